@@ -1,0 +1,21 @@
+#pragma once
+/// The subcommands of `contactbench`; each lives in its own harness/cmd_<name>.cpp.
+/// Each returns the process exit status: 0 ran, 2 bad input (InputError), 1 internal error.
+#include <string>
+#include <vector>
+
+namespace cb {
+
+using Args = std::vector<std::string>;
+
+int cmd_info(const Args& args);
+int cmd_convert(const Args& args);
+int cmd_solve(const Args& args);
+int cmd_run(const Args& args);
+int cmd_merge(const Args& args);
+int cmd_simulate(const Args& args);
+int cmd_stress(const Args& args);
+int cmd_compare(const Args& args);
+int cmd_generate(const Args& args);
+
+} // namespace cb

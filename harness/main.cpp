@@ -1,0 +1,65 @@
+// contactbench: parse the subcommand and dispatch. Exit status: 0 ran, 2 bad input, 1 internal error.
+#include "harness/commands.hpp"
+#include "solvers/types.hpp"
+
+#include <cstring>
+#include <iostream>
+#include <map>
+
+namespace {
+
+struct Command {
+    int (*run)(const cb::Args&);
+    const char* summary;
+};
+
+const std::map<std::string, Command>& commands()
+{
+    static const std::map<std::string, Command> table = {
+        {"info", {cb::cmd_info, "info SNAP: header, sizes, contact kinds, content hash"}},
+        {"convert", {cb::cmd_convert, "convert IN OUT: .qpsnap <-> Matrix Market folder (by extension)"}},
+        {"solve", {cb::cmd_solve, "solve SNAP --solver NAME [--set k=v ...] [--json FILE] [--save-solution DIR]"}},
+        {"run", {cb::cmd_run, "run SUITE.json [--out DIR] [--shard i/N]: a suite of snapshots x solvers"}},
+        {"merge", {cb::cmd_merge, "merge DIR...: join the shards of a suite run"}},
+        {"generate", {cb::cmd_generate, "generate FAMILY --out FILE [--seed S ...]: write a synthetic snapshot"}},
+        {"simulate", {cb::cmd_simulate, "simulate SCENE.json [--frames N] [--out DIR] [--data DIR]"}},
+        {"stress", {cb::cmd_stress, "stress [--out DIR]: the stress suite and its stability table"}},
+        {"compare", {cb::cmd_compare, "compare BASE NEW: regression judge between two result sets"}},
+    };
+    return table;
+}
+
+void usage(std::ostream& out)
+{
+    out << "contactbench: a benchmark harness for contact QP solvers\n"
+           "  minimize 1/2 x'Ax - b'x  subject to  Jx >= c\n\nusage: contactbench COMMAND [options]   "
+           "(contactbench COMMAND --help for details)\n\ncommands:\n";
+    for (const auto& kv : commands()) out << "  " << kv.second.summary << "\n";
+    out << "\nexit status: 0 the command ran (whatever a solver's status), 2 bad input, 1 internal error\n";
+}
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+    if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "help")) {
+        usage(std::cout);
+        return argc < 2 ? 2 : 0;
+    }
+    const auto it = commands().find(argv[1]);
+    if (it == commands().end()) {
+        std::cerr << "contactbench: unknown command '" << argv[1] << "'\n";
+        usage(std::cerr);
+        return 2;
+    }
+    const cb::Args args(argv + 2, argv + argc);
+    try {
+        return it->second.run(args);
+    } catch (const cb::InputError& e) {
+        std::cerr << "contactbench " << argv[1] << ": error: " << e.what() << "\n";
+        return 2;
+    } catch (const std::exception& e) {
+        std::cerr << "contactbench " << argv[1] << ": internal error: " << e.what() << "\n";
+        return 1;
+    }
+}

@@ -1,0 +1,33 @@
+#pragma once
+/// The `.qpsnap` snapshot format, version 1 (DESIGN.md "Snapshot format"):
+///   8 bytes little-endian uint64 N, N bytes UTF-8 JSON header, then a data buffer of raw
+///   little-endian arrays at 8-byte aligned offsets, each with its CRC32.
+/// Arrays: A.indptr A.indices A.data b x0 J.indptr J.indices J.data c (required);
+///         contact.kind contact.depth contact.vertex x_ref lambda_ref (optional).
+#include "solvers/qp.hpp"
+
+#include <map>
+#include <string>
+
+namespace cb {
+
+/// Optional solution arrays stored beside the QP.
+struct SnapshotExtras {
+    Vec x_ref, lambda_ref;  ///< empty when absent
+};
+
+/// Reads and validates a snapshot; throws InputError("PATH: FIELD: problem") and never returns
+/// half a problem. A is symmetrised exactly after the asymmetry check.
+Qp read_qpsnap(const std::string& path, SnapshotExtras* extras = nullptr);
+
+/// Reads only the JSON header (for `info` and suites that filter by metadata).
+nlohmann::json read_qpsnap_header(const std::string& path);
+
+/// Writes atomically (temporary name in the same folder, then rename).
+void write_qpsnap(const std::string& path, const Qp& qp, const SnapshotExtras* extras = nullptr);
+
+/// Content hash of a snapshot file (hex of a 64-bit FNV-1a over the whole file), the key of
+/// the reference-solution cache.
+std::string qpsnap_content_hash(const std::string& path);
+
+} // namespace cb

@@ -1,0 +1,43 @@
+#pragma once
+/// Name -> factory for every solver. A new solver is one file pair and one line in
+/// builtin_solvers.cpp.
+#include "solvers/settings.hpp"
+#include "solvers/solver.hpp"
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace cb {
+
+using SolverFactory = std::function<std::unique_ptr<Solver>(const nlohmann::json& settings)>;
+
+struct SolverEntry {
+    SolverFactory make;
+    std::string description;             ///< one line for `--help`
+    std::vector<SettingDoc> settings;    ///< solver-specific keys (the common ones are implied)
+};
+
+class SolverRegistry {
+public:
+    /// Throws std::logic_error on a duplicate name.
+    void add(const std::string& name, SolverEntry entry);
+    /// Throws InputError naming the known solvers when `name` is not registered, and the
+    /// solver's InputError when a setting is bad.
+    std::unique_ptr<Solver> create(const std::string& name, const nlohmann::json& settings) const;
+    const SolverEntry& entry(const std::string& name) const;
+    bool contains(const std::string& name) const { return m_entries.count(name) != 0; }
+    std::vector<std::string> names() const;  ///< sorted
+
+private:
+    std::map<std::string, SolverEntry> m_entries;
+};
+
+/// Explicit registration (static self-registration would vanish from a static library).
+void register_builtin_solvers(SolverRegistry& registry);
+/// The registry with every built-in solver.
+const SolverRegistry& builtin_registry();
+
+} // namespace cb

@@ -1,0 +1,150 @@
+#include "solvers/settings.hpp"
+
+#include <climits>
+#include <cmath>
+#include <sstream>
+
+namespace cb {
+
+nlohmann::json CommonSettings::to_json() const
+{
+    return {{"tol", tol},
+            {"stop", stop == StopRule::KKT ? "kkt" : "native"},
+            {"max_iterations", max_iterations},
+            {"time_limit_s", time_limit_s},
+            {"seed", seed}};
+}
+
+SettingsReader::SettingsReader(const nlohmann::json& settings, std::string where)
+    : m_settings(settings.is_null() ? nlohmann::json::object() : settings), m_where(std::move(where))
+{
+    if (!m_settings.is_object()) throw_input_error(m_where, "", "settings must be a JSON object");
+}
+
+void SettingsReader::fail(const std::string& key, const std::string& problem) const
+{
+    throw_input_error(m_where, "/" + key, problem);
+}
+
+const nlohmann::json* SettingsReader::find(const std::string& key)
+{
+    m_read.insert(key);
+    const auto it = m_settings.find(key);
+    return it == m_settings.end() ? nullptr : &*it;
+}
+
+double SettingsReader::number(const std::string& key, double fallback, double min_exclusive,
+                              double max_inclusive)
+{
+    const nlohmann::json* value = find(key);
+    if (!value) return fallback;
+    if (!value->is_number()) fail(key, "expected a number, got " + value->dump());
+    const double v = value->get<double>();
+    if (!std::isfinite(v)) fail(key, "must be finite");
+    if (!(v > min_exclusive)) {
+        std::ostringstream s;
+        s << "must be > " << min_exclusive << ", got " << v;
+        fail(key, s.str());
+    }
+    if (!(v <= max_inclusive)) {
+        std::ostringstream s;
+        s << "must be <= " << max_inclusive << ", got " << v;
+        fail(key, s.str());
+    }
+    return v;
+}
+
+long SettingsReader::integer(const std::string& key, long fallback, long min_inclusive, long max_inclusive)
+{
+    const nlohmann::json* value = find(key);
+    if (!value) return fallback;
+    double v = 0;
+    if (value->is_number_integer()) v = static_cast<double>(value->get<long>());
+    else if (value->is_number_float() && std::floor(value->get<double>()) == value->get<double>())
+        v = value->get<double>();
+    else fail(key, "expected an integer, got " + value->dump());
+    if (v < static_cast<double>(min_inclusive))
+        fail(key, "must be >= " + std::to_string(min_inclusive) + ", got " + value->dump());
+    if (v > static_cast<double>(max_inclusive))
+        fail(key, "must be <= " + std::to_string(max_inclusive) + ", got " + value->dump());
+    return static_cast<long>(v);
+}
+
+bool SettingsReader::boolean(const std::string& key, bool fallback)
+{
+    const nlohmann::json* value = find(key);
+    if (!value) return fallback;
+    if (!value->is_boolean()) fail(key, "expected true or false, got " + value->dump());
+    return value->get<bool>();
+}
+
+std::string SettingsReader::choice(const std::string& key, const std::string& fallback,
+                                   const std::vector<std::string>& allowed)
+{
+    const nlohmann::json* value = find(key);
+    if (!value) return fallback;
+    std::string known;
+    for (const auto& a : allowed) known += (known.empty() ? "" : " | ") + a;
+    if (!value->is_string()) fail(key, "expected one of " + known + ", got " + value->dump());
+    const std::string v = value->get<std::string>();
+    for (const auto& a : allowed)
+        if (a == v) return v;
+    fail(key, "expected one of " + known + ", got \"" + v + "\"");
+}
+
+CommonSettings SettingsReader::common()
+{
+    CommonSettings s;
+    s.tol = number("tol", s.tol, 0.0);
+    s.stop = choice("stop", "kkt", {"kkt", "native"}) == "kkt" ? StopRule::KKT : StopRule::NATIVE;
+    s.max_iterations = integer("max_iterations", s.max_iterations, 0);
+    s.time_limit_s = number("time_limit_s", s.time_limit_s, -1e-300);
+    s.seed = static_cast<std::uint64_t>(integer("seed", 0, 0));
+    return s;
+}
+
+void SettingsReader::finish() const
+{
+    for (const auto& item : m_settings.items())
+        if (!m_read.count(item.key())) {
+            std::string known;
+            for (const auto& k : m_read) known += (known.empty() ? "" : ", ") + k;
+            fail(item.key(), "unknown setting; known: " + known);
+        }
+}
+
+std::vector<SettingDoc> common_setting_docs()
+{
+    return {{"tol", "1e-6", "stop tolerance on the common relative KKT error (stop=kkt) or on the native residual (stop=native, absolute)"},
+            {"stop", "kkt", "kkt | native: which criterion ends the solve"},
+            {"max_iterations", "10000", "cap on outer iterations"},
+            {"time_limit_s", "0", "wall-time limit of the solve in seconds; 0 = none"},
+            {"seed", "0", "seed of every random choice"}};
+}
+
+nlohmann::json parse_set_arguments(const std::vector<std::string>& assignments)
+{
+    nlohmann::json out = nlohmann::json::object();
+    for (const auto& a : assignments) {
+        const auto eq = a.find('=');
+        if (eq == std::string::npos || eq == 0)
+            throw_input_error("--set", a, "expected key=value");
+        const std::string key = a.substr(0, eq), value = a.substr(eq + 1);
+        if (value == "true") out[key] = true;
+        else if (value == "false") out[key] = false;
+        else {
+            char* end = nullptr;
+            const long long as_int = std::strtoll(value.c_str(), &end, 10);
+            if (!value.empty() && end && *end == '\0') {
+                out[key] = as_int;
+                continue;
+            }
+            const double as_double = std::strtod(value.c_str(), &end);
+            if (!value.empty() && end && *end == '\0') out[key] = as_double;
+            else out[key] = value;
+        }
+    }
+    return out;
+}
+
+} // namespace cb

@@ -1,0 +1,79 @@
+#include "solvers/solver.hpp"
+
+namespace cb {
+
+const char* to_string(SolveStatus status)
+{
+    switch (status) {
+    case SolveStatus::NOT_RUN: return "not_run";
+    case SolveStatus::CONVERGED: return "converged";
+    case SolveStatus::MAX_ITERATIONS: return "max_iterations";
+    case SolveStatus::TIME_LIMIT: return "time_limit";
+    case SolveStatus::STALLED: return "stalled";
+    case SolveStatus::DIVERGED: return "diverged";
+    case SolveStatus::INFEASIBLE: return "infeasible";
+    case SolveStatus::INVALID_INPUT: return "invalid_input";
+    case SolveStatus::STOPPED_BY_MONITOR: return "stopped_by_monitor";
+    }
+    return "unknown";
+}
+
+SolveStatus solve_status_from_string(const std::string& name)
+{
+    for (SolveStatus s : {SolveStatus::NOT_RUN, SolveStatus::CONVERGED, SolveStatus::MAX_ITERATIONS,
+                          SolveStatus::TIME_LIMIT, SolveStatus::STALLED, SolveStatus::DIVERGED,
+                          SolveStatus::INFEASIBLE, SolveStatus::INVALID_INPUT, SolveStatus::STOPPED_BY_MONITOR})
+        if (name == to_string(s)) return s;
+    throw InputError("unknown solve status '" + name + "'");
+}
+
+const char* to_string(StepKind kind)
+{
+    switch (kind) {
+    case StepKind::START: return "start";
+    case StepKind::CG: return "cg";
+    case StepKind::EXPANSION: return "expansion";
+    case StepKind::PROPORTIONING: return "proportioning";
+    case StepKind::SAFEGUARD: return "safeguard";
+    case StepKind::PGS_SWEEP: return "pgs-sweep";
+    case StepKind::PIVOT: return "pivot";
+    case StepKind::OUTER: return "outer";
+    case StepKind::FINAL: return "final";
+    }
+    return "unknown";
+}
+
+nlohmann::json Counters::to_json() const
+{
+    return {{"iterations", iterations},
+            {"cg_steps", cg_steps},
+            {"expansion_steps", expansion_steps},
+            {"proportioning_steps", proportioning_steps},
+            {"safeguard_steps", safeguard_steps},
+            {"a_products", a_products},
+            {"precond_applications", precond_applications},
+            {"projections", projections},
+            {"power_products", power_products},
+            {"cholmod_analyses", cholmod_analyses},
+            {"cholmod_factorizations", cholmod_factorizations},
+            {"cholmod_solves", cholmod_solves},
+            {"lcp_iterations", lcp_iterations},
+            {"pgs_sweeps", pgs_sweeps},
+            {"pivots", pivots}};
+}
+
+bool notify_monitor(const SolveContext& context, Stopwatch& watch, IterationInfo info)
+{
+    if (!context.monitor) return true;
+    PausedScope paused(watch);
+    info.elapsed_s = watch.seconds();
+    return context.monitor->on_iteration(info);
+}
+
+bool kkt_converged(const QpView& qp, const Vec& x, const Vec& g, const Vec& lambda,
+                   const KktScale& scale, double tol)
+{
+    return kkt_residuals_from_gradient(qp, x, g, lambda).max() * scale.inverse_reference <= tol;
+}
+
+} // namespace cb

@@ -1,0 +1,115 @@
+#pragma once
+/// The one interface every solver implements, with its status, counters and monitor.
+#include "solvers/kkt.hpp"
+#include "solvers/qp.hpp"
+#include "solvers/settings.hpp"
+#include "solvers/stopwatch.hpp"
+
+#include <nlohmann/json.hpp>
+#include <memory>
+#include <string>
+
+namespace cb {
+
+/// Why a solve ended. Numerical failure is a status, never an exception.
+enum class SolveStatus {
+    NOT_RUN,
+    CONVERGED,           ///< the stop rule it was given was met (see SolverResult::criterion)
+    MAX_ITERATIONS,
+    TIME_LIMIT,
+    STALLED,             ///< no progress possible (e.g. a zero step), criterion not met
+    DIVERGED,            ///< NaN/Inf or an objective that blew up
+    INFEASIBLE,          ///< the constraint set is empty (detected)
+    INVALID_INPUT,       ///< the problem does not satisfy the solver's preconditions
+    STOPPED_BY_MONITOR,
+};
+const char* to_string(SolveStatus status);
+SolveStatus solve_status_from_string(const std::string& name);  ///< throws InputError
+
+/// What the last step of an iteration was (reported to the Monitor and in histories).
+enum class StepKind { START, CG, EXPANSION, PROPORTIONING, SAFEGUARD, PGS_SWEEP, PIVOT, OUTER, FINAL };
+const char* to_string(StepKind kind);
+
+/// Deterministic work counters. CI regression compares these exactly.
+struct Counters {
+    long iterations = 0;
+    long cg_steps = 0;
+    long expansion_steps = 0;
+    long proportioning_steps = 0;
+    long safeguard_steps = 0;        ///< Alg. 3 safeguard firings
+    long a_products = 0;             ///< products with A (or equivalents, e.g. one GS sweep = 1)
+    long precond_applications = 0;
+    long projections = 0;
+    long power_products = 0;         ///< A-products spent in the power method (also in a_products)
+    long cholmod_analyses = 0;
+    long cholmod_factorizations = 0;
+    long cholmod_solves = 0;
+    long lcp_iterations = 0;         ///< inner LCP pivots or PGS sweeps
+    long pgs_sweeps = 0;
+    long pivots = 0;                 ///< active-set changes
+    nlohmann::json to_json() const;
+};
+
+/// One monitor call. Pointers are valid only during the call.
+struct IterationInfo {
+    long iteration = 0;
+    StepKind step = StepKind::START;
+    const Vec* x = nullptr;          ///< current primal iterate (may be infeasible)
+    const Vec* lambda = nullptr;     ///< multiplier estimate, or nullptr (harness then fits one)
+    double native_residual = 0.0;    ///< the solver's own residual (MPRGP ||phi+beta||, ICA ||Ax-b-J'l||)
+    long active_set_size = -1;       ///< -1 when the solver has no notion of it
+    const Counters* counters = nullptr;
+    double elapsed_s = 0.0;          ///< solver time so far (monitor time excluded)
+};
+
+/// Called at every outer iteration; its time is excluded from the solver's time.
+class Monitor {
+public:
+    virtual ~Monitor() = default;
+    /// @return false to stop the solve (status STOPPED_BY_MONITOR).
+    virtual bool on_iteration(const IterationInfo& info) = 0;
+};
+
+/// Options the harness passes along with the problem (warm starts across a chain).
+struct SolveContext {
+    Monitor* monitor = nullptr;
+    const Vec* lambda0 = nullptr;         ///< warm-start multipliers, or nullptr
+    Vec* eigenvector = nullptr;           ///< in/out: power-method vector kept along a time-step chain
+};
+
+struct SolverResult {
+    Vec x, lambda;
+    SolveStatus status = SolveStatus::NOT_RUN;
+    std::string criterion;            ///< which stop rule was met: "kkt", "native", or "" if none
+    std::string message;              ///< human-readable detail (why it stopped, what was dropped)
+    long iterations = 0;
+    Counters counters;
+    double setup_s = 0.0;             ///< factorisations, power method ...
+    double solve_s = 0.0;             ///< the iterations
+    double native_residual = 0.0;     ///< at the returned x
+    bool lambda_fitted = false;       ///< true when lambda came from fit_multipliers, not the solver
+    nlohmann::json info = nlohmann::json::object();  ///< solver-specific facts (power method, rows dropped ...)
+};
+
+class Solver {
+public:
+    virtual ~Solver() = default;
+    virtual std::string name() const = 0;
+    /// The effective settings (defaults filled in), recorded in every results file.
+    virtual nlohmann::json settings() const = 0;
+    /// True when the solver needs a decoupled J (at most one row per vertex); the harness
+    /// then applies the decoupling transform first.
+    virtual bool requires_decoupled() const { return false; }
+    virtual SolverResult solve(const QpView& qp, const SolveContext& context) = 0;
+};
+
+/// Helper for solvers: calls the monitor with the stopwatch paused.
+/// @return false when the monitor asked to stop.
+bool notify_monitor(const SolveContext& context, Stopwatch& watch, IterationInfo info);
+
+/// Helper for solvers: the common stopping test. Returns true when the relative KKT error of
+/// (x, lambda) (gradient g = Ax - b given) is <= tol.
+bool kkt_converged(const QpView& qp, const Vec& x, const Vec& g, const Vec& lambda,
+                   const KktScale& scale, double tol);
+
+} // namespace cb
