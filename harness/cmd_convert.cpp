@@ -1,14 +1,53 @@
-// PLACEHOLDER: replaced by the real implementation of `contactbench convert`.
+// `contactbench convert IN OUT`: .qpsnap <-> Matrix Market folder, the direction by the names:
+// OUT ending in .qpsnap is written as a snapshot, anything else as a folder; IN that is a folder
+// is read as Matrix Market, anything else as a .qpsnap. Both outputs are written atomically.
+#include "harness/cli.hpp"
 #include "harness/commands.hpp"
+#include "problems/matrix_market.hpp"
+#include "problems/qpsnap.hpp"
 
+#include <filesystem>
 #include <iostream>
 
 namespace cb {
+namespace {
 
-int cmd_convert(const Args&)
+const char* const kUsage =
+    "contactbench convert IN OUT\n"
+    "  IN.qpsnap  -> OUT folder (A.mtx b.mtx J.mtx c.mtx x0.mtx meta.json [contact.json x_ref.mtx lambda_ref.mtx])\n"
+    "  IN folder  -> OUT.qpsnap (Matrix Market files as written by scipy.io.mmwrite, Julia, MATLAB ...)\n"
+    "  IN.qpsnap  -> OUT.qpsnap (rewrites; validates on the way)\n"
+    "values are written with %.17g: .qpsnap -> folder -> .qpsnap keeps every array bit for bit";
+
+bool ends_with(const std::string& s, const std::string& tail)
 {
-    std::cerr << "contactbench convert: not implemented yet\n";
-    return 1;
+    return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+}
+
+} // namespace
+
+int cmd_convert(const Args& args)
+{
+    const CommandLine cl("convert", args, {}, {});
+    if (cl.help()) {
+        std::cout << "usage: " << kUsage << "\n";
+        return 0;
+    }
+    cl.expect_positional(2, 2, kUsage);
+    const std::string in = cl.positional()[0], out = cl.positional()[1];
+    Qp qp;
+    SnapshotExtras extras;
+    if (std::filesystem::is_directory(in)) qp = read_matrix_market_folder(in, &extras);
+    else qp = read_qpsnap(in, &extras);
+    if (ends_with(out, ".qpsnap")) {
+        write_qpsnap(out, qp, &extras);
+        std::cout << "wrote " << out << " (n = " << qp.n() << ", m = " << qp.m() << ", nnz(A) = " << qp.A.nonZeros()
+                  << ", hash " << qpsnap_content_hash(out) << ")\n";
+    } else {
+        write_matrix_market_folder(out, qp, &extras);
+        std::cout << "wrote " << out << "/ (n = " << qp.n() << ", m = " << qp.m() << ", nnz(A) = " << qp.A.nonZeros() << ")\n";
+    }
+    return 0;
 }
 
 } // namespace cb

@@ -1,14 +1,120 @@
-// PLACEHOLDER: replaced by the real implementation of `contactbench info`.
+// `contactbench info SNAP [--json]`: what a snapshot holds (after full validation): sizes,
+// header, contact kinds, row nnz histograms, meta and the content hash.
+#include "harness/cli.hpp"
 #include "harness/commands.hpp"
+#include "problems/matrix_market.hpp"
+#include "problems/qpsnap.hpp"
 
+#include <filesystem>
 #include <iostream>
+#include <map>
 
 namespace cb {
+namespace {
 
-int cmd_info(const Args&)
+const char* const kUsage = "contactbench info SNAP [--json]\n"
+                           "  SNAP: a .qpsnap file or a Matrix Market folder (A.mtx b.mtx J.mtx c.mtx x0.mtx)\n"
+                           "  --json: print one JSON object instead of text";
+
+const char* kind_name(std::int64_t k)
 {
-    std::cerr << "contactbench info: not implemented yet\n";
-    return 1;
+    switch (ContactKind(k)) {
+    case ContactKind::PLANE: return "plane";
+    case ContactKind::OBSTACLE: return "obstacle";
+    case ContactKind::INTER_BODY: return "inter_body";
+    case ContactKind::SELF: return "self";
+    case ContactKind::OTHER: return "other";
+    }
+    return "unknown";
+}
+
+nlohmann::json row_histogram(const SpMat& M)
+{
+    std::map<long, long> h;
+    for (Eigen::Index r = 0; r < M.rows(); ++r) ++h[long(M.outerIndexPtr()[r + 1] - M.outerIndexPtr()[r])];
+    nlohmann::json out = nlohmann::json::object();
+    for (const auto& kv : h) out[std::to_string(kv.first)] = kv.second;
+    return out;
+}
+
+} // namespace
+
+int cmd_info(const Args& args)
+{
+    const CommandLine cl("info", args, {}, {"--json"});
+    if (cl.help()) {
+        std::cout << "usage: " << kUsage << "\n";
+        return 0;
+    }
+    cl.expect_positional(1, 1, kUsage);
+    const std::string path = cl.positional()[0];
+    const bool folder = std::filesystem::is_directory(path);
+    nlohmann::json info;
+    info["path"] = path;
+    Qp qp;
+    SnapshotExtras extras;
+    if (folder) {
+        qp = read_matrix_market_folder(path, &extras);
+        info["format"] = "matrix-market folder";
+    } else {
+        const nlohmann::json header = read_qpsnap_header(path);
+        qp = read_qpsnap(path, &extras);
+        info["format"] = "qpsnap";
+        info["version"] = header["version"];
+        info["hash"] = qpsnap_content_hash(path);
+        info["file_bytes"] = std::filesystem::file_size(path);
+        nlohmann::json arrays = nlohmann::json::object();
+        for (auto it = header["arrays"].begin(); it != header["arrays"].end(); ++it)
+            arrays[it.key()] = {{"dtype", it.value()["dtype"]}, {"shape", it.value()["shape"]}, {"nbytes", it.value()["nbytes"]}};
+        info["arrays"] = arrays;
+    }
+    info["n"] = qp.n();
+    info["m"] = qp.m();
+    info["nnz_A"] = qp.A.nonZeros();
+    info["nnz_J"] = qp.J.nonZeros();
+    const Vec diag = qp.A.diagonal();
+    info["A_diagonal"] = {{"min", diag.size() ? diag.minCoeff() : 0.0}, {"max", diag.size() ? diag.maxCoeff() : 0.0}};
+    info["A_row_nnz_histogram"] = row_histogram(qp.A);
+    info["J_row_nnz_histogram"] = row_histogram(qp.J);
+    nlohmann::json kinds = nlohmann::json::object();
+    for (const auto k : qp.contacts.kind) kinds[kind_name(k)] = kinds.value(kind_name(k), 0) + 1;
+    info["contact_kinds"] = kinds;
+    const Vec r = qp.m() ? Vec(qp.J * qp.x0 - qp.c) : Vec();
+    info["violated_at_x0"] = qp.m() ? long((r.array() < 0).count()) : 0L;
+    info["max_violation_at_x0"] = qp.m() ? std::max(0.0, -r.minCoeff()) : 0.0;
+    info["has_x_ref"] = extras.x_ref.size() > 0;
+    info["has_lambda_ref"] = extras.lambda_ref.size() > 0;
+    info["meta"] = qp.meta;
+    if (cl.has("--json")) {
+        std::cout << info.dump(2) << "\n";
+        return 0;
+    }
+    std::cout << "file:        " << path << " (" << info["format"].get<std::string>();
+    if (!folder) std::cout << " v" << info["version"] << ", " << info["file_bytes"] << " bytes";
+    std::cout << ")\n";
+    if (!folder) std::cout << "hash:        " << info["hash"].get<std::string>() << "\n";
+    std::cout << "n:           " << qp.n() << "\nm:           " << qp.m() << "\nnnz(A):      " << qp.A.nonZeros()
+              << "\nnnz(J):      " << qp.J.nonZeros() << "\ndiag(A):     [" << info["A_diagonal"]["min"] << ", "
+              << info["A_diagonal"]["max"] << "]\n";
+    std::cout << "contacts:    ";
+    if (kinds.empty()) std::cout << "no kinds recorded";
+    for (auto it = kinds.begin(); it != kinds.end(); ++it) std::cout << it.key() << " " << it.value() << "  ";
+    std::cout << "\nat x0:       " << info["violated_at_x0"] << " violated rows, max violation " << info["max_violation_at_x0"] << "\n";
+    auto print_hist = [](const char* name, const nlohmann::json& h) {
+        std::cout << name;
+        for (auto it = h.begin(); it != h.end(); ++it) std::cout << " " << it.key() << ":" << it.value();
+        std::cout << "   (nnz:rows)\n";
+    };
+    print_hist("row nnz A:  ", info["A_row_nnz_histogram"]);
+    print_hist("row nnz J:  ", info["J_row_nnz_histogram"]);
+    if (info.contains("arrays")) {
+        std::cout << "arrays:\n";
+        for (auto it = info["arrays"].begin(); it != info["arrays"].end(); ++it)
+            std::cout << "  " << it.key() << "  " << it.value()["dtype"].get<std::string>() << " " << it.value()["shape"].dump()
+                      << "  " << it.value()["nbytes"] << " bytes\n";
+    }
+    std::cout << "meta:        " << qp.meta.dump(2) << "\n";
+    return 0;
 }
 
 } // namespace cb

@@ -1,14 +1,47 @@
-// PLACEHOLDER: replaced by the real implementation of `contactbench simulate`.
+// contactbench simulate SCENE.json [--frames N] [--out DIR] [--data DIR] [--solver NAME] [--no-snapshots]
+#include "harness/cli.hpp"
 #include "harness/commands.hpp"
+#include "problems/sim/simulator.hpp"
 
 #include <iostream>
 
 namespace cb {
 
-int cmd_simulate(const Args&)
+int cmd_simulate(const Args& args)
 {
-    std::cerr << "contactbench simulate: not implemented yet\n";
-    return 1;
+    const CommandLine cl("simulate", args, {"--frames", "--out", "--data", "--solver"}, {"--no-snapshots"});
+    const std::string usage =
+        "usage: contactbench simulate SCENE.json [--frames N] [--out DIR] [--data DIR] [--solver NAME] [--no-snapshots]\n"
+        "  SCENE.json     a scene (keys: scenes/README.md), or one of the authors' .ini scene files\n"
+        "  --frames N     simulate N frames instead of the scene's \"frames\"\n"
+        "  --out DIR      output folder (default results/sim/<scene name>): snapshots/*.qpsnap (one per\n"
+        "                 Newton step), steps.csv, frames.csv, <scene>_strip.png, frames/*.obj\n"
+        "  --data DIR     the authors' data folder (resolves \"data:\" mesh paths; default: none, so\n"
+        "                 scenes use their CGAL-data fallbacks)\n"
+        "  --solver NAME  stepping solver (default: the scene's, else mprgp)\n"
+        "  --no-snapshots write no .qpsnap files\n";
+    if (cl.help()) {
+        std::cout << usage;
+        return 0;
+    }
+    cl.expect_positional(1, 1, usage);
+    const std::string scene_path = cl.positional()[0];
+    sim::Scene scene = sim::load_scene(scene_path, sim::default_path_roots(scene_path, cl.value("--data")));
+    sim::SimulatorOptions opt;
+    opt.out_dir = cl.value("--out", "results/sim/" + scene.name);
+    opt.solver = cl.value("--solver");
+    opt.snapshots = !cl.has("--no-snapshots");
+    opt.frames = cl.integer("--frames", -1);
+    if (cl.has("--frames") && opt.frames < 0) throw_input_error("--frames", "", "must be >= 0");
+    opt.progress = &std::cerr;
+    for (const auto& b : scene.bodies)
+        std::cerr << scene.name << ": body " << b.name << ": " << b.mesh.vertices() << " vertices, " << b.mesh.tet_count()
+                  << " tets from " << b.source << (b.quality.empty() ? "" : "; " + b.quality) << "\n";
+    sim::Simulator simulator(std::move(scene), opt);
+    std::cerr << simulator.scene().name << ": " << simulator.vertices() << " vertices, " << simulator.dofs() << " DOFs, "
+              << simulator.tets() << " tets, solver " << simulator.solver_name() << ", output in " << opt.out_dir << "\n";
+    simulator.run();
+    return 0;
 }
 
 } // namespace cb

@@ -1,14 +1,151 @@
-// PLACEHOLDER: replaced by the real implementation of `contactbench solve`.
+// `contactbench solve SNAP --solver NAME`: one solver on one snapshot, a short human summary,
+// optionally the per-run JSON (--json) and the solution (--save-solution).
+#include "harness/cli.hpp"
 #include "harness/commands.hpp"
+#include "harness/results.hpp"
+#include "harness/runner.hpp"
+#include "problems/qpsnap.hpp"
+#include "solvers/registry.hpp"
 
+#include <cstdio>
+#include <filesystem>
+#include <iomanip>
 #include <iostream>
+#include <sstream>
 
 namespace cb {
 
-int cmd_solve(const Args&)
+namespace {
+
+const char* const kUsage =
+    "contactbench solve SNAP --solver NAME [--set key=value ...] [--json FILE] [--save-solution DIR]\n"
+    "                   [--history] [--decouple auto|none|authors|random|depth] [--decouple-seed S]\n"
+    "                   [--repeat k] [--time-limit SECONDS]";
+
+/// A dense vector in Matrix Market array format (%.17g), written atomically.
+void write_mtx_vector(const std::string& path, const Vec& v)
 {
-    std::cerr << "contactbench solve: not implemented yet\n";
-    return 1;
+    std::string text = "%%MatrixMarket matrix array real general\n";
+    text += std::to_string(v.size()) + " 1\n";
+    char buffer[40];
+    for (Eigen::Index i = 0; i < v.size(); ++i) {
+        std::snprintf(buffer, sizeof(buffer), "%.17g\n", v[i]);
+        text += buffer;
+    }
+    write_file_atomic(path, text);
+}
+
+void print_solver_list(std::ostream& out)
+{
+    const auto& registry = builtin_registry();
+    out << "usage: " << kUsage << "\n\nsolvers (contactbench solve --solver NAME --help for settings):\n";
+    size_t width = 0;
+    for (const auto& name : registry.names()) width = std::max(width, name.size());
+    for (const auto& name : registry.names())
+        out << "  " << std::left << std::setw(static_cast<int>(width) + 2) << name << registry.entry(name).description << "\n";
+}
+
+void print_solver_settings(std::ostream& out, const std::string& name)
+{
+    const SolverEntry& entry = builtin_registry().entry(name);  // InputError when unknown
+    out << name << ": " << entry.description << "\n\nsettings (--set key=value; defaults in brackets):\n";
+    std::vector<SettingDoc> docs = common_setting_docs();
+    docs.insert(docs.end(), entry.settings.begin(), entry.settings.end());
+    size_t width = 0;
+    for (const auto& d : docs) width = std::max(width, d.key.size() + d.default_value.size() + 3);
+    for (const auto& d : docs)
+        out << "  " << std::left << std::setw(static_cast<int>(width) + 2) << (d.key + " [" + d.default_value + "]")
+            << d.doc << "\n";
+}
+
+std::string sci(double v)
+{
+    char buffer[32];
+    std::snprintf(buffer, sizeof(buffer), "%.3g", v);
+    return buffer;
+}
+
+} // namespace
+
+int cmd_solve(const Args& args)
+{
+    const CommandLine cl("solve", args,
+                         {"--solver", "--set", "--json", "--save-solution", "--decouple", "--decouple-seed",
+                          "--repeat", "--time-limit"},
+                         {"--history"});
+    if (cl.help()) {
+        if (cl.has("--solver")) print_solver_settings(std::cout, cl.value("--solver"));
+        else print_solver_list(std::cout);
+        return 0;
+    }
+    cl.expect_positional(1, 1, kUsage);
+    if (!cl.has("--solver")) throw_input_error("solve", "--solver", "missing; usage: " + std::string(kUsage));
+    const std::string snap = cl.positional()[0];
+    const std::string name = cl.value("--solver");
+    if (!builtin_registry().contains(name)) builtin_registry().entry(name);  // throws the named InputError
+
+    RunOptions options;
+    options.record_history = cl.has("--history");
+    options.decouple = cl.value("--decouple", "auto");
+    static const char* const orders[] = {"auto", "none", "authors", "random", "depth"};
+    if (std::find(std::begin(orders), std::end(orders), options.decouple) == std::end(orders))
+        throw_input_error("solve", "--decouple",
+                          "expected one of auto, none, authors, random, depth, got '" + options.decouple + "'");
+    const long seed = cl.integer("--decouple-seed", 0);
+    if (seed < 0) throw_input_error("solve", "--decouple-seed", "must be >= 0");
+    options.decouple_seed = static_cast<std::uint64_t>(seed);
+    const long repeat = cl.integer("--repeat", 1);
+    if (repeat < 1 || repeat > 1000) throw_input_error("solve", "--repeat", "must be in 1..1000, got " + std::to_string(repeat));
+    options.repeat = static_cast<int>(repeat);
+    options.time_limit_s = cl.number("--time-limit", 0.0);
+    if (options.time_limit_s < 0) throw_input_error("solve", "--time-limit", "must be >= 0");
+    const nlohmann::json settings = parse_set_arguments(cl.values("--set"));
+
+    const Qp qp = read_qpsnap(snap);
+    const nlohmann::json info = {{"id", std::filesystem::path(snap).stem().string()},
+                                 {"path", snap},
+                                 {"hash", qpsnap_content_hash(snap)},
+                                 {"n", qp.n()},
+                                 {"m", qp.m()},
+                                 {"meta", qp.meta}};
+    const RunOutcome run = run_solver(qp, name, settings, options, info);
+    const nlohmann::json& r = run.record;
+
+    std::ostringstream out;
+    out << "snapshot    " << snap << " (n " << qp.n() << ", m " << qp.m() << ")\n";
+    out << "solver      " << name;
+    if (r["decouple"].value("applied", false))
+        out << " (decoupled " << r["decouple"]["order"].get<std::string>() << ": " << r["decouple"]["rows_before"]
+            << " -> " << r["decouple"]["rows_after"] << " rows)";
+    out << "\n";
+    out << "status      " << r["status"].get<std::string>();
+    if (!r["criterion"].get<std::string>().empty()) out << " (" << r["criterion"].get<std::string>() << ")";
+    if (!run.status_confirmed) out << "  NOT CONFIRMED by the common KKT error";
+    out << "\n";
+    out << "iterations  " << run.result.iterations << ", A-products " << run.result.counters.a_products << "\n";
+    out << "kkt_rel     " << sci(run.kkt_relative.max()) << " (stationarity " << sci(run.kkt_relative.stationarity)
+        << ", primal " << sci(run.kkt_relative.primal) << ", dual " << sci(run.kkt_relative.dual)
+        << ", complementarity " << sci(run.kkt_relative.complementarity) << ")"
+        << (r["lambda_fitted"].get<bool>() ? " lambda fitted" : "") << "\n";
+    out << "objective   " << std::setprecision(10) << run.objective << ", violation " << sci(run.violation)
+        << ", native residual " << sci(run.result.native_residual) << "\n";
+    out << "time        setup " << sci(r["time"]["setup_s"].get<double>()) << " s, solve "
+        << sci(r["time"]["solve_s"].get<double>()) << " s";
+    if (options.repeat > 1) out << " (median of " << options.repeat << ")";
+    out << "\n";
+    if (run.nonfinite) out << "warning     NaN/Inf seen in an iterate\n";
+    if (!run.monotone) out << "warning     objective increased between feasible iterates\n";
+    if (!run.result.message.empty()) out << "message     " << run.result.message << "\n";
+    std::cout << out.str();
+
+    if (cl.has("--json")) write_json_atomic(cl.value("--json"), r);
+    if (cl.has("--save-solution")) {
+        const std::string dir = cl.value("--save-solution");
+        std::filesystem::create_directories(dir);
+        write_mtx_vector(dir + "/x.mtx", run.result.x);
+        write_mtx_vector(dir + "/lambda.mtx", run.lambda_full);  // one entry per row of the snapshot's J
+    }
+    return 0;
 }
 
 } // namespace cb

@@ -26,6 +26,11 @@ nlohmann::json read_qpsnap_header(const std::string& path);
 /// Writes atomically (temporary name in the same folder, then rename).
 void write_qpsnap(const std::string& path, const Qp& qp, const SnapshotExtras* extras = nullptr);
 
+/// The value checks of read_qpsnap on an in-memory QP, for other readers (Matrix Market):
+/// sizes, finite values, sorted rows, A symmetric to within 1e-12 max|A_ij| (then symmetrised
+/// exactly), positive diagonal. Throws InputError("where: field: problem").
+void validate_qp(const std::string& where, Qp& qp);
+
 /// Content hash of a snapshot file (hex of a 64-bit FNV-1a over the whole file), the key of
 /// the reference-solution cache.
 std::string qpsnap_content_hash(const std::string& path);

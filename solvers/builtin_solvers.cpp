@@ -1,5 +1,10 @@
 // The list of built-in solvers: one line per solver (see README "Adding a solver").
 #include "solvers/registry.hpp"
+#include "solvers/active_set.hpp"
+#include "solvers/cg.hpp"
+#include "solvers/mprgp.hpp"
+#include "solvers/ica.hpp"
+#include "solvers/pgs.hpp"
 
 namespace cb {
 
@@ -7,6 +12,11 @@ void register_builtin_solvers(SolverRegistry& registry)
 {
     (void)registry;
     // REGISTRATIONS (one line each, keep sorted):
+    registry.add("active-set", active_set_entry());
+    registry.add("cg", cg_entry());
+    registry.add("mprgp", mprgp_entry());
+    registry.add("ica", ica_entry());
+    registry.add("pgs", pgs_entry());
 }
 
 } // namespace cb

@@ -1,0 +1,116 @@
+#include "harness/history.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace cb {
+
+namespace {
+
+bool all_finite(const Vec& v) { return v.size() == 0 || v.allFinite(); }
+
+nlohmann::json number_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
+
+} // namespace
+
+HistoryMonitor::HistoryMonitor(const QpView& qp, const KktScale& scale, long history_max, bool record)
+    : m_qp(qp), m_scale(scale), m_history_max(std::max(2L, history_max)), m_record(record)
+{
+    const double c_inf = qp.m() > 0 ? qp.c.lpNorm<Eigen::Infinity>() : 0.0;
+    m_feasible_tol = 1e-9 * std::max(1.0, c_inf);
+}
+
+std::vector<std::string> HistoryMonitor::columns()
+{
+    return {"iteration", "time_s", "a_products", "step", "stationarity", "primal", "dual",
+            "complementarity", "kkt", "kkt_rel", "objective", "native_residual", "active_set"};
+}
+
+HistoryRow HistoryMonitor::measure(long call, long iteration, StepKind step, const Vec& x, const Vec* lambda,
+                                   double time_s, long a_products, double native, long active)
+{
+    HistoryRow row;
+    row.call = call;
+    row.iteration = iteration;
+    row.time_s = time_s;
+    row.a_products = a_products;
+    row.step = step;
+    row.native_residual = native;
+    row.active_set = active;
+    const Vec g = m_qp.A * x - m_qp.b;
+    row.objective = 0.5 * x.dot(g) - 0.5 * m_qp.b.dot(x);
+    if (lambda && lambda->size() == m_qp.m()) {
+        row.kkt = kkt_residuals_from_gradient(m_qp, x, g, *lambda);
+    } else {
+        const Vec fitted = fit_multipliers(m_qp, x, g);
+        row.kkt = kkt_residuals_from_gradient(m_qp, x, g, fitted);
+    }
+    row.kkt_abs = row.kkt.max();
+    row.kkt_rel = row.kkt_abs * m_scale.inverse_reference;
+    return row;
+}
+
+void HistoryMonitor::push(HistoryRow row, const Vec& x)
+{
+    if (!std::isfinite(row.objective) || !std::isfinite(row.kkt_abs)) m_nonfinite = true;
+    // Monotonicity over the feasible recorded iterates only: an infeasible start may have a
+    // lower objective than the solution.
+    if (std::isfinite(row.objective) && max_violation(m_qp, x) <= m_feasible_tol) {
+        if (m_have_feasible &&
+            row.objective > m_last_feasible_objective + 1e-12 * std::max(1.0, std::abs(m_last_feasible_objective)))
+            m_monotone = false;
+        m_have_feasible = true;
+        m_last_feasible_objective = row.objective;
+    }
+    m_rows.push_back(row);
+    m_last_recorded_call = row.call;
+    // One slot stays free for the final row appended by finish().
+    while (static_cast<long>(m_rows.size()) > m_history_max - 1) {
+        m_stride *= 2;
+        std::vector<HistoryRow> kept;
+        for (const auto& r : m_rows)
+            if (r.call % m_stride == 0) kept.push_back(r);
+        m_rows.swap(kept);
+    }
+}
+
+bool HistoryMonitor::on_iteration(const IterationInfo& info)
+{
+    const long call = m_calls++;
+    if (info.x && !all_finite(*info.x)) m_nonfinite = true;
+    if (info.lambda && !all_finite(*info.lambda)) m_nonfinite = true;
+    if (!std::isfinite(info.native_residual)) m_nonfinite = true;
+    if (!m_record || !info.x || call % m_stride != 0) return true;
+    const long a_products = info.counters ? info.counters->a_products : 0;
+    push(measure(call, info.iteration, info.step, *info.x, info.lambda, info.elapsed_s, a_products,
+                 info.native_residual, info.active_set_size),
+         *info.x);
+    return true;
+}
+
+void HistoryMonitor::finish(const Vec& x, const Vec& lambda, long iterations, double time_s, long a_products,
+                            double native_residual)
+{
+    if (!all_finite(x) || !all_finite(lambda)) m_nonfinite = true;
+    if (!m_record || x.size() != m_qp.n()) return;
+    if (m_last_recorded_call == m_calls - 1 && !m_rows.empty() && m_rows.back().iteration == iterations) return;
+    const Vec* l = lambda.size() == m_qp.m() ? &lambda : nullptr;
+    HistoryRow row = measure(m_calls, iterations, StepKind::FINAL, x, l, time_s, a_products, native_residual, -1);
+    if (!std::isfinite(row.objective) || !std::isfinite(row.kkt_abs)) m_nonfinite = true;
+    m_rows.push_back(row);
+}
+
+nlohmann::json HistoryMonitor::to_json() const
+{
+    nlohmann::json rows = nlohmann::json::array();
+    for (const auto& r : m_rows) {
+        rows.push_back({r.iteration, number_or_null(r.time_s), r.a_products, to_string(r.step),
+                        number_or_null(r.kkt.stationarity), number_or_null(r.kkt.primal),
+                        number_or_null(r.kkt.dual), number_or_null(r.kkt.complementarity),
+                        number_or_null(r.kkt_abs), number_or_null(r.kkt_rel), number_or_null(r.objective),
+                        number_or_null(r.native_residual), r.active_set});
+    }
+    return {{"columns", columns()}, {"rows", rows}, {"stride", m_stride}, {"monitor_calls", m_calls}};
+}
+
+} // namespace cb

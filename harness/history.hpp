@@ -1,0 +1,73 @@
+#pragma once
+/// The recording monitor: at each recorded solver iteration it measures the iterate with the
+/// common metric (DESIGN.md "Metrics") while the solver's stopwatch is paused.
+///
+/// Stride: every k-th monitor call is recorded; k starts at 1 and doubles whenever the history
+/// would exceed `history_max` rows (rows that are not on the new stride are dropped; the first
+/// row is always kept, and finish() appends the returned point as the last row).
+/// Monotone: the objective must be non-increasing over the recorded iterates that are feasible
+/// to 1e-9 relative (max_i (c_i - J_i x) <= 1e-9 max(1, |c|_inf)), with a floating-point slack
+/// of 1e-12 max(1, |F|) per comparison.
+#include "solvers/kkt.hpp"
+#include "solvers/solver.hpp"
+
+#include <nlohmann/json.hpp>
+#include <vector>
+
+namespace cb {
+
+/// One recorded row (the columns of the results file's "history").
+struct HistoryRow {
+    long call = 0;  ///< index of the monitor call (0-based); drives the stride
+    long iteration = 0;
+    double time_s = 0.0;
+    long a_products = 0;
+    StepKind step = StepKind::START;
+    KktResiduals kkt;
+    double kkt_abs = 0.0, kkt_rel = 0.0;
+    double objective = 0.0;
+    double native_residual = 0.0;
+    long active_set = -1;
+};
+
+class HistoryMonitor : public Monitor {
+public:
+    /// @param record  false: only nonfinite detection on every call (no history rows)
+    HistoryMonitor(const QpView& qp, const KktScale& scale, long history_max, bool record = true);
+
+    bool on_iteration(const IterationInfo& info) override;
+    /// Appends the returned point (x, lambda) as the final row unless the last call was recorded.
+    void finish(const Vec& x, const Vec& lambda, long iterations, double time_s, long a_products,
+                double native_residual);
+
+    bool nonfinite() const { return m_nonfinite; }
+    bool monotone() const { return m_monotone; }
+    long stride() const { return m_stride; }
+    long calls() const { return m_calls; }
+    const std::vector<HistoryRow>& rows() const { return m_rows; }
+
+    static std::vector<std::string> columns();
+    /// {"columns": [...], "rows": [[...], ...]}; nonfinite numbers become null.
+    nlohmann::json to_json() const;
+
+private:
+    HistoryRow measure(long call, long iteration, StepKind step, const Vec& x, const Vec* lambda,
+                       double time_s, long a_products, double native, long active);
+    void push(HistoryRow row, const Vec& x);
+
+    QpView m_qp;
+    KktScale m_scale;
+    long m_history_max;
+    bool m_record;
+    long m_stride = 1;
+    long m_calls = 0;
+    long m_last_recorded_call = -1;
+    bool m_nonfinite = false;
+    bool m_monotone = true;
+    bool m_have_feasible = false;
+    double m_last_feasible_objective = 0.0;
+    double m_feasible_tol = 0.0;
+    std::vector<HistoryRow> m_rows;
+};
+
+} // namespace cb

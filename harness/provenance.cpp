@@ -1,0 +1,133 @@
+#include "harness/provenance.hpp"
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cstdio>
+#include <ctime>
+#include <fstream>
+#include <string>
+#include <thread>
+#include <unistd.h>
+
+#ifndef CB_BUILD_TYPE
+#define CB_BUILD_TYPE "unknown"
+#endif
+#ifndef CB_SOURCE_DIR
+#define CB_SOURCE_DIR "."
+#endif
+#ifndef CB_CHOLMOD_VERSION
+#define CB_CHOLMOD_VERSION "unknown"
+#endif
+
+namespace cb {
+
+namespace {
+
+/// Output of a shell command (stdout), or nullopt-like empty + ok=false on failure.
+bool run_capture(const std::string& command, std::string& out)
+{
+    out.clear();
+    FILE* pipe = ::popen(command.c_str(), "r");
+    if (!pipe) return false;
+    std::array<char, 4096> buffer{};
+    size_t got = 0;
+    while ((got = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0) out.append(buffer.data(), got);
+    return ::pclose(pipe) == 0;
+}
+
+std::string trim(std::string s)
+{
+    while (!s.empty() && (s.back() == '\n' || s.back() == ' ' || s.back() == '\r' || s.back() == '\t')) s.pop_back();
+    size_t i = 0;
+    while (i < s.size() && (s[i] == ' ' || s[i] == '\t')) ++i;
+    return s.substr(i);
+}
+
+std::string cpu_model()
+{
+    std::ifstream in("/proc/cpuinfo");
+    std::string line;
+    while (std::getline(in, line)) {
+        if (line.rfind("model name", 0) == 0) {
+            const auto colon = line.find(':');
+            if (colon != std::string::npos) return trim(line.substr(colon + 1));
+        }
+    }
+    return "unknown";
+}
+
+std::string blas_in_use()
+{
+    char target[4096];
+    for (const char* link : {"/etc/alternatives/libblas.so.3-x86_64-linux-gnu", "/etc/alternatives/libblas.so.3"}) {
+        const ssize_t len = ::readlink(link, target, sizeof(target) - 1);
+        if (len > 0) {
+            target[len] = '\0';
+            return target;
+        }
+    }
+    return "unknown";
+}
+
+nlohmann::json compute()
+{
+    nlohmann::json p;
+    const std::string source = CB_SOURCE_DIR;
+    std::string out;
+    std::string commit = "unknown";
+    nlohmann::json dirty = nullptr;
+    if (run_capture("git -C '" + source + "' rev-parse HEAD 2>/dev/null", out)) {
+        commit = trim(out);
+        if (run_capture("git -C '" + source + "' status --porcelain 2>/dev/null", out)) dirty = !trim(out).empty();
+    } else {
+#ifdef CB_GIT_COMMIT
+        commit = CB_GIT_COMMIT;
+#endif
+    }
+    p["git_commit"] = commit;
+    p["git_dirty"] = dirty;
+    p["build_type"] = CB_BUILD_TYPE;
+#ifdef __VERSION__
+    p["compiler"] = std::string(
+#if defined(__clang__)
+                        "clang "
+#elif defined(__GNUC__)
+                        "gcc "
+#endif
+                        ) +
+                    __VERSION__;
+#else
+    p["compiler"] = "unknown";
+#endif
+    p["cpu"] = cpu_model();
+    p["cores"] = std::thread::hardware_concurrency();
+    p["date"] = utc_now_iso();
+    p["eigen"] = std::to_string(EIGEN_WORLD_VERSION) + "." + std::to_string(EIGEN_MAJOR_VERSION) + "." +
+                 std::to_string(EIGEN_MINOR_VERSION);
+    p["suitesparse"] = CB_CHOLMOD_VERSION;
+    p["blas"] = blas_in_use();
+    char host[256] = {0};
+    p["hostname"] = ::gethostname(host, sizeof(host) - 1) == 0 ? std::string(host) : std::string("unknown");
+    return p;
+}
+
+} // namespace
+
+std::string utc_now_iso()
+{
+    const std::time_t now = std::time(nullptr);
+    std::tm tm{};
+    ::gmtime_r(&now, &tm);
+    char buffer[32];
+    std::strftime(buffer, sizeof(buffer), "%Y-%m-%dT%H:%M:%SZ", &tm);
+    return buffer;
+}
+
+const nlohmann::json& provenance()
+{
+    static const nlohmann::json cached = compute();
+    return cached;
+}
+
+} // namespace cb

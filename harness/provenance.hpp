@@ -1,0 +1,14 @@
+#pragma once
+/// Where a result came from: git commit and dirty flag, build, compiler, CPU, libraries, host.
+#include <nlohmann/json.hpp>
+
+namespace cb {
+
+/// {"git_commit","git_dirty","build_type","compiler","cpu","cores","date","eigen","suitesparse",
+///  "blas","hostname"}. Computed once per process (the date is the first call's, UTC ISO 8601).
+const nlohmann::json& provenance();
+
+/// Current UTC time as "YYYY-MM-DDTHH:MM:SSZ".
+std::string utc_now_iso();
+
+} // namespace cb

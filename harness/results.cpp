@@ -1,0 +1,185 @@
+#include "harness/results.hpp"
+
+#include "solvers/types.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <unistd.h>
+
+namespace cb {
+
+namespace fs = std::filesystem;
+
+void write_file_atomic(const std::string& path, const std::string& content)
+{
+    const fs::path target(path);
+    if (target.has_parent_path()) fs::create_directories(target.parent_path());
+    const std::string tmp = path + ".tmp." + std::to_string(::getpid());
+    {
+        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+        if (!out) throw std::runtime_error(tmp + ": cannot open for writing");
+        out.write(content.data(), static_cast<std::streamsize>(content.size()));
+        out.flush();
+        if (!out) {
+            out.close();
+            std::remove(tmp.c_str());
+            throw std::runtime_error(tmp + ": write failed");
+        }
+    }
+    std::error_code ec;
+    fs::rename(tmp, target, ec);
+    if (ec) {
+        std::remove(tmp.c_str());
+        throw std::runtime_error(path + ": rename failed: " + ec.message());
+    }
+}
+
+void write_json_atomic(const std::string& path, const nlohmann::json& value)
+{
+    // nlohmann writes NaN/Inf as null; replace invalid UTF-8 rather than throwing.
+    write_file_atomic(path, value.dump(1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+}
+
+nlohmann::json read_json_file(const std::string& path)
+{
+    std::ifstream in(path);
+    if (!in) throw_input_error(path, "", "cannot open (missing or unreadable)");
+    try {
+        return nlohmann::json::parse(in);
+    } catch (const nlohmann::json::exception& e) {
+        throw_input_error(path, "", std::string("not valid JSON: ") + e.what());
+    }
+}
+
+std::string run_file_name(const std::string& snapshot_id, const std::string& label)
+{
+    return snapshot_id + "__" + label + ".json";
+}
+
+std::vector<nlohmann::json> read_runs(const std::string& dir)
+{
+    std::vector<std::string> files;
+    const fs::path runs = fs::path(dir) / "runs";
+    if (fs::is_directory(runs))
+        for (const auto& entry : fs::directory_iterator(runs))
+            if (entry.is_regular_file() && entry.path().extension() == ".json") files.push_back(entry.path().string());
+    std::sort(files.begin(), files.end());
+    std::vector<nlohmann::json> out;
+    for (const auto& f : files) {
+        nlohmann::json run = read_json_file(f);
+        run["_file"] = fs::path(f).filename().string();
+        out.push_back(std::move(run));
+    }
+    return out;
+}
+
+const std::vector<std::string>& summary_columns()
+{
+    static const std::vector<std::string> columns = {
+        "suite", "snapshot", "label", "solver", "status", "criterion", "status_confirmed", "iterations",
+        "a_products", "cholmod_factorizations", "kkt", "kkt_rel", "stationarity", "primal", "dual",
+        "complementarity", "objective", "violation", "native_residual", "nonfinite", "monotone", "setup_s",
+        "solve_s", "time_s", "n", "m", "tol"};
+    return columns;
+}
+
+namespace {
+
+std::string csv_escape(const std::string& s)
+{
+    if (s.find_first_of(",\"\n") == std::string::npos) return s;
+    std::string out = "\"";
+    for (char ch : s) {
+        if (ch == '"') out += '"';
+        out += ch;
+    }
+    return out + "\"";
+}
+
+std::string cell(const nlohmann::json& v)
+{
+    if (v.is_null()) return "";
+    if (v.is_boolean()) return v.get<bool>() ? "true" : "false";
+    if (v.is_number_integer() || v.is_number_unsigned()) return v.dump();
+    if (v.is_number_float()) {
+        const double d = v.get<double>();
+        if (!std::isfinite(d)) return "";
+        char buffer[40];
+        std::snprintf(buffer, sizeof(buffer), "%.17g", d);
+        return buffer;
+    }
+    if (v.is_string()) return csv_escape(v.get<std::string>());
+    return csv_escape(v.dump());
+}
+
+const nlohmann::json& at(const nlohmann::json& j, std::initializer_list<const char*> path)
+{
+    static const nlohmann::json null_value;
+    const nlohmann::json* p = &j;
+    for (const char* key : path) {
+        if (!p->is_object() || !p->contains(key)) return null_value;
+        p = &(*p)[key];
+    }
+    return *p;
+}
+
+} // namespace
+
+std::string summary_row(const nlohmann::json& run, const std::string& suite_name)
+{
+    const std::vector<nlohmann::json> values = {
+        suite_name,
+        at(run, {"snapshot", "id"}),
+        at(run, {"label"}),
+        at(run, {"solver"}),
+        at(run, {"status"}),
+        at(run, {"criterion"}),
+        at(run, {"status_confirmed"}),
+        at(run, {"iterations"}),
+        at(run, {"counters", "a_products"}),
+        at(run, {"counters", "cholmod_factorizations"}),
+        at(run, {"kkt", "max"}),
+        at(run, {"kkt_relative", "max"}),
+        at(run, {"kkt_relative", "stationarity"}),
+        at(run, {"kkt_relative", "primal"}),
+        at(run, {"kkt_relative", "dual"}),
+        at(run, {"kkt_relative", "complementarity"}),
+        at(run, {"objective"}),
+        at(run, {"violation"}),
+        at(run, {"native_residual"}),
+        at(run, {"nonfinite"}),
+        at(run, {"monotone"}),
+        at(run, {"time", "setup_s"}),
+        at(run, {"time", "solve_s"}),
+        at(run, {"time", "total_s"}),
+        at(run, {"snapshot", "n"}),
+        at(run, {"snapshot", "m"}),
+        at(run, {"tol"}),
+    };
+    std::string line;
+    for (size_t i = 0; i < values.size(); ++i) line += (i ? "," : "") + cell(values[i]);
+    return line;
+}
+
+std::string summary_csv(const std::vector<nlohmann::json>& runs, const std::string& suite_name)
+{
+    std::string text;
+    for (size_t i = 0; i < summary_columns().size(); ++i) text += (i ? "," : "") + summary_columns()[i];
+    text += "\n";
+    for (const auto& run : runs) text += summary_row(run, suite_name) + "\n";
+    return text;
+}
+
+size_t write_summary(const std::string& dir, const std::string& suite_name)
+{
+    const auto runs = read_runs(dir);
+    write_file_atomic((fs::path(dir) / "summary.csv").string(), summary_csv(runs, suite_name));
+    return runs.size();
+}
+
+} // namespace cb

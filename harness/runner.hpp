@@ -1,0 +1,55 @@
+#pragma once
+/// Runs one solver on one QP the way every harness command does: decoupling when needed, a
+/// recording monitor on the solver's paused stopwatch, the common KKT recomputed at the
+/// returned point, and the per-run results JSON (INTERFACES.md "Results folder").
+#include "solvers/kkt.hpp"
+#include "solvers/qp.hpp"
+#include "solvers/solver.hpp"
+
+#include <nlohmann/json.hpp>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace cb {
+
+struct RunOptions {
+    double time_limit_s = 0.0;      ///< overrides the solver's time_limit_s when > 0
+    long history_max = 2000;        ///< records kept (stride chosen to stay under it)
+    bool record_history = true;
+    std::string decouple = "auto";  ///< auto (decouple when the solver requires it) | none | authors | random | depth
+    std::uint64_t decouple_seed = 0;
+    int repeat = 1;                 ///< median time of k runs
+};
+
+struct RunOutcome {
+    SolverResult result;            ///< as the solver returned it
+    KktResiduals kkt, kkt_relative; ///< recomputed by the harness at the returned (x, lambda)
+    double objective = 0, violation = 0;
+    bool nonfinite = false;         ///< NaN/Inf seen in any iterate or the result
+    bool monotone = true;           ///< objective non-increasing over the recorded feasible iterates
+    bool status_confirmed = true;   ///< "converged" confirmed by the common KKT (<= tol * 1.0001 + fp slack)
+    nlohmann::json record;          ///< the full per-run results JSON (schema below)
+    // Extensions beyond INTERFACES.md:
+    std::vector<int> kept_rows;     ///< rows of the original J the solver saw (empty: all of them)
+    Vec lambda_full;                ///< lambda on the original rows (0 on rows dropped by decoupling)
+};
+
+/// Runs one solver on one QP with the monitor recording history on a paused stopwatch.
+RunOutcome run_solver(const Qp& qp, const std::string& solver_name, const nlohmann::json& settings,
+                      const RunOptions& options, const nlohmann::json& snapshot_info = {});
+
+/// Same, with warm state carried along a chain (context.lambda0 / context.eigenvector; its
+/// monitor field is ignored: the harness installs its own). lambda0 is used when its size is
+/// the original m (restricted to the kept rows when decoupling applies) or the solved QP's m.
+RunOutcome run_solver(const Qp& qp, const std::string& solver_name, const nlohmann::json& settings,
+                      const RunOptions& options, const nlohmann::json& snapshot_info,
+                      const SolveContext& warm);
+
+class SolverRegistry;
+/// Same, with the solver taken from `registry` (tests register small local solvers).
+RunOutcome run_solver(const SolverRegistry& registry, const Qp& qp, const std::string& solver_name,
+                      const nlohmann::json& settings, const RunOptions& options,
+                      const nlohmann::json& snapshot_info, const SolveContext& warm);
+
+} // namespace cb

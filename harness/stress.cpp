@@ -1,0 +1,425 @@
+#include "harness/stress.hpp"
+
+#include "harness/results.hpp"
+#include "harness/runner.hpp"
+#include "solvers/registry.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstring>
+#include <iomanip>
+#include <map>
+#include <ostream>
+#include <sstream>
+#include <poll.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace cb {
+
+bool StressRow::honest() const
+{
+    if (status == "crashed" || status == "hung" || status == "error") return false;
+    if (status == "converged") return status_confirmed;
+    return true;
+}
+
+namespace {
+
+using nlohmann::json;
+using Clock = std::chrono::steady_clock;
+
+/// Non-finite numbers travel as strings so that NaN and Inf survive the JSON round trip.
+json number_json(double v)
+{
+    if (std::isfinite(v)) return v;
+    return std::isnan(v) ? "nan" : (v > 0 ? "inf" : "-inf");
+}
+double json_number(const json& j)
+{
+    if (j.is_number()) return j.get<double>();
+    if (j.is_string()) {
+        const std::string s = j.get<std::string>();
+        if (s == "inf") return INFINITY;
+        if (s == "-inf") return -INFINITY;
+    }
+    return NAN;
+}
+
+json row_to_json(const StressRow& r)
+{
+    return {{"solver", r.solver}, {"case", r.case_id}, {"family", r.family}, {"severity", r.severity},
+            {"status", r.status}, {"kkt", number_json(r.kkt)}, {"tol", r.tol},
+            {"violation", number_json(r.violation)}, {"nonfinite", r.nonfinite}, {"monotone", r.monotone},
+            {"time_s", number_json(r.time_s)}, {"iterations", r.iterations},
+            {"status_confirmed", r.status_confirmed}, {"message", r.message}, {"n", r.n}, {"m", r.m},
+            {"criterion", r.criterion}};
+}
+StressRow row_from_json(const json& j)
+{
+    StressRow r;
+    r.solver = j.at("solver");
+    r.case_id = j.at("case");
+    r.family = j.at("family");
+    r.severity = j.at("severity");
+    r.status = j.at("status");
+    r.kkt = json_number(j.at("kkt"));
+    r.tol = j.at("tol");
+    r.violation = json_number(j.at("violation"));
+    r.nonfinite = j.at("nonfinite");
+    r.monotone = j.at("monotone");
+    r.time_s = json_number(j.at("time_s"));
+    r.iterations = j.at("iterations");
+    r.status_confirmed = j.at("status_confirmed");
+    r.message = j.at("message");
+    r.n = j.at("n");
+    r.m = j.at("m");
+    r.criterion = j.at("criterion");
+    return r;
+}
+
+StressRow blank_row(const StressCase& c, const std::string& solver, const StressOptions& options, long n, long m)
+{
+    StressRow r;
+    r.solver = solver;
+    r.case_id = c.id;
+    r.family = c.family;
+    r.severity = c.severity;
+    r.tol = options.tol;
+    r.n = n;
+    r.m = m;
+    r.kkt = NAN;
+    r.violation = NAN;
+    return r;
+}
+
+/// One run in this process. Returns the row and the per-run record (without history).
+std::pair<StressRow, json> run_one(const Qp& qp, const StressCase& c, const std::string& solver,
+                                   const StressOptions& options)
+{
+    StressRow row = blank_row(c, solver, options, qp.n(), qp.m());
+    RunOptions ro;
+    ro.time_limit_s = options.time_limit_s;
+    ro.history_max = 200;  // enough for the monotonicity and NaN checks
+    ro.decouple = "auto";
+    const json info = {{"id", c.id}, {"path", ""}, {"hash", ""}, {"n", qp.n()}, {"m", qp.m()}, {"meta", qp.meta}};
+    json record;
+    try {
+        const RunOutcome out = run_solver(qp, solver, json{{"tol", options.tol}}, ro, info);
+        row.status = to_string(out.result.status);
+        row.criterion = out.result.criterion;
+        row.kkt = out.kkt_relative.max();
+        row.violation = out.violation;
+        row.nonfinite = out.nonfinite;
+        row.monotone = out.monotone;
+        row.time_s = out.result.setup_s + out.result.solve_s;
+        row.iterations = out.result.iterations;
+        row.status_confirmed = out.status_confirmed;
+        row.message = out.record.value("message", out.result.message);
+        if (out.result.status == SolveStatus::INVALID_INPUT && row.message.empty())
+            row.message = "(invalid_input without a message)";
+        record = out.record;
+        record.erase("history");
+    } catch (const InputError& e) {
+        // A refusal through an exception: still an answer with a message.
+        row.status = to_string(SolveStatus::INVALID_INPUT);
+        row.message = std::string("refused with an exception: ") + e.what();
+    } catch (const std::exception& e) {
+        row.status = "error";
+        row.status_confirmed = false;
+        row.message = std::string("exception: ") + e.what();
+    }
+    return {row, record};
+}
+
+/// Writes all of `data` to fd (the child's result pipe).
+void write_all(int fd, const std::string& data)
+{
+    size_t done = 0;
+    while (done < data.size()) {
+        const ssize_t k = ::write(fd, data.data() + done, data.size() - done);
+        if (k < 0 && errno == EINTR) continue;
+        if (k <= 0) return;
+        done += static_cast<size_t>(k);
+    }
+}
+
+/// One run in a forked child: a crash (signal) or a hang past the hard deadline becomes a row.
+std::pair<StressRow, json> run_isolated(const Qp& qp, const StressCase& c, const std::string& solver,
+                                        const StressOptions& options)
+{
+    int fds[2];
+    if (::pipe(fds) != 0) return run_one(qp, c, solver, options);
+    const pid_t pid = ::fork();
+    if (pid < 0) {
+        ::close(fds[0]);
+        ::close(fds[1]);
+        return run_one(qp, c, solver, options);
+    }
+    if (pid == 0) {
+        ::close(fds[0]);
+        int code = 0;
+        try {
+            const auto result = run_one(qp, c, solver, options);
+            write_all(fds[1], json{{"row", row_to_json(result.first)}, {"record", result.second}}.dump());
+        } catch (...) {
+            code = 3;
+        }
+        ::close(fds[1]);
+        ::_exit(code);
+    }
+    ::close(fds[1]);
+    // Hard deadline: well past the solver's own limit (which covers its setup too).
+    const double deadline_s = 3.0 * options.time_limit_s + 20.0;
+    const auto started = Clock::now();
+    std::string data;
+    bool killed = false;
+    for (;;) {
+        const double elapsed = std::chrono::duration<double>(Clock::now() - started).count();
+        if (elapsed > deadline_s) {
+            ::kill(pid, SIGKILL);
+            killed = true;
+            break;
+        }
+        pollfd p{fds[0], POLLIN, 0};
+        const int ready = ::poll(&p, 1, 200);
+        if (ready < 0 && errno == EINTR) continue;
+        if (ready > 0) {
+            char buffer[65536];
+            const ssize_t k = ::read(fds[0], buffer, sizeof buffer);
+            if (k > 0) data.append(buffer, static_cast<size_t>(k));
+            else if (k == 0) break;  // EOF: the child closed its end
+            else if (errno != EINTR) break;
+        }
+    }
+    ::close(fds[0]);
+    int wstatus = 0;
+    while (::waitpid(pid, &wstatus, 0) < 0 && errno == EINTR) {
+    }
+    StressRow row = blank_row(c, solver, options, qp.n(), qp.m());
+    row.status_confirmed = false;
+    if (killed) {
+        row.status = "hung";
+        std::ostringstream s;
+        s << "no result within " << deadline_s << " s (time limit " << options.time_limit_s << " s); killed";
+        row.message = s.str();
+        row.time_s = deadline_s;
+        return {row, json::object()};
+    }
+    if (WIFSIGNALED(wstatus)) {
+        row.status = "crashed";
+        row.message = std::string("killed by signal ") + std::to_string(WTERMSIG(wstatus)) + " (" +
+                      strsignal(WTERMSIG(wstatus)) + ")";
+        return {row, json::object()};
+    }
+    try {
+        const json j = json::parse(data);
+        return {row_from_json(j.at("row")), j.at("record")};
+    } catch (const std::exception& e) {
+        row.status = "error";
+        row.message = "child exited with status " + std::to_string(WEXITSTATUS(wstatus)) + " without a readable result";
+        return {row, json::object()};
+    }
+}
+
+std::string format_number(double v)
+{
+    if (std::isnan(v)) return "nan";
+    if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+    std::ostringstream s;
+    s << std::setprecision(6) << v;
+    return s.str();
+}
+
+std::string csv_field(const std::string& s)
+{
+    if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
+    std::string out = "\"";
+    for (char ch : s) {
+        if (ch == '"') out += "\"\"";
+        else if (ch == '\n' || ch == '\r') out += ' ';
+        else out += ch;
+    }
+    return out + "\"";
+}
+
+std::string short_status(const StressRow& r)
+{
+    static const std::map<std::string, std::string> names = {
+        {"converged", "ok"},        {"max_iterations", "maxit"}, {"time_limit", "time"},
+        {"stalled", "stalled"},     {"diverged", "diverged"},    {"infeasible", "infeas"},
+        {"invalid_input", "refused"}, {"stopped_by_monitor", "stopped"}, {"crashed", "CRASH"},
+        {"hung", "HUNG"},           {"error", "ERROR"}};
+    const auto it = names.find(r.status);
+    return it == names.end() ? r.status : it->second;
+}
+
+std::string sci(double v)
+{
+    if (!std::isfinite(v)) return format_number(v);
+    std::ostringstream s;
+    s << std::scientific << std::setprecision(1) << v;
+    return s.str();
+}
+
+std::string md_cell(const std::string& s)
+{
+    std::string out;
+    for (char ch : s) out += (ch == '|') ? std::string("\\|") : (ch == '\n' ? std::string(" ") : std::string(1, ch));
+    return out;
+}
+
+} // namespace
+
+StressReport run_stress(const StressOptions& options)
+{
+    const auto started = Clock::now();
+    std::vector<std::string> solvers = options.solvers;
+    if (solvers.empty()) solvers = builtin_registry().names();
+    for (const auto& s : solvers) builtin_registry().entry(s);  // throws the named InputError
+    const std::vector<StressCase> cases = select_stress_cases(stress_cases(options.quick), options.cases);
+
+    StressReport report;
+    report.time_limit_s = options.time_limit_s;
+    report.tol = options.tol;
+    const size_t total = cases.size() * solvers.size();
+    size_t done = 0;
+    for (const StressCase& c : cases) {
+        Qp qp;
+        std::string generation_error;
+        try {
+            qp = make_stress_qp(c);
+        } catch (const std::exception& e) {
+            generation_error = e.what();
+        }
+        for (const std::string& solver : solvers) {
+            ++done;
+            std::pair<StressRow, json> result;
+            if (!generation_error.empty()) {
+                result.first = blank_row(c, solver, options, 0, 0);
+                result.first.status = "error";
+                result.first.status_confirmed = false;
+                result.first.message = "case generation failed: " + generation_error;
+            } else {
+                result = options.isolate ? run_isolated(qp, c, solver, options) : run_one(qp, c, solver, options);
+            }
+            const StressRow& row = result.first;
+            if (options.progress) {
+                *options.progress << "[" << done << "/" << total << "] " << solver << " x " << c.id << ": "
+                                  << row.status << (row.honest() ? "" : " (WRONG)") << " kkt=" << sci(row.kkt)
+                                  << " viol=" << sci(row.violation) << " t=" << std::fixed << std::setprecision(2)
+                                  << row.time_s << "s" << std::defaultfloat << "\n";
+                options.progress->flush();
+            }
+            if (!options.out_dir.empty() && !result.second.empty())
+                write_json_atomic(options.out_dir + "/runs/" + run_file_name(c.id, solver), result.second);
+            report.rows.push_back(row);
+        }
+    }
+    report.wall_s = std::chrono::duration<double>(Clock::now() - started).count();
+    if (!options.out_dir.empty()) {
+        write_file_atomic(options.out_dir + "/stability.csv", stability_csv(report.rows));
+        write_file_atomic(options.out_dir + "/stability.md", stability_markdown(report));
+    }
+    return report;
+}
+
+std::string stability_csv(const std::vector<StressRow>& rows)
+{
+    std::ostringstream s;
+    s << "solver,case,severity,status,kkt,tol,violation,nonfinite,monotone,time_s,iterations,status_confirmed,"
+         "message,family,n,m,criterion\n";
+    for (const StressRow& r : rows) {
+        s << csv_field(r.solver) << ',' << csv_field(r.case_id) << ',' << r.severity << ',' << r.status << ','
+          << format_number(r.kkt) << ',' << format_number(r.tol) << ',' << format_number(r.violation) << ','
+          << (r.nonfinite ? "true" : "false") << ',' << (r.monotone ? "true" : "false") << ','
+          << format_number(r.time_s) << ',' << r.iterations << ',' << (r.status_confirmed ? "true" : "false") << ','
+          << csv_field(r.message) << ',' << csv_field(r.family) << ',' << r.n << ',' << r.m << ','
+          << csv_field(r.criterion) << '\n';
+    }
+    return s.str();
+}
+
+std::string stability_markdown(const StressReport& report)
+{
+    std::vector<std::string> solvers, cases;
+    std::map<std::pair<std::string, std::string>, const StressRow*> cell;
+    std::map<std::string, const StressRow*> case_row;
+    for (const StressRow& r : report.rows) {
+        if (std::find(solvers.begin(), solvers.end(), r.solver) == solvers.end()) solvers.push_back(r.solver);
+        if (std::find(cases.begin(), cases.end(), r.case_id) == cases.end()) cases.push_back(r.case_id);
+        cell[{r.case_id, r.solver}] = &r;
+        case_row[r.case_id] = &r;
+    }
+    std::ostringstream s;
+    s << "# Stability table\n\n"
+      << report.rows.size() << " runs (" << cases.size() << " cases x " << solvers.size()
+      << " solvers), time limit " << report.time_limit_s << " s per run, tol " << report.tol
+      << " on the common relative KKT error; wall time " << std::fixed << std::setprecision(1) << report.wall_s
+      << " s.\n\n"
+      << std::defaultfloat
+      << "Cell: status and the relative KKT error reached (ok = converged, maxit, time, infeas, refused = "
+         "invalid_input, ...). **bold!** = a wrong status (\"converged\" not confirmed by the common KKT, or a "
+         "crash/hang); NaN = non-finite values seen; nm = objective not monotone over feasible iterates.\n\n";
+    s << "| case | sev | n | m |";
+    for (const auto& sv : solvers) s << ' ' << sv << " |";
+    s << "\n|---|---|---|---|";
+    for (size_t k = 0; k < solvers.size(); ++k) s << "---|";
+    s << '\n';
+    for (const auto& c : cases) {
+        const StressRow* any = case_row[c];
+        s << "| " << c << " | " << any->severity << " | " << any->n << " | " << any->m << " |";
+        for (const auto& sv : solvers) {
+            const auto it = cell.find({c, sv});
+            if (it == cell.end()) {
+                s << "  |";
+                continue;
+            }
+            const StressRow& r = *it->second;
+            std::string text = short_status(r) + " " + sci(r.kkt);
+            if (r.nonfinite) text += " NaN";
+            if (!r.monotone) text += " nm";
+            if (!r.honest()) text = "**" + text + "!**";
+            s << ' ' << text << " |";
+        }
+        s << '\n';
+    }
+    s << "\n## Summary per solver\n\n| solver | runs | converged (confirmed) | wrong statuses | refused | "
+         "infeasible | time limit | max iterations | other | non-finite | non-monotone |\n"
+         "|---|---|---|---|---|---|---|---|---|---|---|\n";
+    for (const auto& sv : solvers) {
+        long runs = 0, ok = 0, wrong = 0, refused = 0, infeasible = 0, time = 0, maxit = 0, other = 0, nonfinite = 0,
+             nonmonotone = 0;
+        for (const StressRow& r : report.rows) {
+            if (r.solver != sv) continue;
+            ++runs;
+            if (!r.honest()) ++wrong;
+            else if (r.status == "converged") ++ok;
+            else if (r.status == "invalid_input") ++refused;
+            else if (r.status == "infeasible") ++infeasible;
+            else if (r.status == "time_limit") ++time;
+            else if (r.status == "max_iterations") ++maxit;
+            else ++other;
+            if (r.nonfinite) ++nonfinite;
+            if (!r.monotone) ++nonmonotone;
+        }
+        s << "| " << sv << " | " << runs << " | " << ok << " | " << wrong << " | " << refused << " | " << infeasible
+          << " | " << time << " | " << maxit << " | " << other << " | " << nonfinite << " | " << nonmonotone << " |\n";
+    }
+    s << "\n## Wrong statuses\n\n";
+    long wrong = 0;
+    for (const StressRow& r : report.rows) {
+        if (r.honest()) continue;
+        ++wrong;
+        s << "- " << r.solver << " on " << r.case_id << ": status " << r.status
+          << (r.criterion.empty() ? "" : " (criterion " + r.criterion + ")") << ", relative KKT " << sci(r.kkt)
+          << " vs tol " << sci(r.tol) << ", violation " << sci(r.violation) << ": " << md_cell(r.message) << "\n";
+    }
+    if (wrong == 0) s << "None: every \"converged\" was confirmed by the common KKT error.\n";
+    return s.str();
+}
+
+} // namespace cb

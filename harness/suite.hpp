@@ -1,0 +1,66 @@
+#pragma once
+/// Suite files (INTERFACES.md "Suite JSON"): parse and validate strictly, expand snapshot
+/// globs/folders, and generate synthetic snapshots into a cache keyed by their content.
+#include <nlohmann/json.hpp>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace cb {
+
+struct SuiteSolver {
+    std::string label;   ///< unique in the suite, file-name safe; defaults to `solver`
+    std::string solver;  ///< registry name (an unknown one is reported per run, not here)
+    nlohmann::json settings = nlohmann::json::object();
+};
+
+struct SuiteGenerate {
+    std::string id;
+    std::string family;
+    std::uint64_t seed = 0;
+    nlohmann::json params = nlohmann::json::object();
+};
+
+struct Suite {
+    std::string path;                   ///< the suite file
+    std::string name;
+    std::vector<std::string> snapshots; ///< patterns, as written (relative to the suite file)
+    std::vector<SuiteGenerate> generate;
+    std::vector<SuiteSolver> solvers;
+    double tol = 1e-6;                  ///< default `tol` of every solver (a solver's own setting wins)
+    double time_limit_s = 60.0;
+    int repeat = 1;
+    long history_max = 2000;
+    bool reference = false;
+    std::string decouple = "auto";
+    std::uint64_t decouple_seed = 0;
+    bool chain = false;
+    nlohmann::json raw;                 ///< the file as read
+};
+
+/// Reads and validates a suite file; InputError("SUITE: /field: problem") on any bad or unknown key.
+Suite load_suite(const std::string& path);
+/// Same from JSON already in memory (`where` names it in messages; relative paths resolve
+/// against `base_dir`).
+Suite parse_suite(const nlohmann::json& j, const std::string& where);
+
+/// One snapshot of a suite, resolved to a file.
+struct SuiteSnapshot {
+    std::string id;    ///< file stem (duplicates get "-2", "-3" ...) or the generate entry's id
+    std::string path;
+    bool generated = false;
+};
+
+/// The cache folder: $CB_CACHE, else $HOME/.cache/contactbench, else /tmp/contactbench-cache.
+std::string cache_dir();
+
+/// Expands patterns (files, folders: every *.qpsnap inside, globs: sorted matches) in the
+/// order listed, then the generate entries (written with write_qpsnap into
+/// `generated_dir` (default cache_dir()/generated) under a name derived from a hash of
+/// {family, seed, params}, reused when already there). A pattern matching nothing is an InputError.
+std::vector<SuiteSnapshot> resolve_snapshots(const Suite& suite, const std::string& generated_dir = "");
+
+/// 64-bit FNV-1a as 16 hex digits.
+std::string fnv1a_hex(const std::string& bytes);
+
+} // namespace cb

@@ -1,0 +1,252 @@
+"""Load a contactbench results folder (INTERFACES.md "Results folder") into pandas DataFrames.
+
+A results folder holds summary.csv (one row per run), runs/<snapshot>__<label>.json (the full
+per-run records, with histories when recorded), suite.json and provenance.json. Simulation
+folders (``contactbench simulate``) hold snapshots/*.qpsnap, steps.csv and frames.csv.
+
+Everything here only reads; nothing is computed that the harness already computed.
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import struct
+from dataclasses import dataclass, field
+from typing import Dict, List, Optional
+
+import numpy as np
+import pandas as pd
+
+#: history columns fixed by INTERFACES.md; used when a record omits "columns"
+HISTORY_COLUMNS = ["iteration", "time_s", "a_products", "step", "stationarity", "primal", "dual",
+                   "complementarity", "kkt", "kkt_rel", "objective", "native_residual", "active_set"]
+
+#: summary.csv columns fixed by INTERFACES.md
+SUMMARY_COLUMNS = ["suite", "snapshot", "label", "solver", "status", "criterion", "status_confirmed",
+                   "iterations", "a_products", "cholmod_factorizations", "kkt", "kkt_rel",
+                   "stationarity", "primal", "dual", "complementarity", "objective", "violation",
+                   "native_residual", "nonfinite", "monotone", "setup_s", "solve_s", "time_s", "n",
+                   "m", "tol"]
+
+_BOOL_COLUMNS = ("status_confirmed", "nonfinite", "monotone")
+
+
+def _to_bool(value) -> bool:
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (int, float, np.integer, np.floating)):
+        return bool(value) and not (isinstance(value, float) and math.isnan(value))
+    return str(value).strip().lower() in ("true", "1", "yes")
+
+
+def _number(value) -> float:
+    """JSON numbers, plus null/"nan"/"inf" strings as some writers emit for non-finite values."""
+    if value is None:
+        return float("nan")
+    if isinstance(value, (int, float)):
+        return float(value)
+    try:
+        return float(str(value))
+    except ValueError:
+        return float("nan")
+
+
+@dataclass
+class Results:
+    """One results folder, loaded."""
+    path: str
+    summary: pd.DataFrame                      #: summary.csv (or rebuilt from runs when absent)
+    runs: pd.DataFrame                         #: one row per run JSON (flattened scalars)
+    histories: pd.DataFrame                    #: long form: snapshot, label + history columns
+    records: Dict[tuple, dict] = field(default_factory=dict)  #: (snapshot, label) -> run JSON
+    suite: dict = field(default_factory=dict)
+    provenance: dict = field(default_factory=dict)
+    _by_run: Optional[dict] = field(default=None, repr=False)
+
+    def history(self, snapshot: str, label: str) -> pd.DataFrame:
+        """History of one run (empty DataFrame with the standard columns when not recorded)."""
+        if self.histories.empty:
+            return pd.DataFrame(columns=HISTORY_COLUMNS)
+        if self._by_run is None:  # one pass over the long table, not one filter per lookup
+            self._by_run = {key: g.reset_index(drop=True)
+                            for key, g in self.histories.groupby(["snapshot", "label"], sort=False)}
+        found = self._by_run.get((snapshot, label))
+        return found if found is not None else pd.DataFrame(columns=self.histories.columns)
+
+    def labels(self) -> List[str]:
+        return list(dict.fromkeys(self.runs["label"])) if not self.runs.empty else []
+
+    def snapshots(self) -> List[str]:
+        return list(dict.fromkeys(self.runs["snapshot"])) if not self.runs.empty else []
+
+
+def flatten_run(record: dict) -> dict:
+    """The scalar facts of one run record, as one flat row."""
+    snap = record.get("snapshot", {}) or {}
+    meta = snap.get("meta", {}) or {}
+    counters = record.get("counters", {}) or {}
+    times = record.get("time", {}) or {}
+    kkt = record.get("kkt", {}) or {}
+    kkt_rel = record.get("kkt_relative", {}) or {}
+    ref = record.get("reference") or {}
+    dec = record.get("decouple") or {}
+    row = {
+        "snapshot": snap.get("id", ""),
+        "snapshot_path": snap.get("path", ""),
+        "label": record.get("label", record.get("solver", "")),
+        "solver": record.get("solver", ""),
+        "status": record.get("status", ""),
+        "criterion": record.get("criterion", ""),
+        "status_confirmed": _to_bool(record.get("status_confirmed", True)),
+        "iterations": _number(record.get("iterations")),
+        "objective": _number(record.get("objective")),
+        "kkt": _number(kkt.get("max")),
+        "kkt_rel": _number(kkt_rel.get("max")),
+        "violation": _number(record.get("violation")),
+        "native_residual": _number(record.get("native_residual")),
+        "nonfinite": _to_bool(record.get("nonfinite", False)),
+        "monotone": _to_bool(record.get("monotone", True)),
+        "tol": _number(record.get("tol")),
+        "setup_s": _number(times.get("setup_s")),
+        "solve_s": _number(times.get("solve_s")),
+        "time_s": _number(times.get("total_s", _number(times.get("setup_s")) + _number(times.get("solve_s")))),
+        "n": _number(snap.get("n")),
+        "m": _number(snap.get("m")),
+        "frame": _number(meta.get("frame")),
+        "newton_iteration": _number(meta.get("newton_iteration")),
+        "scene": meta.get("scene", ""),
+        "h": _number(meta.get("h")),
+        "vertices": _number(meta.get("vertices")),
+        "tets": _number(meta.get("tets")),
+        "reference_objective": _number(ref.get("objective")),
+        "rows_before": _number(dec.get("rows_before")),
+        "rows_after": _number(dec.get("rows_after")),
+    }
+    for key, value in counters.items():
+        row["counters." + key] = _number(value)
+    row["a_products"] = _number(counters.get("a_products"))
+    for key, value in (record.get("settings") or {}).items():
+        if isinstance(value, (str, int, float, bool)) or value is None:
+            row["settings." + key] = value
+    return row
+
+
+def history_frame(record: dict) -> pd.DataFrame:
+    """The history of one run record as a DataFrame (empty when not recorded)."""
+    hist = record.get("history")
+    if not hist:
+        return pd.DataFrame(columns=HISTORY_COLUMNS)
+    columns = hist.get("columns") or HISTORY_COLUMNS
+    rows = hist.get("rows") or []
+    df = pd.DataFrame(rows, columns=columns)
+    for col in df.columns:
+        if col != "step":
+            df[col] = pd.to_numeric(df[col], errors="coerce")
+    return df
+
+
+def load_results(path: str, with_history: bool = True) -> Results:
+    """Load a results folder. Raises FileNotFoundError naming the folder when it holds no runs."""
+    runs_dir = os.path.join(path, "runs")
+    summary_path = os.path.join(path, "summary.csv")
+    if not os.path.isdir(runs_dir) and not os.path.isfile(summary_path):
+        raise FileNotFoundError(f"{path}: not a results folder (no runs/ and no summary.csv)")
+    records: Dict[tuple, dict] = {}
+    rows, hists = [], []
+    if os.path.isdir(runs_dir):
+        for name in sorted(os.listdir(runs_dir)):
+            if not name.endswith(".json"):
+                continue
+            file = os.path.join(runs_dir, name)
+            with open(file, encoding="utf-8") as f:
+                try:
+                    record = json.load(f)
+                except json.JSONDecodeError as err:
+                    raise ValueError(f"{file}: not valid JSON: {err}") from err
+            row = flatten_run(record)
+            row["file"] = name
+            rows.append(row)
+            records[(row["snapshot"], row["label"])] = record
+            if with_history:
+                h = history_frame(record)
+                if not h.empty:
+                    h.insert(0, "label", row["label"])
+                    h.insert(0, "snapshot", row["snapshot"])
+                    hists.append(h)
+    runs = pd.DataFrame(rows)
+    if os.path.isfile(summary_path):
+        summary = pd.read_csv(summary_path)
+        for col in _BOOL_COLUMNS:
+            if col in summary.columns:
+                summary[col] = summary[col].map(_to_bool)
+    else:
+        summary = runs[[c for c in SUMMARY_COLUMNS if c in runs.columns]].copy() if not runs.empty \
+            else pd.DataFrame(columns=SUMMARY_COLUMNS)
+    if runs.empty and not summary.empty:
+        runs = summary.copy()   # summary-only folders still give profiles and tables
+    histories = pd.concat(hists, ignore_index=True) if hists else pd.DataFrame(
+        columns=["snapshot", "label"] + HISTORY_COLUMNS)
+    return Results(path=path, summary=summary, runs=runs, histories=histories, records=records,
+                   suite=_read_json(os.path.join(path, "suite.json")),
+                   provenance=_read_json(os.path.join(path, "provenance.json")))
+
+
+def _read_json(path: str) -> dict:
+    if not os.path.isfile(path):
+        return {}
+    with open(path, encoding="utf-8") as f:
+        return json.load(f)
+
+
+def read_qpsnap_header(path: str) -> dict:
+    """The JSON header of a .qpsnap file (8-byte little-endian length, then UTF-8 JSON)."""
+    with open(path, "rb") as f:
+        raw = f.read(8)
+        if len(raw) != 8:
+            raise ValueError(f"{path}: shorter than the 8-byte header length")
+        (length,) = struct.unpack("<Q", raw)
+        if length > 64 * 1024 * 1024:
+            raise ValueError(f"{path}: header length {length} is implausible")
+        text = f.read(length)
+    try:
+        return json.loads(text.decode("utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as err:
+        raise ValueError(f"{path}: header is not UTF-8 JSON: {err}") from err
+
+
+def snapshot_table(folder: str) -> pd.DataFrame:
+    """One row per *.qpsnap in folder (recursively): path, n, m and the meta fields."""
+    rows = []
+    for root, _dirs, files in os.walk(folder):
+        for name in sorted(files):
+            if not name.endswith(".qpsnap"):
+                continue
+            file = os.path.join(root, name)
+            try:
+                header = read_qpsnap_header(file)
+            except (OSError, ValueError):
+                continue
+            meta = header.get("meta", {}) or {}
+            rows.append({"path": file, "name": name, "n": header.get("n"), "m": header.get("m"),
+                         "scene": meta.get("scene", ""), "frame": meta.get("frame"),
+                         "newton_iteration": meta.get("newton_iteration", 0), "h": meta.get("h"),
+                         "vertices": meta.get("vertices"), "tets": meta.get("tets")})
+    df = pd.DataFrame(rows, columns=["path", "name", "n", "m", "scene", "frame", "newton_iteration",
+                                     "h", "vertices", "tets"])
+    if not df.empty:
+        df = df.sort_values(["frame", "newton_iteration", "name"], na_position="last").reset_index(drop=True)
+    return df
+
+
+def load_simulation(folder: str) -> dict:
+    """A simulation output folder: {"steps": DataFrame|None, "frames": DataFrame|None, "snapshots": DataFrame}."""
+    out = {"path": folder, "steps": None, "frames": None}
+    for key in ("steps", "frames"):
+        file = os.path.join(folder, key + ".csv")
+        if os.path.isfile(file):
+            out[key] = pd.read_csv(file)
+    snaps = os.path.join(folder, "snapshots")
+    out["snapshots"] = snapshot_table(snaps) if os.path.isdir(snaps) else snapshot_table(folder) \
+        if os.path.isdir(folder) else pd.DataFrame()
+    return out

@@ -1,0 +1,104 @@
+"""What the paper-figure scripts share: where the results and simulations are, the authors' data,
+and the outcome each script hands to the report.
+
+A figure whose inputs are missing raises NotProduced(reason); the report then says
+"not produced: <reason>", never a made-up figure.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+from dataclasses import dataclass, field
+from typing import Dict, List, Optional
+
+import pandas as pd
+
+from claims import Claim
+from loader import Results, load_results, load_simulation
+
+
+class NotProduced(Exception):
+    """A figure could not be produced; the message is the reason shown in the report."""
+
+
+@dataclass
+class FigureOutcome:
+    name: str                               #: "fig6", "table1", ...
+    title: str
+    files: List[str] = field(default_factory=list)   #: figures written (png + pdf)
+    claims: List[Claim] = field(default_factory=list)
+    tables: List[str] = field(default_factory=list)  #: markdown blocks for the report
+    notes: List[str] = field(default_factory=list)
+    missing: Optional[str] = None           #: reason when not produced
+
+
+@dataclass
+class PaperContext:
+    out: str                                #: results/paper
+    data: Optional[str] = None              #: ../shared/paper-data (may be absent)
+    quick: bool = False
+    results: Dict[str, str] = field(default_factory=dict)   #: suite name -> results folder
+    sims: Dict[str, str] = field(default_factory=dict)      #: scene key -> simulation folder
+    reasons: Dict[str, str] = field(default_factory=dict)   #: suite/scene -> why it is missing
+    notes: Dict[str, List[str]] = field(default_factory=dict)  #: suite -> notes (e.g. substitutions)
+
+    @property
+    def fig_dir(self) -> str:
+        return os.path.join(self.out, "figures")
+
+    def require_results(self, suite: str) -> Results:
+        folder = self.results.get(suite) or os.path.join(self.out, "runs", suite)
+        if suite in self.reasons:
+            raise NotProduced(self.reasons[suite])
+        try:
+            res = load_results(folder)
+        except FileNotFoundError:
+            raise NotProduced(f"no results for suite '{suite}' in {folder}")
+        if res.runs.empty:
+            raise NotProduced(f"suite '{suite}' produced no runs ({folder})")
+        return res
+
+    def simulation(self, key: str) -> Optional[dict]:
+        folder = self.sims.get(key)
+        if not folder or not os.path.isdir(folder):
+            return None
+        return load_simulation(folder)
+
+    def authors_csv(self, name: str) -> Optional[pd.DataFrame]:
+        """The authors' data file figures/<name>, or None when --data is absent."""
+        if not self.data:
+            return None
+        path = os.path.join(self.data, "figures", name)
+        return pd.read_csv(path) if os.path.isfile(path) else None
+
+
+def standalone_context(argv, suite: str, description: str) -> PaperContext:
+    """Command line of a figure script run on its own: RESULTS_DIR [--data DIR] [--out DIR]."""
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("results", help=f"results folder of the '{suite}' suite")
+    parser.add_argument("--data", default=None, help="the authors' data (../shared/paper-data)")
+    parser.add_argument("--out", default=None, help="output folder (figures/ goes inside; default: RESULTS)")
+    parser.add_argument("--sim", action="append", default=[], metavar="KEY=DIR",
+                        help="simulation folders (table1: scene=DIR), repeatable")
+    args = parser.parse_args(argv)
+    ctx = PaperContext(out=args.out or args.results, data=args.data, results={suite: args.results})
+    for item in args.sim:
+        key, _, folder = item.partition("=")
+        ctx.sims[key] = folder
+    return ctx
+
+
+def run_standalone(produce, argv, suite: str, description: str) -> int:
+    ctx = standalone_context(argv, suite, description)
+    try:
+        outcome = produce(ctx)
+    except NotProduced as err:
+        print(f"not produced: {err}")
+        return 1
+    for f in outcome.files:
+        print(f)
+    for c in outcome.claims:
+        print(f"[{c.verdict}] {c.claim}: paper {c.paper}; authors {c.authors}; ours {c.ours}")
+    for t in outcome.tables:
+        print(t)
+    return 0

@@ -1,0 +1,306 @@
+"""Reader for contactbench ``.qpsnap`` v1 snapshots (numpy only; scipy optional).
+
+Layout (DESIGN.md "Snapshot format"): 8-byte little-endian uint64 N, N bytes of UTF-8 JSON
+header, then a data buffer of little-endian arrays at 8-byte aligned offsets, each with its
+zlib CRC32. The checks are those of the C++ reader (problems/qpsnap.cpp) and errors name the
+file and the field: ``QpsnapError("PATH: A.indices: column 7 out of range [0, 6) in row 3")``.
+
+    snap = read_qpsnap("frame_0003.qpsnap")
+    snap["n"], snap["m"], snap["meta"], snap["arrays"]["b"]
+    A, J = matrices(snap)            # scipy.sparse.csr_matrix, needs scipy
+"""
+
+import json
+import zlib
+
+import numpy as np
+
+__all__ = ["QpsnapError", "read_qpsnap", "read_header", "matrices", "content_hash", "REQUIRED", "OPTIONAL"]
+
+REQUIRED = {
+    "A.indptr": "int64", "A.indices": "int64", "A.data": "float64", "b": "float64", "x0": "float64",
+    "J.indptr": "int64", "J.indices": "int64", "J.data": "float64", "c": "float64",
+}
+OPTIONAL = {
+    "contact.kind": "int64", "contact.depth": "float64", "contact.vertex": "int64",
+    "x_ref": "float64", "lambda_ref": "float64",
+}
+_MAX_INT32 = 2147483647
+
+
+class QpsnapError(ValueError):
+    """A snapshot failed validation; the message names the file and the field."""
+
+
+def _fail(path, field, problem):
+    raise QpsnapError(f"{path}: {field}: {problem}" if field else f"{path}: {problem}")
+
+
+def _is_uint(v):
+    return isinstance(v, int) and not isinstance(v, bool) and v >= 0
+
+
+def _parse_header(path, raw, file_size):
+    if file_size < 8:
+        _fail(path, "header", f"file too short: {file_size} bytes, a .qpsnap starts with an 8-byte header length")
+    n_header = int.from_bytes(raw[:8], "little")
+    if n_header > file_size - 8:
+        _fail(path, "header", f"header length {n_header} exceeds the file ({file_size - 8} bytes after the length field)")
+    try:
+        header = json.loads(bytes(raw[8:8 + n_header]).decode("utf-8"))
+    except (UnicodeDecodeError, ValueError) as e:
+        _fail(path, "header", f"not valid UTF-8 JSON ({e})")
+    if not isinstance(header, dict):
+        _fail(path, "header", f"expected a JSON object, got {type(header).__name__}")
+    if "format" not in header:
+        _fail(path, "format", 'missing (expected "qpsnap")')
+    if header["format"] != "qpsnap":
+        _fail(path, "format", f'expected "qpsnap", got {json.dumps(header["format"])}')
+    if "version" not in header:
+        _fail(path, "version", "missing (expected 1)")
+    if header["version"] != 1:
+        _fail(path, "version", f"unsupported version {json.dumps(header['version'])} (this reader knows version 1)")
+    for key in ("n", "m"):
+        if key not in header:
+            _fail(path, key, "missing")
+        if not _is_uint(header[key]):
+            _fail(path, key, f"expected a non-negative integer, got {json.dumps(header[key])}")
+        if header[key] > _MAX_INT32:
+            _fail(path, key, f"too large: {header[key]} > 2147483647 (indices are 32-bit)")
+    if not isinstance(header.get("arrays"), dict):
+        _fail(path, "arrays", "missing or not an object")
+    if "meta" in header and not isinstance(header["meta"], dict):
+        _fail(path, "meta", f"expected an object, got {json.dumps(header['meta'])}")
+    return header, n_header
+
+
+def read_header(path):
+    """The JSON header only (validated as far as the header goes)."""
+    with open(path, "rb") as f:
+        head = f.read(8)
+        f.seek(0, 2)
+        size = f.tell()
+        if len(head) == 8:
+            n_header = int.from_bytes(head, "little")
+            if n_header <= size - 8:
+                f.seek(0)
+                head = f.read(8 + n_header)
+    return _parse_header(path, head, size)[0]
+
+
+def _locate(path, name, dtype, entry, buf):
+    if not isinstance(entry, dict):
+        _fail(path, name, "expected an object {dtype, shape, offset, nbytes, crc32}")
+    for key in ("dtype", "shape", "offset", "nbytes", "crc32"):
+        if key not in entry:
+            _fail(path, f"{name}.{key}", "missing")
+    if entry["dtype"] != dtype:
+        _fail(path, f"{name}.dtype", f'expected "{dtype}", got {json.dumps(entry["dtype"])}')
+    shape = entry["shape"]
+    if not isinstance(shape, list):
+        _fail(path, f"{name}.shape", f"expected an array of integers, got {json.dumps(shape)}")
+    count = 1
+    for d in shape:
+        if not _is_uint(d):
+            _fail(path, f"{name}.shape", f"expected a non-negative integer, got {json.dumps(d)}")
+        count *= d
+    for key in ("offset", "nbytes", "crc32"):
+        if not _is_uint(entry[key]):
+            _fail(path, f"{name}.{key}", f"expected a non-negative integer, got {json.dumps(entry[key])}")
+    offset, nbytes = entry["offset"], entry["nbytes"]
+    if nbytes != count * 8:
+        _fail(path, f"{name}.nbytes", f"{nbytes} does not match shape {json.dumps(shape)} (expected {count * 8})")
+    if offset % 8:
+        _fail(path, f"{name}.offset", f"{offset} is not 8-byte aligned")
+    if offset > len(buf) or nbytes > len(buf) - offset:
+        _fail(path, f"{name}.offset", f"bytes [{offset}, {offset + nbytes}) lie outside the data buffer of {len(buf)} bytes")
+    view = buf[offset:offset + nbytes]
+    crc = zlib.crc32(view) & 0xFFFFFFFF
+    if crc != entry["crc32"]:
+        _fail(path, f"{name}.crc32", f"mismatch: header says {entry['crc32']}, data has {crc}")
+    arr = np.frombuffer(view, dtype="<i8" if dtype == "int64" else "<f8")
+    return arr.reshape(shape) if len(shape) != 1 else arr
+
+
+def _expect_shape(path, name, arr, shape, why):
+    if list(arr.shape) != list(shape):
+        _fail(path, f"{name}.shape", f"expected {list(shape)} ({why}), got {list(arr.shape)}")
+
+
+def _check_csr(path, mat, indptr, indices, rows, cols):
+    nnz = len(indices)
+    if indptr[0] != 0:
+        _fail(path, f"{mat}.indptr", f"must start at 0, starts at {indptr[0]}")
+    steps = np.diff(indptr)
+    bad = np.flatnonzero(steps < 0)
+    if bad.size:
+        r = int(bad[0])
+        _fail(path, f"{mat}.indptr", f"decreases at row {r} ({indptr[r]} then {indptr[r + 1]})")
+    if indptr[rows] != nnz:
+        _fail(path, f"{mat}.indptr", f"ends at {indptr[rows]}, expected nnz = {nnz} (the length of {mat}.indices)")
+    row_of = np.repeat(np.arange(rows), steps)
+    out = np.flatnonzero((indices < 0) | (indices >= cols))
+    if out.size:
+        e = int(out[0])
+        _fail(path, f"{mat}.indices", f"column {indices[e]} out of range [0, {cols}) in row {row_of[e]}")
+    if nnz > 1:
+        same_row = row_of[1:] == row_of[:-1]
+        bad = np.flatnonzero(same_row & (indices[1:] <= indices[:-1]))
+        if bad.size:
+            e = int(bad[0]) + 1
+            _fail(path, f"{mat}.indices",
+                  f"columns not strictly increasing in row {row_of[e]} ({indices[e - 1]} then {indices[e]})")
+    return row_of
+
+
+def read_qpsnap(path):
+    """Reads and validates a snapshot: {"n", "m", "meta", "header", "arrays": {name: ndarray}}.
+
+    A.data is returned symmetrised exactly, ((A + A') / 2), as the C++ reader does; the arrays are
+    read-only views of the file's bytes, except A.data.
+    """
+    path = str(path)
+    with open(path, "rb") as f:
+        raw = f.read()
+    header, n_header = _parse_header(path, raw, len(raw))
+    n, m = header["n"], header["m"]
+    buf = memoryview(raw)[8 + n_header:]
+    for name in header["arrays"]:
+        if name not in REQUIRED and name not in OPTIONAL:
+            _fail(path, f"arrays.{name}", "unknown array name")
+    a = {}
+    for name, dtype in list(REQUIRED.items()) + list(OPTIONAL.items()):
+        if name not in header["arrays"]:
+            if name in REQUIRED:
+                _fail(path, name, "required array missing")
+            continue
+        a[name] = _locate(path, name, dtype, header["arrays"][name], buf)
+    nn, mm = f"n = {n}", f"m = {m}"
+    _expect_shape(path, "A.indptr", a["A.indptr"], [n + 1], f"{nn}, n + 1 entries")
+    nnz_a = a["A.indices"].size
+    _expect_shape(path, "A.indices", a["A.indices"], [nnz_a], "one dimension")
+    if nnz_a > _MAX_INT32:
+        _fail(path, "A.indices", f"nnz {nnz_a} > 2147483647 (indices are 32-bit)")
+    _expect_shape(path, "A.data", a["A.data"], [nnz_a], "the length of A.indices")
+    _expect_shape(path, "b", a["b"], [n], nn)
+    _expect_shape(path, "x0", a["x0"], [n], nn)
+    _expect_shape(path, "J.indptr", a["J.indptr"], [m + 1], f"{mm}, m + 1 entries")
+    nnz_j = a["J.indices"].size
+    _expect_shape(path, "J.indices", a["J.indices"], [nnz_j], "one dimension")
+    _expect_shape(path, "J.data", a["J.data"], [nnz_j], "the length of J.indices")
+    _expect_shape(path, "c", a["c"], [m], mm)
+    for name, shape, why in (("contact.kind", [m], mm), ("contact.depth", [m], mm),
+                             ("contact.vertex", [m, 4], f"{mm}, 4 vertices per row"), ("x_ref", [n], nn),
+                             ("lambda_ref", [m], mm)):
+        if name in a:
+            _expect_shape(path, name, a[name], shape, why)
+    rows_a = _check_csr(path, "A", a["A.indptr"], a["A.indices"], n, n)
+    _check_csr(path, "J", a["J.indptr"], a["J.indices"], m, n)
+    for name in ("A.data", "b", "x0", "J.data", "c", "contact.depth", "x_ref", "lambda_ref"):
+        if name in a:
+            bad = np.flatnonzero(~np.isfinite(a[name].ravel()))
+            if bad.size:
+                i = int(bad[0])
+                _fail(path, name, f"non-finite value {_g17(a[name].ravel()[i])} at index {i}")
+    if "contact.kind" in a:
+        bad = np.flatnonzero((a["contact.kind"] < 0) | (a["contact.kind"] > 4))
+        if bad.size:
+            r = int(bad[0])
+            _fail(path, "contact.kind", f"value {a['contact.kind'][r]} at row {r} is not a contact kind (0..4)")
+    if "contact.depth" in a:
+        bad = np.flatnonzero(a["contact.depth"] < 0)
+        if bad.size:
+            r = int(bad[0])
+            _fail(path, "contact.depth", f"negative depth {_g17(a['contact.depth'][r])} at row {r}")
+    if "contact.vertex" in a:
+        bad = np.flatnonzero(a["contact.vertex"].ravel() < -1)
+        if bad.size:
+            e = int(bad[0])
+            _fail(path, "contact.vertex", f"value {a['contact.vertex'].ravel()[e]} at row {e // 4} is not a vertex id or -1")
+    a["A.indptr"], a["A.indices"], a["A.data"] = _symmetrise(path, n, a["A.indptr"], a["A.indices"], a["A.data"], rows_a)
+    _check_diagonal(path, n, a["A.indptr"], a["A.indices"], a["A.data"])
+    return {"path": path, "n": n, "m": m, "meta": header.get("meta", {}), "header": header, "arrays": a}
+
+
+def _symmetrise(path, n, indptr, indices, data, rows):
+    """Checks |A - A'| <= 1e-12 max|A_ij| (else names the worst pair) and returns (A + A') / 2."""
+    max_abs = float(np.abs(data).max()) if data.size else 0.0
+    tol = 1e-12 * max_abs
+    key = rows.astype(np.int64) * n + indices
+    tkey = indices.astype(np.int64) * n + rows
+    order = np.argsort(tkey, kind="stable")   # the transpose, sorted in CSR order
+    same_pattern = np.array_equal(tkey[order], key)
+    if same_pattern:
+        mirror = data[order]
+        diff = np.abs(data - mirror)
+        pairs_upper = indices > rows
+        if diff.size and diff.max() > tol:
+            # The worst pair, reported from its upper entry (i < j) as the C++ reader does.
+            masked = np.where(pairs_upper, diff, -1.0)
+            e = int(np.argmax(masked))
+            i, j = int(rows[e]), int(indices[e])
+            _fail(path, "A", f"not symmetric: A({i}, {j}) = {_g17(data[e])} but A({j}, {i}) = {_g17(mirror[e])} "
+                             f"(difference {_g17(diff[e])} > 1e-12 * max|A_ij| = {_g17(tol)})")
+        sym = np.where(data == mirror, data, 0.5 * data + 0.5 * mirror)
+        return indptr, indices, sym
+    # One-sided entries: union pattern through a dense-free merge of (key, value) lists.
+    all_keys = np.concatenate([key, tkey])
+    all_vals = np.concatenate([0.5 * data, 0.5 * data])
+    uniq, inv = np.unique(all_keys, return_inverse=True)
+    sym = np.zeros(uniq.size)
+    np.add.at(sym, inv, all_vals)
+    # Asymmetry per stored entry: A(i,j) - A(j,i), with 0 for a missing mirror.
+    pos = np.searchsorted(key, tkey)
+    pos_ok = (pos < key.size) & (key[np.minimum(pos, key.size - 1)] == tkey)
+    mirror = np.where(pos_ok, data[np.minimum(pos, key.size - 1)], 0.0)
+    diff = np.abs(data - mirror)
+    if diff.size and diff.max() > tol:
+        e = int(np.argmax(diff))
+        i, j = int(rows[e]), int(indices[e])
+        _fail(path, "A", f"not symmetric: A({i}, {j}) = {_g17(data[e])} but A({j}, {i}) = {_g17(mirror[e])} "
+                         f"(difference {_g17(diff[e])} > 1e-12 * max|A_ij| = {_g17(tol)})")
+    new_rows, new_cols = uniq // n, uniq % n
+    new_indptr = np.zeros(n + 1, dtype=np.int64)
+    np.add.at(new_indptr, new_rows + 1, 1)
+    return np.cumsum(new_indptr), new_cols.astype(np.int64), sym
+
+
+def _g17(v):
+    """%.17g, as the C++ messages print numbers."""
+    return "%.17g" % float(v)
+
+
+def _check_diagonal(path, n, indptr, indices, data):
+    rows = np.repeat(np.arange(n, dtype=np.int64), np.diff(indptr))
+    is_diag = rows == indices
+    has = np.zeros(n, dtype=bool)
+    has[rows[is_diag]] = True
+    if not has.all():
+        i = int(np.flatnonzero(~has)[0])
+        _fail(path, "A", f"diagonal entry A({i}, {i}) is missing (A must be SPD)")
+    diag = np.empty(n)
+    diag[rows[is_diag]] = data[is_diag]
+    bad = np.flatnonzero(~(diag > 0))
+    if bad.size:
+        i = int(bad[0])
+        _fail(path, "A", f"diagonal entry A({i}, {i}) = {_g17(diag[i])} is not positive (A must be SPD)")
+
+
+def matrices(snap):
+    """(A, J) as scipy.sparse.csr_matrix (A symmetrised); needs scipy."""
+    import scipy.sparse as sp
+    a, n, m = snap["arrays"], snap["n"], snap["m"]
+    A = sp.csr_matrix((a["A.data"], a["A.indices"], a["A.indptr"]), shape=(n, n))
+    J = sp.csr_matrix((a["J.data"], a["J.indices"], a["J.indptr"]), shape=(m, n))
+    return A, J
+
+
+def content_hash(path):
+    """Hex of the 64-bit FNV-1a of the file bytes (the C++ qpsnap_content_hash)."""
+    h = 0xCBF29CE484222325
+    with open(path, "rb") as f:
+        data = f.read()
+    for byte in data:
+        h ^= byte
+        h = (h * 0x100000001B3) & 0xFFFFFFFFFFFFFFFF
+    return "%016x" % h

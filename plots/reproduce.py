@@ -1,0 +1,411 @@
+#!/usr/bin/python3
+"""Reproduce the paper's figures and write results/paper/report.md, from our own simulator.
+
+usage: reproduce.py --contactbench build/bin/contactbench [--data ../shared/paper-data]
+                    [--out results/paper] [--scenes scenes] [--quick] [--force]
+
+Steps (each printed as it runs):
+1. simulate the scenes (contactbench simulate SCENE --frames N --out OUT/sim/<scene> --data DATA),
+   skipped when OUT/sim/<scene> already holds a simulation of the same scene file with >= N frames;
+2. pick the snapshots each figure needs and instantiate suites/paper/*.json into OUT/suites/;
+3. contactbench run OUT/suites/<name>.json --out OUT/runs/<name>, skipped when that folder already
+   holds the results of the identical suite (the harness caches reference solutions itself);
+4. profiles.md per suite, the figures (fig6, fig8, fig9, fig10, fig11, table1) and the report.
+A figure whose inputs are missing is reported as "not produced: <reason>".
+--quick: the coarsest two-dinosaur meshes stand in for the eight dinosaurs, few frames, short time
+limits; it aims at < 5 minutes in all.
+"""
+from __future__ import annotations
+
+import argparse
+import glob
+import hashlib
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import time
+from typing import Dict, List, Optional
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+import pandas as pd  # noqa: E402
+
+import profiles  # noqa: E402
+import report  # noqa: E402
+from loader import load_results, snapshot_table  # noqa: E402
+from paper_context import PaperContext  # noqa: E402
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+MARKER = ".reproduce.json"
+
+#: frames simulated per scene (full, quick); None = not simulated in that mode. A full run takes
+#: the scene file's own "frames" when it has one (two-dinosaur scenes always stop after frame 11).
+FRAMES = {
+    "two_dinos": (12, 12),        # Fig. 11 uses frame 11
+    "eight_dinos": (200, None),   # Figs. 5, 6, 8, 9 (the authors' Fig. 6 has 200 frames)
+    "longcube": (60, 12),         # Figs. 10, 12
+    "dragon_stair": (40, None),   # Table 1 (Fig. 3)
+    "bunny_glass": (40, None),    # Table 1 (Fig. 4)
+}
+#: quick mode: how many two-dinosaur resolutions (the coarsest)
+QUICK_RESOLUTIONS = 2
+#: the most snapshots a chain suite runs (fig6 over the frames with contact; table1 per scene)
+CHAIN_MAX = {"full": 60, "quick": 12}
+TABLE1_MAX = {"full": 20, "quick": 4}
+#: per-run time limit in quick mode [s]
+QUICK_TIME_LIMIT_S = 10
+QUICK_BUDGET_S = 280
+
+
+class Runner:
+    """Shells out to contactbench, logs every command, keeps a time budget."""
+
+    def __init__(self, contactbench: str, budget_s: Optional[float], log_path: str):
+        self.cb = contactbench
+        self.start = time.monotonic()
+        self.budget = budget_s
+        self.steps: List[str] = []
+        self.log_path = log_path
+
+    def elapsed(self) -> float:
+        return time.monotonic() - self.start
+
+    def remaining(self) -> Optional[float]:
+        return None if self.budget is None else self.budget - self.elapsed()
+
+    def say(self, text: str) -> None:
+        print(f"[reproduce {self.elapsed():6.1f}s] {text}", flush=True)
+
+    def call(self, args: List[str], what: str) -> (int, str):
+        """Runs contactbench; returns (exit status, short error text). 124 = timed out / no budget."""
+        rem = self.remaining()
+        if rem is not None and rem < 5:
+            self.steps.append(f"{what}: skipped (quick-mode time budget exhausted)")
+            return 124, "quick-mode time budget exhausted"
+        cmd = [self.cb] + args
+        self.say(f"{what}: {' '.join(cmd)}")
+        t0 = time.monotonic()
+        try:
+            with open(self.log_path, "a", encoding="utf-8") as log:
+                log.write(f"\n$ {' '.join(cmd)}\n")
+                log.flush()
+                proc = subprocess.run(cmd, stdout=log, stderr=subprocess.PIPE, text=True,
+                                      timeout=rem if rem is not None else 6 * 3600)
+                log.write(proc.stderr)
+        except subprocess.TimeoutExpired:
+            self.steps.append(f"{what}: timed out after {time.monotonic() - t0:.0f} s")
+            return 124, f"timed out after {time.monotonic() - t0:.0f} s"
+        except OSError as err:
+            self.steps.append(f"{what}: could not start: {err}")
+            return 127, str(err)
+        dt = time.monotonic() - t0
+        tail = [l for l in proc.stderr.strip().splitlines() if l.strip()]
+        err = tail[-1] if tail else ""
+        self.steps.append(f"{what}: exit {proc.returncode} in {dt:.1f} s" + (f" ({err})" if proc.returncode else ""))
+        self.say(f"{what}: exit {proc.returncode} in {dt:.1f} s")
+        return proc.returncode, err
+
+
+def file_sha(path: str) -> str:
+    with open(path, "rb") as f:
+        return hashlib.sha256(f.read()).hexdigest()[:16]
+
+
+def read_marker(folder: str) -> dict:
+    path = os.path.join(folder, MARKER)
+    if not os.path.isfile(path):
+        return {}
+    with open(path, encoding="utf-8") as f:
+        return json.load(f)
+
+
+def write_marker(folder: str, content: dict) -> None:
+    with open(os.path.join(folder, MARKER), "w", encoding="utf-8") as f:
+        json.dump(content, f, indent=1)
+
+
+def scene_files(scenes_dir: str) -> Dict[str, str]:
+    """scene key -> file; two-dinosaur resolutions as two_dinos_<vertices>."""
+    found = {}
+    for path in sorted(glob.glob(os.path.join(scenes_dir, "*.json"))):
+        found[os.path.splitext(os.path.basename(path))[0]] = path
+    return found
+
+
+def scene_frames(path: str, fallback: int) -> int:
+    """The scene's own "frames" (the simulator's default), else `fallback`."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            value = json.load(f).get("frames")
+        return int(value) if isinstance(value, int) and value > 0 else fallback
+    except (OSError, ValueError, AttributeError):
+        return fallback
+
+
+def two_dino_keys(found: Dict[str, str]) -> List[str]:
+    keys = [k for k in found if re.fullmatch(r"two_dinos_\d+", k)]
+    return sorted(keys, key=lambda k: int(k.rsplit("_", 1)[1]))
+
+
+def simulate(runner: Runner, ctx: PaperContext, key: str, scene: str, frames: int, data: Optional[str],
+             force: bool) -> Optional[str]:
+    """Simulates once (cached); returns the folder, or None with ctx.reasons[key] set."""
+    folder = os.path.join(ctx.out, "sim", key)
+    sha = file_sha(scene)
+    marker = read_marker(folder)
+    if not force and marker.get("scene_sha") == sha and marker.get("frames", 0) >= frames and \
+            os.path.isdir(os.path.join(folder, "snapshots")):
+        runner.say(f"simulate {key}: cached ({marker['frames']} frames in {folder})")
+        runner.steps.append(f"simulate {key}: cached ({marker['frames']} frames)")
+        ctx.sims[key] = folder
+        return folder
+    if os.path.isdir(folder):
+        shutil.rmtree(folder)
+    os.makedirs(folder, exist_ok=True)
+    args = ["simulate", scene, "--frames", str(frames), "--out", folder]
+    if data:
+        args += ["--data", data]
+    rc, err = runner.call(args, f"simulate {key}")
+    snaps = snapshot_table(os.path.join(folder, "snapshots")) if os.path.isdir(os.path.join(folder, "snapshots")) \
+        else pd.DataFrame()
+    if rc != 0 or snaps.empty:
+        ctx.reasons[key] = f"simulation of {os.path.basename(scene)} failed (exit {rc}{': ' + err if err else ''})" \
+            if rc != 0 else f"simulation of {os.path.basename(scene)} wrote no snapshots"
+        return None
+    write_marker(folder, {"scene": scene, "scene_sha": sha, "frames": frames})
+    ctx.sims[key] = folder
+    return folder
+
+
+def snapshots_of(ctx: PaperContext, key: str) -> pd.DataFrame:
+    folder = ctx.sims.get(key)
+    if not folder:
+        return pd.DataFrame()
+    return snapshot_table(os.path.join(folder, "snapshots"))
+
+
+def instantiate(template: str, name: str, snapshots: List[str], out: str, quick: bool) -> str:
+    with open(template, encoding="utf-8") as f:
+        suite = json.load(f)
+    suite["name"] = name
+    suite["snapshots"] = [os.path.abspath(p) for p in snapshots]
+    if quick:
+        suite["time_limit_s"] = min(float(suite.get("time_limit_s", QUICK_TIME_LIMIT_S)), QUICK_TIME_LIMIT_S)
+        for s in suite.get("solvers", []):
+            if "time_limit_s" in s.get("settings", {}):
+                s["settings"]["time_limit_s"] = min(s["settings"]["time_limit_s"], QUICK_TIME_LIMIT_S)
+    os.makedirs(os.path.join(out, "suites"), exist_ok=True)
+    path = os.path.join(out, "suites", f"{name}.json")
+    with open(path, "w", encoding="utf-8") as f:
+        json.dump(suite, f, indent=1)
+    return path
+
+
+def run_suite(runner: Runner, ctx: PaperContext, name: str, template: str, snapshots: List[str],
+              force: bool) -> None:
+    if not snapshots:
+        ctx.reasons.setdefault(name, f"no snapshots selected for suite '{name}'")
+        return
+    suite_path = instantiate(template, name, snapshots, ctx.out, ctx.quick)
+    with open(suite_path, encoding="utf-8") as f:
+        suite = json.load(f)
+    folder = os.path.join(ctx.out, "runs", name)
+    marker = read_marker(folder)
+    if not force and marker.get("suite") == suite and os.path.isfile(os.path.join(folder, "summary.csv")):
+        runner.say(f"run {name}: cached ({folder})")
+        runner.steps.append(f"run {name}: cached")
+        ctx.results[name] = folder
+        return
+    if os.path.isdir(folder):
+        shutil.rmtree(folder)
+    rc, err = runner.call(["run", suite_path, "--out", folder], f"run {name}")
+    ctx.results[name] = folder
+    has_runs = os.path.isdir(os.path.join(folder, "runs")) and any(
+        n.endswith(".json") for n in os.listdir(os.path.join(folder, "runs")))
+    if rc == 0 and has_runs:
+        write_marker(folder, {"suite": suite})
+    elif has_runs:
+        ctx.notes.setdefault(name, []).append(f"contactbench run exited {rc} ({err}); partial results used")
+    else:
+        ctx.reasons[name] = f"contactbench run {name} failed (exit {rc}{': ' + err if err else ''})"
+
+
+def pick_max_rows(snaps: pd.DataFrame, target: Optional[int] = None) -> List[str]:
+    """The snapshot with the most rows (or the one nearest `target` rows among those with contact)."""
+    if snaps.empty:
+        return []
+    with_rows = snaps[snaps["m"] > 0]
+    if with_rows.empty:
+        return [snaps.iloc[-1]["path"]]
+    if target:
+        idx = (with_rows["m"] - target).abs().idxmin()
+        return [with_rows.loc[idx, "path"]]
+    return [with_rows.sort_values("m", ascending=False).iloc[0]["path"]]
+
+
+def pick_frame(snaps: pd.DataFrame, frame: int) -> List[str]:
+    if snaps.empty:
+        return []
+    sel = snaps[snaps["frame"] == frame]
+    if sel.empty:
+        sel = snaps.iloc[[-1]]  # fewer frames than asked: the last one, said in the notes
+    return [sel.iloc[0]["path"]]
+
+
+def chain_with_contact(snaps: pd.DataFrame, limit: int) -> List[str]:
+    """Consecutive snapshots from just before the first contact, at most `limit`."""
+    if snaps.empty:
+        return []
+    contact = snaps.index[snaps["m"] > 0]
+    start = max(0, int(contact[0]) - 2) if len(contact) else max(0, len(snaps) - limit)
+    return list(snaps.iloc[start:start + limit]["path"])
+
+
+def evenly(snaps: pd.DataFrame, limit: int) -> List[str]:
+    if snaps.empty:
+        return []
+    if len(snaps) <= limit:
+        return list(snaps["path"])
+    step = len(snaps) / limit
+    return [snaps.iloc[int(i * step)]["path"] for i in range(limit)]
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--contactbench", default=os.path.join(ROOT, "build", "bin", "contactbench"))
+    parser.add_argument("--data", default=None, help="the authors' data (../shared/paper-data)")
+    parser.add_argument("--out", default=os.path.join(ROOT, "results", "paper"))
+    parser.add_argument("--scenes", default=os.path.join(ROOT, "scenes"))
+    parser.add_argument("--suites", default=os.path.join(ROOT, "suites", "paper"))
+    parser.add_argument("--quick", action="store_true", help="coarse meshes, few frames (< 5 minutes)")
+    parser.add_argument("--force", action="store_true", help="re-simulate and re-run even when cached")
+    parser.add_argument("--no-profiles", action="store_true", help="skip profiles.md per suite (faster)")
+    args = parser.parse_args(argv)
+
+    out = os.path.abspath(args.out)
+    os.makedirs(out, exist_ok=True)
+    data = os.path.abspath(args.data) if args.data and os.path.isdir(args.data) else None
+    ctx = PaperContext(out=out, data=data, quick=args.quick)
+    runner = Runner(os.path.abspath(args.contactbench), QUICK_BUDGET_S if args.quick else None,
+                    os.path.join(out, "reproduce.log"))
+    mode = "quick" if args.quick else "full"
+    runner.say(f"mode {mode}; out {out}; data {data or '(none)'}; contactbench {runner.cb}")
+    if args.data and not data:
+        runner.say(f"--data {args.data} is not a folder: the authors' data is left out")
+
+    all_suites = ["fig6", "fig8", "fig10", "fig11"]
+    found = scene_files(args.scenes)
+    dinos = two_dino_keys(found)
+    if args.quick:
+        dinos = dinos[:QUICK_RESOLUTIONS]
+    cb_ok = os.path.isfile(runner.cb) and os.access(runner.cb, os.X_OK)
+    if not cb_ok:
+        reason = f"contactbench binary not found at {runner.cb} (build it: make build)"
+        runner.say(reason)
+        for key in all_suites + ["table1-" + s for s in FRAMES]:
+            ctx.reasons[key] = reason
+    else:
+        # 1. simulations
+        plan = [(k, found[k], FRAMES["two_dinos"][1 if args.quick else 0]) for k in dinos]
+        for key in ("longcube", "eight_dinos", "dragon_stair", "bunny_glass"):
+            frames = FRAMES[key][1 if args.quick else 0]
+            if frames is None:
+                continue
+            if not args.quick and key in found:
+                frames = scene_frames(found[key], frames)  # the full run simulates what the scene asks
+            if key not in found:
+                ctx.reasons[key] = f"no scene file scenes/{key}.json"
+                runner.say(ctx.reasons[key])
+                continue
+            plan.append((key, found[key], frames))
+        if not dinos:
+            ctx.reasons["fig11"] = "no scenes/two_dinos_<vertices>.json"
+        for key, scene, frames in plan:
+            simulate(runner, ctx, key, scene, frames, data, args.force)
+
+        # 2-3. suites
+        tpl = lambda name: os.path.join(args.suites, f"{name}.json")  # noqa: E731
+        eight = snapshots_of(ctx, "eight_dinos")
+        small = snapshots_of(ctx, dinos[0]) if dinos else pd.DataFrame()
+        if args.quick or eight.empty:
+            sub = "quick mode" if args.quick else ctx.reasons.get("eight_dinos", "eight dinosaurs not simulated")
+            if not small.empty:
+                note = f"{sub}: the coarsest two-dinosaur scene ({dinos[0]}) stands in for the eight dinosaurs"
+                for s in ("fig6", "fig8"):
+                    ctx.notes.setdefault(s, []).append(note)
+                run_suite(runner, ctx, "fig11", tpl("fig11"),
+                          [p for k in dinos for p in pick_frame(snapshots_of(ctx, k), 11)], args.force)
+                run_suite(runner, ctx, "fig8", tpl("fig8"), pick_frame(small, 11), args.force)
+                run_suite(runner, ctx, "fig6", tpl("fig6"), chain_with_contact(small, CHAIN_MAX[mode]), args.force)
+            else:
+                for s in ("fig6", "fig8"):
+                    ctx.reasons[s] = f"{sub}, and no two-dinosaur simulation to stand in"
+        else:
+            run_suite(runner, ctx, "fig8", tpl("fig8"), pick_max_rows(eight, target=691), args.force)
+            run_suite(runner, ctx, "fig6", tpl("fig6"), chain_with_contact(eight, CHAIN_MAX[mode]), args.force)
+        if dinos and "fig11" not in ctx.results and "fig11" not in ctx.reasons:
+            run_suite(runner, ctx, "fig11", tpl("fig11"),
+                      [p for k in dinos for p in pick_frame(snapshots_of(ctx, k), 11)], args.force)
+        cube = snapshots_of(ctx, "longcube")
+        if not cube.empty:
+            run_suite(runner, ctx, "fig10", tpl("fig10"), pick_max_rows(cube), args.force)
+        else:
+            ctx.reasons["fig10"] = ctx.reasons.get("longcube", "long cube not simulated")
+        for key in ("longcube", "eight_dinos", "dragon_stair", "bunny_glass"):
+            snaps = snapshots_of(ctx, key)
+            if snaps.empty:
+                continue
+            run_suite(runner, ctx, f"table1-{key}", tpl("table1"), evenly(snaps, TABLE1_MAX[mode]), args.force)
+
+    # 4. profiles, figures, report
+    profile_paths = {}
+    provenance = {}
+    for name, folder in sorted(ctx.results.items()):
+        if name in ctx.reasons or args.no_profiles:
+            continue
+        try:
+            res = load_results(folder)
+        except (FileNotFoundError, ValueError):
+            continue
+        if res.runs.empty:
+            continue
+        provenance = provenance or res.provenance
+        numbers = profiles.compute(res)
+        figs = profiles.plot_profiles(numbers, os.path.join(folder, "figures"))
+        md = os.path.join(folder, "profiles.md")
+        profiles.write_markdown(res, numbers, md, figs)
+        profile_paths[name] = md
+    outcomes = report.produce_all(ctx, log=runner.say)
+    for o in outcomes:
+        for suite in (o.name, "fig8" if o.name == "fig9" else o.name):
+            for note in ctx.notes.get(suite, []):
+                if note not in o.notes:
+                    o.notes.append(note)
+    previous = {}
+    meta_path = os.path.join(out, "reproduce.json")
+    if os.path.isfile(meta_path):
+        with open(meta_path, encoding="utf-8") as f:
+            previous = json.load(f)
+    elapsed = runner.elapsed()
+    full_run_s = elapsed if not args.quick else previous.get("full_run_s")
+    meta = {"quick": args.quick, "elapsed_s": elapsed, "full_run_s": full_run_s, "steps": runner.steps,
+            "reasons": ctx.reasons, "profiles": profile_paths, "provenance": provenance,
+            "contactbench": runner.cb, "data": data}
+    if full_run_s is None:
+        meta["steps"] = meta["steps"] + ["no full run recorded yet in this folder (make reproduce without QUICK)"]
+    path = report.write_report(ctx, outcomes, meta)
+    with open(meta_path, "w", encoding="utf-8") as f:
+        json.dump(meta, f, indent=1)
+    produced = [o.name for o in outcomes if not o.missing]
+    missing = [f"{o.name} ({o.missing})" for o in outcomes if o.missing]
+    runner.say(f"wrote {path}; produced: {', '.join(produced) or 'none'}")
+    if missing:
+        runner.say("not produced: " + "; ".join(missing))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,124 @@
+#!/usr/bin/python3
+"""Heat map of a stress run: solver x case, colour = log10 of the relative KKT error reached;
+a cell is marked when the solver said "converged" but the common KKT error does not confirm it
+(!), when NaN/Inf appeared (N), or when the objective was not monotone (~).
+
+usage: stability.py STRESS_DIR_OR_CSV [--out FIGDIR]
+Reads STRESS_DIR/stability.csv (or the CSV given; a results folder's summary.csv also works).
+Columns are found by name: solver (label | solver), case (case | snapshot | family), error
+(kkt_rel | kkt_rel_reached | kkt_relative), status, status_confirmed, nonfinite, monotone.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+from typing import List, Optional
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+
+import figutil  # noqa: E402
+from figutil import plt  # noqa: E402
+from loader import _to_bool  # noqa: E402
+
+CANDIDATES = {
+    "solver": ("label", "solver"),
+    "case": ("case", "snapshot", "family", "problem"),
+    "error": ("kkt_rel", "kkt_rel_reached", "kkt_relative", "kkt_rel_max", "kkt"),
+    "status": ("status",),
+    "confirmed": ("status_confirmed", "confirmed"),
+    "nonfinite": ("nonfinite", "nan_inf", "nonfinite_seen"),
+    "monotone": ("monotone",),
+}
+
+
+def find_column(df: pd.DataFrame, role: str) -> Optional[str]:
+    for name in CANDIDATES[role]:
+        if name in df.columns:
+            return name
+    return None
+
+
+def read_table(path: str) -> pd.DataFrame:
+    file = os.path.join(path, "stability.csv") if os.path.isdir(path) else path
+    if os.path.isdir(path) and not os.path.isfile(file):
+        file = os.path.join(path, "summary.csv")
+    if not os.path.isfile(file):
+        raise FileNotFoundError(f"{path}: no stability.csv (nor summary.csv)")
+    return pd.read_csv(file)
+
+
+def cell_marks(row: pd.Series, cols: dict) -> str:
+    marks = ""
+    status = str(row[cols["status"]]).strip().lower() if cols["status"] else ""
+    if cols["confirmed"] and status == "converged" and not _to_bool(row[cols["confirmed"]]):
+        marks += "!"
+    if cols["nonfinite"] and _to_bool(row[cols["nonfinite"]]):
+        marks += "N"
+    if cols["monotone"] and not _to_bool(row[cols["monotone"]]):
+        marks += "~"
+    return marks
+
+
+def plot_stability(df: pd.DataFrame, out_dir: str, stem: str = "stability") -> List[str]:
+    cols = {role: find_column(df, role) for role in CANDIDATES}
+    missing = [r for r in ("solver", "case", "error") if not cols[r]]
+    if missing:
+        raise ValueError(f"stability table lacks the column(s) for {', '.join(missing)}; "
+                         f"has {', '.join(df.columns)}")
+    solvers = list(dict.fromkeys(df[cols["solver"]].astype(str)))
+    cases = list(dict.fromkeys(df[cols["case"]].astype(str)))
+    grid = np.full((len(solvers), len(cases)), np.nan)
+    text = [["" for _ in cases] for _ in solvers]
+    for _, row in df.iterrows():
+        i, j = solvers.index(str(row[cols["solver"]])), cases.index(str(row[cols["case"]]))
+        err = pd.to_numeric(row[cols["error"]], errors="coerce")
+        grid[i, j] = math.log10(err) if np.isfinite(err) and err > 0 else (-16 if err == 0 else np.nan)
+        status = str(row[cols["status"]]) if cols["status"] else ""
+        short = {"converged": "", "max_iterations": "it", "time_limit": "t", "stalled": "st",
+                 "diverged": "div", "infeasible": "inf", "invalid_input": "inv"}.get(status, status[:3])
+        text[i][j] = (short + cell_marks(row, cols)) if np.isfinite(err) else ("NaN" + cell_marks(row, cols))
+    fig, ax = plt.subplots(figsize=(max(5, 0.55 * len(cases) + 2.5), max(2.5, 0.45 * len(solvers) + 1.5)))
+    masked = np.ma.masked_invalid(grid)
+    cmap = plt.get_cmap("RdYlGn_r").copy()
+    cmap.set_bad("#555555")
+    im = ax.imshow(masked, cmap=cmap, vmin=-12, vmax=0, aspect="auto")
+    for i in range(len(solvers)):
+        for j in range(len(cases)):
+            if text[i][j]:
+                ax.text(j, i, text[i][j], ha="center", va="center", fontsize=7,
+                        color="white" if np.isnan(grid[i, j]) else "black", fontweight="bold")
+    ax.set_xticks(range(len(cases)))
+    ax.set_xticklabels(cases, rotation=60, ha="right", fontsize=7)
+    ax.set_yticks(range(len(solvers)))
+    ax.set_yticklabels(solvers, fontsize=8)
+    fig.colorbar(im, ax=ax, label="log10 relative KKT error reached")
+    ax.set_title("stability: ! = 'converged' not confirmed by KKT, N = NaN/Inf seen, ~ = non-monotone,\n"
+                 "it/t/st/div/inf/inv = max_iterations/time_limit/stalled/diverged/infeasible/invalid; grey = no finite error",
+                 fontsize=7)
+    fig.tight_layout()
+    return figutil.save_figure(fig, out_dir, stem)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("stress", help="stress output folder (with stability.csv) or a CSV file")
+    parser.add_argument("--out", help="figure folder (default: <folder>/figures)")
+    args = parser.parse_args(argv)
+    try:
+        df = read_table(args.stress)
+        base = args.stress if os.path.isdir(args.stress) else os.path.dirname(os.path.abspath(args.stress))
+        for p in plot_stability(df, args.out or os.path.join(base, "figures")):
+            print(p)
+    except (FileNotFoundError, ValueError) as err:
+        print(f"stability.py: {err}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,349 @@
+#include "problems/sim/simulator.hpp"
+
+#include "problems/qpsnap.hpp"
+#include "problems/sim/mesh_io.hpp"
+#include "problems/sim/render.hpp"
+#include "solvers/decouple.hpp"
+#include "solvers/kkt.hpp"
+#include "solvers/registry.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <ostream>
+#include <sstream>
+#include <sys/stat.h>
+
+namespace cb::sim {
+namespace {
+double now_s()
+{
+    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+void make_dirs(const std::string& path)
+{
+    std::string cur;
+    std::stringstream ss(path);
+    std::string part;
+    if (!path.empty() && path[0] == '/') cur = "/";
+    while (std::getline(ss, part, '/')) {
+        if (part.empty()) continue;
+        cur += part + "/";
+        ::mkdir(cur.c_str(), 0755);
+    }
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) throw_input_error(path, "", "cannot create output folder");
+}
+} // namespace
+
+Simulator::Simulator(Scene scene, SimulatorOptions options) : m_scene(std::move(scene)), m_opt(std::move(options))
+{
+    // One global numbering: bodies one after another.
+    long nv = 0, nt = 0;
+    for (const Body& b : m_scene.bodies) {
+        nv += b.mesh.vertices();
+        nt += b.mesh.tet_count();
+    }
+    Positions rest(nv, 3);
+    Tets tets(nt, 4);
+    std::vector<Material> materials(static_cast<size_t>(nt));
+    std::vector<CollisionBody> cbodies;
+    long v0 = 0, t0 = 0;
+    m_material = nlohmann::json::array();
+    for (const Body& b : m_scene.bodies) {
+        m_body_first.push_back(v0);
+        rest.middleRows(v0, b.mesh.vertices()) = b.mesh.positions;
+        tets.middleRows(t0, b.mesh.tet_count()) = b.mesh.tets.array() + static_cast<int>(v0);
+        for (long t = 0; t < b.mesh.tet_count(); ++t) materials[static_cast<size_t>(t0 + t)] = b.material;
+        CollisionBody cb;
+        cb.tets = b.mesh.tets.array() + static_cast<int>(v0);
+        const Faces local = boundary_faces(b.mesh);
+        m_body_faces.push_back(local);
+        cb.faces = local.array() + static_cast<int>(v0);
+        for (int v : boundary_vertices(local, b.mesh.vertices())) cb.surface_vertices.push_back(v + static_cast<int>(v0));
+        cbodies.push_back(std::move(cb));
+        m_material.push_back({{"body", b.name}, {"youngs", b.material.youngs}, {"poisson", b.material.poisson},
+                              {"density", b.material.density}, {"mesh", b.source}});
+        v0 += b.mesh.vertices();
+        t0 += b.mesh.tet_count();
+    }
+    m_fem = std::make_unique<CorotatedFem>(rest, tets, materials);
+    std::vector<const Obstacle*> obs;
+    for (const auto& o : m_scene.obstacles) obs.push_back(o.get());
+    m_detector = std::make_unique<CollisionDetector>(std::move(cbodies), std::move(obs), m_scene.detection);
+    m_x = Eigen::Map<const Vec>(rest.data(), 3 * nv);
+    m_v.resize(3 * nv);
+    for (size_t b = 0; b < m_scene.bodies.size(); ++b)
+        for (long i = 0; i < m_scene.bodies[b].mesh.vertices(); ++i)
+            m_v.segment<3>(3 * (m_body_first[b] + i)) = m_scene.bodies[b].velocity;
+
+    // The stepping solver: the scene's (or --solver), default mprgp; fall back to active-set
+    // when mprgp is not registered in this build.
+    const SolverRegistry& reg = builtin_registry();
+    m_solver_name = m_opt.solver.empty() ? m_scene.solver : m_opt.solver;
+    if (m_opt.solver.empty() && m_solver_name == "mprgp" && !reg.contains("mprgp") && reg.contains("active-set")) {
+        if (m_opt.progress) *m_opt.progress << "simulate: solver 'mprgp' is not registered; stepping with 'active-set'\n";
+        m_solver_name = "active-set";
+    }
+    m_solver = reg.create(m_solver_name, m_scene.solver_settings);
+}
+
+Simulator::~Simulator() = default;
+
+std::string Simulator::snapshot_path(long frame, int newton) const
+{
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "_f%04ld_n%d.qpsnap", frame, newton);
+    return m_opt.out_dir + "/snapshots/" + m_scene.name + buf;
+}
+
+std::vector<StepRecord> Simulator::step()
+{
+    std::vector<StepRecord> records;
+    const double h = m_scene.step.h;
+    const Vec x_n = m_x, v_n = m_v;
+    const long frame = m_frame;
+
+    const double td0 = now_s();
+    const Vec x_detect = m_scene.detect_at == "predicted" ? Vec(x_n + h * v_n) : x_n;
+    DetectionStats dstats;
+    m_rows = m_detector->detect(x_detect, &dstats);
+    Qp qp;
+    assemble_constraints(m_rows, dofs(), qp.J, qp.c, qp.contacts);
+    const double time_detection = now_s() - td0;
+    m_last_depth = 0;
+    for (const ContactRow& r : m_rows) m_last_depth = std::max(m_last_depth, r.depth);
+
+    Vec x_k = x_n;
+    for (int k = 0; k < m_scene.newton_iterations; ++k) {
+        StepRecord rec;
+        rec.frame = frame;
+        rec.step = m_step;
+        rec.newton = k;
+        rec.solver = m_solver_name;
+        rec.time_detection_s = k == 0 ? time_detection : 0.0;
+        const double ta0 = now_s();
+        assemble_newton_qp(*m_fem, m_scene.step, x_n, v_n, x_k, m_A, qp.b);
+        rec.time_assembly_s = now_s() - ta0;
+        qp.A = std::move(m_A);
+        // Start point: the inertial prediction for the first Newton step, the iterate after.
+        qp.x0 = k == 0 ? Vec(x_n + h * v_n) : x_k;
+        rec.rows = qp.m();
+        const bool in_range = frame >= m_scene.output.snapshot_first &&
+                              (m_scene.output.snapshot_last < 0 || frame <= m_scene.output.snapshot_last);
+        if (!m_opt.out_dir.empty() && m_opt.snapshots && m_scene.output.snapshots && in_range &&
+            m_scene.steps_per_frame == 1) {
+            qp.meta = {{"scene", m_scene.name}, {"frame", frame}, {"step", m_step}, {"newton_iteration", k},
+                       {"h", h}, {"vertices", vertices()}, {"tets", tets()}, {"bodies", m_scene.bodies.size()},
+                       {"material", m_material}, {"units", "SI"},
+                       {"damping", {{"a_M", m_scene.step.a_M}, {"a_K", m_scene.step.a_K}}},
+                       {"gravity", {m_scene.step.gravity.x(), m_scene.step.gravity.y(), m_scene.step.gravity.z()}},
+                       {"contacts", {{"rows", qp.m()}, {"obstacle_rows", dstats.obstacle_rows},
+                                     {"inter_body_rows", dstats.inter_body_rows}, {"self_rows", dstats.self_rows},
+                                     {"detect_at", m_scene.detect_at}, {"margin", m_scene.detection.margin},
+                                     {"decoupled", is_decoupled(qp.J)}}},
+                       {"generator", {{"command", "simulate"}, {"scene_file", m_scene.file}, {"solver", m_solver_name}}}};
+            rec.snapshot = snapshot_path(frame, k);
+            write_qpsnap(rec.snapshot, qp);
+        }
+        // Decouple for solvers that need it (the snapshot keeps every row).
+        const Qp* solve_qp = &qp;
+        Qp decoupled;
+        if (m_solver->requires_decoupled() && qp.m() > 0 && !is_decoupled(qp.J)) {
+            const DecoupleReport rep = decouple_rows(qp.view(), qp.contacts, DecoupleOrder::AUTHORS, 0);
+            decoupled = select_rows(qp, rep.kept_rows);
+            solve_qp = &decoupled;
+        }
+        rec.rows_solved = solve_qp->m();
+        SolveContext ctx;
+        if (m_eigenvector.size() == dofs()) ctx.eigenvector = &m_eigenvector;
+        else {
+            m_eigenvector.resize(0);
+            ctx.eigenvector = &m_eigenvector;
+        }
+        const double ts0 = now_s();
+        const SolverResult res = m_solver->solve(solve_qp->view(), ctx);
+        rec.time_solve_s = now_s() - ts0;
+        rec.status = to_string(res.status);
+        rec.iterations = res.iterations;
+        if (res.x.size() == dofs() && res.x.allFinite()) {
+            const Vec lambda = res.lambda.size() == solve_qp->m() ? res.lambda : Vec::Zero(solve_qp->m());
+            rec.kkt_rel = kkt_residuals(solve_qp->view(), res.x, lambda).max() * kkt_scale(solve_qp->view()).inverse_reference;
+            x_k = res.x;
+        } else {
+            m_nonfinite = true;
+            rec.kkt_rel = std::numeric_limits<double>::quiet_NaN();
+            if (res.x.size() == dofs()) x_k = res.x;
+        }
+        m_last_violation = qp.m() > 0 && x_k.allFinite() ? max_violation(qp.view(), x_k) : 0.0;
+        m_A = std::move(qp.A);
+        records.push_back(rec);
+        if (m_nonfinite) break;
+    }
+    m_v = (x_k - x_n) / h;
+    m_x = x_k;
+    ++m_step;
+    return records;
+}
+
+FrameRecord Simulator::frame_record() const
+{
+    FrameRecord r;
+    r.frame = m_frame;
+    r.time_s = m_step * m_scene.step.h;
+    r.max_penetration = m_last_violation;
+    r.max_detected_depth = m_last_depth;
+    r.rows = static_cast<long>(m_rows.size());
+    r.kinetic_energy = kinetic_energy(*m_fem, m_v);
+    r.elastic_energy = m_x.allFinite() ? m_fem->energy(m_x) : std::numeric_limits<double>::quiet_NaN();
+    for (long i = 0; i < vertices(); ++i) r.max_speed = std::max(r.max_speed, m_v.segment<3>(3 * i).norm());
+    r.blow_up = m_nonfinite || !m_v.allFinite() || !(r.max_speed <= m_scene.blowup_speed);
+    return r;
+}
+
+std::vector<SurfaceMesh> Simulator::body_surfaces() const
+{
+    std::vector<SurfaceMesh> out;
+    for (size_t b = 0; b < m_scene.bodies.size(); ++b) {
+        SurfaceMesh s;
+        const long nv = m_scene.bodies[b].mesh.vertices();
+        s.positions.resize(nv, 3);
+        for (long i = 0; i < nv; ++i) s.positions.row(i) = m_x.segment<3>(3 * (m_body_first[b] + i)).transpose();
+        s.faces = m_body_faces[b];
+        out.push_back(std::move(s));
+    }
+    return out;
+}
+
+bool Simulator::run()
+{
+    const long frames = m_opt.frames >= 0 ? m_opt.frames : m_scene.frames;
+    const bool write = !m_opt.out_dir.empty();
+    std::ofstream steps_csv, frames_csv;
+    if (write) {
+        make_dirs(m_opt.out_dir);
+        if (m_opt.snapshots && m_scene.output.snapshots) make_dirs(m_opt.out_dir + "/snapshots");
+        steps_csv.open(m_opt.out_dir + "/steps.csv");
+        frames_csv.open(m_opt.out_dir + "/frames.csv");
+        if (!steps_csv || !frames_csv) throw_input_error(m_opt.out_dir, "", "cannot write steps.csv/frames.csv");
+        steps_csv << "frame,step,newton_iteration,solver,status,iterations,kkt_rel,time_assembly_s,time_detection_s,"
+                     "time_solve_s,rows,rows_solved,snapshot\n";
+        frames_csv << "frame,time_s,max_penetration,max_detected_depth,kinetic_energy,elastic_energy,max_speed,rows,blow_up\n";
+        steps_csv << std::setprecision(9);
+        frames_csv << std::setprecision(9);
+    }
+    // Frames pictured in the strip: evenly spread over the run, last frame included.
+    std::vector<long> strip;
+    const int ns = write ? m_scene.output.strip_frames : 0;
+    for (int i = 0; i < ns && frames > 0; ++i) {
+        const long f = ns == 1 ? frames - 1 : static_cast<long>(std::llround(static_cast<double>(i) * (frames - 1) / (ns - 1)));
+        if (strip.empty() || strip.back() != f) strip.push_back(f);
+    }
+    std::vector<std::vector<SurfaceMesh>> strip_meshes;
+    std::vector<long> strip_done;
+    double sum_asm = 0, sum_det = 0, sum_solve = 0;
+    long nsteps = 0;
+    bool ok = true;
+    for (m_frame = 0; m_frame < frames; ++m_frame) {
+        std::vector<StepRecord> recs;
+        for (int s = 0; s < m_scene.steps_per_frame; ++s) {
+            auto r = step();
+            recs.insert(recs.end(), r.begin(), r.end());
+            if (m_nonfinite) break;
+        }
+        const FrameRecord fr = frame_record();
+        long iters = 0;
+        double ta = 0, td = 0, tsv = 0, kkt = 0;
+        std::string status;
+        for (const StepRecord& r : recs) {
+            iters += r.iterations;
+            ta += r.time_assembly_s;
+            td += r.time_detection_s;
+            tsv += r.time_solve_s;
+            kkt = r.kkt_rel;
+            status = r.status;
+            if (write)
+                steps_csv << r.frame << ',' << r.step << ',' << r.newton << ',' << r.solver << ',' << r.status << ','
+                          << r.iterations << ',' << r.kkt_rel << ',' << r.time_assembly_s << ',' << r.time_detection_s << ','
+                          << r.time_solve_s << ',' << r.rows << ',' << r.rows_solved << ',' << r.snapshot << '\n';
+        }
+        sum_asm += ta;
+        sum_det += td;
+        sum_solve += tsv;
+        nsteps += static_cast<long>(recs.size());
+        if (write)
+            frames_csv << fr.frame << ',' << fr.time_s << ',' << fr.max_penetration << ',' << fr.max_detected_depth << ','
+                       << fr.kinetic_energy << ',' << fr.elastic_energy << ',' << fr.max_speed << ',' << fr.rows << ','
+                       << (fr.blow_up ? 1 : 0) << '\n';
+        if (m_opt.progress) {
+            char line[256];
+            std::snprintf(line, sizeof line,
+                          "%s frame %ld/%ld  rows %ld  %s %s  it %ld  kkt %.1e  pen %.2e  asm %.3fs det %.3fs solve %.3fs%s\n",
+                          m_scene.name.c_str(), m_frame + 1, frames, fr.rows, m_solver_name.c_str(), status.c_str(), iters,
+                          kkt, fr.max_penetration, ta, td, tsv, fr.blow_up ? "  BLOW-UP" : "");
+            *m_opt.progress << line << std::flush;
+        }
+        if (write) {
+            if (std::find(strip.begin(), strip.end(), m_frame) != strip.end()) {
+                strip_meshes.push_back(body_surfaces());
+                strip_done.push_back(m_frame);
+            }
+            const auto& ex = m_scene.output.export_frames;
+            if (std::find(ex.begin(), ex.end(), m_frame) != ex.end()) {
+                const auto surfaces = body_surfaces();
+                for (size_t b = 0; b < surfaces.size(); ++b) {
+                    char name[64];
+                    std::snprintf(name, sizeof name, "_f%04ld_b%zu.obj", m_frame, b);
+                    make_dirs(m_opt.out_dir + "/frames");
+                    write_obj(m_opt.out_dir + "/frames/" + m_scene.name + name, surfaces[b]);
+                }
+            }
+        }
+        if (fr.blow_up) {
+            ok = false;
+            ++m_frame;
+            break;
+        }
+    }
+    if (m_opt.progress && nsteps > 0) {
+        char line[256];
+        std::snprintf(line, sizeof line, "%s: %ld steps, mean per step: assembly %.4fs detection %.4fs solve %.4fs%s\n",
+                      m_scene.name.c_str(), nsteps, sum_asm / nsteps, sum_det / nsteps, sum_solve / nsteps,
+                      ok ? "" : " (stopped: blow-up)");
+        *m_opt.progress << line;
+    }
+    if (write && !strip_meshes.empty()) {
+        // Common framing over every pictured frame.
+        Box3 box;
+        for (const auto& frame : strip_meshes)
+            for (const auto& s : frame)
+                for (Eigen::Index i = 0; i < s.positions.rows(); ++i) box.extend(Vec3(s.positions.row(i).transpose()));
+        const Vec3 lo = box.min(), hi = box.max();
+        const double extent = 2.0 * (hi - lo).norm();
+        std::vector<SurfaceMesh> obstacle_surfaces;
+        for (const auto& o : m_scene.obstacles) obstacle_surfaces.push_back(o->surface(0.5 * (lo + hi), extent));
+        // Bodies and the finite obstacles near them set the frame; planes are cut by the tile.
+        Box3 frame_box = box;
+        for (size_t o = 0; o < m_scene.obstacles.size(); ++o)
+            if (m_scene.obstacles[o]->type() != "plane" && m_scene.obstacles[o]->type() != "mesh")
+                for (Eigen::Index i = 0; i < obstacle_surfaces[o].positions.rows(); ++i)
+                    frame_box.extend(Vec3(obstacle_surfaces[o].positions.row(i).transpose()));
+        const View view = make_view(m_scene.output.view_deg, frame_box.min(), frame_box.max());
+        const int size = m_scene.output.image_size;
+        Image image(size * static_cast<int>(strip_meshes.size()), size);
+        static const std::array<double, 3> palette[] = {{0.85, 0.35, 0.25}, {0.25, 0.55, 0.85}, {0.35, 0.7, 0.35},
+                                                        {0.85, 0.7, 0.25},  {0.6, 0.4, 0.8},    {0.3, 0.75, 0.75}};
+        for (size_t f = 0; f < strip_meshes.size(); ++f) {
+            std::vector<ColoredSurface> surfaces;
+            for (const auto& s : obstacle_surfaces) surfaces.push_back({&s, {0.75, 0.75, 0.75}});
+            for (size_t b = 0; b < strip_meshes[f].size(); ++b) surfaces.push_back({&strip_meshes[f][b], palette[b % 6]});
+            render_tile(image, static_cast<int>(f) * size, size, view, surfaces);
+        }
+        write_png(m_opt.out_dir + "/" + m_scene.name + "_strip.png", image);
+    }
+    return ok;
+}
+
+} // namespace cb::sim

@@ -1,0 +1,97 @@
+#pragma once
+/// The simulator behind `contactbench simulate`: steps a scene with backward Euler (one QP per
+/// Newton step), detects collisions once per step, solves each QP with a registry solver, and
+/// writes snapshots (.qpsnap), steps.csv, frames.csv, a PNG strip and OBJ frames.
+///
+/// Detection happens once per time step at the start positions x_n (the authors' DCD), or at
+/// the inertial prediction x_n + h v_n with "detection": {"at": "predicted"}; the rows found are
+/// used by every Newton step of that time step.
+#include "problems/sim/collision/dcd.hpp"
+#include "problems/sim/fem_corotated.hpp"
+#include "problems/sim/integrator.hpp"
+#include "problems/sim/scene.hpp"
+#include "solvers/solver.hpp"
+
+#include <iosfwd>
+#include <memory>
+#include <string>
+
+namespace cb::sim {
+
+struct SimulatorOptions {
+    std::string out_dir;          ///< empty: write nothing (tests)
+    std::string solver;           ///< overrides the scene's solver when not empty
+    bool snapshots = true;        ///< false: --no-snapshots
+    long frames = -1;             ///< overrides the scene's frame count when >= 0
+    std::ostream* progress = nullptr;  ///< one line per frame
+};
+
+/// What one QP solve of a step produced.
+struct StepRecord {
+    long frame = 0, step = 0;
+    int newton = 0;
+    std::string solver, status;
+    long iterations = 0;
+    double kkt_rel = 0;
+    double time_assembly_s = 0, time_detection_s = 0, time_solve_s = 0;
+    long rows = 0, rows_solved = 0;
+    std::string snapshot;  ///< path written, or empty
+};
+
+/// Physical outcome of one frame.
+struct FrameRecord {
+    long frame = 0;
+    double time_s = 0;
+    double max_penetration = 0;   ///< max violation of the step's rows after the solve (m)
+    double max_detected_depth = 0;  ///< deepest penetration found by detection at the step's start (m)
+    double kinetic_energy = 0, elastic_energy = 0, max_speed = 0;
+    long rows = 0;
+    bool blow_up = false;
+};
+
+class Simulator {
+public:
+    Simulator(Scene scene, SimulatorOptions options);
+    ~Simulator();
+    /// Runs all frames (stops early after a blow-up); writes the outputs. Returns false on blow-up.
+    bool run();
+    /// Advances one time step; returns its records (one per Newton step).
+    std::vector<StepRecord> step();
+    /// Frame statistics at the current state (after a step).
+    FrameRecord frame_record() const;
+
+    const Scene& scene() const { return m_scene; }
+    const CorotatedFem& fem() const { return *m_fem; }
+    const Vec& positions() const { return m_x; }
+    const Vec& velocities() const { return m_v; }
+    Vec& velocities() { return m_v; }
+    long vertices() const { return m_fem->vertices(); }
+    long dofs() const { return 3 * m_fem->vertices(); }
+    long tets() const { return m_fem->tet_count(); }
+    /// Surface of every body at the current positions (global vertex ids renumbered per body).
+    std::vector<SurfaceMesh> body_surfaces() const;
+    const std::string& solver_name() const { return m_solver_name; }
+    /// The rows of the last detection.
+    const std::vector<ContactRow>& last_rows() const { return m_rows; }
+
+private:
+    std::string snapshot_path(long frame, int newton) const;
+    Scene m_scene;
+    SimulatorOptions m_opt;
+    std::unique_ptr<CorotatedFem> m_fem;
+    std::unique_ptr<CollisionDetector> m_detector;
+    std::vector<long> m_body_first;  ///< first global vertex of each body
+    std::vector<Faces> m_body_faces; ///< per body, local vertex ids
+    Vec m_x, m_v;
+    SpMat m_A;
+    std::unique_ptr<Solver> m_solver;
+    std::string m_solver_name;
+    Vec m_eigenvector;
+    std::vector<ContactRow> m_rows;
+    long m_frame = 0, m_step = 0;
+    double m_last_violation = 0, m_last_depth = 0;
+    bool m_nonfinite = false;
+    nlohmann::json m_material;
+};
+
+} // namespace cb::sim

@@ -1,0 +1,208 @@
+#include "problems/stress.hpp"
+
+#include "problems/synthetic.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+namespace cb {
+
+namespace {
+
+using nlohmann::json;
+
+StressCase make_case(std::string id, std::string family, int severity, std::string synthetic, json params,
+                     std::string description, std::string modifier = "")
+{
+    StressCase c;
+    c.id = std::move(id);
+    c.family = std::move(family);
+    c.severity = severity;
+    c.synthetic = std::move(synthetic);
+    c.params = std::move(params);
+    c.description = std::move(description);
+    c.modifier = std::move(modifier);
+    return c;
+}
+
+/// Appends rows (triplets per row, c, contact metadata) to a QP.
+struct RowAppender {
+    std::vector<Triplet> t;
+    std::vector<double> c;
+    ContactRows contacts;
+    int rows = 0;
+
+    void add_existing(const Qp& qp, Eigen::Index r, double scale, double c_value)
+    {
+        for (SpMat::InnerIterator it(qp.J, r); it; ++it)
+            t.emplace_back(rows, static_cast<int>(it.col()), scale * it.value());
+        c.push_back(c_value);
+        if (!qp.contacts.empty()) {
+            contacts.kind.push_back(qp.contacts.kind[static_cast<size_t>(r)]);
+            contacts.depth.push_back(qp.contacts.depth[static_cast<size_t>(r)]);
+            for (int k = 0; k < 4; ++k) contacts.vertex.push_back(qp.contacts.vertex[static_cast<size_t>(4 * r + k)]);
+        }
+        ++rows;
+    }
+    void add_vertex_row(int vertex, const Eigen::Vector3d& normal, double c_value, double depth)
+    {
+        for (int d = 0; d < 3; ++d)
+            if (normal[d] != 0.0) t.emplace_back(rows, 3 * vertex + d, normal[d]);
+        c.push_back(c_value);
+        contacts.kind.push_back(static_cast<std::int64_t>(ContactKind::OTHER));
+        contacts.depth.push_back(depth);
+        contacts.vertex.insert(contacts.vertex.end(), {vertex, -1, -1, -1});
+        ++rows;
+    }
+    void finish(Qp& qp, bool keep_contacts)
+    {
+        qp.J = SpMat(rows, qp.n());
+        qp.J.setFromTriplets(t.begin(), t.end());
+        qp.c = Eigen::Map<Vec>(c.data(), static_cast<Eigen::Index>(c.size()));
+        qp.contacts = keep_contacts ? contacts : ContactRows{};
+    }
+};
+
+/// Degenerate J: every other row gets a parallel copy (scaled by 2.5), half of them the same
+/// constraint, half a slightly weaker one (never active at the solution but parallel).
+void add_parallel_rows(Qp& qp, std::uint64_t seed)
+{
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    RowAppender out;
+    const bool keep = !qp.contacts.empty();
+    const double offset = 1e-3 * std::max(1.0, qp.c.size() ? qp.c.lpNorm<Eigen::Infinity>() : 0.0);
+    for (Eigen::Index r = 0; r < qp.m(); ++r) {
+        out.add_existing(qp, r, 1.0, qp.c[r]);
+        if (r % 2 == 0) {
+            const bool same = u(rng) < 0.5;
+            out.add_existing(qp, r, 2.5, 2.5 * (qp.c[r] - (same ? 0.0 : offset)));
+        }
+    }
+    out.finish(qp, keep);
+}
+
+/// Degenerate J: many rows (20) with different normals on the most penetrating vertex, all
+/// satisfied at that vertex's projection onto the plane y = 0 (so the set stays non-empty).
+void add_rows_on_one_vertex(Qp& qp, std::uint64_t seed)
+{
+    if (qp.m() == 0) return;
+    const Vec slack = qp.J * qp.x0 - qp.c;
+    Eigen::Index deepest = 0;
+    slack.minCoeff(&deepest);
+    int vertex = -1;
+    for (SpMat::InnerIterator it(qp.J, deepest); it; ++it) {
+        vertex = static_cast<int>(it.col() / 3);
+        break;
+    }
+    if (vertex < 0) return;
+    std::mt19937_64 rng(seed);
+    std::normal_distribution<double> gauss(0.0, 1.0);
+    RowAppender out;
+    const bool keep = !qp.contacts.empty();
+    for (Eigen::Index r = 0; r < qp.m(); ++r) out.add_existing(qp, r, 1.0, qp.c[r]);
+    Eigen::Vector3d target = qp.x0.segment<3>(3 * vertex);
+    target.y() = std::max(0.0, target.y());
+    for (int k = 0; k < 20; ++k) {
+        Eigen::Vector3d normal(gauss(rng), 0.0, gauss(rng));
+        normal.y() = 1.0;  // upper hemisphere, at most ~70 degrees from the plane normal
+        normal.normalize();
+        const double c_value = normal.dot(target);
+        out.add_vertex_row(vertex, normal, c_value, std::max(0.0, c_value - normal.dot(qp.x0.segment<3>(3 * vertex))));
+    }
+    out.finish(qp, keep);
+}
+
+} // namespace
+
+std::vector<StressCase> stress_cases(bool quick)
+{
+    // Bodies stay small: the FEM grid defaults to 4x4x4 cubes (375 DOF); a few cases use more.
+    const json base = json::object();
+    std::vector<StressCase> all = {
+        make_case("baseline-plane", "baseline", 0, "plane", base, "a soft body falling on the ground"),
+        make_case("baseline-coupled", "baseline", 0, "coupled", base, "two bodies, vertex-triangle rows (coupled J)"),
+        make_case("empty-J", "empty-J", 0, "unconstrained", base, "m = 0: the unconstrained problem"),
+        make_case("stiffness-1e4", "stiffness", 1, "plane", {{"youngs", 1e4}}, "very soft body (E = 1e4 Pa)"),
+        make_case("stiffness-1e8", "stiffness", 2, "plane", {{"youngs", 1e8}}, "stiff body (E = 1e8 Pa)"),
+        make_case("stiffness-1e10", "stiffness", 2, "plane", {{"youngs", 1e10}}, "very stiff body (E = 1e10 Pa)"),
+        make_case("stiffness-1e12", "stiffness", 3, "plane", {{"youngs", 1e12}}, "steel-like and beyond (E = 1e12 Pa)"),
+        make_case("stiffness-coupled-1e9", "stiffness", 3, "coupled", {{"youngs", 1e9}}, "stiff bodies with coupled rows"),
+        make_case("units-mm-g", "units", 2, "plane", {{"length_scale", 1e-3}, {"mass_scale", 1e-3}},
+                  "lengths in mm, masses in g"),
+        make_case("units-km-t", "units", 2, "plane", {{"length_scale", 1e3}, {"mass_scale", 1e3}},
+                  "lengths in km, masses in t"),
+        make_case("timestep-1e-5", "timestep", 2, "plane", {{"h", 1e-5}}, "tiny time step h = 1e-5 s"),
+        make_case("timestep-1", "timestep", 2, "plane", {{"h", 1.0}}, "huge time step h = 1 s"),
+        make_case("timestep-10", "timestep", 3, "plane", {{"h", 10.0}}, "absurd time step h = 10 s"),
+        make_case("rows-scaled-1e3", "scaled-rows", 1, "scaled-rows", {{"row_scale", 1e3}},
+                  "rows of J scaled by factors in [1e-3, 1e3]"),
+        make_case("rows-scaled-1e6", "scaled-rows", 3, "scaled-rows", {{"row_scale", 1e6}},
+                  "rows of J scaled by factors in [1e-6, 1e6]"),
+        make_case("rows-duplicate-50", "degenerate-J", 1, "duplicate-rows", {{"fraction", 0.5}}, "half the rows duplicated"),
+        make_case("rows-duplicate-all", "degenerate-J", 2, "duplicate-rows", {{"fraction", 1.0}}, "every row duplicated"),
+        make_case("rows-parallel", "degenerate-J", 2, "plane", base, "parallel rows (scaled copies, some weaker)",
+                  "parallel-rows"),
+        make_case("rows-zero", "degenerate-J", 1, "zero-rows", {{"count", 5}}, "five zero rows with c = 0"),
+        make_case("rows-one-vertex", "degenerate-J", 2, "plane", base, "20 rows with different normals on one vertex",
+                  "one-vertex"),
+        make_case("infeasible-1", "infeasible", 2, "infeasible", {{"pairs", 1}}, "one contradictory pair of rows"),
+        make_case("infeasible-5", "infeasible", 3, "infeasible", {{"pairs", 5}}, "five contradictory pairs"),
+        make_case("singular-mass-1e-6", "singular-A", 2, "plane", {{"density", 1e-6}},
+                  "tiny mass: A ~ h^2 K with its rigid modes nearly singular"),
+        make_case("singular-mass-1e-10", "singular-A", 3, "plane", {{"density", 1e-10}},
+                  "vanishing mass: A nearly singular"),
+        make_case("tiny-h2K", "singular-A", 1, "plane", {{"h", 1e-7}, {"youngs", 1e4}},
+                  "h^2 K below rounding of M: A ~ M"),
+        make_case("m-near-n-90", "m-near-n", 2, "box", {{"fraction", 0.9}}, "bounds on 90% of the DOFs"),
+        make_case("m-equals-n", "m-near-n", 3, "box", {{"fraction", 1.0}}, "a bound on every DOF"),
+        make_case("random-spd-1e8", "conditioning", 2, "random-spd", {{"n", 300}, {"m", 60}, {"condition", 1e8}},
+                  "random SPD, condition 1e8"),
+        make_case("random-spd-1e12", "conditioning", 3, "random-spd", {{"n", 300}, {"m", 60}, {"condition", 1e12}},
+                  "random SPD, condition 1e12"),
+        make_case("random-spd-m-near-n", "m-near-n", 2, "random-spd", {{"n", 200}, {"m", 190}},
+                  "random SPD with m = 190 rows on n = 200"),
+        make_case("plane-tilted-larger", "baseline", 1, "plane", {{"nx", 8}, {"ny", 4}, {"nz", 8}, {"tilt_deg", 30.0}},
+                  "a larger body (1215 DOF) on a 30 degree slope"),
+    };
+    if (!quick) return all;
+    std::vector<StressCase> subset;
+    for (const auto& c : all)
+        if (c.id == "baseline-plane" || c.id == "rows-duplicate-50" || c.id == "infeasible-1" || c.id == "empty-J")
+            subset.push_back(c);
+    return subset;
+}
+
+std::vector<StressCase> select_stress_cases(const std::vector<StressCase>& all, const std::vector<std::string>& names)
+{
+    if (names.empty()) return all;
+    std::vector<StressCase> out;
+    for (const auto& name : names) {
+        bool found = false;
+        for (const auto& c : all)
+            if (c.id == name || c.family == name) {
+                found = true;
+                if (std::none_of(out.begin(), out.end(), [&](const StressCase& o) { return o.id == c.id; }))
+                    out.push_back(c);
+            }
+        if (!found) {
+            std::string known;
+            for (const auto& c : all) known += (known.empty() ? "" : ", ") + c.id;
+            throw_input_error("--cases", name, "no stress case or family of that name; known: " + known);
+        }
+    }
+    return out;
+}
+
+Qp make_stress_qp(const StressCase& c)
+{
+    Qp qp = make_synthetic(c.synthetic, c.params, c.seed);
+    if (c.modifier == "parallel-rows") add_parallel_rows(qp, c.seed);
+    else if (c.modifier == "one-vertex") add_rows_on_one_vertex(qp, c.seed);
+    else if (!c.modifier.empty()) throw_input_error("stress case " + c.id, "modifier", "unknown '" + c.modifier + "'");
+    qp.meta["stress"] = {{"case", c.id}, {"family", c.family}, {"severity", c.severity}, {"modifier", c.modifier}};
+    return qp;
+}
+
+} // namespace cb

@@ -1,0 +1,211 @@
+// `cg`: preconditioned conjugate gradients on A x = b, ignoring J (ALGORITHMS.md §9).
+// Ref: Li et al. 2015, Fig. 8 (the PCG baseline); Hestenes-Stiefel CG with a Jacobi preconditioner.
+#include "solvers/cg.hpp"
+
+#include <cmath>
+#include <sstream>
+
+namespace cb {
+
+CgSettings CgSettings::from_json(const nlohmann::json& settings)
+{
+    SettingsReader reader(settings, "cg");
+    CgSettings s;
+    s.common = reader.common();
+    s.precond = reader.choice("precond", s.precond, {"none", "jacobi"});
+    reader.finish();
+    return s;
+}
+
+nlohmann::json CgSettings::to_json() const
+{
+    nlohmann::json j = common.to_json();
+    j["precond"] = precond;
+    return j;
+}
+
+std::vector<SettingDoc> cg_setting_docs()
+{
+    return {{"precond", "jacobi", "none | jacobi: preconditioner (diagonal of A)"}};
+}
+
+namespace {
+
+/// Stop test of cg: kkt = unconstrained relative stationarity, native = |r|_2 absolute.
+struct CgStopTest {
+    StopRule rule;
+    double tol;
+    double inv_s;          ///< 1 / max(1, |b|_inf)
+    double inv_reference;  ///< 1 / (|A x0 - b|_inf / s), or 1 when that is 0
+    bool met(const Vec& r) const
+    {
+        if (rule == StopRule::NATIVE) return r.norm() <= tol;
+        return r.lpNorm<Eigen::Infinity>() * inv_s * inv_reference <= tol;
+    }
+};
+
+} // namespace
+
+SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
+{
+    SolverResult result;
+    result.info["ignores_constraints"] = true;
+    result.criterion = "";
+    Counters& counters = result.counters;
+    const Eigen::Index n = qp.n();
+    const CommonSettings& common = m_settings.common;
+
+    Stopwatch watch;
+    watch.start();
+    result.lambda = Vec::Zero(qp.m());
+    if (qp.A.cols() != n || qp.b.size() != n || qp.x0.size() != n) {
+        result.status = SolveStatus::INVALID_INPUT;
+        result.message = "cg: sizes disagree (A " + std::to_string(qp.A.rows()) + "x" +
+                         std::to_string(qp.A.cols()) + ", b " + std::to_string(qp.b.size()) +
+                         ", x0 " + std::to_string(qp.x0.size()) + ")";
+        result.x = qp.x0;
+        return result;
+    }
+    const bool jacobi = m_settings.precond == "jacobi";
+    Vec inv_diag;
+    if (jacobi) {
+        inv_diag = qp.A.diagonal();
+        for (Eigen::Index i = 0; i < n; ++i) {
+            if (!(inv_diag[i] > 0.0) || !std::isfinite(inv_diag[i])) {
+                std::ostringstream msg;
+                msg << "cg: jacobi preconditioner needs a positive diagonal; A(" << i << "," << i
+                    << ") = " << inv_diag[i];
+                result.status = SolveStatus::INVALID_INPUT;
+                result.message = msg.str();
+                result.x = qp.x0;
+                return result;
+            }
+            inv_diag[i] = 1.0 / inv_diag[i];
+        }
+    }
+    auto precondition = [&](const Vec& r) -> Vec {
+        if (!jacobi) return r;
+        ++counters.precond_applications;
+        return inv_diag.cwiseProduct(r);
+    };
+    result.setup_s = watch.seconds();
+    watch.reset();
+    watch.start();
+
+    Vec x = qp.x0;
+    Vec r = qp.b - qp.A * x;  // r = -g
+    ++counters.a_products;
+    const double s = std::max(1.0, n ? qp.b.lpNorm<Eigen::Infinity>() : 0.0);
+    const double stat0 = n ? r.lpNorm<Eigen::Infinity>() / s : 0.0;
+    CgStopTest stop{common.stop, common.tol, 1.0 / s,
+                    (stat0 > 0.0 && std::isfinite(stat0)) ? 1.0 / stat0 : 1.0};
+
+    Vec z = precondition(r);
+    Vec p = z;
+    double rz = r.dot(z);
+    Vec Ap(n);
+
+    auto monitor = [&](StepKind step) {
+        IterationInfo info;
+        info.iteration = counters.iterations;
+        info.step = step;
+        info.x = &x;
+        info.lambda = &result.lambda;
+        info.native_residual = r.norm();
+        info.counters = &counters;
+        return notify_monitor(context, watch, info);
+    };
+    bool stopped = !monitor(StepKind::START);
+    if (stopped) result.status = SolveStatus::STOPPED_BY_MONITOR;
+
+    long replacements = 0;  // residual replacements after a false (recurrence-only) convergence
+    while (result.status == SolveStatus::NOT_RUN) {
+        if (!std::isfinite(rz) || !x.allFinite()) {
+            result.status = SolveStatus::DIVERGED;
+            result.message = "cg: non-finite iterate or residual";
+            break;
+        }
+        if (stop.met(r)) {
+            // The recurrence residual drifts from b - Ax: confirm on the true residual.
+            Vec r_true = qp.b - qp.A * x;
+            ++counters.a_products;
+            if (stop.met(r_true)) {
+                r = r_true;
+                result.status = SolveStatus::CONVERGED;
+                result.criterion = common.stop == StopRule::KKT ? "kkt" : "native";
+                break;
+            }
+            ++replacements;
+            r = r_true;
+            z = precondition(r);
+            p = z;
+            rz = r.dot(z);
+            continue;
+        }
+        if (counters.iterations >= common.max_iterations) {
+            result.status = SolveStatus::MAX_ITERATIONS;
+            break;
+        }
+        if (common.time_limit_s > 0.0 && watch.seconds() >= common.time_limit_s) {
+            result.status = SolveStatus::TIME_LIMIT;
+            break;
+        }
+        Ap.noalias() = qp.A * p;
+        ++counters.a_products;
+        const double pAp = p.dot(Ap);
+        if (!(pAp > 0.0)) {
+            std::ostringstream msg;
+            msg << "cg: breakdown at iteration " << counters.iterations << ": p'Ap = " << pAp
+                << (pAp < 0.0 ? " < 0 (A is not positive definite)" : "");
+            result.status = (pAp == 0.0) ? SolveStatus::STALLED : SolveStatus::DIVERGED;
+            result.message = msg.str();
+            break;
+        }
+        const double alpha = rz / pAp;
+        x.noalias() += alpha * p;
+        r.noalias() -= alpha * Ap;
+        z = precondition(r);
+        const double rz_new = r.dot(z);
+        const double beta = rz_new / rz;
+        rz = rz_new;
+        p = z + beta * p;
+        ++counters.iterations;
+        ++counters.cg_steps;
+        if (!monitor(StepKind::CG)) {
+            result.status = SolveStatus::STOPPED_BY_MONITOR;
+            break;
+        }
+    }
+    if (result.status != SolveStatus::CONVERGED) {
+        r = qp.b - qp.A * x;  // report the true residual, not the recurrence one
+        ++counters.a_products;
+    }
+    result.x = x;
+    result.iterations = counters.iterations;
+    result.native_residual = r.norm();
+    result.info["residual_replacements"] = replacements;
+    result.info["unconstrained_relative_stationarity"] =
+        n ? r.lpNorm<Eigen::Infinity>() / s * stop.inv_reference : 0.0;
+    if (result.message.empty()) {
+        std::ostringstream msg;
+        msg << "cg (" << m_settings.precond << "): " << to_string(result.status) << " after "
+            << counters.iterations << " iterations, |b - Ax|_2 = " << result.native_residual
+            << " (constraints ignored)";
+        result.message = msg.str();
+    }
+    result.solve_s = watch.seconds();
+    return result;
+}
+
+SolverEntry cg_entry()
+{
+    SolverEntry entry;
+    entry.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
+        return std::make_unique<CgSolver>(CgSettings::from_json(settings));
+    };
+    entry.description = "Jacobi-preconditioned CG on Ax = b ignoring J (Fig. 8 baseline); stop=kkt is the unconstrained relative stationarity";
+    entry.settings = cg_setting_docs();
+    return entry;
+}
+
+} // namespace cb

@@ -1,0 +1,42 @@
+#pragma once
+/// `cg`: (Jacobi-)preconditioned conjugate gradients on A x = b, ignoring J (ALGORITHMS.md §9).
+/// The baseline of the paper's Fig. 8: it solves the UNCONSTRAINED problem, so its "KKT error"
+/// (stop=kkt) is the relative stationarity |Ax - b|_inf / s of that problem, divided by its
+/// value at x0. It returns lambda = 0 and info {"ignores_constraints": true}.
+/// Ref: Li et al. 2015, Sec. 6 (Fig. 8 comparison with PCG).
+#include "solvers/registry.hpp"
+#include "solvers/settings.hpp"
+#include "solvers/solver.hpp"
+
+#include <string>
+#include <vector>
+
+namespace cb {
+
+struct CgSettings {
+    CommonSettings common;
+    std::string precond = "jacobi";  ///< none | jacobi (diagonal of A)
+
+    /// Reads and checks the JSON settings (unknown keys are errors).
+    static CgSettings from_json(const nlohmann::json& settings);
+    nlohmann::json to_json() const;
+};
+
+/// The solver-specific keys of `cg`, for --help.
+std::vector<SettingDoc> cg_setting_docs();
+
+class CgSolver final : public Solver {
+public:
+    explicit CgSolver(CgSettings settings) : m_settings(std::move(settings)) {}
+    std::string name() const override { return "cg"; }
+    nlohmann::json settings() const override { return m_settings.to_json(); }
+    SolverResult solve(const QpView& qp, const SolveContext& context) override;
+
+private:
+    CgSettings m_settings;
+};
+
+/// Registry entry (factory, description, setting docs) for builtin_solvers.cpp.
+SolverEntry cg_entry();
+
+} // namespace cb

@@ -1,0 +1,311 @@
+// Ref: Li et al., CGF 2015, Sec. 6.2 (ICA as the comparison method); Otaduy et al. 2009, the
+// anticipation LCP; ALGORITHMS.md §6 (the exact iteration implemented here).
+#include "solvers/ica.hpp"
+
+#include <Eigen/CholmodSupport>
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <vector>
+
+namespace cb {
+
+IcaSettings IcaSettings::from_json(const nlohmann::json& settings)
+{
+    SettingsReader reader(settings, "ica");
+    IcaSettings s;
+    s.common = reader.common();
+    s.pgs_sweeps = reader.integer("pgs_sweeps", s.pgs_sweeps, 1);
+    s.pgs_tol = reader.number("pgs_tol", s.pgs_tol, -1e-300);
+    s.start = reader.choice("start", s.start, {"x0", "unconstrained"});
+    reader.finish();
+    return s;
+}
+
+nlohmann::json IcaSettings::to_json() const
+{
+    nlohmann::json j = common.to_json();
+    j["pgs_sweeps"] = pgs_sweeps;
+    j["pgs_tol"] = pgs_tol;
+    j["start"] = start;
+    return j;
+}
+
+namespace {
+
+/// The 3x3 vertex-block diagonal of A and its inverse. A last block of size < 3 (n not a
+/// multiple of 3) is padded with the identity, which leaves its DOFs untouched.
+struct BlockDiagonal {
+    std::vector<Eigen::Matrix3d> block, inverse;
+    Eigen::Index n = 0;
+    Eigen::Index blocks() const { return static_cast<Eigen::Index>(block.size()); }
+    Eigen::Index begin(Eigen::Index k) const { return 3 * k; }
+    int size(Eigen::Index k) const { return static_cast<int>(std::min<Eigen::Index>(3, n - 3 * k)); }
+};
+
+/// @return false when a block is not invertible (A not SPD).
+bool build_block_diagonal(const SpMat& A, BlockDiagonal& d, std::string& error)
+{
+    d.n = A.rows();
+    const Eigen::Index nb = (d.n + 2) / 3;
+    d.block.assign(static_cast<size_t>(nb), Eigen::Matrix3d::Identity());
+    d.inverse.assign(static_cast<size_t>(nb), Eigen::Matrix3d::Identity());
+    for (Eigen::Index k = 0; k < nb; ++k) {
+        Eigen::Matrix3d& blk = d.block[static_cast<size_t>(k)];
+        const int s = d.size(k);
+        blk.topLeftCorner(s, s).setZero();
+        for (int a = 0; a < s; ++a)
+            for (SpMat::InnerIterator it(A, d.begin(k) + a); it; ++it) {
+                const Eigen::Index col = it.col() - d.begin(k);
+                if (col >= 0 && col < s) blk(a, static_cast<int>(col)) = it.value();
+            }
+        // Each diagonal block of an SPD matrix is SPD; LLT both inverts it and checks that.
+        Eigen::LLT<Eigen::Matrix3d> llt(blk);
+        if (llt.info() != Eigen::Success) {
+            std::ostringstream s_err;
+            s_err << "3x3 diagonal block of vertex " << k << " (rows " << d.begin(k) << ".."
+                  << d.begin(k) + s - 1 << ") is not positive definite";
+            error = s_err.str();
+            return false;
+        }
+        d.inverse[static_cast<size_t>(k)] = llt.solve(Eigen::Matrix3d::Identity());
+        if (!d.inverse[static_cast<size_t>(k)].allFinite()) {
+            error = "3x3 diagonal block of vertex " + std::to_string(k) + " has a non-finite inverse";
+            return false;
+        }
+    }
+    return true;
+}
+
+/// D3^-1 as a sparse matrix (for B = J D3^-1 J' and J D3^-1).
+SpMat block_inverse_matrix(const BlockDiagonal& d)
+{
+    std::vector<Triplet> t;
+    t.reserve(static_cast<size_t>(9 * d.blocks()));
+    for (Eigen::Index k = 0; k < d.blocks(); ++k) {
+        const int s = d.size(k);
+        for (int a = 0; a < s; ++a)
+            for (int b = 0; b < s; ++b)
+                t.emplace_back(static_cast<int>(d.begin(k) + a), static_cast<int>(d.begin(k) + b),
+                               d.inverse[static_cast<size_t>(k)](a, b));
+    }
+    SpMat m(d.n, d.n);
+    m.setFromTriplets(t.begin(), t.end());
+    return m;
+}
+
+/// One ascending block Gauss-Seidel sweep on A x = f (in place). Costs one pass over A.
+void block_gauss_seidel_sweep(const SpMat& A, const BlockDiagonal& d, const Vec& f, Vec& x)
+{
+    for (Eigen::Index k = 0; k < d.blocks(); ++k) {
+        const Eigen::Index i0 = d.begin(k);
+        const int s = d.size(k);
+        Eigen::Vector3d r = Eigen::Vector3d::Zero(), xold = Eigen::Vector3d::Zero();
+        for (int a = 0; a < s; ++a) xold[a] = x[i0 + a];
+        for (int a = 0; a < s; ++a) {
+            double row = 0.0;
+            for (SpMat::InnerIterator it(A, i0 + a); it; ++it) row += it.value() * x[it.col()];
+            r[a] = f[i0 + a] - row;
+        }
+        // r = f - A x (with the old block); add back the block's own term: f - sum_{j not in k} A_kj x_j.
+        r += d.block[static_cast<size_t>(k)] * xold;
+        const Eigen::Vector3d xnew = d.inverse[static_cast<size_t>(k)] * r;
+        for (int a = 0; a < s; ++a) x[i0 + a] = xnew[a];
+    }
+}
+
+/// (D3 x) for the anticipation (L + U) x = A x - D3 x.
+Vec block_times(const BlockDiagonal& d, const Vec& x)
+{
+    Vec out(x.size());
+    for (Eigen::Index k = 0; k < d.blocks(); ++k) {
+        const Eigen::Index i0 = d.begin(k);
+        const int s = d.size(k);
+        Eigen::Vector3d v = Eigen::Vector3d::Zero();
+        for (int a = 0; a < s; ++a) v[a] = x[i0 + a];
+        const Eigen::Vector3d w = d.block[static_cast<size_t>(k)] * v;
+        for (int a = 0; a < s; ++a) out[i0 + a] = w[a];
+    }
+    return out;
+}
+
+bool time_up(const Stopwatch& watch, double limit) { return limit > 0.0 && watch.seconds() >= limit; }
+
+} // namespace
+
+SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
+{
+    const IcaSettings& s = m_settings;
+    const double limit = s.common.time_limit_s;
+    SolverResult result;
+    Counters& counters = result.counters;
+    Stopwatch watch;  // all solver time (setup + iterations), for the time limit
+    watch.start();
+    Stopwatch setup;
+    setup.start();
+
+    const Eigen::Index m = qp.m();
+    result.info["start"] = s.start;
+    result.x = qp.x0;
+    result.lambda = Vec::Zero(m);
+
+    BlockDiagonal d;
+    std::string error;
+    if (!build_block_diagonal(qp.A, d, error)) {
+        result.status = SolveStatus::INVALID_INPUT;
+        result.message = "ica: A must be SPD: " + error;
+        result.setup_s = setup.seconds();
+        return result;
+    }
+    const SpMat Dinv = block_inverse_matrix(d);
+    const SpMat JD = qp.J * Dinv;                            // J D3^-1, m x n
+    const SpMat B = SpMat(JD * qp.J.transpose()).pruned();   // J D3^-1 J', m x m
+    Vec B_diag = Vec::Zero(m);
+    for (Eigen::Index i = 0; i < m; ++i) B_diag[i] = B.coeff(i, i);
+    long zero_rows = 0;
+    for (Eigen::Index i = 0; i < m; ++i)
+        if (!(B_diag[i] > 0.0)) ++zero_rows;
+    result.info["B_nnz"] = static_cast<long>(B.nonZeros());
+    result.info["B_diagonal"] = B.nonZeros() == static_cast<Eigen::Index>(m - zero_rows);
+    result.info["zero_rows"] = zero_rows;
+
+    Vec x = qp.x0;
+    if (s.start == "unconstrained") {
+        Stopwatch start_watch;
+        start_watch.start();
+        Eigen::CholmodSupernodalLLT<SpMatCol, Eigen::Lower> llt;
+        const SpMatCol A_col = qp.A;
+        llt.compute(A_col);
+        ++counters.cholmod_analyses;
+        ++counters.cholmod_factorizations;
+        if (llt.info() != Eigen::Success) {
+            result.status = SolveStatus::INVALID_INPUT;
+            result.message = "ica: start=unconstrained: CHOLMOD could not factor A (not SPD?)";
+            result.setup_s = setup.seconds();
+            return result;
+        }
+        x = llt.solve(qp.b);
+        ++counters.cholmod_solves;
+        result.info["start_solve_s"] = start_watch.seconds();
+        result.info["start_solver"] = "cholmod";
+    }
+    Vec lambda = Vec::Zero(m);
+    if (context.lambda0 && context.lambda0->size() == m) lambda = context.lambda0->cwiseMax(0.0);
+    result.setup_s = setup.seconds();
+
+    Stopwatch solve_watch;
+    solve_watch.start();
+    const KktScale scale = kkt_scale(qp);
+    ++counters.a_products;
+    Vec Ax = qp.A * x;
+    ++counters.a_products;
+    Vec f = qp.b + qp.J.transpose() * lambda;
+    double native = (Ax - f).norm();
+    Vec g = Ax - qp.b;
+
+    auto finish = [&](SolveStatus status, const std::string& criterion, const std::string& message) {
+        result.x = x;
+        result.lambda = lambda;
+        result.status = status;
+        result.criterion = criterion;
+        result.message = message;
+        result.native_residual = native;
+        result.iterations = counters.iterations;
+        result.solve_s = solve_watch.seconds();
+        result.info["native_residual_definition"] = "||A x - b - J' lambda||_2 (absolute)";
+        return result;
+    };
+    auto converged = [&]() -> std::string {
+        if (s.common.stop == StopRule::NATIVE) return native <= s.common.tol ? "native" : "";
+        return kkt_converged(qp, x, g, lambda, scale, s.common.tol) ? "kkt" : "";
+    };
+
+    if (!notify_monitor(context, solve_watch,
+                        {0, StepKind::START, &x, &lambda, native, -1, &counters, 0.0}))
+        return finish(SolveStatus::STOPPED_BY_MONITOR, "", "ica: stopped by the monitor");
+    if (!x.allFinite()) return finish(SolveStatus::DIVERGED, "", "ica: non-finite start point");
+    {
+        const std::string c = converged();
+        if (!c.empty()) return finish(SolveStatus::CONVERGED, c, "ica: the start point meets the stop rule");
+    }
+
+    Vec q(m);
+    double last_dlambda = 0.0;
+    long last_sweeps = 0;
+    for (;;) {
+        if (counters.iterations >= s.common.max_iterations)
+            return finish(SolveStatus::MAX_ITERATIONS, "",
+                          "ica: max_iterations reached (" + std::to_string(s.common.max_iterations) + ")");
+        if (time_up(watch, limit)) return finish(SolveStatus::TIME_LIMIT, "", "ica: time limit reached");
+
+        // 1. anticipation: the LCP of the block-Jacobi prediction x~ = D3^-1 (b + J'l - (L+U) x).
+        if (m > 0) {
+            const Vec LUx = Ax - block_times(d, x);
+            q = qp.c + JD * (LUx - qp.b);
+        }
+        // 2. projected Gauss-Seidel on B lambda >= q, warm-started from the previous lambda.
+        last_sweeps = 0;
+        for (long sweep = 0; sweep < s.pgs_sweeps && m > 0; ++sweep) {
+            double dl2 = 0.0;
+            for (Eigen::Index i = 0; i < m; ++i) {
+                if (!(B_diag[i] > 0.0)) {  // zero row of J: no force can act through it
+                    dl2 += lambda[i] * lambda[i];
+                    lambda[i] = 0.0;
+                    continue;
+                }
+                double r = -q[i];
+                for (SpMat::InnerIterator it(B, i); it; ++it) r += it.value() * lambda[it.col()];
+                const double li = std::max(0.0, lambda[i] - r / B_diag[i]);
+                dl2 += (li - lambda[i]) * (li - lambda[i]);
+                lambda[i] = li;
+            }
+            ++last_sweeps;
+            ++counters.pgs_sweeps;
+            ++counters.lcp_iterations;
+            last_dlambda = std::sqrt(dl2);
+            if (last_dlambda <= s.pgs_tol) break;
+            if (time_up(watch, limit)) break;  // the outer loop reports the limit after this iteration
+        }
+        // 3. one block Gauss-Seidel sweep on A x = b + J' lambda.
+        f = qp.b + qp.J.transpose() * lambda;
+        block_gauss_seidel_sweep(qp.A, d, f, x);
+        ++counters.a_products;
+        // 4. the native residual (its A x is reused by the next anticipation).
+        Ax = qp.A * x;
+        ++counters.a_products;
+        g = Ax - qp.b;
+        native = (Ax - f).norm();
+        ++counters.iterations;
+
+        if (!notify_monitor(context, solve_watch,
+                            {counters.iterations, StepKind::OUTER, &x, &lambda, native, -1, &counters, 0.0}))
+            return finish(SolveStatus::STOPPED_BY_MONITOR, "", "ica: stopped by the monitor");
+        if (!x.allFinite() || !lambda.allFinite() || !std::isfinite(native))
+            return finish(SolveStatus::DIVERGED, "", "ica: non-finite iterate");
+        const std::string c = converged();
+        if (!c.empty()) {
+            result.info["last_pgs_sweeps"] = last_sweeps;
+            result.info["last_pgs_dlambda"] = last_dlambda;
+            std::ostringstream msg;
+            msg << "ica: " << (c == "native" ? "native residual ||Ax-b-J'lambda||_2 = " : "relative KKT error <= tol; native residual = ")
+                << native << (c == "native" ? " <= tol (stationarity only; feasibility not checked)" : "");
+            return finish(SolveStatus::CONVERGED, c, msg.str());
+        }
+    }
+}
+
+SolverEntry ica_entry()
+{
+    SolverEntry e;
+    e.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
+        return std::make_unique<IcaSolver>(IcaSettings::from_json(settings));
+    };
+    e.description = "iterative constraint anticipation (Otaduy et al. 2009) with PGS on J D3^-1 J', as the authors ran it";
+    e.settings = {{"pgs_sweeps", "20", "max projected Gauss-Seidel sweeps per outer iteration"},
+                  {"pgs_tol", "1e-3", "PGS stops when ||dlambda||_2 <= pgs_tol"},
+                  {"start", "x0", "x0 | unconstrained (CHOLMOD solve of A x = b, timed in setup_s, reported in info)"}};
+    return e;
+}
+
+} // namespace cb

@@ -1,0 +1,699 @@
+// `mprgp`: extended monotone MPRGP on decoupled constraints (ALGORITHMS.md §3).
+// Ref: Li et al., "Deformable Objects Collision Handling with Fast Convergence", CGF 2015,
+//      Alg. 1 (outline), Alg. 2 (CG chain), Alg. 3 (safeguards), eq. (13)-(20), Appendix B.
+// The hot loop is written for cost: one A-product per CG step (the projected objective
+// F(P(y)) comes from scalar recurrences plus a sparse correction), O(nnz(J)) row work, and
+// fused vector updates, so that an iteration costs about one Jacobi-PCG iteration.
+#include "solvers/mprgp.hpp"
+
+#include "solvers/decouple.hpp"
+#include "solvers/kkt.hpp"
+#include "solvers/mprgp_kernels.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace cb {
+
+MprgpSettings MprgpSettings::from_json(const nlohmann::json& settings)
+{
+    SettingsReader reader(settings, "mprgp");
+    MprgpSettings s;
+    s.common = reader.common();
+    s.gamma = reader.number("gamma", s.gamma, 0.0);
+    s.precond = reader.choice("precond", s.precond, {"none", "jacobi"});
+    s.alpha = reader.choice("alpha", s.alpha, {"power", "authors"});
+    s.power_max = reader.integer("power_max", s.power_max, 1, 1000000);
+    s.objective = reader.choice("objective", s.objective, {"cheap", "recompute"});
+    s.safeguard_max = reader.integer("safeguard_max", s.safeguard_max, 1, 100000000);
+    reader.finish();
+    return s;
+}
+
+nlohmann::json MprgpSettings::to_json() const
+{
+    nlohmann::json j = common.to_json();
+    j["gamma"] = gamma;
+    j["precond"] = precond;
+    j["alpha"] = alpha;
+    j["power_max"] = power_max;
+    j["objective"] = objective;
+    j["safeguard_max"] = safeguard_max;
+    return j;
+}
+
+std::vector<SettingDoc> mprgp_setting_docs()
+{
+    return {{"gamma", "1", "proportioning constant Gamma > 0 (Alg. 1)"},
+            {"precond", "jacobi", "none | jacobi: D-weighted projection of D^-1 g onto the face (J_A z = 0)"},
+            {"alpha", "power", "power (stop at rel. change 1e-3, warm start) | authors (||v_k+1 - v_k|| <= tol, <= 1001 products, cold)"},
+            {"power_max", "100", "max power-method products (alpha = power)"},
+            {"objective", "cheap", "cheap: F(P(y)) without an extra A-product | recompute: the authors' 2 products per CG step"},
+            {"safeguard_max", "100", "max repeats of Alg. 3's safeguard after one step"}};
+}
+
+SolverEntry mprgp_entry()
+{
+    SolverEntry entry;
+    entry.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
+        return std::make_unique<MprgpSolver>(MprgpSettings::from_json(settings));
+    };
+    entry.description = "extended monotone MPRGP on decoupled J (paper Alg. 1-3, closed-form operators)";
+    entry.settings = mprgp_setting_docs();
+    return entry;
+}
+
+namespace {
+
+std::string fmt(double v)
+{
+    std::ostringstream s;
+    s.precision(3);
+    s << std::scientific << v;
+    return s.str();
+}
+
+bool stopwatch_over(void* data)
+{
+    const auto* pair = static_cast<std::pair<Stopwatch*, double>*>(data);
+    return pair->second > 0.0 && pair->first->seconds() > pair->second;
+}
+
+/// One solve: the workspace is allocated once, before the loop.
+class MprgpRun {
+public:
+    MprgpRun(const QpView& qp, const MprgpSettings& settings, const SolveContext& context)
+        : m_qp(qp), m_A(qp.A), m_J(qp.J), m_b(qp.b), m_c(qp.c), m_st(settings), m_ctx(context),
+          m_n(qp.n()), m_m(qp.m())
+    {
+    }
+
+    SolverResult run();
+
+private:
+    // --- products and objective ---
+    void product(const Vec& v, Vec& out)
+    {
+        out.noalias() = m_A * v;
+        ++m_cnt.a_products;
+    }
+    /// out = A v; returns v'Av and sets vg = v'g (one pass over A).
+    double product_dot(const Vec& v, Vec& out, double& vg)
+    {
+        const int* outer = m_A.outerIndexPtr();
+        const int* inner = m_A.innerIndexPtr();
+        const double* val = m_A.valuePtr();
+        double vav = 0.0, dot_g = 0.0;
+        for (Eigen::Index i = 0; i < m_n; ++i) {
+            double s = 0.0;
+            for (int k = outer[i]; k < outer[i + 1]; ++k) s += val[k] * v[inner[k]];
+            out[i] = s;
+            vav += v[i] * s;
+            if (!m_rows.dof_in_row[static_cast<size_t>(i)]) dot_g += v[i] * m_g[i];
+        }
+        ++m_cnt.a_products;
+        vg = dot_g + m_pg_rows;  // the row DOFs' part comes from evaluate_rows (face form, no cancellation)
+        return vav;
+    }
+    double objective_from_gradient() const { return 0.5 * (m_x.dot(m_g) - m_b.dot(m_x)); }
+    void refresh_gradient()
+    {
+        product(m_x, m_g);
+        m_g -= m_b;
+    }
+    long project_x()
+    {
+        ++m_cnt.projections;
+        return project_decoupled(m_J, m_c, m_rows, m_x, m_x);
+    }
+    bool over_time() const { return m_st.common.time_limit_s > 0.0 && m_watch.seconds() > m_st.common.time_limit_s; }
+
+    /// a'g computed as a'phi on active rows (a in null(J_A)): no cancellation against J_A' lambda.
+    double face_dot(const Vec& a) const;
+    /// Chain start at a feasible x with an exact g: face, z, p, F.
+    void restart();
+    /// Row pass at the current x: Jx, Jg, Jp, lambda, ||beta||^2, phitilde'phi, KKT pieces.
+    void evaluate_rows();
+    /// Correction F(P(x - a p)) - F(x - a p) with the sparse d = J' lambda (Ap known).
+    double projection_correction(double alpha);
+    /// Alg. 3 safeguard: repeat x = P(x - alpha_bar g) while F went up. Returns false on time out.
+    bool safeguard(double f_before, double& f_now);
+    bool expansion();
+    bool proportioning();
+    bool call_monitor(StepKind step);
+
+    const QpView& m_qp;
+    const SpMat& m_A;
+    const SpMat& m_J;
+    const Vec& m_b;
+    const Vec& m_c;
+    const MprgpSettings& m_st;
+    const SolveContext& m_ctx;
+    const Eigen::Index m_n, m_m;
+
+    Stopwatch m_watch;
+    Counters m_cnt;
+    DecoupledRows m_rows;
+    Vec m_dinv;
+    double m_alpha_bar = 0.0;
+    KktScale m_scale;
+    double m_s_b = 1.0, m_s_c = 1.0;
+
+    Vec m_x, m_g, m_z, m_p, m_Ap, m_tmp, m_d, m_lambda, m_jx, m_jg, m_jp;
+    std::vector<char> m_active;
+    std::vector<int> m_touched;
+
+    // Scalars along the chain.
+    double m_rz = 0.0;       // z'g
+    double m_gg_out = 0.0;   // sum of g_j^2 over DOFs in no row
+    double m_pg_rows = 0.0;  // p'phi over the DOFs of rows (from evaluate_rows)
+    double m_ginf_free = 0;  // max |g_j| over DOFs in no row (KKT stationarity part)
+    double m_f_x = 0.0;      // F(x)
+    double m_corr_x = 0.0;   // F(P(x)) - F(x)
+    double m_f_proj_x = 0.0; // F(P(x)) (objective = recompute keeps it directly)
+
+    // Row pass results.
+    double m_beta2 = 0.0, m_phitilde_phi = 0.0, m_native = 0.0, m_kkt_rel = 0.0;
+    double m_face_rel = 0.0;  // relative KKT without the primal part (the face problem's residual)
+    bool m_infeasible = false;
+    long m_active_count = 0;
+};
+
+double MprgpRun::face_dot(const Vec& a) const
+{
+    double sum = 0.0;
+    for (Eigen::Index j = 0; j < m_n; ++j)
+        if (!m_rows.dof_in_row[static_cast<size_t>(j)]) sum += a[j] * m_g[j];
+    const int* outer = m_J.outerIndexPtr();
+    const int* inner = m_J.innerIndexPtr();
+    const double* val = m_J.valuePtr();
+    for (Eigen::Index i = 0; i < m_m; ++i) {
+        const double t = m_active[static_cast<size_t>(i)] ? row_dot(m_J, i, m_g) * m_rows.inv_s[i] : 0.0;
+        for (int k = outer[i]; k < outer[i + 1]; ++k)
+            if (val[k] != 0.0) sum += a[inner[k]] * (m_g[inner[k]] - t * val[k]);
+    }
+    return sum;
+}
+
+void MprgpRun::restart()
+{
+    active_rows(m_J, m_c, m_rows, m_x, m_active);
+    jacobi_face_precondition(m_J, m_rows, m_active, m_dinv, m_g, m_z);
+    ++m_cnt.precond_applications;
+    m_p = m_z;
+    m_rz = face_dot(m_z);
+    m_gg_out = 0.0;
+    m_ginf_free = 0.0;
+    for (Eigen::Index j = 0; j < m_n; ++j)
+        if (!m_rows.dof_in_row[static_cast<size_t>(j)]) {
+            m_ginf_free = std::max(m_ginf_free, std::abs(m_g[j]));
+            m_gg_out += m_g[j] * m_g[j];
+        }
+    m_f_x = objective_from_gradient();
+    m_corr_x = 0.0;
+    m_f_proj_x = m_f_x;
+}
+
+void MprgpRun::evaluate_rows()
+{
+    const int* outer = m_J.outerIndexPtr();
+    const int* inner = m_J.innerIndexPtr();
+    const double* val = m_J.valuePtr();
+    // Norms are summed part by part (DOFs outside every row, then each row's DOFs; rows share
+    // no DOF), never as ||g||^2 minus the active part: that difference cancels catastrophically
+    // when the active rows carry almost all of g near the solution.
+    double beta2 = 0.0, pb2 = m_gg_out, phi2 = m_gg_out, ptp_corr = 0.0;
+    double stat = m_ginf_free, primal = 0.0, compl_ = 0.0, pg_rows = 0.0;
+    bool infeasible = false;
+    long active_count = 0;
+    for (Eigen::Index i = 0; i < m_m; ++i) {
+        double jx = 0.0, jg = 0.0, jp = 0.0;
+        for (int k = outer[i]; k < outer[i + 1]; ++k) {
+            const int j = inner[k];
+            jx += val[k] * m_x[j];
+            jg += val[k] * m_g[j];
+            jp += val[k] * m_p[j];
+        }
+        m_jx[i] = jx;
+        m_jg[i] = jg;
+        m_jp[i] = jp;
+        double lambda = 0.0, t = 0.0;
+        if (m_active[static_cast<size_t>(i)]) {
+            ++active_count;
+            t = jg * m_rows.inv_s[i];
+            lambda = std::max(0.0, t);
+            beta2 += std::min(0.0, t) * std::min(0.0, t) * m_rows.s[i];
+        } else if (m_rows.s[i] > 0.0) {
+            if (jx < m_c[i] - active_tolerance(m_c[i])) infeasible = true;
+            // Projection of x - alpha_bar phi on a free row (J_i phi = J_i g there).
+            const double l = (m_c[i] - jx + m_alpha_bar * jg) * m_rows.inv_s[i];
+            if (l > 0.0) ptp_corr += l * jg;
+        }
+        m_lambda[i] = lambda;
+        for (int k = outer[i]; k < outer[i + 1]; ++k) {
+            if (val[k] == 0.0) continue;
+            const double gk = m_g[inner[k]];
+            const double r_pb = gk - val[k] * lambda;  // (phi + beta)_k
+            const double r_phi = gk - val[k] * t;      // phi_k
+            pb2 += r_pb * r_pb;
+            phi2 += r_phi * r_phi;
+            pg_rows += m_p[inner[k]] * r_phi;
+            stat = std::max(stat, std::abs(r_pb));
+        }
+        primal = std::max(primal, m_c[i] - jx);
+        compl_ = std::max(compl_, std::abs(lambda * (jx - m_c[i])));
+    }
+    m_beta2 = beta2;
+    m_pg_rows = pg_rows;
+    // phitilde = phi - J' l / alpha_bar (eq. 13 through one projection).
+    m_phitilde_phi = phi2 - ptp_corr / m_alpha_bar;
+    m_native = std::sqrt(pb2);
+    m_infeasible = infeasible;
+    m_active_count = active_count;
+    const double stationarity = stat / m_s_b * m_scale.inverse_reference;
+    const double kkt = std::max(std::max(stat / m_s_b, std::max(0.0, primal) / m_s_c), compl_ / m_s_b);
+    m_kkt_rel = std::isfinite(kkt) ? kkt * m_scale.inverse_reference : std::numeric_limits<double>::infinity();
+    m_face_rel = std::isfinite(stationarity) ? std::max(stationarity, compl_ / m_s_b * m_scale.inverse_reference)
+                                             : std::numeric_limits<double>::infinity();
+}
+
+double MprgpRun::projection_correction(double alpha)
+{
+    // F(y + d) = F(y) + d'(Ay - b) + 1/2 d'Ad with d = J' lambda, lambda_i = max(0, (c_i - J_i y)/s_i).
+    const int* outer = m_J.outerIndexPtr();
+    const int* inner = m_J.innerIndexPtr();
+    const double* val = m_J.valuePtr();
+    double dg = 0.0;
+    m_touched.clear();
+    for (Eigen::Index i = 0; i < m_m; ++i) {
+        // Active rows stay on their face (J_A p = 0 in exact arithmetic): their rounding-level
+        // drift must not count as a violation, or it would swamp the tiny F decreases near
+        // the solution.
+        if (m_rows.s[i] <= 0.0 || m_active[static_cast<size_t>(i)]) continue;
+        const double l = (m_c[i] - (m_jx[i] - alpha * m_jp[i])) * m_rows.inv_s[i];
+        if (l <= 0.0) continue;
+        double jgy = 0.0;
+        for (int k = outer[i]; k < outer[i + 1]; ++k) {
+            const int j = inner[k];
+            jgy += val[k] * (m_g[j] - alpha * m_Ap[j]);
+            m_d[j] += l * val[k];
+            m_touched.push_back(j);
+        }
+        dg += l * jgy;
+    }
+    if (m_touched.empty()) return 0.0;
+    ++m_cnt.projections;
+    // d'Ad over the touched rows of A only (A symmetric, d sparse).
+    const int* a_outer = m_A.outerIndexPtr();
+    const int* a_inner = m_A.innerIndexPtr();
+    const double* a_val = m_A.valuePtr();
+    double dad = 0.0;
+    for (int j : m_touched) {
+        const double dj = m_d[j];
+        if (dj == 0.0) continue;
+        double s = 0.0;
+        for (int k = a_outer[j]; k < a_outer[j + 1]; ++k) s += a_val[k] * m_d[a_inner[k]];
+        dad += dj * s;
+    }
+    // Touched DOFs may repeat (explicit zeros, shared columns): clear after the sum.
+    for (int j : m_touched) m_d[j] = 0.0;
+    return dg + 0.5 * dad;
+}
+
+bool MprgpRun::safeguard(double f_before, double& f_now)
+{
+    auto increased = [&](double f) { return f > f_before + 1e-12 * (std::abs(f_before) + std::abs(f)); };
+    long repeats = 0;
+    while (increased(f_now) && repeats < m_st.safeguard_max) {
+        m_x -= m_alpha_bar * m_g;
+        project_x();
+        refresh_gradient();
+        f_now = objective_from_gradient();
+        ++m_cnt.safeguard_steps;
+        ++repeats;
+        if (over_time()) return false;
+    }
+    return true;
+}
+
+bool MprgpRun::expansion()
+{
+    const double f_before = m_f_x + m_corr_x;  // F(P(x))
+    if (m_infeasible) {
+        project_x();  // y = P(x)
+        refresh_gradient();
+    }
+    active_rows(m_J, m_c, m_rows, m_x, m_active);
+    free_gradient(m_J, m_rows, m_active, m_g, m_tmp);  // phi(y)
+    m_x -= m_alpha_bar * m_tmp;
+    project_x();
+    refresh_gradient();
+    double f_now = objective_from_gradient();
+    ++m_cnt.expansion_steps;
+    const bool ok = safeguard(f_before, f_now);
+    restart();
+    return ok;
+}
+
+bool MprgpRun::proportioning()
+{
+    const double f_before = m_f_x;
+    chopped_gradient(m_J, m_rows, m_active, m_g, m_tmp);  // d = beta
+    product(m_tmp, m_Ap);
+    const double dad = m_tmp.dot(m_Ap);
+    const double gd = m_g.dot(m_tmp);
+    if (!(dad > 0.0) || !std::isfinite(dad)) return false;
+    const double alpha_p = gd / dad;
+    m_x -= alpha_p * m_tmp;
+    // -beta keeps active rows feasible and free rows untouched (rows share no DOF), so the
+    // projection is a no-op in exact arithmetic; refresh g only when it did move x.
+    if (project_x() > 0) refresh_gradient();
+    else m_g -= alpha_p * m_Ap;
+    double f_now = objective_from_gradient();
+    ++m_cnt.proportioning_steps;
+    const bool ok = safeguard(f_before, f_now);
+    restart();
+    return ok;
+}
+
+bool MprgpRun::call_monitor(StepKind step)
+{
+    IterationInfo info;
+    info.iteration = m_cnt.iterations;
+    info.step = step;
+    info.x = &m_x;
+    info.lambda = &m_lambda;
+    info.native_residual = m_native;
+    info.active_set_size = m_active_count;
+    info.counters = &m_cnt;
+    return notify_monitor(m_ctx, m_watch, info);
+}
+
+SolverResult MprgpRun::run()
+{
+    SolverResult result;
+    const CommonSettings& common = m_st.common;
+    m_watch.start();
+    result.info["precond"] = m_st.precond;
+    result.info["objective"] = m_st.objective;
+    if (!is_decoupled(m_J)) {
+        result.status = SolveStatus::INVALID_INPUT;
+        result.message = "mprgp: J is not decoupled (two rows touch the same vertex, vertex = column / 3); "
+                         "decouple the problem first (decouple = authors | random | depth) or use mprgp-coupled";
+        result.x = m_qp.x0;
+        result.lambda = Vec::Zero(m_m);
+        return result;
+    }
+    // --- setup: diagonal, row data, power method ---
+    m_dinv = Vec::Ones(m_n);
+    if (m_st.precond == "jacobi") {
+        const Vec diag = m_A.diagonal();
+        for (Eigen::Index j = 0; j < m_n; ++j) {
+            if (!(diag[j] > 0.0)) {
+                result.status = SolveStatus::INVALID_INPUT;
+                result.message = "mprgp: precond=jacobi needs a positive diagonal of A; A(" + std::to_string(j) + "," +
+                                 std::to_string(j) + ") = " + std::to_string(diag[j]);
+                result.x = m_qp.x0;
+                result.lambda = Vec::Zero(m_m);
+                return result;
+            }
+            m_dinv[j] = 1.0 / diag[j];
+        }
+    }
+    m_rows = make_decoupled_rows(m_J, m_dinv);
+    for (Eigen::Index i = 0; i < m_m; ++i) {
+        if (m_rows.s[i] <= 0.0 && m_c[i] > active_tolerance(m_c[i])) {
+            result.status = SolveStatus::INFEASIBLE;
+            result.message = "mprgp: row " + std::to_string(i) + " of J is zero but c_i = " + std::to_string(m_c[i]) +
+                             " > 0: the feasible set is empty";
+            result.x = m_qp.x0;
+            result.lambda = Vec::Zero(m_m);
+            return result;
+        }
+    }
+    Vec eigenvector;
+    const bool warm = m_ctx.eigenvector != nullptr && m_ctx.eigenvector->size() == m_n;
+    if (warm) eigenvector = *m_ctx.eigenvector;
+    const PowerRule rule = m_st.alpha == "authors" ? PowerRule::AUTHORS : PowerRule::POWER;
+    const long power_max = rule == PowerRule::AUTHORS ? 1001 : m_st.power_max;
+    std::pair<Stopwatch*, double> deadline{&m_watch, common.time_limit_s};
+    const PowerResult power = power_method(m_A, eigenvector, rule, power_max, common.tol, warm, common.seed,
+                                           &stopwatch_over, &deadline);
+    m_cnt.power_products = power.products;
+    m_cnt.a_products += power.products;
+    if (m_ctx.eigenvector) *m_ctx.eigenvector = eigenvector;
+    // The power estimate approaches ||A|| from below; alpha_bar must stay <= 2 / ||A|| (Appendix B),
+    // so our default rounds rho up by 1%. The authors' variant uses the estimate as is.
+    const double rho = power.estimate * (rule == PowerRule::POWER ? 1.01 : 1.0);
+    m_alpha_bar = rho > 0.0 ? 2.0 / rho : 1.0;
+    result.info["power"] = {{"rule", m_st.alpha}, {"products", power.products}, {"estimate", power.estimate},
+                            {"rho", rho}, {"warm_start", power.warm}};
+    result.info["alpha_bar"] = m_alpha_bar;
+    m_scale = kkt_scale(m_qp);
+    m_s_b = std::max(1.0, m_b.size() ? m_b.lpNorm<Eigen::Infinity>() : 0.0);
+    m_s_c = std::max(1.0, m_c.size() ? m_c.lpNorm<Eigen::Infinity>() : 0.0);
+    m_watch.pause();
+    result.setup_s = m_watch.seconds();
+    result.info["power"]["seconds"] = result.setup_s;
+
+    // --- solve ---
+    Stopwatch total;
+    m_watch.reset();
+    m_watch.start();
+    m_x = m_qp.x0;
+    m_g.resize(m_n);
+    m_z.resize(m_n);
+    m_p.resize(m_n);
+    m_Ap.resize(m_n);
+    m_tmp.resize(m_n);
+    m_d = Vec::Zero(m_n);
+    m_lambda = Vec::Zero(m_m);
+    m_jx.resize(m_m);
+    m_jg.resize(m_m);
+    m_jp.resize(m_m);
+    m_touched.reserve(static_cast<size_t>(m_J.nonZeros()));
+    project_x();  // x = P(x0)
+    refresh_gradient();
+    restart();
+
+    const bool native = common.stop == StopRule::NATIVE;
+    const bool recompute = m_st.objective == "recompute";
+    const double gamma2 = m_st.gamma * m_st.gamma;
+    StepKind last_step = StepKind::START;
+    SolveStatus status = SolveStatus::MAX_ITERATIONS;
+    std::string why;
+    while (true) {
+        evaluate_rows();
+        if (!std::isfinite(m_native)) {
+            status = SolveStatus::DIVERGED;
+            why = "non-finite gradient";
+            break;
+        }
+        // Converged means at a feasible x (an infeasible chain iterate ends in an expansion).
+        bool converged = !m_infeasible && (native ? m_native <= common.tol : m_kkt_rel <= common.tol);
+        if (converged) {
+            // Confirm at an exact gradient (the recursive g drifts along long chains); the
+            // kkt rule is confirmed by the common metric itself.
+            refresh_gradient();
+            restart();
+            evaluate_rows();
+            converged = native ? m_native <= common.tol
+                               : kkt_converged(m_qp, m_x, m_g, m_lambda, m_scale, common.tol);
+        }
+        if (!call_monitor(last_step)) {
+            status = SolveStatus::STOPPED_BY_MONITOR;
+            why = "the monitor asked to stop";
+            break;
+        }
+        if (converged) {
+            status = SolveStatus::CONVERGED;
+            break;
+        }
+        if (m_cnt.iterations >= common.max_iterations) {
+            status = SolveStatus::MAX_ITERATIONS;
+            why = "iteration cap " + std::to_string(common.max_iterations) + " reached";
+            break;
+        }
+        if (over_time()) {
+            status = SolveStatus::TIME_LIMIT;
+            why = "time limit reached";
+            break;
+        }
+        ++m_cnt.iterations;
+        // An infeasible chain iterate whose face problem is already solved cannot improve
+        // along the frozen face: end the chain (the expansion step projects).
+        const bool face_done = m_infeasible && (native ? m_native <= common.tol : m_face_rel <= common.tol);
+        const bool proportional = !face_done && m_beta2 <= gamma2 * m_phitilde_phi;
+        if (proportional) {
+            // --- CG trial step (Alg. 2) ---
+            double pg = 0.0;
+            const double pap = product_dot(m_p, m_Ap, pg);
+            if (!(pap > 0.0) || !std::isfinite(pap)) {
+                if (m_native == 0.0 || pap == 0.0) {
+                    status = SolveStatus::STALLED;
+                    why = "zero CG direction (p'Ap = 0) above tolerance";
+                } else {
+                    status = SolveStatus::DIVERGED;
+                    why = "p'Ap <= 0 or non-finite: A is not SPD?";
+                }
+                break;
+            }
+            const double alpha = m_rz / pap;
+            const double df = -alpha * pg + 0.5 * alpha * alpha * pap;  // F(x - alpha p) - F(x)
+            bool accept;
+            double corr_y = 0.0, f_proj_y = 0.0;
+            if (recompute) {
+                // The authors' form: build P(y) and evaluate F with a second A-product.
+                m_tmp = m_x - alpha * m_p;
+                const long moved = project_decoupled(m_J, m_c, m_rows, m_tmp, m_tmp);
+                ++m_cnt.projections;
+                product(m_tmp, m_d);
+                f_proj_y = 0.5 * m_tmp.dot(m_d) - m_b.dot(m_tmp);
+                m_d.setZero();
+                accept = moved > 0 ? f_proj_y < m_f_proj_x : f_proj_y <= m_f_proj_x;
+            } else {
+                corr_y = projection_correction(alpha);
+                const double delta = df + corr_y - m_corr_x;
+                // An infeasible trial point must strictly decrease F(P(.)): otherwise a chain
+                // converging to an infeasible face minimiser would never end.
+                accept = corr_y > 0.0 ? delta < 0.0 : delta <= 0.0;
+            }
+            if (accept) {
+                // Fused update: x, g, z = D^-1 g and the dot products in one pass (DOFs in no
+                // row; the rows' DOFs are summed below in face form, see face_dot).
+                double gg = 0.0, zg = 0.0, zap = 0.0, ginf = 0.0;
+                for (Eigen::Index j = 0; j < m_n; ++j) {
+                    m_x[j] -= alpha * m_p[j];
+                    const double gj = m_g[j] - alpha * m_Ap[j];
+                    m_g[j] = gj;
+                    const double zj = m_dinv[j] * gj;
+                    m_z[j] = zj;
+                    if (!m_rows.dof_in_row[static_cast<size_t>(j)]) {
+                        zg += zj * gj;
+                        zap += zj * m_Ap[j];
+                        ginf = std::max(ginf, std::abs(gj));
+                        gg += gj * gj;
+                    }
+                }
+                // Face correction of z on active rows (J_A z = 0) and the rows' part of the dots.
+                const int* outer = m_J.outerIndexPtr();
+                const int* inner = m_J.innerIndexPtr();
+                const double* val = m_J.valuePtr();
+                for (Eigen::Index i = 0; i < m_m; ++i) {
+                    double t = 0.0;
+                    if (m_active[static_cast<size_t>(i)]) {
+                        double wg = 0.0, jg = 0.0;  // (W g)_i = J_i D^-1 g; J_i g
+                        for (int k = outer[i]; k < outer[i + 1]; ++k) {
+                            wg += val[k] * m_z[inner[k]];
+                            jg += val[k] * m_g[inner[k]];
+                        }
+                        const double mu = m_rows.r[i] * wg;
+                        t = jg * m_rows.inv_s[i];
+                        for (int k = outer[i]; k < outer[i + 1]; ++k) m_z[inner[k]] -= mu * val[k] * m_dinv[inner[k]];
+                    }
+                    for (int k = outer[i]; k < outer[i + 1]; ++k) {
+                        if (val[k] == 0.0) continue;
+                        const int j = inner[k];
+                        zg += m_z[j] * (m_g[j] - t * val[k]);
+                        zap += m_z[j] * m_Ap[j];
+                    }
+                }
+                ++m_cnt.precond_applications;
+                const double beta_cg = zap / pap;
+                for (Eigen::Index j = 0; j < m_n; ++j) m_p[j] = m_z[j] - beta_cg * m_p[j];
+                m_rz = zg;
+                m_gg_out = gg;
+                m_ginf_free = ginf;
+                m_f_x += df;
+                m_corr_x = corr_y;
+                if (recompute) m_f_proj_x = f_proj_y;
+                ++m_cnt.cg_steps;
+                last_step = StepKind::CG;
+                continue;
+            }
+            // F(P(y)) went up: the chain ends with an (infeasible) trial point -> expansion.
+            if (!expansion()) {
+                status = SolveStatus::TIME_LIMIT;
+                why = "time limit reached in a safeguard loop";
+                break;
+            }
+            last_step = StepKind::EXPANSION;
+        } else if (m_infeasible) {
+            // Not proportional at an infeasible chain iterate: no feasible point to proportion from.
+            if (!expansion()) {
+                status = SolveStatus::TIME_LIMIT;
+                why = "time limit reached in a safeguard loop";
+                break;
+            }
+            last_step = StepKind::EXPANSION;
+        } else {
+            if (!proportioning()) {
+                if (over_time()) {
+                    status = SolveStatus::TIME_LIMIT;
+                    why = "time limit reached in a safeguard loop";
+                } else {
+                    status = SolveStatus::STALLED;
+                    why = "zero proportioning direction (beta'A beta = 0)";
+                }
+                break;
+            }
+            last_step = StepKind::PROPORTIONING;
+        }
+        if (recompute) m_f_proj_x = m_f_x;
+    }
+
+    // --- final: x = P(x), lambda of Section 2 at the returned x (with an exact gradient) ---
+    if (status != SolveStatus::CONVERGED) {
+        project_x();
+        refresh_gradient();
+        restart();
+    }
+    evaluate_rows();
+    m_watch.pause();
+    result.solve_s = m_watch.seconds();
+    result.status = status;
+    result.iterations = m_cnt.iterations;
+    result.native_residual = m_native;
+    if (status == SolveStatus::CONVERGED) {
+        result.criterion = native ? "native" : "kkt";
+        result.message = std::string("converged: ") + (native ? "||phi+beta||_2 = " : "relative KKT = ") +
+                         fmt(native ? m_native : m_kkt_rel) + " <= tol";
+    } else {
+        result.message = "not converged: " + why + " (relative KKT " + fmt(m_kkt_rel) + ", ||phi+beta|| " +
+                         fmt(m_native) + "; " + std::to_string(m_cnt.cg_steps) + " cg, " +
+                         std::to_string(m_cnt.expansion_steps) + " expansion, " +
+                         std::to_string(m_cnt.proportioning_steps) + " proportioning steps)";
+    }
+    result.x = m_x;
+    result.lambda = m_lambda;
+    result.lambda_fitted = false;
+    result.counters = m_cnt;
+    result.info["safeguard_firings"] = m_cnt.safeguard_steps;
+    result.info["alpha_bar"] = m_alpha_bar;
+    result.info["active_rows"] = m_active_count;
+    {
+        IterationInfo info;
+        info.iteration = m_cnt.iterations;
+        info.step = StepKind::FINAL;
+        info.x = &m_x;
+        info.lambda = &m_lambda;
+        info.native_residual = m_native;
+        info.active_set_size = m_active_count;
+        info.counters = &m_cnt;
+        notify_monitor(m_ctx, m_watch, info);
+    }
+    (void)total;
+    return result;
+}
+
+} // namespace
+
+SolverResult MprgpSolver::solve(const QpView& qp, const SolveContext& context)
+{
+    MprgpRun run(qp, m_settings, context);
+    return run.run();
+}
+
+} // namespace cb

@@ -1,0 +1,46 @@
+#pragma once
+/// `mprgp`: the paper's extended monotone MPRGP on decoupled constraints (ALGORITHMS.md §3).
+/// Requires a decoupled J (no two rows touch the same vertex, vertex = column / 3); the harness
+/// applies solvers/decouple.hpp first. A coupled J gives INVALID_INPUT.
+/// Ref: Li et al., "Deformable Objects Collision Handling with Fast Convergence", CGF 2015,
+///      Alg. 1-3, eq. (13)-(20), Appendix B; Dostal 2009, monotone MPRGP.
+#include "solvers/registry.hpp"
+#include "solvers/settings.hpp"
+#include "solvers/solver.hpp"
+
+#include <string>
+#include <vector>
+
+namespace cb {
+
+struct MprgpSettings {
+    CommonSettings common;
+    double gamma = 1.0;               ///< proportioning constant Gamma (> 0)
+    std::string precond = "jacobi";   ///< none | jacobi (D-weighted projection onto the face)
+    std::string alpha = "power";      ///< power (rel. change 1e-3, warm start) | authors
+    long power_max = 100;             ///< max power-method products (alpha = power)
+    std::string objective = "cheap";  ///< cheap (1 A-product per CG step) | recompute (authors: 2)
+    long safeguard_max = 100;         ///< max Alg. 3 safeguard repeats after one step
+
+    static MprgpSettings from_json(const nlohmann::json& settings);
+    nlohmann::json to_json() const;
+};
+
+std::vector<SettingDoc> mprgp_setting_docs();
+
+class MprgpSolver final : public Solver {
+public:
+    explicit MprgpSolver(MprgpSettings settings) : m_settings(std::move(settings)) {}
+    std::string name() const override { return "mprgp"; }
+    nlohmann::json settings() const override { return m_settings.to_json(); }
+    bool requires_decoupled() const override { return true; }
+    SolverResult solve(const QpView& qp, const SolveContext& context) override;
+
+private:
+    MprgpSettings m_settings;
+};
+
+/// Registry entry (factory, description, settings docs).
+SolverEntry mprgp_entry();
+
+} // namespace cb

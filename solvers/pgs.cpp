@@ -1,0 +1,250 @@
+// Ref: Li et al., CGF 2015, eq. (2) (the dual LCP of the contact QP); ALGORITHMS.md §7.
+#include "solvers/pgs.hpp"
+
+#include <Eigen/CholmodSupport>
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace cb {
+
+PgsSettings PgsSettings::from_json(const nlohmann::json& settings)
+{
+    SettingsReader reader(settings, "pgs");
+    PgsSettings s;
+    s.common = reader.common();
+    s.max_rows = reader.integer("max_rows", s.max_rows, 0);
+    s.block = reader.integer("block", s.block, 1, 4096);
+    reader.finish();
+    return s;
+}
+
+nlohmann::json PgsSettings::to_json() const
+{
+    nlohmann::json j = common.to_json();
+    j["max_rows"] = max_rows;
+    j["block"] = block;
+    return j;
+}
+
+namespace {
+
+/// Y = A^-1 J' is kept (x = x_u + Y lambda without a solve) when it fits in this many doubles.
+constexpr double kMaxStoredEntries = 16e6;
+
+bool time_up(const Stopwatch& watch, double limit) { return limit > 0.0 && watch.seconds() >= limit; }
+
+} // namespace
+
+SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
+{
+    const PgsSettings& s = m_settings;
+    const double limit = s.common.time_limit_s;
+    const Eigen::Index n = qp.n(), m = qp.m();
+    SolverResult result;
+    Counters& counters = result.counters;
+    result.x = qp.x0;
+    result.lambda = Vec::Zero(m);
+    result.info["native_residual_definition"] = "||min(lambda, S lambda - q)||_inf (LCP natural residual, absolute)";
+
+    if (m > s.max_rows) {
+        result.status = SolveStatus::INVALID_INPUT;
+        result.message = "pgs: m = " + std::to_string(m) + " rows exceeds max_rows = " +
+                         std::to_string(s.max_rows) +
+                         " (S = J A^-1 J' is a dense m x m matrix formed with m CHOLMOD solves); "
+                         "raise the max_rows setting to allow it";
+        return result;
+    }
+    Stopwatch watch;
+    watch.start();
+    Stopwatch setup;
+    setup.start();
+
+    // Zero rows of J: S_ii = 0. Row i reads 0 >= c_i, so c_i > 0 means an empty feasible set.
+    std::vector<char> zero_row(static_cast<size_t>(m), 1);
+    for (Eigen::Index i = 0; i < m; ++i)
+        for (SpMat::InnerIterator it(qp.J, i); it; ++it)
+            if (it.value() != 0.0) zero_row[static_cast<size_t>(i)] = 0;
+    long zero_rows = 0;
+    for (Eigen::Index i = 0; i < m; ++i) {
+        if (!zero_row[static_cast<size_t>(i)]) continue;
+        ++zero_rows;
+        if (qp.c[i] > 0.0) {
+            result.status = SolveStatus::INFEASIBLE;
+            std::ostringstream msg;
+            msg << "pgs: row " << i << " of J is zero but c_" << i << " = " << qp.c[i]
+                << " > 0: the constraint 0 >= c_i cannot hold";
+            result.message = msg.str();
+            result.setup_s = setup.seconds();
+            return result;
+        }
+    }
+    result.info["zero_rows"] = zero_rows;
+
+    Eigen::CholmodSupernodalLLT<SpMatCol, Eigen::Lower> llt;
+    {
+        const SpMatCol A_col = qp.A;
+        llt.compute(A_col);
+    }
+    ++counters.cholmod_analyses;
+    ++counters.cholmod_factorizations;
+    if (llt.info() != Eigen::Success) {
+        result.status = SolveStatus::INVALID_INPUT;
+        result.message = "pgs: CHOLMOD could not factor A (not positive definite to working precision)";
+        result.setup_s = setup.seconds();
+        return result;
+    }
+    const Vec x_u = llt.solve(qp.b);
+    ++counters.cholmod_solves;
+    const Vec q = qp.c - qp.J * x_u;
+
+    // S = J A^-1 J', column block by column block.
+    const bool keep_y = static_cast<double>(n) * static_cast<double>(m) <= kMaxStoredEntries;
+    Eigen::MatrixXd Y;
+    if (keep_y) Y.resize(n, m);
+    Eigen::MatrixXd S(m, m);
+    const SpMatCol Jt = SpMatCol(qp.J.transpose());
+    for (Eigen::Index j0 = 0; j0 < m; j0 += s.block) {
+        const Eigen::Index k = std::min<Eigen::Index>(s.block, m - j0);
+        const Eigen::MatrixXd rhs = Eigen::MatrixXd(Jt.middleCols(j0, k));
+        const Eigen::MatrixXd Yc = llt.solve(rhs);
+        counters.cholmod_solves += k;  // one per right-hand side
+        S.middleCols(j0, k) = qp.J * Yc;
+        if (keep_y) Y.middleCols(j0, k) = Yc;
+        if (time_up(watch, limit)) {
+            result.status = SolveStatus::TIME_LIMIT;
+            result.message = "pgs: time limit reached while forming S = J A^-1 J'";
+            result.setup_s = setup.seconds();
+            return result;
+        }
+    }
+    S = 0.5 * (S + S.transpose()).eval();  // exact symmetry (the solves leave O(eps) asymmetry)
+    const Vec S_diag = S.diagonal();
+    result.info["y_stored"] = keep_y;
+    result.setup_s = setup.seconds();
+
+    Stopwatch solve_watch;
+    solve_watch.start();
+    const KktScale scale = kkt_scale(qp);
+    ++counters.a_products;
+    const double s_b = std::max(1.0, qp.b.size() ? qp.b.lpNorm<Eigen::Infinity>() : 0.0);
+    const double s_c = std::max(1.0, m ? qp.c.lpNorm<Eigen::Infinity>() : 0.0);
+
+    Vec lambda = Vec::Zero(m);
+    if (context.lambda0 && context.lambda0->size() == m) lambda = context.lambda0->cwiseMax(0.0);
+    for (Eigen::Index i = 0; i < m; ++i)
+        if (zero_row[static_cast<size_t>(i)]) lambda[i] = 0.0;
+    Vec w = S * lambda - q;  // = J x(lambda) - c, the slack of the primal point
+
+    Vec x = x_u;
+    auto primal_point = [&](bool exact) {
+        if (m == 0) {
+            x = x_u;
+        } else if (keep_y && !exact) {
+            x = x_u + Y * lambda;
+        } else {
+            x = llt.solve(Vec(qp.b + qp.J.transpose() * lambda));
+            ++counters.cholmod_solves;
+        }
+    };
+    auto natural_residual = [&]() {
+        double r = 0.0;
+        for (Eigen::Index i = 0; i < m; ++i) r = std::max(r, std::abs(std::min(lambda[i], w[i])));
+        return r;
+    };
+    // The common KKT in dual space: stationarity is 0 at x(lambda), dual feasibility holds.
+    auto dual_space_kkt = [&]() {
+        double primal = 0.0, comp = 0.0;
+        for (Eigen::Index i = 0; i < m; ++i) {
+            primal = std::max(primal, -w[i]);
+            comp = std::max(comp, std::abs(lambda[i] * w[i]));
+        }
+        return std::max(primal / s_c, comp / s_b) * scale.inverse_reference;
+    };
+
+    double native = natural_residual();
+    double dual_threshold = s.common.tol;
+    auto finish = [&](SolveStatus status, const std::string& criterion, const std::string& message) {
+        primal_point(true);
+        result.x = x;
+        result.lambda = lambda;
+        result.status = status;
+        result.criterion = criterion;
+        result.message = message;
+        result.native_residual = native;
+        result.iterations = counters.iterations;
+        result.solve_s = solve_watch.seconds();
+        return result;
+    };
+    // Returns the criterion met, or "" (a kkt candidate is confirmed at the exact primal point).
+    auto converged = [&]() -> std::string {
+        if (s.common.stop == StopRule::NATIVE) return native <= s.common.tol ? "native" : "";
+        if (dual_space_kkt() > dual_threshold) return "";
+        primal_point(true);
+        const Vec g = qp.A * x - qp.b;
+        ++counters.a_products;
+        if (kkt_converged(qp, x, g, lambda, scale, s.common.tol)) return "kkt";
+        dual_threshold *= 0.5;  // the solve's error showed up: ask more of the dual estimate
+        return "";
+    };
+
+    if (context.monitor) primal_point(false);
+    if (!notify_monitor(context, solve_watch, {0, StepKind::START, &x, &lambda, native, -1, &counters, 0.0}))
+        return finish(SolveStatus::STOPPED_BY_MONITOR, "", "pgs: stopped by the monitor");
+    {
+        const std::string c = converged();
+        if (!c.empty()) return finish(SolveStatus::CONVERGED, c, "pgs: the start point meets the stop rule");
+    }
+
+    for (;;) {
+        if (counters.iterations >= s.common.max_iterations)
+            return finish(SolveStatus::MAX_ITERATIONS, "",
+                          "pgs: max_iterations reached (" + std::to_string(s.common.max_iterations) + " sweeps)");
+        if (time_up(watch, limit)) return finish(SolveStatus::TIME_LIMIT, "", "pgs: time limit reached");
+
+        // One ascending sweep; w = S lambda - q is kept current by rank-one updates.
+        for (Eigen::Index i = 0; i < m; ++i) {
+            if (!(S_diag[i] > 0.0)) continue;  // zero row: lambda_i stays 0
+            const double li = std::max(0.0, lambda[i] - w[i] / S_diag[i]);
+            const double delta = li - lambda[i];
+            if (delta != 0.0) {
+                w.noalias() += delta * S.col(i);
+                lambda[i] = li;
+            }
+        }
+        ++counters.iterations;
+        ++counters.pgs_sweeps;
+        ++counters.lcp_iterations;
+        if (counters.iterations % 64 == 0) w = S * lambda - q;  // limit the drift of the updates
+        native = natural_residual();
+
+        if (context.monitor) primal_point(false);
+        if (!notify_monitor(context, solve_watch,
+                            {counters.iterations, StepKind::PGS_SWEEP, &x, &lambda, native, -1, &counters, 0.0}))
+            return finish(SolveStatus::STOPPED_BY_MONITOR, "", "pgs: stopped by the monitor");
+        if (!lambda.allFinite() || !std::isfinite(native))
+            return finish(SolveStatus::DIVERGED, "", "pgs: non-finite multipliers");
+        const std::string c = converged();
+        if (!c.empty()) {
+            std::ostringstream msg;
+            msg << "pgs: " << (c == "native" ? "LCP natural residual " : "relative KKT error <= tol; natural residual ")
+                << native << " after " << counters.iterations << " sweeps";
+            return finish(SolveStatus::CONVERGED, c, msg.str());
+        }
+    }
+}
+
+SolverEntry pgs_entry()
+{
+    SolverEntry e;
+    e.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
+        return std::make_unique<PgsSolver>(PgsSettings::from_json(settings));
+    };
+    e.description = "projected Gauss-Seidel on the exact dual S = J A^-1 J' (CHOLMOD; small m only)";
+    e.settings = {{"max_rows", "2000", "refuse (invalid_input) problems with more rows of J (S is dense m x m)"},
+                  {"block", "64", "right-hand sides per CHOLMOD solve when forming S"}};
+    return e;
+}
+
+} // namespace cb

@@ -1,0 +1,224 @@
+// Results folder pieces: atomic writes, summary.csv, suite parsing and snapshot resolution,
+// the reference cache.
+#include "harness/reference.hpp"
+#include "harness/results.hpp"
+#include "harness/runner.hpp"
+#include "harness/suite.hpp"
+#include "problems/qpsnap.hpp"
+#include "problems/synthetic.hpp"
+#include "solvers/registry.hpp"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
+
+using namespace cb;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path fresh_dir(const std::string& name)
+{
+    const fs::path dir = fs::temp_directory_path() / ("cb_test_results_" + std::to_string(::getpid())) / name;
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    return dir;
+}
+
+std::string slurp(const fs::path& p)
+{
+    std::ifstream in(p);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+size_t count_tmp(const fs::path& dir)
+{
+    size_t n = 0;
+    for (const auto& e : fs::recursive_directory_iterator(dir))
+        if (e.path().filename().string().find(".tmp") != std::string::npos) ++n;
+    return n;
+}
+
+std::string error_of(const std::function<void()>& f)
+{
+    try {
+        f();
+    } catch (const InputError& e) {
+        return e.what();
+    }
+    return "(no InputError)";
+}
+
+/// Removes the scratch folder after the last test.
+class CleanUp : public ::testing::Environment {
+public:
+    void TearDown() override
+    {
+        fs::remove_all(fs::temp_directory_path() / ("cb_test_results_" + std::to_string(::getpid())));
+    }
+};
+const auto* const kCleanUp = ::testing::AddGlobalTestEnvironment(new CleanUp);
+
+} // namespace
+
+TEST(Results, AtomicWriteReplacesAndLeavesNoTemporary)
+{
+    const fs::path dir = fresh_dir("atomic");
+    const std::string path = (dir / "sub" / "a.json").string();
+    write_json_atomic(path, {{"x", 1}});
+    write_json_atomic(path, {{"x", 2}, {"nan", std::nan("")}});
+    const nlohmann::json back = read_json_file(path);
+    EXPECT_EQ(back["x"], 2);
+    EXPECT_TRUE(back["nan"].is_null());
+    EXPECT_EQ(count_tmp(dir), 0u);
+    EXPECT_EQ(error_of([&] { read_json_file((dir / "missing.json").string()); }),
+              (dir / "missing.json").string() + ": cannot open (missing or unreadable)");
+}
+
+TEST(Results, SummaryColumnsAndRow)
+{
+    const std::string expected =
+        "suite,snapshot,label,solver,status,criterion,status_confirmed,iterations,a_products,"
+        "cholmod_factorizations,kkt,kkt_rel,stationarity,primal,dual,complementarity,objective,violation,"
+        "native_residual,nonfinite,monotone,setup_s,solve_s,time_s,n,m,tol";
+    std::string header;
+    for (size_t i = 0; i < summary_columns().size(); ++i) header += (i ? "," : "") + summary_columns()[i];
+    EXPECT_EQ(header, expected);
+    const nlohmann::json run = {
+        {"solver", "mprgp"}, {"label", "mprgp-jacobi"}, {"status", "converged"}, {"criterion", "kkt"},
+        {"status_confirmed", true}, {"iterations", 54}, {"snapshot", {{"id", "plane-s1"}, {"n", 375}, {"m", 25}}},
+        {"counters", {{"a_products", 120}, {"cholmod_factorizations", 0}}},
+        {"kkt", {{"max", 0.5}}}, {"kkt_relative", {{"max", 0.25}, {"stationarity", 0.25}, {"primal", 0.0},
+                                                    {"dual", 0.0}, {"complementarity", 0.125}}},
+        {"objective", -4.5}, {"violation", 0.0}, {"native_residual", nullptr}, {"nonfinite", false},
+        {"monotone", true}, {"time", {{"setup_s", 0.5}, {"solve_s", 1.5}, {"total_s", 2.0}}}, {"tol", 1e-6},
+        {"message", "a, \"quoted\" message"}};
+    EXPECT_EQ(summary_row(run, "demo"),
+              "demo,plane-s1,mprgp-jacobi,mprgp,converged,kkt,true,54,120,0,0.5,0.25,0.25,0,0,0.125,-4.5,0,,"
+              "false,true,0.5,1.5,2,375,25,9.9999999999999995e-07");
+    const std::string csv = summary_csv({run, run}, "demo");
+    EXPECT_EQ(csv.substr(0, expected.size() + 1), expected + "\n");
+    EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 3);
+}
+
+TEST(Results, WriteSummaryReadsEveryRunFile)
+{
+    const fs::path dir = fresh_dir("summary");
+    write_json_atomic((dir / "runs" / run_file_name("b", "cg")).string(),
+                      {{"label", "cg"}, {"solver", "cg"}, {"snapshot", {{"id", "b"}}}, {"status", "converged"}});
+    write_json_atomic((dir / "runs" / run_file_name("a", "pgs")).string(),
+                      {{"label", "pgs"}, {"solver", "pgs"}, {"snapshot", {{"id", "a"}}}, {"status", "stalled"}});
+    EXPECT_EQ(write_summary(dir.string(), "s"), 2u);
+    const std::string csv = slurp(dir / "summary.csv");
+    // Sorted by file name: a__pgs before b__cg.
+    EXPECT_NE(csv.find("\ns,a,pgs,pgs,stalled,"), std::string::npos) << csv;
+    EXPECT_LT(csv.find("s,a,pgs"), csv.find("s,b,cg"));
+    EXPECT_EQ(count_tmp(dir), 0u);
+}
+
+TEST(Suite, ParsesDefaultsAndSolvers)
+{
+    const Suite s = parse_suite({{"name", "t"}, {"snapshots", {"x.qpsnap"}},
+                                 {"solvers", {{{"label", "m1"}, {"solver", "mprgp"}, {"settings", {{"tol", 1e-4}}}}, "cg"}}},
+                                "suite.json");
+    EXPECT_EQ(s.name, "t");
+    ASSERT_EQ(s.solvers.size(), 2u);
+    EXPECT_EQ(s.solvers[0].label, "m1");
+    EXPECT_EQ(s.solvers[1].label, "cg");
+    EXPECT_EQ(s.solvers[1].solver, "cg");
+    EXPECT_DOUBLE_EQ(s.tol, 1e-6);
+    EXPECT_EQ(s.repeat, 1);
+    EXPECT_EQ(s.history_max, 2000);
+    EXPECT_EQ(s.decouple, "auto");
+    EXPECT_FALSE(s.chain);
+    EXPECT_FALSE(s.reference);
+}
+
+TEST(Suite, RejectsBadSuitesNamingTheField)
+{
+    const nlohmann::json good = {{"name", "t"}, {"snapshots", {"x.qpsnap"}}, {"solvers", {"cg"}}};
+    auto with = [&](const std::string& key, const nlohmann::json& value) {
+        nlohmann::json j = good;
+        j[key] = value;
+        return j;
+    };
+    EXPECT_EQ(error_of([&] { parse_suite(with("colour", 1), "s.json"); }).substr(0, 24), "s.json: /colour: unknown");
+    EXPECT_EQ(error_of([&] { parse_suite(with("tol", -1), "s.json"); }), "s.json: /tol: must be > 0, got -1");
+    EXPECT_EQ(error_of([&] { parse_suite(with("decouple", "up"), "s.json"); }),
+              "s.json: /decouple: expected one of auto, none, authors, random, depth, got 'up'");
+    EXPECT_EQ(error_of([&] { parse_suite(with("solvers", nlohmann::json::array({"cg", "cg"})), "s.json"); }),
+              "s.json: /solvers/1: /label: duplicate label 'cg'");
+    EXPECT_EQ(error_of([&] { parse_suite(with("repeat", 0), "s.json"); }), "s.json: /repeat: must be >= 1, got 0");
+    nlohmann::json no_solvers = good;
+    no_solvers.erase("solvers");
+    EXPECT_EQ(error_of([&] { parse_suite(no_solvers, "s.json"); }),
+              "s.json: /solvers: missing (an array of {label, solver, settings})");
+    EXPECT_EQ(error_of([&] { load_suite("/nonexistent/suite.json"); }),
+              "/nonexistent/suite.json: cannot open (missing or unreadable)");
+}
+
+TEST(Suite, ResolvesGlobsFoldersDuplicatesAndGenerated)
+{
+    const fs::path dir = fresh_dir("resolve");
+    const Qp qp = make_synthetic("plane", {{"nx", 2}, {"ny", 2}, {"nz", 2}}, 1);
+    fs::create_directories(dir / "a");
+    fs::create_directories(dir / "b");
+    write_qpsnap((dir / "a" / "f1.qpsnap").string(), qp);
+    write_qpsnap((dir / "a" / "f2.qpsnap").string(), qp);
+    write_qpsnap((dir / "b" / "f1.qpsnap").string(), qp);
+    const nlohmann::json j = {{"name", "r"},
+                              {"snapshots", {"a/f*.qpsnap", "b/", "a/f1.qpsnap"}},
+                              {"generate", {{{"id", "gen"}, {"family", "plane"}, {"seed", 3}, {"params", {{"nx", 2}}}}}},
+                              {"solvers", {"cg"}}};
+    const Suite s = parse_suite(j, (dir / "suite.json").string());
+    const auto snaps = resolve_snapshots(s, (dir / "cache").string());
+    ASSERT_EQ(snaps.size(), 4u);  // a/f1 listed twice counts once
+    EXPECT_EQ(snaps[0].id, "f1");
+    EXPECT_EQ(snaps[1].id, "f2");
+    EXPECT_EQ(snaps[2].id, "f1-2");
+    EXPECT_EQ(snaps[3].id, "gen");
+    EXPECT_TRUE(snaps[3].generated);
+    const auto first_time = fs::last_write_time(snaps[3].path);
+    const auto again = resolve_snapshots(s, (dir / "cache").string());
+    EXPECT_EQ(again[3].path, snaps[3].path);  // cached by content key, not rewritten
+    EXPECT_EQ(fs::last_write_time(again[3].path), first_time);
+    EXPECT_EQ(read_qpsnap(snaps[3].path).n(), make_synthetic("plane", {{"nx", 2}}, 3).n());
+    const Suite missing = parse_suite({{"name", "r"}, {"snapshots", {"zz*.qpsnap"}}, {"solvers", {"cg"}}},
+                                      (dir / "suite.json").string());
+    EXPECT_EQ(error_of([&] { resolve_snapshots(missing, (dir / "cache").string()); }),
+              (dir / "suite.json").string() + ": /snapshots/0: pattern '" + (dir / "zz*.qpsnap").string() +
+                  "' matches no file");
+}
+
+TEST(Reference, CachedByKeyAndAttached)
+{
+    if (!builtin_registry().contains("active-set")) GTEST_SKIP() << "active-set not registered";
+    const fs::path dir = fresh_dir("reference");
+    const Qp qp = make_synthetic("plane", {{"nx", 2}, {"ny", 2}, {"nz", 2}}, 2);
+    const nlohmann::json ref = reference_solution(qp, "k1", dir.string());
+    ASSERT_TRUE(ref["objective"].is_number()) << ref.dump();
+    EXPECT_FALSE(ref["cached"].get<bool>());
+    EXPECT_TRUE(fs::exists(dir / "reference" / "k1.json"));
+    const nlohmann::json again = reference_solution(qp, "k1", dir.string());
+    EXPECT_TRUE(again["cached"].get<bool>());
+    EXPECT_EQ(again["objective"], ref["objective"]);
+    // An independent solver agrees with F* to its tolerance.
+    if (builtin_registry().contains("mprgp")) {
+        RunOptions options;
+        const RunOutcome run = run_solver(qp, "mprgp", {{"tol", 1e-9}}, options);
+        nlohmann::json record = run.record;
+        attach_reference(record, ref);
+        const double f_star = ref["objective"].get<double>();
+        EXPECT_NEAR(run.objective, f_star, 1e-6 * std::max(1.0, std::abs(f_star)));
+        const auto& columns = record["history"]["columns"];
+        EXPECT_EQ(columns.back(), "obj_rel");
+        const auto& rows = record["history"]["rows"];
+        ASSERT_FALSE(rows.empty());
+        EXPECT_LT(rows.back().back().get<double>(), 1e-4);
+        EXPECT_TRUE(record.contains("obj_rel"));
+    }
+}

@@ -1,0 +1,130 @@
+// Tests of the stress suite: cases are generated, every run ends in an honest outcome, and the
+// stability files have the columns the heat map reads.
+#include "harness/stress.hpp"
+#include "solvers/kkt.hpp"
+
+#include <gtest/gtest.h>
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+namespace cb {
+namespace {
+
+TEST(StressCases, AreDistinctSeededAndBuildable)
+{
+    const auto all = stress_cases(false);
+    EXPECT_GE(all.size(), 28u);
+    std::set<std::string> ids;
+    for (const auto& c : all) EXPECT_TRUE(ids.insert(c.id).second) << c.id;
+    EXPECT_EQ(stress_cases(true).size(), 4u);
+    // The custom degenerate modifiers: parallel rows and many rows on one vertex.
+    const auto pick = select_stress_cases(all, {"rows-parallel", "rows-one-vertex"});
+    ASSERT_EQ(pick.size(), 2u);
+    const Qp base = make_stress_qp(select_stress_cases(all, {"baseline-plane"})[0]);
+    const Qp parallel = make_stress_qp(pick[0]);
+    EXPECT_EQ(parallel.m(), base.m() + (base.m() + 1) / 2);
+    const Qp one_vertex = make_stress_qp(pick[1]);
+    EXPECT_EQ(one_vertex.m(), base.m() + 20);
+    // The 20 extra rows touch the same three DOFs.
+    std::set<long> vertices;
+    for (Eigen::Index r = base.m(); r < one_vertex.m(); ++r)
+        for (SpMat::InnerIterator it(one_vertex.J, r); it; ++it) vertices.insert(it.col() / 3);
+    EXPECT_EQ(vertices.size(), 1u);
+    // Same case, same QP.
+    const Qp again = make_stress_qp(pick[1]);
+    EXPECT_EQ((again.J - one_vertex.J).norm(), 0.0);
+    EXPECT_EQ(again.c, one_vertex.c);
+    // Selection by family, and a named error for an unknown name.
+    EXPECT_EQ(select_stress_cases(all, {"infeasible"}).size(), 2u);
+    try {
+        select_stress_cases(all, {"no-such-case"});
+        FAIL();
+    } catch (const InputError& e) {
+        EXPECT_EQ(std::string(e.what()).rfind("--cases: no-such-case: no stress case or family of that name; known: baseline-plane, ", 0), 0u);
+    }
+}
+
+TEST(StressRun, QuickRunGivesHonestOutcomesAndWritesTheTable)
+{
+    const std::string dir = (std::filesystem::temp_directory_path() / "cb_test_stress").string();
+    std::filesystem::remove_all(dir);
+    StressOptions options;
+    options.quick = true;
+    options.solvers = {"active-set", "pgs"};
+    options.time_limit_s = 2.0;
+    options.out_dir = dir;
+    std::ostringstream progress;
+    options.progress = &progress;
+    const StressReport report = run_stress(options);
+    ASSERT_EQ(report.rows.size(), 8u);
+    for (const StressRow& r : report.rows) {
+        SCOPED_TRACE(r.solver + " x " + r.case_id + ": " + r.status + ": " + r.message);
+        EXPECT_NE(r.status, "crashed");
+        EXPECT_NE(r.status, "hung");
+        EXPECT_NE(r.status, "error");
+        if (r.status == "converged") {
+            EXPECT_TRUE(r.status_confirmed);
+            EXPECT_LE(r.kkt, r.tol * (1 + 1e-9));
+        } else {
+            EXPECT_FALSE(r.message.empty());
+        }
+        EXPECT_TRUE(r.honest());
+        if (r.case_id.rfind("infeasible", 0) == 0) {
+            EXPECT_NE(r.status, "converged");
+        }
+        if (r.case_id == "baseline-plane") {
+            EXPECT_EQ(r.status, "converged");
+        }
+    }
+    const std::string lines_text = progress.str();
+    EXPECT_EQ(std::count(lines_text.begin(), lines_text.end(), '\n'), 8) << lines_text;
+
+    std::ifstream csv(dir + "/stability.csv");
+    std::string header;
+    std::getline(csv, header);
+    EXPECT_EQ(header, "solver,case,severity,status,kkt,tol,violation,nonfinite,monotone,time_s,iterations,"
+                      "status_confirmed,message,family,n,m,criterion");
+    long lines = 0;
+    for (std::string line; std::getline(csv, line);) ++lines;
+    EXPECT_EQ(lines, 8);
+    std::ifstream md(dir + "/stability.md");
+    const std::string text((std::istreambuf_iterator<char>(md)), std::istreambuf_iterator<char>());
+    EXPECT_NE(text.find("| case | sev | n | m | active-set | pgs |"), std::string::npos);
+    EXPECT_NE(text.find("None: every \"converged\" was confirmed by the common KKT error."), std::string::npos);
+    EXPECT_TRUE(std::filesystem::exists(dir + "/runs/baseline-plane__pgs.json"));
+    std::filesystem::remove_all(dir);
+}
+
+TEST(StressReportText, ListsAWrongStatus)
+{
+    StressReport report;
+    report.tol = 1e-6;
+    StressRow r;
+    r.solver = "liar";
+    r.case_id = "baseline-plane";
+    r.status = "converged";
+    r.criterion = "native";
+    r.kkt = 0.25;
+    r.tol = 1e-6;
+    r.violation = 0.01;
+    r.status_confirmed = false;
+    r.message = "residual small";
+    report.rows.push_back(r);
+    EXPECT_FALSE(r.honest());
+    const std::string md = stability_markdown(report);
+    EXPECT_NE(md.find("| baseline-plane | 0 | 0 | 0 | **ok 2.5e-01!** |"), std::string::npos) << md;
+    EXPECT_NE(md.find("- liar on baseline-plane: status converged (criterion native), relative KKT 2.5e-01 vs "
+                      "tol 1.0e-06, violation 1.0e-02: residual small"),
+              std::string::npos)
+        << md;
+    const std::string csv = stability_csv(report.rows);
+    EXPECT_NE(csv.find("\nliar,baseline-plane,0,converged,0.25,1e-06,0.01,false,true,0,0,false,residual small,,0,0,native\n"),
+              std::string::npos)
+        << csv;
+}
+
+} // namespace
+} // namespace cb

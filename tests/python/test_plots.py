@@ -1,0 +1,326 @@
+"""Tests of the plot scripts on small results folders written in the INTERFACES.md schema.
+
+Run from tests/python with PYTHONPATH=plots and MPLBACKEND=Agg:
+    /usr/bin/python3 -m unittest
+"""
+import io
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import unittest
+from contextlib import redirect_stdout
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+sys.path.insert(0, os.path.join(ROOT, "plots"))
+sys.path.insert(0, os.path.join(HERE, "fixtures"))
+os.environ.setdefault("MPLBACKEND", "Agg")
+
+import make_fixture as mf  # noqa: E402
+import claims  # noqa: E402
+import convergence  # noqa: E402
+import loader  # noqa: E402
+import profiles  # noqa: E402
+import report  # noqa: E402
+import reproduce  # noqa: E402
+import stability  # noqa: E402
+from paper_context import PaperContext  # noqa: E402
+
+FAKE_CB = os.path.join(HERE, "fixtures", "fake_contactbench.py")
+
+
+class TempDirCase(unittest.TestCase):
+    def setUp(self):
+        self.tmp = tempfile.mkdtemp(prefix="cb_plots_")
+
+    def tearDown(self):
+        shutil.rmtree(self.tmp, ignore_errors=True)
+
+
+class TestLoader(TempDirCase):
+    def test_reads_runs_summary_and_histories(self):
+        recs = [mf.make_run("s0", "a", iterations=5), mf.make_run("s0", "b", iterations=8, confirmed=False)]
+        res = loader.load_results(mf.write_results(self.tmp, recs))
+        self.assertEqual(sorted(res.labels()), ["a", "b"])
+        self.assertEqual(len(res.runs), 2)
+        self.assertEqual(len(res.histories), 6 + 9)
+        self.assertEqual(len(res.history("s0", "b")), 9)
+        self.assertTrue(res.history("s0", "missing").empty)
+        # booleans written as "true"/"false" text in summary.csv come back as bool
+        self.assertEqual(res.summary["status_confirmed"].tolist(), [True, False])
+        run_b = res.runs[res.runs["label"] == "b"].iloc[0]
+        self.assertFalse(run_b["status_confirmed"])
+        self.assertEqual(run_b["a_products"], 8)
+        self.assertEqual(res.suite["name"], "fixture")
+
+    def test_not_a_results_folder_names_the_folder(self):
+        with self.assertRaisesRegex(FileNotFoundError, "not a results folder"):
+            loader.load_results(os.path.join(self.tmp, "nothing"))
+
+    def test_qpsnap_header(self):
+        import fake_contactbench as fake
+        path = os.path.join(self.tmp, "x.qpsnap")
+        fake.write_snapshot(path, 12, 3, {"scene": "t", "frame": 7})
+        table = loader.snapshot_table(self.tmp)
+        self.assertEqual(table.iloc[0]["n"], 12)
+        self.assertEqual(table.iloc[0]["frame"], 7)
+        with open(path, "wb") as f:
+            f.write(b"\x01\x02")
+        with self.assertRaisesRegex(ValueError, "shorter than"):
+            loader.read_qpsnap_header(path)
+
+
+class TestConvergence(TempDirCase):
+    def test_three_figures_png_and_pdf(self):
+        recs = [mf.make_run(f"s{i}", lab, iterations=it) for i in range(2) for lab, it in (("a", 5), ("b", 9))]
+        recs.append(mf.make_run("s2", "a", history=False))  # a run without history is still drawn
+        folder = mf.write_results(self.tmp, recs)
+        with redirect_stdout(io.StringIO()):
+            self.assertEqual(convergence.main([folder]), 0)
+        for stem in ("time", "iterations", "a_products"):
+            for ext in ("png", "pdf"):
+                path = os.path.join(folder, "figures", f"convergence_{stem}.{ext}")
+                self.assertTrue(os.path.getsize(path) > 1000, path)
+
+    def test_empty_folder_is_an_error(self):
+        self.assertEqual(convergence.main.__module__, "convergence")
+        os.makedirs(os.path.join(self.tmp, "runs"))
+        import contextlib
+        with contextlib.redirect_stderr(io.StringIO()) as err:
+            self.assertEqual(convergence.main([self.tmp]), 2)
+        self.assertIn("no runs", err.getvalue())
+
+
+class TestProfiles(TempDirCase):
+    def hand_made(self):
+        # problem p0: a 1 s, b 2 s; p1: a 4 s, b 2 s; p2: a 1 s, b fails (KKT 1e-1)
+        recs = [mf.make_run("p0", "a", solve_s=1.0, history=False), mf.make_run("p0", "b", solve_s=2.0, history=False),
+                mf.make_run("p1", "a", solve_s=4.0, history=False), mf.make_run("p1", "b", solve_s=2.0, history=False),
+                mf.make_run("p2", "a", solve_s=1.0, history=False),
+                mf.make_run("p2", "b", solve_s=3.0, final_kkt_rel=1e-1, status="max_iterations", history=False)]
+        return loader.load_results(mf.write_results(self.tmp, recs))
+
+    def test_shifted_geomean_by_hand(self):
+        self.assertAlmostEqual(profiles.shifted_geomean([1, 4, 1], 10), (11 * 14 * 11) ** (1 / 3) - 10, places=12)
+        self.assertAlmostEqual(profiles.shifted_geomean([2.0, 2.0], 0), 2.0, places=12)
+        self.assertTrue(math.isnan(profiles.shifted_geomean([], 10)))
+        with self.assertRaises(ValueError):
+            profiles.shifted_geomean([-20.0], 10)
+
+    def test_known_ratios_profiles_and_geomean(self):
+        res = self.hand_made()
+        numbers = profiles.compute(res, shift=10)
+        cost = profiles.cost_matrix(numbers["tiers"], 1e-6)
+        ratios = profiles.performance_ratios(cost)
+        self.assertEqual(ratios.loc["p0"].tolist(), [1.0, 2.0])
+        self.assertEqual(ratios.loc["p1"].tolist(), [2.0, 1.0])
+        self.assertEqual(ratios.loc["p2", "a"], 1.0)
+        self.assertTrue(math.isinf(ratios.loc["p2", "b"]))
+        prof = profiles.performance_profile(ratios, [1.0, 2.0])
+        self.assertAlmostEqual(prof.loc[1.0, "a"], 2 / 3)
+        self.assertAlmostEqual(prof.loc[1.0, "b"], 1 / 3)
+        self.assertAlmostEqual(prof.loc[2.0, "a"], 1.0)
+        self.assertAlmostEqual(prof.loc[2.0, "b"], 2 / 3)
+        # success: b reaches 1e-2 on all three? no: its KKT is 1e-1 on p2
+        self.assertAlmostEqual(numbers["success"].loc["b", 1e-6], 2 / 3)
+        self.assertAlmostEqual(numbers["success"].loc["a", 1e-8], 0.0)   # fixture final KKT 1e-7
+        # shifted geomean: a = (11*14*11)^(1/3) - 10; b's failure counts at the time limit (10 s)
+        self.assertEqual(numbers["penalty_s"], 10.0)
+        self.assertAlmostEqual(numbers["sgm"].loc["a", 1e-6], (11 * 14 * 11) ** (1 / 3) - 10, places=9)
+        self.assertAlmostEqual(numbers["sgm"].loc["b", 1e-6], (12 * 12 * 20) ** (1 / 3) - 10, places=9)
+        data = profiles.data_profile(profiles.cost_matrix(numbers["tiers"], 1e-6, "a_products"), [10.0])
+        self.assertAlmostEqual(data.loc[10.0, "a"], 1.0)  # 10 A-products each
+
+    def test_time_to_tier_from_history(self):
+        # KKT decays by 10^-1.0625 per iteration over 8 iterations spread on 8 s: below 1e-2 first at
+        # iteration 2 (t = 2 s), below 1e-8 first at iteration 8
+        rec = mf.make_run("p", "a", iterations=8, solve_s=8.0, final_kkt_rel=10 ** -8.5)
+        res = loader.load_results(mf.write_results(self.tmp, [rec]))
+        tt = profiles.tier_table(res)
+        row = tt[tt["tier"] == 1e-2].iloc[0]
+        self.assertAlmostEqual(row["time_s"], 2.0, places=9)
+        self.assertEqual(row["a_products"], 2)
+        self.assertAlmostEqual(tt[tt["tier"] == 1e-8].iloc[0]["time_s"], 8.0, places=9)
+
+    def test_status_honesty_and_markdown(self):
+        recs = [mf.make_run("p0", "a"), mf.make_run("p1", "a"),
+                mf.make_run("p2", "a", confirmed=False, final_kkt_rel=3e-6),
+                mf.make_run("p0", "b", status="max_iterations", final_kkt_rel=1e-3)]
+        folder = mf.write_results(self.tmp, recs)
+        res = loader.load_results(folder)
+        hon = profiles.status_honesty(res.runs).set_index("label")
+        self.assertEqual(hon.loc["a", "converged"], 3)
+        self.assertEqual(hon.loc["a", "confirmed"], 2)
+        self.assertAlmostEqual(hon.loc["a", "share"], 2 / 3)
+        self.assertTrue(math.isnan(hon.loc["b", "share"]))  # never claimed convergence
+        with redirect_stdout(io.StringIO()) as out:
+            self.assertEqual(profiles.main([folder, "--shift", "1"]), 0)
+        self.assertIn("shift of the geometric mean = 1 s", out.getvalue())
+        with open(os.path.join(folder, "profiles.md"), encoding="utf-8") as f:
+            md = f.read()
+        self.assertIn("shift = 1 s", md)
+        self.assertIn("| a | 3 | 3 | 2 | 67% |", md)
+        self.assertIn("p2 / a: relative KKT 3.00e-06", md)
+        for stem in ("profiles_performance", "profiles_data"):
+            self.assertTrue(os.path.isfile(os.path.join(folder, "figures", stem + ".pdf")))
+
+
+class TestStability(TempDirCase):
+    def test_heat_map_and_marks(self):
+        path = os.path.join(self.tmp, "stability.csv")
+        with open(path, "w") as f:
+            f.write("case,solver,status,kkt_rel,status_confirmed,nonfinite,monotone\n"
+                    "stiff,mprgp,converged,1e-7,true,false,true\n"
+                    "stiff,ica,converged,1e-3,false,false,false\n"
+                    "mm-units,mprgp,diverged,nan,false,true,false\n")
+        with redirect_stdout(io.StringIO()):
+            self.assertEqual(stability.main([self.tmp]), 0)
+        self.assertTrue(os.path.isfile(os.path.join(self.tmp, "figures", "stability.png")))
+        df = stability.read_table(self.tmp)
+        cols = {r: stability.find_column(df, r) for r in stability.CANDIDATES}
+        self.assertEqual(stability.cell_marks(df.iloc[1], cols), "!~")
+        self.assertEqual(stability.cell_marks(df.iloc[2], cols), "N~")
+        self.assertEqual(stability.cell_marks(df.iloc[0], cols), "")
+
+    def test_missing_columns_named(self):
+        import pandas as pd
+        with self.assertRaisesRegex(ValueError, "case, error"):
+            stability.plot_stability(pd.DataFrame({"solver": ["a"]}), self.tmp)
+
+
+class TestVerdicts(unittest.TestCase):
+    def test_published_fair(self):
+        v = claims.verdict_published_fair
+        self.assertEqual(v(True, True), claims.HOLDS)
+        self.assertEqual(v(True, False), claims.HOLDS_AS_PUBLISHED)
+        self.assertEqual(v(False, False), claims.DOES_NOT_HOLD)
+        self.assertEqual(v(None, None), claims.NOT_MEASURED)
+        self.assertEqual(v(True, None), claims.HOLDS_AS_PUBLISHED)
+        self.assertEqual(claims.verdict_threshold(float("nan"), 1.0), claims.NOT_MEASURED)
+        self.assertEqual(claims.verdict_threshold(0.5, 1.0, greater=False), claims.HOLDS)
+
+    def test_fig8_relative_error(self):
+        import fig8
+        import pandas as pd
+        err = fig8.relative_error(pd.Series([0.0, -0.9, -0.99, -1.0]), -1.0)
+        self.assertEqual(err.tolist()[0], 1.0)
+        self.assertAlmostEqual(err[2], 0.01)
+        self.assertEqual(fig8.iterations_to(err, [0, 1, 2, 3], 0.05), 2)
+
+
+class TestReport(TempDirCase):
+    def test_missing_inputs_are_reported_not_faked(self):
+        ctx = PaperContext(out=self.tmp, data=None)
+        ctx.reasons["fig10"] = "no scene file scenes/longcube.json"
+        outcomes = report.produce_all(ctx, log=lambda *_: None)
+        self.assertTrue(all(o.missing for o in outcomes))
+        path = report.write_report(ctx, outcomes, {})
+        with open(path, encoding="utf-8") as f:
+            text = f.read()
+        self.assertIn("not produced: no scene file scenes/longcube.json", text)
+        rows = [l for l in text.splitlines() if l.startswith("| ") and "**" in l]
+        self.assertEqual(len(rows), len(report.EXPECTED_CLAIMS))
+        self.assertTrue(all("**not measured**" in r for r in rows))
+        self.assertFalse(os.path.isdir(os.path.join(self.tmp, "figures")) and
+                         any(f.endswith(".png") for f in os.listdir(os.path.join(self.tmp, "figures"))))
+
+
+class TestReproduce(TempDirCase):
+    """reproduce.py end to end with a stand-in contactbench (tests/python/fixtures/fake_contactbench.py)."""
+
+    def setUp(self):
+        super().setUp()
+        self.scenes = os.path.join(self.tmp, "scenes")
+        os.makedirs(self.scenes)
+        for name in ("two_dinos_1303", "two_dinos_1493", "longcube"):
+            with open(os.path.join(self.scenes, name + ".json"), "w") as f:
+                f.write("{}")
+
+    def test_quick_run_produces_every_figure_and_claim(self):
+        out = os.path.join(self.tmp, "out")
+        data = os.path.join(os.path.dirname(ROOT), "shared", "paper-data")
+        args = ["--contactbench", FAKE_CB, "--out", out, "--scenes", self.scenes, "--quick", "--no-profiles"]
+        if os.path.isdir(data):
+            args += ["--data", data]
+        with redirect_stdout(io.StringIO()) as log:
+            self.assertEqual(reproduce.main(args), 0)
+        figs = os.path.join(out, "figures")
+        for stem in ("fig6_decoupling_time", "fig8_mprgp_vs_cg", "fig9_preconditioning", "fig10_mprgp_vs_ica",
+                     "fig11_scaling"):
+            for ext in ("png", "pdf"):
+                self.assertTrue(os.path.getsize(os.path.join(figs, f"{stem}.{ext}")) > 1000, stem)
+        self.assertTrue(os.path.isfile(os.path.join(figs, "table1.csv")))
+        with open(os.path.join(out, "report.md"), encoding="utf-8") as f:
+            text = f.read()
+        rows = [l for l in text.splitlines() if l.startswith("| ") and "**" in l]
+        self.assertEqual(len(rows), len(report.EXPECTED_CLAIMS))
+        allowed = {claims.HOLDS, claims.HOLDS_AS_PUBLISHED, claims.HOLDS_NATIVE_ONLY, claims.DOES_NOT_HOLD,
+                   claims.NOT_MEASURED}
+        for r in rows:
+            verdict = r.rsplit("**", 2)[1]
+            self.assertIn(verdict, allowed)
+        with open(os.path.join(out, "claims.json"), encoding="utf-8") as f:
+            saved = json.load(f)
+        self.assertEqual([c["key"] for c in saved][:len(report.EXPECTED_CLAIMS)],
+                         [k for k, _, _ in report.EXPECTED_CLAIMS])
+        # the fake's ICA is ~17x slower than its MPRGP at the smallest size: computed, not typed in
+        low_res = next(c for c in saved if c["key"] == "fig11-ica-low-res")
+        self.assertEqual(low_res["verdict"], claims.DOES_NOT_HOLD)
+        self.assertIn("not simulated: dragon_stair", text)
+        self.assertIn("quick", log.getvalue())
+
+    def test_missing_binary_reports_reason(self):
+        out = os.path.join(self.tmp, "out")
+        with redirect_stdout(io.StringIO()):
+            reproduce.main(["--contactbench", os.path.join(self.tmp, "nope"), "--out", out, "--scenes", self.scenes])
+        with open(os.path.join(out, "report.md"), encoding="utf-8") as f:
+            text = f.read()
+        self.assertIn("not produced: contactbench binary not found", text)
+
+    def test_simulations_and_runs_are_cached(self):
+        out = os.path.join(self.tmp, "out")
+        ctx = PaperContext(out=out, quick=True)
+        runner = reproduce.Runner(FAKE_CB, None, os.path.join(self.tmp, "log"))
+        scene = os.path.join(self.scenes, "two_dinos_1303.json")
+        with redirect_stdout(io.StringIO()):
+            sim = reproduce.simulate(runner, ctx, "two_dinos_1303", scene, 12, None, False)
+            self.assertIsNotNone(sim)
+            reproduce.simulate(runner, ctx, "two_dinos_1303", scene, 12, None, False)
+            snaps = reproduce.snapshots_of(ctx, "two_dinos_1303")
+            self.assertEqual(reproduce.pick_frame(snaps, 11), [snaps.iloc[11]["path"]])
+            tpl = os.path.join(ROOT, "suites", "paper", "fig11.json")
+            reproduce.run_suite(runner, ctx, "fig11", tpl, reproduce.pick_frame(snaps, 11), False)
+            reproduce.run_suite(runner, ctx, "fig11", tpl, reproduce.pick_frame(snaps, 11), False)
+        self.assertEqual(runner.steps[1], "simulate two_dinos_1303: cached (12 frames)")
+        self.assertTrue(runner.steps[2].startswith("run fig11: exit 0"))
+        self.assertEqual(runner.steps[3], "run fig11: cached")
+        with open(os.path.join(out, "suites", "fig11.json"), encoding="utf-8") as f:
+            suite = json.load(f)
+        self.assertEqual(suite["time_limit_s"], reproduce.QUICK_TIME_LIMIT_S)
+        self.assertTrue(os.path.isabs(suite["snapshots"][0]))
+
+
+class TestSuiteTemplates(unittest.TestCase):
+    KEYS = {"name", "snapshots", "generate", "solvers", "tol", "time_limit_s", "repeat", "history_max",
+            "reference", "decouple", "decouple_seed", "chain"}
+
+    def test_templates_follow_the_schema(self):
+        folder = os.path.join(ROOT, "suites", "paper")
+        names = sorted(f for f in os.listdir(folder) if f.endswith(".json"))
+        self.assertEqual(names, ["fig10.json", "fig11.json", "fig6.json", "fig8.json", "table1.json"])
+        for name in names:
+            with open(os.path.join(folder, name), encoding="utf-8") as f:
+                suite = json.load(f)
+            self.assertLessEqual(set(suite), self.KEYS, name)
+            labels = [s["label"] for s in suite["solvers"]]
+            self.assertEqual(len(labels), len(set(labels)), name)
+            for s in suite["solvers"]:
+                self.assertIn(s["solver"], {"mprgp", "mprgp-coupled", "mprgp-box", "ica", "pgs", "active-set", "cg"})
+
+
+if __name__ == "__main__":
+    unittest.main()

@@ -1,0 +1,194 @@
+// Tests of the decoupled closed forms (ALGORITHMS.md §2) against their definitions, and of the
+// power method against a dense eigensolver.
+#include "problems/synthetic.hpp"
+#include "solvers/decouple.hpp"
+#include "solvers/mprgp_kernels.hpp"
+
+#include <Eigen/Dense>
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace {
+
+using cb::Vec;
+
+/// A decoupled J with rows of random sign/size over random vertices (some rows with 12 nnz),
+/// c and x such that part of the rows are active, part violated, part slack.
+struct Fixture {
+    cb::SpMat J;
+    Vec c, x, g, dinv;
+    cb::DecoupledRows rows;
+    std::vector<char> active;
+};
+
+Fixture make_fixture(std::uint64_t seed)
+{
+    std::mt19937_64 rng(seed);
+    std::normal_distribution<double> normal(0.0, 1.0);
+    const int vertices = 60, n = 3 * vertices;
+    std::vector<int> perm(vertices);
+    for (int i = 0; i < vertices; ++i) perm[i] = i;
+    std::shuffle(perm.begin(), perm.end(), rng);
+    std::vector<cb::Triplet> t;
+    int row = 0, next = 0;
+    while (next + 4 <= vertices && row < 14) {
+        const int touched = (row % 3 == 0) ? 4 : 1;  // inter-body style rows touch 4 vertices
+        for (int v = 0; v < touched; ++v, ++next)
+            for (int d = 0; d < 3; ++d) t.emplace_back(row, 3 * perm[next] + d, normal(rng));
+        ++row;
+    }
+    Fixture f;
+    f.J.resize(row, n);
+    f.J.setFromTriplets(t.begin(), t.end());
+    f.x = Vec::NullaryExpr(n, [&]() { return normal(rng); });
+    f.g = Vec::NullaryExpr(n, [&]() { return normal(rng); });
+    f.dinv = Vec::NullaryExpr(n, [&]() { return 0.5 + std::abs(normal(rng)); });
+    const Vec jx = f.J * f.x;
+    f.c.resize(row);
+    for (int i = 0; i < row; ++i) f.c[i] = jx[i] + (i % 3 == 0 ? 0.0 : (i % 3 == 1 ? -0.5 : 0.7));  // active / slack / violated
+    f.rows = cb::make_decoupled_rows(f.J, f.dinv);
+    // Put x on the feasible set first (the operators are defined at feasible points).
+    cb::project_decoupled(f.J, f.c, f.rows, f.x, f.x);
+    cb::active_rows(f.J, f.c, f.rows, f.x, f.active);
+    return f;
+}
+
+TEST(MprgpKernels, FixtureIsDecoupledWithActiveRows)
+{
+    const Fixture f = make_fixture(1);
+    EXPECT_TRUE(cb::is_decoupled(f.J));
+    int active = 0;
+    for (char a : f.active) active += a;
+    EXPECT_GE(active, 8);  // the originally active and the violated (now projected) rows
+    EXPECT_LT(active, f.J.rows());
+}
+
+TEST(MprgpKernels, ProjectionIsFeasibleAndOptimal)
+{
+    for (std::uint64_t seed : {1u, 2u, 3u}) {
+        Fixture f = make_fixture(seed);
+        std::mt19937_64 rng(seed + 100);
+        std::normal_distribution<double> normal(0.0, 1.0);
+        const Vec z = f.x + Vec::NullaryExpr(f.x.size(), [&]() { return normal(rng); });
+        Vec p, lambda;
+        cb::project_decoupled(f.J, f.c, f.rows, z, p, &lambda);
+        const Vec slack = f.J * p - f.c;
+        EXPECT_GE(slack.minCoeff(), -1e-12);
+        // z - P(z) = -J' lambda with lambda >= 0 and lambda_i slack_i = 0: the normal cone.
+        EXPECT_LE((z - p + f.J.transpose() * lambda).norm(), 1e-12);
+        EXPECT_GE(lambda.minCoeff(), 0.0);
+        EXPECT_LE(lambda.cwiseProduct(slack).cwiseAbs().maxCoeff(), 1e-12);
+        // Variational inequality (z - P z)'(y - P z) <= 0 for feasible y (some projected points).
+        for (int k = 0; k < 20; ++k) {
+            Vec y = f.x + 3.0 * Vec::NullaryExpr(f.x.size(), [&]() { return normal(rng); });
+            cb::project_decoupled(f.J, f.c, f.rows, y, y);
+            EXPECT_LE((z - p).dot(y - p), 1e-10);
+        }
+    }
+}
+
+TEST(MprgpKernels, FreeAndChoppedGradientsMeetTheirDefinitions)
+{
+    for (std::uint64_t seed : {1u, 2u, 3u}) {
+        const Fixture f = make_fixture(seed);
+        Vec phi, beta;
+        cb::free_gradient(f.J, f.rows, f.active, f.g, phi);
+        cb::chopped_gradient(f.J, f.rows, f.active, f.g, beta);
+        EXPECT_NEAR(phi.dot(beta), 0.0, 1e-12);
+        EXPECT_GE(phi.dot(f.g), -1e-12);
+        EXPECT_GE(beta.dot(f.g), -1e-12);
+        const Vec jphi = f.J * phi, jbeta = f.J * beta;
+        bool some_chopped = false;
+        for (Eigen::Index i = 0; i < f.J.rows(); ++i) {
+            if (!f.active[static_cast<size_t>(i)]) continue;
+            EXPECT_NEAR(jphi[i], 0.0, 1e-12);  // J_A phi = 0
+            EXPECT_LE(jbeta[i], 1e-12);        // -J_A beta >= 0: -beta moves into the set
+            some_chopped = some_chopped || jbeta[i] < -1e-8;
+        }
+        EXPECT_TRUE(some_chopped || beta.norm() == 0.0);
+        // phi is the orthogonal projection of g onto null(J_A): g - phi in range(J_A').
+        std::vector<int> act;
+        for (Eigen::Index i = 0; i < f.J.rows(); ++i)
+            if (f.active[static_cast<size_t>(i)]) act.push_back(static_cast<int>(i));
+        Eigen::MatrixXd JA(static_cast<Eigen::Index>(act.size()), f.J.cols());
+        const Eigen::MatrixXd Jd = Eigen::MatrixXd(f.J);
+        for (size_t r = 0; r < act.size(); ++r) JA.row(static_cast<Eigen::Index>(r)) = Jd.row(act[r]);
+        const Vec mu = (JA * JA.transpose()).ldlt().solve(JA * f.g);
+        EXPECT_LE((f.g - JA.transpose() * mu - phi).norm(), 1e-10);
+        // beta solves min ||beta - (g - phi)|| s.t. J_A beta <= 0: KKT of eq. (17) with nu = -J_A beta-part.
+        Vec lambda;
+        cb::decoupled_multipliers(f.J, f.rows, f.active, f.g, lambda);
+        EXPECT_LE((phi + beta - (f.g - f.J.transpose() * lambda)).norm(), 1e-12);
+    }
+}
+
+TEST(MprgpKernels, ReducedFreeGradientMatchesItsDefinition)
+{
+    const Fixture f = make_fixture(4);
+    Vec phi;
+    cb::free_gradient(f.J, f.rows, f.active, f.g, phi);
+    for (double alpha_bar : {1e-3, 0.1, 1.0, 10.0}) {
+        Vec trial = f.x - alpha_bar * phi, projected;
+        cb::project_decoupled(f.J, f.c, f.rows, trial, projected);
+        const Vec phitilde = (f.x - projected) / alpha_bar;
+        EXPECT_NEAR(cb::reduced_free_gradient_dot(f.J, f.c, f.rows, f.x, phi, alpha_bar), phitilde.dot(phi),
+                    1e-10 * phi.squaredNorm());
+        // phitilde'phi <= ||phi||^2 (the projection only shortens the step).
+        EXPECT_LE(phitilde.dot(phi), phi.squaredNorm() * (1 + 1e-12));
+    }
+}
+
+TEST(MprgpKernels, JacobiPreconditionerKeepsTheFace)
+{
+    for (std::uint64_t seed : {1u, 2u}) {
+        const Fixture f = make_fixture(seed);
+        Vec z;
+        cb::jacobi_face_precondition(f.J, f.rows, f.active, f.dinv, f.g, z);
+        const Vec jz = f.J * z;
+        for (Eigen::Index i = 0; i < f.J.rows(); ++i)
+            if (f.active[static_cast<size_t>(i)]) EXPECT_NEAR(jz[i], 0.0, 1e-12);
+        // D-weighted projection: z minimises (z - D^-1 g)' D (z - D^-1 g) on null(J_A), so
+        // D z - g lies in range(J_A'): it vanishes on every DOF outside active rows.
+        const Vec resid = z.cwiseQuotient(f.dinv) - f.g;
+        for (Eigen::Index j = 0; j < resid.size(); ++j) {
+            bool in_active = false;
+            for (Eigen::Index i = 0; i < f.J.rows(); ++i)
+                if (f.active[static_cast<size_t>(i)] && f.J.coeff(i, j) != 0.0) in_active = true;
+            if (!in_active) EXPECT_NEAR(resid[j], 0.0, 1e-12);
+        }
+        EXPECT_GT(z.dot(f.g), 0.0);  // a descent direction
+    }
+    // No rows: plain Jacobi.
+    cb::SpMat empty(0, 6);
+    const Vec dinv = Vec::LinSpaced(6, 1.0, 2.0), g = Vec::Ones(6);
+    const cb::DecoupledRows rows = cb::make_decoupled_rows(empty, dinv);
+    Vec z;
+    cb::jacobi_face_precondition(empty, rows, {}, dinv, g, z);
+    EXPECT_LE((z - dinv).norm(), 0.0);
+}
+
+TEST(MprgpKernels, PowerMethodEstimatesTheNormFromBelowAndWarmStartHelps)
+{
+    const cb::SpMat A = cb::fem_like_matrix({3, 3, 3, 0.1, 1e6, 0.4, 1000.0, 0.01});
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig{Eigen::MatrixXd(A)};
+    const double norm = eig.eigenvalues().maxCoeff();
+    Vec v;
+    const cb::PowerResult cold = cb::power_method(A, v, cb::PowerRule::POWER, 1000, 0.0, false, 1);
+    EXPECT_LE(cold.estimate, norm * (1 + 1e-12));
+    EXPECT_GE(cold.estimate, 0.9 * norm);
+    EXPECT_FALSE(cold.warm);
+    const cb::PowerResult warm = cb::power_method(A, v, cb::PowerRule::POWER, 1000, 0.0, true, 1);
+    EXPECT_TRUE(warm.warm);
+    EXPECT_LE(warm.products, 3);
+    EXPECT_NEAR(warm.estimate, norm, 0.01 * norm);
+    Vec u;
+    const cb::PowerResult authors = cb::power_method(A, u, cb::PowerRule::AUTHORS, 1001, 1e-8, true, 1);
+    EXPECT_FALSE(authors.warm);  // the authors' variant always starts cold
+    EXPECT_NEAR(authors.estimate, norm, 1e-3 * norm);
+    EXPECT_LE(authors.products, 1001);
+    const cb::PowerResult capped = cb::power_method(A, u, cb::PowerRule::POWER, 2, 0.0, false, 1);
+    EXPECT_EQ(capped.products, 2);
+}
+
+} // namespace
