@@ -73,9 +73,11 @@ baseline: build
 	@echo "baseline: rewrote results/baselines/ci (commit it with the change that explains it)"
 
 demo: deps build
+	$(CB) simulate scenes/demo.json --out results/demo/sim
 	$(CB) run suites/demo.json --out results/demo
 	$(PY) plots/convergence.py results/demo
-	@echo "demo: figures in results/demo/figures/"
+	$(PY) plots/profiles.py results/demo
+	@echo "demo: simulation pictures in results/demo/sim/, solver figures and profiles in results/demo/figures/"
 
 bench: build
 	mkdir -p results/bench
@@ -86,6 +88,7 @@ reproduce: deps build
 
 stress: build
 	$(CB) stress --out results/stress
+	$(PY) plots/stability.py results/stress
 
 fuzz: deps
 	cmake -S . -B $(BUILD)-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DCB_FUZZ=ON

@@ -14,7 +14,7 @@
 #include "harness/runner.hpp"
 #include "harness/suite.hpp"
 #include "problems/qpsnap.hpp"
-#include "solvers/decouple.hpp"
+#include "solvers/decouple.hpp"  // select_rows
 #include "solvers/registry.hpp"
 
 #include <cstdio>
@@ -126,7 +126,6 @@ int cmd_run(const Args& args)
     }
 
     RunOptions options;
-    options.time_limit_s = suite.time_limit_s;
     options.history_max = suite.history_max;
     options.decouple = suite.decouple;
     options.decouple_seed = suite.decouple_seed;
@@ -140,10 +139,16 @@ int cmd_run(const Args& args)
         std::unique_ptr<Qp> qp;
         nlohmann::json info;
         const SuiteSnapshot& snap = snapshots[s];
+        std::string load_error;  // a bad snapshot fails its runs, not the suite
         if (any) {
-            qp = std::make_unique<Qp>(read_qpsnap(snap.path));
-            info = {{"id", snap.id}, {"path", snap.path}, {"hash", qpsnap_content_hash(snap.path)},
-                    {"n", qp->n()}, {"m", qp->m()}, {"meta", qp->meta}, {"generated", snap.generated}};
+            try {
+                qp = std::make_unique<Qp>(read_qpsnap(snap.path));
+                info = {{"id", snap.id}, {"path", snap.path}, {"hash", qpsnap_content_hash(snap.path)},
+                        {"n", qp->n()}, {"m", qp->m()}, {"meta", qp->meta}, {"generated", snap.generated}};
+            } catch (const InputError& e) {
+                load_error = e.what();
+                info = {{"id", snap.id}, {"path", snap.path}, {"generated", snap.generated}};
+            }
         }
         for (size_t v = 0; v < labels; ++v) {
             if (!in_shard(s, v)) continue;
@@ -156,9 +161,13 @@ int cmd_run(const Args& args)
                 continue;
             }
             nlohmann::json settings = sv.settings;
+            // Suite-wide tol and time limit are defaults: a solver's own setting wins.
             if (!settings.contains("tol")) settings["tol"] = suite.tol;
+            if (!settings.contains("time_limit_s")) settings["time_limit_s"] = suite.time_limit_s;
             nlohmann::json record;
-            if (!registry.contains(sv.solver)) {
+            if (!load_error.empty()) {
+                record = failed_record(sv, settings, info, "invalid_input", load_error, suite.tol);
+            } else if (!registry.contains(sv.solver)) {
                 std::string known;
                 for (const auto& n : registry.names()) known += (known.empty() ? "" : ", ") + n;
                 record = failed_record(sv, settings, info, "invalid_input",
@@ -177,6 +186,7 @@ int cmd_run(const Args& args)
                         state.has_lambda = run.lambda_full.size() > 0;
                     }
                     record = std::move(run.record);
+                    const std::vector<int> kept_rows = std::move(run.kept_rows);
                     if (suite.reference) {
                         // F* of the QP the solver saw (decoupled or not).
                         std::string key = info["hash"].get<std::string>();
@@ -185,11 +195,7 @@ int cmd_run(const Args& args)
                         if (decoupled) key += "-" + dec["order"].get<std::string>() + "-" + dec["seed"].dump();
                         if (!references.count(key)) {
                             if (decoupled) {
-                                const DecoupleReport report =
-                                    decouple_rows(qp->view(), qp->contacts,
-                                                  decouple_order_from_string(dec["order"].get<std::string>()),
-                                                  dec["seed"].get<std::uint64_t>());
-                                references[key] = reference_solution(select_rows(*qp, report.kept_rows), key);
+                                references[key] = reference_solution(select_rows(*qp, kept_rows), key);
                             } else {
                                 references[key] = reference_solution(*qp, key);
                             }

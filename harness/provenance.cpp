@@ -1,6 +1,7 @@
 #include "harness/provenance.hpp"
 
 #include <Eigen/Core>
+#include <SuiteSparse_config.h>
 
 #include <array>
 #include <cstdio>
@@ -105,7 +106,8 @@ nlohmann::json compute()
     p["date"] = utc_now_iso();
     p["eigen"] = std::to_string(EIGEN_WORLD_VERSION) + "." + std::to_string(EIGEN_MAJOR_VERSION) + "." +
                  std::to_string(EIGEN_MINOR_VERSION);
-    p["suitesparse"] = CB_CHOLMOD_VERSION;
+    p["suitesparse"] = std::to_string(SUITESPARSE_MAIN_VERSION) + "." + std::to_string(SUITESPARSE_SUB_VERSION) + "." +
+                       std::to_string(SUITESPARSE_SUBSUB_VERSION) + " (CHOLMOD " + CB_CHOLMOD_VERSION + ")";
     p["blas"] = blas_in_use();
     char host[256] = {0};
     p["hostname"] = ::gethostname(host, sizeof(host) - 1) == 0 ? std::string(host) : std::string("unknown");

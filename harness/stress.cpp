@@ -56,7 +56,7 @@ json row_to_json(const StressRow& r)
             {"violation", number_json(r.violation)}, {"nonfinite", r.nonfinite}, {"monotone", r.monotone},
             {"time_s", number_json(r.time_s)}, {"iterations", r.iterations},
             {"status_confirmed", r.status_confirmed}, {"message", r.message}, {"n", r.n}, {"m", r.m},
-            {"criterion", r.criterion}};
+            {"criterion", r.criterion}, {"m_solved", r.m_solved}};
 }
 StressRow row_from_json(const json& j)
 {
@@ -78,6 +78,7 @@ StressRow row_from_json(const json& j)
     r.n = j.at("n");
     r.m = j.at("m");
     r.criterion = j.at("criterion");
+    r.m_solved = j.at("m_solved");
     return r;
 }
 
@@ -91,6 +92,7 @@ StressRow blank_row(const StressCase& c, const std::string& solver, const Stress
     r.tol = options.tol;
     r.n = n;
     r.m = m;
+    r.m_solved = m;
     r.kkt = NAN;
     r.violation = NAN;
     return r;
@@ -123,6 +125,8 @@ std::pair<StressRow, json> run_one(const Qp& qp, const StressCase& c, const std:
             row.message = "(invalid_input without a message)";
         record = out.record;
         record.erase("history");
+        if (record.contains("decouple") && record["decouple"].value("applied", false))
+            row.m_solved = record["decouple"].value("rows_after", row.m);
     } catch (const InputError& e) {
         // A refusal through an exception: still an answer with a message.
         row.status = to_string(SolveStatus::INVALID_INPUT);
@@ -331,14 +335,14 @@ std::string stability_csv(const std::vector<StressRow>& rows)
 {
     std::ostringstream s;
     s << "solver,case,severity,status,kkt,tol,violation,nonfinite,monotone,time_s,iterations,status_confirmed,"
-         "message,family,n,m,criterion\n";
+         "message,family,n,m,criterion,m_solved\n";
     for (const StressRow& r : rows) {
         s << csv_field(r.solver) << ',' << csv_field(r.case_id) << ',' << r.severity << ',' << r.status << ','
           << format_number(r.kkt) << ',' << format_number(r.tol) << ',' << format_number(r.violation) << ','
           << (r.nonfinite ? "true" : "false") << ',' << (r.monotone ? "true" : "false") << ','
           << format_number(r.time_s) << ',' << r.iterations << ',' << (r.status_confirmed ? "true" : "false") << ','
           << csv_field(r.message) << ',' << csv_field(r.family) << ',' << r.n << ',' << r.m << ','
-          << csv_field(r.criterion) << '\n';
+          << csv_field(r.criterion) << ',' << r.m_solved << '\n';
     }
     return s.str();
 }
@@ -363,7 +367,9 @@ std::string stability_markdown(const StressReport& report)
       << std::defaultfloat
       << "Cell: status and the relative KKT error reached (ok = converged, maxit, time, infeas, refused = "
          "invalid_input, ...). **bold!** = a wrong status (\"converged\" not confirmed by the common KKT, or a "
-         "crash/hang); NaN = non-finite values seen; nm = objective not monotone over feasible iterates.\n\n";
+         "crash/hang); NaN = non-finite values seen; nm = objective not monotone over feasible iterates; "
+         "(k rows) = the harness decoupled J for this solver, which then solved a QP with k of the m rows "
+         "(its KKT is measured on that QP).\n\n";
     s << "| case | sev | n | m |";
     for (const auto& sv : solvers) s << ' ' << sv << " |";
     s << "\n|---|---|---|---|";
@@ -382,6 +388,7 @@ std::string stability_markdown(const StressReport& report)
             std::string text = short_status(r) + " " + sci(r.kkt);
             if (r.nonfinite) text += " NaN";
             if (!r.monotone) text += " nm";
+            if (r.m_solved != r.m) text += " (" + std::to_string(r.m_solved) + " rows)";
             if (!r.honest()) text = "**" + text + "!**";
             s << ' ' << text << " |";
         }

@@ -38,6 +38,7 @@ struct StressRow {
     std::string message;
     long n = 0, m = 0;
     std::string criterion;
+    long m_solved = 0;                ///< rows the solver saw (fewer than m when the harness decoupled J)
 
     /// An honest outcome: a confirmed "converged", or any non-converged solver status with a
     /// message (invalid_input and infeasible included). Crashes and hangs are not.
@@ -54,7 +55,7 @@ struct StressReport {
 StressReport run_stress(const StressOptions& options);
 
 /// Columns: solver, case, severity, status, kkt, tol, violation, nonfinite, monotone, time_s,
-/// iterations, status_confirmed, message, family, n, m, criterion.
+/// iterations, status_confirmed, message, family, n, m, criterion, m_solved.
 std::string stability_csv(const std::vector<StressRow>& rows);
 /// A case x solver table (status and KKT reached) and a summary of wrong statuses.
 std::string stability_markdown(const StressReport& report);

@@ -28,7 +28,7 @@ struct Suite {
     std::vector<SuiteGenerate> generate;
     std::vector<SuiteSolver> solvers;
     double tol = 1e-6;                  ///< default `tol` of every solver (a solver's own setting wins)
-    double time_limit_s = 60.0;
+    double time_limit_s = 60.0;         ///< default `time_limit_s` of every solver (0 disables)
     int repeat = 1;
     long history_max = 2000;
     bool reference = false;

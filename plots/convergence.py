@@ -56,6 +56,7 @@ def plot_convergence(results: Results, out_dir: str, column: str = "kkt_rel",
             ax.set_yscale("log")
             if x == "time_s":
                 ax.set_xscale("symlog", linthresh=1e-4)
+                ax.set_xlim(left=0)
             ax.set_title(snap if len(snap) < 40 else snap[:37] + "...", fontsize=8)
             ax.set_xlabel(xlabel)
             ax.set_ylabel("relative KKT error" if column == "kkt_rel" else column)

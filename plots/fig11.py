@@ -21,6 +21,7 @@ import numpy as np  # noqa: E402
 import figutil  # noqa: E402
 from claims import Claim, verdict_published_fair, verdict_threshold  # noqa: E402
 from figutil import fmt, plt  # noqa: E402
+from loader import measured, unmeasured_notes  # noqa: E402
 from paper_context import FigureOutcome, NotProduced, PaperContext, run_standalone  # noqa: E402
 
 SUITE = "fig11"
@@ -28,7 +29,7 @@ PAIRS = {"published": ("mprgp-published", "ica-published"), "fair": ("mprgp-fair
 
 
 def by_dof(runs, label):
-    sel = runs[runs["label"] == label].copy()
+    sel = measured(runs[runs["label"] == label]).copy()
     return sel.sort_values("n")
 
 
@@ -49,6 +50,7 @@ def produce(ctx: PaperContext) -> FigureOutcome:
         raise NotProduced(f"suite '{SUITE}' has none of the labels {sorted(sum(PAIRS.values(), ()))}")
     authors = ctx.authors_csv("fig11_mprgp_vs_ica.csv")
     out = FigureOutcome("fig11", "Fig. 11: scaling of MPRGP and ICA with the number of DOFs")
+    out.notes += unmeasured_notes(runs)
     fig, axes = plt.subplots(1, 3, figsize=(15, 4), squeeze=False)
     for ax, (mode, (ml, il)) in zip(axes.flat[:2], PAIRS.items()):
         m, i = by_dof(runs, ml), by_dof(runs, il)
@@ -114,11 +116,9 @@ def produce(ctx: PaperContext) -> FigureOutcome:
         texts.append(f"{mode}: ICA/MPRGP {fmt(r['ratio'].iloc[0])}x at {fmt(r['n_m'].iloc[0])} DOF -> "
                      f"{fmt(r['ratio'].iloc[-1])}x at {fmt(r['n_m'].iloc[-1])} DOF")
     a_grow = a_small = "—"
-    a_small_ratio = float("nan")
     if authors is not None and not authors.empty:
         a = authors.sort_values("dofs")
         ar = (a["ica_time_s"] / a["mprgp_time_s"]).to_numpy()
-        a_small_ratio = float(ar[0])
         a_grow = f"ICA/MPRGP {fmt(ar[0])}x at {fmt(a['dofs'].iloc[0])} DOF -> {fmt(ar[-1])}x at {fmt(a['dofs'].iloc[-1])} DOF"
         a_small = f"ICA/MPRGP {fmt(ar[0])}x at {fmt(a['dofs'].iloc[0])} DOF (ICA slower there too)" if ar[0] > 1 \
             else f"ICA/MPRGP {fmt(ar[0])}x at {fmt(a['dofs'].iloc[0])} DOF"

@@ -21,6 +21,7 @@ import numpy as np  # noqa: E402
 import figutil  # noqa: E402
 from claims import Claim, verdict_published_fair  # noqa: E402
 from figutil import fmt, plt  # noqa: E402
+from loader import measured, unmeasured_notes  # noqa: E402
 from paper_context import FigureOutcome, NotProduced, PaperContext, run_standalone  # noqa: E402
 
 SUITE = "fig6"
@@ -32,7 +33,7 @@ SPEEDUP_THRESHOLD = 1.1
 
 
 def per_frame(runs, label):
-    sel = runs[runs["label"] == label].copy()
+    sel = measured(runs[runs["label"] == label]).copy()
     if sel.empty:
         return sel
     if sel["frame"].isna().all():
@@ -56,7 +57,7 @@ def time_ratio(runs, coupled_label):
 def produce(ctx: PaperContext) -> FigureOutcome:
     res = ctx.require_results(SUITE)
     runs = res.runs
-    if DECOUPLED not in set(runs["label"]):
+    if DECOUPLED not in set(measured(runs)["label"]):
         raise NotProduced(f"suite '{SUITE}' has no '{DECOUPLED}' runs")
     out = FigureOutcome("fig6", "Fig. 6: time per frame, decoupled vs coupled constraints")
     authors = ctx.authors_csv("fig6_decoupling_time.csv")
@@ -96,6 +97,7 @@ def produce(ctx: PaperContext) -> FigureOutcome:
     fig.tight_layout()
     out.files += figutil.save_figure(fig, ctx.fig_dir, "fig6_decoupling_time")
 
+    out.notes += unmeasured_notes(runs)
     r_pub, n_pub = time_ratio(runs, PUBLISHED)
     r_fair, n_fair = time_ratio(runs, FAIR)
     ok = lambda r: None if np.isnan(r) else bool(r > SPEEDUP_THRESHOLD)  # noqa: E731

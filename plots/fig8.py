@@ -23,6 +23,7 @@ import pandas as pd  # noqa: E402
 import figutil  # noqa: E402
 from claims import Claim, verdict_published_fair  # noqa: E402
 from figutil import fmt, plt  # noqa: E402
+from loader import UNMEASURED_STATUSES, unmeasured_notes  # noqa: E402
 from paper_context import FigureOutcome, NotProduced, PaperContext, run_standalone  # noqa: E402
 
 SUITE = "fig8"
@@ -55,6 +56,8 @@ def curve(res, snapshot, label):
     if h.empty or "objective" not in h:
         return None
     run = res.runs[(res.runs["snapshot"] == snapshot) & (res.runs["label"] == label)].iloc[0]
+    if run["status"] in UNMEASURED_STATUSES:
+        return None
     ref = run.get("reference_objective", np.nan)
     if label.startswith("mprgp") and np.isfinite(ref):
         f_star, source = float(ref), "reference"
@@ -89,6 +92,7 @@ def produce(ctx: PaperContext) -> FigureOutcome:
         raise NotProduced(f"suite '{SUITE}': no history of '{MPRGP}' on {snap}")
     run0 = res.runs[res.runs["snapshot"] == snap].iloc[0]
     out = FigureOutcome("fig8", "Fig. 8: MPRGP vs CG ignoring J, relative objective error")
+    out.notes += unmeasured_notes(res.runs[res.runs["snapshot"] == snap])
     authors = ctx.authors_csv("fig8_objective_history.csv")
     a_curves = authors_curves(authors) if authors is not None else {}
     styles = {MPRGP: ("C0", "-"), CG_NONE: ("C3", "--"), CG_JACOBI: ("C2", "-.")}

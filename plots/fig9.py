@@ -16,6 +16,7 @@ import numpy as np  # noqa: E402
 import figutil  # noqa: E402
 from claims import Claim, verdict_threshold  # noqa: E402
 from figutil import fmt, plt  # noqa: E402
+from loader import measured  # noqa: E402
 from paper_context import FigureOutcome, NotProduced, PaperContext, run_standalone  # noqa: E402
 from fig8 import MPRGP, MPRGP_NONE, pick_snapshot  # noqa: E402
 
@@ -27,8 +28,9 @@ SIGNIFICANT = 1.5
 def produce(ctx: PaperContext) -> FigureOutcome:
     res = ctx.require_results(SUITE)
     snap = pick_snapshot(res)
+    ran = set(measured(res.runs[res.runs["snapshot"] == snap])["label"])
     hj, hn = res.history(snap, MPRGP), res.history(snap, MPRGP_NONE)
-    if hj.empty or hn.empty:
+    if hj.empty or hn.empty or not {MPRGP, MPRGP_NONE} <= ran:
         raise NotProduced(f"suite '{SUITE}': histories of '{MPRGP}' and '{MPRGP_NONE}' needed on {snap}")
     out = FigureOutcome("fig9", "Fig. 9: ||phi + beta|| with and without preconditioning")
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.6), squeeze=False)

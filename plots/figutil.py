@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import math
 import os
-from typing import List, Optional
+from typing import List
 
 import matplotlib
 
@@ -44,6 +44,21 @@ def first_reach(history: pd.DataFrame, column: str, threshold: float, x: str = "
     xs = pd.to_numeric(history[x], errors="coerce").to_numpy()
     hit = np.nonzero(np.isfinite(vals) & (vals <= threshold))[0]
     return float(xs[hit[0]]) if hit.size else float("nan")
+
+
+def settle_time(history: pd.DataFrame, column: str, threshold: float, x: str = "time_s") -> float:
+    """The x from which history[column] stays <= threshold to the end, or NaN when the last value
+    is above it. Unlike first_reach, a solver whose residual dips and rises again (ICA's
+    stationarity is 0 at its unconstrained start) is not credited for the dip."""
+    if history is None or history.empty or column not in history or x not in history:
+        return float("nan")
+    vals = pd.to_numeric(history[column], errors="coerce").to_numpy()
+    xs = pd.to_numeric(history[x], errors="coerce").to_numpy()
+    ok = np.isfinite(vals) & (vals <= threshold)
+    if not ok[-1]:
+        return float("nan")
+    above = np.nonzero(~ok)[0]
+    return float(xs[above[-1] + 1]) if above.size else float(xs[0])
 
 
 def fmt(value, digits: int = 3) -> str:

@@ -98,6 +98,7 @@ def flatten_run(record: dict) -> dict:
         "solver": record.get("solver", ""),
         "status": record.get("status", ""),
         "criterion": record.get("criterion", ""),
+        "message": record.get("message", ""),
         "status_confirmed": _to_bool(record.get("status_confirmed", True)),
         "iterations": _number(record.get("iterations")),
         "objective": _number(record.get("objective")),
@@ -130,6 +131,31 @@ def flatten_run(record: dict) -> dict:
         if isinstance(value, (str, int, float, bool)) or value is None:
             row["settings." + key] = value
     return row
+
+
+#: statuses of runs that measured nothing (the solver refused or never ran)
+UNMEASURED_STATUSES = ("invalid_input", "not_run")
+
+
+def measured(runs: pd.DataFrame) -> pd.DataFrame:
+    """The runs that actually ran (not invalid_input / not_run)."""
+    if runs.empty or "status" not in runs:
+        return runs
+    return runs[~runs["status"].isin(UNMEASURED_STATUSES)]
+
+
+def unmeasured_notes(runs: pd.DataFrame, labels=None) -> list:
+    """One line per label whose runs did not run, with the first message."""
+    notes = []
+    if runs.empty or "status" not in runs:
+        return notes
+    bad = runs[runs["status"].isin(UNMEASURED_STATUSES)]
+    for label, g in bad.groupby("label", sort=False):
+        if labels is not None and label not in labels:
+            continue
+        msg = str(g.iloc[0].get("message", "") or "")
+        notes.append(f"{label}: {len(g)} run(s) {g.iloc[0]['status']}" + (f" ({msg})" if msg else ""))
+    return notes
 
 
 def history_frame(record: dict) -> pd.DataFrame:

@@ -19,7 +19,7 @@ import argparse
 import math
 import os
 import sys
-from typing import Dict, Iterable, List, Optional
+from typing import Dict, Iterable, List
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
@@ -174,7 +174,7 @@ def plot_profiles(numbers: dict, out_dir: str) -> List[str]:
 
 
 def _table(df: pd.DataFrame, index_name: str, fmt_cell=fmt) -> str:
-    cols = [str(c) if not isinstance(c, float) else f"{c:g}" for c in df.columns]
+    cols = [str(c) if not isinstance(c, float) else f"{c:.0e}" for c in df.columns]
     lines = ["| " + index_name + " | " + " | ".join(cols) + " |", "|" + "---|" * (len(cols) + 1)]
     for idx, row in df.iterrows():
         lines.append(f"| {idx} | " + " | ".join(fmt_cell(v) for v in row.values) + " |")

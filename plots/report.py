@@ -124,6 +124,11 @@ def render(ctx: PaperContext, outcomes: List[FigureOutcome], meta: Optional[dict
         for n in o.notes:
             lines += ["", n]
         lines.append("")
+    if meta.get("strips"):
+        lines += ["## Scenes simulated", ""]
+        for key, path in meta["strips"].items():
+            lines.append(f"- {key}: ![{key}]({os.path.relpath(path, ctx.out)})")
+        lines.append("")
     if meta.get("steps"):
         lines += ["## What ran", ""]
         for s in meta["steps"]:

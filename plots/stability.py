@@ -96,7 +96,7 @@ def plot_stability(df: pd.DataFrame, out_dir: str, stem: str = "stability") -> L
     ax.set_xticklabels(cases, rotation=60, ha="right", fontsize=7)
     ax.set_yticks(range(len(solvers)))
     ax.set_yticklabels(solvers, fontsize=8)
-    fig.colorbar(im, ax=ax, label="log10 relative KKT error reached")
+    fig.colorbar(im, ax=ax, label=f"log10 {cols['error']} reached")
     ax.set_title("stability: ! = 'converged' not confirmed by KKT, N = NaN/Inf seen, ~ = non-monotone,\n"
                  "it/t/st/div/inf/inv = max_iterations/time_limit/stalled/diverged/infeasible/invalid; grey = no finite error",
                  fontsize=7)

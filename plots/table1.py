@@ -18,7 +18,8 @@ import pandas as pd  # noqa: E402
 
 from claims import Claim, verdict_threshold  # noqa: E402
 from figutil import fmt  # noqa: E402
-from paper_context import FigureOutcome, NotProduced, PaperContext, run_standalone  # noqa: E402
+from loader import measured  # noqa: E402
+from paper_context import FigureOutcome, NotProduced, PaperContext  # noqa: E402
 
 #: paper.txt, Table 1 (Sec. 6.1): figure, vertices, tets, h [ms], cg/it, t [s per solve], frames
 PAPER = {
@@ -59,7 +60,7 @@ def scene_row(ctx: PaperContext, scene: str) -> dict:
     except NotProduced as err:
         row["runs_missing"] = str(err)
         return row
-    runs = res.runs[res.runs["solver"].astype(str).str.startswith("mprgp")]
+    runs = measured(res.runs[res.runs["solver"].astype(str).str.startswith("mprgp")])
     if runs.empty:
         return row
     it = runs["iterations"].sum()

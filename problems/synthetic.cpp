@@ -760,13 +760,13 @@ Qp make_synthetic(const std::string& family, const nlohmann::json& params, std::
         throw_input_error("synthetic", "family", "unknown family '" + family + "'; known: " + known);
     }
     const nlohmann::json p = effective_params(family, it->second, params);
-    Qp qp;
-    if (family == "unconstrained") qp = make_plane_like(family, p, seed, false);
-    else if (family == "plane") qp = make_plane_like(family, p, seed, true);
-    else if (family == "box") qp = make_box(family, p, seed);
-    else if (family == "coupled") qp = make_coupled(family, p, seed);
-    else if (family == "random-spd") return make_random_spd(family, p, seed);
-    else qp = make_variant(family, p, seed);
+    if (family == "random-spd") return make_random_spd(family, p, seed);  // applies its own units
+    // Built in one initialisation: Eigen 3.4's SparseMatrix has no move assignment.
+    Qp qp = family == "unconstrained" ? make_plane_like(family, p, seed, false)
+            : family == "plane"       ? make_plane_like(family, p, seed, true)
+            : family == "box"         ? make_box(family, p, seed)
+            : family == "coupled"     ? make_coupled(family, p, seed)
+                                      : make_variant(family, p, seed);
     apply_units(qp, p["length_scale"].get<double>(), p["mass_scale"].get<double>());
     return qp;
 }

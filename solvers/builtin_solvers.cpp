@@ -3,6 +3,8 @@
 #include "solvers/active_set.hpp"
 #include "solvers/cg.hpp"
 #include "solvers/mprgp.hpp"
+#include "solvers/mprgp_box.hpp"
+#include "solvers/mprgp_coupled.hpp"
 #include "solvers/ica.hpp"
 #include "solvers/pgs.hpp"
 
@@ -15,6 +17,8 @@ void register_builtin_solvers(SolverRegistry& registry)
     registry.add("active-set", active_set_entry());
     registry.add("cg", cg_entry());
     registry.add("mprgp", mprgp_entry());
+    registry.add("mprgp-box", mprgp_box_entry());
+    registry.add("mprgp-coupled", mprgp_coupled_entry());
     registry.add("ica", ica_entry());
     registry.add("pgs", pgs_entry());
 }

@@ -9,6 +9,31 @@ namespace cb::sim {
 
 void polar_rotation(const Eigen::Matrix3d& F, Eigen::Matrix3d& R, Eigen::Matrix3d& S)
 {
+    // Fast path: scaled Newton iteration X <- (g X + X^-T / g) / 2 (Higham 1986), which converges
+    // quadratically to the polar rotation of a well-conditioned F with det F > 0, about 20x
+    // cheaper than a 3x3 SVD. Inverted, flat or badly conditioned tets take the SVD path.
+    const double det = F.determinant();
+    const double fnorm = F.norm();
+    if (det > 1e-6 * fnorm * fnorm * fnorm) {
+        Eigen::Matrix3d X = F;
+        bool converged = false;
+        for (int k = 0; k < 20; ++k) {
+            const Eigen::Matrix3d Xinv = X.inverse();
+            const double g = std::sqrt(Xinv.norm() / X.norm());
+            const Eigen::Matrix3d next = 0.5 * (g * X + Xinv.transpose() / g);
+            const double change = (next - X).norm();
+            X = next;
+            if (change <= 1e-13) {
+                converged = true;
+                break;
+            }
+        }
+        if (converged) {
+            R = X;
+            S = R.transpose() * F;
+            return;
+        }
+    }
     Eigen::JacobiSVD<Eigen::Matrix3d, Eigen::NoQRPreconditioner> svd(F, Eigen::ComputeFullU | Eigen::ComputeFullV);
     Eigen::Matrix3d U = svd.matrixU();
     const Eigen::Matrix3d& V = svd.matrixV();

@@ -57,7 +57,11 @@ void write_png(const std::string& path, const Image& image)
 View make_view(const Vec3& view_deg, const Vec3& lo, const Vec3& hi)
 {
     View v;
-    v.rotation = rotation_from_euler_deg(view_deg);
+    // Yaw about the world's y axis first, then pitch about the camera's x axis, then roll.
+    const Vec3 r = view_deg * (M_PI / 180.0);
+    v.rotation = (Eigen::AngleAxisd(r.z(), Vec3::UnitZ()) * Eigen::AngleAxisd(r.x(), Vec3::UnitX()) *
+                  Eigen::AngleAxisd(r.y(), Vec3::UnitY()))
+                     .toRotationMatrix();
     // Frame the 8 corners of the box in camera coordinates.
     Vec3 clo = Vec3::Constant(1e300), chi = Vec3::Constant(-1e300);
     for (int k = 0; k < 8; ++k) {

@@ -24,7 +24,8 @@ struct ColoredSurface {
     std::array<double, 3> color;  ///< 0..1
 };
 
-/// Orthographic view: world -> camera rotation from Euler degrees, framing the box [lo, hi].
+/// Orthographic view: world -> camera rotation R = Rz(z) Rx(x) Ry(y) from degrees (yaw y about
+/// the world's up axis, then pitch x: positive looks down), framing the box [lo, hi].
 struct View {
     Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
     Vec3 center = Vec3::Zero();

@@ -39,7 +39,7 @@ struct OutputSettings {
     long snapshot_last = -1;
     int strip_frames = 6;      ///< pictures in the PNG strip (0: none)
     int image_size = 256;      ///< pixels per picture (square)
-    Vec3 view_deg = Vec3(-20, 30, 0);  ///< camera rotation (x then y then z, degrees)
+    Vec3 view_deg = Vec3(20, 30, 0);  ///< camera: [pitch (down), yaw, roll] in degrees
     std::vector<long> export_frames;   ///< OBJ surfaces of these frames
 };
 

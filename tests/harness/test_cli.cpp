@@ -279,3 +279,22 @@ TEST(Cli, ChainCarriesWarmStateAndReferenceAddsObjectiveError)
     EXPECT_LT(r1["obj_rel"].get<double>(), 1e-3);
     EXPECT_TRUE(fs::exists(work_dir() / "cache" / "reference" / (r1["snapshot"]["hash"].get<std::string>() + ".json")));
 }
+
+TEST(Cli, CorruptSnapshotFailsItsRunsOnly)
+{
+    const fs::path dir = work_dir() / "corrupt";
+    fs::create_directories(dir);
+    fs::copy_file(small_snapshot(), dir / "good.qpsnap", fs::copy_options::overwrite_existing);
+    std::ofstream(dir / "bad.qpsnap") << "not a snapshot";
+    write_json_atomic((dir / "suite.json").string(),
+                      {{"name", "corrupt"}, {"snapshots", {"*.qpsnap"}}, {"solvers", {"mprgp"}},
+                       {"time_limit_s", 5}});
+    const Output o = run("run '" + (dir / "suite.json").string() + "' --out '" + (dir / "out").string() + "'");
+    ASSERT_EQ(o.status, 0) << o.err;
+    const nlohmann::json bad = read_json_file((dir / "out" / "runs" / "bad__mprgp.json").string());
+    EXPECT_EQ(bad["status"], "invalid_input");
+    EXPECT_EQ(bad["message"].get<std::string>().rfind((dir / "bad.qpsnap").string() + ": ", 0), 0u) << bad["message"];
+    const nlohmann::json good = read_json_file((dir / "out" / "runs" / "good__mprgp.json").string());
+    EXPECT_EQ(good["status"], "converged");
+    EXPECT_DOUBLE_EQ(good["settings"]["time_limit_s"].get<double>(), 5.0);  // the suite's default reached the solver
+}

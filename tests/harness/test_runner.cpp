@@ -280,10 +280,23 @@ TEST(Runner, DecouplesCoupledRowsForMprgp)
     options.record_history = false;
     const RunOutcome run = run_solver(qp, "mprgp", {{"tol", 1e-6}}, options);
     const auto& d = run.record["decouple"];
-    if (!is_decoupled(qp.J)) {
+    ASSERT_FALSE(is_decoupled(qp.J));  // the family shares vertices between rows
+    {
         EXPECT_TRUE(d["applied"].get<bool>());
         EXPECT_LT(d["rows_after"].get<long>(), d["rows_before"].get<long>());
         EXPECT_EQ(d["order"], "authors");
+        // lambda on the original rows: the kept rows carry the solver's multipliers, the rest 0.
+        ASSERT_EQ(run.lambda_full.size(), qp.m());
+        ASSERT_EQ(static_cast<long>(run.kept_rows.size()), d["rows_after"].get<long>());
+        std::vector<bool> kept(static_cast<size_t>(qp.m()), false);
+        for (int r : run.kept_rows) kept[static_cast<size_t>(r)] = true;
+        for (Eigen::Index i = 0; i < qp.m(); ++i)
+            if (!kept[static_cast<size_t>(i)]) EXPECT_EQ(run.lambda_full[i], 0.0);
+        // J' lambda_full on the original J equals J_kept' lambda: the stationarity is the same.
+        const Vec g = qp.A * run.result.x - qp.b;
+        const KktResiduals full = kkt_residuals_from_gradient(qp.view(), run.result.x, g, run.lambda_full);
+        EXPECT_NEAR(full.stationarity, run.kkt.stationarity, 1e-12 * std::max(1.0, run.kkt.stationarity));
+        EXPECT_TRUE(run.record.contains("violation_original"));
     }
     EXPECT_EQ(d["rows_before"].get<long>(), qp.m());
     options.decouple = "none";

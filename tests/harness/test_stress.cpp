@@ -2,6 +2,7 @@
 // stability files have the columns the heat map reads.
 #include "harness/stress.hpp"
 #include "solvers/kkt.hpp"
+#include "solvers/registry.hpp"
 
 #include <gtest/gtest.h>
 #include <algorithm>
@@ -86,7 +87,7 @@ TEST(StressRun, QuickRunGivesHonestOutcomesAndWritesTheTable)
     std::string header;
     std::getline(csv, header);
     EXPECT_EQ(header, "solver,case,severity,status,kkt,tol,violation,nonfinite,monotone,time_s,iterations,"
-                      "status_confirmed,message,family,n,m,criterion");
+                      "status_confirmed,message,family,n,m,criterion,m_solved");
     long lines = 0;
     for (std::string line; std::getline(csv, line);) ++lines;
     EXPECT_EQ(lines, 8);
@@ -96,6 +97,23 @@ TEST(StressRun, QuickRunGivesHonestOutcomesAndWritesTheTable)
     EXPECT_NE(text.find("None: every \"converged\" was confirmed by the common KKT error."), std::string::npos);
     EXPECT_TRUE(std::filesystem::exists(dir + "/runs/baseline-plane__pgs.json"));
     std::filesystem::remove_all(dir);
+}
+
+TEST(StressRun, RecordsRowsDroppedByDecoupling)
+{
+    if (!builtin_registry().contains("mprgp") || !builtin_registry().create("mprgp", {})->requires_decoupled())
+        GTEST_SKIP() << "no registered solver requiring decoupled rows";
+    StressOptions options;
+    options.solvers = {"mprgp"};
+    options.cases = {"infeasible-1"};
+    options.isolate = false;
+    options.time_limit_s = 2.0;
+    const StressReport report = run_stress(options);
+    ASSERT_EQ(report.rows.size(), 1u);
+    const StressRow& r = report.rows[0];
+    // The contradictory pair touches one vertex: decoupling keeps at most one of its rows.
+    EXPECT_LT(r.m_solved, r.m);
+    EXPECT_NE(stability_markdown(report).find(" (" + std::to_string(r.m_solved) + " rows) |"), std::string::npos);
 }
 
 TEST(StressReportText, ListsAWrongStatus)
@@ -121,7 +139,7 @@ TEST(StressReportText, ListsAWrongStatus)
               std::string::npos)
         << md;
     const std::string csv = stability_csv(report.rows);
-    EXPECT_NE(csv.find("\nliar,baseline-plane,0,converged,0.25,1e-06,0.01,false,true,0,0,false,residual small,,0,0,native\n"),
+    EXPECT_NE(csv.find("\nliar,baseline-plane,0,converged,0.25,1e-06,0.01,false,true,0,0,false,residual small,,0,0,native,0\n"),
               std::string::npos)
         << csv;
 }

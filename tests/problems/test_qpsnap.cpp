@@ -8,6 +8,7 @@
 #include <zlib.h>
 
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -440,14 +441,51 @@ TEST(QpsnapPerf, LoadTimeOf107kDofSnapshot)
     qp.J.resize(0, qp.A.rows());
     const std::string path = temp_path("big.qpsnap");
     write_qpsnap(path, qp);
-    file_bytes(path);  // warm the page cache
+    read_qpsnap(path);  // warm the page cache
     const auto t0 = std::chrono::steady_clock::now();
+    const std::clock_t c0 = std::clock();
     const Qp back = read_qpsnap(path);
+    const double cpu = double(std::clock() - c0) / CLOCKS_PER_SEC;
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    std::printf("[ perf ] read_qpsnap: n = %ld, nnz(A) = %ld, %.3f s\n", long(back.n()), long(back.A.nonZeros()), s);
+    std::printf("[ perf ] read_qpsnap: n = %ld, nnz(A) = %ld, %.3f s wall, %.3f s cpu\n", long(back.n()),
+                long(back.A.nonZeros()), s, cpu);
     EXPECT_EQ(back.A.nonZeros(), qp.A.nonZeros());
     std::filesystem::remove(path);
 }
 
 } // namespace
 } // namespace cb
+
+namespace cb {
+namespace {
+
+/// The committed fixture (written by `contactbench generate plane --param nx=2 --param ny=2
+/// --param nz=2 --seed 1`) stays readable: a format change that breaks old files fails here.
+TEST(QpsnapFixture, CommittedFileReads)
+{
+    const std::string path = std::string(CB_TEST_DATA_DIR) + "/plane_2x2x2.qpsnap";
+    const Qp qp = read_qpsnap(path);
+    EXPECT_EQ(qp.n(), 81);
+    EXPECT_EQ(qp.m(), 18);
+    EXPECT_EQ(qp.contacts.kind.size(), 18u);
+    EXPECT_EQ(qp.meta["generator"]["family"], "plane");
+    EXPECT_EQ(qpsnap_content_hash(path).size(), 16u);
+}
+
+} // namespace
+} // namespace cb
+
+// Regression (found by tests/fuzz): a header number too large for a double made nlohmann::json
+// throw out_of_range, which escaped read_qpsnap instead of becoming an InputError.
+TEST(QpsnapFuzzRegression, JsonNumberOverflowIsAnInputError)
+{
+    const std::string path = std::string(CB_TEST_DATA_DIR) + "/../fuzz/regressions/json-number-overflow.qpsnap";
+    try {
+        (void)cb::read_qpsnap(path);
+        FAIL() << "expected an InputError";
+    } catch (const cb::InputError& e) {
+        const std::string message = e.what();
+        EXPECT_EQ(message.rfind(path + ": header: not a valid JSON header:", 0), 0u) << message;
+    }
+    EXPECT_THROW((void)cb::read_qpsnap_header(path), cb::InputError);
+}

@@ -8,7 +8,6 @@ import json
 import math
 import os
 import shutil
-import subprocess
 import sys
 import tempfile
 import unittest
@@ -173,10 +172,12 @@ class TestStability(TempDirCase):
     def test_heat_map_and_marks(self):
         path = os.path.join(self.tmp, "stability.csv")
         with open(path, "w") as f:
-            f.write("case,solver,status,kkt_rel,status_confirmed,nonfinite,monotone\n"
-                    "stiff,mprgp,converged,1e-7,true,false,true\n"
-                    "stiff,ica,converged,1e-3,false,false,false\n"
-                    "mm-units,mprgp,diverged,nan,false,true,false\n")
+            # the header harness/stress.cpp writes
+            f.write("solver,case,severity,status,kkt,tol,violation,nonfinite,monotone,time_s,iterations,"
+                    "status_confirmed,message,family,n,m,criterion,m_solved\n"
+                    "mprgp,stiff,2,converged,1e-7,1e-6,0,false,true,0.1,10,true,,plane,30,4,kkt,4\n"
+                    "ica,stiff,2,converged,1e-3,1e-6,0,false,false,0.1,10,false,\"x, y\",plane,30,4,native,4\n"
+                    "mprgp,mm-units,3,diverged,nan,1e-6,0,true,false,0.1,10,false,,plane,30,4,,4\n")
         with redirect_stdout(io.StringIO()):
             self.assertEqual(stability.main([self.tmp]), 0)
         self.assertTrue(os.path.isfile(os.path.join(self.tmp, "figures", "stability.png")))
@@ -185,6 +186,7 @@ class TestStability(TempDirCase):
         self.assertEqual(stability.cell_marks(df.iloc[1], cols), "!~")
         self.assertEqual(stability.cell_marks(df.iloc[2], cols), "N~")
         self.assertEqual(stability.cell_marks(df.iloc[0], cols), "")
+        self.assertEqual(cols["error"], "kkt")
 
     def test_missing_columns_named(self):
         import pandas as pd
@@ -202,6 +204,16 @@ class TestVerdicts(unittest.TestCase):
         self.assertEqual(v(True, None), claims.HOLDS_AS_PUBLISHED)
         self.assertEqual(claims.verdict_threshold(float("nan"), 1.0), claims.NOT_MEASURED)
         self.assertEqual(claims.verdict_threshold(0.5, 1.0, greater=False), claims.HOLDS)
+
+    def test_first_reach_and_settle_time(self):
+        import figutil
+        import pandas as pd
+        # ICA-like: 0 at the start, up, then down for good at t = 3
+        h = pd.DataFrame({"time_s": [0.0, 1.0, 2.0, 3.0, 4.0], "r": [0.0, 1.0, 0.5, 0.01, 0.001]})
+        self.assertEqual(figutil.first_reach(h, "r", 0.01), 0.0)
+        self.assertEqual(figutil.settle_time(h, "r", 0.01), 3.0)
+        self.assertTrue(math.isnan(figutil.settle_time(h, "r", 1e-4)))
+        self.assertEqual(figutil.settle_time(h, "r", 2.0), 0.0)
 
     def test_fig8_relative_error(self):
         import fig8

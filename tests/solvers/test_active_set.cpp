@@ -388,3 +388,69 @@ TEST(ActiveSet, HandlesTwoThousandRows)
     std::cout << "m = " << qp.m() << ", n = " << qp.n() << ": setup " << r.setup_s << " s, solve " << r.solve_s
               << " s, info " << r.info.dump() << "\n";
 }
+
+// A = I, b = (0, -10); rows x0 >= 1, x1 >= 1, x0 + 2 x1 >= 3.5. GI adds x1 >= 1, then x0 >= 1,
+// reaching (1, 1) with a full working set; the third row is then violated and lies in the span
+// of the two (n_2 = n_0 + 2 n_1): a pure dual step drops x0 >= 1 before the third row enters.
+// x* = (1.5, 1): x* - b = (1.5, 11) = 8 (0, 1) + 1.5 (1, 2)  ->  lambda* = (0, 8, 1.5).
+TEST(ActiveSet, DependentRowTakesADualStep)
+{
+    Eigen::MatrixXd J(3, 2);
+    J << 1, 0, 0, 1, 1, 2;
+    const Qp qp = dense_qp(Eigen::MatrixXd::Identity(2, 2), Eigen::Vector2d(0, -10), J, Eigen::Vector3d(1, 1, 3.5),
+                           Vec::Zero(2));
+    const SolverResult r = run_active_set(qp);
+    ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
+    EXPECT_NEAR(r.x[0], 1.5, 1e-14);
+    EXPECT_NEAR(r.x[1], 1.0, 1e-14);
+    EXPECT_EQ(r.lambda[0], 0.0);
+    EXPECT_NEAR(r.lambda[1], 8.0, 1e-13);
+    EXPECT_NEAR(r.lambda[2], 1.5, 1e-13);
+    EXPECT_EQ(r.info["dependent_steps"], 1);
+    EXPECT_EQ(r.info["rows_added"], 3);
+    EXPECT_EQ(r.info["rows_dropped"], 1);
+    EXPECT_EQ(r.counters.pivots, 4);
+}
+
+TEST(ActiveSet, TimeLimitIsHonoured)
+{
+    const Qp qp = cb::make_synthetic("plane", {{"nx", 3}, {"ny", 2}, {"nz", 3}}, 1);
+    const SolverResult r = run_active_set(qp, {{"time_limit_s", 1e-12}});
+    EXPECT_EQ(r.status, SolveStatus::TIME_LIMIT) << r.message;
+    EXPECT_TRUE(r.criterion.empty());
+}
+
+namespace {
+struct PivotMonitor : cb::Monitor {
+    std::vector<cb::StepKind> steps;
+    std::vector<long> active;
+    Vec last_x;
+    bool on_iteration(const cb::IterationInfo& info) override
+    {
+        steps.push_back(info.step);
+        active.push_back(info.active_set_size);
+        last_x = *info.x;
+        return true;
+    }
+};
+} // namespace
+
+TEST(ActiveSet, MonitorSeesEveryPivot)
+{
+    const Qp qp = cb::testing_qps::two_row_coupled_qp();
+    PivotMonitor monitor;
+    cb::ActiveSetSolver solver(cb::ActiveSetSettings::from_json(nlohmann::json::object()));
+    cb::SolveContext context;
+    context.monitor = &monitor;
+    const SolverResult r = solver.solve(qp.view(), context);
+    ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
+    // start, two pivots (one row each), final
+    ASSERT_EQ(monitor.steps.size(), 4u);
+    EXPECT_EQ(monitor.steps[0], cb::StepKind::START);
+    EXPECT_EQ(monitor.steps[1], cb::StepKind::PIVOT);
+    EXPECT_EQ(monitor.steps[3], cb::StepKind::FINAL);
+    EXPECT_EQ(monitor.active[0], 0);
+    EXPECT_EQ(monitor.active[1], 1);
+    EXPECT_EQ(monitor.active[2], 2);
+    EXPECT_LE((monitor.last_x - r.x).lpNorm<Eigen::Infinity>(), 1e-12);
+}

@@ -1,0 +1,343 @@
+// `mprgp-box`: Dostal's MPRGP for bounds (ALGORITHMS.md §5).
+// Ref: Dostal 2009, Ch. 5: free/chopped gradients eq. (11)-(12) of Li et al. 2015, reduced
+//      free gradient phitilde_i = min((x_i - l_i)/alpha_bar, phi_i) (and its upper-bound mirror),
+//      feasible step length before the expansion step, Alg. 1-2.
+#include "solvers/mprgp_box.hpp"
+
+#include "solvers/kkt.hpp"
+#include "solvers/mprgp_kernels.hpp"
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace cb {
+
+bool is_bound_rows(const SpMat& J)
+{
+    for (Eigen::Index i = 0; i < J.rows(); ++i) {
+        int nonzeros = 0;
+        for (SpMat::InnerIterator it(J, i); it; ++it) nonzeros += it.value() != 0.0;
+        if (nonzeros > 1) return false;
+    }
+    return true;
+}
+
+MprgpBoxSettings MprgpBoxSettings::from_json(const nlohmann::json& settings)
+{
+    SettingsReader reader(settings, "mprgp-box");
+    MprgpBoxSettings s;
+    s.common = reader.common();
+    s.gamma = reader.number("gamma", s.gamma, 0.0);
+    s.precond = reader.choice("precond", s.precond, {"none", "jacobi"});
+    s.power_max = reader.integer("power_max", s.power_max, 1, 1000000);
+    reader.finish();
+    return s;
+}
+
+nlohmann::json MprgpBoxSettings::to_json() const
+{
+    nlohmann::json j = common.to_json();
+    j["gamma"] = gamma;
+    j["precond"] = precond;
+    j["power_max"] = power_max;
+    return j;
+}
+
+std::vector<SettingDoc> mprgp_box_setting_docs()
+{
+    return {{"gamma", "1", "proportioning constant Gamma > 0"},
+            {"precond", "jacobi", "none | jacobi (diagonal of A on the free set)"},
+            {"power_max", "100", "max power-method products (alpha_bar = 2 / (1.01 ||A||))"}};
+}
+
+SolverEntry mprgp_box_entry()
+{
+    SolverEntry entry;
+    entry.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
+        return std::make_unique<MprgpBoxSolver>(MprgpBoxSettings::from_json(settings));
+    };
+    entry.description = "Dostal's MPRGP for bound rows (every row of J a signed unit vector), lower and upper bounds";
+    entry.settings = mprgp_box_setting_docs();
+    return entry;
+}
+
+namespace {
+
+std::string fmt(double v)
+{
+    std::ostringstream s;
+    s.precision(3);
+    s << std::scientific << v;
+    return s.str();
+}
+
+} // namespace
+
+SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context)
+{
+    const CommonSettings& common = m_settings.common;
+    const Eigen::Index n = qp.n(), m = qp.m();
+    SolverResult result;
+    Stopwatch watch;
+    watch.start();
+    Counters cnt;
+    result.x = qp.x0;
+    result.lambda = Vec::Zero(m);
+    // --- bounds from the rows ---
+    const double inf = std::numeric_limits<double>::infinity();
+    Vec lower = Vec::Constant(n, -inf), upper = Vec::Constant(n, inf);
+    std::vector<int> lower_row(static_cast<size_t>(n), -1), upper_row(static_cast<size_t>(n), -1);
+    std::vector<int> row_dof(static_cast<size_t>(m), -1);
+    Vec row_coef = Vec::Zero(m);
+    for (Eigen::Index i = 0; i < m; ++i) {
+        int nonzeros = 0;
+        for (SpMat::InnerIterator it(qp.J, i); it; ++it) {
+            if (it.value() == 0.0) continue;
+            ++nonzeros;
+            row_dof[static_cast<size_t>(i)] = static_cast<int>(it.col());
+            row_coef[i] = it.value();
+        }
+        if (nonzeros > 1) {
+            result.status = SolveStatus::INVALID_INPUT;
+            result.message = "mprgp-box: row " + std::to_string(i) + " of J has " + std::to_string(nonzeros) +
+                             " nonzeros; mprgp-box needs bound rows (one nonzero per row, a x_j >= c); use mprgp "
+                             "(decoupled J) or mprgp-coupled";
+            return result;
+        }
+        if (nonzeros == 0) {
+            if (qp.c[i] > active_tolerance(qp.c[i])) {
+                result.status = SolveStatus::INFEASIBLE;
+                result.message = "mprgp-box: row " + std::to_string(i) + " is zero but c > 0: empty feasible set";
+                return result;
+            }
+            continue;
+        }
+        const int j = row_dof[static_cast<size_t>(i)];
+        const double bound = qp.c[i] / row_coef[i];
+        if (row_coef[i] > 0.0) {
+            if (bound > lower[j]) { lower[j] = bound; lower_row[static_cast<size_t>(j)] = static_cast<int>(i); }
+        } else if (bound < upper[j]) {
+            upper[j] = bound;
+            upper_row[static_cast<size_t>(j)] = static_cast<int>(i);
+        }
+    }
+    for (Eigen::Index j = 0; j < n; ++j)
+        if (lower[j] > upper[j]) {
+            result.status = SolveStatus::INFEASIBLE;
+            result.message = "mprgp-box: DOF " + std::to_string(j) + " has lower bound " + fmt(lower[j]) +
+                             " > upper bound " + fmt(upper[j]);
+            return result;
+        }
+    Vec dinv = Vec::Ones(n);
+    if (m_settings.precond == "jacobi") {
+        const Vec diag = qp.A.diagonal();
+        if (!(diag.minCoeff() > 0.0)) {
+            result.status = SolveStatus::INVALID_INPUT;
+            result.message = "mprgp-box: precond=jacobi needs a positive diagonal of A";
+            return result;
+        }
+        dinv = diag.cwiseInverse();
+    }
+    // Tolerance for "at the bound", in x units: tau_i of the row divided by |a|.
+    Vec tol_lower = Vec::Zero(n), tol_upper = Vec::Zero(n);
+    for (Eigen::Index j = 0; j < n; ++j) {
+        const int rl = lower_row[static_cast<size_t>(j)], ru = upper_row[static_cast<size_t>(j)];
+        if (rl >= 0) tol_lower[j] = active_tolerance(qp.c[rl]) / std::abs(row_coef[rl]);
+        if (ru >= 0) tol_upper[j] = active_tolerance(qp.c[ru]) / std::abs(row_coef[ru]);
+    }
+    Vec eigenvector;
+    const bool warm = context.eigenvector && context.eigenvector->size() == n;
+    if (warm) eigenvector = *context.eigenvector;
+    const PowerResult power = power_method(qp.A, eigenvector, PowerRule::POWER, m_settings.power_max, common.tol,
+                                           warm, common.seed);
+    if (context.eigenvector) *context.eigenvector = eigenvector;
+    cnt.power_products = power.products;
+    cnt.a_products += power.products;
+    const double alpha_bar = power.estimate > 0.0 ? 2.0 / (1.01 * power.estimate) : 1.0;
+    result.info["alpha_bar"] = alpha_bar;
+    result.info["power"] = {{"products", power.products}, {"estimate", power.estimate}, {"warm_start", power.warm}};
+    const KktScale scale = kkt_scale(qp);
+    watch.pause();
+    result.setup_s = watch.seconds();
+    watch.reset();
+    watch.start();
+
+    // --- the MPRGP loop ---
+    Vec x = qp.x0.cwiseMax(lower).cwiseMin(upper);
+    ++cnt.projections;
+    Vec g = qp.A * x - qp.b;
+    ++cnt.a_products;
+    Vec phi(n), beta(n), z(n), p(n), Ap(n), lambda = Vec::Zero(m);
+    std::vector<char> at_lower(static_cast<size_t>(n)), at_upper(static_cast<size_t>(n));
+    auto classify = [&]() {
+        for (Eigen::Index j = 0; j < n; ++j) {
+            at_lower[static_cast<size_t>(j)] = x[j] <= lower[j] + tol_lower[j];
+            at_upper[static_cast<size_t>(j)] = !at_lower[static_cast<size_t>(j)] && x[j] >= upper[j] - tol_upper[j];
+        }
+    };
+    auto gradients = [&]() {
+        for (Eigen::Index j = 0; j < n; ++j) {
+            const bool lo = at_lower[static_cast<size_t>(j)], up = at_upper[static_cast<size_t>(j)];
+            phi[j] = (lo || up) ? 0.0 : g[j];
+            beta[j] = lo ? std::min(g[j], 0.0) : (up ? std::max(g[j], 0.0) : 0.0);
+            z[j] = dinv[j] * phi[j];
+        }
+        ++cnt.precond_applications;
+    };
+    auto phitilde_dot_phi = [&]() {
+        double s = 0.0;
+        for (Eigen::Index j = 0; j < n; ++j) {
+            if (phi[j] > 0.0) s += std::min((x[j] - lower[j]) / alpha_bar, phi[j]) * phi[j];
+            else if (phi[j] < 0.0) s += std::max((x[j] - upper[j]) / alpha_bar, phi[j]) * phi[j];
+        }
+        return s;
+    };
+    auto multipliers = [&]() {
+        lambda.setZero();
+        for (Eigen::Index j = 0; j < n; ++j) {
+            const int rl = lower_row[static_cast<size_t>(j)], ru = upper_row[static_cast<size_t>(j)];
+            if (at_lower[static_cast<size_t>(j)] && rl >= 0) lambda[rl] = std::max(0.0, g[j] / row_coef[rl]);
+            if (at_upper[static_cast<size_t>(j)] && ru >= 0) lambda[ru] = std::max(0.0, g[j] / row_coef[ru]);
+        }
+    };
+    classify();
+    gradients();
+    p = z;
+    const bool native = common.stop == StopRule::NATIVE;
+    SolveStatus status = SolveStatus::MAX_ITERATIONS;
+    std::string why = "iteration cap " + std::to_string(common.max_iterations) + " reached";
+    StepKind last = StepKind::START;
+    double native_residual = 0.0, kkt_rel = 0.0;
+    while (true) {
+        multipliers();
+        native_residual = (phi + beta).norm();
+        kkt_rel = kkt_residuals_from_gradient(qp, x, g, lambda).max() * scale.inverse_reference;
+        bool converged = native ? native_residual <= common.tol : kkt_rel <= common.tol;
+        if (converged) {  // confirm at an exact gradient
+            g = qp.A * x - qp.b;
+            ++cnt.a_products;
+            gradients();
+            multipliers();
+            native_residual = (phi + beta).norm();
+            converged = native ? native_residual <= common.tol : kkt_converged(qp, x, g, lambda, scale, common.tol);
+            p = z;
+        }
+        IterationInfo info;
+        info.iteration = cnt.iterations;
+        info.step = last;
+        info.x = &x;
+        info.lambda = &lambda;
+        info.native_residual = native_residual;
+        info.counters = &cnt;
+        if (!notify_monitor(context, watch, info)) {
+            status = SolveStatus::STOPPED_BY_MONITOR;
+            why = "the monitor asked to stop";
+            break;
+        }
+        if (converged) {
+            status = SolveStatus::CONVERGED;
+            break;
+        }
+        if (!std::isfinite(native_residual)) {
+            status = SolveStatus::DIVERGED;
+            why = "non-finite gradient";
+            break;
+        }
+        if (cnt.iterations >= common.max_iterations) break;
+        if (common.time_limit_s > 0.0 && watch.seconds() > common.time_limit_s) {
+            status = SolveStatus::TIME_LIMIT;
+            why = "time limit reached";
+            break;
+        }
+        ++cnt.iterations;
+        if (beta.squaredNorm() <= m_settings.gamma * m_settings.gamma * phitilde_dot_phi()) {
+            Ap.noalias() = qp.A * p;
+            ++cnt.a_products;
+            const double pap = p.dot(Ap);
+            if (!(pap > 0.0)) {
+                status = pap == 0.0 ? SolveStatus::STALLED : SolveStatus::DIVERGED;
+                why = "p'Ap <= 0";
+                break;
+            }
+            const double alpha_cg = z.dot(g) / pap;
+            double alpha_f = inf;  // largest feasible step along -p
+            for (Eigen::Index j = 0; j < n; ++j) {
+                if (p[j] > 0.0 && std::isfinite(lower[j])) alpha_f = std::min(alpha_f, (x[j] - lower[j]) / p[j]);
+                else if (p[j] < 0.0 && std::isfinite(upper[j])) alpha_f = std::min(alpha_f, (x[j] - upper[j]) / p[j]);
+            }
+            if (alpha_cg <= alpha_f) {
+                x -= alpha_cg * p;
+                g -= alpha_cg * Ap;
+                const std::vector<char> lo_before = at_lower, up_before = at_upper;
+                classify();
+                gradients();
+                if (lo_before == at_lower && up_before == at_upper) {
+                    p = z - (z.dot(Ap) / pap) * p;
+                } else {
+                    p = z;  // the face changed: restart the conjugate directions
+                }
+                ++cnt.cg_steps;
+                last = StepKind::CG;
+            } else {
+                // Feasible half step, then the expansion step with the fixed length alpha_bar.
+                x -= alpha_f * p;
+                g -= alpha_f * Ap;
+                x = x.cwiseMax(lower).cwiseMin(upper);  // rounding at the bound hit
+                classify();
+                gradients();
+                x = (x - alpha_bar * phi).cwiseMax(lower).cwiseMin(upper);
+                ++cnt.projections;
+                g = qp.A * x - qp.b;
+                ++cnt.a_products;
+                classify();
+                gradients();
+                p = z;
+                ++cnt.expansion_steps;
+                last = StepKind::EXPANSION;
+            }
+        } else {
+            Ap.noalias() = qp.A * beta;
+            ++cnt.a_products;
+            const double dad = beta.dot(Ap);
+            if (!(dad > 0.0)) {
+                status = SolveStatus::STALLED;
+                why = "beta'A beta <= 0";
+                break;
+            }
+            const double alpha_p = g.dot(beta) / dad;
+            x -= alpha_p * beta;
+            g -= alpha_p * Ap;
+            classify();
+            gradients();
+            p = z;
+            ++cnt.proportioning_steps;
+            last = StepKind::PROPORTIONING;
+        }
+    }
+    g = qp.A * x - qp.b;
+    ++cnt.a_products;
+    classify();
+    gradients();
+    multipliers();
+    native_residual = (phi + beta).norm();
+    kkt_rel = kkt_residuals_from_gradient(qp, x, g, lambda).max() * scale.inverse_reference;
+    watch.pause();
+    result.solve_s = watch.seconds();
+    result.status = status;
+    result.x = x;
+    result.lambda = lambda;
+    result.iterations = cnt.iterations;
+    result.counters = cnt;
+    result.native_residual = native_residual;
+    if (status == SolveStatus::CONVERGED) {
+        result.criterion = native ? "native" : "kkt";
+        result.message = "converged: " + std::string(native ? "||phi+beta||_2 = " + fmt(native_residual)
+                                                            : "relative KKT = " + fmt(kkt_rel)) + " <= tol";
+    } else {
+        result.message = "not converged: " + why + " (relative KKT " + fmt(kkt_rel) + ")";
+    }
+    return result;
+}
+
+} // namespace cb

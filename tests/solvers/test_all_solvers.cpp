@@ -1,0 +1,123 @@
+// Every registered solver (builtin_registry().names(), so solvers registered later are covered
+// automatically) on tiny hand-derived QPs (STYLE.md §7). Solvers that require a decoupled J get
+// only decoupled problems; a solver that reports info.ignores_constraints (cg) must return the
+// unconstrained minimiser instead.
+#include "solvers/kkt.hpp"
+#include "solvers/registry.hpp"
+#include "tests/solvers/tiny_qps.hpp"
+
+#include <gtest/gtest.h>
+#include <Eigen/Dense>
+
+namespace {
+
+using cb::Qp;
+using cb::SolverResult;
+using cb::SolveStatus;
+using cb::Vec;
+
+constexpr double TOL = 1e-9;
+
+struct HandCase {
+    std::string name;
+    Qp qp;
+    Vec x_star;
+    Vec lambda_star;  ///< empty when not unique
+    bool decoupled;
+};
+
+std::vector<HandCase> hand_cases()
+{
+    namespace tq = cb::testing_qps;
+    std::vector<HandCase> cases;
+    cases.push_back({"style_example", tq::tiny_active_qp(), Eigen::Vector2d(1, 1), Vec::Constant(1, 2.0), true});
+    cases.push_back({"two_rows_decoupled", tq::two_row_decoupled_qp(), tq::two_row_decoupled_x(),
+                     Eigen::Vector2d(2, 4), true});
+    cases.push_back({"unconstrained", tq::unconstrained_qp(), tq::unconstrained_x(), Vec(0), true});
+    cases.push_back({"two_rows_coupled", tq::two_row_coupled_qp(), Eigen::Vector2d(1, 1), Eigen::Vector2d(3, 3), false});
+    return cases;
+}
+
+class AllSolvers : public ::testing::TestWithParam<std::string> {};
+
+} // namespace
+
+TEST_P(AllSolvers, TinyHandDerivedQpsSatisfyKkt)
+{
+    for (const HandCase& hc : hand_cases()) {
+        SCOPED_TRACE(GetParam() + " on " + hc.name);
+        const auto solver = cb::builtin_registry().create(GetParam(), {{"tol", TOL}});
+        if (solver->requires_decoupled() && !hc.decoupled) continue;
+        const SolverResult r = solver->solve(hc.qp.view(), cb::SolveContext{});
+        ASSERT_EQ(r.x.size(), hc.qp.n());
+        ASSERT_EQ(r.lambda.size(), hc.qp.m());
+        const bool ignores = r.info.is_object() && r.info.value("ignores_constraints", false);
+        if (ignores) {
+            // The unconstrained minimiser, whatever J says.
+            const Vec x_unc = Eigen::MatrixXd(hc.qp.A).ldlt().solve(hc.qp.b);
+            ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
+            EXPECT_LE((r.x - x_unc).lpNorm<Eigen::Infinity>(), 1e-6);
+            continue;
+        }
+        ASSERT_EQ(r.status, SolveStatus::CONVERGED) << cb::to_string(r.status) << ": " << r.message;
+        const cb::KktResiduals kkt = cb::kkt_residuals(hc.qp.view(), r.x, r.lambda);
+        const double rel = kkt.max() * cb::kkt_scale(hc.qp.view()).inverse_reference;
+        if (r.criterion == "kkt") EXPECT_LE(rel, TOL * (1 + 1e-6)) << "status honesty";
+        const double tol = 1e-6 * (1.0 + hc.qp.b.lpNorm<Eigen::Infinity>());
+        EXPECT_LE(kkt.stationarity, tol);
+        EXPECT_LE(kkt.primal, tol);
+        EXPECT_LE(kkt.dual, tol);
+        EXPECT_LE(kkt.complementarity, tol);
+        // hand-derived, independent of kkt_residuals()
+        EXPECT_LE((r.x - hc.x_star).lpNorm<Eigen::Infinity>(), 1e-6);
+        if (hc.lambda_star.size()) EXPECT_LE((r.lambda - hc.lambda_star).lpNorm<Eigen::Infinity>(), 1e-5);
+    }
+}
+
+// "converged" must mean what it says, on a problem that takes a few iterations.
+TEST_P(AllSolvers, ConvergedStatusIsConfirmedByTheCommonKkt)
+{
+    // 3 decoupled vertices, A tridiagonal-coupled in each coordinate, two rows active.
+    const int n = 9;
+    Eigen::MatrixXd A = 4.0 * Eigen::MatrixXd::Identity(n, n);
+    for (int i = 0; i + 3 < n; ++i) A(i, i + 3) = A(i + 3, i) = -1.0;
+    Vec b = Vec::LinSpaced(n, -1.0, 1.0);
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(2, n);
+    J(0, 1) = 1.0;                   // vertex 0, y >= 0.5
+    J(1, 7) = 1.0;                   // vertex 2, y >= 1
+    const Qp qp = cb::testing_qps::dense_qp(A, b, J, Eigen::Vector2d(0.5, 1.0), Vec::Zero(n));
+    for (double tol : {1e-4, 1e-8}) {
+        const auto solver = cb::builtin_registry().create(GetParam(), {{"tol", tol}});
+        const SolverResult r = solver->solve(qp.view(), cb::SolveContext{});
+        if (r.status != SolveStatus::CONVERGED || r.criterion != "kkt") continue;
+        if (r.info.is_object() && r.info.value("ignores_constraints", false)) continue;
+        const double rel = cb::kkt_residuals(qp.view(), r.x, r.lambda).max() * cb::kkt_scale(qp.view()).inverse_reference;
+        EXPECT_LE(rel, tol * (1 + 1e-6)) << GetParam() << " claims convergence at tol " << tol;
+    }
+}
+
+TEST_P(AllSolvers, UnknownSettingIsAnInputError)
+{
+    EXPECT_THROW(cb::builtin_registry().create(GetParam(), {{"no_such_setting", 1}}), cb::InputError);
+}
+
+// The effective settings a results file records can be fed back unchanged.
+TEST_P(AllSolvers, EffectiveSettingsRoundTrip)
+{
+    const auto solver = cb::builtin_registry().create(GetParam(), nlohmann::json::object());
+    const nlohmann::json effective = solver->settings();
+    ASSERT_TRUE(effective.is_object());
+    for (const char* key : {"tol", "stop", "max_iterations", "time_limit_s", "seed"})
+        EXPECT_TRUE(effective.contains(key)) << key;
+    const auto again = cb::builtin_registry().create(GetParam(), effective);
+    EXPECT_EQ(again->settings(), effective);
+    EXPECT_FALSE(cb::builtin_registry().entry(GetParam()).description.empty());
+}
+
+INSTANTIATE_TEST_SUITE_P(Registry, AllSolvers, ::testing::ValuesIn(cb::builtin_registry().names()),
+                         [](const auto& info) {
+                             std::string name = info.param;
+                             for (char& ch : name)
+                                 if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
+                             return name;
+                         });
