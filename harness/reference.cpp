@@ -30,7 +30,7 @@ nlohmann::json reference_solution(const Qp& qp, const std::string& key, const st
     RunOptions options;
     options.record_history = false;
     options.decouple = "none";  // the caller passes the QP the solvers saw
-    const nlohmann::json settings = {{"tol", 1e-10}, {"max_iterations", 100000}};
+    const nlohmann::json settings = {{"tol", 1e-10}, {"max_iterations", 100000}, {"monitor_every", 0}};
     nlohmann::json ref;
     ref["key"] = key;
     ref["source"] = "active-set";
@@ -40,7 +40,13 @@ nlohmann::json reference_solution(const Qp& qp, const std::string& key, const st
     ref["kkt"] = run.record["kkt"];
     ref["kkt_rel"] = run.record["kkt_relative"]["max"];
     ref["objective_x0"] = run.record["objective_x0"];
-    ref["objective"] = run.result.status == SolveStatus::CONVERGED ? run.record["objective"] : nlohmann::json();
+    // A reference stalled near double precision (ill-conditioned A: eps * cond) is still the best
+    // F* there is; accept it when its relative KKT error is <= 1e-7 and say so.
+    const double kkt_rel = run.kkt_relative.max();
+    const bool usable = run.result.status == SolveStatus::CONVERGED ||
+                        (run.result.status == SolveStatus::STALLED && std::isfinite(kkt_rel) && kkt_rel <= 1e-7);
+    ref["objective"] = usable ? run.record["objective"] : nlohmann::json();
+    ref["accepted_stalled"] = usable && run.result.status != SolveStatus::CONVERGED;
     ref["message"] = run.record["message"];
     write_json_atomic(path, ref);
     ref["cached"] = false;

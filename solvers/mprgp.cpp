@@ -102,16 +102,20 @@ private:
     /// out = A v; returns v'Av and sets vg = v'g (one pass over A).
     double product_dot(const Vec& v, Vec& out, double& vg)
     {
-        const int* outer = m_A.outerIndexPtr();
-        const int* inner = m_A.innerIndexPtr();
-        const double* val = m_A.valuePtr();
+        const int* __restrict outer = m_A.outerIndexPtr();
+        const int* __restrict inner = m_A.innerIndexPtr();
+        const double* __restrict val = m_A.valuePtr();
+        const double* __restrict pv = v.data();
+        const double* __restrict pg = m_g.data();
+        const char* __restrict in_row = m_rows.dof_in_row.data();
+        double* __restrict po = out.data();
         double vav = 0.0, dot_g = 0.0;
         for (Eigen::Index i = 0; i < m_n; ++i) {
             double s = 0.0;
-            for (int k = outer[i]; k < outer[i + 1]; ++k) s += val[k] * v[inner[k]];
-            out[i] = s;
-            vav += v[i] * s;
-            if (!m_rows.dof_in_row[static_cast<size_t>(i)]) dot_g += v[i] * m_g[i];
+            for (int k = outer[i]; k < outer[i + 1]; ++k) s += val[k] * pv[inner[k]];
+            po[i] = s;
+            vav += pv[i] * s;
+            if (!in_row[i]) dot_g += pv[i] * pg[i];
         }
         ++m_cnt.a_products;
         vg = dot_g + m_pg_rows;  // the row DOFs' part comes from evaluate_rows (face form, no cancellation)
@@ -564,17 +568,26 @@ SolverResult MprgpRun::run()
                 // Fused update: x, g, z = D^-1 g and the dot products in one pass (DOFs in no
                 // row; the rows' DOFs are summed below in face form, see face_dot).
                 double gg = 0.0, zg = 0.0, zap = 0.0, ginf = 0.0;
-                for (Eigen::Index j = 0; j < m_n; ++j) {
-                    m_x[j] -= alpha * m_p[j];
-                    const double gj = m_g[j] - alpha * m_Ap[j];
-                    m_g[j] = gj;
-                    const double zj = m_dinv[j] * gj;
-                    m_z[j] = zj;
-                    if (!m_rows.dof_in_row[static_cast<size_t>(j)]) {
-                        zg += zj * gj;
-                        zap += zj * m_Ap[j];
-                        ginf = std::max(ginf, std::abs(gj));
-                        gg += gj * gj;
+                {
+                    double* __restrict px = m_x.data();
+                    double* __restrict pgr = m_g.data();
+                    double* __restrict pz = m_z.data();
+                    const double* __restrict pp = m_p.data();
+                    const double* __restrict pap_v = m_Ap.data();
+                    const double* __restrict pd = m_dinv.data();
+                    const char* __restrict in_row = m_rows.dof_in_row.data();
+                    for (Eigen::Index j = 0; j < m_n; ++j) {
+                        px[j] -= alpha * pp[j];
+                        const double gj = pgr[j] - alpha * pap_v[j];
+                        pgr[j] = gj;
+                        const double zj = pd[j] * gj;
+                        pz[j] = zj;
+                        if (!in_row[j]) {
+                            zg += zj * gj;
+                            zap += zj * pap_v[j];
+                            ginf = std::max(ginf, std::abs(gj));
+                            gg += gj * gj;
+                        }
                     }
                 }
                 // Face correction of z on active rows (J_A z = 0) and the rows' part of the dots.
@@ -602,7 +615,11 @@ SolverResult MprgpRun::run()
                 }
                 ++m_cnt.precond_applications;
                 const double beta_cg = zap / pap;
-                for (Eigen::Index j = 0; j < m_n; ++j) m_p[j] = m_z[j] - beta_cg * m_p[j];
+                {
+                    double* __restrict pp = m_p.data();
+                    const double* __restrict pz = m_z.data();
+                    for (Eigen::Index j = 0; j < m_n; ++j) pp[j] = pz[j] - beta_cg * pp[j];
+                }
                 m_rz = zg;
                 m_gg_out = gg;
                 m_ginf_free = ginf;

@@ -275,6 +275,7 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
         for (Eigen::Index i = 0; i < m; ++i)
             if (std::abs(slack[i]) <= active_tolerance(qp.c[i]) && gram.coeff(i, i) > 0.0) next.push_back(static_cast<int>(i));
         if (next == face && (face.empty() || face_factor.ok)) return;
+        if (next != face) ++cnt.pivots;  // an active-set change
         face = next;
         std::fill(active.begin(), active.end(), 0);
         for (int i : face) active[static_cast<size_t>(i)] = 1;

@@ -62,7 +62,9 @@ TEST_P(AllSolvers, TinyHandDerivedQpsSatisfyKkt)
         ASSERT_EQ(r.status, SolveStatus::CONVERGED) << cb::to_string(r.status) << ": " << r.message;
         const cb::KktResiduals kkt = cb::kkt_residuals(hc.qp.view(), r.x, r.lambda);
         const double rel = kkt.max() * cb::kkt_scale(hc.qp.view()).inverse_reference;
-        if (r.criterion == "kkt") EXPECT_LE(rel, TOL * (1 + 1e-6)) << "status honesty";
+        if (r.criterion == "kkt") {
+            EXPECT_LE(rel, TOL * (1 + 1e-6)) << "status honesty";
+        }
         const double tol = 1e-6 * (1.0 + hc.qp.b.lpNorm<Eigen::Infinity>());
         EXPECT_LE(kkt.stationarity, tol);
         EXPECT_LE(kkt.primal, tol);
@@ -70,7 +72,9 @@ TEST_P(AllSolvers, TinyHandDerivedQpsSatisfyKkt)
         EXPECT_LE(kkt.complementarity, tol);
         // hand-derived, independent of kkt_residuals()
         EXPECT_LE((r.x - hc.x_star).lpNorm<Eigen::Infinity>(), 1e-6);
-        if (hc.lambda_star.size()) EXPECT_LE((r.lambda - hc.lambda_star).lpNorm<Eigen::Infinity>(), 1e-5);
+        if (hc.lambda_star.size()) {
+            EXPECT_LE((r.lambda - hc.lambda_star).lpNorm<Eigen::Infinity>(), 1e-5);
+        }
     }
 }
 
