@@ -185,3 +185,38 @@ TEST(Obstacles, SignedDistancesOfSimpleShapes)
     EXPECT_LT((hit.normal - Vec3(0, 1, 0)).norm(), 1e-12);
     EXPECT_FALSE(mesh->query(Vec3(0.5, 2.05, 1.0), 0.0, hit));
 }
+
+TEST(Dcd, SelfContactFindsOverlapWithinOneBodyAndNothingAtRest)
+{
+    // One body made of two overlapping box components: with self-contact on, its rows equal
+    // the inter-body rows of the same geometry split into two bodies; a plain box has none.
+    const TetMesh a = make_box_mesh(3, 3, 3, Vec3(0.1, 0.1, 0.1), Vec3(0, 0, 0));
+    const TetMesh b = make_box_mesh(3, 3, 3, Vec3(0.1, 0.1, 0.1), Vec3(0.05, 0.27, 0.04));
+    const int nv = static_cast<int>(a.vertices());
+    Vec x(3 * (a.vertices() + b.vertices()));
+    CollisionBody one, two[2];
+    for (int k = 0; k < 2; ++k) {
+        const TetMesh& m = k == 0 ? a : b;
+        const int off = k == 0 ? 0 : nv;
+        const Faces f = boundary_faces(m);
+        for (long i = 0; i < m.vertices(); ++i) x.segment<3>(3 * (off + i)) = m.positions.row(i).transpose();
+        two[k].tets = m.tets.array() + off;
+        two[k].faces = f.array() + off;
+        for (int v : boundary_vertices(f, m.vertices())) two[k].surface_vertices.push_back(v + off);
+    }
+    one.tets.resize(two[0].tets.rows() + two[1].tets.rows(), 4);
+    one.tets << two[0].tets, two[1].tets;
+    one.faces.resize(two[0].faces.rows() + two[1].faces.rows(), 3);
+    one.faces << two[0].faces, two[1].faces;
+    one.surface_vertices = two[0].surface_vertices;
+    one.surface_vertices.insert(one.surface_vertices.end(), two[1].surface_vertices.begin(), two[1].surface_vertices.end());
+    DetectionSettings self;
+    self.self_contact = true;
+    DetectionStats st_self, st_inter, st_rest;
+    CollisionDetector(std::vector<CollisionBody>{one}, {}, self).detect(x, &st_self);
+    CollisionDetector(std::vector<CollisionBody>{two[0], two[1]}, {}, DetectionSettings{}).detect(x, &st_inter);
+    EXPECT_EQ(st_inter.inter_body_rows, 18);
+    EXPECT_EQ(st_self.self_rows, st_inter.inter_body_rows);
+    CollisionDetector(std::vector<CollisionBody>{two[0]}, {}, self).detect(x, &st_rest);
+    EXPECT_EQ(st_rest.self_rows, 0);
+}
