@@ -91,9 +91,12 @@ stress: build
 	$(PY) plots/stability.py results/stress
 
 fuzz: deps
-	cmake -S . -B $(BUILD)-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DCB_FUZZ=ON
+	cmake -S . -B $(BUILD)-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DCB_FUZZ=ON \
+	  -DCB_BUILD_TESTS=OFF -DCB_BUILD_BENCH=OFF
 	cmake --build $(BUILD)-fuzz -j $(JOBS) --target fuzz_qpsnap
-	$(BUILD)-fuzz/bin/fuzz_qpsnap -max_total_time=$(or $(FUZZ_SECONDS),60) tests/fuzz/corpus
+	mkdir -p $(BUILD)-fuzz/corpus && cp tests/fuzz/corpus/* $(BUILD)-fuzz/corpus/
+	$(BUILD)-fuzz/bin/fuzz_qpsnap -max_total_time=$(or $(FUZZ_SECONDS),60) -timeout=10 -rss_limit_mb=2048 \
+	  -artifact_prefix=$(BUILD)-fuzz/ $(BUILD)-fuzz/corpus
 
 clean:
 	rm -rf $(BUILD) $(BUILD)-*
