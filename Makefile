@@ -7,6 +7,7 @@ CB := $(BUILD)/bin/contactbench
 CB_CACHE ?= $(HOME)/.cache/contactbench
 DATA ?= $(abspath ../shared/paper-data)
 export OPENBLAS_NUM_THREADS ?= 1
+export MPLBACKEND ?= Agg
 
 DEB_PACKAGES := build-essential cmake git zlib1g-dev libeigen3-dev libsuitesparse-dev nlohmann-json3-dev \
   libgtest-dev libbenchmark-dev libopenblas0-pthread \
@@ -77,7 +78,9 @@ demo: deps build
 	$(CB) run suites/demo.json --out results/demo
 	$(PY) plots/convergence.py results/demo
 	$(PY) plots/profiles.py results/demo
-	@echo "demo: simulation pictures in results/demo/sim/, solver figures and profiles in results/demo/figures/"
+	$(PY) plots/reproduce.py --contactbench $(CB) --data $(DATA) --out results/paper --quick
+	@echo "demo: simulation pictures in results/demo/sim/, solver figures and profiles in results/demo/figures/,"
+	@echo "      the paper's figures and claims (quick mode) in results/paper/report.md"
 
 bench: build
 	mkdir -p results/bench
