@@ -453,11 +453,17 @@ nlohmann::json read_qpsnap_header(const std::string& path)
 Qp read_qpsnap(const std::string& path, SnapshotExtras* extras)
 {
     const MappedFile f(path);
+    return read_qpsnap_bytes(path, f.data(), f.size(), extras);
+}
+
+Qp read_qpsnap_bytes(const std::string& path, const unsigned char* bytes, std::uint64_t size,
+                     SnapshotExtras* extras)
+{
     std::uint64_t N = 0;
-    const nlohmann::json h = parse_header(path, f.data(), f.size(), &N);
+    const nlohmann::json h = parse_header(path, bytes, size, &N);
     const std::uint64_t n = h["n"].get<std::uint64_t>(), m = h["m"].get<std::uint64_t>();
-    const unsigned char* buffer = f.data() + 8 + N;
-    const std::uint64_t buffer_size = f.size() - 8 - N;
+    const unsigned char* buffer = bytes + 8 + N;
+    const std::uint64_t buffer_size = size - 8 - N;
     std::unique_ptr<std::uint64_t[]> aligned;  // a writer that did not pad its header: copy once
     if (reinterpret_cast<std::uintptr_t>(buffer) % 8 != 0) {
         aligned.reset(new std::uint64_t[buffer_size / 8 + 1]);

@@ -20,6 +20,11 @@ struct SnapshotExtras {
 /// half a problem. A is symmetrised exactly after the asymmetry check.
 Qp read_qpsnap(const std::string& path, SnapshotExtras* extras = nullptr);
 
+/// The same checks on a snapshot already in memory (`path` only names it in messages); used by
+/// the fuzzer, which would otherwise spend most of its time writing files.
+Qp read_qpsnap_bytes(const std::string& path, const unsigned char* bytes, std::uint64_t size,
+                     SnapshotExtras* extras = nullptr);
+
 /// Reads only the JSON header (for `info` and suites that filter by metadata).
 nlohmann::json read_qpsnap_header(const std::string& path);
 

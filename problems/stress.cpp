@@ -1,10 +1,16 @@
 #include "problems/stress.hpp"
 
+#include "problems/qpsnap.hpp"
+#include "problems/sim/scene.hpp"
+#include "problems/sim/simulator.hpp"
 #include "problems/synthetic.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
 #include <random>
+#include <unistd.h>
 
 namespace cb {
 
@@ -114,6 +120,76 @@ void add_rows_on_one_vertex(Qp& qp, std::uint64_t seed)
     out.finish(qp, keep);
 }
 
+/// The demo scene (scenes/demo.json: two 4x4x4-cube boxes, 750 DOF) built in memory, with the
+/// case's overrides: "youngs" (Pa, both bodies), "speed" (m/s, added downwards to both bodies'
+/// initial velocities), "h" (s).
+json fem_demo_scene(const json& params)
+{
+    const double youngs = params.value("youngs", 2e5);
+    const double speed = params.value("speed", 0.0);
+    const json material = {{"youngs", youngs}, {"poisson", 0.4}, {"density", 1000}};
+    return {
+        {"name", "stress-fem"},
+        {"h", params.value("h", 0.01)},
+        {"gravity", {0, -9.8, 0}},
+        {"a_M", 0.02},
+        {"a_K", 0.01},
+        {"solver_settings", {{"tol", 1e-8}, {"max_iterations", 5000}}},
+        {"detection", {{"margin", 0.005}}},
+        {"bodies",
+         {{{"name", "lower"}, {"box", {{"cells", {4, 4, 4}}, {"size", {0.4, 0.4, 0.4}}}}, {"material", material},
+           {"translate", {0, 0.22, 0}}, {"velocity", {0, -1.0 - speed, 0}}},
+          {{"name", "upper"}, {"box", {{"cells", {4, 4, 4}}, {"size", {0.3, 0.3, 0.3}}}}, {"material", material},
+           {"translate", {0.05, 0.75, 0.03}}, {"rotate_deg", {20, 0, 15}}, {"velocity", {0, -2.5 - speed, 0}}}}},
+        {"obstacles", {{{"type", "plane"}, {"normal", {0, 1, 0}}, {"point", {0, 0, 0}}}}},
+        {"output", {{"strip_frames", 0}}},
+    };
+}
+
+/// Removes a temporary folder when it goes out of scope.
+struct TempDir {
+    std::string path;
+    ~TempDir()
+    {
+        std::error_code ec;
+        if (!path.empty()) std::filesystem::remove_all(path, ec);
+    }
+};
+
+/// A FEM snapshot from our own simulator: the demo scene (with the case's overrides) stepped
+/// for params["frames"] time steps (mprgp as the stepping solver, so the trajectory does
+/// not depend on a solver under test); the QP of the last step that had contact rows is the
+/// case. The simulator only hands QPs out as .qpsnap files, so they go through a temp folder.
+Qp make_fem_sim_qp(const StressCase& c)
+{
+    const std::string where = "stress case " + c.id;
+    const long frames = c.params.value("frames", 5L);
+    if (frames < 1) throw_input_error(where, "frames", "expected >= 1");
+    std::string pattern = (std::filesystem::temp_directory_path() / "cb-stress-fem-XXXXXX").string();
+    if (!mkdtemp(pattern.data())) throw_input_error(where, pattern, "cannot create a temporary folder");
+    TempDir tmp{pattern};
+    std::filesystem::create_directories(tmp.path + "/snapshots");
+
+    sim::SimulatorOptions options;
+    options.out_dir = tmp.path;
+    options.solver = "mprgp";
+    sim::Simulator simulator(sim::load_scene_json(fem_demo_scene(c.params), where, sim::PathRoots{}), options);
+    Qp last;
+    long last_step = -1;
+    for (long s = 0; s < frames; ++s) {
+        for (const sim::StepRecord& rec : simulator.step()) {
+            if (rec.rows > 0 && !rec.snapshot.empty()) {
+                last = read_qpsnap(rec.snapshot);
+                last_step = s;
+            }
+        }
+    }
+    if (last_step < 0 || last.m() == 0)
+        throw_input_error(where, "frames", "no step with contact rows in " + std::to_string(frames) + " steps");
+    last.meta["stress_source"] = {{"step", last_step}, {"frames", frames}, {"scene", "demo (in memory)"}};
+    return last;
+}
+
 } // namespace
 
 std::vector<StressCase> stress_cases(bool quick)
@@ -165,6 +241,10 @@ std::vector<StressCase> stress_cases(bool quick)
                   "random SPD with m = 190 rows on n = 200"),
         make_case("plane-tilted-larger", "baseline", 1, "plane", {{"nx", 8}, {"ny", 4}, {"nz", 8}, {"tilt_deg", 30.0}},
                   "a larger body (1215 DOF) on a 30 degree slope"),
+        make_case("fem-stiff-1e10", "fem-sim", 2, "fem-sim", {{"youngs", 1e10}, {"frames", 6}},
+                  "simulator snapshot: demo scene (750 DOF) with E = 1e10 Pa, last step with contacts"),
+        make_case("fem-fast-50ms", "fem-sim", 3, "fem-sim", {{"speed", 50.0}, {"frames", 3}},
+                  "simulator snapshot: demo scene (750 DOF) thrown down at ~50 m/s, last step with contacts"),
     };
     if (!quick) return all;
     std::vector<StressCase> subset;
@@ -197,7 +277,7 @@ std::vector<StressCase> select_stress_cases(const std::vector<StressCase>& all, 
 
 Qp make_stress_qp(const StressCase& c)
 {
-    Qp qp = make_synthetic(c.synthetic, c.params, c.seed);
+    Qp qp = c.synthetic == "fem-sim" ? make_fem_sim_qp(c) : make_synthetic(c.synthetic, c.params, c.seed);
     if (c.modifier == "parallel-rows") add_parallel_rows(qp, c.seed);
     else if (c.modifier == "one-vertex") add_rows_on_one_vertex(qp, c.seed);
     else if (!c.modifier.empty()) throw_input_error("stress case " + c.id, "modifier", "unknown '" + c.modifier + "'");

@@ -3,7 +3,8 @@
 /// seeded QPs (a few hundred to a few thousand DOF) at several severities, built on
 /// make_synthetic where possible: stiffness, extreme units, tiny and huge time steps, badly
 /// scaled rows, degenerate J (duplicated, parallel, zero rows, many rows on one vertex),
-/// infeasible sets, empty J, nearly singular A, m close to n, ill-conditioned random SPD.
+/// infeasible sets, empty J, nearly singular A, m close to n, ill-conditioned random SPD; and
+/// "fem-sim": QPs of our own simulator (problems/sim) on stiff and fast variants of the demo scene.
 #include "solvers/qp.hpp"
 
 #include <nlohmann/json.hpp>
@@ -17,7 +18,8 @@ struct StressCase {
     std::string id;           ///< unique, e.g. "stiffness-1e12"
     std::string family;       ///< stress family, e.g. "stiffness" (several cases share one)
     int severity = 0;         ///< 0 = baseline, 1 mild, 2 hard, 3 extreme
-    std::string synthetic;    ///< make_synthetic family the case starts from
+    std::string synthetic;    ///< make_synthetic family the case starts from, or "fem-sim": a snapshot
+                              ///< of our simulator on the demo scene (params: youngs, speed, h, frames)
     nlohmann::json params = nlohmann::json::object();  ///< its params
     std::string modifier;     ///< "" or a transform applied after generation ("parallel-rows", "one-vertex")
     std::uint64_t seed = 1;

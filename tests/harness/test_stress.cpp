@@ -116,6 +116,46 @@ TEST(StressRun, RecordsRowsDroppedByDecoupling)
     EXPECT_NE(stability_markdown(report).find(" (" + std::to_string(r.m_solved) + " rows) |"), std::string::npos);
 }
 
+TEST(StressCases, FemSimSnapshotsHaveContactsAndActiveSetConverges)
+{
+    const auto all = stress_cases(false);
+    const auto fem = select_stress_cases(all, {"fem-sim"});
+    ASSERT_EQ(fem.size(), 2u);
+    EXPECT_EQ(fem[0].id, "fem-stiff-1e10");
+    EXPECT_EQ(fem[1].id, "fem-fast-50ms");
+    std::vector<long> rows;
+    for (const StressCase& c : fem) {
+        SCOPED_TRACE(c.id);
+        const Qp qp = make_stress_qp(c);
+        EXPECT_EQ(qp.n(), 750);  // the demo scene: two 4x4x4-cube boxes, 250 vertices
+        EXPECT_GT(qp.m(), 0);
+        EXPECT_EQ(qp.meta.at("stress").at("family"), "fem-sim");
+        // The start point (inertial prediction) violates the contact rows: the contacts matter.
+        EXPECT_GT(max_violation(qp.view(), qp.x0), 0.0);
+        rows.push_back(static_cast<long>(qp.m()));
+    }
+    StressOptions options;
+    options.solvers = {"active-set"};
+    options.cases = {"fem-sim"};
+    // Isolated: an in-process CHOLMOD solve starts BLAS threads, and a later fork (the next
+    // test's isolated runs) can then deadlock in the child.
+    options.isolate = true;
+    options.time_limit_s = 5.0;
+    const StressReport report = run_stress(options);
+    ASSERT_EQ(report.rows.size(), 2u);
+    for (size_t i = 0; i < report.rows.size(); ++i) {
+        const StressRow& r = report.rows[i];
+        SCOPED_TRACE(r.case_id + ": " + r.status + ": " + r.message);
+        EXPECT_EQ(r.family, "fem-sim");
+        EXPECT_EQ(r.m, rows[i]);  // same (deterministic) QP as generated above
+        EXPECT_EQ(r.status, "converged");
+        EXPECT_TRUE(r.status_confirmed);
+        EXPECT_TRUE(r.honest());
+        EXPECT_LE(r.kkt, r.tol * (1 + 1e-9));
+        EXPECT_FALSE(r.nonfinite);
+    }
+}
+
 TEST(StressReportText, ListsAWrongStatus)
 {
     StressReport report;
