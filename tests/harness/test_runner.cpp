@@ -291,7 +291,9 @@ TEST(Runner, DecouplesCoupledRowsForMprgp)
         std::vector<bool> kept(static_cast<size_t>(qp.m()), false);
         for (int r : run.kept_rows) kept[static_cast<size_t>(r)] = true;
         for (Eigen::Index i = 0; i < qp.m(); ++i)
-            if (!kept[static_cast<size_t>(i)]) EXPECT_EQ(run.lambda_full[i], 0.0);
+            if (!kept[static_cast<size_t>(i)]) {
+                EXPECT_EQ(run.lambda_full[i], 0.0);
+            }
         // J' lambda_full on the original J equals J_kept' lambda: the stationarity is the same.
         const Vec g = qp.A * run.result.x - qp.b;
         const KktResiduals full = kkt_residuals_from_gradient(qp.view(), run.result.x, g, run.lambda_full);

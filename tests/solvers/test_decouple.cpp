@@ -98,7 +98,9 @@ TEST(Decouple, CoupledFamilyBecomesDecoupledAndMetadataFollows)
             const int i = r.kept_rows[k];
             EXPECT_EQ(sub.c[static_cast<Eigen::Index>(k)], qp.c[i]);
             EXPECT_EQ((sub.J.row(static_cast<Eigen::Index>(k)) - qp.J.row(i)).norm(), 0.0);
-            if (!qp.contacts.kind.empty()) EXPECT_EQ(sub.contacts.kind[k], qp.contacts.kind[static_cast<size_t>(i)]);
+            if (!qp.contacts.kind.empty()) {
+                EXPECT_EQ(sub.contacts.kind[k], qp.contacts.kind[static_cast<size_t>(i)]);
+            }
         }
         // Maximal: every dropped row shares a vertex with a kept one.
         std::set<Eigen::Index> taken;

@@ -55,7 +55,9 @@ TEST(MprgpBox, AgreesWithActiveSetOnLowerAndUpperBounds)
             bool has_upper = false;
             for (Eigen::Index i = 0; i < qp.m(); ++i)
                 for (cb::SpMat::InnerIterator it(qp.J, i); it; ++it) has_upper = has_upper || it.value() < 0.0;
-            if (std::string(family) == "box") EXPECT_TRUE(has_upper);
+            if (std::string(family) == "box") {
+                EXPECT_TRUE(has_upper);
+            }
             const cb::SolverResult ref =
                 cb::builtin_registry().create("active-set", {{"tol", 1e-12}})->solve(qp.view(), {});
             ASSERT_EQ(ref.status, SolveStatus::CONVERGED) << ref.message;

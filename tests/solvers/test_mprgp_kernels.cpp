@@ -147,7 +147,9 @@ TEST(MprgpKernels, JacobiPreconditionerKeepsTheFace)
         cb::jacobi_face_precondition(f.J, f.rows, f.active, f.dinv, f.g, z);
         const Vec jz = f.J * z;
         for (Eigen::Index i = 0; i < f.J.rows(); ++i)
-            if (f.active[static_cast<size_t>(i)]) EXPECT_NEAR(jz[i], 0.0, 1e-12);
+            if (f.active[static_cast<size_t>(i)]) {
+                EXPECT_NEAR(jz[i], 0.0, 1e-12);
+            }
         // D-weighted projection: z minimises (z - D^-1 g)' D (z - D^-1 g) on null(J_A), so
         // D z - g lies in range(J_A'): it vanishes on every DOF outside active rows.
         const Vec resid = z.cwiseQuotient(f.dinv) - f.g;
@@ -155,7 +157,9 @@ TEST(MprgpKernels, JacobiPreconditionerKeepsTheFace)
             bool in_active = false;
             for (Eigen::Index i = 0; i < f.J.rows(); ++i)
                 if (f.active[static_cast<size_t>(i)] && f.J.coeff(i, j) != 0.0) in_active = true;
-            if (!in_active) EXPECT_NEAR(resid[j], 0.0, 1e-12);
+            if (!in_active) {
+                EXPECT_NEAR(resid[j], 0.0, 1e-12);
+            }
         }
         EXPECT_GT(z.dot(f.g), 0.0);  // a descent direction
     }
