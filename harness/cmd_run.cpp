@@ -42,10 +42,12 @@ Shard parse_shard(const std::string& text)
     char* end = nullptr;
     bool ok = slash != std::string::npos && slash > 0;
     if (ok) {
-        s.index = std::strtol(text.substr(0, slash).c_str(), &end, 10);
+        // Keep the substrings alive while `end` points into them (ASan: stack-use-after-scope).
+        const std::string index_text = text.substr(0, slash), count_text = text.substr(slash + 1);
+        s.index = std::strtol(index_text.c_str(), &end, 10);
         ok = *end == '\0';
-        s.count = std::strtol(text.substr(slash + 1).c_str(), &end, 10);
-        ok = ok && *end == '\0' && slash + 1 < text.size();
+        s.count = std::strtol(count_text.c_str(), &end, 10);
+        ok = ok && *end == '\0' && !count_text.empty();
     }
     if (!ok || s.count < 1 || s.index < 1 || s.index > s.count)
         throw_input_error("run", "--shard", "expected i/N with 1 <= i <= N, got '" + text + "'");
