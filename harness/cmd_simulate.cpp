@@ -1,8 +1,10 @@
 // contactbench simulate SCENE.json [--frames N] [--out DIR] [--data DIR] [--solver NAME] [--no-snapshots]
 #include "harness/cli.hpp"
 #include "harness/commands.hpp"
+#include "harness/suite.hpp"
 #include "problems/sim/simulator.hpp"
 
+#include <filesystem>
 #include <iostream>
 
 namespace cb {
@@ -16,8 +18,9 @@ int cmd_simulate(const Args& args)
         "  --frames N     simulate N frames instead of the scene's \"frames\"\n"
         "  --out DIR      output folder (default results/sim/<scene name>): snapshots/*.qpsnap (one per\n"
         "                 Newton step), steps.csv, frames.csv, <scene>_strip.png, frames/*.obj\n"
-        "  --data DIR     the authors' data folder (resolves \"data:\" mesh paths; default: none, so\n"
-        "                 scenes use their CGAL-data fallbacks)\n"
+        "  --data DIR     the authors' data folder (resolves \"data:\" mesh paths; default:\n"
+        "                 $CB_CACHE/paper-data when `make paper-data` has written it, else none, so\n"
+        "                 scenes use their CGAL-data stand-ins)\n"
         "  --solver NAME  stepping solver (default: the scene's, else mprgp)\n"
         "  --no-snapshots write no .qpsnap files\n";
     if (cl.help()) {
@@ -26,7 +29,16 @@ int cmd_simulate(const Args& args)
     }
     cl.expect_positional(1, 1, usage);
     const std::string scene_path = cl.positional()[0];
-    sim::Scene scene = sim::load_scene(scene_path, sim::default_path_roots(scene_path, cl.value("--data")));
+    // The authors' data: --data, else where `make paper-data` puts it, else none (stand-in meshes).
+    std::string data = cl.value("--data");
+    if (!cl.has("--data")) {
+        const std::string cached = cache_dir() + "/paper-data";
+        if (std::filesystem::is_directory(cached)) data = cached;
+        else
+            std::cerr << "simulate: no authors' data in " << cached
+                      << " (`make paper-data` writes it); \"data:\" meshes use their stand-ins\n";
+    }
+    sim::Scene scene = sim::load_scene(scene_path, sim::default_path_roots(scene_path, data));
     sim::SimulatorOptions opt;
     opt.out_dir = cl.value("--out", "results/sim/" + scene.name);
     opt.solver = cl.value("--solver");

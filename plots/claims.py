@@ -19,7 +19,7 @@ class Claim:
     claim: str                  #: the claim in words
     source: str                 #: where the paper says it (section / figure)
     paper: str                  #: the paper's number or words
-    authors: str = "—"          #: what the authors' data (../shared/paper-data) shows
+    authors: str = "—"          #: what the authors' data (`make paper-data`) shows
     ours: str = "—"             #: what we measured
     verdict: str = NOT_MEASURED
     rule: str = ""              #: how the verdict was computed

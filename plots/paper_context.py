@@ -32,10 +32,17 @@ class FigureOutcome:
     missing: Optional[str] = None           #: reason when not produced
 
 
+def default_data_dir() -> str:
+    """Where `make paper-data` puts the authors' data: $CB_CACHE/paper-data (CB_CACHE defaults to
+    ~/.cache/contactbench). Callers treat a missing folder as "no authors' data"."""
+    cache = os.environ.get("CB_CACHE") or os.path.join(os.path.expanduser("~"), ".cache", "contactbench")
+    return os.path.join(cache, "paper-data")
+
+
 @dataclass
 class PaperContext:
     out: str                                #: results/paper
-    data: Optional[str] = None              #: ../shared/paper-data (may be absent)
+    data: Optional[str] = None              #: the authors' data, $CB_CACHE/paper-data (may be absent)
     quick: bool = False
     results: Dict[str, str] = field(default_factory=dict)   #: suite name -> results folder
     sims: Dict[str, str] = field(default_factory=dict)      #: scene key -> simulation folder
@@ -76,7 +83,8 @@ def standalone_context(argv, suite: str, description: str) -> PaperContext:
     """Command line of a figure script run on its own: RESULTS_DIR [--data DIR] [--out DIR]."""
     parser = argparse.ArgumentParser(description=description)
     parser.add_argument("results", help=f"results folder of the '{suite}' suite")
-    parser.add_argument("--data", default=None, help="the authors' data (../shared/paper-data)")
+    parser.add_argument("--data", default=default_data_dir(),
+                        help="the authors' data (default $CB_CACHE/paper-data, written by `make paper-data`)")
     parser.add_argument("--out", default=None, help="output folder (figures/ goes inside; default: RESULTS)")
     parser.add_argument("--sim", action="append", default=[], metavar="KEY=DIR",
                         help="simulation folders (table1: scene=DIR), repeatable")

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Reproduce the paper's figures and write results/paper/report.md, from our own simulator.
 
-usage: reproduce.py --contactbench build/bin/contactbench [--data ../shared/paper-data]
+usage: reproduce.py --contactbench build/bin/contactbench [--data DIR (default $CB_CACHE/paper-data)]
                     [--out results/paper] [--scenes scenes] [--quick] [--force]
 
 Steps (each printed as it runs):
@@ -37,7 +37,7 @@ import pandas as pd  # noqa: E402
 import profiles  # noqa: E402
 import report  # noqa: E402
 from loader import UNMEASURED_STATUSES, load_results, snapshot_table  # noqa: E402
-from paper_context import PaperContext  # noqa: E402
+from paper_context import PaperContext, default_data_dir  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 MARKER = ".reproduce.json"
@@ -323,7 +323,8 @@ def evenly(snaps: pd.DataFrame, limit: int) -> List[str]:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--contactbench", default=os.path.join(ROOT, "build", "bin", "contactbench"))
-    parser.add_argument("--data", default=None, help="the authors' data (../shared/paper-data)")
+    parser.add_argument("--data", default=default_data_dir(),
+                        help="the authors' data, as `make paper-data` writes it (default: $CB_CACHE/paper-data)")
     parser.add_argument("--out", default=os.path.join(ROOT, "results", "paper"))
     parser.add_argument("--scenes", default=os.path.join(ROOT, "scenes"))
     parser.add_argument("--suites", default=os.path.join(ROOT, "suites", "paper"))
@@ -340,8 +341,9 @@ def main(argv=None) -> int:
                     os.path.join(out, "reproduce.log"))
     mode = "quick" if args.quick else "full"
     runner.say(f"mode {mode}; out {out}; data {data or '(none)'}; contactbench {runner.cb}")
-    if args.data and not data:
-        runner.say(f"--data {args.data} is not a folder: the authors' data is left out")
+    if not data:
+        runner.say(f"no authors' data at {args.data} (`make paper-data` fetches it): the scenes use the CGAL "
+                   "stand-in meshes and the figures leave out the authors' curves")
 
     all_suites = ["fig6", "fig8", "fig10", "fig11"]
     found = scene_files(args.scenes)

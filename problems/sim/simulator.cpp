@@ -280,8 +280,8 @@ bool Simulator::run()
         if (m_opt.progress) {
             char line[256];
             std::snprintf(line, sizeof line,
-                          "%s frame %ld/%ld  rows %ld  %s %s  it %ld  kkt %.1e  pen %.2e  asm %.3fs det %.3fs solve %.3fs%s\n",
-                          m_scene.name.c_str(), m_frame + 1, frames, fr.rows, m_solver_name.c_str(), status.c_str(), iters,
+                          "%s frame %04ld (%ld of %ld)  rows %ld  %s %s  it %ld  kkt %.1e  pen %.2e  asm %.3fs det %.3fs solve %.3fs%s\n",
+                          m_scene.name.c_str(), m_frame, m_frame + 1, frames, fr.rows, m_solver_name.c_str(), status.c_str(), iters,
                           kkt, fr.max_penetration, ta, td, tsv, fr.blow_up ? "  BLOW-UP" : "");
             *m_opt.progress << line << std::flush;
         }

@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# clang-tidy (checks in .clang-tidy) on the C++ sources changed against a base revision.
+# usage: tools/tidy-changed.sh BUILD_DIR [BASE]     (`make tidy`; CI runs it on its change)
+# Headers are checked through the sources that include them (HeaderFilterRegex in .clang-tidy).
+set -euo pipefail
+build=${1:-build}
+base=${2:-main}
+cd "$(dirname "$0")/.."
+tidy=$(command -v clang-tidy || ls /usr/bin/clang-tidy-* 2>/dev/null | sort -V | tail -1 || true)
+if [ -z "$tidy" ]; then
+  echo "tidy: clang-tidy is not installed (apt-get install clang-tidy)" >&2
+  exit 2
+fi
+if [ ! -f "$build/compile_commands.json" ]; then
+  cmake -S . -B "$build" -DCMAKE_EXPORT_COMPILE_COMMANDS=ON >/dev/null
+fi
+mapfile -t files < <( { git diff --name-only --diff-filter=ACMR "$base" -- '*.cpp'; \
+                        git ls-files --others --exclude-standard -- '*.cpp'; } | sort -u)
+# A changed header is checked through one source beside it that includes it.
+mapfile -t headers < <(git diff --name-only --diff-filter=ACMR "$base" -- '*.hpp')
+for h in "${headers[@]}"; do
+  src=${h%.hpp}.cpp
+  [ -f "$src" ] && files+=("$src")
+done
+mapfile -t files < <(printf '%s\n' "${files[@]}" | sort -u | grep -v '^tests/fuzz/' || true)
+if [ ${#files[@]} -eq 0 ]; then
+  echo "tidy: no C++ source changed against $base"
+  exit 0
+fi
+echo "tidy: $tidy on ${#files[@]} file(s) changed against $base"
+"$tidy" -p "$build" --quiet "${files[@]}"
