@@ -17,5 +17,7 @@ int cmd_simulate(const Args& args);
 int cmd_stress(const Args& args);
 int cmd_compare(const Args& args);
 int cmd_generate(const Args& args);
+int cmd_solvers(const Args& args);
+int cmd_version(const Args& args);
 
 } // namespace cb

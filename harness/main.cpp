@@ -20,9 +20,10 @@ const std::map<std::string, Command>& commands()
         {"convert", {cb::cmd_convert, "convert IN OUT: .qpsnap <-> Matrix Market folder (by extension)"}},
         {"solve", {cb::cmd_solve, "solve SNAP --solver NAME [--set k=v ...] [--json FILE] [--save-solution DIR]"}},
         {"run", {cb::cmd_run, "run SUITE.json [--out DIR] [--shard i/N]: a suite of snapshots x solvers"}},
-        {"merge", {cb::cmd_merge, "merge DIR...: join the shards of a suite run"}},
+        {"merge", {cb::cmd_merge, "merge OUT DIR...: join the shard folders DIR... of a suite run into OUT"}},
         {"generate", {cb::cmd_generate, "generate FAMILY --out FILE [--seed S ...]: write a synthetic snapshot"}},
-        {"simulate", {cb::cmd_simulate, "simulate SCENE.json [--frames N] [--out DIR] [--data DIR]"}},
+        {"simulate", {cb::cmd_simulate, "simulate SCENE.json [--frames N] [--out DIR] [--data DIR]: snapshots of a scene"}},
+        {"solvers", {cb::cmd_solvers, "solvers [--json]: every registered solver, one line each, with what it applies to"}},
         {"stress", {cb::cmd_stress, "stress [--out DIR]: the stress suite and its stability table"}},
         {"compare", {cb::cmd_compare, "compare BASE NEW: regression judge between two result sets"}},
     };
@@ -35,7 +36,8 @@ void usage(std::ostream& out)
            "  minimize 1/2 x'Ax - b'x  subject to  Jx >= c\n\nusage: contactbench COMMAND [options]   "
            "(contactbench COMMAND --help for details)\n\ncommands:\n";
     for (const auto& kv : commands()) out << "  " << kv.second.summary << "\n";
-    out << "\nexit status: 0 the command ran (whatever a solver's status), 2 bad input, 1 internal error\n";
+    out << "  --version [--json]: commit, build type, compiler and library versions\n"
+           "\nexit status: 0 the command ran (whatever a solver's status), 2 bad input, 1 internal error\n";
 }
 
 } // namespace
@@ -46,15 +48,16 @@ int main(int argc, char** argv)
         usage(std::cout);
         return argc < 2 ? 2 : 0;
     }
-    const auto it = commands().find(argv[1]);
-    if (it == commands().end()) {
+    const bool version = !std::strcmp(argv[1], "--version") || !std::strcmp(argv[1], "version");
+    const auto it = version ? commands().end() : commands().find(argv[1]);
+    if (!version && it == commands().end()) {
         std::cerr << "contactbench: unknown command '" << argv[1] << "'\n";
         usage(std::cerr);
         return 2;
     }
     const cb::Args args(argv + 2, argv + argc);
     try {
-        return it->second.run(args);
+        return version ? cb::cmd_version(args) : it->second.run(args);
     } catch (const cb::InputError& e) {
         std::cerr << "contactbench " << argv[1] << ": error: " << e.what() << "\n";
         return 2;

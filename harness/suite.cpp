@@ -119,6 +119,12 @@ Suite parse_suite(const nlohmann::json& j, const std::string& where)
         const auto& v = j["snapshots"];
         if (!v.is_array()) throw_input_error(where, "/snapshots", "expected an array of paths/globs, got " + type_name(v));
         for (size_t i = 0; i < v.size(); ++i) {
+            if (v[i].is_object()) {  // a simulation folder with a frame selection
+                s.simulations.push_back(parse_suite_simulation(v[i], where + ": /snapshots/" + std::to_string(i)));
+                s.simulations.back().position = s.snapshots.size();
+                s.simulations.back().field = "/snapshots/" + std::to_string(i);
+                continue;
+            }
             if (!v[i].is_string() || v[i].get<std::string>().empty())
                 throw_input_error(where, "/snapshots/" + std::to_string(i), "expected a non-empty string, got " + v[i].dump());
             s.snapshots.push_back(v[i].get<std::string>());
@@ -149,7 +155,7 @@ Suite parse_suite(const nlohmann::json& j, const std::string& where)
             s.generate.push_back(std::move(g));
         }
     }
-    if (s.snapshots.empty() && s.generate.empty())
+    if (s.snapshots.empty() && s.simulations.empty() && s.generate.empty())
         throw_input_error(where, "/snapshots", "the suite names no snapshots and generates none");
     if (!j.contains("solvers")) throw_input_error(where, "/solvers", "missing (an array of {label, solver, settings})");
     const auto& solvers = j["solvers"];
@@ -217,7 +223,14 @@ std::vector<SuiteSnapshot> resolve_snapshots(const Suite& suite, const std::stri
         if (!seen_paths.insert(key).second) return;
         found.emplace_back(p.stem().string(), p.string());
     };
-    for (size_t i = 0; i < suite.snapshots.size(); ++i) {
+    auto add_simulations_at = [&](size_t position) {
+        for (const auto& sim : suite.simulations)
+            if (sim.position == position)
+                for (const auto& f : expand_suite_simulation(sim, suite.path)) add(f);
+    };
+    for (size_t i = 0; i <= suite.snapshots.size(); ++i) {
+        add_simulations_at(i);
+        if (i == suite.snapshots.size()) break;
         const std::string& pattern = suite.snapshots[i];
         const fs::path full = fs::path(pattern).is_absolute() ? fs::path(pattern) : base / pattern;
         const std::string field = "/snapshots/" + std::to_string(i);

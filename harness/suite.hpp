@@ -21,10 +21,27 @@ struct SuiteGenerate {
     nlohmann::json params = nlohmann::json::object();
 };
 
+/// A `snapshots` entry that picks the snapshots of a simulation folder (`contactbench simulate
+/// --out DIR`) from its steps.csv: {"sim": DIR, "frames": "a:b", "stride": k, "min_rows": r,
+/// "newton": i, "scene": SCENE.json}. Frames a..b-1 (either end may be omitted; "a" is one frame),
+/// every k-th of them, steps with at least r contact rows, Newton iteration i (default: all).
+struct SuiteSimulation {
+    size_t position = 0;     ///< number of string patterns listed before it (keeps the suite's order)
+    std::string field;       ///< "/snapshots/<i>", for messages
+    std::string folder;      ///< as written (relative to the suite file)
+    long first = 0;          ///< first frame
+    long end = -1;           ///< one past the last frame; -1: to the end
+    long stride = 1;
+    long min_rows = 0;
+    long newton = -1;        ///< -1: every Newton iteration
+    std::string scene;       ///< optional: the scene file, so that errors print the exact command
+};
+
 struct Suite {
     std::string path;                   ///< the suite file
     std::string name;
     std::vector<std::string> snapshots; ///< patterns, as written (relative to the suite file)
+    std::vector<SuiteSimulation> simulations;  ///< simulation entries of `snapshots`
     std::vector<SuiteGenerate> generate;
     std::vector<SuiteSolver> solvers;
     double tol = 1e-6;                  ///< default `tol` of every solver (a solver's own setting wins)
@@ -59,6 +76,14 @@ std::string cache_dir();
 /// `generated_dir` (default cache_dir()/generated) under a name derived from a hash of
 /// {family, seed, params}, reused when already there). A pattern matching nothing is an InputError.
 std::vector<SuiteSnapshot> resolve_snapshots(const Suite& suite, const std::string& generated_dir = "");
+
+/// Parses a simulation entry of `snapshots` (`at` names it in messages); InputError on bad keys.
+SuiteSimulation parse_suite_simulation(const nlohmann::json& entry, const std::string& at);
+
+/// The snapshot files a simulation entry selects, in frame order. InputError naming the suite
+/// field when the folder, its steps.csv, a frame or a snapshot is missing, with the
+/// `contactbench simulate` command that writes it.
+std::vector<std::string> expand_suite_simulation(const SuiteSimulation& sim, const std::string& suite_path);
 
 /// 64-bit FNV-1a as 16 hex digits.
 std::string fnv1a_hex(const std::string& bytes);

@@ -183,7 +183,7 @@ def convert_figures(read) -> Dict[str, str]:
 
 # ---------------------------------------------------------------- fetching and verifying
 
-def read_manifest(path: str = MANIFEST) -> Dict[str, str]:
+def read_manifest(path: str) -> Dict[str, str]:
     """path in the tree -> SHA-256 hex."""
     out = {}
     with open(path) as f:
@@ -311,7 +311,7 @@ def main(argv: Optional[List[str]] = None) -> int:
         print(f"paper-data: {msg}", file=sys.stderr, flush=True)
 
     try:
-        manifest = read_manifest()
+        manifest = read_manifest(MANIFEST)
         with tempfile.TemporaryDirectory(prefix="cb-paper-data-") as scratch:
             root, desc = fetch(args.source, scratch, say)
             needed = sorted(set(COPIED.values()) | set(RAW.values()))

@@ -10,17 +10,27 @@
 
 namespace cb {
 
+namespace {
+
+/// The entry with its applicability line (what `contactbench solvers` prints beside the name).
+SolverEntry applies_to(SolverEntry entry, const char* problems)
+{
+    entry.applies_to = problems;
+    return entry;
+}
+
+} // namespace
+
 void register_builtin_solvers(SolverRegistry& registry)
 {
-    (void)registry;
-    // REGISTRATIONS (one line each, keep sorted):
-    registry.add("active-set", active_set_entry());
-    registry.add("cg", cg_entry());
-    registry.add("mprgp", mprgp_entry());
-    registry.add("mprgp-box", mprgp_box_entry());
-    registry.add("mprgp-coupled", mprgp_coupled_entry());
-    registry.add("ica", ica_entry());
-    registry.add("pgs", pgs_entry());
+    // REGISTRATIONS (one line each): registry.add("name", name_entry());
+    registry.add("active-set", applies_to(active_set_entry(), "any J (dense Schur complement of the working set)"));
+    registry.add("cg", applies_to(cg_entry(), "ignores J (solves Ax = b)"));
+    registry.add("mprgp", applies_to(mprgp_entry(), "decoupled rows only (the harness decouples a coupled J first)"));
+    registry.add("mprgp-box", applies_to(mprgp_box_entry(), "bounds only (every row of J has at most one nonzero)"));
+    registry.add("mprgp-coupled", applies_to(mprgp_coupled_entry(), "any J"));
+    registry.add("ica", applies_to(ica_entry(), "any J"));
+    registry.add("pgs", applies_to(pgs_entry(), "any J with at most max_rows rows (2000; the dual matrix is dense)"));
 }
 
 } // namespace cb

@@ -18,6 +18,7 @@ struct SolverEntry {
     SolverFactory make;
     std::string description;             ///< one line for `--help`
     std::vector<SettingDoc> settings;    ///< solver-specific keys (the common ones are implied)
+    std::string applies_to = "any J";    ///< which problems it accepts, for `contactbench solvers`
 };
 
 class SolverRegistry {
