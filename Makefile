@@ -83,9 +83,9 @@ baseline: build
 demo: deps build
 	$(CB) simulate scenes/demo.json --out results/demo/sim
 	$(CB) run suites/demo.json --out results/demo
-	$(PY) plots/convergence.py results/demo
-	$(PY) plots/profiles.py results/demo
-	$(PY) plots/reproduce.py --contactbench $(CB) --data $(DATA) --out results/paper --quick
+	$(PY) -m plots.convergence results/demo
+	$(PY) -m plots.profiles results/demo
+	$(PY) -m plots.reproduce --contactbench $(CB) --data $(DATA) --out results/paper --quick
 	@echo "demo: simulation pictures in results/demo/sim/, solver figures and profiles in results/demo/figures/,"
 	@echo "      the paper's figures and claims (quick mode) in results/paper/report.md"
 
@@ -103,11 +103,11 @@ bench: build
 	$(BUILD)/bin/cb_bench --benchmark_out=results/bench/bench.json --benchmark_out_format=json
 
 reproduce: deps build
-	$(PY) plots/reproduce.py --contactbench $(CB) --data $(DATA) --out results/paper $(if $(QUICK),--quick,)
+	$(PY) -m plots.reproduce --contactbench $(CB) --data $(DATA) --out results/paper $(if $(QUICK),--quick,)
 
 stress: build
 	$(CB) stress --out results/stress
-	$(PY) plots/stability.py results/stress
+	$(PY) -m plots.stability results/stress
 
 fuzz: deps
 	cmake -S . -B $(BUILD)-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DCB_FUZZ=ON \

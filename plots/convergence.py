@@ -12,11 +12,10 @@ import os
 import sys
 from typing import List
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-import figutil  # noqa: E402
-from figutil import plt  # noqa: E402
-from loader import Results, load_results  # noqa: E402
+from plots import figutil  # noqa: E402
+from plots.figutil import plt  # noqa: E402
+from plots.loader import Results, load_results  # noqa: E402
 
 AXES = (("time_s", "time [s] (solver only)", "time"),
         ("iteration", "iterations", "iterations"),

@@ -11,15 +11,14 @@ from __future__ import annotations
 import os
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 import numpy as np  # noqa: E402
 
-import figutil  # noqa: E402
-from claims import (DOES_NOT_HOLD, HOLDS, HOLDS_NATIVE_ONLY, NOT_MEASURED, Claim)  # noqa: E402
-from figutil import fmt, plt  # noqa: E402
-from loader import measured, unmeasured_notes  # noqa: E402
-from paper_context import FigureOutcome, NotProduced, PaperContext, run_standalone  # noqa: E402
+from plots import figutil  # noqa: E402
+from plots.claims import (DOES_NOT_HOLD, HOLDS, HOLDS_NATIVE_ONLY, NOT_MEASURED, Claim)  # noqa: E402
+from plots.figutil import fmt, plt  # noqa: E402
+from plots.loader import measured, unmeasured_notes  # noqa: E402
+from plots.paper_context import FigureOutcome, NotProduced, PaperContext, run_standalone  # noqa: E402
 
 SUITE = "fig10"
 MPRGP = "mprgp"

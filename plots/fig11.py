@@ -14,15 +14,14 @@ from __future__ import annotations
 import os
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 import numpy as np  # noqa: E402
 
-import figutil  # noqa: E402
-from claims import Claim, verdict_published_fair, verdict_threshold  # noqa: E402
-from figutil import fmt, plt  # noqa: E402
-from loader import measured, unmeasured_notes  # noqa: E402
-from paper_context import FigureOutcome, NotProduced, PaperContext, run_standalone  # noqa: E402
+from plots import figutil  # noqa: E402
+from plots.claims import Claim, verdict_published_fair, verdict_threshold  # noqa: E402
+from plots.figutil import fmt, plt  # noqa: E402
+from plots.loader import measured, unmeasured_notes  # noqa: E402
+from plots.paper_context import FigureOutcome, NotProduced, PaperContext, run_standalone  # noqa: E402
 
 SUITE = "fig11"
 PAIRS = {"published": ("mprgp-published", "ica-published"), "fair": ("mprgp-fair", "ica-fair")}

@@ -15,16 +15,15 @@ from __future__ import annotations
 import os
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-import figutil  # noqa: E402
-from claims import Claim, verdict_published_fair  # noqa: E402
-from figutil import fmt, plt  # noqa: E402
-from loader import UNMEASURED_STATUSES, unmeasured_notes  # noqa: E402
-from paper_context import FigureOutcome, NotProduced, PaperContext, run_standalone  # noqa: E402
+from plots import figutil  # noqa: E402
+from plots.claims import Claim, verdict_published_fair  # noqa: E402
+from plots.figutil import fmt, plt  # noqa: E402
+from plots.loader import UNMEASURED_STATUSES, unmeasured_notes  # noqa: E402
+from plots.paper_context import FigureOutcome, NotProduced, PaperContext, run_standalone  # noqa: E402
 
 SUITE = "fig8"
 MPRGP, MPRGP_NONE, CG_NONE, CG_JACOBI = "mprgp-jacobi", "mprgp-none", "cg-none", "cg-jacobi"

@@ -5,6 +5,13 @@ per-run records, with histories when recorded), suite.json and provenance.json. 
 folders (``contactbench simulate``) hold snapshots/*.qpsnap, steps.csv and frames.csv.
 
 Everything here only reads; nothing is computed that the harness already computed.
+
+This is the pandas entry point of contactbench (docs/INTERFACES.md gives every column's unit):
+
+    from plots.loader import load_results, load_simulation
+    res = load_results("results/demo")        # .summary, .runs, .histories DataFrames
+    res.history("plane-s1", "mprgp")          # one run's history
+    load_simulation("results/demo/sim")       # steps.csv, frames.csv, snapshot headers
 """
 from __future__ import annotations
 

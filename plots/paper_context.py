@@ -13,8 +13,8 @@ from typing import Dict, List, Optional
 
 import pandas as pd
 
-from claims import Claim
-from loader import Results, load_results, load_simulation
+from plots.claims import Claim
+from plots.loader import Results, load_results, load_simulation
 
 
 class NotProduced(Exception):

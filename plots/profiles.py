@@ -21,14 +21,13 @@ import os
 import sys
 from typing import Dict, Iterable, List
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-import figutil  # noqa: E402
-from figutil import TIERS, fmt, plt  # noqa: E402
-from loader import Results, load_results  # noqa: E402
+from plots import figutil  # noqa: E402
+from plots.figutil import TIERS, fmt, plt  # noqa: E402
+from plots.loader import Results, load_results  # noqa: E402
 
 DEFAULT_SHIFT_S = 10.0
 

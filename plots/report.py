@@ -13,10 +13,9 @@ import os
 import sys
 from typing import Dict, List, Optional
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from claims import NOT_MEASURED, Claim  # noqa: E402
-from paper_context import FigureOutcome, NotProduced, PaperContext  # noqa: E402
+from plots.claims import NOT_MEASURED, Claim  # noqa: E402
+from plots.paper_context import FigureOutcome, NotProduced, PaperContext  # noqa: E402
 
 #: the claims every report has a row for, in order, with the figure that measures each
 EXPECTED_CLAIMS = [
@@ -32,12 +31,12 @@ EXPECTED_CLAIMS = [
 
 
 def figure_modules():
-    import fig6
-    import fig8
-    import fig9
-    import fig10
-    import fig11
-    import table1
+    from plots import fig6
+    from plots import fig8
+    from plots import fig9
+    from plots import fig10
+    from plots import fig11
+    from plots import table1
     return [fig6, fig8, fig9, fig10, fig11, table1]
 
 

@@ -30,14 +30,13 @@ import threading
 import time
 from typing import Dict, List, Optional
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 import pandas as pd  # noqa: E402
 
-import profiles  # noqa: E402
-import report  # noqa: E402
-from loader import UNMEASURED_STATUSES, load_results, snapshot_table  # noqa: E402
-from paper_context import PaperContext, default_data_dir  # noqa: E402
+from plots import profiles  # noqa: E402
+from plots import report  # noqa: E402
+from plots.loader import UNMEASURED_STATUSES, load_results, snapshot_table  # noqa: E402
+from plots.paper_context import PaperContext, default_data_dir  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 MARKER = ".reproduce.json"

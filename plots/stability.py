@@ -16,14 +16,13 @@ import os
 import sys
 from typing import List, Optional
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-import figutil  # noqa: E402
-from figutil import plt  # noqa: E402
-from loader import _to_bool  # noqa: E402
+from plots import figutil  # noqa: E402
+from plots.figutil import plt  # noqa: E402
+from plots.loader import _to_bool  # noqa: E402
 
 CANDIDATES = {
     "solver": ("label", "solver"),

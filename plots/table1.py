@@ -11,15 +11,14 @@ from __future__ import annotations
 import os
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from claims import Claim, verdict_threshold  # noqa: E402
-from figutil import fmt  # noqa: E402
-from loader import measured  # noqa: E402
-from paper_context import FigureOutcome, NotProduced, PaperContext  # noqa: E402
+from plots.claims import Claim, verdict_threshold  # noqa: E402
+from plots.figutil import fmt  # noqa: E402
+from plots.loader import measured  # noqa: E402
+from plots.paper_context import FigureOutcome, NotProduced, PaperContext  # noqa: E402
 
 #: paper.txt, Table 1 (Sec. 6.1): figure, vertices, tets, h [ms], cg/it, t [s per solve], frames
 PAPER = {
@@ -141,7 +140,7 @@ def produce(ctx: PaperContext) -> FigureOutcome:
 
 def _standalone(argv) -> int:
     # the results folder is one scene's runs: register it under that scene's suite name
-    from paper_context import standalone_context
+    from plots.paper_context import standalone_context
     ctx = standalone_context(argv, "table1", __doc__.splitlines()[0])
     folder = ctx.results.pop("table1")
     scene = next(iter(ctx.sims), None)

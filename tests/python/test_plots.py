@@ -15,19 +15,13 @@ from contextlib import redirect_stdout
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-sys.path.insert(0, os.path.join(ROOT, "plots"))
+sys.path.insert(0, ROOT)  # plots/ is a package of the repository root
 sys.path.insert(0, os.path.join(HERE, "fixtures"))
 os.environ.setdefault("MPLBACKEND", "Agg")
 
 import make_fixture as mf  # noqa: E402
-import claims  # noqa: E402
-import convergence  # noqa: E402
-import loader  # noqa: E402
-import profiles  # noqa: E402
-import report  # noqa: E402
-import reproduce  # noqa: E402
-import stability  # noqa: E402
-from paper_context import PaperContext  # noqa: E402
+from plots import claims, convergence, loader, profiles, report, reproduce, stability  # noqa: E402
+from plots.paper_context import PaperContext  # noqa: E402
 
 FAKE_CB = os.path.join(HERE, "fixtures", "fake_contactbench.py")
 
@@ -86,7 +80,7 @@ class TestConvergence(TempDirCase):
                 self.assertTrue(os.path.getsize(path) > 1000, path)
 
     def test_empty_folder_is_an_error(self):
-        self.assertEqual(convergence.main.__module__, "convergence")
+        self.assertEqual(convergence.main.__module__, "plots.convergence")
         os.makedirs(os.path.join(self.tmp, "runs"))
         import contextlib
         with contextlib.redirect_stderr(io.StringIO()) as err:
@@ -206,7 +200,7 @@ class TestVerdicts(unittest.TestCase):
         self.assertEqual(claims.verdict_threshold(0.5, 1.0, greater=False), claims.HOLDS)
 
     def test_first_reach_and_settle_time(self):
-        import figutil
+        from plots import figutil
         import pandas as pd
         # ICA-like: 0 at the start, up, then down for good at t = 3
         h = pd.DataFrame({"time_s": [0.0, 1.0, 2.0, 3.0, 4.0], "r": [0.0, 1.0, 0.5, 0.01, 0.001]})
@@ -216,7 +210,7 @@ class TestVerdicts(unittest.TestCase):
         self.assertEqual(figutil.settle_time(h, "r", 2.0), 0.0)
 
     def test_fig8_relative_error(self):
-        import fig8
+        from plots import fig8
         import pandas as pd
         err = fig8.relative_error(pd.Series([0.0, -0.9, -0.99, -1.0]), -1.0)
         self.assertEqual(err.tolist()[0], 1.0)

@@ -15,9 +15,9 @@ import zlib
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(HERE)), "plots"))
+sys.path.insert(0, os.path.dirname(os.path.dirname(HERE)))  # plots/ is a package of the repository root
 
-import qpsnap  # noqa: E402
+from plots import qpsnap  # noqa: E402
 
 CONTACTBENCH = os.environ.get("CB_CONTACTBENCH", "")
 HAVE_CB = bool(CONTACTBENCH) and os.path.exists(CONTACTBENCH)
