@@ -35,12 +35,12 @@ int cmd_version(const Args& args)
     const nlohmann::json dirty = p.value("git_dirty", nlohmann::json());
     std::cout << "contactbench " << text("git_commit")
               << (dirty.is_boolean() ? (dirty.get<bool>() ? " (uncommitted changes)" : "") : " (not a git checkout)") << "\n"
-              << "build type   " << text("build_type") << "\n"
-              << "compiler     " << text("compiler") << "\n"
-              << "Eigen        " << text("eigen") << "\n"
-              << "SuiteSparse  " << text("suitesparse") << "\n"
+              << "build type    " << text("build_type") << "\n"
+              << "compiler      " << text("compiler") << "\n"
+              << "Eigen         " << text("eigen") << "\n"
+              << "SuiteSparse   " << text("suitesparse") << "\n"
               << "nlohmann-json " << json_version << "\n"
-              << "BLAS         " << text("blas") << "\n";
+              << "BLAS          " << text("blas") << "\n";
     return 0;
 }
 
