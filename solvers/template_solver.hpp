@@ -34,7 +34,7 @@ std::vector<SettingDoc> template_setting_docs();
 
 class TemplateSolver final : public Solver {
 public:
-    explicit TemplateSolver(TemplateSettings settings) : m_settings(std::move(settings)) {}
+    explicit TemplateSolver(const TemplateSettings& settings) : m_settings(settings) {}
     std::string name() const override { return "template"; }
     nlohmann::json settings() const override { return m_settings.to_json(); }
     SolverResult solve(const QpView& qp, const SolveContext& context) override;
