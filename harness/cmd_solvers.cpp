@@ -12,9 +12,9 @@ namespace cb {
 int cmd_solvers(const Args& args)
 {
     const CommandLine cl("solvers", args, {}, {"--json"});
-    const std::string usage =
-        "usage: contactbench solvers [--json]\n"
-        "  every registered solver: name, applicability, description (settings: contactbench solve --solver NAME --help)\n";
+    const std::string usage = "usage: contactbench solvers [--json]\n"
+                              "  every registered solver: name, applicability, description (settings: contactbench "
+                              "solve --solver NAME --help)\n";
     if (cl.help()) {
         std::cout << usage;
         return 0;
@@ -27,8 +27,10 @@ int cmd_solvers(const Args& args)
         for (const auto& name : names) {
             const SolverEntry& e = registry.entry(name);
             nlohmann::json settings = nlohmann::json::array();
-            for (const auto& s : e.settings) settings.push_back({{"key", s.key}, {"default", s.default_value}, {"doc", s.doc}});
-            out.push_back({{"name", name}, {"applies_to", e.applies_to}, {"description", e.description}, {"settings", settings}});
+            for (const auto& s : e.settings)
+                settings.push_back({{"key", s.key}, {"default", s.default_value}, {"doc", s.doc}});
+            out.push_back(
+                {{"name", name}, {"applies_to", e.applies_to}, {"description", e.description}, {"settings", settings}});
         }
         std::cout << out.dump(1) << "\n";
         return 0;
@@ -43,4 +45,4 @@ int cmd_solvers(const Args& args)
     return 0;
 }
 
-} // namespace cb
+}  // namespace cb

@@ -22,10 +22,11 @@ int cmd_version(const Args& args)
     const std::string json_version = std::to_string(NLOHMANN_JSON_VERSION_MAJOR) + "." +
                                      std::to_string(NLOHMANN_JSON_VERSION_MINOR) + "." +
                                      std::to_string(NLOHMANN_JSON_VERSION_PATCH);
-    auto text = [&](const char* key) { return p.contains(key) && p[key].is_string() ? p[key].get<std::string>() : "unknown"; };
+    auto text = [&](const char* key) {
+        return p.contains(key) && p[key].is_string() ? p[key].get<std::string>() : "unknown";
+    };
     if (cl.has("--json")) {
-        nlohmann::json out = {{"git_commit", text("git_commit")},
-                              {"git_dirty", p.value("git_dirty", nlohmann::json())},
+        nlohmann::json out = {{"git_commit", text("git_commit")}, {"git_dirty", p.value("git_dirty", nlohmann::json())},
                               {"build_type", text("build_type")}, {"compiler", text("compiler")},
                               {"eigen", text("eigen")},           {"suitesparse", text("suitesparse")},
                               {"nlohmann_json", json_version},    {"blas", text("blas")}};
@@ -34,7 +35,8 @@ int cmd_version(const Args& args)
     }
     const nlohmann::json dirty = p.value("git_dirty", nlohmann::json());
     std::cout << "contactbench " << text("git_commit")
-              << (dirty.is_boolean() ? (dirty.get<bool>() ? " (uncommitted changes)" : "") : " (not a git checkout)") << "\n"
+              << (dirty.is_boolean() ? (dirty.get<bool>() ? " (uncommitted changes)" : "") : " (not a git checkout)")
+              << "\n"
               << "build type    " << text("build_type") << "\n"
               << "compiler      " << text("compiler") << "\n"
               << "Eigen         " << text("eigen") << "\n"
@@ -44,4 +46,4 @@ int cmd_version(const Args& args)
     return 0;
 }
 
-} // namespace cb
+}  // namespace cb

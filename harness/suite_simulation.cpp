@@ -23,14 +23,16 @@ long parse_frame(const std::string& text, const std::string& at, const std::stri
         if (used == text.size() && v >= 0) return v;
     } catch (const std::exception&) {
     }
-    throw_input_error(at, "/frames", "expected \"a:b\", \"a:\", \":b\" or \"a\" with frames >= 0, got \"" + whole + "\"");
+    throw_input_error(at, "/frames",
+                      "expected \"a:b\", \"a:\", \":b\" or \"a\" with frames >= 0, got \"" + whole + "\"");
 }
 
 long non_negative(const nlohmann::json& e, const char* key, const std::string& at, long fallback, long min)
 {
     if (!e.contains(key)) return fallback;
     if (!e[key].is_number_integer() || e[key].get<long>() < min)
-        throw_input_error(at, std::string("/") + key, "expected an integer >= " + std::to_string(min) + ", got " + e[key].dump());
+        throw_input_error(at, std::string("/") + key,
+                          "expected an integer >= " + std::to_string(min) + ", got " + e[key].dump());
     return e[key].get<long>();
 }
 
@@ -53,7 +55,7 @@ std::string simulate_command(const SuiteSimulation& sim, const fs::path& folder,
     return cmd;
 }
 
-} // namespace
+}  // namespace
 
 SuiteSimulation parse_suite_simulation(const nlohmann::json& e, const std::string& at)
 {
@@ -63,8 +65,9 @@ SuiteSimulation parse_suite_simulation(const nlohmann::json& e, const std::strin
             throw_input_error(at, "/" + item.key(), "unknown key; known: frames, min_rows, newton, scene, sim, stride");
     SuiteSimulation s;
     if (!e.contains("sim") || !e["sim"].is_string() || e["sim"].get<std::string>().empty())
-        throw_input_error(at, "/sim", "expected the folder of a simulation (contactbench simulate --out DIR), got " +
-                                          (e.contains("sim") ? e["sim"].dump() : std::string("nothing")));
+        throw_input_error(at, "/sim",
+                          "expected the folder of a simulation (contactbench simulate --out DIR), got " +
+                              (e.contains("sim") ? e["sim"].dump() : std::string("nothing")));
     s.folder = e["sim"].get<std::string>();
     if (e.contains("frames")) {
         const auto& f = e["frames"];
@@ -92,7 +95,8 @@ SuiteSimulation parse_suite_simulation(const nlohmann::json& e, const std::strin
     s.min_rows = non_negative(e, "min_rows", at, 0, 0);
     s.newton = non_negative(e, "newton", at, -1, 0);
     if (e.contains("scene")) {
-        if (!e["scene"].is_string()) throw_input_error(at, "/scene", "expected a scene file name, got " + e["scene"].dump());
+        if (!e["scene"].is_string())
+            throw_input_error(at, "/scene", "expected a scene file name, got " + e["scene"].dump());
         s.scene = e["scene"].get<std::string>();
     }
     return s;
@@ -117,7 +121,8 @@ std::vector<std::string> expand_suite_simulation(const SuiteSimulation& sim, con
     for (size_t k = 0; k < header.size(); ++k) col[header[k]] = k;
     for (const char* need : {"frame", "newton_iteration", "rows", "snapshot"})
         if (!col.count(need))
-            throw_input_error(steps_csv.string(), "", std::string("no column '") + need + "' in the header '" + line + "'");
+            throw_input_error(steps_csv.string(), "",
+                              std::string("no column '") + need + "' in the header '" + line + "'");
 
     // Frame -> its steps (a frame has one step per Newton iteration), in file order.
     struct Step {
@@ -131,12 +136,14 @@ std::vector<std::string> expand_suite_simulation(const SuiteSimulation& sim, con
         const std::vector<std::string> cells = split(line, ',');
         if (cells.size() != header.size())
             throw_input_error(steps_csv.string(), "line " + std::to_string(number),
-                              "expected " + std::to_string(header.size()) + " cells, got " + std::to_string(cells.size()));
+                              "expected " + std::to_string(header.size()) + " cells, got " +
+                                  std::to_string(cells.size()));
         try {
             steps.push_back({std::stol(cells[col["frame"]]), std::stol(cells[col["newton_iteration"]]),
                              std::stol(cells[col["rows"]]), cells[col["snapshot"]]});
         } catch (const std::exception&) {
-            throw_input_error(steps_csv.string(), "line " + std::to_string(number), "frame, newton_iteration and rows must be integers");
+            throw_input_error(steps_csv.string(), "line " + std::to_string(number),
+                              "frame, newton_iteration and rows must be integers");
         }
         last_frame = std::max(last_frame, steps.back().frame);
     }
@@ -167,8 +174,8 @@ std::vector<std::string> expand_suite_simulation(const SuiteSimulation& sim, con
         const fs::path file = folder / "snapshots" / fs::path(st.snapshot).filename();
         if (!fs::is_regular_file(file))
             throw_input_error(suite_path, sim.field,
-                              "snapshot '" + file.string() + "' is missing; make it with: " +
-                                  simulate_command(sim, folder, frames_needed));
+                              "snapshot '" + file.string() +
+                                  "' is missing; make it with: " + simulate_command(sim, folder, frames_needed));
         out.push_back(file.string());
     }
     if (out.empty())
@@ -178,4 +185,4 @@ std::vector<std::string> expand_suite_simulation(const SuiteSimulation& sim, con
     return out;
 }
 
-} // namespace cb
+}  // namespace cb

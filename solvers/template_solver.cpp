@@ -59,8 +59,10 @@ bool bounds_from_rows(const QpView& qp, Bounds& out, std::string& why)
             out.row_col[static_cast<size_t>(i)] = it.col();
             out.row_coef[static_cast<size_t>(i)] = it.value();
             const double bound = qp.c[i] / it.value();
-            if (it.value() > 0) out.lo[it.col()] = std::max(out.lo[it.col()], bound);
-            else out.hi[it.col()] = std::min(out.hi[it.col()], bound);
+            if (it.value() > 0)
+                out.lo[it.col()] = std::max(out.lo[it.col()], bound);
+            else
+                out.hi[it.col()] = std::min(out.hi[it.col()], bound);
         }
         if (out.row_col[static_cast<size_t>(i)] < 0 && qp.c[i] > 0) {
             why = "row " + std::to_string(i) + " is zero but c > 0: no feasible point";
@@ -92,7 +94,7 @@ Vec bound_multipliers(const QpView& qp, const Bounds& bounds, const Vec& x, cons
     return lambda;
 }
 
-} // namespace
+}  // namespace
 
 SolverResult TemplateSolver::solve(const QpView& qp, const SolveContext& context)
 {
@@ -202,4 +204,4 @@ SolverEntry template_entry()
     return entry;
 }
 
-} // namespace cb
+}  // namespace cb

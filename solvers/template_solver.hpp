@@ -22,8 +22,8 @@ namespace cb {
 
 /// Every setting with its default; `from_json` checks them, `to_json` records the effective values.
 struct TemplateSettings {
-    CommonSettings common;     ///< tol, stop, max_iterations, time_limit_s, seed
-    double step_scale = 1.0;   ///< step t = step_scale / |A|_inf, in (0, 2)
+    CommonSettings common;    ///< tol, stop, max_iterations, time_limit_s, seed
+    double step_scale = 1.0;  ///< step t = step_scale / |A|_inf, in (0, 2)
 
     static TemplateSettings from_json(const nlohmann::json& settings);  ///< throws InputError
     nlohmann::json to_json() const;
@@ -46,4 +46,4 @@ private:
 /// Registry entry: factory, one-line description, setting docs, applicability.
 SolverEntry template_entry();
 
-} // namespace cb
+}  // namespace cb

@@ -71,9 +71,10 @@ TEST_F(SuiteSimulation, FrameRangeStrideAndMinRows)
 
 TEST_F(SuiteSimulation, KeepsTheSuiteOrderAmongPatterns)
 {
-    const nlohmann::json suite = {{"name", "s"},
-                                  {"snapshots", {"sim/x/snapshots/x_f0000_n0.qpsnap", {{"sim", "sim/x"}, {"frames", "4:5"}}}},
-                                  {"solvers", {"cg"}}};
+    const nlohmann::json suite = {
+        {"name", "s"},
+        {"snapshots", {"sim/x/snapshots/x_f0000_n0.qpsnap", {{"sim", "sim/x"}, {"frames", "4:5"}}}},
+        {"solvers", {"cg"}}};
     const auto snaps = cb::resolve_snapshots(cb::parse_suite(suite, (root / "suite.json").string()));
     ASSERT_EQ(snaps.size(), 2u);
     EXPECT_EQ(snaps[0].id, "x_f0000_n0");
@@ -92,10 +93,12 @@ TEST_F(SuiteSimulation, MissingFolderSaysWhichCommandMakesIt)
 TEST_F(SuiteSimulation, TooFewFramesSaysHowManyToSimulate)
 {
     const std::string msg = error({{"sim", "sim/x"}, {"frames", "4:9"}});
-    EXPECT_NE(msg.find("frames up to 8 asked, but '" + (root / "sim/x").string() + "' holds frames 0..5"), std::string::npos)
-        << msg;
-    EXPECT_NE(msg.find("make them with: contactbench simulate SCENE.json --out " + (root / "sim/x").string() + " --frames 9"),
+    EXPECT_NE(msg.find("frames up to 8 asked, but '" + (root / "sim/x").string() + "' holds frames 0..5"),
               std::string::npos)
+        << msg;
+    EXPECT_NE(
+        msg.find("make them with: contactbench simulate SCENE.json --out " + (root / "sim/x").string() + " --frames 9"),
+        std::string::npos)
         << msg;
 }
 
@@ -115,11 +118,13 @@ TEST_F(SuiteSimulation, BadEntriesAreNamed)
     const std::string suite = (root / "suite.json").string();
     EXPECT_EQ(error({{"sim", "sim/x"}, {"frames", "5:3"}}),
               suite + ": /snapshots/0: /frames: \"5:3\" selects no frame (a:b means frames a to b-1)");
-    EXPECT_EQ(error({{"sim", "sim/x"}, {"stride", 0}}), suite + ": /snapshots/0: /stride: expected an integer >= 1, got 0");
+    EXPECT_EQ(error({{"sim", "sim/x"}, {"stride", 0}}),
+              suite + ": /snapshots/0: /stride: expected an integer >= 1, got 0");
     EXPECT_EQ(error({{"sim", "sim/x"}, {"frame", "1"}}),
               suite + ": /snapshots/0: /frame: unknown key; known: frames, min_rows, newton, scene, sim, stride");
-    EXPECT_EQ(error({{"sim", "sim/x"}, {"min_rows", 1000}}),
-              suite + ": /snapshots/0: selects no snapshot of '" + (root / "sim/x").string() + "' (frames 0..5, min_rows 1000)");
+    EXPECT_EQ(error({{"sim", "sim/x"}, {"min_rows", 1000}}), suite + ": /snapshots/0: selects no snapshot of '" +
+                                                                 (root / "sim/x").string() +
+                                                                 "' (frames 0..5, min_rows 1000)");
 }
 
-} // namespace
+}  // namespace

@@ -82,4 +82,4 @@ TEST(TemplateSolver, SettingsAreCheckedAndRecorded)
     EXPECT_EQ(registry.entry("template").applies_to, "bounds only (every row of J has at most one nonzero)");
 }
 
-} // namespace
+}  // namespace
