@@ -46,11 +46,15 @@ std::vector<std::string> split(const std::string& line, char sep)
     return out;
 }
 
-/// The command that writes the simulation folder, for error messages.
-std::string simulate_command(const SuiteSimulation& sim, const fs::path& folder, long frames_needed)
+/// The command that writes the simulation folder, for error messages: paths as seen from the
+/// working directory (the suite's are relative to the suite file), so that it can be pasted.
+std::string simulate_command(const SuiteSimulation& sim, const fs::path& base, const fs::path& folder,
+                             long frames_needed)
 {
-    const std::string scene = sim.scene.empty() ? "SCENE.json" : sim.scene;
-    std::string cmd = "contactbench simulate " + scene + " --out " + folder.string();
+    std::string scene = "SCENE.json";
+    if (!sim.scene.empty())
+        scene = fs::path(sim.scene).is_absolute() ? sim.scene : (base / sim.scene).lexically_normal().string();
+    std::string cmd = "contactbench simulate " + scene + " --out " + folder.lexically_normal().string();
     if (frames_needed > 0) cmd += " --frames " + std::to_string(frames_needed);
     return cmd;
 }
@@ -105,14 +109,15 @@ SuiteSimulation parse_suite_simulation(const nlohmann::json& e, const std::strin
 std::vector<std::string> expand_suite_simulation(const SuiteSimulation& sim, const std::string& suite_path)
 {
     const fs::path base = fs::path(suite_path).has_parent_path() ? fs::path(suite_path).parent_path() : fs::path(".");
-    const fs::path folder = fs::path(sim.folder).is_absolute() ? fs::path(sim.folder) : base / sim.folder;
+    const fs::path folder =
+        (fs::path(sim.folder).is_absolute() ? fs::path(sim.folder) : base / sim.folder).lexically_normal();
     const long frames_needed = sim.end >= 0 ? sim.end : 0;
     const fs::path steps_csv = folder / "steps.csv";
     if (!fs::is_regular_file(steps_csv))
         throw_input_error(suite_path, sim.field,
                           "no simulation in '" + folder.string() + "' (" +
                               (fs::is_directory(folder) ? "no steps.csv" : "no such folder") +
-                              "); make it with: " + simulate_command(sim, folder, frames_needed));
+                              "); make it with: " + simulate_command(sim, base, folder, frames_needed));
     std::ifstream in(steps_csv);
     std::string line;
     std::getline(in, line);
@@ -151,7 +156,7 @@ std::vector<std::string> expand_suite_simulation(const SuiteSimulation& sim, con
         throw_input_error(suite_path, sim.field,
                           "frames up to " + std::to_string(sim.end - 1) + " asked, but '" + folder.string() +
                               "' holds frames 0.." + std::to_string(last_frame) +
-                              "; make them with: " + simulate_command(sim, folder, frames_needed));
+                              "; make them with: " + simulate_command(sim, base, folder, frames_needed));
 
     std::vector<std::string> out;
     long selected = 0;  // index among the frames in range, for the stride
@@ -169,13 +174,13 @@ std::vector<std::string> expand_suite_simulation(const SuiteSimulation& sim, con
             throw_input_error(suite_path, sim.field,
                               "frame " + std::to_string(st.frame) + " of '" + folder.string() +
                                   "' has no snapshot (simulated with --no-snapshots?); make it with: " +
-                                  simulate_command(sim, folder, frames_needed));
+                                  simulate_command(sim, base, folder, frames_needed));
         // The snapshot lives in the folder's snapshots/ whatever path steps.csv recorded.
         const fs::path file = folder / "snapshots" / fs::path(st.snapshot).filename();
         if (!fs::is_regular_file(file))
             throw_input_error(suite_path, sim.field,
                               "snapshot '" + file.string() +
-                                  "' is missing; make it with: " + simulate_command(sim, folder, frames_needed));
+                                  "' is missing; make it with: " + simulate_command(sim, base, folder, frames_needed));
         out.push_back(file.string());
     }
     if (out.empty())

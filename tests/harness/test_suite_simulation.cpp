@@ -86,8 +86,9 @@ TEST_F(SuiteSimulation, MissingFolderSaysWhichCommandMakesIt)
     const std::string suite = (root / "suite.json").string();
     EXPECT_EQ(error({{"sim", "sim/demo"}, {"frames", "3:8"}, {"scene", "../scenes/demo.json"}}),
               suite + ": /snapshots/0: no simulation in '" + (root / "sim/demo").string() +
-                  "' (no such folder); make it with: contactbench simulate ../scenes/demo.json --out " +
-                  (root / "sim/demo").string() + " --frames 8");
+                  "' (no such folder); make it with: contactbench simulate " +
+                  (root.parent_path() / "scenes/demo.json").string() + " --out " + (root / "sim/demo").string() +
+                  " --frames 8");
 }
 
 TEST_F(SuiteSimulation, TooFewFramesSaysHowManyToSimulate)
