@@ -12,6 +12,7 @@
 #include "harness/reference.hpp"
 #include "harness/results.hpp"
 #include "harness/runner.hpp"
+#include "harness/slurm.hpp"
 #include "harness/suite.hpp"
 #include "problems/qpsnap.hpp"
 #include "solvers/decouple.hpp"  // select_rows
@@ -22,6 +23,7 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <optional>
 
 namespace cb {
 
@@ -98,8 +100,17 @@ int cmd_run(const Args& args)
     }
     cl.expect_positional(1, 1, kUsage);
     const Suite suite = load_suite(cl.positional()[0]);
-    const std::string out = cl.value("--out", "results/" + suite.name);
-    const Shard shard = cl.has("--shard") ? parse_shard(cl.value("--shard")) : Shard{};
+    std::string out = cl.value("--out", "results/" + suite.name);
+    Shard shard = cl.has("--shard") ? parse_shard(cl.value("--shard")) : Shard{};
+    if (!cl.has("--shard")) {
+        // A Slurm array task: its shard from the array variables, its own folder inside --out.
+        if (const std::optional<ArrayShard> task = shard_from_slurm(slurm_environment())) {
+            shard = {task->index, task->count};
+            out = (fs::path(out) / shard_folder_name(task->index, task->count)).string();
+            std::cerr << "run: Slurm array task " << slurm_environment()["SLURM_ARRAY_TASK_ID"] << ": shard "
+                      << shard.index << "/" << shard.count << " -> " << out << "\n";
+        }
+    }
     const bool force = cl.has("--force");
     const std::vector<SuiteSnapshot> snapshots = resolve_snapshots(suite);
     const auto& registry = builtin_registry();

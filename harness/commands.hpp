@@ -17,5 +17,7 @@ int cmd_simulate(const Args& args);
 int cmd_stress(const Args& args);
 int cmd_compare(const Args& args);
 int cmd_generate(const Args& args);
+// Slurm job arrays (issue 19).
+int cmd_cluster(const Args& args);
 
 } // namespace cb

@@ -25,6 +25,7 @@ const std::map<std::string, Command>& commands()
         {"simulate", {cb::cmd_simulate, "simulate SCENE.json [--frames N] [--out DIR] [--data DIR]"}},
         {"stress", {cb::cmd_stress, "stress [--out DIR]: the stress suite and its stability table"}},
         {"compare", {cb::cmd_compare, "compare BASE NEW: regression judge between two result sets"}},
+        {"cluster", {cb::cmd_cluster, "cluster slurm SUITE.json --out DIR --shards N: sbatch files of a job array + merge"}},
     };
     return table;
 }
