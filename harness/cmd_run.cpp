@@ -8,6 +8,7 @@
 // (snapshot-major order: j = snapshot * labels + label) runs in shard i iff j % N == i-1.
 #include "harness/cli.hpp"
 #include "harness/commands.hpp"
+#include "harness/process_pool.hpp"
 #include "harness/provenance.hpp"
 #include "harness/reference.hpp"
 #include "harness/results.hpp"
@@ -31,7 +32,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const char* const kUsage = "contactbench run SUITE.json [--out DIR] [--shard i/N] [--force]";
+const char* const kUsage = "contactbench run SUITE.json [--out DIR] [--shard i/N] [--force] [--jobs N [--jobs-timed]]";
 
 struct Shard {
     long index = 1, count = 1;  ///< 1-based index of count
@@ -89,13 +90,17 @@ struct WarmState {
 
 int cmd_run(const Args& args)
 {
-    const CommandLine cl("run", args, {"--out", "--shard"}, {"--force"});
+    const CommandLine cl("run", args, {"--out", "--shard", "--jobs"}, {"--force", "--jobs-timed"});
     if (cl.help()) {
         std::cout << "usage: " << kUsage
                   << "\n\nRuns every (snapshot, solver label) of a suite; writes DIR/runs/<id>__<label>.json,\n"
                      "DIR/summary.csv, DIR/suite.json and DIR/provenance.json (DIR defaults to\n"
                      "results/<suite name>). Finished runs are skipped unless --force. --shard i/N runs\n"
-                     "job j iff j % N == i-1; `contactbench merge` joins the shard folders.\n";
+                     "job j iff j % N == i-1; `contactbench merge` joins the shard folders. In a Slurm array\n"
+                     "task without --shard, the shard comes from SLURM_ARRAY_TASK_ID/MIN/COUNT and the runs\n"
+                     "go to DIR/shard-<i>-of-<N> (see `contactbench cluster --help`).\n"
+                     "--jobs N runs N jobs at a time in child processes when the suite's times are not judged\n"
+                     "(\"timed\": false); timed suites still run one at a time unless --jobs-timed.\n";
         return 0;
     }
     cl.expect_positional(1, 1, kUsage);
@@ -112,6 +117,11 @@ int cmd_run(const Args& args)
         }
     }
     const bool force = cl.has("--force");
+    const long jobs = cl.integer("--jobs", 1);
+    if (jobs < 1) throw_input_error("run", "--jobs", "must be >= 1, got " + std::to_string(jobs));
+    std::string jobs_note;
+    ProcessPool pool(concurrent_jobs(jobs, suite.timed, suite.chain, cl.has("--jobs-timed"), jobs_note));
+    if (!jobs_note.empty()) std::cerr << "run: " << jobs_note << "\n";
     const std::vector<SuiteSnapshot> snapshots = resolve_snapshots(suite);
     const auto& registry = builtin_registry();
     fs::create_directories(fs::path(out) / "runs");
@@ -173,6 +183,10 @@ int cmd_run(const Args& args)
                 std::cerr << prefix << "done before, skipped\n";
                 continue;
             }
+            if (pool.delegate()) {  // --jobs: a child process does this job
+                ++ran;
+                continue;
+            }
             nlohmann::json settings = sv.settings;
             // Suite-wide tol and time limit are defaults: a solver's own setting wins.
             if (!settings.contains("tol")) settings["tol"] = suite.tol;
@@ -224,6 +238,7 @@ int cmd_run(const Args& args)
             record["label"] = sv.label;
             record["suite"] = suite.name;
             record["mode"] = suite.chain ? "chain" : "cold";
+            if (pool.parallel()) record["concurrent_jobs"] = jobs;  // its time shared the machine
             write_json_atomic(run_path(s, v), record);
             ++ran;
             std::string line = prefix + record["status"].get<std::string>();
@@ -236,8 +251,11 @@ int cmd_run(const Args& args)
                 line += ": " + record["message"].get<std::string>();
             }
             std::cerr << line << "\n";
+            pool.job_done();  // a child ends here
         }
     }
+    if (const size_t failed = pool.wait_all())
+        throw std::runtime_error(std::to_string(failed) + " parallel job(s) failed; rerun to redo them (finished runs are kept)");
     const size_t runs = write_summary(out, suite.name);
     write_json_atomic((fs::path(out) / "suite.json").string(), suite.raw);
     write_json_atomic((fs::path(out) / "provenance.json").string(), provenance());

@@ -13,7 +13,8 @@ namespace {
 
 const char* const kVariables[] = {"SLURM_ARRAY_TASK_ID",  "SLURM_ARRAY_TASK_COUNT", "SLURM_ARRAY_TASK_MIN",
                                   "SLURM_ARRAY_TASK_MAX", "SLURM_ARRAY_JOB_ID",     "SLURM_JOB_ID",
-                                  "SLURMD_NODENAME",      "SLURM_JOB_PARTITION",    "SLURM_CPUS_ON_NODE"};
+                                  "SLURMD_NODENAME",      "SLURM_JOB_PARTITION",    "SLURM_CPUS_ON_NODE",
+                                  "SLURM_CPU_BIND"};
 
 /// The integer value of `name`, or nullopt when it is not set; InputError when it is not an integer.
 std::optional<long> integer_variable(const Environment& env, const std::string& name)
@@ -103,7 +104,8 @@ nlohmann::json slurm_job_provenance(const Environment& env)
             {"array_task_id", get("SLURM_ARRAY_TASK_ID")},
             {"node", node == env.end() ? host_name() : node->second},
             {"partition", get("SLURM_JOB_PARTITION")},
-            {"cpus_on_node", get("SLURM_CPUS_ON_NODE")}};
+            {"cpus_on_node", get("SLURM_CPUS_ON_NODE")},
+            {"cpu_bind", get("SLURM_CPU_BIND")}};  // set by srun --cpu-bind where the cluster binds
 }
 
 std::string shell_quote(const std::string& word)

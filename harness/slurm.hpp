@@ -34,7 +34,7 @@ std::optional<ArrayShard> shard_from_slurm(const Environment& env);
 std::string shard_folder_name(long index, long count);
 
 /// Facts of the Slurm job this process runs in, for provenance: job_id, array_job_id,
-/// array_task_id, node (SLURMD_NODENAME, else the host name), partition, cpus_on_node; null
+/// array_task_id, node (SLURMD_NODENAME, else the host name), partition, cpus_on_node, cpu_bind; null
 /// when SLURM_JOB_ID is not set.
 nlohmann::json slurm_job_provenance(const Environment& env);
 
