@@ -141,8 +141,9 @@ std::string sbatch_array_script(const SbatchOptions& o)
       << "# One BLAS thread: CHOLMOD's results, and so the counters, do not depend on the core count.\n"
       << "export OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1\n"
       << "# `run` reads its shard from SLURM_ARRAY_TASK_ID/MIN/COUNT and records job, node, CPU and load.\n"
-      << "srun --ntasks=1 --cpu-bind=cores " << shell_quote(o.contactbench) << " run " << shell_quote(o.suite)
-      << " --out " << shell_quote(o.out) << "\n";
+      // --cpus-per-task again: srun 22.05 does not inherit it from the batch allocation.
+      << "srun --ntasks=1 --cpus-per-task=" << o.cpus_per_task << " --cpu-bind=cores " << shell_quote(o.contactbench)
+      << " run " << shell_quote(o.suite) << " --out " << shell_quote(o.out) << "\n";
     return s.str();
 }
 

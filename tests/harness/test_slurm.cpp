@@ -132,15 +132,16 @@ TEST(SlurmSbatch, ArrayAndMergeFiles)
     o.mem = "2G";
     o.exclusive = true;
     o.max_parallel = 2;
+    o.cpus_per_task = 2;
     o.extra = {"--account=abc"};
     const std::string array = sbatch_array_script(o);
     for (const std::string line :
          {"#!/bin/bash\n", "\n#SBATCH --job-name=cb-ci\n", "\n#SBATCH --array=5-8%2\n", "\n#SBATCH --ntasks=1\n",
-          "\n#SBATCH --cpus-per-task=1\n", "\n#SBATCH --hint=nomultithread\n", "\n#SBATCH --exclusive\n",
+          "\n#SBATCH --cpus-per-task=2\n", "\n#SBATCH --hint=nomultithread\n", "\n#SBATCH --exclusive\n",
           "\n#SBATCH --mem=2G\n", "\n#SBATCH --partition=short\n", "\n#SBATCH --time=00:30:00\n",
           "\n#SBATCH --account=abc\n", "\n#SBATCH --output=/scratch/u/ci/slurm/%x-%A_%a.out\n",
           "\nexport OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1\n",
-          "\nsrun --ntasks=1 --cpu-bind=cores '/opt/cb/bin/contactbench' run '/home/u/suites/ci.json' --out "
+          "\nsrun --ntasks=1 --cpus-per-task=2 --cpu-bind=cores '/opt/cb/bin/contactbench' run '/home/u/suites/ci.json' --out "
           "'/scratch/u/ci'\n"})
         EXPECT_NE(array.find(line), std::string::npos) << line << "\nnot in\n" << array;
     // Every #SBATCH line comes before the first command (sbatch stops reading them there).
