@@ -164,7 +164,8 @@ strip_times "$S/single/summary.csv" >"$S/single.csv"
 # One array through the generated files and the printed commands; FIRST is the first array index.
 submit_and_check() {
     local name=$1 first=$2 out="$S/$1"
-    "$CB" cluster slurm "$SUITE" --out "$out" --shards 4 --first-index "$first" --time 00:10:00 \
+    shift 2  # further options of `cluster slurm`
+    "$CB" cluster slurm "$SUITE" --out "$out" --shards 4 --first-index "$first" --time 00:10:00 "$@" \
         >"$S/log/$name.submit.sh" 2>"$S/log/$name.cluster.log" || fail "cluster slurm failed: $(cat "$S/log/$name.cluster.log")"
     log "$name: $(cat "$S/log/$name.cluster.log")"
     sed 's/^/    /' "$S/log/$name.submit.sh"
@@ -223,7 +224,8 @@ EOF
 }
 
 submit_and_check array0 0
-submit_and_check array5 5
+# The offset array also tries the other options on the real sbatch: whole nodes, memory, a throttle.
+submit_and_check array5 5 --exclusive --mem 500M --max-parallel 2 --sbatch-option=--comment=contactbench-test
 log "merge log: $(cat "$S"/array5/slurm/*merge*.out | tail -n 2 | tr '\n' ' ')"
 echo "PASSED: 4-task Slurm arrays 0-3 and 5-8 merged equal to the single run"
 exit 0
