@@ -11,6 +11,7 @@
 #include "harness/process_pool.hpp"
 #include "harness/provenance.hpp"
 #include "harness/reference.hpp"
+#include "harness/reference_prefetch.hpp"
 #include "harness/results.hpp"
 #include "harness/runner.hpp"
 #include "harness/slurm.hpp"
@@ -100,7 +101,8 @@ int cmd_run(const Args& args)
                      "task without --shard, the shard comes from SLURM_ARRAY_TASK_ID/MIN/COUNT and the runs\n"
                      "go to DIR/shard-<i>-of-<N> (see `contactbench cluster --help`).\n"
                      "--jobs N runs N jobs at a time in child processes when the suite's times are not judged\n"
-                     "(\"timed\": false); timed suites still run one at a time unless --jobs-timed.\n";
+                     "(\"timed\": false); timed suites still run one at a time unless --jobs-timed. With\n"
+                     "\"reference\": true, the reference solutions are computed N snapshots at a time first.\n";
         return 0;
     }
     cl.expect_positional(1, 1, kUsage);
@@ -148,6 +150,11 @@ int cmd_run(const Args& args)
         }
     }
 
+    if (suite.reference && jobs > 1) {  // untimed work: N snapshots at a time, before the runs
+        const size_t prefetched = prefetch_references(suite, snapshots, todo, jobs);
+        std::cerr << "run: --jobs " << jobs << ": reference solutions of " << prefetched << " snapshot(s) computed "
+                  << jobs << " at a time before the runs\n";
+    }
     RunOptions options;
     options.history_max = suite.history_max;
     options.decouple = suite.decouple;

@@ -245,3 +245,42 @@ TEST(RunEnv, ClusterSlurmWritesFilesAndPrintsCommands)
     EXPECT_NE(space.err.find("holds a space, quote or %, which #SBATCH lines cannot carry"), std::string::npos) << space.err;
     EXPECT_FALSE(fs::exists(spaced));
 }
+
+TEST(RunEnv, JobsComputeReferencesBeforeTheTimedRuns)
+{
+    const nlohmann::json suite = {
+        {"name", "refs"},
+        {"generate", {{{"id", "plane"}, {"family", "plane"}, {"seed", 1}, {"params", {{"nx", 3}, {"ny", 2}, {"nz", 3}}}},
+                      {{"id", "coupled"}, {"family", "coupled"}, {"seed", 13}, {"params", {{"nx", 4}, {"ny", 2}, {"nz", 4}}}}}},
+        {"solvers", {"mprgp", "pgs"}},  // mprgp sees the coupled snapshot decoupled: a second reference
+        {"reference", true},
+        {"tol", 1e-6},
+        {"time_limit_s", 20}};
+    const fs::path path = work_dir() / "refs.json";
+    write_json_atomic(path.string(), suite);
+    const fs::path serial = work_dir() / "refs-serial", parallel = work_dir() / "refs-parallel";
+    // Separate caches: the parallel run must compute every reference itself.
+    const Output s = run("run '" + path.string() + "' --out '" + serial.string() + "'",
+                         "CB_CACHE='" + (work_dir() / "cache-serial").string() + "'");
+    ASSERT_EQ(s.status, 0) << s.err;
+    const Output p = run("run '" + path.string() + "' --out '" + parallel.string() + "' --jobs 2",
+                         "CB_CACHE='" + (work_dir() / "cache-parallel").string() + "'");
+    ASSERT_EQ(p.status, 0) << p.err;
+    EXPECT_NE(p.err.find("run: --jobs 2: reference solutions of 2 snapshot(s) computed 2 at a time before the runs\n"),
+              std::string::npos)
+        << p.err;
+    EXPECT_NE(p.err.find("its runs go one at a time"), std::string::npos) << p.err;
+    // Every run found its reference already computed: the prefetch used the runs' cache keys.
+    size_t decoupled_keys = 0;
+    for (const std::string name : {"plane__mprgp", "plane__pgs", "coupled__mprgp", "coupled__pgs"}) {
+        const nlohmann::json par = read_json_file((parallel / "runs" / (name + ".json")).string());
+        const nlohmann::json ser = read_json_file((serial / "runs" / (name + ".json")).string());
+        EXPECT_TRUE(par["reference"]["cached"].get<bool>()) << name;
+        EXPECT_EQ(par["reference"]["key"], ser["reference"]["key"]) << name;
+        EXPECT_EQ(par["reference"]["objective"], ser["reference"]["objective"]) << name;
+        EXPECT_EQ(par["obj_rel"], ser["obj_rel"]) << name;
+        if (par["reference"]["key"].get<std::string>().find("-authors-0") != std::string::npos) ++decoupled_keys;
+    }
+    EXPECT_EQ(decoupled_keys, 1u);  // coupled x mprgp
+    EXPECT_EQ(summary_without_times(parallel), summary_without_times(serial));
+}
