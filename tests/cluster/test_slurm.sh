@@ -47,8 +47,14 @@ dump_logs() {
         tail -n 20 "$f"
     done
 }
+JOBS=()
 cleanup() {
     local pid
+    # Jobs still queued or running (a failure mid-way) are cancelled while slurmctld is up.
+    if [ "${#JOBS[@]}" -gt 0 ] && [ -n "$(timeout 5 squeue -h -o %i 2>/dev/null)" ]; then
+        timeout 5 scancel "${JOBS[@]}" 2>/dev/null
+        for _ in $(seq 25); do [ -z "$(timeout 5 squeue -h -o %i 2>/dev/null)" ] && break; sleep 0.2; done
+    fi
     for pid in "${PIDS[@]}"; do
         kill -TERM "$pid" 2>/dev/null
     done
@@ -178,7 +184,9 @@ submit_and_check() {
     eval "${first_line/(sbatch /(timeout 30 sbatch }" || fail "$name: '$first_line' failed"
     merge_output=$(eval "timeout 30 $second_line" 2>&1) || fail "$name: '$second_line' failed: $merge_output"
     [ -n "$jobid" ] || fail "$name: no job id from sbatch --parsable"
+    JOBS+=("$jobid")
     local merge_id=${merge_output##* }
+    JOBS+=("$merge_id")
     log "$name: array job $jobid, merge job $merge_id ($merge_output)"
     local waited=0 queued t_array=""
     while queued=$(timeout 5 squeue -h -j "$jobid,$merge_id" -o %F 2>/dev/null) && [ -n "$queued" ]; do
