@@ -3,6 +3,7 @@
 #include "harness/commands.hpp"
 #include "harness/provenance.hpp"
 #include "harness/results.hpp"
+#include "harness/timing_hygiene.hpp"
 
 #include <filesystem>
 #include <fstream>
@@ -23,6 +24,14 @@ std::string slurp(const fs::path& p)
     std::ostringstream s;
     s << in.rdbuf();
     return s.str();
+}
+
+/// Shards run on a cluster may land on different CPU models: say so when the suite is timed.
+void warn_mixed_cpu_models(const std::string& out, const nlohmann::json& suite)
+{
+    if (suite.is_object() && !suite.value("timed", true)) return;  // "timed": false: times are not judged
+    const std::string warning = mixed_cpu_warning(cpu_models_of_timed_runs(read_runs(out)));
+    if (!warning.empty()) std::cerr << "merge: warning: " << warning << "\n";
 }
 
 } // namespace
@@ -72,6 +81,7 @@ int cmd_merge(const Args& args)
     prov["merged_from"] = shards;
     write_json_atomic((fs::path(out) / "provenance.json").string(), prov);
     const size_t runs = write_summary(out, name);
+    warn_mixed_cpu_models(out, suite);
     std::cerr << "merged " << copied << " run files (" << duplicates << " duplicates skipped); " << runs << " runs in "
               << out << "/summary.csv\n";
     return 0;

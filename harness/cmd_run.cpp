@@ -8,10 +8,13 @@
 // (snapshot-major order: j = snapshot * labels + label) runs in shard i iff j % N == i-1.
 #include "harness/cli.hpp"
 #include "harness/commands.hpp"
+#include "harness/process_pool.hpp"
 #include "harness/provenance.hpp"
 #include "harness/reference.hpp"
+#include "harness/reference_prefetch.hpp"
 #include "harness/results.hpp"
 #include "harness/runner.hpp"
+#include "harness/slurm.hpp"
 #include "harness/suite.hpp"
 #include "problems/qpsnap.hpp"
 #include "solvers/decouple.hpp"  // select_rows
@@ -22,6 +25,7 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <optional>
 
 namespace cb {
 
@@ -29,7 +33,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const char* const kUsage = "contactbench run SUITE.json [--out DIR] [--shard i/N] [--force]";
+const char* const kUsage = "contactbench run SUITE.json [--out DIR] [--shard i/N] [--force] [--jobs N [--jobs-timed]]";
 
 struct Shard {
     long index = 1, count = 1;  ///< 1-based index of count
@@ -87,20 +91,39 @@ struct WarmState {
 
 int cmd_run(const Args& args)
 {
-    const CommandLine cl("run", args, {"--out", "--shard"}, {"--force"});
+    const CommandLine cl("run", args, {"--out", "--shard", "--jobs"}, {"--force", "--jobs-timed"});
     if (cl.help()) {
         std::cout << "usage: " << kUsage
                   << "\n\nRuns every (snapshot, solver label) of a suite; writes DIR/runs/<id>__<label>.json,\n"
                      "DIR/summary.csv, DIR/suite.json and DIR/provenance.json (DIR defaults to\n"
                      "results/<suite name>). Finished runs are skipped unless --force. --shard i/N runs\n"
-                     "job j iff j % N == i-1; `contactbench merge` joins the shard folders.\n";
+                     "job j iff j % N == i-1; `contactbench merge` joins the shard folders. In a Slurm array\n"
+                     "task without --shard, the shard comes from SLURM_ARRAY_TASK_ID/MIN/COUNT and the runs\n"
+                     "go to DIR/shard-<i>-of-<N> (see `contactbench cluster --help`).\n"
+                     "--jobs N runs N jobs at a time in child processes when the suite's times are not judged\n"
+                     "(\"timed\": false); timed suites still run one at a time unless --jobs-timed. With\n"
+                     "\"reference\": true, the reference solutions are computed N snapshots at a time first.\n";
         return 0;
     }
     cl.expect_positional(1, 1, kUsage);
     const Suite suite = load_suite(cl.positional()[0]);
-    const std::string out = cl.value("--out", "results/" + suite.name);
-    const Shard shard = cl.has("--shard") ? parse_shard(cl.value("--shard")) : Shard{};
+    std::string out = cl.value("--out", "results/" + suite.name);
+    Shard shard = cl.has("--shard") ? parse_shard(cl.value("--shard")) : Shard{};
+    if (!cl.has("--shard")) {
+        // A Slurm array task: its shard from the array variables, its own folder inside --out.
+        if (const std::optional<ArrayShard> task = shard_from_slurm(slurm_environment())) {
+            shard = {task->index, task->count};
+            out = (fs::path(out) / shard_folder_name(task->index, task->count)).string();
+            std::cerr << "run: Slurm array task " << slurm_environment()["SLURM_ARRAY_TASK_ID"] << ": shard "
+                      << shard.index << "/" << shard.count << " -> " << out << "\n";
+        }
+    }
     const bool force = cl.has("--force");
+    const long jobs = cl.integer("--jobs", 1);
+    if (jobs < 1) throw_input_error("run", "--jobs", "must be >= 1, got " + std::to_string(jobs));
+    std::string jobs_note;
+    ProcessPool pool(concurrent_jobs(jobs, suite.timed, suite.chain, cl.has("--jobs-timed"), jobs_note));
+    if (!jobs_note.empty()) std::cerr << "run: " << jobs_note << "\n";
     const std::vector<SuiteSnapshot> snapshots = resolve_snapshots(suite);
     const auto& registry = builtin_registry();
     fs::create_directories(fs::path(out) / "runs");
@@ -127,6 +150,11 @@ int cmd_run(const Args& args)
         }
     }
 
+    if (suite.reference && jobs > 1) {  // untimed work: N snapshots at a time, before the runs
+        const size_t prefetched = prefetch_references(suite, snapshots, todo, jobs);
+        std::cerr << "run: --jobs " << jobs << ": reference solutions of " << prefetched << " snapshot(s) computed "
+                  << jobs << " at a time before the runs\n";
+    }
     RunOptions options;
     options.history_max = suite.history_max;
     options.decouple = suite.decouple;
@@ -160,6 +188,10 @@ int cmd_run(const Args& args)
                                        " x " + sv.label + ": ";
             if (!todo[s][v]) {
                 std::cerr << prefix << "done before, skipped\n";
+                continue;
+            }
+            if (pool.delegate()) {  // --jobs: a child process does this job
+                ++ran;
                 continue;
             }
             nlohmann::json settings = sv.settings;
@@ -213,6 +245,7 @@ int cmd_run(const Args& args)
             record["label"] = sv.label;
             record["suite"] = suite.name;
             record["mode"] = suite.chain ? "chain" : "cold";
+            if (pool.parallel()) record["concurrent_jobs"] = jobs;  // its time shared the machine
             write_json_atomic(run_path(s, v), record);
             ++ran;
             std::string line = prefix + record["status"].get<std::string>();
@@ -225,8 +258,11 @@ int cmd_run(const Args& args)
                 line += ": " + record["message"].get<std::string>();
             }
             std::cerr << line << "\n";
+            pool.job_done();  // a child ends here
         }
     }
+    if (const size_t failed = pool.wait_all())
+        throw std::runtime_error(std::to_string(failed) + " parallel job(s) failed; rerun to redo them (finished runs are kept)");
     const size_t runs = write_summary(out, suite.name);
     write_json_atomic((fs::path(out) / "suite.json").string(), suite.raw);
     write_json_atomic((fs::path(out) / "provenance.json").string(), provenance());

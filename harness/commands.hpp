@@ -19,5 +19,7 @@ int cmd_compare(const Args& args);
 int cmd_generate(const Args& args);
 int cmd_solvers(const Args& args);
 int cmd_version(const Args& args);
+// Slurm job arrays (issue 19).
+int cmd_cluster(const Args& args);
 
 } // namespace cb

@@ -1,5 +1,7 @@
 #include "harness/provenance.hpp"
 
+#include "harness/slurm.hpp"
+
 #include <Eigen/Core>
 #include <SuiteSparse_config.h>
 
@@ -111,6 +113,8 @@ nlohmann::json compute()
     p["blas"] = blas_in_use();
     char host[256] = {0};
     p["hostname"] = ::gethostname(host, sizeof(host) - 1) == 0 ? std::string(host) : std::string("unknown");
+    const nlohmann::json job = slurm_job_provenance(slurm_environment());
+    if (!job.is_null()) p["slurm"] = job;
     return p;
 }
 
@@ -126,10 +130,20 @@ std::string utc_now_iso()
     return buffer;
 }
 
-const nlohmann::json& provenance()
+nlohmann::json load_average()
+{
+    std::ifstream in("/proc/loadavg");
+    double one = 0, five = 0, fifteen = 0;
+    if (!(in >> one >> five >> fifteen)) return nullptr;
+    return {one, five, fifteen};
+}
+
+nlohmann::json provenance()
 {
     static const nlohmann::json cached = compute();
-    return cached;
+    nlohmann::json p = cached;
+    p["load_average"] = load_average();  // now, not at the first call: a busy node shows per run
+    return p;
 }
 
 } // namespace cb

@@ -23,7 +23,7 @@ const std::set<std::string>& known_keys()
 {
     static const std::set<std::string> keys = {"name", "snapshots", "generate", "solvers", "tol", "time_limit_s",
                                                "repeat", "history_max", "reference", "decouple", "decouple_seed",
-                                               "chain", "description", "tiers", "comment"};
+                                               "chain", "description", "tiers", "comment", "timed"};
     return keys;
 }
 
@@ -199,6 +199,7 @@ Suite parse_suite(const nlohmann::json& j, const std::string& where)
         throw_input_error(where, "/decouple", "expected one of auto, none, authors, random, depth, got '" + s.decouple + "'");
     s.decouple_seed = static_cast<std::uint64_t>(get_integer(j, "decouple_seed", where, 0, 0));
     s.chain = get_bool(j, "chain", where, false);
+    s.timed = get_bool(j, "timed", where, true);
     if (j.contains("tiers")) {
         const auto& t = j["tiers"];
         if (!t.is_array()) throw_input_error(where, "/tiers", "expected an array of numbers, got " + t.dump());

@@ -52,6 +52,7 @@ struct Suite {
     std::string decouple = "auto";
     std::uint64_t decouple_seed = 0;
     bool chain = false;
+    bool timed = true;                  ///< false: times are not judged (counters only); `run --jobs` runs it in parallel
     nlohmann::json raw;                 ///< the file as read
 };
 
