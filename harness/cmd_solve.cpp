@@ -130,7 +130,7 @@ int cmd_solve(const Args& args)
     out << "error       " << sci(run.accuracy.max()) << " of the scene size l = " << sci(run.scale.length) << " ("
         << run.scale.length_source << "); stationarity " << sci(run.accuracy.stationarity) << ", primal "
         << sci(run.accuracy.primal) << ", dual " << sci(run.accuracy.dual) << ", complementarity "
-        << sci(run.accuracy.complementarity) << (r["lambda_fitted"].get<bool>() ? ", lambda fitted" : "")
+        << sci(run.accuracy.complementarity) << ", gap " << sci(run.accuracy.gap) << (r["lambda_fitted"].get<bool>() ? ", lambda fitted" : "")
         << "; tol " << sci(r["accuracy_tol"].get<double>()) << "\n";
     if (r.contains("accuracy_solved"))
         out << "solved QP   error " << sci(run.accuracy_solved.max()) << " on the " << r["solved_problem"].get<std::string>()

@@ -23,7 +23,7 @@ HistoryMonitor::HistoryMonitor(const QpView& qp, const AccuracyScale& scale, lon
 std::vector<std::string> HistoryMonitor::columns()
 {
     return {"iteration", "time_s", "a_products", "step", "stationarity", "primal", "dual",
-            "complementarity", "kkt_rel", "objective", "native_residual", "active_set"};
+            "complementarity", "gap", "kkt_rel", "objective", "native_residual", "active_set"};
 }
 
 HistoryRow HistoryMonitor::measure(long call, long iteration, StepKind step, const Vec& x, const Vec* lambda,
@@ -117,6 +117,7 @@ nlohmann::json HistoryMonitor::to_json() const
         rows.push_back({r.iteration, number_or_null(r.time_s), r.a_products, to_string(r.step),
                         number_or_null(r.accuracy.stationarity), number_or_null(r.accuracy.primal),
                         number_or_null(r.accuracy.dual), number_or_null(r.accuracy.complementarity),
+                        number_or_null(r.accuracy.gap),
                         number_or_null(r.accuracy.max()), number_or_null(r.objective),
                         number_or_null(r.native_residual), r.active_set});
     }

@@ -83,7 +83,7 @@ const std::vector<std::string>& summary_columns()
     static const std::vector<std::string> columns = {
         "suite", "snapshot", "label", "solver", "status", "solver_status", "criterion", "status_confirmed",
         "iterations", "a_products", "cholmod_factorizations", "kkt_rel", "stationarity", "primal", "dual",
-        "complementarity", "kkt_rel_solved", "m_solved", "objective", "energy_gap", "violation",
+        "complementarity", "gap", "kkt_rel_solved", "m_solved", "objective", "energy_gap", "violation",
         "native_residual", "nonfinite", "monotone", "setup_s", "solve_s", "time_s", "n", "m", "tol",
         "length_scale", "length_scale_source"};
     return columns;
@@ -150,6 +150,7 @@ std::string summary_row(const nlohmann::json& run, const std::string& suite_name
         at(run, {"accuracy", "primal"}),
         at(run, {"accuracy", "dual"}),
         at(run, {"accuracy", "complementarity"}),
+        at(run, {"accuracy", "gap"}),
         run.contains("accuracy_solved") ? at(run, {"accuracy_solved", "max"}) : at(run, {"accuracy", "max"}),
         run.contains("m_solved") ? at(run, {"m_solved"}) : at(run, {"snapshot", "m"}),
         at(run, {"objective"}),

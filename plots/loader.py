@@ -21,12 +21,12 @@ import pandas as pd
 #: history columns (harness/history.cpp); used when a record omits "columns". kkt_rel is the
 #: accuracy error e of docs/accuracy.md on the original QP (the name is kept for old files).
 HISTORY_COLUMNS = ["iteration", "time_s", "a_products", "step", "stationarity", "primal", "dual",
-                   "complementarity", "kkt_rel", "objective", "native_residual", "active_set"]
+                   "complementarity", "gap", "kkt_rel", "objective", "native_residual", "active_set"]
 
 #: summary.csv columns (harness/results.cpp)
 SUMMARY_COLUMNS = ["suite", "snapshot", "label", "solver", "status", "solver_status", "criterion",
                    "status_confirmed", "iterations", "a_products", "cholmod_factorizations", "kkt_rel",
-                   "stationarity", "primal", "dual", "complementarity", "kkt_rel_solved", "m_solved",
+                   "stationarity", "primal", "dual", "complementarity", "gap", "kkt_rel_solved", "m_solved",
                    "objective", "energy_gap", "violation", "native_residual", "nonfinite", "monotone",
                    "setup_s", "solve_s", "time_s", "n", "m", "tol", "length_scale", "length_scale_source"]
 

@@ -9,9 +9,11 @@
 ///   primal           max_i max(0, c_i - J_i x) / n_i / l         (penetration)
 ///   dual             max_i max(0, -lambda_i) n_i / k_i / l       (displacement of a pulling force)
 ///   complementarity  max_i min(|lambda_i| n_i / k_i, |J_i x - c_i| / n_i) / l
-///   e = max of the four.
+///   gap              sum_i |lambda_i (J_i x - c_i)| / (d_ref l^2)  (the duality gap in units of the
+///                    energy of moving a typical DOF, d_ref = mean of D, by the scene size)
+///   e = max of the five.
 /// A zero row (n_i = 0) is feasible iff c_i <= 0 (else the primal part is infinite); its
-/// multiplier exerts no force, so it adds nothing to the dual and complementarity parts.
+/// multiplier exerts no force, so it adds nothing to the dual, complementarity and gap parts.
 #include "solvers/qp.hpp"
 
 #include <nlohmann/json.hpp>
@@ -21,33 +23,38 @@
 
 namespace cb {
 
-/// The four parts of the accuracy error, each a fraction of the scene size.
+/// The five parts of the accuracy error: four lengths as fractions of the scene size, and the
+/// duality gap as a fraction of the energy scale d_ref l^2.
 struct AccuracyParts {
     double stationarity = 0.0;
     double primal = 0.0;
     double dual = 0.0;
     double complementarity = 0.0;
+    double gap = 0.0;
     double max() const;      ///< the error e
-    nlohmann::json to_json() const;  ///< {stationarity, primal, dual, complementarity, max}; non-finite -> null
+    nlohmann::json to_json() const;  ///< {stationarity, primal, dual, complementarity, gap, max}; non-finite -> null
 };
 
 /// What the measure needs from the problem alone, computed once per QP: O(nnz(A) + nnz(J)),
-/// plus one A-product when the length scale falls back to the Jacobi step (counted in a_products).
+/// plus the A-products of the length-scale fallback for a point-like start (in a_products).
 struct AccuracyScale {
     Vec inv_diag;              ///< 1 / D_jj (a non-positive D_jj uses the largest D)
     Vec inv_row_norm;          ///< 1 / n_i, or 0 for a zero row
     Vec length_per_multiplier; ///< n_i / k_i: the displacement a unit multiplier causes along row i
     double length = 1.0;       ///< the scene size l, in the problem's length unit
     double inv_length = 1.0;
-    std::string length_source; ///< x0_extent | x0_range | jacobi_step | constraint_gap | unit
+    std::string length_source; ///< x0_extent | x0_range | unconstrained_extent | constraint_gap | unit
     double stiffness = 1.0;    ///< d_ref = mean of D: the energy scale is d_ref * l^2
+    double inv_energy = 1.0;   ///< 1 / (d_ref l^2)
     long a_products = 0;       ///< A-products spent computing this scale
     nlohmann::json to_json() const;  ///< {length_scale, length_scale_source, stiffness_scale}
 };
 
 /// The scene size l (docs/accuracy.md "Length scale"): the largest axis extent of x0 read as 3-D
 /// points when n is a multiple of 3, else the range of x0's entries; when that is 0 (or not
-/// finite), |D^-1 (b - A x0)|_inf, then max_i |c_i - J_i x0| / n_i, then 1.
+/// finite), the same extent of the unconstrained minimiser (Jacobi-PCG from x0 to a relative
+/// residual of 1e-3, at most 200 iterations; its A-products are counted), then
+/// max_i |c_i - J_i x0| / n_i, then 1.
 AccuracyScale accuracy_scale(const QpView& qp);
 
 /// The measure at (x, lambda) with the gradient g = Ax - b already known (no A-product).

@@ -15,7 +15,7 @@
 ///
 /// Counting (Counters::a_products): one A-product equivalent per block Gauss-Seidel sweep and one
 /// per residual product A x; the residual's A x is reused by the next anticipation ((L+U)x =
-/// Ax - D3 x), so an outer iteration costs 2 A-products (+1 for A x0 at the start, +1 when the accuracy scale falls back on the Jacobi step). The published
+/// Ax - D3 x), so an outer iteration costs 2 A-products (+1 for A x0 at the start, + those of the accuracy scale's fallback for a point-like start). The published
 /// implementation recomputes (L+U)x, i.e. about 3 per outer iteration. PGS sweeps on B are counted
 /// in pgs_sweeps (and lcp_iterations), not as A-products.
 #include "solvers/registry.hpp"

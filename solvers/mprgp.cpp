@@ -228,7 +228,7 @@ void MprgpRun::evaluate_rows()
     // no DOF), never as ||g||^2 minus the active part: that difference cancels catastrophically
     // when the active rows carry almost all of g near the solution.
     double beta2 = 0.0, pb2 = m_gg_out, phi2 = m_gg_out, ptp_corr = 0.0;
-    double stat = m_ginf_free, primal = 0.0, compl_ = 0.0, pg_rows = 0.0;
+    double stat = m_ginf_free, primal = 0.0, compl_ = 0.0, gap = 0.0, pg_rows = 0.0;
     bool infeasible = false;
     long active_count = 0;
     for (Eigen::Index i = 0; i < m_m; ++i) {
@@ -269,6 +269,7 @@ void MprgpRun::evaluate_rows()
         const double inv_norm = m_scale.inv_row_norm[i];
         primal = std::max(primal, (m_c[i] - jx) * inv_norm);
         compl_ = std::max(compl_, std::min(lambda * m_scale.length_per_multiplier[i], std::abs(jx - m_c[i]) * inv_norm));
+        if (inv_norm > 0.0) gap += std::abs(lambda * (jx - m_c[i]));
     }
     m_beta2 = beta2;
     m_pg_rows = pg_rows;
@@ -277,7 +278,7 @@ void MprgpRun::evaluate_rows()
     m_native = std::sqrt(pb2);
     m_infeasible = infeasible;
     m_active_count = active_count;
-    const double face = std::max(stat, compl_) * m_scale.inv_length;
+    const double face = std::max(std::max(stat, compl_) * m_scale.inv_length, gap * m_scale.inv_energy);
     const double error = std::max(face, std::max(0.0, primal) * m_scale.inv_length);
     m_error = std::isfinite(error) ? error : std::numeric_limits<double>::infinity();
     m_face_error = std::isfinite(face) ? face : std::numeric_limits<double>::infinity();

@@ -154,14 +154,15 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
     // The accuracy measure in dual space: stationarity is 0 at x(lambda), dual feasibility holds
     // (lambda >= 0); the row parts as in solvers/accuracy.cpp.
     auto dual_space_error = [&]() {
-        double primal = 0.0, comp = 0.0;
+        double primal = 0.0, comp = 0.0, gap = 0.0;
         for (Eigen::Index i = 0; i < m; ++i) {
             const double inv_norm = scale.inv_row_norm[i];
             if (inv_norm == 0.0) continue;  // zero rows: checked at the exact primal point
             primal = std::max(primal, -w[i] * inv_norm);
             comp = std::max(comp, std::min(lambda[i] * scale.length_per_multiplier[i], std::abs(w[i]) * inv_norm));
+            gap += std::abs(lambda[i] * w[i]);
         }
-        return std::max(primal, comp) * scale.inv_length;
+        return std::max(std::max(primal, comp) * scale.inv_length, gap * scale.inv_energy);
     };
 
     double native = natural_residual();

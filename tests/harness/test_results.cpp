@@ -84,7 +84,7 @@ TEST(Results, SummaryColumnsAndRow)
 {
     const std::string expected =
         "suite,snapshot,label,solver,status,solver_status,criterion,status_confirmed,iterations,a_products,"
-        "cholmod_factorizations,kkt_rel,stationarity,primal,dual,complementarity,kkt_rel_solved,m_solved,objective,"
+        "cholmod_factorizations,kkt_rel,stationarity,primal,dual,complementarity,gap,kkt_rel_solved,m_solved,objective,"
         "energy_gap,violation,native_residual,nonfinite,monotone,setup_s,solve_s,time_s,n,m,tol,length_scale,"
         "length_scale_source";
     std::string header;
@@ -95,7 +95,8 @@ TEST(Results, SummaryColumnsAndRow)
         {"solver_status", "converged"}, {"criterion", "kkt"},
         {"status_confirmed", true}, {"iterations", 54}, {"snapshot", {{"id", "plane-s1"}, {"n", 375}, {"m", 25}}},
         {"counters", {{"a_products", 120}, {"cholmod_factorizations", 0}}},
-        {"accuracy", {{"max", 0.25}, {"stationarity", 0.25}, {"primal", 0.0}, {"dual", 0.0}, {"complementarity", 0.125}}},
+        {"accuracy", {{"max", 0.25}, {"stationarity", 0.25}, {"primal", 0.0}, {"dual", 0.0}, {"complementarity", 0.125},
+                      {"gap", 0.0625}}},
         {"accuracy_solved", {{"max", 0.5}}}, {"m_solved", 12}, {"energy_gap", 0.75},
         {"objective", -4.5}, {"violation", 0.0}, {"native_residual", nullptr}, {"nonfinite", false},
         {"monotone", true}, {"time", {{"setup_s", 0.5}, {"solve_s", 1.5}, {"total_s", 2.0}}}, {"tol", 1e-6},
@@ -103,13 +104,13 @@ TEST(Results, SummaryColumnsAndRow)
         {"message", "a, \"quoted\" message"}};
     EXPECT_EQ(summary_row(run, "demo"),
               "demo,plane-s1,mprgp-jacobi,mprgp,solved_relaxation,converged,kkt,true,54,120,0,0.25,0.25,0,0,0.125,"
-              "0.5,12,-4.5,0.75,0,,false,true,0.5,1.5,2,375,25,9.9999999999999995e-07,2,x0_extent");
+              "0.0625,0.5,12,-4.5,0.75,0,,false,true,0.5,1.5,2,375,25,9.9999999999999995e-07,2,x0_extent");
     // A run on an unchanged problem: the solved error and rows are the original's.
     nlohmann::json plain = run;
     plain.erase("accuracy_solved");
     plain.erase("m_solved");
     const std::string row = summary_row(plain, "demo");
-    EXPECT_NE(row.find(",0.125,0.25,25,-4.5,"), std::string::npos) << row;
+    EXPECT_NE(row.find(",0.125,0.0625,0.25,25,-4.5,"), std::string::npos) << row;
     const std::string csv = summary_csv({run, run}, "demo");
     EXPECT_EQ(csv.substr(0, expected.size() + 1), expected + "\n");
     EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 3);

@@ -165,12 +165,13 @@ TEST(Runner, RecordHasEverySchemaKey)
                             "info", "history", "provenance", "solver_status", "m_solved", "length_scale",
                             "length_scale_source", "stiffness_scale", "accuracy_tol", "violation_original"})
         EXPECT_TRUE(run.record.contains(key)) << key;
-    for (const char* key : {"stationarity", "primal", "dual", "complementarity", "max"}) {
+    for (const char* key : {"stationarity", "primal", "dual", "complementarity", "gap", "max"}) {
         EXPECT_TRUE(run.record["accuracy"].contains(key)) << key;
         EXPECT_TRUE(run.record["kkt_relative"].contains(key)) << key;
     }
-    // x0 = -1 everywhere has no extent: l falls back on |D^-1 (b - A x0)|_inf = 2.
-    EXPECT_EQ(run.record["length_scale_source"], "jacobi_step");
+    // x0 = -1 everywhere has no extent: l falls back on the extent of x_u = b / d =
+    // (1, -1, 1, -1, 1, -1), i.e. of the points (1, -1, 1) and (-1, 1, -1): 2.
+    EXPECT_EQ(run.record["length_scale_source"], "unconstrained_extent");
     EXPECT_DOUBLE_EQ(run.record["length_scale"].get<double>(), 2.0);
     EXPECT_DOUBLE_EQ(run.record["stiffness_scale"].get<double>(), 3.5);  // mean of 1..6
     EXPECT_FALSE(run.record.contains("accuracy_solved"));  // the problem was not changed
@@ -182,7 +183,7 @@ TEST(Runner, RecordHasEverySchemaKey)
         EXPECT_TRUE(run.record["decouple"].contains(key)) << key;
     const auto& columns = run.record["history"]["columns"];
     EXPECT_EQ(columns, nlohmann::json(HistoryMonitor::columns()));
-    EXPECT_EQ(columns.size(), 12u);
+    EXPECT_EQ(columns.size(), 13u);
     for (const auto& row : run.record["history"]["rows"]) EXPECT_EQ(row.size(), columns.size());
     EXPECT_DOUBLE_EQ(run.record["tol"].get<double>(), 1e-8);
 }
@@ -193,8 +194,8 @@ TEST(Runner, HistoryKktMatchesFinalAndDecreases)
     const auto& rows = run.record["history"]["rows"];
     ASSERT_GE(rows.size(), 10u);
     // Each damped Jacobi step halves the error on the free coordinates: kkt_rel (e) falls.
-    ASSERT_EQ(run.record["history"]["columns"][8], "kkt_rel");
-    const double first = rows[1][8].get<double>(), last = rows.back()[8].get<double>();
+    ASSERT_EQ(run.record["history"]["columns"][9], "kkt_rel");
+    const double first = rows[1][9].get<double>(), last = rows.back()[9].get<double>();
     EXPECT_LT(last, first * 1e-6);
     EXPECT_NEAR(last, run.accuracy.max(), 1e-15 + 1e-9 * run.accuracy.max());
     EXPECT_EQ(rows.back()[0].get<long>(), run.result.iterations);
@@ -214,12 +215,13 @@ TEST(Runner, LyingSolverIsNotConfirmed)
     EXPECT_TRUE(run.record["lambda_fitted"].get<bool>());
     // At x0 = -1 (l = 2): the fit gives lambda = g = d x0 - b = (-2, 0, -6, 0, -10, 0); every row
     // penetrates by 1 (primal 1/2), pulls with lambda / d = 2 (dual 2/2 = 1), complementarity
-    // min(2, 1) / 2 = 1/2.
+    // min(2, 1) / 2 = 1/2, gap (2 + 6 + 10) * 1 / (d_ref l^2 = 3.5 * 4) = 18/14.
     // (The fit's Tikhonov term, 1e-12 of the diagonal, shows in the last digits.)
     EXPECT_NEAR(run.accuracy.primal, 0.5, 1e-9);
     EXPECT_NEAR(run.accuracy.dual, 1.0, 1e-9);
     EXPECT_NEAR(run.accuracy.complementarity, 0.5, 1e-9);
-    EXPECT_NEAR(run.accuracy.max(), 1.0, 1e-9);
+    EXPECT_NEAR(run.accuracy.gap, 18.0 / 14.0, 1e-9);
+    EXPECT_NEAR(run.accuracy.max(), 18.0 / 14.0, 1e-9);
 }
 
 TEST(Runner, StrideKeepsHistoryUnderMaxWithFirstAndLast)

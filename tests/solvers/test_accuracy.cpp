@@ -48,6 +48,7 @@ TEST(Accuracy, ScaleOfTheWorkedQp)
     EXPECT_DOUBLE_EQ(s.length, 2.0);  // n = 2 is no multiple of 3: the range of x0
     EXPECT_EQ(s.length_source, "x0_range");
     EXPECT_DOUBLE_EQ(s.stiffness, 5.0);  // mean of D
+    EXPECT_DOUBLE_EQ(s.inv_energy, 1.0 / 20.0);
     EXPECT_EQ(s.a_products, 0);
     const nlohmann::json j = s.to_json();
     EXPECT_EQ(j["length_scale_source"], "x0_range");
@@ -58,7 +59,8 @@ TEST(Accuracy, ScaleOfTheWorkedQp)
 //   Jx - c = (-1.5, 0): row 0 penetrates 1.5 / n0 = 0.5                          -> 0.5 / l = 0.25
 //   row 1 pulls: lambda n/k = -0.5 * 0.125 = -0.0625                               -> 0.03125
 //   complementarity: row 0 min(1 * 1.5, 0.5) = 0.5, row 1 min(0.0625, 0) = 0     -> 0.25
-TEST(Accuracy, FourPartsOnHandWorkedPoint)
+//   gap: |1 * -1.5| + |-0.5 * 0| = 1.5 over d_ref l^2 = 5 * 4                      -> 0.075
+TEST(Accuracy, FivePartsOnHandWorkedPoint)
 {
     const Qp qp = worked_qp(Eigen::Vector2d(2, 0), Eigen::Vector2d(3, 1), Eigen::Vector2d(0, 2));
     const cb::AccuracyParts e = cb::accuracy(qp.view(), Eigen::Vector2d(0.5, 1), Eigen::Vector2d(1, -0.5));
@@ -66,10 +68,12 @@ TEST(Accuracy, FourPartsOnHandWorkedPoint)
     EXPECT_DOUBLE_EQ(e.primal, 0.25);
     EXPECT_DOUBLE_EQ(e.dual, 0.03125);
     EXPECT_DOUBLE_EQ(e.complementarity, 0.25);
+    EXPECT_DOUBLE_EQ(e.gap, 0.075);
     EXPECT_DOUBLE_EQ(e.max(), 1.0);
     const nlohmann::json j = e.to_json();
     EXPECT_DOUBLE_EQ(j["max"].get<double>(), 1.0);
     EXPECT_DOUBLE_EQ(j["dual"].get<double>(), 0.03125);
+    EXPECT_DOUBLE_EQ(j["gap"].get<double>(), 0.075);
     // from_gradient gives the same without the A-product
     const cb::AccuracyScale s = cb::accuracy_scale(qp.view());
     const Vec x = Eigen::Vector2d(0.5, 1);
@@ -103,21 +107,23 @@ TEST(Accuracy, LengthScaleIsTheLargestAxisExtentOfTheStart)
     EXPECT_DOUBLE_EQ(cb::accuracy_scale(shifted.view()).length, 5.0);
 }
 
-// A degenerate start (range 0) falls back on |D^-1 (b - A x0)|_inf, then on the constraint gaps
-// |c_i - J_i x0| / n_i, then on 1.
+// A degenerate start (range 0) falls back on the extent of the unconstrained minimiser, then on
+// the constraint gaps |c_i - J_i x0| / n_i, then on 1.
 TEST(Accuracy, LengthScaleFallbacks)
 {
-    // b - A x0 = (6, 0) - (2, 8) = (4, -8); D^-1 of it = (2, -1) -> l = 2 (one A-product).
-    const Qp jacobi = worked_qp(Eigen::Vector2d(6, 0), Eigen::Vector2d(0, 4), Eigen::Vector2d(1, 1));
-    const cb::AccuracyScale s1 = cb::accuracy_scale(jacobi.view());
-    EXPECT_DOUBLE_EQ(s1.length, 2.0);
-    EXPECT_EQ(s1.length_source, "jacobi_step");
-    EXPECT_EQ(s1.a_products, 1);
+    // A diagonal: Jacobi-PCG is exact in one step, x_u = D^-1 b = (3, 0) -> l = 3
+    // (A-products: the start residual and one iteration).
+    const Qp unconstrained = worked_qp(Eigen::Vector2d(6, 0), Eigen::Vector2d(0, 4), Eigen::Vector2d(1, 1));
+    const cb::AccuracyScale s1 = cb::accuracy_scale(unconstrained.view());
+    EXPECT_DOUBLE_EQ(s1.length, 3.0);
+    EXPECT_EQ(s1.length_source, "unconstrained_extent");
+    EXPECT_EQ(s1.a_products, 2);
     // b = A x0: the gaps |0 - 3| / 3 = 1 and |4 - 1| / 1 = 3 -> l = 3.
     const Qp gap = worked_qp(Eigen::Vector2d(2, 8), Eigen::Vector2d(0, 4), Eigen::Vector2d(1, 1));
     const cb::AccuracyScale s2 = cb::accuracy_scale(gap.view());
     EXPECT_DOUBLE_EQ(s2.length, 3.0);
     EXPECT_EQ(s2.length_source, "constraint_gap");
+    EXPECT_EQ(s2.a_products, 1);  // the start residual, already 0
     // Every row exactly active at an unconstrained minimiser: nothing to measure a length by.
     const Qp none = worked_qp(Eigen::Vector2d(2, 8), Eigen::Vector2d(3, 1), Eigen::Vector2d(1, 1));
     const cb::AccuracyScale s3 = cb::accuracy_scale(none.view());
@@ -148,6 +154,7 @@ TEST(Accuracy, MissingLambdaMeansGradientOnly)
     EXPECT_DOUBLE_EQ(e.primal, 0.25);
     EXPECT_EQ(e.dual, 0.0);
     EXPECT_EQ(e.complementarity, 0.0);
+    EXPECT_EQ(e.gap, 0.0);
 }
 
 TEST(Accuracy, NonFiniteReadsAsInfinity)
@@ -210,7 +217,7 @@ TEST(Accuracy, FitMultipliersSplitsDependentRows)
     EXPECT_NEAR(lambda[2], 2.0 / 3.0, 1e-3);
 }
 
-// The thresholds are lengths relative to l (= 1.5 here: x0 = 0 falls back on D^-1 b = (0, 1.5)).
+// The thresholds are lengths relative to l (= 1.5 here: x0 = 0 falls back on x_u = (0, 1.5)),
 // A row off its face by 1e-8 (inside 1e-6 l, outside 1e-9 l) whose fitted multiplier would be
 // negative is dropped; an exactly active one keeps its honest negative multiplier.
 TEST(Accuracy, FitMultipliersDropsNearActiveNegativeRows)

@@ -147,10 +147,10 @@ std::vector<Mapped> maps_of(const Qp& qp)
 
 void expect_same_measure(const AccuracyParts& e, const AccuracyParts& f, bool exact, const std::string& what)
 {
-    const double parts_e[] = {e.stationarity, e.primal, e.dual, e.complementarity, e.max()};
-    const double parts_f[] = {f.stationarity, f.primal, f.dual, f.complementarity, f.max()};
-    const char* names[] = {"stationarity", "primal", "dual", "complementarity", "max"};
-    for (int k = 0; k < 5; ++k) {
+    const double parts_e[] = {e.stationarity, e.primal, e.dual, e.complementarity, e.gap, e.max()};
+    const double parts_f[] = {f.stationarity, f.primal, f.dual, f.complementarity, f.gap, f.max()};
+    const char* names[] = {"stationarity", "primal", "dual", "complementarity", "gap", "max"};
+    for (int k = 0; k < 6; ++k) {
         const double bound = exact ? 1e-9 * std::abs(parts_e[k]) : TOL / 10;
         EXPECT_NEAR(parts_f[k], parts_e[k], bound) << what << ": " << names[k];
     }
@@ -272,7 +272,7 @@ TEST(AccuracyMetamorphic, StartMovedOneKilometreGivesTheSameConvergedAccuracy)
             if (run.status != "converged") continue;
             const std::string what = solver + (p == &qp ? " (start)" : " (start moved 1 km)");
             EXPECT_LE(run.accuracy.max(), TOL * (1 + 1e-9)) << what;
-            EXPECT_LE(energy_gap(scale, run.objective, ref.objective), 1e-6) << what;
+            EXPECT_LE(energy_gap(scale, run.objective, ref.objective), 2 * TOL) << what;
         }
     }
 }
