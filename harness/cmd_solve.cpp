@@ -118,15 +118,23 @@ int cmd_solve(const Args& args)
         out << " (decoupled " << r["decouple"]["order"].get<std::string>() << ": " << r["decouple"]["rows_before"]
             << " -> " << r["decouple"]["rows_after"] << " rows)";
     out << "\n";
-    out << "status      " << r["status"].get<std::string>();
+    out << "status      " << run.status;
     if (!r["criterion"].get<std::string>().empty()) out << " (" << r["criterion"].get<std::string>() << ")";
-    if (!run.status_confirmed) out << "  NOT CONFIRMED by the common KKT error";
+    if (run.status != to_string(run.result.status)) out << "; the solver said " << to_string(run.result.status);
+    if (run.status == STATUS_SOLVED_RELAXATION)
+        out << "  (tol met on the problem it solved, " << run.m_solved << " of " << qp.m()
+            << " rows, not on the original QP)";
+    if (!run.status_confirmed) out << "  NOT CONFIRMED by the accuracy measure";
     out << "\n";
     out << "iterations  " << run.result.iterations << ", A-products " << run.result.counters.a_products << "\n";
-    out << "kkt_rel     " << sci(run.kkt_relative.max()) << " (stationarity " << sci(run.kkt_relative.stationarity)
-        << ", primal " << sci(run.kkt_relative.primal) << ", dual " << sci(run.kkt_relative.dual)
-        << ", complementarity " << sci(run.kkt_relative.complementarity) << ")"
-        << (r["lambda_fitted"].get<bool>() ? " lambda fitted" : "") << "\n";
+    out << "error       " << sci(run.accuracy.max()) << " of the scene size l = " << sci(run.scale.length) << " ("
+        << run.scale.length_source << "); stationarity " << sci(run.accuracy.stationarity) << ", primal "
+        << sci(run.accuracy.primal) << ", dual " << sci(run.accuracy.dual) << ", complementarity "
+        << sci(run.accuracy.complementarity) << ", gap " << sci(run.accuracy.gap) << (r["lambda_fitted"].get<bool>() ? ", lambda fitted" : "")
+        << "; tol " << sci(r["accuracy_tol"].get<double>()) << "\n";
+    if (r.contains("accuracy_solved"))
+        out << "solved QP   error " << sci(run.accuracy_solved.max()) << " on the " << r["solved_problem"].get<std::string>()
+            << " QP (" << run.m_solved << " of " << qp.m() << " rows)\n";
     out << "objective   " << std::setprecision(10) << run.objective << ", violation " << sci(run.violation)
         << ", native residual " << sci(run.result.native_residual) << "\n";
     out << "time        setup " << sci(r["time"]["setup_s"].get<double>()) << " s, solve "

@@ -13,17 +13,17 @@ nlohmann::json number_or_null(double v) { return std::isfinite(v) ? nlohmann::js
 
 } // namespace
 
-HistoryMonitor::HistoryMonitor(const QpView& qp, const KktScale& scale, long history_max, bool record)
-    : m_qp(qp), m_scale(scale), m_history_max(std::max(2L, history_max)), m_record(record)
+HistoryMonitor::HistoryMonitor(const QpView& qp, const AccuracyScale& scale, long history_max, bool record,
+                               std::vector<int> kept_rows)
+    : m_qp(qp), m_scale(scale), m_kept_rows(std::move(kept_rows)), m_history_max(std::max(2L, history_max)),
+      m_record(record)
 {
-    const double c_inf = qp.m() > 0 ? qp.c.lpNorm<Eigen::Infinity>() : 0.0;
-    m_feasible_tol = 1e-9 * std::max(1.0, c_inf);
 }
 
 std::vector<std::string> HistoryMonitor::columns()
 {
     return {"iteration", "time_s", "a_products", "step", "stationarity", "primal", "dual",
-            "complementarity", "kkt", "kkt_rel", "objective", "native_residual", "active_set"};
+            "complementarity", "gap", "kkt_rel", "objective", "native_residual", "active_set"};
 }
 
 HistoryRow HistoryMonitor::measure(long call, long iteration, StepKind step, const Vec& x, const Vec* lambda,
@@ -39,23 +39,25 @@ HistoryRow HistoryMonitor::measure(long call, long iteration, StepKind step, con
     row.active_set = active;
     const Vec g = m_qp.A * x - m_qp.b;
     row.objective = 0.5 * x.dot(g) - 0.5 * m_qp.b.dot(x);
-    if (lambda && lambda->size() == m_qp.m()) {
-        row.kkt = kkt_residuals_from_gradient(m_qp, x, g, *lambda);
+    if (lambda && !m_kept_rows.empty() && lambda->size() == static_cast<Eigen::Index>(m_kept_rows.size())) {
+        Vec padded = Vec::Zero(m_qp.m());
+        for (size_t k = 0; k < m_kept_rows.size(); ++k) padded[m_kept_rows[k]] = (*lambda)[static_cast<Eigen::Index>(k)];
+        row.accuracy = accuracy_from_gradient(m_qp, m_scale, x, g, padded);
+    } else if (lambda && lambda->size() == m_qp.m()) {
+        row.accuracy = accuracy_from_gradient(m_qp, m_scale, x, g, *lambda);
     } else {
-        const Vec fitted = fit_multipliers(m_qp, x, g);
-        row.kkt = kkt_residuals_from_gradient(m_qp, x, g, fitted);
+        const Vec fitted = fit_multipliers(m_qp, m_scale, x, g);
+        row.accuracy = accuracy_from_gradient(m_qp, m_scale, x, g, fitted);
     }
-    row.kkt_abs = row.kkt.max();
-    row.kkt_rel = row.kkt_abs * m_scale.inverse_reference;
     return row;
 }
 
-void HistoryMonitor::push(HistoryRow row, const Vec& x)
+void HistoryMonitor::push(HistoryRow row)
 {
-    if (!std::isfinite(row.objective) || !std::isfinite(row.kkt_abs)) m_nonfinite = true;
+    if (!std::isfinite(row.objective) || !std::isfinite(row.accuracy.max())) m_nonfinite = true;
     // Monotonicity over the feasible recorded iterates only: an infeasible start may have a
     // lower objective than the solution.
-    if (std::isfinite(row.objective) && max_violation(m_qp, x) <= m_feasible_tol) {
+    if (std::isfinite(row.objective) && row.accuracy.primal <= 1e-9) {
         if (m_have_feasible &&
             row.objective > m_last_feasible_objective + 1e-12 * std::max(1.0, std::abs(m_last_feasible_objective)))
             m_monotone = false;
@@ -83,8 +85,7 @@ bool HistoryMonitor::on_iteration(const IterationInfo& info)
     if (!m_record || !info.x || call % m_stride != 0) return true;
     const long a_products = info.counters ? info.counters->a_products : 0;
     push(measure(call, info.iteration, info.step, *info.x, info.lambda, info.elapsed_s, a_products,
-                 info.native_residual, info.active_set_size),
-         *info.x);
+                 info.native_residual, info.active_set_size));
     return true;
 }
 
@@ -93,10 +94,19 @@ void HistoryMonitor::finish(const Vec& x, const Vec& lambda, long iterations, do
 {
     if (!all_finite(x) || !all_finite(lambda)) m_nonfinite = true;
     if (!m_record || x.size() != m_qp.n()) return;
-    if (m_last_recorded_call == m_calls - 1 && !m_rows.empty() && m_rows.back().iteration == iterations) return;
     const Vec* l = lambda.size() == m_qp.m() ? &lambda : nullptr;
+    if (m_last_recorded_call == m_calls - 1 && !m_rows.empty() && m_rows.back().iteration == iterations) {
+        // The solver's last call was the returned point: measure it with the multipliers the
+        // harness settled on, so that the last row is the run's error.
+        HistoryRow& last = m_rows.back();
+        const HistoryRow again = measure(last.call, last.iteration, last.step, x, l, last.time_s, last.a_products,
+                                         last.native_residual, last.active_set);
+        last.accuracy = again.accuracy;
+        last.objective = again.objective;
+        return;
+    }
     HistoryRow row = measure(m_calls, iterations, StepKind::FINAL, x, l, time_s, a_products, native_residual, -1);
-    if (!std::isfinite(row.objective) || !std::isfinite(row.kkt_abs)) m_nonfinite = true;
+    if (!std::isfinite(row.objective) || !std::isfinite(row.accuracy.max())) m_nonfinite = true;
     m_rows.push_back(row);
 }
 
@@ -105,9 +115,10 @@ nlohmann::json HistoryMonitor::to_json() const
     nlohmann::json rows = nlohmann::json::array();
     for (const auto& r : m_rows) {
         rows.push_back({r.iteration, number_or_null(r.time_s), r.a_products, to_string(r.step),
-                        number_or_null(r.kkt.stationarity), number_or_null(r.kkt.primal),
-                        number_or_null(r.kkt.dual), number_or_null(r.kkt.complementarity),
-                        number_or_null(r.kkt_abs), number_or_null(r.kkt_rel), number_or_null(r.objective),
+                        number_or_null(r.accuracy.stationarity), number_or_null(r.accuracy.primal),
+                        number_or_null(r.accuracy.dual), number_or_null(r.accuracy.complementarity),
+                        number_or_null(r.accuracy.gap),
+                        number_or_null(r.accuracy.max()), number_or_null(r.objective),
                         number_or_null(r.native_residual), r.active_set});
     }
     return {{"columns", columns()}, {"rows", rows}, {"stride", m_stride}, {"monitor_calls", m_calls}};

@@ -1,14 +1,15 @@
 #pragma once
 /// The recording monitor: at each recorded solver iteration it measures the iterate with the
-/// common metric (DESIGN.md "Metrics") while the solver's stopwatch is paused.
+/// accuracy measure (docs/accuracy.md) on the ORIGINAL QP while the solver's stopwatch is paused
+/// (a solver that saw fewer rows has its multipliers padded with 0 on the rows it did not see).
 ///
 /// Stride: every k-th monitor call is recorded; k starts at 1 and doubles whenever the history
 /// would exceed `history_max` rows (rows that are not on the new stride are dropped; the first
 /// row is always kept, and finish() appends the returned point as the last row).
 /// Monotone: the objective must be non-increasing over the recorded iterates that are feasible
-/// to 1e-9 relative (max_i (c_i - J_i x) <= 1e-9 max(1, |c|_inf)), with a floating-point slack
+/// to 1e-9 of the scene size (the measure's primal part <= 1e-9), with a floating-point slack
 /// of 1e-12 max(1, |F|) per comparison.
-#include "solvers/kkt.hpp"
+#include "solvers/accuracy.hpp"
 #include "solvers/solver.hpp"
 
 #include <nlohmann/json.hpp>
@@ -23,8 +24,7 @@ struct HistoryRow {
     double time_s = 0.0;
     long a_products = 0;
     StepKind step = StepKind::START;
-    KktResiduals kkt;
-    double kkt_abs = 0.0, kkt_rel = 0.0;
+    AccuracyParts accuracy;  ///< the measure's parts; accuracy.max() is the error e (column kkt_rel)
     double objective = 0.0;
     double native_residual = 0.0;
     long active_set = -1;
@@ -32,8 +32,11 @@ struct HistoryRow {
 
 class HistoryMonitor : public Monitor {
 public:
-    /// @param record  false: only nonfinite detection on every call (no history rows)
-    HistoryMonitor(const QpView& qp, const KktScale& scale, long history_max, bool record = true);
+    /// @param qp         the original QP (what every row is measured on)
+    /// @param kept_rows  rows of qp the solver saw, in its order (empty: all of them)
+    /// @param record     false: only nonfinite detection on every call (no history rows)
+    HistoryMonitor(const QpView& qp, const AccuracyScale& scale, long history_max, bool record = true,
+                   std::vector<int> kept_rows = {});
 
     bool on_iteration(const IterationInfo& info) override;
     /// Appends the returned point (x, lambda) as the final row unless the last call was recorded.
@@ -53,10 +56,11 @@ public:
 private:
     HistoryRow measure(long call, long iteration, StepKind step, const Vec& x, const Vec* lambda,
                        double time_s, long a_products, double native, long active);
-    void push(HistoryRow row, const Vec& x);
+    void push(HistoryRow row);
 
     QpView m_qp;
-    KktScale m_scale;
+    AccuracyScale m_scale;
+    std::vector<int> m_kept_rows;
     long m_history_max;
     bool m_record;
     long m_stride = 1;
@@ -66,7 +70,6 @@ private:
     bool m_monotone = true;
     bool m_have_feasible = false;
     double m_last_feasible_objective = 0.0;
-    double m_feasible_tol = 0.0;
     std::vector<HistoryRow> m_rows;
 };
 

@@ -1,7 +1,7 @@
 #pragma once
-/// Reference solutions (F*) for the relative objective error of DESIGN.md "Metrics", computed
-/// with the `active-set` solver and cached by snapshot content hash:
-/// <cache_dir()>/reference/<key>.json.
+/// Reference solutions (x*, F*) of the ORIGINAL QP for the energy figure of docs/accuracy.md,
+/// computed with the `active-set` solver (every row, tol 1e-10) and cached by snapshot content
+/// hash: <cache_dir()>/reference/<key>.json.
 #include "solvers/qp.hpp"
 
 #include <nlohmann/json.hpp>
@@ -9,14 +9,16 @@
 
 namespace cb {
 
-/// {"objective": F*, "objective_x0": F(x0), "source": "active-set", "status", "kkt": {...},
-///  "kkt_rel", "key", "cached": bool}. `key` is the snapshot hash (plus a decoupling suffix when
-/// the solvers saw a decoupled QP). A failed reference solve is still cached, with its status,
-/// and "objective" null.
+/// {"objective": F*, "objective_x0": F(x0), "source": "active-set", "status", "accuracy": {...},
+///  "kkt_rel" (= accuracy.max), "key", "cached": bool}. `key` is the snapshot hash. Pass the QP in
+/// the file, never a decoupled one: F* is the original problem's optimum for every solver.
+/// A failed reference solve is still cached, with its status, and "objective" null.
 nlohmann::json reference_solution(const Qp& qp, const std::string& key, const std::string& cache = "");
 
-/// Adds "reference" to a run record and the column "obj_rel" = |F - F*| / |F(x0) - F*| to its
-/// history (null where undefined).
+/// Adds "reference" to a run record, "energy_gap" = |F - F*| / (d_ref l^2) (docs/accuracy.md; d_ref
+/// and l from the record's stiffness_scale and length_scale) to it and as a history column
+/// (null where undefined). Refuses (adds nothing but "reference") a reference whose key is not the
+/// record's snapshot hash (a reduced QP's F* is not the original's).
 void attach_reference(nlohmann::json& record, const nlohmann::json& reference);
 
 } // namespace cb

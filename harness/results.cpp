@@ -81,10 +81,11 @@ std::vector<nlohmann::json> read_runs(const std::string& dir)
 const std::vector<std::string>& summary_columns()
 {
     static const std::vector<std::string> columns = {
-        "suite", "snapshot", "label", "solver", "status", "criterion", "status_confirmed", "iterations",
-        "a_products", "cholmod_factorizations", "kkt", "kkt_rel", "stationarity", "primal", "dual",
-        "complementarity", "objective", "violation", "native_residual", "nonfinite", "monotone", "setup_s",
-        "solve_s", "time_s", "n", "m", "tol"};
+        "suite", "snapshot", "label", "solver", "status", "solver_status", "criterion", "status_confirmed",
+        "iterations", "a_products", "cholmod_factorizations", "kkt_rel", "stationarity", "primal", "dual",
+        "complementarity", "gap", "kkt_rel_solved", "m_solved", "objective", "energy_gap", "violation",
+        "native_residual", "nonfinite", "monotone", "setup_s", "solve_s", "time_s", "n", "m", "tol",
+        "length_scale", "length_scale_source"};
     return columns;
 }
 
@@ -138,18 +139,22 @@ std::string summary_row(const nlohmann::json& run, const std::string& suite_name
         at(run, {"label"}),
         at(run, {"solver"}),
         at(run, {"status"}),
+        at(run, {"solver_status"}),
         at(run, {"criterion"}),
         at(run, {"status_confirmed"}),
         at(run, {"iterations"}),
         at(run, {"counters", "a_products"}),
         at(run, {"counters", "cholmod_factorizations"}),
-        at(run, {"kkt", "max"}),
-        at(run, {"kkt_relative", "max"}),
-        at(run, {"kkt_relative", "stationarity"}),
-        at(run, {"kkt_relative", "primal"}),
-        at(run, {"kkt_relative", "dual"}),
-        at(run, {"kkt_relative", "complementarity"}),
+        at(run, {"accuracy", "max"}),
+        at(run, {"accuracy", "stationarity"}),
+        at(run, {"accuracy", "primal"}),
+        at(run, {"accuracy", "dual"}),
+        at(run, {"accuracy", "complementarity"}),
+        at(run, {"accuracy", "gap"}),
+        run.contains("accuracy_solved") ? at(run, {"accuracy_solved", "max"}) : at(run, {"accuracy", "max"}),
+        run.contains("m_solved") ? at(run, {"m_solved"}) : at(run, {"snapshot", "m"}),
         at(run, {"objective"}),
+        at(run, {"energy_gap"}),
         at(run, {"violation"}),
         at(run, {"native_residual"}),
         at(run, {"nonfinite"}),
@@ -160,6 +165,8 @@ std::string summary_row(const nlohmann::json& run, const std::string& suite_name
         at(run, {"snapshot", "n"}),
         at(run, {"snapshot", "m"}),
         at(run, {"tol"}),
+        at(run, {"length_scale"}),
+        at(run, {"length_scale_source"}),
     };
     std::string line;
     for (size_t i = 0; i < values.size(); ++i) line += (i ? "," : "") + cell(values[i]);

@@ -1,8 +1,15 @@
 #pragma once
 /// Runs one solver on one QP the way every harness command does: decoupling when needed, a
-/// recording monitor on the solver's paused stopwatch, the common KKT recomputed at the
-/// returned point, and the per-run results JSON (INTERFACES.md "Results folder").
-#include "solvers/kkt.hpp"
+/// recording monitor on the solver's paused stopwatch, the accuracy measure (docs/accuracy.md)
+/// recomputed on the ORIGINAL QP at the returned point, the run's status, and the per-run
+/// results JSON (harness/README.md "Results").
+///
+/// The run's status: `converged` only when the solver says converged AND the error e on the
+/// original QP is <= tol (for stop=native, <= DEFAULT_ACCURACY_TOL: the native tol is in another
+/// unit); `solved_relaxation` when the solver changed the problem (the harness decoupled its rows,
+/// or it ignores J) and met the tolerance on its own problem only; `unconfirmed` when it said
+/// converged and the measure disagrees on the problem it solved; otherwise the solver's status.
+#include "solvers/accuracy.hpp"
 #include "solvers/qp.hpp"
 #include "solvers/solver.hpp"
 
@@ -22,13 +29,23 @@ struct RunOptions {
     int repeat = 1;                 ///< median time of k runs
 };
 
+/// Run statuses beside the solver's own (SolveStatus names).
+inline constexpr const char* STATUS_SOLVED_RELAXATION = "solved_relaxation";
+inline constexpr const char* STATUS_UNCONFIRMED = "unconfirmed";
+/// The accuracy a `stop=native` run must reach on e to count as converged.
+inline constexpr double DEFAULT_ACCURACY_TOL = 1e-6;
+
 struct RunOutcome {
-    SolverResult result;            ///< as the solver returned it
-    KktResiduals kkt, kkt_relative; ///< recomputed by the harness at the returned (x, lambda)
-    double objective = 0, violation = 0;
+    SolverResult result;            ///< as the solver returned it (result.status: the solver's word)
+    std::string status;             ///< the run's status (above); record "status"
+    AccuracyScale scale;            ///< of the original QP
+    AccuracyParts accuracy;         ///< e on the ORIGINAL QP at the returned (x, lambda)
+    AccuracyParts accuracy_solved;  ///< e on the QP the solver solved (== accuracy when unchanged)
+    long m_solved = 0;              ///< rows of the QP the solver solved (0 for a solver ignoring J)
+    double objective = 0, violation = 0;  ///< F(x) and max(0, c - Jx) of the original QP
     bool nonfinite = false;         ///< NaN/Inf seen in any iterate or the result
     bool monotone = true;           ///< objective non-increasing over the recorded feasible iterates
-    bool status_confirmed = true;   ///< "converged" confirmed by the common KKT (<= tol * 1.0001 + fp slack)
+    bool status_confirmed = true;   ///< false only for `unconfirmed` (the solver's claim fails on its own QP)
     nlohmann::json record;          ///< the full per-run results JSON (schema below)
     // Extensions beyond INTERFACES.md:
     std::vector<int> kept_rows;     ///< rows of the original J the solver saw (empty: all of them)

@@ -15,7 +15,8 @@ namespace cb {
 struct StressOptions {
     std::string out_dir;              ///< "" = write nothing
     double time_limit_s = 5.0;        ///< per run (solver time)
-    double tol = 1e-6;                ///< common relative KKT tolerance given to every solver
+    double tol = 1e-6;                ///< tolerance on the accuracy error e given to every solver
+    bool reference = true;            ///< solve each case with active-set (tol 1e-10) for F* and the energy gap
     std::vector<std::string> solvers; ///< empty = every registered solver
     std::vector<std::string> cases;   ///< ids or families; empty = all (of the quick set if quick)
     bool quick = false;               ///< the 4-case subset
@@ -27,21 +28,27 @@ struct StressOptions {
 struct StressRow {
     std::string solver, case_id, family;
     int severity = 0;
-    std::string status;               ///< a SolveStatus name, or "crashed" / "hung" / "error"
-    double kkt = 0.0;                 ///< relative common KKT error at the returned point
+    std::string status;               ///< the run's status (harness/runner.hpp), or "crashed" / "hung" / "error"
+    std::string solver_status;        ///< the solver's own word (a SolveStatus name), "" when it gave none
+    double kkt = 0.0;                 ///< the accuracy error e on the original QP at the returned point
+    double kkt_solved = 0.0;          ///< e on the QP the solver solved (decoupled / unconstrained)
     double tol = 0.0;
-    double violation = 0.0;           ///< max(0, c - Jx), length units
+    double violation = 0.0;           ///< max(0, c - Jx) on the original rows, length units
+    double primal = 0.0;              ///< the same as a fraction of the scene size (e's primal part)
+    double energy_gap = 0.0;          ///< |F - F*| / (d_ref l^2), NaN without a reference
     bool nonfinite = false, monotone = true;
     double time_s = 0.0;              ///< setup + solve
     long iterations = 0;
-    bool status_confirmed = true;     ///< "converged" confirmed by the common KKT
+    bool status_confirmed = true;     ///< false for "unconfirmed" (the solver's claim fails on its own QP)
     std::string message;
     long n = 0, m = 0;
     std::string criterion;
     long m_solved = 0;                ///< rows the solver saw (fewer than m when the harness decoupled J)
 
-    /// An honest outcome: a confirmed "converged", or any non-converged solver status with a
-    /// message (invalid_input and infeasible included). Crashes and hangs are not.
+    /// An honest outcome: "converged" (which the measure confirmed), "solved_relaxation" (the
+    /// solver's claim holds on the problem it solved, and the status says so), or any
+    /// non-converged solver status with a message (invalid_input and infeasible included).
+    /// "unconfirmed", crashes and hangs are not.
     bool honest() const;
 };
 
@@ -55,7 +62,8 @@ struct StressReport {
 StressReport run_stress(const StressOptions& options);
 
 /// Columns: solver, case, severity, status, kkt, tol, violation, nonfinite, monotone, time_s,
-/// iterations, status_confirmed, message, family, n, m, criterion, m_solved.
+/// iterations, status_confirmed, message, family, n, m, criterion, m_solved, solver_status,
+/// kkt_solved, primal, energy_gap.  (kkt = the accuracy error e on the original QP.)
 std::string stability_csv(const std::vector<StressRow>& rows);
 /// A case x solver table (status and KKT reached) and a summary of wrong statuses.
 std::string stability_markdown(const StressReport& report);

@@ -58,7 +58,7 @@ def plot_convergence(results: Results, out_dir: str, column: str = "kkt_rel",
                 ax.set_xlim(left=0)
             ax.set_title(snap if len(snap) < 40 else snap[:37] + "...", fontsize=8)
             ax.set_xlabel(xlabel)
-            ax.set_ylabel("relative KKT error" if column == "kkt_rel" else column)
+            ax.set_ylabel("error e on the original QP (fraction of scene size)" if column == "kkt_rel" else column)
             ax.grid(True, which="both", alpha=0.3)
             if drawn:
                 ax.legend(fontsize=7)

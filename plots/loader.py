@@ -25,16 +25,21 @@ from typing import Dict, List, Optional
 import numpy as np
 import pandas as pd
 
-#: history columns fixed by INTERFACES.md; used when a record omits "columns"
+#: history columns (harness/history.cpp); used when a record omits "columns". kkt_rel is the
+#: accuracy error e of docs/accuracy.md on the original QP (the name is kept for old files).
 HISTORY_COLUMNS = ["iteration", "time_s", "a_products", "step", "stationarity", "primal", "dual",
-                   "complementarity", "kkt", "kkt_rel", "objective", "native_residual", "active_set"]
+                   "complementarity", "gap", "kkt_rel", "objective", "native_residual", "active_set"]
 
-#: summary.csv columns fixed by INTERFACES.md
-SUMMARY_COLUMNS = ["suite", "snapshot", "label", "solver", "status", "criterion", "status_confirmed",
-                   "iterations", "a_products", "cholmod_factorizations", "kkt", "kkt_rel",
-                   "stationarity", "primal", "dual", "complementarity", "objective", "violation",
-                   "native_residual", "nonfinite", "monotone", "setup_s", "solve_s", "time_s", "n",
-                   "m", "tol"]
+#: summary.csv columns (harness/results.cpp)
+SUMMARY_COLUMNS = ["suite", "snapshot", "label", "solver", "status", "solver_status", "criterion",
+                   "status_confirmed", "iterations", "a_products", "cholmod_factorizations", "kkt_rel",
+                   "stationarity", "primal", "dual", "complementarity", "gap", "kkt_rel_solved", "m_solved",
+                   "objective", "energy_gap", "violation", "native_residual", "nonfinite", "monotone",
+                   "setup_s", "solve_s", "time_s", "n", "m", "tol", "length_scale", "length_scale_source"]
+
+#: run statuses beside the solvers' own (harness/runner.hpp)
+RELAXATION_STATUS = "solved_relaxation"
+UNCONFIRMED_STATUS = "unconfirmed"
 
 _BOOL_COLUMNS = ("status_confirmed", "nonfinite", "monotone")
 
@@ -94,8 +99,9 @@ def flatten_run(record: dict) -> dict:
     meta = snap.get("meta", {}) or {}
     counters = record.get("counters", {}) or {}
     times = record.get("time", {}) or {}
-    kkt = record.get("kkt", {}) or {}
-    kkt_rel = record.get("kkt_relative", {}) or {}
+    # "accuracy" (e on the original QP); older files only have "kkt_relative".
+    accuracy = record.get("accuracy") or record.get("kkt_relative") or {}
+    solved = record.get("accuracy_solved") or accuracy
     ref = record.get("reference") or {}
     dec = record.get("decouple") or {}
     row = {
@@ -104,13 +110,18 @@ def flatten_run(record: dict) -> dict:
         "label": record.get("label", record.get("solver", "")),
         "solver": record.get("solver", ""),
         "status": record.get("status", ""),
+        "solver_status": record.get("solver_status", record.get("status", "")),
         "criterion": record.get("criterion", ""),
         "message": record.get("message", ""),
         "status_confirmed": _to_bool(record.get("status_confirmed", True)),
         "iterations": _number(record.get("iterations")),
         "objective": _number(record.get("objective")),
-        "kkt": _number(kkt.get("max")),
-        "kkt_rel": _number(kkt_rel.get("max")),
+        "kkt_rel": _number(accuracy.get("max")),
+        "kkt_rel_solved": _number(solved.get("max")),
+        "m_solved": _number(record.get("m_solved", snap.get("m"))),
+        "energy_gap": _number(record.get("energy_gap")),
+        "length_scale": _number(record.get("length_scale")),
+        "length_scale_source": record.get("length_scale_source", ""),
         "violation": _number(record.get("violation")),
         "native_residual": _number(record.get("native_residual")),
         "nonfinite": _to_bool(record.get("nonfinite", False)),

@@ -1,7 +1,8 @@
 #!/usr/bin/python3
-"""Heat map of a stress run: solver x case, colour = log10 of the relative KKT error reached;
-a cell is marked when the solver said "converged" but the common KKT error does not confirm it
-(!), when NaN/Inf appeared (N), or when the objective was not monotone (~).
+"""Heat map of a stress run: solver x case, colour = log10 of the accuracy error e reached on the
+original QP (docs/accuracy.md); a cell is marked "rel" when the run is solved_relaxation (tol met
+only on the problem the solver changed), "!" when the solver said "converged" and the measure does
+not confirm it (status unconfirmed), N when NaN/Inf appeared, ~ when the objective was not monotone.
 
 usage: stability.py STRESS_DIR_OR_CSV [--out FIGDIR]
 Reads STRESS_DIR/stability.csv (or the CSV given; a results folder's summary.csv also works).
@@ -54,7 +55,8 @@ def read_table(path: str) -> pd.DataFrame:
 def cell_marks(row: pd.Series, cols: dict) -> str:
     marks = ""
     status = str(row[cols["status"]]).strip().lower() if cols["status"] else ""
-    if cols["confirmed"] and status == "converged" and not _to_bool(row[cols["confirmed"]]):
+    if status == "unconfirmed" or (cols["confirmed"] and status == "converged"
+                                   and not _to_bool(row[cols["confirmed"]])):
         marks += "!"
     if cols["nonfinite"] and _to_bool(row[cols["nonfinite"]]):
         marks += "N"
@@ -79,7 +81,8 @@ def plot_stability(df: pd.DataFrame, out_dir: str, stem: str = "stability") -> L
         grid[i, j] = math.log10(err) if np.isfinite(err) and err > 0 else (-16 if err == 0 else np.nan)
         status = str(row[cols["status"]]) if cols["status"] else ""
         short = {"converged": "", "max_iterations": "it", "time_limit": "t", "stalled": "st",
-                 "diverged": "div", "infeasible": "inf", "invalid_input": "inv"}.get(status, status[:3])
+                 "diverged": "div", "infeasible": "inf", "invalid_input": "inv", "solved_relaxation": "rel",
+                 "unconfirmed": ""}.get(status, status[:3])
         text[i][j] = (short + cell_marks(row, cols)) if np.isfinite(err) else ("NaN" + cell_marks(row, cols))
     fig, ax = plt.subplots(figsize=(max(5, 0.55 * len(cases) + 2.5), max(2.5, 0.45 * len(solvers) + 1.5)))
     masked = np.ma.masked_invalid(grid)
@@ -96,8 +99,9 @@ def plot_stability(df: pd.DataFrame, out_dir: str, stem: str = "stability") -> L
     ax.set_yticks(range(len(solvers)))
     ax.set_yticklabels(solvers, fontsize=8)
     fig.colorbar(im, ax=ax, label=f"log10 {cols['error']} reached")
-    ax.set_title("stability: ! = 'converged' not confirmed by KKT, N = NaN/Inf seen, ~ = non-monotone,\n"
-                 "it/t/st/div/inf/inv = max_iterations/time_limit/stalled/diverged/infeasible/invalid; grey = no finite error",
+    ax.set_title("stability (error e on the original QP): ! = 'converged' not confirmed by the measure, "
+                 "rel = solved_relaxation,\nN = NaN/Inf seen, ~ = non-monotone, it/t/st/div/inf/inv = "
+                 "max_iterations/time_limit/stalled/diverged/infeasible/invalid; grey = no finite error",
                  fontsize=7)
     fig.tight_layout()
     return figutil.save_figure(fig, out_dir, stem)

@@ -40,7 +40,7 @@ nlohmann::json ActiveSetSettings::to_json() const
 
 std::vector<SettingDoc> active_set_setting_docs()
 {
-    return {{"tol", "1e-10", "(overrides the common default) relative KKT error required for 'converged'"},
+    return {{"tol", "1e-10", "(overrides the common default) accuracy error e required for 'converged'"},
             {"monitor_every", "1", "monitor call every k-th pivot (each forms x with one untimed solve); 0 = start and end only"},
             {"polish_rounds", "4", "iterative-refinement rounds of the equality QP on the final working set"},
             {"dependency_tol", "1e-10", "row p depends on the working set when K_pp - K_pW S_W^-1 K_Wp <= dependency_tol * K_pp"}};
@@ -184,8 +184,8 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
     watch.reset();
     watch.start();
 
-    const KktScale scale = kkt_scale(qp);
-    ++counters.a_products;
+    const AccuracyScale scale = accuracy_scale(qp);
+    counters.a_products += scale.a_products;
     const Vec x_unc = solve_A(qp.b);
     Vec s_base = m > 0 ? Vec(qp.J * x_unc - qp.c) : Vec(0);
     const double x_scale = std::max(x_unc.size() ? x_unc.lpNorm<Eigen::Infinity>() : 0.0,
@@ -259,20 +259,22 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
         return v;
     };
     Vec x_monitor;
-    auto monitor = [&](StepKind step) {
+    // `returned`: the final call passes the returned (polished) point, so that the history's
+    // last row is what the solver returns.
+    auto monitor = [&](StepKind step, const Vec* returned = nullptr, double returned_native = 0.0) {
         if (!context.monitor) return true;
         const bool every = m_settings.monitor_every > 0 && counters.iterations % m_settings.monitor_every == 0;
         if (step == StepKind::PIVOT && !every) return true;
-        {
+        if (!returned) {
             PausedScope paused(watch);  // forming x is monitor work, not solver work
             x_monitor = chol.solve(Vec(qp.b + Jt(lambda)));
         }
         IterationInfo info;
         info.iteration = counters.iterations;
         info.step = step;
-        info.x = &x_monitor;
+        info.x = returned ? returned : &x_monitor;
         info.lambda = &lambda;
-        info.native_residual = m > 0 ? max_violation_of(s) : 0.0;
+        info.native_residual = returned ? returned_native : (m > 0 ? max_violation_of(s) : 0.0);
         info.active_set_size = static_cast<long>(W.size());
         info.counters = &counters;
         return notify_monitor(context, watch, info);
@@ -377,20 +379,20 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
         //   A x - J_W' lambda_W = b,  J_W x = c_W
         const int q = static_cast<int>(W.size());
         x = solve_A(qp.b + Jt(lambda));
-        double best_rel = INF;
+        double best_error = INF;
         Vec best_x = x, best_lambda = lambda;
         for (long round = 0; round <= m_settings.polish_rounds; ++round) {
             const Vec g = qp.A * x - qp.b;
             ++counters.a_products;
-            const double rel = kkt_residuals_from_gradient(qp, x, g, lambda).max() * scale.inverse_reference;
-            if (rel < best_rel) {
-                best_rel = rel;
+            const double error = accuracy_from_gradient(qp, scale, x, g, lambda).max();
+            if (error < best_error) {
+                best_error = error;
                 best_x = x;
                 best_lambda = lambda;
             } else {
                 break;  // refinement stopped helping
             }
-            if (round == m_settings.polish_rounds || rel <= 1e-15) break;
+            if (round == m_settings.polish_rounds || error <= 1e-15) break;
             const Vec r1 = Jt(lambda) - g;
             const Vec v = solve_A(r1);
             Vec rhs(q);
@@ -430,8 +432,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
     if (!x_polished) x = solve_A(qp.b + Jt(lambda));
     const Vec g = qp.A * x - qp.b;
     ++counters.a_products;
-    const KktResiduals kkt = kkt_residuals_from_gradient(qp, x, g, lambda);
-    const double rel = kkt.max() * scale.inverse_reference;
+    const double rel = accuracy_from_gradient(qp, scale, x, g, lambda).max();
     const double stationarity_abs = (g - Jt(lambda)).lpNorm<Eigen::Infinity>();
     result.native_residual = std::max(stationarity_abs, max_violation(qp, x));
 
@@ -442,11 +443,11 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
             result.status = SolveStatus::CONVERGED;
             result.criterion = common.stop == StopRule::KKT ? "kkt" : "native";
             msg << "active-set: optimal working set of " << W.size() << " rows after "
-                << counters.iterations << " steps; relative KKT " << rel;
+                << counters.iterations << " steps; accuracy error " << rel;
         } else {
             result.status = SolveStatus::STALLED;
             msg << "active-set: working set of " << W.size() << " rows found, but the polished "
-                << (common.stop == StopRule::KKT ? "relative KKT error " : "native residual ")
+                << (common.stop == StopRule::KKT ? "accuracy error " : "native residual ")
                 << (common.stop == StopRule::KKT ? rel : result.native_residual) << " > tol "
                 << common.tol << " (ill-conditioned A or dependent rows)";
         }
@@ -454,7 +455,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
     } else if (result.message.empty()) {
         std::ostringstream msg;
         msg << "active-set: " << to_string(result.status) << " after " << counters.iterations
-            << " steps; working set " << W.size() << " rows; relative KKT " << rel;
+            << " steps; working set " << W.size() << " rows; accuracy error " << rel;
         result.message = msg.str();
     }
     result.x = x;
@@ -469,8 +470,8 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
     result.info["gi_restarts"] = gi_restarts;
     result.info["zero_rows"] = zero_rows;
     result.info["clipped_negative_lambda"] = clipped;
-    result.info["kkt_relative"] = rel;
-    monitor(StepKind::FINAL);
+    result.info["accuracy_error"] = rel;
+    monitor(StepKind::FINAL, &x, result.native_residual);
     result.solve_s = watch.seconds();
     return result;
 }

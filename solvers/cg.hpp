@@ -1,8 +1,9 @@
 #pragma once
 /// `cg`: (Jacobi-)preconditioned conjugate gradients on A x = b, ignoring J (ALGORITHMS.md §9).
-/// The baseline of the paper's Fig. 8: it solves the UNCONSTRAINED problem, so its "KKT error"
-/// (stop=kkt) is the relative stationarity |Ax - b|_inf / s of that problem, divided by its
-/// value at x0. It returns lambda = 0 and info {"ignores_constraints": true}.
+/// The baseline of the paper's Fig. 8: it solves the UNCONSTRAINED relaxation, so its stop=kkt
+/// test is the accuracy error of that problem (docs/accuracy.md: |D^-1 (Ax - b)|_inf / l), and the
+/// harness reports a constrained problem it "solved" as `solved_relaxation`. It returns lambda = 0
+/// and info {"ignores_constraints": true}.
 /// Ref: Li et al. 2015, Sec. 6 (Fig. 8 comparison with PCG).
 #include "solvers/registry.hpp"
 #include "solvers/settings.hpp"

@@ -196,8 +196,8 @@ SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
 
     Stopwatch solve_watch;
     solve_watch.start();
-    const KktScale scale = kkt_scale(qp);
-    ++counters.a_products;
+    const AccuracyScale scale = accuracy_scale(qp);
+    counters.a_products += scale.a_products;
     Vec Ax = qp.A * x;
     ++counters.a_products;
     Vec f = qp.b + qp.J.transpose() * lambda;
@@ -218,7 +218,7 @@ SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
     };
     auto converged = [&]() -> std::string {
         if (s.common.stop == StopRule::NATIVE) return native <= s.common.tol ? "native" : "";
-        return kkt_converged(qp, x, g, lambda, scale, s.common.tol) ? "kkt" : "";
+        return accuracy_converged(qp, scale, x, g, lambda, s.common.tol) ? "kkt" : "";
     };
 
     if (!notify_monitor(context, solve_watch,
@@ -288,7 +288,7 @@ SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
             result.info["last_pgs_sweeps"] = last_sweeps;
             result.info["last_pgs_dlambda"] = last_dlambda;
             std::ostringstream msg;
-            msg << "ica: " << (c == "native" ? "native residual ||Ax-b-J'lambda||_2 = " : "relative KKT error <= tol; native residual = ")
+            msg << "ica: " << (c == "native" ? "native residual ||Ax-b-J'lambda||_2 = " : "accuracy error <= tol; native residual = ")
                 << native << (c == "native" ? " <= tol (stationarity only; feasibility not checked)" : "");
             return finish(SolveStatus::CONVERGED, c, msg.str());
         }

@@ -11,11 +11,11 @@
 ///      at most `pgs_sweeps` sweeps, stop when ||dlambda||_2 <= `pgs_tol`;
 ///   3. one ascending block Gauss-Seidel sweep on  A x = b + J' lambda;
 ///   4. stop (stop=native) when ||A x - b - J' lambda||_2 <= tol (absolute, stationarity only,
-///      as published), or (stop=kkt, default) on the common relative KKT error.
+///      as published), or (stop=kkt, default) on the accuracy error e (docs/accuracy.md).
 ///
 /// Counting (Counters::a_products): one A-product equivalent per block Gauss-Seidel sweep and one
 /// per residual product A x; the residual's A x is reused by the next anticipation ((L+U)x =
-/// Ax - D3 x), so an outer iteration costs 2 A-products (+1 for A x0 at the start). The published
+/// Ax - D3 x), so an outer iteration costs 2 A-products (+1 for A x0 at the start, + those of the accuracy scale's fallback for a point-like start). The published
 /// implementation recomputes (L+U)x, i.e. about 3 per outer iteration. PGS sweeps on B are counted
 /// in pgs_sweeps (and lcp_iterations), not as A-products.
 #include "solvers/registry.hpp"

@@ -7,7 +7,7 @@
 #include "solvers/mprgp.hpp"
 
 #include "solvers/decouple.hpp"
-#include "solvers/kkt.hpp"
+#include "solvers/accuracy.hpp"
 #include "solvers/mprgp_kernels.hpp"
 
 #include <algorithm>
@@ -162,8 +162,7 @@ private:
     DecoupledRows m_rows;
     Vec m_dinv;
     double m_alpha_bar = 0.0;
-    KktScale m_scale;
-    double m_s_b = 1.0, m_s_c = 1.0;
+    AccuracyScale m_scale;
 
     Vec m_x, m_g, m_z, m_p, m_Ap, m_tmp, m_d, m_lambda, m_jx, m_jg, m_jp;
     std::vector<char> m_active;
@@ -173,14 +172,14 @@ private:
     double m_rz = 0.0;       // z'g
     double m_gg_out = 0.0;   // sum of g_j^2 over DOFs in no row
     double m_pg_rows = 0.0;  // p'phi over the DOFs of rows (from evaluate_rows)
-    double m_ginf_free = 0;  // max |g_j| over DOFs in no row (KKT stationarity part)
+    double m_ginf_free = 0;  // max |g_j| / D_jj over DOFs in no row (the measure's stationarity part)
     double m_f_x = 0.0;      // F(x)
     double m_corr_x = 0.0;   // F(P(x)) - F(x)
     double m_f_proj_x = 0.0; // F(P(x)) (objective = recompute keeps it directly)
 
     // Row pass results.
-    double m_beta2 = 0.0, m_phitilde_phi = 0.0, m_native = 0.0, m_kkt_rel = 0.0;
-    double m_face_rel = 0.0;  // relative KKT without the primal part (the face problem's residual)
+    double m_beta2 = 0.0, m_phitilde_phi = 0.0, m_native = 0.0, m_error = 0.0;
+    double m_face_error = 0.0;  // accuracy error without the primal part (the face problem's residual)
     bool m_infeasible = false;
     long m_active_count = 0;
 };
@@ -212,7 +211,7 @@ void MprgpRun::restart()
     m_ginf_free = 0.0;
     for (Eigen::Index j = 0; j < m_n; ++j)
         if (!m_rows.dof_in_row[static_cast<size_t>(j)]) {
-            m_ginf_free = std::max(m_ginf_free, std::abs(m_g[j]));
+            m_ginf_free = std::max(m_ginf_free, std::abs(m_g[j]) * m_scale.inv_diag[j]);
             m_gg_out += m_g[j] * m_g[j];
         }
     m_f_x = objective_from_gradient();
@@ -229,7 +228,7 @@ void MprgpRun::evaluate_rows()
     // no DOF), never as ||g||^2 minus the active part: that difference cancels catastrophically
     // when the active rows carry almost all of g near the solution.
     double beta2 = 0.0, pb2 = m_gg_out, phi2 = m_gg_out, ptp_corr = 0.0;
-    double stat = m_ginf_free, primal = 0.0, compl_ = 0.0, pg_rows = 0.0;
+    double stat = m_ginf_free, primal = 0.0, compl_ = 0.0, gap = 0.0, pg_rows = 0.0;
     bool infeasible = false;
     long active_count = 0;
     for (Eigen::Index i = 0; i < m_m; ++i) {
@@ -264,10 +263,13 @@ void MprgpRun::evaluate_rows()
             pb2 += r_pb * r_pb;
             phi2 += r_phi * r_phi;
             pg_rows += m_p[inner[k]] * r_phi;
-            stat = std::max(stat, std::abs(r_pb));
+            stat = std::max(stat, std::abs(r_pb) * m_scale.inv_diag[inner[k]]);
         }
-        primal = std::max(primal, m_c[i] - jx);
-        compl_ = std::max(compl_, std::abs(lambda * (jx - m_c[i])));
+        // The accuracy measure's row parts (solvers/accuracy.hpp): lengths along the unit normal.
+        const double inv_norm = m_scale.inv_row_norm[i];
+        primal = std::max(primal, (m_c[i] - jx) * inv_norm);
+        compl_ = std::max(compl_, std::min(lambda * m_scale.length_per_multiplier[i], std::abs(jx - m_c[i]) * inv_norm));
+        if (inv_norm > 0.0) gap += std::abs(lambda * (jx - m_c[i]));
     }
     m_beta2 = beta2;
     m_pg_rows = pg_rows;
@@ -276,11 +278,10 @@ void MprgpRun::evaluate_rows()
     m_native = std::sqrt(pb2);
     m_infeasible = infeasible;
     m_active_count = active_count;
-    const double stationarity = stat / m_s_b * m_scale.inverse_reference;
-    const double kkt = std::max(std::max(stat / m_s_b, std::max(0.0, primal) / m_s_c), compl_ / m_s_b);
-    m_kkt_rel = std::isfinite(kkt) ? kkt * m_scale.inverse_reference : std::numeric_limits<double>::infinity();
-    m_face_rel = std::isfinite(stationarity) ? std::max(stationarity, compl_ / m_s_b * m_scale.inverse_reference)
-                                             : std::numeric_limits<double>::infinity();
+    const double face = std::max(std::max(stat, compl_) * m_scale.inv_length, gap * m_scale.inv_energy);
+    const double error = std::max(face, std::max(0.0, primal) * m_scale.inv_length);
+    m_error = std::isfinite(error) ? error : std::numeric_limits<double>::infinity();
+    m_face_error = std::isfinite(face) ? face : std::numeric_limits<double>::infinity();
 }
 
 double MprgpRun::projection_correction(double alpha)
@@ -455,9 +456,8 @@ SolverResult MprgpRun::run()
     result.info["power"] = {{"rule", m_st.alpha}, {"products", power.products}, {"estimate", power.estimate},
                             {"rho", rho}, {"warm_start", power.warm}};
     result.info["alpha_bar"] = m_alpha_bar;
-    m_scale = kkt_scale(m_qp);
-    m_s_b = std::max(1.0, m_b.size() ? m_b.lpNorm<Eigen::Infinity>() : 0.0);
-    m_s_c = std::max(1.0, m_c.size() ? m_c.lpNorm<Eigen::Infinity>() : 0.0);
+    m_scale = accuracy_scale(m_qp);
+    m_cnt.a_products += m_scale.a_products;
     m_watch.pause();
     result.setup_s = m_watch.seconds();
     result.info["power"]["seconds"] = result.setup_s;
@@ -496,15 +496,15 @@ SolverResult MprgpRun::run()
             break;
         }
         // Converged means at a feasible x (an infeasible chain iterate ends in an expansion).
-        bool converged = !m_infeasible && (native ? m_native <= common.tol : m_kkt_rel <= common.tol);
+        bool converged = !m_infeasible && (native ? m_native <= common.tol : m_error <= common.tol);
         if (converged) {
             // Confirm at an exact gradient (the recursive g drifts along long chains); the
-            // kkt rule is confirmed by the common metric itself.
+            // kkt rule is confirmed by the common measure itself.
             refresh_gradient();
             restart();
             evaluate_rows();
             converged = native ? m_native <= common.tol
-                               : kkt_converged(m_qp, m_x, m_g, m_lambda, m_scale, common.tol);
+                               : accuracy_converged(m_qp, m_scale, m_x, m_g, m_lambda, common.tol);
         }
         if (!call_monitor(last_step)) {
             status = SolveStatus::STOPPED_BY_MONITOR;
@@ -528,7 +528,7 @@ SolverResult MprgpRun::run()
         ++m_cnt.iterations;
         // An infeasible chain iterate whose face problem is already solved cannot improve
         // along the frozen face: end the chain (the expansion step projects).
-        const bool face_done = m_infeasible && (native ? m_native <= common.tol : m_face_rel <= common.tol);
+        const bool face_done = m_infeasible && (native ? m_native <= common.tol : m_face_error <= common.tol);
         const bool proportional = !face_done && m_beta2 <= gamma2 * m_phitilde_phi;
         if (proportional) {
             // --- CG trial step (Alg. 2) ---
@@ -575,6 +575,7 @@ SolverResult MprgpRun::run()
                     const double* __restrict pp = m_p.data();
                     const double* __restrict pap_v = m_Ap.data();
                     const double* __restrict pd = m_dinv.data();
+                    const double* __restrict pw = m_scale.inv_diag.data();
                     const char* __restrict in_row = m_rows.dof_in_row.data();
                     for (Eigen::Index j = 0; j < m_n; ++j) {
                         px[j] -= alpha * pp[j];
@@ -585,7 +586,7 @@ SolverResult MprgpRun::run()
                         if (!in_row[j]) {
                             zg += zj * gj;
                             zap += zj * pap_v[j];
-                            ginf = std::max(ginf, std::abs(gj));
+                            ginf = std::max(ginf, std::abs(gj) * pw[j]);
                             gg += gj * gj;
                         }
                     }
@@ -675,10 +676,10 @@ SolverResult MprgpRun::run()
     result.native_residual = m_native;
     if (status == SolveStatus::CONVERGED) {
         result.criterion = native ? "native" : "kkt";
-        result.message = std::string("converged: ") + (native ? "||phi+beta||_2 = " : "relative KKT = ") +
-                         fmt(native ? m_native : m_kkt_rel) + " <= tol";
+        result.message = std::string("converged: ") + (native ? "||phi+beta||_2 = " : "accuracy error = ") +
+                         fmt(native ? m_native : m_error) + " <= tol";
     } else {
-        result.message = "not converged: " + why + " (relative KKT " + fmt(m_kkt_rel) + ", ||phi+beta|| " +
+        result.message = "not converged: " + why + " (accuracy error " + fmt(m_error) + ", ||phi+beta|| " +
                          fmt(m_native) + "; " + std::to_string(m_cnt.cg_steps) + " cg, " +
                          std::to_string(m_cnt.expansion_steps) + " expansion, " +
                          std::to_string(m_cnt.proportioning_steps) + " proportioning steps)";

@@ -4,7 +4,7 @@
 //      feasible step length before the expansion step, Alg. 1-2.
 #include "solvers/mprgp_box.hpp"
 
-#include "solvers/kkt.hpp"
+#include "solvers/accuracy.hpp"
 #include "solvers/mprgp_kernels.hpp"
 
 #include <cmath>
@@ -157,7 +157,8 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
     const double alpha_bar = power.estimate > 0.0 ? 2.0 / (1.01 * power.estimate) : 1.0;
     result.info["alpha_bar"] = alpha_bar;
     result.info["power"] = {{"products", power.products}, {"estimate", power.estimate}, {"warm_start", power.warm}};
-    const KktScale scale = kkt_scale(qp);
+    const AccuracyScale scale = accuracy_scale(qp);
+    cnt.a_products += scale.a_products;
     watch.pause();
     result.setup_s = watch.seconds();
     watch.reset();
@@ -208,19 +209,19 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
     SolveStatus status = SolveStatus::MAX_ITERATIONS;
     std::string why = "iteration cap " + std::to_string(common.max_iterations) + " reached";
     StepKind last = StepKind::START;
-    double native_residual = 0.0, kkt_rel = 0.0;
+    double native_residual = 0.0, error = 0.0;
     while (true) {
         multipliers();
         native_residual = (phi + beta).norm();
-        kkt_rel = kkt_residuals_from_gradient(qp, x, g, lambda).max() * scale.inverse_reference;
-        bool converged = native ? native_residual <= common.tol : kkt_rel <= common.tol;
+        error = accuracy_from_gradient(qp, scale, x, g, lambda).max();
+        bool converged = native ? native_residual <= common.tol : error <= common.tol;
         if (converged) {  // confirm at an exact gradient
             g = qp.A * x - qp.b;
             ++cnt.a_products;
             gradients();
             multipliers();
             native_residual = (phi + beta).norm();
-            converged = native ? native_residual <= common.tol : kkt_converged(qp, x, g, lambda, scale, common.tol);
+            converged = native ? native_residual <= common.tol : accuracy_converged(qp, scale, x, g, lambda, common.tol);
             p = z;
         }
         IterationInfo info;
@@ -321,7 +322,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
     gradients();
     multipliers();
     native_residual = (phi + beta).norm();
-    kkt_rel = kkt_residuals_from_gradient(qp, x, g, lambda).max() * scale.inverse_reference;
+    error = accuracy_from_gradient(qp, scale, x, g, lambda).max();
     watch.pause();
     result.solve_s = watch.seconds();
     result.status = status;
@@ -333,9 +334,9 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
     if (status == SolveStatus::CONVERGED) {
         result.criterion = native ? "native" : "kkt";
         result.message = "converged: " + std::string(native ? "||phi+beta||_2 = " + fmt(native_residual)
-                                                            : "relative KKT = " + fmt(kkt_rel)) + " <= tol";
+                                                            : "accuracy error = " + fmt(error)) + " <= tol";
     } else {
-        result.message = "not converged: " + why + " (relative KKT " + fmt(kkt_rel) + ")";
+        result.message = "not converged: " + why + " (accuracy error " + fmt(error) + ")";
     }
     return result;
 }

@@ -4,7 +4,7 @@
 // Not a hot path: written for clarity; every subproblem is on CHOLMOD.
 #include "solvers/mprgp_coupled.hpp"
 
-#include "solvers/kkt.hpp"
+#include "solvers/accuracy.hpp"
 #include "solvers/mprgp_kernels.hpp"
 
 #include <Eigen/CholmodSupport>
@@ -237,7 +237,8 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
     cnt.power_products = power.products;
     cnt.a_products += power.products;
     const double alpha_bar = power.estimate > 0.0 ? 2.0 / (1.01 * power.estimate) : 1.0;
-    const KktScale scale = kkt_scale(qp);
+    const AccuracyScale scale = accuracy_scale(qp);
+    cnt.a_products += scale.a_products;
     watch.pause();
     result.setup_s = watch.seconds();
     watch.reset();
@@ -339,7 +340,7 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
     SolveStatus status = SolveStatus::MAX_ITERATIONS;
     std::string why = "iteration cap " + std::to_string(common.max_iterations) + " reached";
     StepKind last = StepKind::START;
-    double native_residual = 0.0, kkt_rel = 0.0;
+    double native_residual = 0.0, error = 0.0;
     auto restart = [&]() {
         set_face(x);
         phi = free_grad(g);
@@ -353,8 +354,8 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
         lambda.setZero();
         for (size_t r = 0; r < face.size(); ++r) lambda[face[r]] = mu[static_cast<Eigen::Index>(r)];
         native_residual = (phi + beta).norm();
-        kkt_rel = kkt_residuals_from_gradient(qp, x, g, lambda).max() * scale.inverse_reference;
-        bool converged = x_feasible && (native ? native_residual <= common.tol : kkt_rel <= common.tol);
+        error = accuracy_from_gradient(qp, scale, x, g, lambda).max();
+        bool converged = x_feasible && (native ? native_residual <= common.tol : error <= common.tol);
         IterationInfo info;
         info.iteration = cnt.iterations;
         info.step = last;
@@ -389,9 +390,11 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
         project(trial);
         const double phitilde_phi = (x - trial).dot(phi) / alpha_bar;
         // An infeasible chain iterate whose face problem is solved cannot improve along the face.
-        const double s_b = std::max(1.0, qp.b.size() ? qp.b.lpNorm<Eigen::Infinity>() : 0.0);
-        const bool face_done = !x_feasible && (native ? phi.norm() <= common.tol
-                                                      : phi.lpNorm<Eigen::Infinity>() / s_b * scale.inverse_reference <= common.tol);
+        // (The face residual phi measured like the stationarity part of the accuracy error.)
+        const bool face_done =
+            !x_feasible && (native ? phi.norm() <= common.tol
+                                   : phi.cwiseProduct(scale.inv_diag).lpNorm<Eigen::Infinity>() * scale.inv_length <=
+                                         common.tol);
         const bool proportional = !face_done && beta.squaredNorm() <= st.gamma * st.gamma * phitilde_phi;
         bool do_expansion = false;
         if (proportional) {
@@ -462,8 +465,8 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
     lambda.setZero();
     for (size_t r = 0; r < face.size(); ++r) lambda[face[r]] = mu[static_cast<Eigen::Index>(r)];
     native_residual = (phi + beta).norm();
-    kkt_rel = kkt_residuals_from_gradient(qp, x, g, lambda).max() * scale.inverse_reference;
-    if (status == SolveStatus::CONVERGED && !(native ? native_residual <= common.tol : kkt_rel <= common.tol)) {
+    error = accuracy_from_gradient(qp, scale, x, g, lambda).max();
+    if (status == SolveStatus::CONVERGED && !(native ? native_residual <= common.tol : error <= common.tol)) {
         status = SolveStatus::STALLED;
         why = "the criterion held on the updated gradient but not at the exact gradient (rounding drift)";
     }
@@ -486,10 +489,10 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
     if (status == SolveStatus::CONVERGED) {
         result.criterion = native ? "native" : "kkt";
         result.message = "converged: " + std::string(native ? "||phi+beta||_2 = " + fmt(native_residual)
-                                                            : "relative KKT = " + fmt(kkt_rel)) +
+                                                            : "accuracy error = " + fmt(error)) +
                          " <= tol; safeguard firings " + std::to_string(cnt.safeguard_steps);
     } else {
-        result.message = "not converged: " + why + " (relative KKT " + fmt(kkt_rel) + ")";
+        result.message = "not converged: " + why + " (accuracy error " + fmt(error) + ")";
     }
     if (lcp_failures > 0) result.message += "; " + std::to_string(lcp_failures) + " LCP solves missed their tolerance";
     return result;

@@ -3,7 +3,7 @@
 //      eq. (13), (15)-(20); Alg. 1-3. With JJ' diagonal every subproblem is row-separable.
 #include "solvers/mprgp_kernels.hpp"
 
-#include "solvers/kkt.hpp"
+#include "solvers/accuracy.hpp"
 
 #include <cmath>
 #include <random>

@@ -65,7 +65,7 @@ void chopped_gradient(const SpMat& J, const DecoupledRows& rows, const std::vect
 double reduced_free_gradient_dot(const SpMat& J, const Vec& c, const DecoupledRows& rows, const Vec& x,
                                  const Vec& phi, double alpha_bar);
 
-/// Multipliers for the KKT metric: lambda_i = max(0, J_i g / s_i) on active rows, 0 elsewhere.
+/// Multipliers for the accuracy measure: lambda_i = max(0, J_i g / s_i) on active rows, 0 elsewhere.
 void decoupled_multipliers(const SpMat& J, const DecoupledRows& rows, const std::vector<char>& active,
                            const Vec& g, Vec& lambda);
 

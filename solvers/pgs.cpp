@@ -126,10 +126,8 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
 
     Stopwatch solve_watch;
     solve_watch.start();
-    const KktScale scale = kkt_scale(qp);
-    ++counters.a_products;
-    const double s_b = std::max(1.0, qp.b.size() ? qp.b.lpNorm<Eigen::Infinity>() : 0.0);
-    const double s_c = std::max(1.0, m ? qp.c.lpNorm<Eigen::Infinity>() : 0.0);
+    const AccuracyScale scale = accuracy_scale(qp);
+    counters.a_products += scale.a_products;
 
     Vec lambda = Vec::Zero(m);
     if (context.lambda0 && context.lambda0->size() == m) lambda = context.lambda0->cwiseMax(0.0);
@@ -153,14 +151,18 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
         for (Eigen::Index i = 0; i < m; ++i) r = std::max(r, std::abs(std::min(lambda[i], w[i])));
         return r;
     };
-    // The common KKT in dual space: stationarity is 0 at x(lambda), dual feasibility holds.
-    auto dual_space_kkt = [&]() {
-        double primal = 0.0, comp = 0.0;
+    // The accuracy measure in dual space: stationarity is 0 at x(lambda), dual feasibility holds
+    // (lambda >= 0); the row parts as in solvers/accuracy.cpp.
+    auto dual_space_error = [&]() {
+        double primal = 0.0, comp = 0.0, gap = 0.0;
         for (Eigen::Index i = 0; i < m; ++i) {
-            primal = std::max(primal, -w[i]);
-            comp = std::max(comp, std::abs(lambda[i] * w[i]));
+            const double inv_norm = scale.inv_row_norm[i];
+            if (inv_norm == 0.0) continue;  // zero rows: checked at the exact primal point
+            primal = std::max(primal, -w[i] * inv_norm);
+            comp = std::max(comp, std::min(lambda[i] * scale.length_per_multiplier[i], std::abs(w[i]) * inv_norm));
+            gap += std::abs(lambda[i] * w[i]);
         }
-        return std::max(primal / s_c, comp / s_b) * scale.inverse_reference;
+        return std::max(std::max(primal, comp) * scale.inv_length, gap * scale.inv_energy);
     };
 
     double native = natural_residual();
@@ -180,11 +182,11 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
     // Returns the criterion met, or "" (a kkt candidate is confirmed at the exact primal point).
     auto converged = [&]() -> std::string {
         if (s.common.stop == StopRule::NATIVE) return native <= s.common.tol ? "native" : "";
-        if (dual_space_kkt() > dual_threshold) return "";
+        if (dual_space_error() > dual_threshold) return "";
         primal_point(true);
         const Vec g = qp.A * x - qp.b;
         ++counters.a_products;
-        if (kkt_converged(qp, x, g, lambda, scale, s.common.tol)) return "kkt";
+        if (accuracy_converged(qp, scale, x, g, lambda, s.common.tol)) return "kkt";
         dual_threshold *= 0.5;  // the solve's error showed up: ask more of the dual estimate
         return "";
     };
@@ -228,7 +230,7 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
         const std::string c = converged();
         if (!c.empty()) {
             std::ostringstream msg;
-            msg << "pgs: " << (c == "native" ? "LCP natural residual " : "relative KKT error <= tol; natural residual ")
+            msg << "pgs: " << (c == "native" ? "LCP natural residual " : "accuracy error <= tol; natural residual ")
                 << native << " after " << counters.iterations << " sweeps";
             return finish(SolveStatus::CONVERGED, c, msg.str());
         }

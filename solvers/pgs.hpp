@@ -13,7 +13,7 @@
 ///
 /// Stop rules: stop=native: the LCP natural residual ||min(lambda, S lambda - q)||_inf <= tol
 /// (absolute, constraint units), which is zero exactly at a solution; stop=kkt (default): the
-/// common relative KKT error, evaluated in dual space (J x - c = S lambda - q) at every sweep and
+/// accuracy error e (docs/accuracy.md), evaluated in dual space (J x - c = S lambda - q) at every sweep and
 /// confirmed at the primal x before "converged" is returned.
 #include "solvers/registry.hpp"
 #include "solvers/solver.hpp"

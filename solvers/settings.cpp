@@ -115,8 +115,8 @@ void SettingsReader::finish() const
 
 std::vector<SettingDoc> common_setting_docs()
 {
-    return {{"tol", "1e-6", "stop tolerance on the common relative KKT error (stop=kkt) or on the native residual (stop=native, absolute)"},
-            {"stop", "kkt", "kkt | native: which criterion ends the solve"},
+    return {{"tol", "1e-6", "stop tolerance on the accuracy error e, dimensionless: residual lengths as a fraction of the scene size (stop=kkt); or on the native residual in the paper's units (stop=native)"},
+            {"stop", "kkt", "kkt | native: which criterion ends the solve (kkt = the accuracy error e of docs/accuracy.md)"},
             {"max_iterations", "10000", "cap on outer iterations"},
             {"time_limit_s", "0", "wall-time limit of the solve in seconds; 0 = none"},
             {"seed", "0", "seed of every random choice"}};

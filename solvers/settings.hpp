@@ -12,13 +12,13 @@
 namespace cb {
 
 enum class StopRule {
-    KKT,     ///< the common relative KKT error of DESIGN.md (default)
+    KKT,     ///< the common accuracy error e of docs/accuracy.md (default; the name `kkt` is kept)
     NATIVE,  ///< the solver's published criterion; `tol` is then the paper's absolute tolerance
 };
 
 /// Settings every solver accepts.
 struct CommonSettings {
-    double tol = 1e-6;          ///< on the common relative KKT error (or native residual, stop=native)
+    double tol = 1e-6;          ///< on the accuracy error e (a fraction of the scene size), or the native residual (stop=native)
     StopRule stop = StopRule::KKT;
     long max_iterations = 10000;  ///< outer iterations
     double time_limit_s = 0.0;    ///< 0 disables the limit

@@ -70,10 +70,10 @@ bool notify_monitor(const SolveContext& context, Stopwatch& watch, IterationInfo
     return context.monitor->on_iteration(info);
 }
 
-bool kkt_converged(const QpView& qp, const Vec& x, const Vec& g, const Vec& lambda,
-                   const KktScale& scale, double tol)
+bool accuracy_converged(const QpView& qp, const AccuracyScale& scale, const Vec& x, const Vec& g,
+                        const Vec& lambda, double tol)
 {
-    return kkt_residuals_from_gradient(qp, x, g, lambda).max() * scale.inverse_reference <= tol;
+    return accuracy_from_gradient(qp, scale, x, g, lambda).max() <= tol;
 }
 
 } // namespace cb

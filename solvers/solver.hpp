@@ -1,6 +1,6 @@
 #pragma once
 /// The one interface every solver implements, with its status, counters and monitor.
-#include "solvers/kkt.hpp"
+#include "solvers/accuracy.hpp"
 #include "solvers/qp.hpp"
 #include "solvers/settings.hpp"
 #include "solvers/stopwatch.hpp"
@@ -107,9 +107,10 @@ public:
 /// @return false when the monitor asked to stop.
 bool notify_monitor(const SolveContext& context, Stopwatch& watch, IterationInfo info);
 
-/// Helper for solvers: the common stopping test. Returns true when the relative KKT error of
-/// (x, lambda) (gradient g = Ax - b given) is <= tol.
-bool kkt_converged(const QpView& qp, const Vec& x, const Vec& g, const Vec& lambda,
-                   const KktScale& scale, double tol);
+/// Helper for solvers: the common stopping test (docs/accuracy.md). True when the accuracy error
+/// e of (x, lambda) on `qp` (gradient g = Ax - b given) is <= tol. Every solver's `stop=kkt`
+/// test and its confirmation of `stop=native` call this, on the QP it solves.
+bool accuracy_converged(const QpView& qp, const AccuracyScale& scale, const Vec& x, const Vec& g,
+                        const Vec& lambda, double tol);
 
 } // namespace cb

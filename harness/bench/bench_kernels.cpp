@@ -5,7 +5,7 @@
 // "Performance targets").
 //   build-*/bin/cb_bench --benchmark_filter='Triad|AProduct|Pcg|Mprgp'
 #include "problems/synthetic.hpp"
-#include "solvers/kkt.hpp"
+#include "solvers/accuracy.hpp"
 #include "solvers/registry.hpp"
 
 #include <benchmark/benchmark.h>

@@ -4,7 +4,7 @@
 #include "problems/sim/mesh_io.hpp"
 #include "problems/sim/render.hpp"
 #include "solvers/decouple.hpp"
-#include "solvers/kkt.hpp"
+#include "solvers/accuracy.hpp"
 #include "solvers/registry.hpp"
 
 #include <chrono>
@@ -170,7 +170,7 @@ std::vector<StepRecord> Simulator::step()
         rec.iterations = res.iterations;
         if (res.x.size() == dofs() && res.x.allFinite()) {
             const Vec lambda = res.lambda.size() == solve_qp->m() ? res.lambda : Vec::Zero(solve_qp->m());
-            rec.kkt_rel = kkt_residuals(solve_qp->view(), res.x, lambda).max() * kkt_scale(solve_qp->view()).inverse_reference;
+            rec.kkt_rel = accuracy(solve_qp->view(), res.x, lambda).max();  // the accuracy error e
             x_k = res.x;
         } else {
             m_nonfinite = true;

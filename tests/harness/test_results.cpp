@@ -9,6 +9,7 @@
 #include "solvers/registry.hpp"
 
 #include <gtest/gtest.h>
+#include <cmath>
 
 #include <chrono>
 #include <cstdlib>
@@ -82,24 +83,34 @@ TEST(Results, AtomicWriteReplacesAndLeavesNoTemporary)
 TEST(Results, SummaryColumnsAndRow)
 {
     const std::string expected =
-        "suite,snapshot,label,solver,status,criterion,status_confirmed,iterations,a_products,"
-        "cholmod_factorizations,kkt,kkt_rel,stationarity,primal,dual,complementarity,objective,violation,"
-        "native_residual,nonfinite,monotone,setup_s,solve_s,time_s,n,m,tol";
+        "suite,snapshot,label,solver,status,solver_status,criterion,status_confirmed,iterations,a_products,"
+        "cholmod_factorizations,kkt_rel,stationarity,primal,dual,complementarity,gap,kkt_rel_solved,m_solved,objective,"
+        "energy_gap,violation,native_residual,nonfinite,monotone,setup_s,solve_s,time_s,n,m,tol,length_scale,"
+        "length_scale_source";
     std::string header;
     for (size_t i = 0; i < summary_columns().size(); ++i) header += (i ? "," : "") + summary_columns()[i];
     EXPECT_EQ(header, expected);
     const nlohmann::json run = {
-        {"solver", "mprgp"}, {"label", "mprgp-jacobi"}, {"status", "converged"}, {"criterion", "kkt"},
+        {"solver", "mprgp"}, {"label", "mprgp-jacobi"}, {"status", "solved_relaxation"},
+        {"solver_status", "converged"}, {"criterion", "kkt"},
         {"status_confirmed", true}, {"iterations", 54}, {"snapshot", {{"id", "plane-s1"}, {"n", 375}, {"m", 25}}},
         {"counters", {{"a_products", 120}, {"cholmod_factorizations", 0}}},
-        {"kkt", {{"max", 0.5}}}, {"kkt_relative", {{"max", 0.25}, {"stationarity", 0.25}, {"primal", 0.0},
-                                                    {"dual", 0.0}, {"complementarity", 0.125}}},
+        {"accuracy", {{"max", 0.25}, {"stationarity", 0.25}, {"primal", 0.0}, {"dual", 0.0}, {"complementarity", 0.125},
+                      {"gap", 0.0625}}},
+        {"accuracy_solved", {{"max", 0.5}}}, {"m_solved", 12}, {"energy_gap", 0.75},
         {"objective", -4.5}, {"violation", 0.0}, {"native_residual", nullptr}, {"nonfinite", false},
         {"monotone", true}, {"time", {{"setup_s", 0.5}, {"solve_s", 1.5}, {"total_s", 2.0}}}, {"tol", 1e-6},
+        {"length_scale", 2.0}, {"length_scale_source", "x0_extent"},
         {"message", "a, \"quoted\" message"}};
     EXPECT_EQ(summary_row(run, "demo"),
-              "demo,plane-s1,mprgp-jacobi,mprgp,converged,kkt,true,54,120,0,0.5,0.25,0.25,0,0,0.125,-4.5,0,,"
-              "false,true,0.5,1.5,2,375,25,9.9999999999999995e-07");
+              "demo,plane-s1,mprgp-jacobi,mprgp,solved_relaxation,converged,kkt,true,54,120,0,0.25,0.25,0,0,0.125,"
+              "0.0625,0.5,12,-4.5,0.75,0,,false,true,0.5,1.5,2,375,25,9.9999999999999995e-07,2,x0_extent");
+    // A run on an unchanged problem: the solved error and rows are the original's.
+    nlohmann::json plain = run;
+    plain.erase("accuracy_solved");
+    plain.erase("m_solved");
+    const std::string row = summary_row(plain, "demo");
+    EXPECT_NE(row.find(",0.125,0.0625,0.25,25,-4.5,"), std::string::npos) << row;
     const std::string csv = summary_csv({run, run}, "demo");
     EXPECT_EQ(csv.substr(0, expected.size() + 1), expected + "\n");
     EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 3);
@@ -215,10 +226,22 @@ TEST(Reference, CachedByKeyAndAttached)
         const double f_star = ref["objective"].get<double>();
         EXPECT_NEAR(run.objective, f_star, 1e-6 * std::max(1.0, std::abs(f_star)));
         const auto& columns = record["history"]["columns"];
-        EXPECT_EQ(columns.back(), "obj_rel");
+        EXPECT_EQ(columns.back(), "energy_gap");
         const auto& rows = record["history"]["rows"];
         ASSERT_FALSE(rows.empty());
-        EXPECT_LT(rows.back().back().get<double>(), 1e-4);
-        EXPECT_TRUE(record.contains("obj_rel"));
+        // |F - F*| / (d_ref l^2), from the record's own scales.
+        const double energy = record["stiffness_scale"].get<double>() * std::pow(record["length_scale"].get<double>(), 2);
+        EXPECT_DOUBLE_EQ(record["energy_gap"].get<double>(), std::abs(run.objective - f_star) / energy);
+        EXPECT_LT(record["energy_gap"].get<double>(), 1e-9);
+        EXPECT_DOUBLE_EQ(rows.back().back().get<double>(), record["energy_gap"].get<double>());
+        // A reference of a reduced (decoupled) QP is not the original's F*: no energy gap.
+        nlohmann::json reduced = run.record;
+        reduced["snapshot"]["hash"] = "k1";
+        nlohmann::json reduced_ref = ref;
+        reduced_ref["key"] = "k1-authors-0";
+        attach_reference(reduced, reduced_ref);
+        EXPECT_FALSE(reduced.contains("energy_gap"));
+        EXPECT_EQ(reduced["reference_note"],
+                  "reference of a reduced QP (key k1-authors-0): no energy gap; F* must be the original QP's");
     }
 }

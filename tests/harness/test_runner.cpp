@@ -1,4 +1,4 @@
-// run_solver: the harness-side measurements (KKT recomputed, status confirmation, history
+// run_solver: the harness-side measurements (accuracy recomputed, the run's status, history
 // stride, nonfinite and monotone detection, repeat, decoupling) on toy solvers with
 // hand-derived solutions.
 #include "harness/history.hpp"
@@ -63,7 +63,7 @@ public:
         Stopwatch watch;
         watch.start();
         SolverResult r;
-        const KktScale scale = kkt_scale(qp);
+        const AccuracyScale scale = accuracy_scale(qp);
         const Vec d = qp.A.diagonal();
         Vec x = qp.x0;
         if (m_mode == "lie") {
@@ -86,7 +86,7 @@ public:
             if (m_mode == "nan" && it == 3) x[0] = std::numeric_limits<double>::quiet_NaN();
             if (m_mode == "nan" && it == 4) x[0] = 0.0;
             g = qp.A * x - qp.b;
-            const Vec lambda = fit_multipliers(qp, x, g);
+            const Vec lambda = fit_multipliers(qp, scale, x, g);
             IterationInfo info;
             info.iteration = it + 1;
             info.step = StepKind::OUTER;
@@ -94,7 +94,7 @@ public:
             info.native_residual = g.norm();
             info.counters = &r.counters;
             notify_monitor(context, watch, info);
-            if (m_mode == "honest" && kkt_converged(qp, x, g, lambda, scale, m_common.tol)) {
+            if (m_mode == "honest" && accuracy_converged(qp, scale, x, g, lambda, m_common.tol)) {
                 ++it;
                 r.status = SolveStatus::CONVERGED;
                 r.criterion = "kkt";
@@ -105,7 +105,7 @@ public:
         r.iterations = it;
         r.counters.iterations = it;
         r.x = x;
-        r.lambda = fit_multipliers(qp, x, qp.A * x - qp.b);
+        r.lambda = fit_multipliers(qp, accuracy_scale(qp), x, qp.A * x - qp.b);
         r.lambda_fitted = true;
         r.solve_s = watch.seconds();
         return r;
@@ -141,7 +141,9 @@ TEST(Runner, HonestSolverMatchesHandSolution)
     const Vec expected = (Vec(6) << 1, 0, 1, 0, 1, 0).finished();
     EXPECT_LT((run.result.x - expected).lpNorm<Eigen::Infinity>(), 1e-9);
     EXPECT_TRUE(run.status_confirmed);
-    EXPECT_LE(run.kkt_relative.max(), 1e-10 * (1 + 1e-9));
+    EXPECT_LE(run.accuracy.max(), 1e-10 * (1 + 1e-9));
+    EXPECT_EQ(run.status, "converged");
+    EXPECT_EQ(run.m_solved, 6);
     // F(x*) = sum over the free coordinates of -b_i^2 / (2 d_i) = -(1/2 + 9/6 + 25/10) = -4.5.
     EXPECT_NEAR(run.objective, -4.5, 1e-9);
     EXPECT_EQ(run.violation, 0.0);
@@ -158,14 +160,21 @@ TEST(Runner, RecordHasEverySchemaKey)
 {
     const RunOutcome run = run_toy({{"tol", 1e-8}});
     for (const char* key : {"solver", "label", "settings", "snapshot", "decouple", "status", "criterion", "message",
-                            "iterations", "objective", "kkt", "kkt_relative", "violation", "native_residual",
+                            "iterations", "objective", "accuracy", "kkt_relative", "violation", "native_residual",
                             "lambda_fitted", "nonfinite", "monotone", "status_confirmed", "tol", "counters", "time",
-                            "info", "history", "provenance"})
+                            "info", "history", "provenance", "solver_status", "m_solved", "length_scale",
+                            "length_scale_source", "stiffness_scale", "accuracy_tol", "violation_original"})
         EXPECT_TRUE(run.record.contains(key)) << key;
-    for (const char* key : {"stationarity", "primal", "dual", "complementarity", "max"}) {
-        EXPECT_TRUE(run.record["kkt"].contains(key)) << key;
+    for (const char* key : {"stationarity", "primal", "dual", "complementarity", "gap", "max"}) {
+        EXPECT_TRUE(run.record["accuracy"].contains(key)) << key;
         EXPECT_TRUE(run.record["kkt_relative"].contains(key)) << key;
     }
+    // x0 = -1 everywhere has no extent: l falls back on the extent of x_u = b / d =
+    // (1, -1, 1, -1, 1, -1), i.e. of the points (1, -1, 1) and (-1, 1, -1): 2.
+    EXPECT_EQ(run.record["length_scale_source"], "unconstrained_extent");
+    EXPECT_DOUBLE_EQ(run.record["length_scale"].get<double>(), 2.0);
+    EXPECT_DOUBLE_EQ(run.record["stiffness_scale"].get<double>(), 3.5);  // mean of 1..6
+    EXPECT_FALSE(run.record.contains("accuracy_solved"));  // the problem was not changed
     for (const char* key : {"setup_s", "solve_s", "total_s", "repeat"}) EXPECT_TRUE(run.record["time"].contains(key)) << key;
     for (const char* key : {"git_commit", "git_dirty", "build_type", "compiler", "cpu", "cores", "date", "eigen",
                             "suitesparse", "blas", "hostname"})
@@ -184,10 +193,11 @@ TEST(Runner, HistoryKktMatchesFinalAndDecreases)
     const RunOutcome run = run_toy({{"tol", 1e-12}});
     const auto& rows = run.record["history"]["rows"];
     ASSERT_GE(rows.size(), 10u);
-    // Each damped Jacobi step halves the error on the free coordinates: kkt_rel falls.
+    // Each damped Jacobi step halves the error on the free coordinates: kkt_rel (e) falls.
+    ASSERT_EQ(run.record["history"]["columns"][9], "kkt_rel");
     const double first = rows[1][9].get<double>(), last = rows.back()[9].get<double>();
     EXPECT_LT(last, first * 1e-6);
-    EXPECT_NEAR(last, run.kkt_relative.max(), 1e-15 + 1e-9 * run.kkt_relative.max());
+    EXPECT_NEAR(last, run.accuracy.max(), 1e-15 + 1e-9 * run.accuracy.max());
     EXPECT_EQ(rows.back()[0].get<long>(), run.result.iterations);
     EXPECT_EQ(rows[0][3], "outer");
 }
@@ -197,10 +207,21 @@ TEST(Runner, LyingSolverIsNotConfirmed)
     const RunOutcome run = run_toy({{"mode", "lie"}});
     EXPECT_EQ(run.result.status, SolveStatus::CONVERGED);
     EXPECT_FALSE(run.status_confirmed);
+    EXPECT_EQ(run.status, "unconfirmed");
+    EXPECT_EQ(run.record["status"], "unconfirmed");
+    EXPECT_EQ(run.record["solver_status"], "converged");
     EXPECT_EQ(run.record["status_confirmed"], false);
     // lambda came from the harness's fit because the solver returned none.
     EXPECT_TRUE(run.record["lambda_fitted"].get<bool>());
-    EXPECT_NEAR(run.kkt_relative.max(), 1.0, 1e-9);  // measured at x0: the reference point
+    // At x0 = -1 (l = 2): the fit gives lambda = g = d x0 - b = (-2, 0, -6, 0, -10, 0); every row
+    // penetrates by 1 (primal 1/2), pulls with lambda / d = 2 (dual 2/2 = 1), complementarity
+    // min(2, 1) / 2 = 1/2, gap (2 + 6 + 10) * 1 / (d_ref l^2 = 3.5 * 4) = 18/14.
+    // (The fit's Tikhonov term, 1e-12 of the diagonal, shows in the last digits.)
+    EXPECT_NEAR(run.accuracy.primal, 0.5, 1e-9);
+    EXPECT_NEAR(run.accuracy.dual, 1.0, 1e-9);
+    EXPECT_NEAR(run.accuracy.complementarity, 0.5, 1e-9);
+    EXPECT_NEAR(run.accuracy.gap, 18.0 / 14.0, 1e-9);
+    EXPECT_NEAR(run.accuracy.max(), 18.0 / 14.0, 1e-9);
 }
 
 TEST(Runner, StrideKeepsHistoryUnderMaxWithFirstAndLast)
@@ -285,20 +306,26 @@ TEST(Runner, DecouplesCoupledRowsForMprgp)
         EXPECT_TRUE(d["applied"].get<bool>());
         EXPECT_LT(d["rows_after"].get<long>(), d["rows_before"].get<long>());
         EXPECT_EQ(d["order"], "authors");
-        // lambda on the original rows: the kept rows carry the solver's multipliers, the rest 0.
+        // The run is measured on the ORIGINAL rows; the solved (decoupled) QP's error stays beside.
         ASSERT_EQ(run.lambda_full.size(), qp.m());
         ASSERT_EQ(static_cast<long>(run.kept_rows.size()), d["rows_after"].get<long>());
-        std::vector<bool> kept(static_cast<size_t>(qp.m()), false);
-        for (int r : run.kept_rows) kept[static_cast<size_t>(r)] = true;
-        for (Eigen::Index i = 0; i < qp.m(); ++i)
-            if (!kept[static_cast<size_t>(i)]) {
-                EXPECT_EQ(run.lambda_full[i], 0.0);
-            }
-        // J' lambda_full on the original J equals J_kept' lambda: the stationarity is the same.
+        EXPECT_EQ(run.m_solved, d["rows_after"].get<long>());
+        EXPECT_EQ(run.record["m_solved"], d["rows_after"]);
+        EXPECT_EQ(run.record["solved_problem"], "decoupled");
+        ASSERT_TRUE(run.record.contains("accuracy_solved"));
         const Vec g = qp.A * run.result.x - qp.b;
-        const KktResiduals full = kkt_residuals_from_gradient(qp.view(), run.result.x, g, run.lambda_full);
-        EXPECT_NEAR(full.stationarity, run.kkt.stationarity, 1e-12 * std::max(1.0, run.kkt.stationarity));
-        EXPECT_TRUE(run.record.contains("violation_original"));
+        const AccuracyParts full = accuracy_from_gradient(qp.view(), accuracy_scale(qp.view()), run.result.x, g,
+                                                          run.lambda_full);
+        EXPECT_DOUBLE_EQ(full.max(), run.accuracy.max());
+        EXPECT_DOUBLE_EQ(run.record["violation_original"].get<double>(), max_violation(qp.view(), run.result.x));
+        // Its status says on which problem tol was met.
+        ASSERT_EQ(run.result.status, SolveStatus::CONVERGED) << run.result.message;
+        EXPECT_LE(run.accuracy_solved.max(), 1e-6 * (1 + 1e-9));
+        if (run.accuracy.max() <= 1e-6) {
+            EXPECT_EQ(run.status, "converged");
+        } else {
+            EXPECT_EQ(run.status, "solved_relaxation");
+        }
     }
     EXPECT_EQ(d["rows_before"].get<long>(), qp.m());
     options.decouple = "none";

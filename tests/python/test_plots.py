@@ -139,6 +139,29 @@ class TestProfiles(TempDirCase):
         self.assertEqual(row["a_products"], 2)
         self.assertAlmostEqual(tt[tt["tier"] == 1e-8].iloc[0]["time_s"], 8.0, places=9)
 
+    def test_solved_relaxation_is_neither_success_nor_failure(self):
+        # b met tol only on a problem it changed (decoupled rows) on p1: its own column, left out of
+        # b's success rate, its geometric mean and its profile denominators.
+        relax = mf.make_run("p1", "b", solve_s=2.0, final_kkt_rel=1e-3, history=False)
+        relax["status"], relax["solver_status"] = "solved_relaxation", "converged"
+        recs = [mf.make_run("p0", "a", solve_s=1.0, history=False), mf.make_run("p0", "b", solve_s=2.0, history=False),
+                mf.make_run("p1", "a", solve_s=4.0, history=False), relax]
+        res = loader.load_results(mf.write_results(self.tmp, recs))
+        numbers = profiles.compute(res, shift=10)
+        self.assertAlmostEqual(numbers["success"].loc["b", 1e-6], 1.0)  # 1 of 1 judged run
+        self.assertEqual(numbers["success"].loc["b", "solved_relaxation"], 1)
+        self.assertEqual(numbers["success"].loc["a", "solved_relaxation"], 0)
+        self.assertAlmostEqual(numbers["sgm"].loc["b", 1e-6], 2.0, places=9)
+        tt = numbers["tiers"]
+        ratios = profiles.performance_ratios(profiles.cost_matrix(tt, 1e-6))
+        prof = profiles.performance_profile(ratios, [1.0], profiles.relaxation_matrix(tt, 1e-6))
+        self.assertAlmostEqual(prof.loc[1.0, "b"], 0.0)  # p0: 2 s vs a's 1 s; p1 not judged
+        self.assertAlmostEqual(prof.loc[1.0, "a"], 1.0)  # best on both (alone on p1)
+        hon = profiles.status_honesty(res.runs).set_index("label")
+        self.assertEqual(hon.loc["b", "converged"], 2)
+        self.assertEqual(hon.loc["b", "confirmed"], 1)
+        self.assertEqual(hon.loc["b", "relaxation"], 1)
+
     def test_status_honesty_and_markdown(self):
         recs = [mf.make_run("p0", "a"), mf.make_run("p1", "a"),
                 mf.make_run("p2", "a", confirmed=False, final_kkt_rel=3e-6),
@@ -156,8 +179,8 @@ class TestProfiles(TempDirCase):
         with open(os.path.join(folder, "profiles.md"), encoding="utf-8") as f:
             md = f.read()
         self.assertIn("shift = 1 s", md)
-        self.assertIn("| a | 3 | 3 | 2 | 67% |", md)
-        self.assertIn("p2 / a: relative KKT 3.00e-06", md)
+        self.assertIn("| a | 3 | 3 | 2 | 0 | 67% |", md)
+        self.assertIn("p2 / a: error 3.00e-06", md)
         for stem in ("profiles_performance", "profiles_data"):
             self.assertTrue(os.path.isfile(os.path.join(folder, "figures", stem + ".pdf")))
 

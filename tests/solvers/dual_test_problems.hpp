@@ -2,7 +2,7 @@
 /// Small self-contained contact QPs for the ica/pgs tests (no dependency on problems/):
 /// a grid of vertices with an SPD A = mass I + stiffness (L (x) C) (L: the grid graph Laplacian,
 /// C: a fixed SPD 3x3 coupling, so the 3x3 vertex blocks are full), pushed below the plane y >= 0.
-#include "solvers/kkt.hpp"
+#include "solvers/accuracy.hpp"
 #include "solvers/qp.hpp"
 
 #include <Eigen/Dense>
@@ -89,7 +89,7 @@ inline Qp make_grid_qp(const GridQpParams& p)
 /// Relative common KKT error of (x, lambda), computed the harness's way.
 inline double relative_kkt(const Qp& qp, const Vec& x, const Vec& lambda)
 {
-    return kkt_residuals(qp.view(), x, lambda).max() * kkt_scale(qp.view()).inverse_reference;
+    return accuracy(qp.view(), x, lambda).max();
 }
 
 } // namespace cb::test

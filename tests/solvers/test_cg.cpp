@@ -2,7 +2,7 @@
 // counters, monitor calls, breakdown and settings errors.
 #include "problems/synthetic.hpp"
 #include "solvers/cg.hpp"
-#include "solvers/kkt.hpp"
+#include "solvers/accuracy.hpp"
 #include "tests/solvers/tiny_qps.hpp"
 
 #include <gtest/gtest.h>
@@ -52,8 +52,11 @@ TEST(Cg, SolvesHandUnconstrainedQpInThreeSteps)
     EXPECT_EQ(r.lambda.size(), 0);
     EXPECT_EQ(r.info["ignores_constraints"], true);
     EXPECT_EQ(r.counters.precond_applications, 0);
-    // one product for r0, one per iteration, one to confirm on the true residual
-    EXPECT_EQ(r.counters.a_products, r.iterations + 2);
+    // one product for r0, one per iteration, one to confirm on the true residual, plus the
+    // accuracy scale's (x0 = 0 is one point: l is the extent of a PCG estimate of x_u)
+    const long scale_products = cb::accuracy_scale(qp.view()).a_products;
+    EXPECT_GE(scale_products, 2);
+    EXPECT_EQ(r.counters.a_products, r.iterations + 2 + scale_products);
     EXPECT_EQ(r.counters.cg_steps, r.iterations);
 }
 
@@ -86,20 +89,21 @@ TEST(Cg, IgnoresConstraintsAndReturnsZeroMultipliers)
     EXPECT_GT(cb::max_violation(qp.view(), r.x), 0.99);  // x0 >= 1 violated by 1
 }
 
-// stop=kkt: |Ax - b|_inf / s <= tol * (same at x0); checked on the returned x.
-TEST(Cg, KktStopIsRelativeUnconstrainedStationarity)
+// stop=kkt: the accuracy error of the unconstrained problem, |D^-1 (Ax - b)|_inf / l <= tol, with
+// l the extent of x0 (docs/accuracy.md); checked on the returned x.
+TEST(Cg, KktStopIsTheUnconstrainedAccuracyError)
 {
     const Qp qp = cb::make_synthetic("unconstrained", {{"nx", 3}, {"ny", 3}, {"nz", 3}}, 2);
+    const cb::AccuracyScale scale = cb::accuracy_scale(qp.view());
     for (double tol : {1e-3, 1e-6, 1e-9}) {
         const SolverResult r = run_cg(qp, {{"tol", tol}});
         ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
-        const double s = std::max(1.0, qp.b.lpNorm<Eigen::Infinity>());
-        const double at_x0 = (qp.A * qp.x0 - qp.b).lpNorm<Eigen::Infinity>() / s;
-        const double at_x = (qp.A * r.x - qp.b).lpNorm<Eigen::Infinity>() / s;
-        EXPECT_LE(at_x, tol * at_x0);
-        // With m = 0 this is exactly the common relative KKT error.
-        EXPECT_NEAR(cb::kkt_residuals(qp.view(), r.x, r.lambda).max() * cb::kkt_scale(qp.view()).inverse_reference,
-                    at_x / at_x0, 1e-12);
+        const Vec g = qp.A * r.x - qp.b;
+        const double at_x = g.cwiseQuotient(Vec(qp.A.diagonal())).lpNorm<Eigen::Infinity>() / scale.length;
+        EXPECT_LE(at_x, tol);
+        // With m = 0 this is exactly the accuracy error.
+        EXPECT_NEAR(cb::accuracy(qp.view(), r.x, r.lambda).max(), at_x, 1e-12 * at_x);
+        EXPECT_NEAR(r.info["unconstrained_error"].get<double>(), at_x, 1e-9 * at_x);
     }
 }
 

@@ -5,7 +5,7 @@
 #include "solvers/active_set.hpp"
 #include "solvers/cg.hpp"
 #include "solvers/decouple.hpp"
-#include "solvers/kkt.hpp"
+#include "solvers/accuracy.hpp"
 #include "solvers/mprgp.hpp"
 #include "solvers/mprgp_kernels.hpp"
 #include "solvers/registry.hpp"
@@ -40,7 +40,7 @@ Qp decoupled(const Qp& qp, cb::DecoupleOrder order = cb::DecoupleOrder::RANDOM, 
 
 double relative_kkt(const Qp& qp, const cb::Vec& x, const cb::Vec& lambda)
 {
-    return cb::kkt_residuals(qp.view(), x, lambda).max() * cb::kkt_scale(qp.view()).inverse_reference;
+    return cb::accuracy(qp.view(), x, lambda).max();
 }
 
 /// Records F(P(x)) at every monitor call (P computed here, with the closed form of §2).

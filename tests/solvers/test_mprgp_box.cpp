@@ -1,7 +1,7 @@
 // Tests of `mprgp-box` (ALGORITHMS.md §5): bounds from signed unit rows (both sides), agreement
 // with the active-set reference and with `mprgp`, statuses.
 #include "problems/synthetic.hpp"
-#include "solvers/kkt.hpp"
+#include "solvers/accuracy.hpp"
 #include "solvers/mprgp_box.hpp"
 #include "solvers/registry.hpp"
 
@@ -16,7 +16,7 @@ using cb::SolveStatus;
 
 double relative_kkt(const Qp& qp, const cb::Vec& x, const cb::Vec& lambda)
 {
-    return cb::kkt_residuals(qp.view(), x, lambda).max() * cb::kkt_scale(qp.view()).inverse_reference;
+    return cb::accuracy(qp.view(), x, lambda).max();
 }
 
 class Monotone : public cb::Monitor {
