@@ -15,7 +15,7 @@ namespace cb {
 
 struct CgSettings {
     CommonSettings common;
-    std::string precond = "jacobi";  ///< none | jacobi (diagonal of A)
+    std::string precond = "jacobi";  ///< none | jacobi (diagonal of A) | ichol (incomplete Cholesky of A)
 
     /// Reads and checks the JSON settings (unknown keys are errors).
     static CgSettings from_json(const nlohmann::json& settings);
