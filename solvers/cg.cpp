@@ -15,6 +15,7 @@ CgSettings CgSettings::from_json(const nlohmann::json& settings)
     CgSettings s;
     s.common = reader.common();
     s.precond = reader.choice("precond", s.precond, {"none", "jacobi", "ichol"});
+    s.start = reader.choice("start", s.start, {"x0", "zero"});
     reader.finish();
     return s;
 }
@@ -23,12 +24,14 @@ nlohmann::json CgSettings::to_json() const
 {
     nlohmann::json j = common.to_json();
     j["precond"] = precond;
+    j["start"] = start;
     return j;
 }
 
 std::vector<SettingDoc> cg_setting_docs()
 {
-    return {{"precond", "jacobi", "none | jacobi: preconditioner (diagonal of A) | ichol: incomplete Cholesky of A (Eigen, AMD, no fill; docs/preconditioners.md)"}};
+    return {{"precond", "jacobi", "none | jacobi: preconditioner (diagonal of A) | ichol: incomplete Cholesky of A (Eigen, AMD, no fill; docs/preconditioners.md)"},
+            {"start", "x0", "x0 | zero: start point (zero: a 1e-8 reduction of |b|, free of the rounding floor eps |A||x0| that a start near the solution meets; docs/preconditioners.md)"}};
 }
 
 namespace {
@@ -113,7 +116,7 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
     watch.reset();
     watch.start();
 
-    Vec x = qp.x0;
+    Vec x = m_settings.start == "zero" ? Vec(Vec::Zero(n)) : qp.x0;
     Vec r = qp.b - qp.A * x;  // r = -g
     ++counters.a_products;
     const double s = std::max(1.0, n ? qp.b.lpNorm<Eigen::Infinity>() : 0.0);
