@@ -23,12 +23,15 @@ MprgpSettings MprgpSettings::from_json(const nlohmann::json& settings)
     SettingsReader reader(settings, "mprgp");
     MprgpSettings s;
     s.common = reader.common();
-    s.gamma = reader.number("gamma", s.gamma, 0.0);
     s.precond = reader.choice("precond", s.precond, {"none", "jacobi", "ichol"});
+    // With ichol the CG chains are short and cheap to restart; Gamma = 1 (the paper's) then
+    // spends most iterations proportioning (docs/preconditioners.md), so its default is 10.
+    s.gamma = reader.number("gamma", s.precond == "ichol" ? 10.0 : s.gamma, 0.0);
     s.alpha = reader.choice("alpha", s.alpha, {"power", "authors"});
     s.power_max = reader.integer("power_max", s.power_max, 1, 1000000);
     s.objective = reader.choice("objective", s.objective, {"cheap", "recompute"});
     s.safeguard_max = reader.integer("safeguard_max", s.safeguard_max, 1, 100000000);
+    s.expansion = reader.choice("expansion", s.expansion, {"paper", "precond"});
     s.ichol_refactor = reader.number("ichol_refactor", s.ichol_refactor, -1e-300, 1.0);
     reader.finish();
     return s;
@@ -44,17 +47,19 @@ nlohmann::json MprgpSettings::to_json() const
     j["objective"] = objective;
     j["safeguard_max"] = safeguard_max;
     j["ichol_refactor"] = ichol_refactor;
+    j["expansion"] = expansion;
     return j;
 }
 
 std::vector<SettingDoc> mprgp_setting_docs()
 {
-    return {{"gamma", "1", "proportioning constant Gamma > 0 (Alg. 1)"},
+    return {{"gamma", "1", "proportioning constant Gamma > 0 (Alg. 1); default 10 with precond = ichol"},
             {"precond", "jacobi", "none | jacobi: D-weighted projection of D^-1 g onto the face (J_A z = 0) | ichol: Q M^-1 Q g with M the incomplete Cholesky factor of the face matrix Q A Q + normal block, refactored when the face changes (docs/preconditioners.md)"},
             {"alpha", "power", "power (stop at rel. change 1e-3, warm start) | authors (||v_k+1 - v_k|| <= tol, <= 1001 products, cold)"},
             {"power_max", "100", "max power-method products (alpha = power)"},
             {"objective", "cheap", "cheap: F(P(y)) without an extra A-product | recompute: the authors' 2 products per CG step"},
             {"safeguard_max", "100", "max repeats of Alg. 3's safeguard after one step"},
+            {"expansion", "paper", "paper: x = P(x - alpha_bar phi), alpha_bar = 2/||A|| (Alg. 1) | precond: x = P(x - a z) with z the preconditioner's face direction and a = z'g / z'Az (one more A-product; Alg. 3's safeguard still guarantees descent); docs/preconditioners.md"},
             {"ichol_refactor", "0.1", "precond = ichol: refactor the face matrix when more than this fraction of the rows changed face since the last factorization (0: at every face change; 1: factor once)"}};
 }
 
@@ -377,8 +382,22 @@ bool MprgpRun::expansion()
         refresh_gradient();
     }
     active_rows(m_J, m_c, m_rows, m_x, m_active);
-    free_gradient(m_J, m_rows, m_active, m_g, m_tmp);  // phi(y)
-    m_x -= m_alpha_bar * m_tmp;
+    if (m_st.expansion == "precond") {
+        // The preconditioned free gradient with its exact step: on stiff problems alpha_bar =
+        // 2/||A|| moves the soft DOFs by almost nothing, so the face grows by a few rows per
+        // expansion; this step reaches the rows the CG chain was heading for.
+        if (m_ichol && m_ic.ready()) ichol_face_precondition(m_ic, m_J, m_rows, m_active, m_g, m_work, m_tmp);
+        else jacobi_face_precondition(m_J, m_rows, m_active, m_dinv, m_g, m_tmp);
+        ++m_cnt.precond_applications;
+        product(m_tmp, m_Ap);
+        const double dad = m_tmp.dot(m_Ap);
+        const double dg = face_dot(m_tmp);
+        const double step = dad > 0.0 && dg > 0.0 && std::isfinite(dad) ? dg / dad : m_alpha_bar;
+        m_x -= step * m_tmp;
+    } else {
+        free_gradient(m_J, m_rows, m_active, m_g, m_tmp);  // phi(y)
+        m_x -= m_alpha_bar * m_tmp;
+    }
     project_x();
     refresh_gradient();
     double f_now = objective_from_gradient();
