@@ -10,6 +10,7 @@
 #include <Eigen/SparseCholesky>
 
 #include <cmath>
+#include <cstdio>
 
 namespace {
 
@@ -112,9 +113,21 @@ TEST_P(IcholStiffFamily, MprgpWithinTwiceCg)
     EXPECT_LE(relative_kkt(qp, mp.x, mp.lambda), 1e-8);
     EXPECT_LE(mp.iterations, 2 * cg.iterations) << "mprgp " << mp.iterations << ", cg " << cg.iterations;
     EXPECT_GE(mp.counters.precond_factorizations, 1);
+    std::printf("%s: cg ichol %ld iterations, mprgp ichol %ld (%ld factorizations, %ld expansions, %ld proportionings)\n",
+                GetParam(), cg.iterations, mp.iterations, mp.counters.precond_factorizations,
+                mp.counters.expansion_steps, mp.counters.proportioning_steps);
 }
 
 INSTANTIATE_TEST_SUITE_P(Stiffness, IcholStiffFamily,
-                         ::testing::Values("stiffness-1e4", "stiffness-1e8", "stiffness-1e10", "stiffness-1e12"));
+                         ::testing::Values("stiffness-1e4", "stiffness-1e8", "stiffness-1e10", "stiffness-1e12",
+                                           "slab-stiff-1e10", "slab-stiff-1e12"));
+
+TEST(IcholReproducer, SlabIsAtTheSnapshotsScale)
+{
+    const Qp qp = cb::make_stress_qp(cb::select_stress_cases(cb::stress_cases(false), {"slab-stiff-1e10"}).at(0));
+    EXPECT_EQ(qp.n(), 4335);  // 1445 vertices
+    EXPECT_EQ(qp.m(), 289);   // the bottom face's vertex-plane rows
+    EXPECT_GT(cb::max_violation(qp.view(), qp.x0), 0.0);
+}
 
 } // namespace
