@@ -4,6 +4,7 @@ preconditioners on the stiff-slab scene at Young's moduli 1e4..1e12 Pa.
 
     python3 plots/stiff.py run  --bin build/bin/contactbench --out results/stiff [--youngs 1e4,1e8,...]
     python3 plots/stiff.py plot --out results/stiff          (redraw from results/stiff/runs/*.json)
+    --scene scenes/stiff_slab_graded.json                    (the irregular mesh, cond(A) = 1.1e9 at 1e10)
 
 `run` simulates one step of scenes/stiff_slab.json per modulus (the stress cases slab-stiff-*),
 solves the snapshot with each configuration (tol 1e-8, history on) and writes
@@ -129,10 +130,16 @@ def write_outputs(runs: Dict[float, Dict[str, dict]], out_dir: str, tol: float) 
         print("wrote", path)
 
 
-def run_all(binary: str, out_dir: str, moduli: List[float], tol: float, max_iterations: int, time_limit: float) -> None:
+def run_all(binary: str, out_dir: str, moduli: List[float], tol: float, max_iterations: int, time_limit: float,
+            scene_path_in: str = SCENE) -> None:
     os.makedirs(os.path.join(out_dir, "runs"), exist_ok=True)
-    with open(SCENE) as f:
+    with open(scene_path_in) as f:
         scene = json.load(f)
+    # Relative mesh paths are resolved against the scene's folder: make them absolute.
+    for body in scene.get("bodies", []):
+        mesh = body.get("mesh")
+        if isinstance(mesh, str) and not os.path.isabs(mesh) and ":" not in mesh:
+            body["mesh"] = os.path.join(os.path.dirname(os.path.abspath(scene_path_in)), mesh)
     for youngs in moduli:
         with tempfile.TemporaryDirectory() as tmp:
             scene["bodies"][0]["material"]["youngs"] = youngs
@@ -160,6 +167,7 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default="results/stiff")
     ap.add_argument("--bin", default="build/bin/contactbench")
     ap.add_argument("--youngs", default="1e4,1e6,1e8,1e10,1e12")
+    ap.add_argument("--scene", default=SCENE, help="a one-body scene (default scenes/stiff_slab.json)")
     ap.add_argument("--tol", type=float, default=1e-8)
     ap.add_argument("--max-iterations", type=int, default=20000)
     ap.add_argument("--time-limit", type=float, default=60.0)
@@ -170,7 +178,7 @@ def main(argv=None) -> int:
         except ValueError:
             print(f"plots/stiff.py: --youngs: expected comma-separated numbers, got '{args.youngs}'", file=sys.stderr)
             return 2
-        run_all(args.bin, args.out, moduli, args.tol, args.max_iterations, args.time_limit)
+        run_all(args.bin, args.out, moduli, args.tol, args.max_iterations, args.time_limit, args.scene)
     runs = load_runs(args.out)
     if not runs:
         print(f"plots/stiff.py: {args.out}/runs: no run JSON (<E>__<config>.json)", file=sys.stderr)
