@@ -120,6 +120,39 @@ void add_rows_on_one_vertex(Qp& qp, std::uint64_t seed)
     out.finish(qp, keep);
 }
 
+/// Rigid translation of the whole problem by t per vertex (x -> x + t): x0 + t, b + A t, c + J t.
+/// The solution moves by t and nothing else changes; a solver that sees only differences of
+/// positions behaves the same (problems whose DOF count is not a multiple of 3 are left alone).
+void translate_problem(Qp& qp, const Eigen::Vector3d& shift)
+{
+    if (qp.n() % 3 != 0) return;
+    Vec t(qp.n());
+    for (Eigen::Index v = 0; v < qp.n() / 3; ++v) t.segment<3>(3 * v) = shift;
+    qp.b += qp.A * t;
+    qp.c += qp.J * t;
+    qp.x0 += t;
+    qp.meta["translated_m"] = {shift.x(), shift.y(), shift.z()};
+}
+
+/// The stiff slab of scenes/stiff_slab.json (issue 17's reproducer: 16x4x16 cubes, 1445
+/// vertices, E = params["youngs"], nu = 0.45, h = 0.05 s) tilted by 2 degrees and dropped on
+/// the ground, so that about 289 vertex-plane rows exist (margin 6 cm) and only some are active.
+json fem_slab_scene(const json& params)
+{
+    const json material = {{"youngs", params.value("youngs", 1e10)}, {"poisson", 0.45}, {"density", 1000}};
+    return {
+        {"name", "stress-slab"},
+        {"h", params.value("h", 0.05)},
+        {"gravity", {0, -9.8, 0}},
+        {"detection", {{"margin", 0.06}}},
+        {"bodies",
+         {{{"name", "slab"}, {"box", {{"cells", {16, 4, 16}}, {"size", {1.6, 0.4, 1.6}}}}, {"material", material},
+           {"rotate_deg", {0, 0, 2}}, {"translate", {0, 0.228, 0}}, {"velocity", {0, -0.5, 0}}}}},
+        {"obstacles", {{{"type", "plane"}, {"normal", {0, 1, 0}}, {"point", {0, 0, 0}}}}},
+        {"output", {{"strip_frames", 0}}},
+    };
+}
+
 /// The demo scene (scenes/demo.json: two 4x4x4-cube boxes, 750 DOF) built in memory, with the
 /// case's overrides: "youngs" (Pa, both bodies), "speed" (m/s, added downwards to both bodies'
 /// initial velocities), "h" (s).
@@ -172,8 +205,13 @@ Qp make_fem_sim_qp(const StressCase& c)
 
     sim::SimulatorOptions options;
     options.out_dir = tmp.path;
+    const bool slab = c.params.value("scene", std::string("demo")) == "slab";
+    // mprgp steps both scenes: CHOLMOD (active-set) in the parent leaves the forked children
+    // of `stress` hanging. The slab cases use the first step, whose QP no solver has touched.
     options.solver = "mprgp";
-    sim::Simulator simulator(sim::load_scene_json(fem_demo_scene(c.params), where, sim::PathRoots{}), options);
+    sim::Simulator simulator(
+        sim::load_scene_json(slab ? fem_slab_scene(c.params) : fem_demo_scene(c.params), where, sim::PathRoots{}),
+        options);
     Qp last;
     long last_step = -1;
     for (long s = 0; s < frames; ++s) {
@@ -186,7 +224,7 @@ Qp make_fem_sim_qp(const StressCase& c)
     }
     if (last_step < 0 || last.m() == 0)
         throw_input_error(where, "frames", "no step with contact rows in " + std::to_string(frames) + " steps");
-    last.meta["stress_source"] = {{"step", last_step}, {"frames", frames}, {"scene", "demo (in memory)"}};
+    last.meta["stress_source"] = {{"step", last_step}, {"frames", frames}, {"scene", slab ? "stiff slab (in memory)" : "demo (in memory)"}};
     return last;
 }
 
@@ -245,6 +283,23 @@ std::vector<StressCase> stress_cases(bool quick)
                   "simulator snapshot: demo scene (750 DOF) with E = 1e10 Pa, last step with contacts"),
         make_case("fem-fast-50ms", "fem-sim", 3, "fem-sim", {{"speed", 50.0}, {"frames", 3}},
                   "simulator snapshot: demo scene (750 DOF) thrown down at ~50 m/s, last step with contacts"),
+        make_case("slab-stiff-1e4", "stiff-slab", 1, "fem-sim", {{"scene", "slab"}, {"youngs", 1e4}, {"frames", 1}},
+                  "stiff-slab scene (4335 DOF, h = 0.05 s, 289 plane rows) with E = 1e4 Pa, first step"),
+        make_case("slab-stiff-1e6", "stiff-slab", 1, "fem-sim", {{"scene", "slab"}, {"youngs", 1e6}, {"frames", 1}},
+                  "stiff-slab scene with E = 1e6 Pa, first step"),
+        make_case("slab-stiff-1e8", "stiff-slab", 2, "fem-sim", {{"scene", "slab"}, {"youngs", 1e8}, {"frames", 1}},
+                  "stiff-slab scene with E = 1e8 Pa, first step"),
+        make_case("slab-stiff-1e10", "stiff-slab", 2, "fem-sim", {{"scene", "slab"}, {"youngs", 1e10}, {"frames", 1}},
+                  "issue 17's reproducer: stiff-slab scene with E = 1e10 Pa (cond(A) ~ 1e9), first step"),
+        make_case("slab-stiff-1e12", "stiff-slab", 3, "fem-sim", {{"scene", "slab"}, {"youngs", 1e12}, {"frames", 1}},
+                  "stiff-slab scene with E = 1e12 Pa, first step"),
+        make_case("coupled-translated-100m", "translation", 2, "coupled", base,
+                  "baseline-coupled moved by 100 m along x (x0 + t, b + A t, c + J t)", "translate-100m"),
+        make_case("coupled-stiff-translated-100m", "translation", 3, "coupled", {{"youngs", 1e9}},
+                  "stiffness-coupled-1e9 moved by 100 m along x", "translate-100m"),
+        make_case("fem-translated-100m", "translation", 3, "fem-sim", {{"youngs", 1e8}, {"frames", 6}},
+                  "simulator snapshot (demo scene, E = 1e8 Pa, plane and inter-body rows) moved by 100 m along x",
+                  "translate-100m"),
     };
     if (!quick) return all;
     std::vector<StressCase> subset;
@@ -280,6 +335,7 @@ Qp make_stress_qp(const StressCase& c)
     Qp qp = c.synthetic == "fem-sim" ? make_fem_sim_qp(c) : make_synthetic(c.synthetic, c.params, c.seed);
     if (c.modifier == "parallel-rows") add_parallel_rows(qp, c.seed);
     else if (c.modifier == "one-vertex") add_rows_on_one_vertex(qp, c.seed);
+    else if (c.modifier == "translate-100m") translate_problem(qp, Eigen::Vector3d(100.0, 0.0, 0.0));
     else if (!c.modifier.empty()) throw_input_error("stress case " + c.id, "modifier", "unknown '" + c.modifier + "'");
     qp.meta["stress"] = {{"case", c.id}, {"family", c.family}, {"severity", c.severity}, {"modifier", c.modifier}};
     return qp;

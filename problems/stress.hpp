@@ -21,7 +21,7 @@ struct StressCase {
     std::string synthetic;    ///< make_synthetic family the case starts from, or "fem-sim": a snapshot
                               ///< of our simulator on the demo scene (params: youngs, speed, h, frames)
     nlohmann::json params = nlohmann::json::object();  ///< its params
-    std::string modifier;     ///< "" or a transform applied after generation ("parallel-rows", "one-vertex")
+    std::string modifier;     ///< "" or a transform applied after generation ("parallel-rows", "one-vertex", "translate-100m")
     std::uint64_t seed = 1;
     std::string description;  ///< one line
 };

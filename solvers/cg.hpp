@@ -16,7 +16,8 @@ namespace cb {
 
 struct CgSettings {
     CommonSettings common;
-    std::string precond = "jacobi";  ///< none | jacobi (diagonal of A)
+    std::string precond = "jacobi";  ///< none | jacobi (diagonal of A) | ichol (incomplete Cholesky of A)
+    std::string start = "x0";        ///< x0 | zero (start point of the iteration)
 
     /// Reads and checks the JSON settings (unknown keys are errors).
     static CgSettings from_json(const nlohmann::json& settings);

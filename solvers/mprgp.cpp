@@ -8,6 +8,7 @@
 
 #include "solvers/decouple.hpp"
 #include "solvers/accuracy.hpp"
+#include "solvers/ichol.hpp"
 #include "solvers/mprgp_kernels.hpp"
 
 #include <algorithm>
@@ -22,12 +23,16 @@ MprgpSettings MprgpSettings::from_json(const nlohmann::json& settings)
     SettingsReader reader(settings, "mprgp");
     MprgpSettings s;
     s.common = reader.common();
-    s.gamma = reader.number("gamma", s.gamma, 0.0);
-    s.precond = reader.choice("precond", s.precond, {"none", "jacobi"});
+    s.precond = reader.choice("precond", s.precond, {"none", "jacobi", "ichol"});
+    // With ichol the CG chains are short and cheap to restart; Gamma = 1 (the paper's) then
+    // spends most iterations proportioning (docs/preconditioners.md), so its default is 10.
+    s.gamma = reader.number("gamma", s.precond == "ichol" ? 10.0 : s.gamma, 0.0);
     s.alpha = reader.choice("alpha", s.alpha, {"power", "authors"});
     s.power_max = reader.integer("power_max", s.power_max, 1, 1000000);
     s.objective = reader.choice("objective", s.objective, {"cheap", "recompute"});
     s.safeguard_max = reader.integer("safeguard_max", s.safeguard_max, 1, 100000000);
+    s.expansion = reader.choice("expansion", s.expansion, {"paper", "precond"});
+    s.ichol_refactor = reader.number("ichol_refactor", s.ichol_refactor, -1e-300, 1.0);
     reader.finish();
     return s;
 }
@@ -41,17 +46,21 @@ nlohmann::json MprgpSettings::to_json() const
     j["power_max"] = power_max;
     j["objective"] = objective;
     j["safeguard_max"] = safeguard_max;
+    j["ichol_refactor"] = ichol_refactor;
+    j["expansion"] = expansion;
     return j;
 }
 
 std::vector<SettingDoc> mprgp_setting_docs()
 {
-    return {{"gamma", "1", "proportioning constant Gamma > 0 (Alg. 1)"},
-            {"precond", "jacobi", "none | jacobi: D-weighted projection of D^-1 g onto the face (J_A z = 0)"},
+    return {{"gamma", "1", "proportioning constant Gamma > 0 (Alg. 1); default 10 with precond = ichol"},
+            {"precond", "jacobi", "none | jacobi: D-weighted projection of D^-1 g onto the face (J_A z = 0) | ichol: Q M^-1 Q g with M the incomplete Cholesky factor of the face matrix Q A Q + normal block, refactored when the face changes (docs/preconditioners.md)"},
             {"alpha", "power", "power (stop at rel. change 1e-3, warm start) | authors (||v_k+1 - v_k|| <= tol, <= 1001 products, cold)"},
             {"power_max", "100", "max power-method products (alpha = power)"},
             {"objective", "cheap", "cheap: F(P(y)) without an extra A-product | recompute: the authors' 2 products per CG step"},
-            {"safeguard_max", "100", "max repeats of Alg. 3's safeguard after one step"}};
+            {"safeguard_max", "100", "max repeats of Alg. 3's safeguard after one step"},
+            {"expansion", "paper", "paper: x = P(x - alpha_bar phi), alpha_bar = 2/||A|| (Alg. 1) | precond: x = P(x - a z) with z the preconditioner's face direction and a = z'g / z'Az (one more A-product; Alg. 3's safeguard still guarantees descent); docs/preconditioners.md"},
+            {"ichol_refactor", "0.1", "precond = ichol: refactor the face matrix when more than this fraction of the rows changed face since the last factorization (0: at every face change; 1: factor once)"}};
 }
 
 SolverEntry mprgp_entry()
@@ -161,6 +170,12 @@ private:
     Counters m_cnt;
     DecoupledRows m_rows;
     Vec m_dinv;
+    bool m_ichol = false;
+    IncompleteCholeskyPreconditioner m_ic;
+    std::vector<char> m_face_factored;  // active set the ichol factor was built for
+    bool m_face_factor_failed = false;
+    std::string m_face_factor_error;
+    Vec m_work;
     double m_alpha_bar = 0.0;
     AccuracyScale m_scale;
 
@@ -203,7 +218,24 @@ double MprgpRun::face_dot(const Vec& a) const
 void MprgpRun::restart()
 {
     active_rows(m_J, m_c, m_rows, m_x, m_active);
-    jacobi_face_precondition(m_J, m_rows, m_active, m_dinv, m_g, m_z);
+    if (m_ichol) {
+        // The factor belongs to one face: rebuild it only when the face changed.
+        // Q M^-1 Q is a valid (SPD on the face) preconditioner for any SPD M, so a factor of an
+        // older face only costs quality: rebuild it when the face drifted by more than
+        // ichol_refactor of the rows.
+        long changed = 0;
+        if (m_ic.ready())
+            for (size_t i = 0; i < m_active.size(); ++i) changed += m_active[i] != m_face_factored[i];
+        if (!m_ic.ready() || static_cast<double>(changed) > m_st.ichol_refactor * static_cast<double>(m_m)) {
+            if (!m_ic.factor(face_matrix(m_A, m_J, m_rows, m_active), m_face_factor_error)) m_face_factor_failed = true;
+            m_face_factored = m_active;
+            ++m_cnt.precond_factorizations;
+        }
+        if (m_ic.ready()) ichol_face_precondition(m_ic, m_J, m_rows, m_active, m_g, m_work, m_z);
+        else m_z.setZero(m_n);
+    } else {
+        jacobi_face_precondition(m_J, m_rows, m_active, m_dinv, m_g, m_z);
+    }
     ++m_cnt.precond_applications;
     m_p = m_z;
     m_rz = face_dot(m_z);
@@ -351,8 +383,22 @@ bool MprgpRun::expansion()
         refresh_gradient();
     }
     active_rows(m_J, m_c, m_rows, m_x, m_active);
-    free_gradient(m_J, m_rows, m_active, m_g, m_tmp);  // phi(y)
-    m_x -= m_alpha_bar * m_tmp;
+    if (m_st.expansion == "precond") {
+        // The preconditioned free gradient with its exact step: on stiff problems alpha_bar =
+        // 2/||A|| moves the soft DOFs by almost nothing, so the face grows by a few rows per
+        // expansion; this step reaches the rows the CG chain was heading for.
+        if (m_ichol && m_ic.ready()) ichol_face_precondition(m_ic, m_J, m_rows, m_active, m_g, m_work, m_tmp);
+        else jacobi_face_precondition(m_J, m_rows, m_active, m_dinv, m_g, m_tmp);
+        ++m_cnt.precond_applications;
+        product(m_tmp, m_Ap);
+        const double dad = m_tmp.dot(m_Ap);
+        const double dg = face_dot(m_tmp);
+        const double step = dad > 0.0 && dg > 0.0 && std::isfinite(dad) ? dg / dad : m_alpha_bar;
+        m_x -= step * m_tmp;
+    } else {
+        free_gradient(m_J, m_rows, m_active, m_g, m_tmp);  // phi(y)
+        m_x -= m_alpha_bar * m_tmp;
+    }
     project_x();
     refresh_gradient();
     double f_now = objective_from_gradient();
@@ -427,6 +473,7 @@ SolverResult MprgpRun::run()
             m_dinv[j] = 1.0 / diag[j];
         }
     }
+    m_ichol = m_st.precond == "ichol";
     m_rows = make_decoupled_rows(m_J, m_dinv);
     for (Eigen::Index i = 0; i < m_m; ++i) {
         if (m_rows.s[i] <= 0.0 && m_c[i] > active_tolerance(m_c[i])) {
@@ -472,6 +519,7 @@ SolverResult MprgpRun::run()
     m_p.resize(m_n);
     m_Ap.resize(m_n);
     m_tmp.resize(m_n);
+    m_work.resize(m_n);
     m_d = Vec::Zero(m_n);
     m_lambda = Vec::Zero(m_m);
     m_jx.resize(m_m);
@@ -489,6 +537,11 @@ SolverResult MprgpRun::run()
     SolveStatus status = SolveStatus::MAX_ITERATIONS;
     std::string why;
     while (true) {
+        if (m_face_factor_failed) {
+            status = SolveStatus::DIVERGED;
+            why = "precond=ichol: " + m_face_factor_error;
+            break;
+        }
         evaluate_rows();
         if (!std::isfinite(m_native)) {
             status = SolveStatus::DIVERGED;
@@ -591,6 +644,12 @@ SolverResult MprgpRun::run()
                         }
                     }
                 }
+                if (m_ichol) {
+                    // The fused pass computed z = g (dinv = 1); replace it by the face IC direction.
+                    ichol_face_precondition(m_ic, m_J, m_rows, m_active, m_g, m_work, m_z);
+                    zg = face_dot(m_z);
+                    zap = m_z.dot(m_Ap);
+                } else {
                 // Face correction of z on active rows (J_A z = 0) and the rows' part of the dots.
                 const int* outer = m_J.outerIndexPtr();
                 const int* inner = m_J.innerIndexPtr();
@@ -613,6 +672,7 @@ SolverResult MprgpRun::run()
                         zg += m_z[j] * (m_g[j] - t * val[k]);
                         zap += m_z[j] * m_Ap[j];
                     }
+                }
                 }
                 ++m_cnt.precond_applications;
                 const double beta_cg = zap / pap;
@@ -691,6 +751,7 @@ SolverResult MprgpRun::run()
     result.info["safeguard_firings"] = m_cnt.safeguard_steps;
     result.info["alpha_bar"] = m_alpha_bar;
     result.info["active_rows"] = m_active_count;
+    if (m_ichol) result.info["ichol"] = {{"factor_nonzeros", m_ic.factor_nonzeros()}, {"a_nonzeros", static_cast<long>(m_A.nonZeros())}};
     {
         IterationInfo info;
         info.iteration = m_cnt.iterations;

@@ -256,13 +256,21 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
         v += Jt * lambda;
         return true;
     };
+    // Translation invariance: positions enter only as differences from a reference point
+    // x_ref = P(x0), whose gradient g_ref = A x_ref - b is formed once. F(v) - F(x_ref) and
+    // g(v) = A (v - x_ref) + g_ref then carry rounding errors relative to |A||v - x_ref|,
+    // not to |A||v|: a problem translated by 100 m gives the same F decreases, where
+    // 1/2 v'Av - b'v would bury them under rounding of its huge absolute value (the
+    // monotonicity tests then reject every CG step and the chain degenerates into expansions).
+    Vec x_ref, g_ref;
     auto F = [&](const Vec& v) {
         ++cnt.a_products;
-        return objective(qp, v);
+        const Vec u = v - x_ref;
+        return 0.5 * u.dot(A * u) + g_ref.dot(u);
     };
     auto gradient = [&](const Vec& v) {
         ++cnt.a_products;
-        return Vec(A * v - qp.b);
+        return Vec(A * (v - x_ref) + g_ref);
     };
 
     // Face data, refactored only when the active set changes.
@@ -331,7 +339,10 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
 
     Vec x = qp.x0;
     project(x);
-    Vec g = gradient(x);
+    x_ref = x;
+    g_ref = A * x - qp.b;
+    ++cnt.a_products;
+    Vec g = g_ref;
     set_face(x);
     Vec phi = free_grad(g), z = precondition(g, phi), p = z, mu, beta, lambda = Vec::Zero(m);
     double f_proj_x = F(x);

@@ -52,6 +52,7 @@ nlohmann::json Counters::to_json() const
             {"safeguard_steps", safeguard_steps},
             {"a_products", a_products},
             {"precond_applications", precond_applications},
+            {"precond_factorizations", precond_factorizations},
             {"projections", projections},
             {"power_products", power_products},
             {"cholmod_analyses", cholmod_analyses},

@@ -39,6 +39,7 @@ struct Counters {
     long safeguard_steps = 0;        ///< Alg. 3 safeguard firings
     long a_products = 0;             ///< products with A (or equivalents, e.g. one GS sweep = 1)
     long precond_applications = 0;
+    long precond_factorizations = 0; ///< incomplete Cholesky factorizations (precond = ichol)
     long projections = 0;
     long power_products = 0;         ///< A-products spent in the power method (also in a_products)
     long cholmod_analyses = 0;

@@ -179,7 +179,7 @@ TEST(Cg, SettingsAreCheckedByName)
         cb::CgSettings::from_json({{"precond", "ilu"}});
         FAIL() << "no exception";
     } catch (const cb::InputError& e) {
-        EXPECT_EQ(std::string(e.what()), "cg: /precond: expected one of none | jacobi, got \"ilu\"");
+        EXPECT_EQ(std::string(e.what()), "cg: /precond: expected one of none | jacobi | ichol, got \"ilu\"");
     }
     EXPECT_THROW(cb::CgSettings::from_json({{"start", "projected"}}), cb::InputError);
     const cb::CgSettings d = cb::CgSettings::from_json(nlohmann::json::object());
