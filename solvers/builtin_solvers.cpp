@@ -7,6 +7,9 @@
 #include "solvers/mprgp_coupled.hpp"
 #include "solvers/ica.hpp"
 #include "solvers/pgs.hpp"
+#ifdef CB_HAVE_IPOPT
+#include "solvers/peers/ipopt_solver.hpp"
+#endif
 
 namespace cb {
 
@@ -21,6 +24,10 @@ void register_builtin_solvers(SolverRegistry& registry)
     registry.add("mprgp-coupled", mprgp_coupled_entry());
     registry.add("ica", ica_entry());
     registry.add("pgs", pgs_entry());
+    // External peers (solvers/peers/), each only when CMake found its library:
+#ifdef CB_HAVE_IPOPT
+    registry.add("ipopt", ipopt_entry());
+#endif
 }
 
 } // namespace cb
