@@ -1,0 +1,68 @@
+// The external peers (solvers/peers/, compiled only when their packages are found) against the
+// reference `active-set` on the CI suite's problems (suites/ci.json): same objective to 1e-6
+// relative, a feasible point, and the common KKT test met. A peer that is not built is skipped.
+#include "problems/synthetic.hpp"
+#include "solvers/kkt.hpp"
+#include "solvers/registry.hpp"
+
+#include <gtest/gtest.h>
+#include <algorithm>
+#include <cmath>
+
+namespace {
+
+using cb::Qp;
+using cb::SolverResult;
+using cb::SolveStatus;
+using cb::Vec;
+
+struct CiCase {
+    std::string id, family;
+    std::uint64_t seed;
+    nlohmann::json params;
+};
+
+// The generate block of suites/ci.json.
+std::vector<CiCase> ci_cases()
+{
+    return {{"plane-small", "plane", 11, {{"nx", 4}, {"ny", 4}, {"nz", 4}}},
+            {"plane-tilted", "plane", 12, {{"nx", 4}, {"ny", 3}, {"nz", 4}, {"tilt_deg", 20}}},
+            {"coupled", "coupled", 13, {{"nx", 4}, {"ny", 2}, {"nz", 4}}},
+            {"box", "box", 14, {{"nx", 4}, {"ny", 4}, {"nz", 4}}},
+            {"stiff", "plane", 15, {{"nx", 4}, {"ny", 4}, {"nz", 4}, {"youngs", 1e9}}}};
+}
+
+class Peers : public ::testing::TestWithParam<std::string> {};
+
+} // namespace
+
+TEST_P(Peers, AgreeWithActiveSetOnTheCiSuite)
+{
+    if (!cb::builtin_registry().contains(GetParam())) GTEST_SKIP() << GetParam() << " is not built";
+    for (const CiCase& cc : ci_cases()) {
+        SCOPED_TRACE(GetParam() + " on " + cc.id);
+        const Qp qp = cb::make_synthetic(cc.family, cc.params, cc.seed);
+        const auto view = qp.view();
+        const SolverResult ref =
+            cb::builtin_registry().create("active-set", {{"tol", 1e-9}})->solve(view, cb::SolveContext{});
+        ASSERT_EQ(ref.status, SolveStatus::CONVERGED) << ref.message;
+        const SolverResult r = cb::builtin_registry().create(GetParam(), {{"tol", 1e-8}})->solve(view, cb::SolveContext{});
+        ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
+        ASSERT_EQ(r.x.size(), qp.n());
+        ASSERT_EQ(r.lambda.size(), qp.m());
+        const double f_ref = cb::objective(view, ref.x), f = cb::objective(view, r.x);
+        EXPECT_LE(std::abs(f - f_ref), 1e-6 * std::max(1.0, std::abs(f_ref)));
+        const Vec slack = qp.J * r.x - qp.c;
+        const double violation = qp.m() ? std::max(0.0, -slack.minCoeff()) : 0.0;
+        EXPECT_LE(violation, 1e-9 * std::max(1.0, qp.c.lpNorm<Eigen::Infinity>()));
+        const Vec g = qp.A * r.x - qp.b;
+        EXPECT_TRUE(cb::kkt_converged(view, r.x, g, r.lambda, cb::kkt_scale(view), 1e-8));
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Installed, Peers, ::testing::Values("ipopt"),
+                         [](const ::testing::TestParamInfo<std::string>& p) {
+                             std::string s = p.param;
+                             std::replace(s.begin(), s.end(), '-', '_');
+                             return s;
+                         });
