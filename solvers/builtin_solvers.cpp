@@ -10,6 +10,9 @@
 #ifdef CB_HAVE_IPOPT
 #include "solvers/peers/ipopt_solver.hpp"
 #endif
+#ifdef CB_HAVE_SICONOS
+#include "solvers/peers/siconos_lemke.hpp"
+#endif
 
 namespace cb {
 
@@ -27,6 +30,9 @@ void register_builtin_solvers(SolverRegistry& registry)
     // External peers (solvers/peers/), each only when CMake found its library:
 #ifdef CB_HAVE_IPOPT
     registry.add("ipopt", ipopt_entry());
+#endif
+#ifdef CB_HAVE_SICONOS
+    registry.add("siconos-lemke", siconos_lemke_entry());
 #endif
 }
 

@@ -60,9 +60,23 @@ TEST_P(Peers, AgreeWithActiveSetOnTheCiSuite)
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(Installed, Peers, ::testing::Values("ipopt"),
+INSTANTIATE_TEST_SUITE_P(Installed, Peers, ::testing::Values("ipopt", "siconos-lemke"),
                          [](const ::testing::TestParamInfo<std::string>& p) {
                              std::string s = p.param;
                              std::replace(s.begin(), s.end(), '-', '_');
                              return s;
                          });
+
+// The child process of siconos-lemke is ended at the time limit and that is a recorded status
+// (the limit is below the time CHOLMOD's setup alone takes, so it has passed before the child
+// is waited for).
+TEST(SiconosLemke, TimeLimitEndsTheChildProcess)
+{
+    if (!cb::builtin_registry().contains("siconos-lemke")) GTEST_SKIP() << "siconos-lemke is not built";
+    const Qp qp = cb::make_synthetic("plane", {{"nx", 4}, {"ny", 4}, {"nz", 4}}, 11);
+    const SolverResult r = cb::builtin_registry()
+                               .create("siconos-lemke", {{"time_limit_s", 1e-9}})
+                               ->solve(qp.view(), cb::SolveContext{});
+    EXPECT_EQ(r.status, SolveStatus::TIME_LIMIT) << r.message;
+    EXPECT_EQ(r.message, "siconos-lemke: time limit reached; the child process was killed");
+}
