@@ -1,6 +1,7 @@
 // The external peers (solvers/peers/, compiled only when their packages are found) against the
 // reference `active-set` on the CI suite's problems (suites/ci.json): same objective to 1e-6
 // relative, a feasible point, and the common KKT test met. A peer that is not built is skipped.
+#include "problems/fclib_io.hpp"
 #include "problems/synthetic.hpp"
 #include "solvers/kkt.hpp"
 #include "solvers/registry.hpp"
@@ -8,6 +9,8 @@
 #include <gtest/gtest.h>
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <unistd.h>
 
 namespace {
 
@@ -79,4 +82,29 @@ TEST(SiconosLemke, TimeLimitEndsTheChildProcess)
                                ->solve(qp.view(), cb::SolveContext{});
     EXPECT_EQ(r.status, SolveStatus::TIME_LIMIT) << r.message;
     EXPECT_EQ(r.message, "siconos-lemke: time limit reached; the child process was killed");
+}
+
+// Siconos given the arrays that libfclib reads back from an FCLIB export (Debian's Siconos is
+// built without FCLIB support, so the harness's reader hands them over) agrees with active-set
+// on the original problem.
+TEST(SiconosLemke, OnArraysReadBackFromFclibAgreesWithActiveSet)
+{
+    if (!cb::builtin_registry().contains("siconos-lemke")) GTEST_SKIP() << "siconos-lemke is not built";
+    if (cb::fclib_version().empty()) GTEST_SKIP() << "FCLIB export is not built";
+    const Qp qp = cb::make_synthetic("coupled", {{"nx", 4}, {"ny", 2}, {"nz", 4}}, 13);
+    const std::filesystem::path path =
+        std::filesystem::temp_directory_path() / ("cb_test_peers_" + std::to_string(::getpid()) + ".hdf5");
+    cb::write_fclib_global(path.string(), qp);
+    const Qp back = cb::read_fclib_global(path.string());
+    std::filesystem::remove(path);
+    const SolverResult r =
+        cb::builtin_registry().create("siconos-lemke", {{"tol", 1e-8}})->solve(back.view(), cb::SolveContext{});
+    ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
+    const SolverResult ref =
+        cb::builtin_registry().create("active-set", {{"tol", 1e-9}})->solve(qp.view(), cb::SolveContext{});
+    ASSERT_EQ(ref.status, SolveStatus::CONVERGED) << ref.message;
+    const double f_ref = cb::objective(qp.view(), ref.x), f = cb::objective(qp.view(), r.x);
+    EXPECT_LE(std::abs(f - f_ref), 1e-6 * std::max(1.0, std::abs(f_ref)));
+    const Vec g = qp.A * r.x - qp.b;
+    EXPECT_TRUE(cb::kkt_converged(qp.view(), r.x, g, r.lambda, cb::kkt_scale(qp.view()), 1e-8));
 }
