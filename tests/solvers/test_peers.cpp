@@ -108,3 +108,15 @@ TEST(SiconosLemke, OnArraysReadBackFromFclibAgreesWithActiveSet)
     const Vec g = qp.A * r.x - qp.b;
     EXPECT_TRUE(cb::kkt_converged(qp.view(), r.x, g, r.lambda, cb::kkt_scale(qp.view()), 1e-8));
 }
+
+// max_iterations maps onto Ipopt's max_iter, and Ipopt's own word is kept in the message.
+TEST(Ipopt, MaxIterationsIsIpoptsMaxIter)
+{
+    if (!cb::builtin_registry().contains("ipopt")) GTEST_SKIP() << "ipopt is not built";
+    const Qp qp = cb::make_synthetic("plane", {{"nx", 4}, {"ny", 4}, {"nz", 4}}, 11);
+    const SolverResult r =
+        cb::builtin_registry().create("ipopt", {{"max_iterations", 2}})->solve(qp.view(), cb::SolveContext{});
+    EXPECT_EQ(r.status, SolveStatus::MAX_ITERATIONS) << r.message;
+    EXPECT_EQ(r.info.value("ipopt_status", ""), "Maximum_Iterations_Exceeded");
+    EXPECT_EQ(r.iterations, 2);
+}
