@@ -47,7 +47,8 @@ public:
     QpTnlp(const QpView& qp, const SolveContext& context, const IpoptSettings& settings, Stopwatch& watch,
            SolverResult& result)
         : m_qp(qp), m_context(context), m_settings(settings), m_watch(watch), m_result(result),
-          m_scale(kkt_scale(qp)), m_x(qp.x0), m_lambda(Vec::Zero(qp.m()))
+          m_scale(kkt_scale(qp)), m_x(qp.x0), m_lambda(Vec::Zero(qp.m())),
+          m_base_iterations(result.counters.iterations)
     {
         for (int i = 0; i < qp.A.outerSize(); ++i)
             for (SpMat::InnerIterator it(qp.A, i); it; ++it)
@@ -131,7 +132,7 @@ public:
                                Number, Number, Number, Index, const Ipopt::IpoptData* ip_data,
                                Ipopt::IpoptCalculatedQuantities* ip_cq) override
     {
-        m_result.counters.iterations = iter;
+        m_result.counters.iterations = m_base_iterations + iter;  // summed over re-solves
         current_iterate(ip_data, ip_cq);
         const Vec g = m_qp.A * m_x - m_qp.b;
         ++m_result.counters.a_products;
@@ -187,6 +188,7 @@ private:
     SolverResult& m_result;
     KktScale m_scale;
     Vec m_x, m_lambda;
+    long m_base_iterations = 0;
     long m_hess_nnz = 0;
     double m_native = 0.0;
     bool m_stopped_at_kkt = false, m_stopped_by_monitor = false, m_time_up = false;
@@ -261,7 +263,27 @@ SolverResult IpoptSolver::solve(const QpView& qp, const SolveContext& context)
     Stopwatch watch;
     watch.start();
     Ipopt::SmartPtr<QpTnlp> tnlp = new QpTnlp(qp, context, s, watch, result);
-    const Ipopt::ApplicationReturnStatus rc = app->OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(Ipopt::GetRawPtr(tnlp)));
+    Ipopt::ApplicationReturnStatus rc = app->OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(Ipopt::GetRawPtr(tnlp)));
+    // Ipopt's tolerance is on its own scaled error: it can declare success at a point the common
+    // KKT test rejects. Then ask it for more (Ipopt tol / 1e3, down to 1e-14), at most twice.
+    double tol_used = ipopt_tol;
+    int retries = 0;
+    auto kkt_holds = [&]() {
+        const Vec g = qp.A * tnlp->x() - qp.b;
+        ++result.counters.a_products;
+        return tnlp->x().allFinite() && tnlp->lambda().allFinite() &&
+               kkt_converged(qp, tnlp->x(), g, tnlp->lambda(), kkt_scale(qp), s.common.tol);
+    };
+    while (s.common.stop == StopRule::KKT && retries < 2 && tol_used > 1e-14 &&
+           (rc == Ipopt::Solve_Succeeded || rc == Ipopt::Solved_To_Acceptable_Level) && !kkt_holds()) {
+        ++retries;
+        tol_used = std::max(1e-14, tol_used * 1e-3);
+        app->Options()->SetNumericValue("tol", tol_used);
+        tnlp = new QpTnlp(qp, context, s, watch, result);
+        rc = app->OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(Ipopt::GetRawPtr(tnlp)));
+    }
+    result.info["ipopt_retries"] = retries;
+    result.info["ipopt_tol_last"] = tol_used;
     result.solve_s = watch.seconds();
 
     result.x = tnlp->x();
@@ -272,6 +294,7 @@ SolverResult IpoptSolver::solve(const QpView& qp, const SolveContext& context)
     std::ostringstream msg;
     msg << "ipopt: Ipopt " << IPOPT_VERSION << " returned " << ipopt_status_name(rc) << " after "
         << result.iterations << " iterations";
+    if (retries > 0) msg << " (" << retries << " re-solve(s) with a tighter Ipopt tol, last " << tol_used << ")";
 
     // The verdict is the common KKT test at the returned point, never Ipopt's own flag.
     const Vec g = qp.A * result.x - qp.b;

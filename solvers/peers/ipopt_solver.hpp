@@ -6,7 +6,9 @@
 /// Settings map onto Ipopt's own options as follows (the mapping is recorded in result.info):
 ///   tol            -> stop=kkt: the harness's relative KKT error is tested on Ipopt's iterate in
 ///                     its intermediate callback, which ends the solve when it holds; Ipopt's own
-///                     `tol` is set to 1e-2 * tol so that Ipopt does not stop first.
+///                     `tol` is set to 1e-2 * tol so that Ipopt does not stop first; if Ipopt still
+///                     declares success at a point the KKT test rejects, it re-solves with its tol
+///                     / 1e3 (at most twice).
 ///                     stop=native: Ipopt's `tol` (its scaled NLP error) = tol.
 ///   max_iterations -> `max_iter`;  time_limit_s -> wall clock checked in the callback (Ipopt 3.11's
 ///                     `max_cpu_time` counts CPU, not wall time, so it is only a backstop).
