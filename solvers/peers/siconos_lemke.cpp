@@ -1,5 +1,6 @@
 // Siconos numerics' Lemke on the dual LCP, in a child process (see siconos_lemke.hpp).
 #include "solvers/peers/siconos_lemke.hpp"
+#include "solvers/peers/child_process.hpp"
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/Dense>
@@ -11,12 +12,6 @@
 #include <SolverOptions.h>
 #include <lcp_cst.h>
 
-#include <poll.h>
-#include <signal.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
-#include <cerrno>
 #include <cstring>
 #include <sstream>
 #include <vector>
@@ -49,8 +44,8 @@ struct ChildReport {
     double residual = 0.0;
 };
 
-/// Runs Lemke on (W, q) in the child; writes lambda (m doubles) then a ChildReport.
-[[noreturn]] void run_child(int fd, Eigen::MatrixXd& W, Vec& q, long max_iterations, double tol)
+/// Runs Lemke on (W, q) (in the child); returns lambda (m doubles) then a ChildReport.
+std::vector<char> run_lemke(Eigen::MatrixXd& W, Vec& q, long max_iterations, double tol)
 {
     const int m = static_cast<int>(q.size());
     NumericsMatrix* M = NM_new();
@@ -67,19 +62,10 @@ struct ChildReport {
     report.info = linearComplementarity_driver(&problem, z.data(), w.data(), options);
     report.iterations = options->iparam[SICONOS_IPARAM_ITER_DONE];
     report.residual = options->dparam[SICONOS_DPARAM_RESIDU];
-    auto write_all = [&](const void* data, size_t bytes) {
-        const char* p = static_cast<const char*>(data);
-        while (bytes > 0) {
-            const ssize_t k = ::write(fd, p, bytes);
-            if (k <= 0) _exit(3);
-            p += k;
-            bytes -= static_cast<size_t>(k);
-        }
-    };
-    write_all(z.data(), z.size() * sizeof(double));
-    write_all(&report, sizeof report);
-    ::close(fd);
-    _exit(0);  // no destructors, no atexit handlers of the parent's libraries
+    std::vector<char> out(z.size() * sizeof(double) + sizeof report);
+    std::memcpy(out.data(), z.data(), z.size() * sizeof(double));
+    std::memcpy(out.data() + z.size() * sizeof(double), &report, sizeof report);
+    return out;
 }
 
 } // namespace
@@ -145,43 +131,10 @@ SolverResult SiconosLemkeSolver::solve(const QpView& qp, const SolveContext& con
         result.solve_s = solve_watch.seconds();
         return result;
     }
-    int fds[2];
-    if (::pipe(fds) != 0) throw std::runtime_error(std::string("siconos-lemke: pipe: ") + std::strerror(errno));
-    const pid_t pid = ::fork();
-    if (pid < 0) throw std::runtime_error(std::string("siconos-lemke: fork: ") + std::strerror(errno));
-    if (pid == 0) {
-        ::close(fds[0]);
-        run_child(fds[1], W, q, s.common.max_iterations, s.common.tol);
-    }
-    ::close(fds[1]);
-    std::vector<char> bytes;
     const size_t expected = static_cast<size_t>(m) * sizeof(double) + sizeof(ChildReport);
-    bool timed_out = false;
-    char buffer[65536];
-    for (;;) {
-        int wait_ms = -1;
-        if (s.common.time_limit_s > 0.0) {
-            const double left = s.common.time_limit_s - watch.seconds();
-            if (left <= 0.0) {
-                timed_out = true;
-                break;
-            }
-            wait_ms = static_cast<int>(left * 1000.0) + 1;
-        }
-        pollfd p{fds[0], POLLIN, 0};
-        const int ready = ::poll(&p, 1, wait_ms);
-        if (ready < 0 && errno == EINTR) continue;
-        if (ready == 0) continue;  // the loop head tests the limit
-        const ssize_t k = ::read(fds[0], buffer, sizeof buffer);
-        if (k < 0 && errno == EINTR) continue;
-        if (k <= 0) break;  // EOF: the child finished or died
-        bytes.insert(bytes.end(), buffer, buffer + k);
-    }
-    ::close(fds[0]);
-    if (timed_out) ::kill(pid, SIGKILL);
-    int wstatus = 0;
-    while (::waitpid(pid, &wstatus, 0) < 0 && errno == EINTR) {
-    }
+    const ChildOutcome child = run_in_child([&]() { return run_lemke(W, q, s.common.max_iterations, s.common.tol); },
+                                            watch, s.common.time_limit_s);
+    const std::vector<char>& bytes = child.bytes;
     result.solve_s = solve_watch.seconds();
     result.iterations = 0;
 
@@ -189,18 +142,17 @@ SolverResult SiconosLemkeSolver::solve(const QpView& qp, const SolveContext& con
         result.x = llt.solve(Vec(qp.b + qp.J.transpose() * result.lambda));
         ++counters.cholmod_solves;
     };
-    if (timed_out) {
+    if (child.timed_out) {
         result.status = SolveStatus::TIME_LIMIT;
         result.message = "siconos-lemke: time limit reached; the child process was killed";
         return result;
     }
-    if (WIFSIGNALED(wstatus) || !WIFEXITED(wstatus) || WEXITSTATUS(wstatus) != 0 || bytes.size() != expected) {
+    if (child.failed || bytes.size() != expected) {
         result.status = SolveStatus::DIVERGED;
         result.info["crashed"] = true;
         std::ostringstream msg;
-        msg << "siconos-lemke: the Siconos child process ";
-        if (WIFSIGNALED(wstatus)) msg << "was killed by signal " << WTERMSIG(wstatus) << " (" << strsignal(WTERMSIG(wstatus)) << ")";
-        else msg << "exited with status " << WEXITSTATUS(wstatus) << " after sending " << bytes.size() << " of " << expected << " bytes";
+        msg << "siconos-lemke: the Siconos child process " << (child.failed ? child.failure : "sent")
+            << " (" << bytes.size() << " of " << expected << " bytes received)";
         result.message = msg.str();
         return result;
     }
