@@ -12,6 +12,7 @@
 #endif
 #ifdef CB_HAVE_SICONOS
 #include "solvers/peers/siconos_lemke.hpp"
+#include "solvers/peers/siconos_nsn.hpp"
 #endif
 
 namespace cb {
@@ -33,6 +34,7 @@ void register_builtin_solvers(SolverRegistry& registry)
 #endif
 #ifdef CB_HAVE_SICONOS
     registry.add("siconos-lemke", siconos_lemke_entry());
+    registry.add("siconos-nsn", siconos_nsn_entry());
 #endif
 }
 
