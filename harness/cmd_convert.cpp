@@ -3,6 +3,7 @@
 // is read as Matrix Market, anything else as a .qpsnap. Both outputs are written atomically.
 #include "harness/cli.hpp"
 #include "harness/commands.hpp"
+#include "problems/fclib_io.hpp"
 #include "problems/matrix_market.hpp"
 #include "problems/qpsnap.hpp"
 
@@ -17,6 +18,7 @@ const char* const kUsage =
     "  IN.qpsnap  -> OUT folder (A.mtx b.mtx J.mtx c.mtx x0.mtx meta.json [contact.json x_ref.mtx lambda_ref.mtx])\n"
     "  IN folder  -> OUT.qpsnap (Matrix Market files as written by scipy.io.mmwrite, Julia, MATLAB ...)\n"
     "  IN.qpsnap  -> OUT.qpsnap (rewrites; validates on the way)\n"
+    "  IN.qpsnap  -> OUT.hdf5 / .h5: an FCLIB fclib_global problem (mu = 0; /solution when known), and back\n"
     "values are written with %.17g: .qpsnap -> folder -> .qpsnap keeps every array bit for bit";
 
 bool ends_with(const std::string& s, const std::string& tail)
@@ -38,8 +40,12 @@ int cmd_convert(const Args& args)
     Qp qp;
     SnapshotExtras extras;
     if (std::filesystem::is_directory(in)) qp = read_matrix_market_folder(in, &extras);
+    else if (is_fclib_path(in)) qp = read_fclib_global(in, &extras);
     else qp = read_qpsnap(in, &extras);
-    if (ends_with(out, ".qpsnap")) {
+    if (is_fclib_path(out)) {
+        write_fclib_global(out, qp, &extras);
+        std::cout << "wrote " << out << " (FCLIB fclib_global, n = " << qp.n() << ", " << qp.m() << " contacts, mu = 0)\n";
+    } else if (ends_with(out, ".qpsnap")) {
         write_qpsnap(out, qp, &extras);
         std::cout << "wrote " << out << " (n = " << qp.n() << ", m = " << qp.m() << ", nnz(A) = " << qp.A.nonZeros()
                   << ", hash " << qpsnap_content_hash(out) << ")\n";

@@ -7,6 +7,13 @@
 #include "solvers/mprgp_coupled.hpp"
 #include "solvers/ica.hpp"
 #include "solvers/pgs.hpp"
+#ifdef CB_HAVE_IPOPT
+#include "solvers/peers/ipopt_solver.hpp"
+#endif
+#ifdef CB_HAVE_SICONOS
+#include "solvers/peers/siconos_lemke.hpp"
+#include "solvers/peers/siconos_nsn.hpp"
+#endif
 
 namespace cb {
 
@@ -31,6 +38,14 @@ void register_builtin_solvers(SolverRegistry& registry)
     registry.add("mprgp-coupled", applies_to(mprgp_coupled_entry(), "any J"));
     registry.add("ica", applies_to(ica_entry(), "any J"));
     registry.add("pgs", applies_to(pgs_entry(), "any J with at most max_rows rows (2000; the dual matrix is dense)"));
+    // External peers (solvers/peers/), each only when CMake found its library:
+#ifdef CB_HAVE_IPOPT
+    registry.add("ipopt", applies_to(ipopt_entry(), "any J (interior point on the primal QP)"));
+#endif
+#ifdef CB_HAVE_SICONOS
+    registry.add("siconos-lemke", applies_to(siconos_lemke_entry(), "any J with at most max_rows rows (dense dual LCP)"));
+    registry.add("siconos-nsn", applies_to(siconos_nsn_entry(), "any J (global problem, mu = 0)"));
+#endif
 }
 
 } // namespace cb

@@ -1,0 +1,346 @@
+// Ipopt as an external peer (see ipopt_solver.hpp for the mapping of settings onto Ipopt's options).
+#include "solvers/peers/ipopt_solver.hpp"
+
+#include <IpIpoptApplication.hpp>
+#include <IpIpoptCalculatedQuantities.hpp>
+#include <IpIpoptData.hpp>
+#include <IpOrigIpoptNLP.hpp>
+#include <IpTNLP.hpp>
+#include <IpTNLPAdapter.hpp>
+#include <IpoptConfig.h>
+
+#include <cmath>
+#include <sstream>
+
+namespace cb {
+
+IpoptSettings IpoptSettings::from_json(const nlohmann::json& settings)
+{
+    SettingsReader reader(settings, "ipopt");
+    IpoptSettings s;
+    s.common = reader.common();
+    s.nlp_scaling = reader.choice("nlp_scaling", s.nlp_scaling, {"gradient-based", "none"});
+    s.print_level = reader.integer("print_level", s.print_level, 0, 12);
+    reader.finish();
+    return s;
+}
+
+nlohmann::json IpoptSettings::to_json() const
+{
+    nlohmann::json j = common.to_json();
+    j["nlp_scaling"] = nlp_scaling;
+    j["print_level"] = print_level;
+    return j;
+}
+
+std::string ipopt_version() { return IPOPT_VERSION; }
+
+namespace {
+
+using Ipopt::Index;
+using Ipopt::Number;
+
+/// The QP as an Ipopt TNLP. Ipopt's Lagrangian is f + y'g, so for Jx >= c its multipliers are
+/// <= 0 and ours are lambda = -y.
+class QpTnlp : public Ipopt::TNLP {
+public:
+    QpTnlp(const QpView& qp, const SolveContext& context, const IpoptSettings& settings, Stopwatch& watch,
+           SolverResult& result)
+        : m_qp(qp), m_context(context), m_settings(settings), m_watch(watch), m_result(result),
+          m_scale(accuracy_scale(qp)), m_x(qp.x0), m_lambda(Vec::Zero(qp.m())),
+          m_base_iterations(result.counters.iterations)
+    {
+        for (int i = 0; i < qp.A.outerSize(); ++i)
+            for (SpMat::InnerIterator it(qp.A, i); it; ++it)
+                if (it.col() <= i) ++m_hess_nnz;
+    }
+
+    bool get_nlp_info(Index& n, Index& m, Index& nnz_jac_g, Index& nnz_h_lag, IndexStyleEnum& style) override
+    {
+        n = static_cast<Index>(m_qp.n());
+        m = static_cast<Index>(m_qp.m());
+        nnz_jac_g = static_cast<Index>(m_qp.J.nonZeros());
+        nnz_h_lag = static_cast<Index>(m_hess_nnz);
+        style = C_STYLE;
+        return true;
+    }
+    bool get_bounds_info(Index n, Number* x_l, Number* x_u, Index m, Number* g_l, Number* g_u) override
+    {
+        for (Index i = 0; i < n; ++i) x_l[i] = -2e19, x_u[i] = 2e19;  // beyond nlp_*_bound_inf: free
+        for (Index i = 0; i < m; ++i) g_l[i] = m_qp.c[i], g_u[i] = 2e19;
+        return true;
+    }
+    bool get_starting_point(Index n, bool init_x, Number* x, bool, Number*, Number*, Index, bool, Number*) override
+    {
+        if (init_x)
+            for (Index i = 0; i < n; ++i) x[i] = m_qp.x0[i];
+        return true;
+    }
+    bool eval_f(Index n, const Number* x, bool, Number& obj) override
+    {
+        const Eigen::Map<const Vec> xv(x, n);
+        obj = objective(m_qp, xv);
+        ++m_result.counters.a_products;
+        return true;
+    }
+    bool eval_grad_f(Index n, const Number* x, bool, Number* grad) override
+    {
+        const Eigen::Map<const Vec> xv(x, n);
+        Eigen::Map<Vec>(grad, n) = m_qp.A * xv - m_qp.b;
+        ++m_result.counters.a_products;
+        return true;
+    }
+    bool eval_g(Index n, const Number* x, bool, Index m, Number* g) override
+    {
+        const Eigen::Map<const Vec> xv(x, n);
+        Eigen::Map<Vec>(g, m) = m_qp.J * xv;
+        return true;
+    }
+    bool eval_jac_g(Index, const Number*, bool, Index, Index, Index* rows, Index* cols, Number* values) override
+    {
+        Index k = 0;
+        for (int i = 0; i < m_qp.J.outerSize(); ++i)
+            for (SpMat::InnerIterator it(m_qp.J, i); it; ++it, ++k) {
+                if (values) values[k] = it.value();
+                else rows[k] = i, cols[k] = static_cast<Index>(it.col());
+            }
+        return true;
+    }
+    bool eval_h(Index, const Number*, bool, Number obj_factor, Index, const Number*, bool, Index, Index* rows,
+                Index* cols, Number* values) override
+    {
+        Index k = 0;
+        for (int i = 0; i < m_qp.A.outerSize(); ++i)
+            for (SpMat::InnerIterator it(m_qp.A, i); it; ++it) {
+                if (it.col() > i) continue;  // lower triangle
+                if (values) values[k] = obj_factor * it.value();
+                else rows[k] = i, cols[k] = static_cast<Index>(it.col());
+                ++k;
+            }
+        return true;
+    }
+    void finalize_solution(Ipopt::SolverReturn, Index n, const Number* x, const Number*, const Number*, Index m,
+                           const Number*, const Number* y, Number, const Ipopt::IpoptData*,
+                           Ipopt::IpoptCalculatedQuantities*) override
+    {
+        if (m_stopped_at_kkt || m_stopped_by_monitor) return;  // keep the point the callback judged
+        m_x = Eigen::Map<const Vec>(x, n);
+        m_lambda = -Eigen::Map<const Vec>(y, m);
+    }
+
+    bool intermediate_callback(Ipopt::AlgorithmMode, Index iter, Number, Number, Number inf_du, Number, Number,
+                               Number, Number, Number, Index, const Ipopt::IpoptData* ip_data,
+                               Ipopt::IpoptCalculatedQuantities* ip_cq) override
+    {
+        m_result.counters.iterations = m_base_iterations + iter;  // summed over re-solves
+        current_iterate(ip_data, ip_cq);
+        const Vec g = m_qp.A * m_x - m_qp.b;
+        ++m_result.counters.a_products;
+        const bool kkt_ok = m_settings.common.stop == StopRule::KKT &&
+                            accuracy_converged(m_qp, m_scale, m_x, g, m_lambda, m_settings.common.tol);
+        m_native = inf_du;
+        const StepKind step = iter == 0 ? StepKind::START : StepKind::OUTER;
+        if (!notify_monitor(m_context, m_watch,
+                            {iter, step, &m_x, &m_lambda, inf_du, -1, &m_result.counters, 0.0})) {
+            m_stopped_by_monitor = true;
+            return false;
+        }
+        if (kkt_ok) {
+            m_stopped_at_kkt = true;
+            return false;
+        }
+        const double limit = m_settings.common.time_limit_s;
+        if (limit > 0.0 && m_watch.seconds() >= limit) {
+            m_time_up = true;
+            return false;
+        }
+        return true;
+    }
+
+    const Vec& x() const { return m_x; }
+    const Vec& lambda() const { return m_lambda; }
+    bool stopped_at_kkt() const { return m_stopped_at_kkt; }
+    bool stopped_by_monitor() const { return m_stopped_by_monitor; }
+    bool time_up() const { return m_time_up; }
+    double native() const { return m_native; }
+
+private:
+    /// Ipopt's current iterate in the user's space: x, and the constraint multipliers unscaled
+    /// the way Ipopt's own finalisation does it (d-scaling applied, objective scaling removed).
+    void current_iterate(const Ipopt::IpoptData* ip_data, Ipopt::IpoptCalculatedQuantities* ip_cq)
+    {
+        auto* orig = dynamic_cast<Ipopt::OrigIpoptNLP*>(Ipopt::GetRawPtr(ip_cq->GetIpoptNLP()));
+        if (!orig) return;
+        auto* adapter = dynamic_cast<Ipopt::TNLPAdapter*>(Ipopt::GetRawPtr(orig->nlp()));
+        if (!adapter) return;
+        adapter->ResortX(*ip_data->curr()->x(), m_x.data());
+        Ipopt::SmartPtr<Ipopt::Vector> y_d = orig->NLP_scaling()->apply_vector_scaling_d_NonConst(
+            ip_data->curr()->y_d());
+        y_d->Scal(orig->NLP_scaling()->unapply_obj_scaling(1.0));
+        adapter->ResortG(*ip_data->curr()->y_c(), *y_d, m_lambda.data());
+        m_lambda = -m_lambda;
+    }
+
+    const QpView& m_qp;
+    const SolveContext& m_context;
+    const IpoptSettings& m_settings;
+    Stopwatch& m_watch;
+    SolverResult& m_result;
+    AccuracyScale m_scale;
+    Vec m_x, m_lambda;
+    long m_base_iterations = 0;
+    long m_hess_nnz = 0;
+    double m_native = 0.0;
+    bool m_stopped_at_kkt = false, m_stopped_by_monitor = false, m_time_up = false;
+};
+
+const char* ipopt_status_name(Ipopt::ApplicationReturnStatus s)
+{
+    switch (s) {
+    case Ipopt::Solve_Succeeded: return "Solve_Succeeded";
+    case Ipopt::Solved_To_Acceptable_Level: return "Solved_To_Acceptable_Level";
+    case Ipopt::Infeasible_Problem_Detected: return "Infeasible_Problem_Detected";
+    case Ipopt::Search_Direction_Becomes_Too_Small: return "Search_Direction_Becomes_Too_Small";
+    case Ipopt::Diverging_Iterates: return "Diverging_Iterates";
+    case Ipopt::User_Requested_Stop: return "User_Requested_Stop";
+    case Ipopt::Feasible_Point_Found: return "Feasible_Point_Found";
+    case Ipopt::Maximum_Iterations_Exceeded: return "Maximum_Iterations_Exceeded";
+    case Ipopt::Restoration_Failed: return "Restoration_Failed";
+    case Ipopt::Error_In_Step_Computation: return "Error_In_Step_Computation";
+    case Ipopt::Maximum_CpuTime_Exceeded: return "Maximum_CpuTime_Exceeded";
+    case Ipopt::Not_Enough_Degrees_Of_Freedom: return "Not_Enough_Degrees_Of_Freedom";
+    case Ipopt::Invalid_Problem_Definition: return "Invalid_Problem_Definition";
+    case Ipopt::Invalid_Option: return "Invalid_Option";
+    case Ipopt::Invalid_Number_Detected: return "Invalid_Number_Detected";
+    case Ipopt::Unrecoverable_Exception: return "Unrecoverable_Exception";
+    case Ipopt::NonIpopt_Exception_Thrown: return "NonIpopt_Exception_Thrown";
+    case Ipopt::Insufficient_Memory: return "Insufficient_Memory";
+    case Ipopt::Internal_Error: return "Internal_Error";
+    }
+    return "unknown";
+}
+
+} // namespace
+
+SolverResult IpoptSolver::solve(const QpView& qp, const SolveContext& context)
+{
+    const IpoptSettings& s = m_settings;
+    SolverResult result;
+    result.x = qp.x0;
+    result.lambda = Vec::Zero(qp.m());
+    const double ipopt_tol = s.common.stop == StopRule::NATIVE ? s.common.tol : 1e-2 * s.common.tol;
+    result.info["library"] = std::string("Ipopt ") + IPOPT_VERSION;
+    result.info["native_residual_definition"] = "Ipopt's inf_du (scaled dual infeasibility) at its last iterate";
+    result.info["ipopt_options"] = {{"tol", ipopt_tol},
+                                    {"max_iter", s.common.max_iterations},
+                                    {"max_cpu_time", s.common.time_limit_s > 0 ? s.common.time_limit_s : 1e6},
+                                    {"bound_relax_factor", 0.0},
+                                    {"hessian_constant", "yes"},
+                                    {"jac_d_constant", "yes"},
+                                    {"nlp_scaling_method", s.nlp_scaling},
+                                    {"print_level", s.print_level}};
+    result.info["history"] = "from Ipopt's intermediate callback (one entry per Ipopt iteration)";
+
+    Stopwatch setup;
+    setup.start();
+    Ipopt::SmartPtr<Ipopt::IpoptApplication> app = IpoptApplicationFactory();
+    app->Options()->SetNumericValue("tol", ipopt_tol);
+    app->Options()->SetIntegerValue("max_iter", static_cast<Index>(std::min<long>(s.common.max_iterations, 1L << 30)));
+    app->Options()->SetNumericValue("max_cpu_time", s.common.time_limit_s > 0 ? s.common.time_limit_s : 1e6);
+    app->Options()->SetNumericValue("bound_relax_factor", 0.0);
+    app->Options()->SetStringValue("hessian_constant", "yes");
+    app->Options()->SetStringValue("jac_d_constant", "yes");
+    app->Options()->SetStringValue("nlp_scaling_method", s.nlp_scaling);
+    app->Options()->SetIntegerValue("print_level", static_cast<Index>(s.print_level));
+    app->Options()->SetStringValue("sb", "yes");  // no banner
+    if (app->Initialize() != Ipopt::Solve_Succeeded) {
+        result.status = SolveStatus::INVALID_INPUT;
+        result.message = "ipopt: Ipopt rejected its options";
+        return result;
+    }
+    result.setup_s = setup.seconds();
+
+    Stopwatch watch;
+    watch.start();
+    Ipopt::SmartPtr<QpTnlp> tnlp = new QpTnlp(qp, context, s, watch, result);
+    Ipopt::ApplicationReturnStatus rc = app->OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(Ipopt::GetRawPtr(tnlp)));
+    // Ipopt's tolerance is on its own scaled error: it can declare success at a point the common
+    // KKT test rejects. Then ask it for more (Ipopt tol / 1e3, down to 1e-14), at most twice.
+    double tol_used = ipopt_tol;
+    int retries = 0;
+    auto kkt_holds = [&]() {
+        const Vec g = qp.A * tnlp->x() - qp.b;
+        ++result.counters.a_products;
+        return tnlp->x().allFinite() && tnlp->lambda().allFinite() &&
+               accuracy_converged(qp, accuracy_scale(qp), tnlp->x(), g, tnlp->lambda(), s.common.tol);
+    };
+    while (s.common.stop == StopRule::KKT && retries < 2 && tol_used > 1e-14 &&
+           (rc == Ipopt::Solve_Succeeded || rc == Ipopt::Solved_To_Acceptable_Level) && !kkt_holds()) {
+        ++retries;
+        tol_used = std::max(1e-14, tol_used * 1e-3);
+        app->Options()->SetNumericValue("tol", tol_used);
+        tnlp = new QpTnlp(qp, context, s, watch, result);
+        rc = app->OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(Ipopt::GetRawPtr(tnlp)));
+    }
+    result.info["ipopt_retries"] = retries;
+    result.info["ipopt_tol_last"] = tol_used;
+    result.solve_s = watch.seconds();
+
+    result.x = tnlp->x();
+    result.lambda = tnlp->lambda();
+    result.native_residual = tnlp->native();
+    result.iterations = result.counters.iterations;
+    result.info["ipopt_status"] = ipopt_status_name(rc);
+    std::ostringstream msg;
+    msg << "ipopt: Ipopt " << IPOPT_VERSION << " returned " << ipopt_status_name(rc) << " after "
+        << result.iterations << " iterations";
+    if (retries > 0) msg << " (" << retries << " re-solve(s) with a tighter Ipopt tol, last " << tol_used << ")";
+
+    // The verdict is the common KKT test at the returned point, never Ipopt's own flag.
+    const Vec g = qp.A * result.x - qp.b;
+    ++result.counters.a_products;
+    const bool finite = result.x.allFinite() && result.lambda.allFinite();
+    const bool kkt_ok = finite && accuracy_converged(qp, accuracy_scale(qp), result.x, g, result.lambda, s.common.tol);
+    if (tnlp->stopped_by_monitor()) {
+        result.status = SolveStatus::STOPPED_BY_MONITOR;
+    } else if (s.common.stop == StopRule::KKT && kkt_ok) {
+        result.status = SolveStatus::CONVERGED;
+        result.criterion = "kkt";
+        msg << (tnlp->stopped_at_kkt() ? " (stopped by the harness: relative KKT error <= tol)"
+                                       : " (relative KKT error <= tol)");
+    } else if (s.common.stop == StopRule::NATIVE &&
+               (rc == Ipopt::Solve_Succeeded || rc == Ipopt::Solved_To_Acceptable_Level)) {
+        result.status = SolveStatus::CONVERGED;
+        result.criterion = "native";
+    } else if (!finite || rc == Ipopt::Diverging_Iterates || rc == Ipopt::Invalid_Number_Detected) {
+        result.status = SolveStatus::DIVERGED;
+    } else if (rc == Ipopt::Infeasible_Problem_Detected) {
+        result.status = SolveStatus::INFEASIBLE;
+    } else if (tnlp->time_up() || rc == Ipopt::Maximum_CpuTime_Exceeded) {
+        result.status = SolveStatus::TIME_LIMIT;
+    } else if (rc == Ipopt::Maximum_Iterations_Exceeded) {
+        result.status = SolveStatus::MAX_ITERATIONS;
+    } else if (rc == Ipopt::Invalid_Problem_Definition || rc == Ipopt::Not_Enough_Degrees_Of_Freedom) {
+        result.status = SolveStatus::INVALID_INPUT;
+    } else {
+        result.status = SolveStatus::STALLED;  // Ipopt finished, the common KKT test does not hold
+        msg << " but the relative KKT error at its point is above tol";
+    }
+    result.message = msg.str();
+    return result;
+}
+
+SolverEntry ipopt_entry()
+{
+    SolverEntry e;
+    e.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
+        return std::make_unique<IpoptSolver>(IpoptSettings::from_json(settings));
+    };
+    e.description = std::string("peer: Ipopt ") + IPOPT_VERSION +
+                    " interior point (MUMPS) on the primal QP, any J, bound_relax_factor 0";
+    e.settings = {{"nlp_scaling", "gradient-based", "Ipopt's nlp_scaling_method: gradient-based or none"},
+                  {"print_level", "0", "Ipopt's print_level (0 silent .. 12)"}};
+    return e;
+}
+
+} // namespace cb

@@ -1,0 +1,209 @@
+// Siconos numerics' Lemke on the dual LCP, in a child process (see siconos_lemke.hpp).
+#include "solvers/peers/siconos_lemke.hpp"
+#include "solvers/peers/child_process.hpp"
+
+#include <Eigen/CholmodSupport>
+#include <Eigen/Dense>
+
+#include <LCP_Solvers.h>
+#include <LinearComplementarityProblem.h>
+#include <NonSmoothDrivers.h>
+#include <NumericsMatrix.h>
+#include <SolverOptions.h>
+#include <lcp_cst.h>
+
+#include <cstring>
+#include <sstream>
+#include <vector>
+
+namespace cb {
+
+SiconosLemkeSettings SiconosLemkeSettings::from_json(const nlohmann::json& settings)
+{
+    SettingsReader reader(settings, "siconos-lemke");
+    SiconosLemkeSettings s;
+    s.common = reader.common();
+    s.max_rows = reader.integer("max_rows", s.max_rows, 0);
+    reader.finish();
+    return s;
+}
+
+nlohmann::json SiconosLemkeSettings::to_json() const
+{
+    nlohmann::json j = common.to_json();
+    j["max_rows"] = max_rows;
+    return j;
+}
+
+namespace {
+
+/// What the child sends back through the pipe after the lambda values.
+struct ChildReport {
+    int info = -1;
+    int iterations = 0;
+    double residual = 0.0;
+};
+
+/// Runs Lemke on (W, q) (in the child); returns lambda (m doubles) then a ChildReport.
+std::vector<char> run_lemke(Eigen::MatrixXd& W, Vec& q, long max_iterations, double tol)
+{
+    const int m = static_cast<int>(q.size());
+    NumericsMatrix* M = NM_new();
+    M->storageType = NM_DENSE;
+    M->size0 = m;
+    M->size1 = m;
+    M->matrix0 = W.data();  // column-major, as Siconos expects
+    LinearComplementarityProblem problem{m, M, q.data()};
+    std::vector<double> z(static_cast<size_t>(m), 0.0), w(static_cast<size_t>(m), 0.0);
+    SolverOptions* options = solver_options_create(SICONOS_LCP_LEMKE);
+    options->iparam[SICONOS_IPARAM_MAX_ITER] = static_cast<int>(std::min<long>(max_iterations, 1L << 30));
+    options->dparam[SICONOS_DPARAM_TOL] = tol;
+    ChildReport report;
+    report.info = linearComplementarity_driver(&problem, z.data(), w.data(), options);
+    report.iterations = options->iparam[SICONOS_IPARAM_ITER_DONE];
+    report.residual = options->dparam[SICONOS_DPARAM_RESIDU];
+    std::vector<char> out(z.size() * sizeof(double) + sizeof report);
+    std::memcpy(out.data(), z.data(), z.size() * sizeof(double));
+    std::memcpy(out.data() + z.size() * sizeof(double), &report, sizeof report);
+    return out;
+}
+
+} // namespace
+
+SolverResult SiconosLemkeSolver::solve(const QpView& qp, const SolveContext& context)
+{
+    const SiconosLemkeSettings& s = m_settings;
+    const Eigen::Index m = qp.m();
+    SolverResult result;
+    Counters& counters = result.counters;
+    result.x = qp.x0;
+    result.lambda = Vec::Zero(m);
+    result.info["library"] = std::string("Siconos numerics ") + CB_SICONOS_VERSION;
+    result.info["history"] = "final point only (Siconos's Lemke has no iteration callback)";
+    result.info["child_process"] = true;
+    result.info["native_residual_definition"] = "Siconos's LCP error (SICONOS_DPARAM_RESIDU)";
+    if (m > s.max_rows) {
+        result.status = SolveStatus::INVALID_INPUT;
+        result.message = "siconos-lemke: m = " + std::to_string(m) + " rows exceeds max_rows = " +
+                         std::to_string(s.max_rows) + " (W = J A^-1 J' is dense m x m); raise max_rows to allow it";
+        return result;
+    }
+    Stopwatch watch;
+    watch.start();
+    Stopwatch setup;
+    setup.start();
+    Eigen::CholmodSupernodalLLT<SpMatCol, Eigen::Lower> llt;
+    {
+        const SpMatCol A_col = qp.A;
+        llt.compute(A_col);
+    }
+    ++counters.cholmod_analyses;
+    ++counters.cholmod_factorizations;
+    if (llt.info() != Eigen::Success) {
+        result.status = SolveStatus::INVALID_INPUT;
+        result.message = "siconos-lemke: CHOLMOD could not factor A (not positive definite to working precision)";
+        return result;
+    }
+    const Vec x_u = llt.solve(qp.b);
+    ++counters.cholmod_solves;
+    Vec q = qp.J * x_u - qp.c;
+    Eigen::MatrixXd W(m, m);
+    const SpMatCol Jt = SpMatCol(qp.J.transpose());
+    constexpr Eigen::Index kBlock = 64;
+    for (Eigen::Index j0 = 0; j0 < m; j0 += kBlock) {
+        const Eigen::Index k = std::min(kBlock, m - j0);
+        W.middleCols(j0, k) = qp.J * Eigen::MatrixXd(llt.solve(Eigen::MatrixXd(Jt.middleCols(j0, k))));
+        counters.cholmod_solves += k;
+    }
+    W = 0.5 * (W + W.transpose()).eval();
+    result.setup_s = setup.seconds();
+
+    Stopwatch solve_watch;
+    solve_watch.start();
+    if (m == 0) {  // Siconos asserts on an empty LCP (it aborts the process: seen in the child)
+        result.x = x_u;
+        const Vec g = qp.A * result.x - qp.b;
+        ++counters.a_products;
+        const bool ok = accuracy_converged(qp, accuracy_scale(qp), result.x, g, result.lambda, s.common.tol);
+        result.status = ok ? SolveStatus::CONVERGED : SolveStatus::STALLED;
+        result.criterion = ok ? "kkt" : "";
+        result.message = "siconos-lemke: no constraints: x = A^-1 b (Siconos not called)";
+        result.solve_s = solve_watch.seconds();
+        return result;
+    }
+    const size_t expected = static_cast<size_t>(m) * sizeof(double) + sizeof(ChildReport);
+    const ChildOutcome child = run_in_child([&]() { return run_lemke(W, q, s.common.max_iterations, s.common.tol); },
+                                            watch, s.common.time_limit_s);
+    const std::vector<char>& bytes = child.bytes;
+    result.solve_s = solve_watch.seconds();
+    result.iterations = 0;
+
+    auto primal = [&]() {
+        result.x = llt.solve(Vec(qp.b + qp.J.transpose() * result.lambda));
+        ++counters.cholmod_solves;
+    };
+    if (child.timed_out) {
+        result.status = SolveStatus::TIME_LIMIT;
+        result.message = "siconos-lemke: time limit reached; the child process was killed";
+        return result;
+    }
+    if (child.failed || bytes.size() != expected) {
+        result.status = SolveStatus::DIVERGED;
+        result.info["crashed"] = true;
+        std::ostringstream msg;
+        msg << "siconos-lemke: the Siconos child process " << (child.failed ? child.failure : "sent")
+            << " (" << bytes.size() << " of " << expected << " bytes received)";
+        result.message = msg.str();
+        return result;
+    }
+    result.info["crashed"] = false;
+    std::memcpy(result.lambda.data(), bytes.data(), static_cast<size_t>(m) * sizeof(double));
+    ChildReport report;
+    std::memcpy(&report, bytes.data() + static_cast<size_t>(m) * sizeof(double), sizeof report);
+    counters.iterations = report.iterations;
+    counters.pivots = report.iterations;
+    counters.lcp_iterations = report.iterations;
+    result.iterations = report.iterations;
+    result.native_residual = report.residual;
+    result.info["siconos_info"] = report.info;
+    primal();
+
+    Stopwatch paused;  // the monitor sees the final point only
+    notify_monitor(context, paused, {report.iterations, StepKind::FINAL, &result.x, &result.lambda,
+                                     report.residual, -1, &counters, result.solve_s});
+    const Vec g = qp.A * result.x - qp.b;
+    ++counters.a_products;
+    const bool finite = result.x.allFinite() && result.lambda.allFinite();
+    std::ostringstream msg;
+    msg << "siconos-lemke: Siconos Lemke returned info = " << report.info << " ("
+        << (report.info == 0 ? "solved" : "failed") << ") after " << report.iterations << " pivots, error "
+        << report.residual;
+    if (!finite) {
+        result.status = SolveStatus::DIVERGED;
+    } else if (s.common.stop == StopRule::NATIVE ? (report.info == 0 && report.residual <= s.common.tol)
+                                                 : accuracy_converged(qp, accuracy_scale(qp), result.x, g, result.lambda, s.common.tol)) {
+        result.status = SolveStatus::CONVERGED;
+        result.criterion = s.common.stop == StopRule::NATIVE ? "native" : "kkt";
+    } else if (report.info != 0 && report.iterations >= s.common.max_iterations) {
+        result.status = SolveStatus::MAX_ITERATIONS;
+    } else {
+        result.status = SolveStatus::STALLED;
+        msg << "; the relative KKT error at its point is above tol";
+    }
+    result.message = msg.str();
+    return result;
+}
+
+SolverEntry siconos_lemke_entry()
+{
+    SolverEntry e;
+    e.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
+        return std::make_unique<SiconosLemkeSolver>(SiconosLemkeSettings::from_json(settings));
+    };
+    e.description = std::string("peer: Siconos numerics ") + CB_SICONOS_VERSION +
+                    " Lemke on the dual LCP W = J A^-1 J' (CHOLMOD, dense; child process)";
+    e.settings = {{"max_rows", "4000", "refuse (invalid_input) problems with more rows of J (W is dense m x m)"}};
+    return e;
+}
+
+} // namespace cb

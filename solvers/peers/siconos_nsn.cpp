@@ -1,0 +1,170 @@
+// Siconos numerics' global nonsmooth Newton (mu = 0) in a child process (see siconos_nsn.hpp).
+#include "solvers/peers/siconos_nsn.hpp"
+#include "solvers/peers/child_process.hpp"
+
+#include <Friction_cst.h>
+#include <GlobalFrictionContactProblem.h>
+#include <NonSmoothDrivers.h>
+#include <NumericsMatrix.h>
+#include <NumericsSparseMatrix.h>
+#include <SolverOptions.h>
+
+#include <cstring>
+#include <sstream>
+#include <vector>
+
+namespace cb {
+
+SiconosNsnSettings SiconosNsnSettings::from_json(const nlohmann::json& settings)
+{
+    SettingsReader reader(settings, "siconos-nsn");
+    SiconosNsnSettings s;
+    s.common = reader.common();
+    reader.finish();
+    return s;
+}
+
+nlohmann::json SiconosNsnSettings::to_json() const { return common.to_json(); }
+
+namespace {
+
+struct ChildReport {
+    int info = -1;
+    int iterations = 0;
+    double residual = 0.0;
+};
+
+/// A sparse (triplet) NumericsMatrix; `transpose_of_rows` stores the transpose of `S`.
+NumericsMatrix* numerics_matrix(const SpMat& S, Eigen::Index rows, Eigen::Index cols, bool transpose,
+                                long col_stride)
+{
+    NumericsMatrix* N = NM_create(NM_SPARSE, static_cast<int>(rows), static_cast<int>(cols));
+    NM_triplet_alloc(N, S.nonZeros());
+    N->matrix2->origin = NSM_TRIPLET;
+    for (int i = 0; i < S.outerSize(); ++i)
+        for (SpMat::InnerIterator it(S, i); it; ++it) {
+            if (transpose) NM_zentry(N, static_cast<int>(it.col()), static_cast<int>(col_stride * i), it.value(), 0.0);
+            else NM_zentry(N, i, static_cast<int>(it.col()), it.value(), 0.0);
+        }
+    return N;
+}
+
+/// In the child: returns v (n doubles), r (3m doubles), then a ChildReport.
+std::vector<char> run_nsn(const QpView& qp, long max_iterations, double tol)
+{
+    const Eigen::Index n = qp.n(), m = qp.m();
+    GlobalFrictionContactProblem problem{};
+    problem.dimension = 3;
+    problem.numberOfContacts = static_cast<int>(m);
+    problem.M = numerics_matrix(qp.A, n, n, false, 1);
+    problem.H = numerics_matrix(qp.J, n, 3 * m, true, 3);  // column 3i = row i of J
+    Vec q = qp.b, b = Vec::Zero(3 * m), mu = Vec::Zero(m);
+    for (Eigen::Index i = 0; i < m; ++i) b[3 * i] = -qp.c[i];
+    problem.q = q.data();
+    problem.b = b.data();
+    problem.mu = mu.data();
+    problem.norm_q = -1.0;
+    problem.norm_b = -1.0;
+    problem.env = nullptr;
+    std::vector<double> v(static_cast<size_t>(n), 0.0), r(static_cast<size_t>(3 * m), 0.0),
+        u(static_cast<size_t>(3 * m), 0.0);
+    for (Eigen::Index j = 0; j < n; ++j) v[static_cast<size_t>(j)] = qp.x0[j];
+    SolverOptions* options = solver_options_create(SICONOS_GLOBAL_FRICTION_3D_NSN_AC);
+    options->iparam[SICONOS_IPARAM_MAX_ITER] = static_cast<int>(std::min<long>(max_iterations, 1L << 30));
+    options->dparam[SICONOS_DPARAM_TOL] = tol;
+    ChildReport report;
+    report.info = gfc3d_driver(&problem, r.data(), u.data(), v.data(), options);
+    report.iterations = options->iparam[SICONOS_IPARAM_ITER_DONE];
+    report.residual = options->dparam[SICONOS_DPARAM_RESIDU];
+    std::vector<char> out((v.size() + r.size()) * sizeof(double) + sizeof report);
+    std::memcpy(out.data(), v.data(), v.size() * sizeof(double));
+    std::memcpy(out.data() + v.size() * sizeof(double), r.data(), r.size() * sizeof(double));
+    std::memcpy(out.data() + (v.size() + r.size()) * sizeof(double), &report, sizeof report);
+    return out;
+}
+
+} // namespace
+
+SolverResult SiconosNsnSolver::solve(const QpView& qp, const SolveContext& context)
+{
+    const SiconosNsnSettings& s = m_settings;
+    const Eigen::Index n = qp.n(), m = qp.m();
+    SolverResult result;
+    Counters& counters = result.counters;
+    result.x = qp.x0;
+    result.lambda = Vec::Zero(m);
+    result.info["library"] = std::string("Siconos numerics ") + CB_SICONOS_VERSION;
+    result.info["history"] = "final point only (Siconos's global Newton has no iteration callback)";
+    result.info["child_process"] = true;
+    result.info["native_residual_definition"] = "Siconos's global friction-contact error (SICONOS_DPARAM_RESIDU)";
+    Stopwatch watch;
+    watch.start();
+    const size_t expected = static_cast<size_t>(n + 3 * m) * sizeof(double) + sizeof(ChildReport);
+    const ChildOutcome child =
+        run_in_child([&]() { return run_nsn(qp, s.common.max_iterations, s.common.tol); }, watch, s.common.time_limit_s);
+    result.solve_s = watch.seconds();
+    if (child.timed_out) {
+        result.status = SolveStatus::TIME_LIMIT;
+        result.message = "siconos-nsn: time limit reached; the child process was killed";
+        return result;
+    }
+    if (child.failed || child.bytes.size() != expected) {
+        result.status = SolveStatus::DIVERGED;
+        result.info["crashed"] = true;
+        std::ostringstream msg;
+        msg << "siconos-nsn: the Siconos child process " << (child.failed ? child.failure : "sent")
+            << " (" << child.bytes.size() << " of " << expected << " bytes received)";
+        result.message = msg.str();
+        return result;
+    }
+    result.info["crashed"] = false;
+    const char* p = child.bytes.data();
+    std::memcpy(result.x.data(), p, static_cast<size_t>(n) * sizeof(double));
+    Vec r(3 * m);
+    std::memcpy(r.data(), p + n * sizeof(double), static_cast<size_t>(3 * m) * sizeof(double));
+    for (Eigen::Index i = 0; i < m; ++i) result.lambda[i] = r[3 * i];
+    ChildReport report;
+    std::memcpy(&report, p + (n + 3 * m) * sizeof(double), sizeof report);
+    counters.iterations = report.iterations;
+    result.iterations = report.iterations;
+    result.native_residual = report.residual;
+    result.info["siconos_info"] = report.info;
+
+    Stopwatch paused;  // the monitor sees the final point only
+    notify_monitor(context, paused, {report.iterations, StepKind::FINAL, &result.x, &result.lambda, report.residual,
+                                     -1, &counters, result.solve_s});
+    const Vec g = qp.A * result.x - qp.b;
+    ++counters.a_products;
+    const bool finite = result.x.allFinite() && result.lambda.allFinite();
+    std::ostringstream msg;
+    msg << "siconos-nsn: Siconos NSN_AC returned info = " << report.info << " ("
+        << (report.info == 0 ? "solved" : "failed") << ") after " << report.iterations << " Newton iterations, error "
+        << report.residual;
+    if (!finite) {
+        result.status = SolveStatus::DIVERGED;
+    } else if (s.common.stop == StopRule::NATIVE ? (report.info == 0 && report.residual <= s.common.tol)
+                                                 : accuracy_converged(qp, accuracy_scale(qp), result.x, g, result.lambda, s.common.tol)) {
+        result.status = SolveStatus::CONVERGED;
+        result.criterion = s.common.stop == StopRule::NATIVE ? "native" : "kkt";
+    } else if (report.info != 0 && report.iterations >= s.common.max_iterations) {
+        result.status = SolveStatus::MAX_ITERATIONS;
+    } else {
+        result.status = SolveStatus::STALLED;
+        msg << "; the relative KKT error at its point is above tol";
+    }
+    result.message = msg.str();
+    return result;
+}
+
+SolverEntry siconos_nsn_entry()
+{
+    SolverEntry e;
+    e.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
+        return std::make_unique<SiconosNsnSolver>(SiconosNsnSettings::from_json(settings));
+    };
+    e.description = std::string("peer: Siconos numerics ") + CB_SICONOS_VERSION +
+                    " global nonsmooth Newton (NSN_AC, mu = 0) on M = A, H = J' (child process)";
+    return e;
+}
+
+} // namespace cb
