@@ -2,6 +2,8 @@
 // Ref: Li et al. 2015, Fig. 8 (the PCG baseline); Hestenes-Stiefel CG with a Jacobi preconditioner.
 #include "solvers/cg.hpp"
 
+#include "solvers/a_product.hpp"
+
 #include <cmath>
 #include <sstream>
 
@@ -93,7 +95,7 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
     watch.start();
 
     Vec x = qp.x0;
-    Vec r = qp.b - qp.A * x;  // r = -g
+    Vec r = qp.b - a_product(qp.A, x);  // r = -g
     ++counters.a_products;
     const double s = std::max(1.0, n ? qp.b.lpNorm<Eigen::Infinity>() : 0.0);
     const double stat0 = n ? r.lpNorm<Eigen::Infinity>() / s : 0.0;
@@ -127,7 +129,7 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
         }
         if (stop.met(r)) {
             // The recurrence residual drifts from b - Ax: confirm on the true residual.
-            Vec r_true = qp.b - qp.A * x;
+            Vec r_true = qp.b - a_product(qp.A, x);
             ++counters.a_products;
             if (stop.met(r_true)) {
                 r = r_true;
@@ -150,7 +152,7 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
             result.status = SolveStatus::TIME_LIMIT;
             break;
         }
-        Ap.noalias() = qp.A * p;
+        a_product(qp.A, p, Ap);
         ++counters.a_products;
         const double pAp = p.dot(Ap);
         if (!(pAp > 0.0)) {
@@ -177,7 +179,7 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
         }
     }
     if (result.status != SolveStatus::CONVERGED) {
-        r = qp.b - qp.A * x;  // report the true residual, not the recurrence one
+        r = qp.b - a_product(qp.A, x);  // report the true residual, not the recurrence one
         ++counters.a_products;
     }
     result.x = x;

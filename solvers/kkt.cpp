@@ -1,5 +1,7 @@
 #include "solvers/kkt.hpp"
 
+#include "solvers/a_product.hpp"
+
 #include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cmath>
@@ -54,7 +56,7 @@ KktResiduals kkt_residuals_from_gradient(const QpView& qp, const Vec& x, const V
 
 KktResiduals kkt_residuals(const QpView& qp, const Vec& x, const Vec& lambda)
 {
-    const Vec g = qp.A * x - qp.b;
+    const Vec g = a_product(qp.A, x) - qp.b;
     return kkt_residuals_from_gradient(qp, x, g, lambda);
 }
 

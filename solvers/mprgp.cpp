@@ -6,6 +6,7 @@
 // fused vector updates, so that an iteration costs about one Jacobi-PCG iteration.
 #include "solvers/mprgp.hpp"
 
+#include "solvers/a_product.hpp"
 #include "solvers/decouple.hpp"
 #include "solvers/kkt.hpp"
 #include "solvers/mprgp_kernels.hpp"
@@ -96,7 +97,7 @@ private:
     // --- products and objective ---
     void product(const Vec& v, Vec& out)
     {
-        out.noalias() = m_A * v;
+        a_product(m_A, v, out);
         ++m_cnt.a_products;
     }
     /// out = A v; returns v'Av and sets vg = v'g (one pass over A).

@@ -4,6 +4,7 @@
 //      feasible step length before the expansion step, Alg. 1-2.
 #include "solvers/mprgp_box.hpp"
 
+#include "solvers/a_product.hpp"
 #include "solvers/kkt.hpp"
 #include "solvers/mprgp_kernels.hpp"
 
@@ -166,7 +167,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
     // --- the MPRGP loop ---
     Vec x = qp.x0.cwiseMax(lower).cwiseMin(upper);
     ++cnt.projections;
-    Vec g = qp.A * x - qp.b;
+    Vec g = a_product(qp.A, x) - qp.b;
     ++cnt.a_products;
     Vec phi(n), beta(n), z(n), p(n), Ap(n), lambda = Vec::Zero(m);
     std::vector<char> at_lower(static_cast<size_t>(n)), at_upper(static_cast<size_t>(n));
@@ -215,7 +216,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
         kkt_rel = kkt_residuals_from_gradient(qp, x, g, lambda).max() * scale.inverse_reference;
         bool converged = native ? native_residual <= common.tol : kkt_rel <= common.tol;
         if (converged) {  // confirm at an exact gradient
-            g = qp.A * x - qp.b;
+            g = a_product(qp.A, x) - qp.b;
             ++cnt.a_products;
             gradients();
             multipliers();
@@ -252,7 +253,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
         }
         ++cnt.iterations;
         if (beta.squaredNorm() <= m_settings.gamma * m_settings.gamma * phitilde_dot_phi()) {
-            Ap.noalias() = qp.A * p;
+            a_product(qp.A, p, Ap);
             ++cnt.a_products;
             const double pap = p.dot(Ap);
             if (!(pap > 0.0)) {
@@ -288,7 +289,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
                 gradients();
                 x = (x - alpha_bar * phi).cwiseMax(lower).cwiseMin(upper);
                 ++cnt.projections;
-                g = qp.A * x - qp.b;
+                g = a_product(qp.A, x) - qp.b;
                 ++cnt.a_products;
                 classify();
                 gradients();
@@ -297,7 +298,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
                 last = StepKind::EXPANSION;
             }
         } else {
-            Ap.noalias() = qp.A * beta;
+            a_product(qp.A, beta, Ap);
             ++cnt.a_products;
             const double dad = beta.dot(Ap);
             if (!(dad > 0.0)) {
@@ -315,7 +316,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
             last = StepKind::PROPORTIONING;
         }
     }
-    g = qp.A * x - qp.b;
+    g = a_product(qp.A, x) - qp.b;
     ++cnt.a_products;
     classify();
     gradients();

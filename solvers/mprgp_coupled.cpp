@@ -4,6 +4,7 @@
 // Not a hot path: written for clarity; every subproblem is on CHOLMOD.
 #include "solvers/mprgp_coupled.hpp"
 
+#include "solvers/a_product.hpp"
 #include "solvers/kkt.hpp"
 #include "solvers/mprgp_kernels.hpp"
 
@@ -261,7 +262,7 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
     };
     auto gradient = [&](const Vec& v) {
         ++cnt.a_products;
-        return Vec(A * v - qp.b);
+        return Vec(a_product(A, v) - qp.b);
     };
 
     // Face data, refactored only when the active set changes.
@@ -395,7 +396,7 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
         const bool proportional = !face_done && beta.squaredNorm() <= st.gamma * st.gamma * phitilde_phi;
         bool do_expansion = false;
         if (proportional) {
-            const Vec Ap = A * p;
+            const Vec Ap = a_product(A, p);
             ++cnt.a_products;
             const double pap = p.dot(Ap);
             if (!(pap > 0.0)) {
@@ -435,7 +436,7 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
             ++cnt.expansion_steps;
             last = StepKind::EXPANSION;
         } else {
-            const Vec Ad = A * beta;
+            const Vec Ad = a_product(A, beta);
             ++cnt.a_products;
             const double dad = beta.dot(Ad);
             if (!(dad > 0.0)) {
