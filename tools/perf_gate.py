@@ -194,7 +194,6 @@ def fingerprint(rec, binary):
     p = rec.get("provenance", {})
     fp = {k: p.get(k, "unknown") for k in ("cpu", "blas", "suitesparse", "compiler")}
     fp["source_commit"] = p.get("git_commit", "unknown")
-    fp["binary"] = os.path.abspath(binary)
     return fp
 
 
@@ -431,7 +430,9 @@ def cmd_record(args):
     if not changed:
         log("the record did not change: nothing to commit")
         return 0
-    print(git("diff", "--stat", "--", "results/baselines", check=False))
+    print(changed)
+    # What the reviewer of the baseline commit reads: the changed rows of the record.
+    print(git("diff", "--no-color", "--", RECORD, check=False))
     log("commit it alone, right after the change that explains it; that commit becomes the gate's BASE:\n"
         "    git add -A results/baselines && git commit -m 'CI baseline: re-recorded after <change>'")
     return 0
