@@ -212,11 +212,15 @@ def measure(sides, jobs, work, repeats, with_instructions, parallel):
             t = rec.get("time", {})
             samples = t.get("samples_total_s") or ([t["total_s"]] if "total_s" in t else [])
             rows[n][job.key()] = row_from_record(job, rec, samples if repeats > 1 else None)
+            rows[n][job.key()]["_native_s"] = min(samples) if samples else 0.0  # orders the callgrind runs
             machine[n] = machine[n] or fingerprint(rec, sides[n])
     native_s = time.time() - t0
     t0 = time.time()
     if with_instructions:
+        # Longest first (by native time), so the parallel processes finish together.
+        cost = {job.key(): max(rows[n][job.key()]["_native_s"] for n in names) for job in jobs}
         tasks = [(n, i, job) for i, job in enumerate(jobs) for n in names]
+        tasks.sort(key=lambda t: -cost[t[2].key()])
         with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, parallel)) as pool:
             futures = {pool.submit(solve_callgrind, sides[n], job, os.path.join(work, "callgrind-%s-%d.out" % (n, i))):
                        (n, job) for n, i, job in tasks}
@@ -356,7 +360,7 @@ def cmd_gate(args):
             log("cannot build a BASE revision: %s" % reason)
             log("falling back to the committed record %s with the across-machines rules" % RECORD)
             return cmd_check(args, started)
-        if same_source(sha):
+        if not args.no_reuse and same_source(sha):
             base, how = new, ("%s (%s): its %s equal HEAD's and the tree is clean in them, so the current "
                               "binary serves as BASE" % (sha[:12], why, " ".join(SOURCE_PATHS)))
         else:
@@ -461,6 +465,8 @@ def main(argv):
         if name == "gate":
             p.add_argument("--base", default="", help="BASE revision (default: the commit that last changed %s)" % RECORD)
             p.add_argument("--base-binary", default="", help="a built BASE binary instead of a revision")
+            p.add_argument("--no-reuse", action="store_true",
+                           help="build BASE even when its source equals the working tree's")
     p = sub.add_parser("measure")
     common(p, None)
     p.add_argument("--binary", required=True)
