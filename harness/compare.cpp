@@ -344,7 +344,10 @@ std::string CompareReport::header() const
         else
             out << "shown, not judged\n";
     } else {
-        out << "machines DIFFER: across-machines rules: statuses equal; work counters within +"
+        const bool differ = machine_known(base_machine) && machine_known(new_machine) && base_machine != new_machine;
+        out << (differ ? "machines DIFFER: " : "") << "across-machines rules"
+            << (differ ? "" : " (asked for: the sides may come from different machines)")
+            << ": statuses equal; work counters within +"
             << format_g(100.0 * options.counter_rtol, 3) << "% + " << options.counter_atol << "; kkt_rel within +"
             << format_g(100.0 * options.kkt_rtol, 3)
             << "% above tol; instructions and wall time shown, not judged\n";

@@ -266,6 +266,14 @@ TEST(ComparePerfRecord, AcrossMachinesCountersGetTolerancesAndInstructionsAreNot
     EXPECT_NE(header.find("measured on AMD EPYC"), std::string::npos) << header;
     EXPECT_NE(header.find("measured on Intel Xeon"), std::string::npos) << header;
     EXPECT_NE(header.find("work counters within +25% + 2"), std::string::npos) << header;
+
+    // Asked for on one machine (the gate's fallback against the committed record): said so.
+    CompareOptions across;
+    across.cross_machine = true;
+    const CompareReport asked = compare_inputs(read_compare_input(write_perf("xb", base, "AMD EPYC")),
+                                               read_compare_input(write_perf("xs", base, "AMD EPYC")), across);
+    EXPECT_TRUE(asked.cross_machine);
+    EXPECT_NE(asked.header().find("\nacross-machines rules (asked for"), std::string::npos) << asked.header();
 }
 
 TEST(ComparePerfRecord, MalformedRecordsNameTheFileLineAndColumn)
