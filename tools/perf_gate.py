@@ -405,14 +405,27 @@ def cmd_check(args, started=None):
     return status
 
 
-def cmd_measure(args):
+def round_significant(value, digits=3):
+    """10804963 -> 10800000: the committed record keeps what a re-record must not churn on
+    (instruction counts move by a few instructions with heap alignment)."""
+    if not value:
+        return value
+    scale = 10 ** max(0, len(str(int(value))) - digits)
+    return int(round(value / scale) * scale)
+
+
+def cmd_measure(args, significant=None):
     check_tools(args)
     binary = os.path.abspath(args.binary)
     with tempfile.TemporaryDirectory(prefix="perf-gate-") as work:
         jobs = suite_jobs(binary, args.suite, work, args.filter)
         measured, native_s, callgrind_s = measure({"side": binary}, jobs, work, args.repeats,
                                                   not args.no_instructions, args.jobs)
-    write_record(args.out, *measured["side"])
+    rows, machine = measured["side"]
+    if significant:
+        for r in rows:
+            r["instructions"] = round_significant(r.get("instructions"), significant)
+    write_record(args.out, rows, machine)
     log("%s: %d runs (%.0f s natively, %.0f s under callgrind)" % (args.out, len(jobs), native_s, callgrind_s))
     return 0
 
@@ -426,7 +439,7 @@ def cmd_record(args):
                         "from the clean tree:\n" + dirty)
     args.out = os.path.join(ROOT, RECORD)
     args.repeats = 1
-    cmd_measure(args)
+    cmd_measure(args, significant=3)
     old = os.path.join(ROOT, "results", "baselines", "ci")
     if os.path.isdir(old):  # the former per-run folder, replaced by the compact record
         shutil.rmtree(old)
