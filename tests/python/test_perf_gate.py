@@ -90,6 +90,8 @@ class PlantedRegressions(unittest.TestCase):
         self.assertEqual(status, 3, out)
         for row in report["rows"]:
             self.assertEqual(row["regressed"], ["instructions"], row)
+            # Well beyond the 3% threshold, not at its edge.
+            self.assertGreater(row["new"]["instructions"], 1.1 * row["base"]["instructions"], row)
             for counter in ("iterations", "a_products", "a_products_harness"):
                 self.assertEqual(row["new"][counter], row["base"][counter], row)
         self.assertIn("FAIL regressed: instructions", out)
