@@ -11,7 +11,11 @@
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
 LOGS="$ROOT/results/perf-gate-selftest"
-WORK=$(mktemp -d "${TMPDIR:-/tmp}/cb-perf-gate-selftest.XXXXXX")
+# Scratch space inside the checkout's git-ignored .cache/ by default: with ccache's base_dir set
+# above the checkout, the clone's builds then hit the cache.
+SCRATCH=${TMPDIR:-$ROOT/.cache}
+mkdir -p "$SCRATCH"
+WORK=$(mktemp -d "$SCRATCH/cb-perf-gate-selftest.XXXXXX")
 trap 'rm -rf "$WORK"' EXIT
 mkdir -p "$LOGS"
 GATE_ARGS="--filter /mprgp\$\$"
