@@ -288,11 +288,11 @@ def resolve_base(rev):
 
 
 def same_source(sha):
-    """True when BASE's binary sources equal HEAD's and the working tree has no change in them."""
-    for p in SOURCE_PATHS:
-        if git("rev-parse", "%s:%s" % (sha, p), check=False) != git("rev-parse", "HEAD:%s" % p, check=False):
-            return False
-    return git("status", "--porcelain", "--", *SOURCE_PATHS, check=False) == ""
+    """True when the working tree's binary sources (tracked and untracked, docs aside) equal BASE's."""
+    paths = SOURCE_PATHS + [":(exclude)*.md"]
+    differs = subprocess.run(["git", "-C", ROOT, "diff", "--quiet", sha, "--"] + paths).returncode != 0
+    untracked = git("ls-files", "--others", "--exclude-standard", "--", *paths, check=False)
+    return not differs and not untracked
 
 
 def build_base(sha, jobs):
@@ -361,7 +361,7 @@ def cmd_gate(args):
             log("falling back to the committed record %s with the across-machines rules" % RECORD)
             return cmd_check(args, started)
         if not args.no_reuse and same_source(sha):
-            base, how = new, ("%s (%s): its %s equal HEAD's and the tree is clean in them, so the current "
+            base, how = new, ("%s (%s): its %s equal the working tree's (docs aside), so the current "
                               "binary serves as BASE" % (sha[:12], why, " ".join(SOURCE_PATHS)))
         else:
             t0 = time.time()
