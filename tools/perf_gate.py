@@ -197,23 +197,32 @@ def fingerprint(rec, binary):
     return fp
 
 
-def measure(sides, jobs, work, repeats, with_instructions, parallel):
-    """Measures every job with every binary of `sides` ({name: binary}), interleaved: for each job
-    the binaries take turns (the order alternates between jobs), so load drifts hit both alike.
+def measure(sides, jobs, work, repeats, with_instructions, parallel, rounds=1):
+    """Measures every job with every binary of `sides` ({name: binary}), interleaved: in each of
+    `rounds` rounds, for each job, the binaries take turns (the order alternates between jobs and
+    rounds), each process timing `repeats` solves; the samples of all rounds are pooled, so a load
+    burst during one process neither sets the minimum nor hides in the noise band.
     Returns {name: (rows, fingerprint)} and the seconds spent natively and under callgrind."""
     names = list(sides)
     rows = {n: {} for n in names}
     machine = {n: None for n in names}
+    samples = {n: {job.key(): [] for job in jobs} for n in names}
+    records = {n: {} for n in names}
     t0 = time.time()
-    for i, job in enumerate(jobs):
-        order = names if i % 2 == 0 else list(reversed(names))
-        for n in order:
-            rec = solve_native(sides[n], job, repeats, os.path.join(work, "%s-%d.json" % (n, i)))
-            t = rec.get("time", {})
-            samples = t.get("samples_total_s") or ([t["total_s"]] if "total_s" in t else [])
-            rows[n][job.key()] = row_from_record(job, rec, samples if repeats > 1 else None)
-            rows[n][job.key()]["_native_s"] = min(samples) if samples else 0.0  # orders the callgrind runs
-            machine[n] = machine[n] or fingerprint(rec, sides[n])
+    for r in range(rounds):
+        for i, job in enumerate(jobs):
+            order = names if (i + r) % 2 == 0 else list(reversed(names))
+            for n in order:
+                rec = solve_native(sides[n], job, repeats, os.path.join(work, "%s-%d.json" % (n, i)))
+                t = rec.get("time", {})
+                samples[n][job.key()] += t.get("samples_total_s") or ([t["total_s"]] if "total_s" in t else [])
+                records[n].setdefault(job.key(), rec)  # counters and status: the first round's
+                machine[n] = machine[n] or fingerprint(rec, sides[n])
+    for n in names:
+        for job in jobs:
+            pooled = samples[n][job.key()]
+            rows[n][job.key()] = row_from_record(job, records[n][job.key()], pooled if len(pooled) > 1 else None)
+            rows[n][job.key()]["_native_s"] = min(pooled) if pooled else 0.0  # orders the callgrind runs
     native_s = time.time() - t0
     t0 = time.time()
     if with_instructions:
@@ -377,11 +386,12 @@ def cmd_gate(args):
     work = work_dir(args)
     jobs = suite_jobs(new, args.suite, work, args.filter)
     sides = {"base": base, "new": new}
-    measured, native_s, callgrind_s = measure(sides, jobs, work, args.repeats, not args.no_instructions, args.jobs)
+    measured, native_s, callgrind_s = measure(sides, jobs, work, args.repeats, not args.no_instructions, args.jobs,
+                                              args.rounds)
     for name in sides:
         write_record(os.path.join(work, name + ".csv"), *measured[name])
-    log("%d runs x 2 binaries: wall time %d samples each (%.0f s), instructions under callgrind (%.0f s)"
-        % (len(jobs), args.repeats, native_s, callgrind_s if not args.no_instructions else 0))
+    log("%d runs x 2 binaries: wall time %d rounds x %d samples each (%.0f s), instructions under callgrind (%.0f s)"
+        % (len(jobs), args.rounds, args.repeats, native_s, callgrind_s if not args.no_instructions else 0))
     status = compare(new, os.path.join(work, "base.csv"), os.path.join(work, "new.csv"), args)
     log("records in %s/{base,new}.csv; gate time %.0f s; exit %d" % (args.out, time.time() - started, status))
     return status
@@ -471,7 +481,8 @@ def main(argv):
         p = sub.add_parser(name)
         common(p, os.path.join(ROOT, "results", "perf-gate"))
         p.add_argument("--new-binary", default=os.path.join(ROOT, "build", "bin", "contactbench"))
-        p.add_argument("--repeats", type=int, default=5, help="wall-time samples per run and side (min is judged)")
+        p.add_argument("--rounds", type=int, default=3, help="interleaved processes per run and side")
+        p.add_argument("--repeats", type=int, default=3, help="timed solves per process (the min of all is judged)")
         p.add_argument("--instructions-rtol", type=float, default=0.03)
         p.add_argument("--time-ratio", type=float, default=1.5, help="0: wall time shown, not judged")
         p.add_argument("--only-changes", action="store_true")
@@ -489,8 +500,8 @@ def main(argv):
     common(p, None)
     p.add_argument("--binary", default=os.path.join(ROOT, "build", "bin", "contactbench"))
     args = parser.parse_args(argv)
-    if getattr(args, "repeats", 1) < 1:
-        parser.error("--repeats must be >= 1")
+    if getattr(args, "repeats", 1) < 1 or getattr(args, "rounds", 1) < 1:
+        parser.error("--repeats and --rounds must be >= 1")
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     try:
         return {"gate": cmd_gate, "check": cmd_check, "measure": cmd_measure, "record": cmd_record}[args.command](args)
