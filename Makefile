@@ -9,27 +9,34 @@ CB_CACHE ?= $(HOME)/.cache/contactbench
 DATA ?= $(CB_CACHE)/paper-data
 # Where `make paper-data` fetches the authors' tree from: a git URL, a folder or a .tar.gz.
 PAPER_DATA_SOURCE ?= https://github.com/simba518/MPRGP.git
+CCACHE := $(shell command -v ccache 2>/dev/null)
+CONFIGURE = cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $(if $(CCACHE),-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+# The perf gate (tools/perf_gate.py): BASE=<rev> overrides the base revision; PERF_GATE_ARGS
+# passes more options (e.g. --filter '/mprgp$$' --repeats 3).
+GATE = CB_CACHE="$(CB_CACHE)" $(PY) tools/perf_gate.py
 export OPENBLAS_NUM_THREADS ?= 1
 export MPLBACKEND ?= Agg
 
 DEB_PACKAGES := build-essential cmake git zlib1g-dev libeigen3-dev libsuitesparse-dev nlohmann-json3-dev \
   libgtest-dev libbenchmark-dev libopenblas0-pthread \
-  python3-numpy python3-pandas python3-matplotlib python3-scipy libcgal-demo
+  python3-numpy python3-pandas python3-matplotlib python3-scipy libcgal-demo ccache valgrind
 
-.PHONY: help deps build test demo bench baseline reproduce stress fuzz clean meshes paper-data docs-check tidy
+.PHONY: help deps build test demo bench baseline reproduce stress fuzz clean meshes paper-data docs-check tidy \
+  ci-perf perf-gate perf-gate-selftest contactbench-binary
 
 help:
 	@echo "make demo       install, build, simulate a small scene, run the solvers, write figures"
 	@echo "make test       install, build from scratch (Release), run every C++ and Python test + CI perf gate"
+	@echo "make perf-gate  same-machine A/B of the CI suite against BASE (default: the commit of the baseline)"
 	@echo "make deps       install the Debian packages (apt-get, as root); quick when present"
 	@echo "make build      configure and build into $(BUILD)/"
 	@echo "make bench      Google Benchmark suite (JSON in results/bench/)"
-	@echo "make baseline   rewrite results/baselines/ci from the CI suite (after an intended change)"
+	@echo "make baseline   re-record results/baselines/ci.csv from a clean tree (commit it alone, after the change)"
 	@echo "make paper-data fetch the authors' repository (simba518/MPRGP at 57fdd2c), verify it, extract"
 	@echo "                meshes, scenes and figure tables into DATA=$(DATA) (PAPER_DATA_SOURCE=URL|DIR|.tar.gz)"
 	@echo "make reproduce  the paper's figures and report in results/paper/ (QUICK=1: about a minute on 2 cores)"
 	@echo "make docs-check fail on a cited document or section that is not in the repository"
-	@echo "make tidy       clang-tidy on the C++ files changed against main (BASE=main)"
+	@echo "make tidy       clang-tidy on the C++ files changed against main (TIDY_BASE=main)"
 	@echo "make stress     the stress suite and its stability table in results/stress/"
 	@echo "make fuzz       fuzz the snapshot reader (FUZZ_SECONDS=60)"
 
@@ -56,29 +63,39 @@ meshes:
 	fi
 
 $(BUILD)/CMakeCache.txt:
-	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release
+	$(CONFIGURE)
 
 build: $(BUILD)/CMakeCache.txt
 	cmake --build $(BUILD) -j $(JOBS)
 
 test: deps
 	rm -rf $(BUILD)
-	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release
+	$(CONFIGURE)
 	cmake --build $(BUILD) -j $(JOBS)
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) --timeout 600
-	@if [ -f suites/ci.json ]; then $(MAKE) --no-print-directory ci-perf; fi
+	@$(MAKE) --no-print-directory perf-gate
 
-# CI performance gate: the fixed CI suite against the committed baseline (counters exact).
-ci-perf:
-	rm -rf results/ci-new
-	$(CB) run suites/ci.json --out results/ci-new
-	$(CB) compare results/baselines/ci results/ci-new
+contactbench-binary: $(BUILD)/CMakeCache.txt
+	cmake --build $(BUILD) -j $(JOBS) --target contactbench
 
-baseline: build
-	rm -rf results/baselines/ci.tmp
-	$(CB) run suites/ci.json --out results/baselines/ci.tmp
-	rm -rf results/baselines/ci && mv results/baselines/ci.tmp results/baselines/ci
-	@echo "baseline: rewrote results/baselines/ci (commit it with the change that explains it)"
+# CI performance gate: the CI suite run by BASE's binary and this tree's, on this machine,
+# interleaved; work counters exact, instructions in the solve (callgrind) within 3%, wall time
+# judged beyond 1.5x. Without a buildable BASE it falls back to ci-perf. Exit 3: a regression.
+perf-gate: contactbench-binary
+	$(GATE) gate --new-binary $(CB) --jobs $(JOBS) $(if $(BASE),--base $(BASE)) $(PERF_GATE_ARGS)
+
+# Against the committed record (results/baselines/ci.csv), with the across-machines rules.
+ci-perf: contactbench-binary
+	$(GATE) check --new-binary $(CB) --jobs $(JOBS) $(PERF_GATE_ARGS)
+
+# Re-record the compact baseline from a clean tree; commit it alone, right after the change.
+baseline: contactbench-binary
+	$(GATE) record --binary $(CB) --jobs $(JOBS)
+
+# End to end: a scratch clone with a planted regression through `make perf-gate` (real worktree
+# build of BASE; slow: two builds of contactbench).
+perf-gate-selftest:
+	tests/perf/selftest.sh
 
 demo: deps build
 	$(CB) simulate scenes/demo.json --out results/demo/sim
@@ -96,7 +113,7 @@ docs-check:
 	$(PY) tests/python/docs_check.py .
 
 tidy: $(BUILD)/CMakeCache.txt
-	tools/tidy-changed.sh $(BUILD) $(or $(BASE),main)
+	tools/tidy-changed.sh $(BUILD) $(or $(TIDY_BASE),main)
 
 bench: build
 	mkdir -p results/bench

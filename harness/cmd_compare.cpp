@@ -1,5 +1,5 @@
-// `contactbench compare BASE NEW [--kkt-rtol 0.1] [--json FILE]`: the regression judge
-// (harness/compare.hpp). Exit 1 on any regression, status change or missing run, 0 clean.
+// `contactbench compare BASE NEW`: the regression judge (harness/compare.hpp) between two results
+// folders or compact performance records. Exit 0 pass, 3 regression, 2 bad input, 1 internal error.
 #include "harness/cli.hpp"
 #include "harness/commands.hpp"
 #include "harness/compare.hpp"
@@ -9,27 +9,59 @@
 
 namespace cb {
 
+namespace {
+
+/// Exit status of a comparison that found a regression (2 and 1 are bad input and internal error).
+constexpr int kRegression = 3;
+
+} // namespace
+
 int cmd_compare(const Args& args)
 {
-    const char* const usage = "contactbench compare BASE NEW [--kkt-rtol 0.1] [--json FILE]";
-    const CommandLine cl("compare", args, {"--kkt-rtol", "--json"}, {});
+    const char* const usage =
+        "contactbench compare BASE NEW [--only-changes] [--filter REGEX] [--kkt-rtol 0.1]\n"
+        "                     [--instructions-rtol 0.03] [--time-ratio 1.5] [--cross-machine] [--json FILE]";
+    const CommandLine cl("compare", args,
+                         {"--kkt-rtol", "--instructions-rtol", "--time-ratio", "--filter", "--json"},
+                         {"--only-changes", "--cross-machine"});
     if (cl.help()) {
         std::cout << "usage: " << usage
-                  << "\n\nCompares every (snapshot, label) run of BASE/runs with NEW/runs: the counters iterations,\n"
-                     "a_products, cholmod_factorizations, precond_applications exactly (lower is better),\n"
-                     "kkt_rel (regressed when NEW > BASE * (1 + kkt-rtol) and above tol), the status\n"
-                     "(any change fails) and the time ratio NEW/BASE (reported only). A run missing in NEW\n"
-                     "fails. Exit status 1 on any failure, 0 clean, 2 bad input.\n";
+                  << "\n\nBASE and NEW are results folders (runs/*.json) or compact performance records (.csv,\n"
+                     "with the machine fingerprint NAME-machine.json beside them; tools/perf_gate.py writes\n"
+                     "them). Every (snapshot, label) run of BASE is judged against NEW:\n"
+                     "  status                     any change fails; a run missing in NEW fails\n"
+                     "  work counters              iterations, a_products, a_products_harness (products counted\n"
+                     "                             by the harness), cholmod_factorizations, precond_applications:\n"
+                     "                             exact on the same machine (growth fails)\n"
+                     "  kkt_rel                    fails when NEW > BASE * (1 + kkt-rtol) and above tol\n"
+                     "  instructions               executed in the solve: fails beyond +instructions-rtol\n"
+                     "  time                       NEW/BASE of the minimum times with a noise band (the sum of\n"
+                     "                             both sides' median/min - 1): fails beyond --time-ratio and\n"
+                     "                             outside the band (0: never judged; never on one sample)\n"
+                     "When both machines are known and differ (or --cross-machine), counters may grow by 25% + 2\n"
+                     "and instructions and time are shown, not judged. --only-changes prints the rows that\n"
+                     "differ; --filter keeps the runs whose \"snapshot/label\" matches REGEX (e.g. '/mprgp$').\n"
+                     "Exit status: 0 pass, 3 regression, 2 bad input, 1 internal error.\n";
         return 0;
     }
     cl.expect_positional(2, 2, usage);
     CompareOptions options;
-    options.kkt_rtol = cl.number("--kkt-rtol", 0.1);
+    options.kkt_rtol = cl.number("--kkt-rtol", options.kkt_rtol);
     if (!(options.kkt_rtol >= 0.0)) throw_input_error("compare", "--kkt-rtol", "must be >= 0");
-    const CompareReport report = compare_folders(cl.positional()[0], cl.positional()[1], options);
-    std::cout << report.table() << "\n" << report.verdict() << "\n";
+    options.instructions_rtol = cl.number("--instructions-rtol", options.instructions_rtol);
+    if (!(options.instructions_rtol >= 0.0)) throw_input_error("compare", "--instructions-rtol", "must be >= 0");
+    options.time_ratio_max = cl.number("--time-ratio", options.time_ratio_max);
+    if (!(options.time_ratio_max == 0.0 || options.time_ratio_max >= 1.0))
+        throw_input_error("compare", "--time-ratio", "must be 0 (not judged) or >= 1");
+    options.cross_machine = cl.has("--cross-machine");
+    const std::string base_path = cl.positional()[0], new_path = cl.positional()[1];
+    const CompareInput base = read_compare_input(base_path);
+    if (base.runs.empty()) throw_input_error(base_path, "runs/", "no run files (*.json) to compare against");
+    const CompareInput next = read_compare_input(new_path);
+    const CompareReport report = compare_inputs(base, next, options, cl.value("--filter"));
+    std::cout << report.header() << "\n" << report.table(cl.has("--only-changes")) << "\n" << report.verdict() << "\n";
     if (cl.has("--json")) write_json_atomic(cl.value("--json"), report.to_json());
-    return report.failed() ? 1 : 0;
+    return report.failed() ? kRegression : 0;
 }
 
 } // namespace cb

@@ -1,5 +1,6 @@
 #include "harness/compare.hpp"
 
+#include "harness/perf_record.hpp"
 #include "harness/results.hpp"
 #include "solvers/types.hpp"
 
@@ -8,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <regex>
 #include <sstream>
 
 namespace cb {
@@ -40,19 +42,52 @@ nlohmann::json kkt_rel(const nlohmann::json& run)
     return nullptr;
 }
 
-double total_time(const nlohmann::json& run)
+nlohmann::json instructions(const nlohmann::json& run)
 {
-    if (run.contains("time") && run["time"].is_object()) {
-        const auto& t = run["time"];
-        if (t.contains("total_s") && t["total_s"].is_number()) return t["total_s"].get<double>();
+    return run.contains("instructions") && run["instructions"].is_number() ? run["instructions"] : nlohmann::json();
+}
+
+/// Wall time of a run: the minimum over its samples and the relative spread median/min - 1
+/// (-1 when there is a single sample: no noise estimate, so never judged).
+struct TimeStats {
+    double min = 0.0, noise = -1.0;
+};
+
+TimeStats time_stats(const nlohmann::json& run)
+{
+    TimeStats stats;
+    if (!run.contains("time") || !run["time"].is_object()) return stats;
+    const auto& t = run["time"];
+    if (t.contains("samples_total_s") && t["samples_total_s"].is_array() && t["samples_total_s"].size() > 1) {
+        std::vector<double> samples = t["samples_total_s"].get<std::vector<double>>();
+        std::sort(samples.begin(), samples.end());
+        const size_t mid = samples.size() / 2;
+        const double median = samples.size() % 2 ? samples[mid] : 0.5 * (samples[mid - 1] + samples[mid]);
+        stats.min = samples.front();
+        if (stats.min > 0.0) stats.noise = median / stats.min - 1.0;
+        return stats;
     }
-    return 0.0;
+    if (t.contains("min_total_s") && t["min_total_s"].is_number()) {  // a compact record
+        stats.min = t["min_total_s"].get<double>();
+        if (t.contains("noise") && t["noise"].is_number() && t.value("samples", 0) > 1)
+            stats.noise = t["noise"].get<double>();
+        return stats;
+    }
+    if (t.contains("total_s") && t["total_s"].is_number()) stats.min = t["total_s"].get<double>();
+    return stats;
 }
 
 std::string format_g(double v, int digits = 2)
 {
     char buffer[40];
     std::snprintf(buffer, sizeof(buffer), "%.*g", digits, v);
+    return buffer;
+}
+
+std::string format_fixed(double v, int decimals)
+{
+    char buffer[40];
+    std::snprintf(buffer, sizeof(buffer), "%.*f", decimals, v);
     return buffer;
 }
 
@@ -74,22 +109,121 @@ std::string change_text(const nlohmann::json& b, const nlohmann::json& n)
     return text;
 }
 
+/// "2.413M +0.000%": BASE's count and NEW's relative change (three decimals: unchanged code
+/// must read +0.000%).
+std::string instructions_text(const nlohmann::json& b, const nlohmann::json& n)
+{
+    auto count = [](const nlohmann::json& v) {
+        if (!v.is_number()) return std::string("-");
+        const double x = v.get<double>();
+        if (x >= 1e9) return format_fixed(x / 1e9, 3) + "G";
+        if (x >= 1e6) return format_fixed(x / 1e6, 3) + "M";
+        if (x >= 1e3) return format_fixed(x / 1e3, 3) + "k";
+        return format_g(x, 6);
+    };
+    if (!b.is_number() || !n.is_number()) return b.is_null() && n.is_null() ? "-" : count(b) + " -> " + count(n);
+    const double bv = b.get<double>(), nv = n.get<double>();
+    if (bv == 0.0) return count(b) + " -> " + count(n);
+    const double pct = 100.0 * (nv - bv) / bv;
+    return count(b) + " " + (pct >= 0 ? "+" : "") + format_fixed(pct, 3) + "%";
+}
+
+bool is_results_folder(const std::string& path) { return std::filesystem::is_directory(path); }
+
+nlohmann::json folder_machine(const std::string& dir, const std::vector<nlohmann::json>& runs)
+{
+    const std::filesystem::path provenance = std::filesystem::path(dir) / "provenance.json";
+    if (std::filesystem::is_regular_file(provenance)) return machine_fingerprint(read_json_file(provenance.string()));
+    for (const auto& r : runs)
+        if (r.contains("provenance") && r["provenance"].is_object()) return machine_fingerprint(r["provenance"]);
+    return nlohmann::json::object();
+}
+
+bool machine_known(const nlohmann::json& m)
+{
+    if (!m.is_object() || m.empty()) return false;
+    for (const auto& item : m.items())
+        if (item.value() != "unknown") return true;
+    return false;
+}
+
 } // namespace
 
 const std::vector<std::string>& compared_counters()
 {
-    static const std::vector<std::string> names = {"iterations", "a_products", "cholmod_factorizations",
-                                                   "precond_applications"};
+    static const std::vector<std::string> names = {"iterations", "a_products", "a_products_harness",
+                                                   "cholmod_factorizations", "precond_applications"};
     return names;
+}
+
+bool CompareRow::changed() const
+{
+    if (verdict != "equal") return true;
+    for (const auto& c : compared_counters())
+        if (base.value(c, nlohmann::json()) != next.value(c, nlohmann::json())) return true;
+    return base.value("instructions", nlohmann::json()) != next.value("instructions", nlohmann::json());
+}
+
+CompareInput read_compare_input(const std::string& path)
+{
+    CompareInput input;
+    input.source = path;
+    if (is_results_folder(path)) {
+        input.runs = read_runs(path);
+        input.machine = folder_machine(path, input.runs);
+        return input;
+    }
+    if (!std::filesystem::exists(path)) throw_input_error(path, "", "no such results folder or performance record (.csv)");
+    if (std::filesystem::path(path).extension() != ".csv")
+        throw_input_error(path, "", "expected a results folder or a performance record (.csv)");
+    input.runs = read_perf_record(path);
+    const std::string machine_file = machine_file_for(path);
+    if (std::filesystem::is_regular_file(machine_file)) {
+        const nlohmann::json machine = read_json_file(machine_file);
+        if (!machine.is_object()) throw_input_error(machine_file, "", "expected a JSON object (the machine fingerprint)");
+        input.machine = machine_fingerprint(machine);
+    }
+    return input;
 }
 
 CompareReport compare_runs(const std::vector<nlohmann::json>& base, const std::vector<nlohmann::json>& next,
                            const CompareOptions& options)
 {
+    CompareInput b, n;
+    b.runs = base;
+    n.runs = next;
+    return compare_inputs(b, n, options);
+}
+
+CompareReport compare_inputs(const CompareInput& base_input, const CompareInput& next_input,
+                             const CompareOptions& options, const std::string& filter)
+{
     std::map<Key, const nlohmann::json*> base_by_key, new_by_key;
-    for (const auto& r : base) base_by_key[key_of(r)] = &r;
-    for (const auto& r : next) new_by_key[key_of(r)] = &r;
+    std::regex pattern;
+    try {
+        pattern = std::regex(filter, std::regex::ECMAScript);
+    } catch (const std::regex_error& e) {
+        throw_input_error("compare", "--filter", "not a regular expression: '" + filter + "' (" + e.what() + ")");
+    }
+    auto selected = [&](const Key& key) {
+        return filter.empty() || std::regex_search(key.first + "/" + key.second, pattern);
+    };
+    for (const auto& r : base_input.runs)
+        if (selected(key_of(r))) base_by_key[key_of(r)] = &r;
+    for (const auto& r : next_input.runs)
+        if (selected(key_of(r))) new_by_key[key_of(r)] = &r;
+
     CompareReport report;
+    report.options = options;
+    report.base_source = base_input.source;
+    report.new_source = next_input.source;
+    report.base_machine = base_input.machine;
+    report.new_machine = next_input.machine;
+    report.cross_machine = options.cross_machine || (machine_known(base_input.machine) &&
+                                                     machine_known(next_input.machine) &&
+                                                     base_input.machine != next_input.machine);
+    const bool exact = !report.cross_machine;
+
     for (const auto& [key, b] : base_by_key) {
         CompareRow row;
         row.snapshot = key.first;
@@ -98,7 +232,9 @@ CompareReport compare_runs(const std::vector<nlohmann::json>& base, const std::v
         const auto it = new_by_key.find(key);
         for (const auto& c : compared_counters()) row.base[c] = counter(*b, c);
         row.base["kkt_rel"] = kkt_rel(*b);
-        row.base["total_s"] = total_time(*b);
+        row.base["instructions"] = instructions(*b);
+        const TimeStats bt = time_stats(*b);
+        row.base["time_min_s"] = bt.min;
         if (it == new_by_key.end()) {
             row.verdict = "missing";
             ++report.missing;
@@ -109,16 +245,23 @@ CompareReport compare_runs(const std::vector<nlohmann::json>& base, const std::v
         row.new_status = n.value("status", "");
         for (const auto& c : compared_counters()) row.next[c] = counter(n, c);
         row.next["kkt_rel"] = kkt_rel(n);
-        row.next["total_s"] = total_time(n);
+        row.next["instructions"] = instructions(n);
+        const TimeStats nt = time_stats(n);
+        row.next["time_min_s"] = nt.min;
+
         for (const auto& c : compared_counters()) {
             const auto& bv = row.base[c];
             const auto& nv = row.next[c];
-            if (!bv.is_number() || !nv.is_number()) {
-                if (bv != nv) row.regressed.push_back(c);  // a counter appeared or vanished
+            if (bv.is_null()) continue;  // not recorded by BASE (an older binary): shown, not judged
+            if (!nv.is_number()) {
+                row.regressed.push_back(c);  // recorded by BASE, vanished in NEW
                 continue;
             }
-            if (nv.get<double>() > bv.get<double>()) row.regressed.push_back(c);
-            else if (nv.get<double>() < bv.get<double>()) row.improved.push_back(c);
+            const double x = bv.get<double>(), y = nv.get<double>();
+            const double allowed = exact ? x : x * (1.0 + options.counter_rtol) + static_cast<double>(options.counter_atol);
+            const double better = exact ? x : (x - static_cast<double>(options.counter_atol)) / (1.0 + options.counter_rtol);
+            if (y > allowed) row.regressed.push_back(c);
+            else if (y < better) row.improved.push_back(c);
         }
         const double tol = n.value("tol", b->value("tol", 0.0));
         const auto& bk = row.base["kkt_rel"];
@@ -130,21 +273,19 @@ CompareReport compare_runs(const std::vector<nlohmann::json>& base, const std::v
         } else if (bk.is_number() && !nk.is_number()) {
             row.regressed.push_back("kkt_rel");  // NaN or absent now
         }
-        const double bt = row.base["total_s"].get<double>(), nt = row.next["total_s"].get<double>();
-        if (bt > 0.0) {
-            row.time_ratio = nt / bt;
-            row.time_ratio_min = row.time_ratio_max = row.time_ratio;
-            const auto& bs = (*b)["time"].value("samples_total_s", nlohmann::json::array());
-            const auto& ns = n["time"].value("samples_total_s", nlohmann::json::array());
-            if (bs.size() > 1 || ns.size() > 1) {
-                // Spread: the extreme ratios of NEW's samples against BASE's median and vice versa.
-                const double bmin = (*b)["time"].value("min_total_s", bt), bmax = (*b)["time"].value("max_total_s", bt);
-                const double nmin = n["time"].value("min_total_s", nt), nmax = n["time"].value("max_total_s", nt);
-                if (bmax > 0.0 && bmin > 0.0) {
-                    row.time_ratio_min = nmin / bmax;
-                    row.time_ratio_max = nmax / bmin;
-                }
-            }
+        const auto& bi = row.base["instructions"];
+        const auto& ni = row.next["instructions"];
+        if (exact && bi.is_number() && ni.is_number() && bi.get<double>() > 0.0) {
+            const double change = ni.get<double>() / bi.get<double>() - 1.0;
+            if (change > options.instructions_rtol) row.regressed.push_back("instructions");
+            else if (change < -options.instructions_rtol) row.improved.push_back("instructions");
+        }
+        if (bt.min > 0.0 && nt.min > 0.0) {
+            row.time_ratio = nt.min / bt.min;
+            if (bt.noise >= 0.0 && nt.noise >= 0.0) row.time_band = bt.noise + nt.noise;
+            if (exact && options.time_ratio_max > 0.0 && row.time_band >= 0.0 && row.time_ratio > options.time_ratio_max &&
+                row.time_ratio > 1.0 + row.time_band)
+                row.regressed.push_back("time");
         }
         if (row.new_status != row.base_status) {
             row.verdict = "status-changed";
@@ -176,55 +317,82 @@ CompareReport compare_runs(const std::vector<nlohmann::json>& base, const std::v
 
 CompareReport compare_folders(const std::string& base_dir, const std::string& new_dir, const CompareOptions& options)
 {
-    if (!std::filesystem::is_directory(base_dir)) throw_input_error(base_dir, "", "no such results folder");
-    if (!std::filesystem::is_directory(new_dir)) throw_input_error(new_dir, "", "no such results folder");
-    const auto base = read_runs(base_dir);
-    if (base.empty()) throw_input_error(base_dir, "runs/", "no run files (*.json) to compare against");
-    const auto next = read_runs(new_dir);
-    return compare_runs(base, next, options);
+    const CompareInput base = read_compare_input(base_dir);
+    if (base.runs.empty()) throw_input_error(base_dir, "runs/", "no run files (*.json) to compare against");
+    const CompareInput next = read_compare_input(new_dir);
+    return compare_inputs(base, next, options);
 }
 
-std::string CompareReport::table() const
+std::string CompareReport::header() const
+{
+    std::ostringstream out;
+    const bool same = !cross_machine;
+    out << "BASE  " << (base_source.empty() ? "(records)" : base_source) << "  measured on "
+        << describe_machine(base_machine) << "\n";
+    out << "NEW   " << (new_source.empty() ? "(records)" : new_source) << "  measured on "
+        << (same && base_machine == new_machine && machine_known(new_machine) ? "the same machine"
+                                                                               : describe_machine(new_machine))
+        << "\n";
+    if (same) {
+        out << "rules (same machine): statuses equal; work counters exact (" << compared_counters().size()
+            << " counters, lower is better); instructions in the solve within +"
+            << format_g(100.0 * options.instructions_rtol, 3) << "%; kkt_rel within +"
+            << format_g(100.0 * options.kkt_rtol, 3) << "% above tol; wall time (min of the samples, NEW/BASE "
+            << "with its noise band) ";
+        if (options.time_ratio_max > 0.0)
+            out << "judged beyond " << format_g(options.time_ratio_max, 3) << "x and outside the band\n";
+        else
+            out << "shown, not judged\n";
+    } else {
+        const bool differ = machine_known(base_machine) && machine_known(new_machine) && base_machine != new_machine;
+        out << (differ ? "machines DIFFER: " : "") << "across-machines rules"
+            << (differ ? "" : " (asked for: the sides may come from different machines)")
+            << ": statuses equal; work counters within +"
+            << format_g(100.0 * options.counter_rtol, 3) << "% + " << options.counter_atol << "; kkt_rel within +"
+            << format_g(100.0 * options.kkt_rtol, 3)
+            << "% above tol; instructions and wall time shown, not judged\n";
+    }
+    return out.str();
+}
+
+std::string CompareReport::table(bool only_changes) const
 {
     std::vector<std::vector<std::string>> cells;
-    cells.push_back({"snapshot", "label", "status", "iterations", "a_products", "factorizations", "precond",
-                     "kkt_rel", "time new/base", "verdict"});
+    cells.push_back({"snapshot", "label", "status", "iterations", "a_products", "a_products_harness", "factorizations",
+                     "precond", "kkt_rel", "instructions", "time new/base", "verdict"});
+    const size_t columns = cells[0].size();
     for (const auto& r : rows) {
+        if (only_changes && !r.changed()) continue;
         std::vector<std::string> line = {r.snapshot, r.label};
-        if (r.verdict == "missing") {
-            line.push_back(r.base_status + " -> (missing)");
-            for (int i = 0; i < 6; ++i) line.push_back("");
-            line.push_back("FAIL missing in NEW");
-            cells.push_back(line);
-            continue;
-        }
-        if (r.verdict == "new") {
-            line.push_back("(new) " + r.new_status);
-            for (int i = 0; i < 6; ++i) line.push_back("");
-            line.push_back("new (not judged)");
+        if (r.verdict == "missing" || r.verdict == "new") {
+            line.push_back(r.verdict == "missing" ? r.base_status + " -> (missing)" : "(new) " + r.new_status);
+            while (line.size() + 1 < columns) line.push_back("");
+            line.push_back(r.verdict == "missing" ? "FAIL missing in NEW" : "new (not judged)");
             cells.push_back(line);
             continue;
         }
         line.push_back(r.base_status == r.new_status ? r.new_status : r.base_status + " -> " + r.new_status);
         for (const auto& c : compared_counters()) line.push_back(change_text(r.base[c], r.next[c]));
         line.push_back(change_text(r.base["kkt_rel"], r.next["kkt_rel"]));
-        std::string time = r.time_ratio > 0.0 ? format_g(r.time_ratio, 3) + "x" : "-";
-        if (r.time_ratio_min != r.time_ratio_max)
-            time += " [" + format_g(r.time_ratio_min, 3) + ".." + format_g(r.time_ratio_max, 3) + "]";
+        line.push_back(instructions_text(r.base["instructions"], r.next["instructions"]));
+        std::string time = r.time_ratio > 0.0 ? format_fixed(r.time_ratio, 2) + "x" : "-";
+        if (r.time_ratio > 0.0 && r.time_band >= 0.0) time += " ±" + format_fixed(r.time_band, 2);
         line.push_back(time);
         std::string verdict;
         if (r.verdict == "status-changed") verdict = "FAIL status changed";
         else if (r.verdict == "regressed") verdict = "FAIL regressed:";
         else if (r.verdict == "improved") verdict = "improved:";
         else verdict = "equal";
+        const bool solver_counted = std::find(r.regressed.begin(), r.regressed.end(), "a_products") != r.regressed.end();
         if (r.verdict == "regressed" || r.verdict == "status-changed")
-            for (const auto& q : r.regressed) verdict += " " + q;
+            for (const auto& q : r.regressed)
+                verdict += " " + q + (q == "a_products_harness" && !solver_counted ? " (uncounted by the solver)" : "");
         if (r.verdict == "improved")
             for (const auto& q : r.improved) verdict += " " + q;
         line.push_back(verdict);
         cells.push_back(line);
     }
-    std::vector<size_t> width(cells[0].size(), 0);
+    std::vector<size_t> width(columns, 0);
     for (const auto& line : cells)
         for (size_t i = 0; i < line.size(); ++i) width[i] = std::max(width[i], line[i].size());
     std::ostringstream out;
@@ -237,6 +405,7 @@ std::string CompareReport::table() const
         while (!text.empty() && text.back() == ' ') text.pop_back();
         out << text << "\n";
     }
+    if (only_changes && cells.size() == 1) out << "(no run changed)\n";
     return out.str();
 }
 
@@ -257,11 +426,26 @@ nlohmann::json CompareReport::to_json() const
         rows_json.push_back({{"snapshot", r.snapshot}, {"label", r.label}, {"base_status", r.base_status},
                              {"new_status", r.new_status}, {"verdict", r.verdict}, {"regressed", r.regressed},
                              {"improved", r.improved}, {"base", r.base}, {"new", r.next},
-                             {"time_ratio", r.time_ratio}, {"time_ratio_min", r.time_ratio_min},
-                             {"time_ratio_max", r.time_ratio_max}});
-    return {{"failed", failed()}, {"equal", equal}, {"improved", improved}, {"regressed", regressed},
-            {"status_changed", status_changed}, {"missing", missing}, {"new", added},
-            {"verdict", verdict()}, {"rows", rows_json}};
+                             {"time_ratio", r.time_ratio},
+                             {"time_band", r.time_band >= 0.0 ? nlohmann::json(r.time_band) : nlohmann::json()}});
+    return {{"failed", failed()},
+            {"equal", equal},
+            {"improved", improved},
+            {"regressed", regressed},
+            {"status_changed", status_changed},
+            {"missing", missing},
+            {"new", added},
+            {"base", {{"source", base_source}, {"machine", base_machine}}},
+            {"next", {{"source", new_source}, {"machine", new_machine}}},
+            {"cross_machine", cross_machine},
+            {"rules",
+             {{"kkt_rtol", options.kkt_rtol},
+              {"instructions_rtol", options.instructions_rtol},
+              {"time_ratio_max", options.time_ratio_max},
+              {"counter_rtol", cross_machine ? options.counter_rtol : 0.0},
+              {"counter_atol", cross_machine ? options.counter_atol : 0}}},
+            {"verdict", verdict()},
+            {"rows", rows_json}};
 }
 
 } // namespace cb

@@ -1,15 +1,23 @@
 #pragma once
-/// The regression judge between two results folders (`contactbench compare BASE NEW`).
+/// The regression judge between two result sets (`contactbench compare BASE NEW`). Each side is a
+/// results folder (runs/*.json, as `contactbench run` writes) or a compact performance record
+/// (a .csv, harness/perf_record.hpp, as the perf gate and `make baseline` write).
 ///
 /// For each (snapshot id, label) present in BASE:
-///  - missing in NEW: failure;
-///  - status changed: failure;
-///  - counters iterations, a_products, cholmod_factorizations, precond_applications compared
-///    exactly (deterministic; lower is better): higher in NEW is a regression;
+///  - missing in NEW: failure; status changed: failure;
+///  - work counters (iterations, a_products, a_products_harness, cholmod_factorizations,
+///    precond_applications; lower is better): on the same machine any growth is a regression
+///    (they are deterministic); across machines growth beyond counter_rtol * BASE + counter_atol;
+///  - a_products_harness counts the products made through solvers/a_product, whoever asked for
+///    them: growth that the solver's own a_products does not show is named "uncounted";
 ///  - KKT: regressed when kkt_rel(NEW) > kkt_rel(BASE) * (1 + kkt_rtol) and above the run's tol;
-///  - time: NEW/BASE total time ratio (min..max of the per-repeat ratios when repeat > 1),
-///    reported, never judged (timings are not deterministic).
-/// Runs only in NEW are listed as "new" and are not failures.
+///  - instructions executed in the solve (callgrind, deterministic on one machine): regressed
+///    when NEW > BASE * (1 + instructions_rtol); not judged across machines;
+///  - wall time: the ratio of the minimum times NEW/BASE with a noise band (the sum of both
+///    sides' relative spreads, median/min - 1); regressed only when the ratio exceeds
+///    time_ratio_max and 1 + band, and never from a single sample per side.
+/// A counter or measure absent on either side is shown and not judged. Runs only in NEW are
+/// listed as "new" and are not failures.
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -18,35 +26,65 @@ namespace cb {
 
 struct CompareOptions {
     double kkt_rtol = 0.1;
+    double instructions_rtol = 0.03;  ///< relative growth of instructions judged a regression
+    double time_ratio_max = 1.5;      ///< NEW/BASE min-time ratio judged a regression (0: never judged)
+    double counter_rtol = 0.25;       ///< across machines: allowed relative growth of a counter ...
+    long counter_atol = 2;            ///< ... plus this many
+    bool cross_machine = false;       ///< force the across-machines rules even when fingerprints agree
 };
 
-/// The exactly compared counters, in table order.
+/// The compared counters, in table order.
 const std::vector<std::string>& compared_counters();
+
+/// One side of a comparison: where it came from, its runs and the machine that measured them.
+struct CompareInput {
+    std::string source;
+    std::vector<nlohmann::json> runs;
+    nlohmann::json machine = nlohmann::json::object();  ///< machine_fingerprint(); empty when unknown
+};
+
+/// Reads a results folder (machine from provenance.json or the runs' provenance) or a compact
+/// CSV (machine from the -machine.json beside it). InputError naming the path when neither.
+CompareInput read_compare_input(const std::string& path);
 
 struct CompareRow {
     std::string snapshot, label;
     std::string base_status, new_status;
     std::string verdict;                   ///< "equal", "improved", "regressed", "status-changed", "missing", "new"
-    std::vector<std::string> regressed;    ///< names of regressed quantities ("a_products", "kkt_rel" ...)
+    std::vector<std::string> regressed;    ///< names of regressed quantities ("a_products", "instructions" ...)
     std::vector<std::string> improved;
-    nlohmann::json base, next;             ///< compared values (counters, kkt_rel, tol, time)
-    double time_ratio = 0.0;               ///< NEW/BASE total time (0 when unknown)
-    double time_ratio_min = 0.0, time_ratio_max = 0.0;
+    nlohmann::json base, next;             ///< compared values (counters, kkt_rel, instructions, time)
+    double time_ratio = 0.0;               ///< NEW/BASE minimum time (0 when unknown)
+    double time_band = -1.0;               ///< relative noise band of the ratio (< 0: unknown, not judged)
     bool failure() const { return verdict == "regressed" || verdict == "status-changed" || verdict == "missing"; }
+    /// True when anything differs (a counter, instructions, the status), judged or not.
+    bool changed() const;
 };
 
 struct CompareReport {
     std::vector<CompareRow> rows;
     long equal = 0, improved = 0, regressed = 0, status_changed = 0, missing = 0, added = 0;
+    std::string base_source, new_source;
+    nlohmann::json base_machine = nlohmann::json::object(), new_machine = nlohmann::json::object();
+    bool cross_machine = false;
+    CompareOptions options;
     bool failed() const { return regressed + status_changed + missing > 0; }
-    std::string table() const;    ///< aligned, human-readable
+    /// The two sides, their machines, and the rules applied (stated thresholds).
+    std::string header() const;
+    /// Aligned, human-readable; only the rows that changed when `only_changes`.
+    std::string table(bool only_changes = false) const;
     std::string verdict() const;  ///< one line: "verdict: PASS ..." or "verdict: FAIL ..."
     nlohmann::json to_json() const;
 };
 
 CompareReport compare_runs(const std::vector<nlohmann::json>& base, const std::vector<nlohmann::json>& next,
                            const CompareOptions& options = {});
-/// Reads BASE/runs/*.json and NEW/runs/*.json (InputError when a folder has no runs).
+/// Compares two inputs; the across-machines rules apply when both fingerprints are known and
+/// differ (or options.cross_machine). `filter`: only runs whose "snapshot/label" matches this
+/// regular expression (searched, ECMAScript; empty: all).
+CompareReport compare_inputs(const CompareInput& base, const CompareInput& next, const CompareOptions& options = {},
+                             const std::string& filter = "");
+/// Reads BASE and NEW (folders or compact CSVs) and compares them (InputError when BASE has no runs).
 CompareReport compare_folders(const std::string& base_dir, const std::string& new_dir,
                               const CompareOptions& options = {});
 

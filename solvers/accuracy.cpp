@@ -1,4 +1,5 @@
 #include "solvers/accuracy.hpp"
+#include "solvers/a_product.hpp"
 
 #include <Eigen/SparseCholesky>
 #include <limits>
@@ -110,13 +111,13 @@ AccuracyScale accuracy_scale(const QpView& qp)
         // A length built from one Jacobi step, |D^-1 (b - A x0)|, underestimates it by up to
         // cond(A) (1e7 on the stress suite's random SPD cases).
         source = "unconstrained_extent";
-        Vec x = qp.x0, r = qp.b - qp.A * qp.x0;
+        Vec x = qp.x0, r = qp.b - a_product(qp.A, qp.x0);
         ++s.a_products;
         const double r0 = r.cwiseProduct(s.inv_diag).lpNorm<Eigen::Infinity>();
         Vec z = r.cwiseProduct(s.inv_diag), p = z, Ap(n);
         double rz = r.dot(z);
         for (Eigen::Index k = 0; k < std::min<Eigen::Index>(n, UNCONSTRAINED_ITERATIONS) && r0 > 0.0; ++k) {
-            Ap = qp.A * p;
+            Ap = a_product(qp.A, p);
             ++s.a_products;
             const double pap = p.dot(Ap);
             if (!(pap > 0.0) || !std::isfinite(pap)) break;
@@ -191,7 +192,7 @@ AccuracyParts accuracy_from_gradient(const QpView& qp, const AccuracyScale& scal
 
 AccuracyParts accuracy(const QpView& qp, const AccuracyScale& scale, const Vec& x, const Vec& lambda)
 {
-    const Vec g = qp.A * x - qp.b;
+    const Vec g = a_product(qp.A, x) - qp.b;
     return accuracy_from_gradient(qp, scale, x, g, lambda);
 }
 
@@ -210,7 +211,7 @@ double a_norm_distance(const QpView& qp, const AccuracyScale& scale, const Vec& 
 {
     if (x.size() != qp.n() || x_star.size() != qp.n()) return std::numeric_limits<double>::quiet_NaN();
     const Vec d = x - x_star;
-    const double energy = d.dot(qp.A * d);
+    const double energy = d.dot(a_product(qp.A, d));
     return std::sqrt(std::max(0.0, energy) / scale.stiffness) * scale.inv_length;
 }
 

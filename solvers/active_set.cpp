@@ -7,6 +7,8 @@
 // only formed (one solve) when it is needed: monitor calls and the final polish.
 #include "solvers/active_set.hpp"
 
+#include "solvers/a_product.hpp"
+
 #include <Eigen/CholmodSupport>
 #include <algorithm>
 #include <cmath>
@@ -382,7 +384,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
         double best_error = INF;
         Vec best_x = x, best_lambda = lambda;
         for (long round = 0; round <= m_settings.polish_rounds; ++round) {
-            const Vec g = qp.A * x - qp.b;
+            const Vec g = a_product(qp.A, x) - qp.b;
             ++counters.a_products;
             const double error = accuracy_from_gradient(qp, scale, x, g, lambda).max();
             if (error < best_error) {
@@ -430,7 +432,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
     }
 
     if (!x_polished) x = solve_A(qp.b + Jt(lambda));
-    const Vec g = qp.A * x - qp.b;
+    const Vec g = a_product(qp.A, x) - qp.b;
     ++counters.a_products;
     const double rel = accuracy_from_gradient(qp, scale, x, g, lambda).max();
     const double stationarity_abs = (g - Jt(lambda)).lpNorm<Eigen::Infinity>();

@@ -2,6 +2,7 @@
 // Ref: Li et al. 2015, Fig. 8 (the PCG baseline); Hestenes-Stiefel CG with a Jacobi preconditioner.
 #include "solvers/cg.hpp"
 
+#include "solvers/a_product.hpp"
 #include "solvers/ichol.hpp"
 
 #include <cmath>
@@ -117,7 +118,7 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
     watch.start();
 
     Vec x = m_settings.start == "zero" ? Vec(Vec::Zero(n)) : qp.x0;
-    Vec r = qp.b - qp.A * x;  // r = -g
+    Vec r = qp.b - a_product(qp.A, x);  // r = -g
     ++counters.a_products;
     // cg solves the unconstrained relaxation: its stop test measures that QP (J without rows).
     const SpMat no_rows(0, n);
@@ -153,7 +154,7 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
         }
         if (stop.met(r)) {
             // The recurrence residual drifts from b - Ax: confirm on the true residual.
-            Vec r_true = qp.b - qp.A * x;
+            Vec r_true = qp.b - a_product(qp.A, x);
             ++counters.a_products;
             if (stop.met(r_true)) {
                 r = r_true;
@@ -176,7 +177,7 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
             result.status = SolveStatus::TIME_LIMIT;
             break;
         }
-        Ap.noalias() = qp.A * p;
+        a_product(qp.A, p, Ap);
         ++counters.a_products;
         const double pAp = p.dot(Ap);
         if (!(pAp > 0.0)) {
@@ -203,7 +204,7 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
         }
     }
     if (result.status != SolveStatus::CONVERGED) {
-        r = qp.b - qp.A * x;  // report the true residual, not the recurrence one
+        r = qp.b - a_product(qp.A, x);  // report the true residual, not the recurrence one
         ++counters.a_products;
     }
     result.x = x;

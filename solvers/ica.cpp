@@ -2,6 +2,8 @@
 // anticipation LCP; ALGORITHMS.md §6 (the exact iteration implemented here).
 #include "solvers/ica.hpp"
 
+#include "solvers/a_product.hpp"
+
 #include <Eigen/CholmodSupport>
 #include <Eigen/Dense>
 #include <algorithm>
@@ -198,7 +200,7 @@ SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
     solve_watch.start();
     const AccuracyScale scale = accuracy_scale(qp);
     counters.a_products += scale.a_products;
-    Vec Ax = qp.A * x;
+    Vec Ax = a_product(qp.A, x);
     ++counters.a_products;
     Vec f = qp.b + qp.J.transpose() * lambda;
     double native = (Ax - f).norm();
@@ -272,7 +274,7 @@ SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
         block_gauss_seidel_sweep(qp.A, d, f, x);
         ++counters.a_products;
         // 4. the native residual (its A x is reused by the next anticipation).
-        Ax = qp.A * x;
+        a_product(qp.A, x, Ax);
         ++counters.a_products;
         g = Ax - qp.b;
         native = (Ax - f).norm();

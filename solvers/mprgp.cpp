@@ -6,6 +6,7 @@
 // fused vector updates, so that an iteration costs about one Jacobi-PCG iteration.
 #include "solvers/mprgp.hpp"
 
+#include "solvers/a_product.hpp"
 #include "solvers/decouple.hpp"
 #include "solvers/accuracy.hpp"
 #include "solvers/ichol.hpp"
@@ -105,7 +106,7 @@ private:
     // --- products and objective ---
     void product(const Vec& v, Vec& out)
     {
-        out.noalias() = m_A * v;
+        a_product(m_A, v, out);
         ++m_cnt.a_products;
     }
     /// out = A v; returns v'Av and sets vg = v'g (one pass over A).

@@ -4,6 +4,7 @@
 //      feasible step length before the expansion step, Alg. 1-2.
 #include "solvers/mprgp_box.hpp"
 
+#include "solvers/a_product.hpp"
 #include "solvers/accuracy.hpp"
 #include "solvers/mprgp_kernels.hpp"
 
@@ -167,7 +168,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
     // --- the MPRGP loop ---
     Vec x = qp.x0.cwiseMax(lower).cwiseMin(upper);
     ++cnt.projections;
-    Vec g = qp.A * x - qp.b;
+    Vec g = a_product(qp.A, x) - qp.b;
     ++cnt.a_products;
     Vec phi(n), beta(n), z(n), p(n), Ap(n), lambda = Vec::Zero(m);
     std::vector<char> at_lower(static_cast<size_t>(n)), at_upper(static_cast<size_t>(n));
@@ -216,7 +217,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
         error = accuracy_from_gradient(qp, scale, x, g, lambda).max();
         bool converged = native ? native_residual <= common.tol : error <= common.tol;
         if (converged) {  // confirm at an exact gradient
-            g = qp.A * x - qp.b;
+            g = a_product(qp.A, x) - qp.b;
             ++cnt.a_products;
             gradients();
             multipliers();
@@ -253,7 +254,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
         }
         ++cnt.iterations;
         if (beta.squaredNorm() <= m_settings.gamma * m_settings.gamma * phitilde_dot_phi()) {
-            Ap.noalias() = qp.A * p;
+            a_product(qp.A, p, Ap);
             ++cnt.a_products;
             const double pap = p.dot(Ap);
             if (!(pap > 0.0)) {
@@ -289,7 +290,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
                 gradients();
                 x = (x - alpha_bar * phi).cwiseMax(lower).cwiseMin(upper);
                 ++cnt.projections;
-                g = qp.A * x - qp.b;
+                g = a_product(qp.A, x) - qp.b;
                 ++cnt.a_products;
                 classify();
                 gradients();
@@ -298,7 +299,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
                 last = StepKind::EXPANSION;
             }
         } else {
-            Ap.noalias() = qp.A * beta;
+            a_product(qp.A, beta, Ap);
             ++cnt.a_products;
             const double dad = beta.dot(Ap);
             if (!(dad > 0.0)) {
@@ -316,7 +317,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
             last = StepKind::PROPORTIONING;
         }
     }
-    g = qp.A * x - qp.b;
+    g = a_product(qp.A, x) - qp.b;
     ++cnt.a_products;
     classify();
     gradients();

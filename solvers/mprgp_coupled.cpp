@@ -4,6 +4,7 @@
 // Not a hot path: written for clarity; every subproblem is on CHOLMOD.
 #include "solvers/mprgp_coupled.hpp"
 
+#include "solvers/a_product.hpp"
 #include "solvers/accuracy.hpp"
 #include "solvers/mprgp_kernels.hpp"
 
@@ -266,11 +267,11 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
     auto F = [&](const Vec& v) {
         ++cnt.a_products;
         const Vec u = v - x_ref;
-        return 0.5 * u.dot(A * u) + g_ref.dot(u);
+        return 0.5 * u.dot(a_product(A, u)) + g_ref.dot(u);
     };
     auto gradient = [&](const Vec& v) {
         ++cnt.a_products;
-        return Vec(A * (v - x_ref) + g_ref);
+        return Vec(a_product(A, Vec(v - x_ref)) + g_ref);
     };
 
     // Face data, refactored only when the active set changes.
@@ -340,7 +341,7 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
     Vec x = qp.x0;
     project(x);
     x_ref = x;
-    g_ref = A * x - qp.b;
+    g_ref = a_product(A, x) - qp.b;
     ++cnt.a_products;
     Vec g = g_ref;
     set_face(x);
@@ -409,7 +410,7 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
         const bool proportional = !face_done && beta.squaredNorm() <= st.gamma * st.gamma * phitilde_phi;
         bool do_expansion = false;
         if (proportional) {
-            const Vec Ap = A * p;
+            const Vec Ap = a_product(A, p);
             ++cnt.a_products;
             const double pap = p.dot(Ap);
             if (!(pap > 0.0)) {
@@ -449,7 +450,7 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
             ++cnt.expansion_steps;
             last = StepKind::EXPANSION;
         } else {
-            const Vec Ad = A * beta;
+            const Vec Ad = a_product(A, beta);
             ++cnt.a_products;
             const double dad = beta.dot(Ad);
             if (!(dad > 0.0)) {

@@ -3,6 +3,7 @@
 //      eq. (13), (15)-(20); Alg. 1-3. With JJ' diagonal every subproblem is row-separable.
 #include "solvers/mprgp_kernels.hpp"
 
+#include "solvers/a_product.hpp"
 #include "solvers/accuracy.hpp"
 
 #include <cmath>
@@ -135,7 +136,7 @@ PowerResult power_method(const SpMat& A, Vec& v, PowerRule rule, long max_produc
     Vec w(n);
     double previous = 0.0;
     for (long k = 0; k < max_products; ++k) {
-        w.noalias() = A * v;
+        a_product(A, v, w);
         ++result.products;
         const double norm_w = w.norm();
         if (!(norm_w > 0.0) || !std::isfinite(norm_w)) break;

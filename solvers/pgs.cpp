@@ -1,5 +1,6 @@
 // Ref: Li et al., CGF 2015, eq. (2) (the dual LCP of the contact QP); ALGORITHMS.md §7.
 #include "solvers/pgs.hpp"
+#include "solvers/a_product.hpp"
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/Dense>
@@ -184,7 +185,7 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
         if (s.common.stop == StopRule::NATIVE) return native <= s.common.tol ? "native" : "";
         if (dual_space_error() > dual_threshold) return "";
         primal_point(true);
-        const Vec g = qp.A * x - qp.b;
+        const Vec g = a_product(qp.A, x) - qp.b;
         ++counters.a_products;
         if (accuracy_converged(qp, scale, x, g, lambda, s.common.tol)) return "kkt";
         dual_threshold *= 0.5;  // the solve's error showed up: ask more of the dual estimate

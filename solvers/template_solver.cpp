@@ -1,6 +1,7 @@
 // `template`: projected gradient descent on bound rows, the model of a contactbench solver
 // (solvers/template_solver.hpp says what it shows; docs/STYLE.md §3 the rules it follows).
 #include "solvers/template_solver.hpp"
+#include "solvers/a_product.hpp"
 
 #include "solvers/accuracy.hpp"
 
@@ -132,7 +133,7 @@ SolverResult TemplateSolver::solve(const QpView& qp, const SolveContext& context
     // --- solve ---
     Vec x = qp.x0.cwiseMax(bounds.lo).cwiseMin(bounds.hi);
     ++counters.projections;
-    Vec g = qp.A * x - qp.b;
+    Vec g = a_product(qp.A, x) - qp.b;
     ++counters.a_products;
     Vec lambda = bound_multipliers(qp, bounds, x, g);
     auto native = [&]() {  // |x - P(x - g)|_inf: zero exactly at a solution
@@ -173,7 +174,7 @@ SolverResult TemplateSolver::solve(const QpView& qp, const SolveContext& context
         }
         x = (x - step * g).cwiseMax(bounds.lo).cwiseMin(bounds.hi);
         ++counters.projections;
-        g.noalias() = qp.A * x - qp.b;
+        g.noalias() = a_product(qp.A, x) - qp.b;
         ++counters.a_products;
         lambda = bound_multipliers(qp, bounds, x, g);
         ++counters.iterations;

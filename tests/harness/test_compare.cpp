@@ -1,13 +1,17 @@
-// The regression judge: on records built by hand, and end to end through the binary (an
-// identical copy passes, a worse run fails with exit 1 and names the counter).
+// The regression judge: on records built by hand, on compact performance records (CSV), and end
+// to end through the binary (an identical copy passes with exit 0, a worse run fails with exit 3
+// and names the counter, bad input exits 2 naming the file).
 #include "harness/compare.hpp"
+#include "harness/perf_record.hpp"
 #include "harness/results.hpp"
+#include "solvers/types.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -101,13 +105,230 @@ TEST(Compare, BinaryExitCodesOnFolders)
     EXPECT_EQ(judge("'" + (dir / "base").string() + "' '" + (dir / "same").string() + "'", out), 0) << out;
     EXPECT_NE(out.find("verdict: PASS"), std::string::npos) << out;
     const std::string json = (dir / "judge.json").string();
-    EXPECT_EQ(judge("'" + (dir / "base").string() + "' '" + (dir / "worse").string() + "' --json '" + json + "'", out), 1)
+    EXPECT_EQ(judge("'" + (dir / "base").string() + "' '" + (dir / "worse").string() + "' --json '" + json + "'", out), 3)
         << out;
     EXPECT_NE(out.find("25 -> 40 (+60%)"), std::string::npos) << out;
     EXPECT_NE(out.find("FAIL regressed: a_products"), std::string::npos) << out;
     EXPECT_NE(out.find("verdict: FAIL"), std::string::npos) << out;
     EXPECT_EQ(read_json_file(json)["regressed"], 1);
     EXPECT_EQ(judge("'" + (dir / "base").string() + "' '" + (dir / "nowhere").string() + "'", out), 2) << out;
-    EXPECT_EQ(out, "contactbench compare: error: " + (dir / "nowhere").string() + ": no such results folder\n");
+    EXPECT_EQ(out, "contactbench compare: error: " + (dir / "nowhere").string() +
+                       ": no such results folder or performance record (.csv)\n");
     fs::remove_all(dir);
+}
+
+namespace {
+
+/// A compact record row (harness/perf_record.hpp): snapshot,label,status,iterations,a_products,
+/// a_products_harness,kkt_rel,tol,instructions,time_min_s,time_noise,time_samples.
+struct PerfRow {
+    std::string snapshot, label, status = "converged";
+    long iterations = 10, a_products = 20, a_products_harness = 18;
+    double kkt_rel = 5e-7;
+    long instructions = 1000000;
+    double time_min_s = 0.01, time_noise = 0.05;
+    long time_samples = 5;
+};
+
+const char* const kPerfHeader =
+    "snapshot,label,status,iterations,a_products,a_products_harness,kkt_rel,tol,instructions,time_min_s,time_noise,"
+    "time_samples\n";
+
+std::string perf_line(const PerfRow& r)
+{
+    std::ostringstream out;
+    out << r.snapshot << "," << r.label << "," << r.status << "," << r.iterations << "," << r.a_products << ","
+        << r.a_products_harness << "," << r.kkt_rel << ",1e-06," << r.instructions << "," << r.time_min_s << ","
+        << r.time_noise << "," << r.time_samples << "\n";
+    return out.str();
+}
+
+fs::path perf_dir()
+{
+    const fs::path dir = fs::temp_directory_path() / ("cb_test_compare_csv_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    return dir;
+}
+
+/// Writes NAME.csv (and NAME-machine.json when cpu is given) and returns the CSV path.
+std::string write_perf(const std::string& name, const std::vector<PerfRow>& rows, const std::string& cpu = "")
+{
+    const fs::path csv = perf_dir() / (name + ".csv");
+    std::string text = kPerfHeader;
+    for (const auto& r : rows) text += perf_line(r);
+    write_file_atomic(csv.string(), text);
+    if (!cpu.empty())
+        write_json_atomic((perf_dir() / (name + "-machine.json")).string(),
+                          {{"cpu", cpu}, {"blas", "/usr/lib/x86_64-linux-gnu/openblas-pthread/libblas.so.3"},
+                           {"suitesparse", "5.12.0 (CHOLMOD 3.0.14)"}, {"compiler", "gcc 12.2.0"}});
+    return csv.string();
+}
+
+PerfRow row(const std::string& snapshot, const std::string& label)
+{
+    PerfRow r;
+    r.snapshot = snapshot;
+    r.label = label;
+    return r;
+}
+
+std::vector<std::string> regressed_of(const CompareReport& report, const std::string& snapshot)
+{
+    for (const auto& r : report.rows)
+        if (r.snapshot == snapshot) return r.regressed;
+    ADD_FAILURE() << "no row " << snapshot;
+    return {};
+}
+
+} // namespace
+
+TEST(ComparePerfRecord, InstructionsAndHarnessCountedProductsOnOneMachine)
+{
+    const std::vector<PerfRow> base = {row("a", "mprgp"), row("b", "mprgp"), row("c", "mprgp"), row("d", "mprgp")};
+    std::vector<PerfRow> next = base;
+    next[0].instructions = 1020000;     // +2%: under the 3% threshold
+    next[1].instructions = 1040000;     // +4%: regressed
+    next[2].a_products_harness = 19;    // one product the solver did not count
+    next[3].a_products = 21;            // counted by both
+    next[3].a_products_harness = 19;
+    const CompareInput b = read_compare_input(write_perf("base", base, "AMD EPYC"));
+    const CompareInput n = read_compare_input(write_perf("next", next, "AMD EPYC"));
+    EXPECT_EQ(b.machine["cpu"], "AMD EPYC");
+    const CompareReport report = compare_inputs(b, n);
+    EXPECT_FALSE(report.cross_machine);
+    EXPECT_EQ(report.equal, 1);
+    EXPECT_EQ(report.regressed, 3);
+    EXPECT_TRUE(regressed_of(report, "a").empty());
+    EXPECT_EQ(regressed_of(report, "b"), std::vector<std::string>{"instructions"});
+    EXPECT_EQ(regressed_of(report, "c"), std::vector<std::string>{"a_products_harness"});
+    EXPECT_EQ(regressed_of(report, "d"), (std::vector<std::string>{"a_products", "a_products_harness"}));
+    const std::string table = report.table();
+    EXPECT_NE(table.find("1.000M +2.000%"), std::string::npos) << table;
+    EXPECT_NE(table.find("FAIL regressed: a_products_harness (uncounted by the solver)"), std::string::npos) << table;
+    EXPECT_NE(table.find("FAIL regressed: a_products a_products_harness\n"), std::string::npos) << table;
+    const std::string header = report.header();
+    EXPECT_NE(header.find("measured on AMD EPYC, openblas-pthread, SuiteSparse 5.12.0 (CHOLMOD 3.0.14), gcc 12.2.0"),
+              std::string::npos) << header;
+    EXPECT_NE(header.find("NEW   " + n.source + "  measured on the same machine"), std::string::npos) << header;
+    EXPECT_NE(header.find("instructions in the solve within +3%"), std::string::npos) << header;
+
+    // An older BASE without the harness count: shown, not judged.
+    std::vector<nlohmann::json> old_runs = b.runs;
+    for (auto& r : old_runs) r["counters"].erase("a_products_harness");
+    CompareInput old = b;
+    old.runs = old_runs;
+    EXPECT_TRUE(regressed_of(compare_inputs(old, n), "c").empty());
+}
+
+TEST(ComparePerfRecord, WallTimeIsJudgedOnlyBeyondTheRatioAndOutsideTheNoiseBand)
+{
+    const std::vector<PerfRow> base = {row("a", "cg"), row("b", "cg"), row("c", "cg"), row("d", "cg")};
+    std::vector<PerfRow> next = base;
+    next[0].time_min_s = 0.016;  // 1.6x, band 0.10: regressed
+    next[1].time_min_s = 0.016;  // 1.6x but noisy (band 0.05 + 0.60): not judged a regression
+    next[1].time_noise = 0.6;
+    next[2].time_min_s = 0.014;  // 1.4x: under the 1.5x threshold
+    next[3].time_min_s = 0.03;   // 3x from a single sample: never judged
+    next[3].time_samples = 1;
+    const CompareReport report = compare_inputs(read_compare_input(write_perf("tb", base)),
+                                                read_compare_input(write_perf("tn", next)));
+    EXPECT_EQ(regressed_of(report, "a"), std::vector<std::string>{"time"});
+    EXPECT_TRUE(regressed_of(report, "b").empty());
+    EXPECT_TRUE(regressed_of(report, "c").empty());
+    EXPECT_TRUE(regressed_of(report, "d").empty());
+    EXPECT_NEAR(report.rows[0].time_ratio, 1.6, 1e-12);
+    EXPECT_NEAR(report.rows[0].time_band, 0.1, 1e-12);
+    EXPECT_NE(report.table().find("1.60x ±0.10"), std::string::npos) << report.table();
+    CompareOptions never;
+    never.time_ratio_max = 0.0;
+    EXPECT_FALSE(compare_inputs(read_compare_input(write_perf("tb", base)), read_compare_input(write_perf("tn", next)),
+                                never)
+                     .failed());
+}
+
+TEST(ComparePerfRecord, AcrossMachinesCountersGetTolerancesAndInstructionsAreNotJudged)
+{
+    const std::vector<PerfRow> base = {row("a", "active-set"), row("b", "active-set"), row("c", "active-set")};
+    std::vector<PerfRow> next = base;
+    next[0].a_products = 21;              // one more product (rounding on another CPU): within 25% + 2
+    next[0].a_products_harness = 19;
+    next[0].instructions = 1500000;       // another CPU's BLAS kernels: not judged
+    next[1].iterations = 16;              // 10 -> 16: beyond 10 * 1.25 + 2 = 14.5
+    next[2].status = "max_iterations";
+    const CompareReport report = compare_inputs(read_compare_input(write_perf("xb", base, "AMD EPYC")),
+                                                read_compare_input(write_perf("xn", next, "Intel Xeon")));
+    EXPECT_TRUE(report.cross_machine);
+    EXPECT_TRUE(regressed_of(report, "a").empty());
+    EXPECT_EQ(regressed_of(report, "b"), std::vector<std::string>{"iterations"});
+    EXPECT_EQ(report.status_changed, 1);
+    const std::string header = report.header();
+    EXPECT_NE(header.find("machines DIFFER"), std::string::npos) << header;
+    EXPECT_NE(header.find("measured on AMD EPYC"), std::string::npos) << header;
+    EXPECT_NE(header.find("measured on Intel Xeon"), std::string::npos) << header;
+    EXPECT_NE(header.find("work counters within +25% + 2"), std::string::npos) << header;
+
+    // Asked for on one machine (the gate's fallback against the committed record): said so.
+    CompareOptions across;
+    across.cross_machine = true;
+    const CompareReport asked = compare_inputs(read_compare_input(write_perf("xb", base, "AMD EPYC")),
+                                               read_compare_input(write_perf("xs", base, "AMD EPYC")), across);
+    EXPECT_TRUE(asked.cross_machine);
+    EXPECT_NE(asked.header().find("\nacross-machines rules (asked for"), std::string::npos) << asked.header();
+}
+
+TEST(ComparePerfRecord, MalformedRecordsNameTheFileLineAndColumn)
+{
+    const fs::path dir = perf_dir();
+    auto error_of = [&](const std::string& name, const std::string& text) -> std::string {
+        const std::string path = (dir / name).string();
+        write_file_atomic(path, text);
+        try {
+            read_perf_record(path);
+        } catch (const InputError& e) {
+            return e.what();
+        }
+        return "no error";
+    };
+    const std::string p1 = (dir / "unknown.csv").string();
+    EXPECT_EQ(error_of("unknown.csv", "snapshot,label,status,speed\na,cg,converged,1\n"),
+              p1 + ": line 1: unknown column 'speed'");
+    const std::string p2 = (dir / "count.csv").string();
+    EXPECT_EQ(error_of("count.csv", "snapshot,label,status,a_products\na,cg,converged,1\nb,cg,converged,x\n"),
+              p2 + ": line 3: column a_products: expected a count (integer >= 0), got 'x'");
+    const std::string p3 = (dir / "cells.csv").string();
+    EXPECT_EQ(error_of("cells.csv", "snapshot,label,status\na,cg\n"), p3 + ": line 2: expected 3 cells, got 2");
+    const std::string p4 = (dir / "twice.csv").string();
+    EXPECT_EQ(error_of("twice.csv", "snapshot,label,status\na,cg,converged\na,cg,converged\n"),
+              p4 + ": line 3: run a/cg appears twice");
+    const std::string p5 = (dir / "nostatus.csv").string();
+    EXPECT_EQ(error_of("nostatus.csv", "snapshot,label\na,cg\n"), p5 + ": line 1: missing column 'status'");
+}
+
+TEST(ComparePerfRecord, BinaryOnlyChangesFilterAndExitCodes)
+{
+    const char* b = std::getenv("CB_CONTACTBENCH");
+    const std::string binary = b && *b ? b : std::string(CB_BINARY_DIR) + "/bin/contactbench";
+    const std::vector<PerfRow> base = {row("a", "mprgp"), row("a", "cg"), row("b", "mprgp")};
+    std::vector<PerfRow> next = base;
+    next[1].instructions = 1100000;  // a/cg: +10%
+    const std::string base_csv = write_perf("bb", base, "AMD EPYC"), next_csv = write_perf("bn", next, "AMD EPYC");
+    const std::string out_file = (perf_dir() / "out.txt").string();
+    auto judge = [&](const std::string& args, std::string& out) {
+        const int raw = std::system(("'" + binary + "' compare " + args + " >'" + out_file + "' 2>&1").c_str());
+        std::ifstream in(out_file);
+        out.assign(std::istreambuf_iterator<char>(in), {});
+        return WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+    };
+    std::string out;
+    EXPECT_EQ(judge("'" + base_csv + "' '" + next_csv + "' --only-changes", out), 3) << out;
+    EXPECT_NE(out.find("a         cg     converged"), std::string::npos) << out;
+    EXPECT_EQ(out.find("mprgp"), std::string::npos) << out;  // unchanged rows left out
+    EXPECT_NE(out.find("FAIL regressed: instructions"), std::string::npos) << out;
+    EXPECT_EQ(judge("'" + base_csv + "' '" + next_csv + "' --filter '/mprgp$'", out), 0) << out;
+    EXPECT_NE(out.find("verdict: PASS (2 runs compared: 2 equal"), std::string::npos) << out;
+    EXPECT_EQ(judge("'" + base_csv + "' '" + next_csv + "' --instructions-rtol 0.2", out), 0) << out;
+    EXPECT_EQ(judge("'" + base_csv + "' '" + next_csv + "' --filter '('", out), 2) << out;
+    EXPECT_NE(out.find("contactbench compare: error: compare: --filter: not a regular expression: '('"),
+              std::string::npos) << out;
+    fs::remove_all(perf_dir());
 }
