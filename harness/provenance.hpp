@@ -8,6 +8,10 @@ namespace cb {
 ///  "blas","hostname"}. Computed once per process (the date is the first call's, UTC ISO 8601).
 const nlohmann::json& provenance();
 
+/// The build a result comes from: {"commit": git commit, "binary": FNV-1a hash of the running
+/// executable (/proc/self/exe)}. Part of every run's identity: a rebuild redoes the runs.
+const nlohmann::json& build_identity();
+
 /// Current UTC time as "YYYY-MM-DDTHH:MM:SSZ".
 std::string utc_now_iso();
 

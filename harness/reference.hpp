@@ -1,13 +1,17 @@
 #pragma once
 /// Reference solutions (F*) for the relative objective error of DESIGN.md "Metrics", computed
-/// with the `active-set` solver and cached by snapshot content hash:
-/// <cache_dir()>/reference/<key>.json.
+/// with the `active-set` solver and cached by snapshot content hash and method (solver, settings,
+/// kReferenceVersion): <cache_dir()>/reference/<key>-<method hash>.json.
 #include "solvers/qp.hpp"
 
 #include <nlohmann/json.hpp>
 #include <string>
 
 namespace cb {
+
+/// Bump when the reference computation changes in a way its settings do not show (cached
+/// references of another version are recomputed).
+constexpr int kReferenceVersion = 1;
 
 /// {"objective": F*, "objective_x0": F(x0), "source": "active-set", "status", "kkt": {...},
 ///  "kkt_rel", "key", "cached": bool}. `key` is the snapshot hash (plus a decoupling suffix when

@@ -76,7 +76,7 @@ TEST(Results, AtomicWriteReplacesAndLeavesNoTemporary)
     EXPECT_TRUE(back["nan"].is_null());
     EXPECT_EQ(count_tmp(dir), 0u);
     EXPECT_EQ(error_of([&] { read_json_file((dir / "missing.json").string()); }),
-              (dir / "missing.json").string() + ": cannot open (missing or unreadable)");
+              (dir / "missing.json").string() + ": cannot open: No such file or directory");
 }
 
 TEST(Results, SummaryColumnsAndRow)
@@ -158,7 +158,7 @@ TEST(Suite, RejectsBadSuitesNamingTheField)
     EXPECT_EQ(error_of([&] { parse_suite(no_solvers, "s.json"); }),
               "s.json: /solvers: missing (an array of {label, solver, settings})");
     EXPECT_EQ(error_of([&] { load_suite("/nonexistent/suite.json"); }),
-              "/nonexistent/suite.json: cannot open (missing or unreadable)");
+              "/nonexistent/suite.json: cannot open: No such file or directory");
 }
 
 TEST(Suite, ResolvesGlobsFoldersDuplicatesAndGenerated)
