@@ -53,7 +53,10 @@ int cmd_merge(const Args& args)
         if (!fs::exists(jobs_path))
             throw_input_error(jobs_path.string(), "", "missing: the shard's `contactbench run` did not finish (run it again)");
         const nlohmann::json jobs = read_json_file(jobs_path.string());
-        if (!jobs.is_object() || !jobs.contains("suite_hash") || !jobs.contains("shard") || !jobs["jobs"].is_array())
+        if (!jobs.is_object() || !jobs.contains("suite_hash") || !jobs.contains("shard") || !jobs["shard"].is_object() ||
+            !jobs["shard"].value("index", nlohmann::json()).is_number_integer() ||
+            !jobs["shard"].value("count", nlohmann::json()).is_number_integer() || !jobs.contains("jobs") ||
+            !jobs["jobs"].is_array() || !jobs.value("all_jobs", nlohmann::json()).is_number_integer())
             throw_input_error(jobs_path.string(), "", "not a jobs file of `contactbench run`");
         if (!fs::exists(dir / "suite.json"))
             throw_input_error((dir / "suite.json").string(), "", "missing: the shard's `contactbench run` did not finish");
@@ -74,6 +77,8 @@ int cmd_merge(const Args& args)
         if (!indices.insert(index).second)
             throw_input_error(jobs_path.string(), "shard", "shard " + std::to_string(index) + " given twice");
         for (const auto& f : jobs["jobs"]) {
+            if (!f.is_string() || fs::path(f.get<std::string>()).filename() != f.get<std::string>())
+                throw_input_error(jobs_path.string(), "jobs", "expected run file names, got " + f.dump());
             const std::string name = f.get<std::string>();
             if (!fs::is_regular_file(dir / "runs" / name))
                 throw_input_error((dir / "runs" / name).string(), "", "missing: shard " + std::to_string(index) +

@@ -107,6 +107,7 @@ struct MtxLimits {
     long max_rows = 2147483647L, max_cols = 2147483647L;
     std::string why_rows, why_cols;
     bool plus_entries = false;  ///< max_rows grows by the entries the file declares (rows of J)
+    bool vector_size = false;   ///< a vector of exactly max_rows entries: the folder's "size" message
     bool diagonal_needed = false;  ///< every row needs a stored entry (A: SPD, diagonal present)
 };
 
@@ -162,6 +163,10 @@ MtxFile parse_mtx(const std::string& path, const MtxLimits& limits = {})
     long expected = 0;
     if (f.format == "coordinate") expected = long(size[2]);
     else expected = symmetric ? f.rows * (f.rows + 1) / 2 : f.rows * f.cols;
+    if (limits.vector_size) {
+        const long got = (f.cols == 1 || f.rows == 0) ? f.rows : f.cols;
+        if (got > limits.max_rows) throw_input_error(path, "size", limits.why_rows + ", got " + std::to_string(got));
+    }
     const long max_rows = limits.plus_entries ? std::min(2147483647L, limits.max_rows + expected) : limits.max_rows;
     if (f.rows > max_rows)
         throw_input_error(path, line_field(lines.line()),
@@ -389,6 +394,7 @@ Qp read_matrix_market_folder(const std::string& dir, SnapshotExtras* extras)
     auto vector_of = [&](const char* name, long size, const char* what) {
         const std::string path = (d / name).string();
         MtxLimits limits;  // a vector longer than expected is refused before it is allocated
+        limits.vector_size = true;
         limits.max_rows = limits.max_cols = std::max(size, 1L);
         limits.why_rows = limits.why_cols = std::string("expected ") + what + " = " + std::to_string(size) + " entries";
         Vec v = read_mtx_vector_bounded(path, limits);
