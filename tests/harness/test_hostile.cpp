@@ -55,10 +55,10 @@ struct Output {
 };
 
 /// Runs `[PREFIX;] timeout 120 contactbench ARGS` in bash (PREFIX: ulimit ...); a hang ends as 124.
-Output run(const std::string& args, const std::string& prefix = "")
+Output run(const std::string& args, const std::string& prefix = "", const std::string& program = binary())
 {
     const fs::path out = work_dir() / "stdout.txt", err = work_dir() / "stderr.txt";
-    const std::string inner = (prefix.empty() ? "" : prefix + "; ") + "exec timeout 120 '" + binary() + "' " + args +
+    const std::string inner = (prefix.empty() ? "" : prefix + "; ") + "exec timeout 120 '" + program + "' " + args +
                               " >'" + out.string() + "' 2>'" + err.string() + "'";
     std::string quoted;
     for (char ch : inner) quoted += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
@@ -203,6 +203,25 @@ TEST(RunIdentity, SolverOutcomesAreFinal)
     EXPECT_TRUE(capped["final"].get<bool>());
     const Output again = run("run " + q(suite) + " --out " + q(out));
     EXPECT_NE(again.err.find("ran 0 of 2 jobs"), std::string::npos) << again.err;
+}
+
+TEST(RunIdentity, AnotherBuildRedoesTheRuns)
+{
+    const fs::path dir = fresh_dir("rebuild");
+    write_snapshot(dir / "a.qpsnap", 1);
+    write_snapshot(dir / "b.qpsnap", 2);
+    const fs::path suite = write_suite(dir, "rebuild", {"mprgp"}), out = dir / "out";
+    ASSERT_EQ(run("run " + q(suite) + " --out " + q(out)).status, 0);
+    // "Rebuilt": the same program with one byte more (an ELF file runs with trailing bytes).
+    const fs::path rebuilt = dir / "contactbench-rebuilt";
+    fs::copy_file(binary(), rebuilt);
+    std::ofstream(rebuilt, std::ios::app) << '\n';
+    fs::permissions(rebuilt, fs::perms::owner_exec, fs::perm_options::add);
+    const Output again = run("run " + q(suite) + " --out " + q(out), "", rebuilt.string());
+    ASSERT_EQ(again.status, 0) << again.err;
+    EXPECT_NE(again.err.find("a x mprgp: stored run not reused: the build changed (commit or binary)\n"), std::string::npos)
+        << again.err;
+    EXPECT_NE(again.err.find("ran 2 of 2 jobs"), std::string::npos) << again.err;
 }
 
 TEST(RunIdentity, OneSuitePerOutAndFresh)
