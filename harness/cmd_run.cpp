@@ -3,13 +3,14 @@
 //
 // Resume: a job is skipped when DIR/runs/<id>__<label>.json holds a final run of the same identity
 // (runner.hpp run_identity: snapshot content, solver, settings, suite entry, build); any other
-// stored run is redone, a run that failed for an input or harness error included. One DIR holds
-// one suite (or one shard of it): run files of other jobs make `run` refuse (exit 2) unless
-// --fresh. A lock (flock on DIR/.lock) keeps two runs on one DIR apart. In a chain ("chain":
-// true) warm state is carried per label from snapshot to snapshot, so a label's chain is rerun
-// whole unless every one of its runs is reusable, and shards split a chain suite by label (label
-// k runs in shard i iff k % N == i-1), never inside a chain. Otherwise job j (snapshot-major
-// order: j = snapshot * labels + label) runs in shard i iff j % N == i-1.
+// stored run is redone, and so is one that failed because its snapshot could not be read or on
+// an internal error ("final": false). One DIR holds one suite (or one shard of it): run files of
+// other jobs make `run` refuse (exit 2) unless --fresh. A lock (flock on DIR/.lock) keeps two
+// runs on one DIR apart. In a chain ("chain": true) warm state is carried per label from
+// snapshot to snapshot, so a label's chain is rerun whole unless every one of its runs is
+// reusable, and shards split a chain suite by label (label k runs in shard i iff k % N == i-1),
+// never inside a chain. Otherwise job j (snapshot-major order: j = snapshot * labels + label)
+// runs in shard i iff j % N == i-1.
 #include "harness/cli.hpp"
 #include "harness/commands.hpp"
 #include "harness/provenance.hpp"
