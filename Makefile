@@ -38,7 +38,7 @@ help:
 	@echo "make docs-check fail on a cited document or section that is not in the repository"
 	@echo "make tidy       clang-tidy on the C++ files changed against main (TIDY_BASE=main)"
 	@echo "make stress     the stress suite and its stability table in results/stress/"
-	@echo "make fuzz       fuzz the snapshot reader (FUZZ_SECONDS=60)"
+	@echo "make fuzz       fuzz the snapshot, suite and scene readers (FUZZ_SECONDS=60 each)"
 
 deps:
 	@missing=""; for p in $(DEB_PACKAGES); do \
@@ -126,13 +126,18 @@ stress: build
 	$(CB) stress --out results/stress
 	$(PY) -m plots.stability results/stress
 
+# Each reader on its own corpus: FUZZ_SECONDS per target (FUZZ_TARGETS to pick some).
+FUZZ_TARGETS ?= qpsnap suite scene
 fuzz: deps
 	cmake -S . -B $(BUILD)-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DCB_FUZZ=ON \
 	  -DCB_BUILD_TESTS=OFF -DCB_BUILD_BENCH=OFF
-	cmake --build $(BUILD)-fuzz -j $(JOBS) --target fuzz_qpsnap
-	mkdir -p $(BUILD)-fuzz/corpus && cp tests/fuzz/corpus/* $(BUILD)-fuzz/corpus/
-	$(BUILD)-fuzz/bin/fuzz_qpsnap -max_total_time=$(or $(FUZZ_SECONDS),60) -timeout=10 -rss_limit_mb=2048 \
-	  -artifact_prefix=$(BUILD)-fuzz/ $(BUILD)-fuzz/corpus
+	cmake --build $(BUILD)-fuzz -j $(JOBS) --target $(addprefix fuzz_,$(FUZZ_TARGETS))
+	for t in $(FUZZ_TARGETS); do \
+	  corpus=tests/fuzz/corpus; [ $$t = qpsnap ] || corpus=tests/fuzz/corpus_$$t; \
+	  mkdir -p $(BUILD)-fuzz/corpus_$$t && cp $$corpus/* $(BUILD)-fuzz/corpus_$$t/ && \
+	  $(BUILD)-fuzz/bin/fuzz_$$t -max_total_time=$(or $(FUZZ_SECONDS),60) -timeout=10 -rss_limit_mb=2048 \
+	    -artifact_prefix=$(BUILD)-fuzz/$$t- $(BUILD)-fuzz/corpus_$$t || exit 1; \
+	done
 
 clean:
 	rm -rf $(BUILD) $(BUILD)-*

@@ -2,6 +2,7 @@
 // seeded synthetic snapshot (problems/synthetic.hpp); --list prints every family and its params.
 #include "harness/cli.hpp"
 #include "harness/commands.hpp"
+#include "problems/io_util.hpp"
 #include "problems/qpsnap.hpp"
 #include "problems/synthetic.hpp"
 
@@ -47,11 +48,13 @@ int cmd_generate(const Args& args)
             throw_input_error("generate", "--param", "expected key=value, got '" + kv + "'");
         const std::string key = kv.substr(0, eq), text = kv.substr(eq + 1);
         try {
+            check_json_depth(text.data(), text.data() + text.size(), "generate", "--param " + key);
             params[key] = nlohmann::json::parse(text);
-        } catch (const nlohmann::json::parse_error&) {
+        } catch (const nlohmann::json::exception&) {
             throw_input_error("generate", "--param " + key, "value '" + text + "' is not a JSON number or true/false");
         }
     }
+    // Bounded parameters, finite values (problems/synthetic.hpp): never a file our reader rejects.
     const Qp qp = make_synthetic(family, params, std::uint64_t(seed));
     const std::string out = cl.value("--out");
     write_qpsnap(out, qp);

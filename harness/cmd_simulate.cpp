@@ -11,7 +11,7 @@ namespace cb {
 
 int cmd_simulate(const Args& args)
 {
-    const CommandLine cl("simulate", args, {"--frames", "--out", "--data", "--solver"}, {"--no-snapshots"});
+    const CommandLine cl("simulate", args, {"--frames", "--out", "--data", "--solver"}, {"--no-snapshots", "--version"});
     const std::string usage =
         "usage: contactbench simulate SCENE.json [--frames N] [--out DIR] [--data DIR] [--solver NAME] [--no-snapshots]\n"
         "  SCENE.json     a scene (keys: scenes/README.md), or one of the authors' .ini scene files\n"
@@ -22,7 +22,15 @@ int cmd_simulate(const Args& args)
         "                 $CB_CACHE/paper-data when `make paper-data` has written it, else none, so\n"
         "                 scenes use their CGAL-data stand-ins)\n"
         "  --solver NAME  stepping solver (default: the scene's, else mprgp)\n"
-        "  --no-snapshots write no .qpsnap files\n";
+        "  --no-snapshots write no .qpsnap files\n"
+        "  --version      print the simulator version (the key of cached simulations) and exit\n"
+        "A simulation into an existing DIR replaces the earlier one's files. While it runs the tables are\n"
+        "steps.csv.partial and frames.csv.partial (rows appended a whole frame at a time); at the end they\n"
+        "are renamed and simulation.json (scene, mesh files, data folder, frames, version) is written last.\n";
+    if (cl.has("--version")) {
+        std::cout << "simulator " << sim::kSimulatorVersion << "\n";
+        return 0;
+    }
     if (cl.help()) {
         std::cout << usage;
         return 0;
@@ -42,6 +50,7 @@ int cmd_simulate(const Args& args)
     sim::SimulatorOptions opt;
     opt.out_dir = cl.value("--out", "results/sim/" + scene.name);
     opt.solver = cl.value("--solver");
+    opt.data_dir = cl.value("--data");
     opt.snapshots = !cl.has("--no-snapshots");
     opt.frames = cl.integer("--frames", -1);
     if (cl.has("--frames") && opt.frames < 0) throw_input_error("--frames", "", "must be >= 0");

@@ -2,6 +2,7 @@
 #include "harness/commands.hpp"
 #include "solvers/types.hpp"
 
+#include <csignal>
 #include <cstring>
 #include <iostream>
 #include <map>
@@ -56,6 +57,8 @@ int main(int argc, char** argv)
         usage(std::cerr);
         return 2;
     }
+    // Past a file-size limit (ulimit -f) a write must fail with EFBIG and a clear error, not kill us.
+    std::signal(SIGXFSZ, SIG_IGN);
     const cb::Args args(argv + 2, argv + argc);
     try {
         return version ? cb::cmd_version(args) : it->second.run(args);

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <string>
 #include <thread>
+#include <vector>
 #include <unistd.h>
 
 #ifndef CB_BUILD_TYPE
@@ -136,6 +137,31 @@ nlohmann::json load_average()
     double one = 0, five = 0, fifteen = 0;
     if (!(in >> one >> five >> fifteen)) return nullptr;
     return {one, five, fifteen};
+}
+
+const nlohmann::json& build_identity()
+{
+    static const nlohmann::json cached = [] {
+        // FNV-1a 64 of the executable's bytes: the same source rebuilt with other flags differs.
+        std::uint64_t h = 14695981039346656037ULL;
+        std::ifstream in("/proc/self/exe", std::ios::binary);
+        std::vector<char> buffer(1 << 20);
+        bool read_any = false;
+        while (in) {
+            in.read(buffer.data(), std::streamsize(buffer.size()));
+            const std::streamsize got = in.gcount();
+            read_any = read_any || got > 0;
+            for (std::streamsize i = 0; i < got; ++i) {
+                h ^= static_cast<unsigned char>(buffer[size_t(i)]);
+                h *= 1099511628211ULL;
+            }
+        }
+        char hex[17];
+        std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+        return nlohmann::json{{"commit", provenance()["git_commit"]},
+                              {"binary", read_any ? nlohmann::json(hex) : nlohmann::json()}};
+    }();
+    return cached;
 }
 
 nlohmann::json provenance()

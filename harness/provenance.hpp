@@ -13,6 +13,10 @@ nlohmann::json provenance();
 /// The node's load average over 1, 5 and 15 minutes (/proc/loadavg), null when unreadable.
 nlohmann::json load_average();
 
+/// The build a result comes from: {"commit": git commit, "binary": FNV-1a hash of the running
+/// executable (/proc/self/exe)}. Part of every run's identity: a rebuild redoes the runs.
+const nlohmann::json& build_identity();
+
 /// Current UTC time as "YYYY-MM-DDTHH:MM:SSZ".
 std::string utc_now_iso();
 

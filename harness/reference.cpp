@@ -14,12 +14,16 @@ namespace fs = std::filesystem;
 
 nlohmann::json reference_solution(const Qp& qp, const std::string& key, const std::string& cache)
 {
+    // Keyed on everything F* depends on: the snapshot (content hash in `key`), the reference
+    // solver, its settings and kReferenceVersion; not on the binary, so a rebuild keeps the cache.
+    const nlohmann::json settings = {{"tol", 1e-10}, {"max_iterations", 100000}, {"monitor_every", 0}};
+    const nlohmann::json method = {{"solver", "active-set"}, {"settings", settings}, {"version", kReferenceVersion}};
     const std::string dir = (cache.empty() ? cache_dir() : cache) + "/reference";
-    const std::string path = dir + "/" + key + ".json";
+    const std::string path = dir + "/" + key + "-" + fnv1a_hex(method.dump()).substr(0, 8) + ".json";
     if (fs::is_regular_file(path)) {
         try {
             nlohmann::json cached = read_json_file(path);
-            if (cached.is_object() && cached.value("key", "") == key) {
+            if (cached.is_object() && cached.value("key", "") == key && cached.value("method", nlohmann::json()) == method) {
                 cached["cached"] = true;
                 return cached;
             }
@@ -30,9 +34,9 @@ nlohmann::json reference_solution(const Qp& qp, const std::string& key, const st
     RunOptions options;
     options.record_history = false;
     options.decouple = "none";  // the caller passes the QP the solvers saw
-    const nlohmann::json settings = {{"tol", 1e-10}, {"max_iterations", 100000}, {"monitor_every", 0}};
     nlohmann::json ref;
     ref["key"] = key;
+    ref["method"] = method;
     ref["source"] = "active-set";
     ref["date"] = utc_now_iso();
     const RunOutcome run = run_solver(qp, "active-set", settings, options, {});

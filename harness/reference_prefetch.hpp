@@ -9,11 +9,6 @@
 
 namespace cb {
 
-/// The cache key of the reference of the QP a solver sees: the snapshot's content hash, plus
-/// "-<order>-<seed>" when decoupling drops rows. It must match the key `run` attaches.
-std::string reference_cache_key(const std::string& content_hash, bool decoupled, const std::string& order,
-                                std::uint64_t seed);
-
 /// Computes (or finds cached) the references of every snapshot s with a job to do (todo[s][v]
 /// for some label v), one child process per snapshot, `jobs` at a time. Returns the number of
 /// snapshots handled; throws std::runtime_error when a child failed. Bad snapshots and bad

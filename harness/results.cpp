@@ -1,5 +1,6 @@
 #include "harness/results.hpp"
 
+#include "problems/io_util.hpp"
 #include "solvers/types.hpp"
 
 #include <algorithm>
@@ -15,30 +16,6 @@ namespace cb {
 
 namespace fs = std::filesystem;
 
-void write_file_atomic(const std::string& path, const std::string& content)
-{
-    const fs::path target(path);
-    if (target.has_parent_path()) fs::create_directories(target.parent_path());
-    const std::string tmp = path + ".tmp." + std::to_string(::getpid());
-    {
-        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-        if (!out) throw std::runtime_error(tmp + ": cannot open for writing");
-        out.write(content.data(), static_cast<std::streamsize>(content.size()));
-        out.flush();
-        if (!out) {
-            out.close();
-            std::remove(tmp.c_str());
-            throw std::runtime_error(tmp + ": write failed");
-        }
-    }
-    std::error_code ec;
-    fs::rename(tmp, target, ec);
-    if (ec) {
-        std::remove(tmp.c_str());
-        throw std::runtime_error(path + ": rename failed: " + ec.message());
-    }
-}
-
 void write_json_atomic(const std::string& path, const nlohmann::json& value)
 {
     // nlohmann writes NaN/Inf as null; replace invalid UTF-8 rather than throwing.
@@ -47,13 +24,8 @@ void write_json_atomic(const std::string& path, const nlohmann::json& value)
 
 nlohmann::json read_json_file(const std::string& path)
 {
-    std::ifstream in(path);
-    if (!in) throw_input_error(path, "", "cannot open (missing or unreadable)");
-    try {
-        return nlohmann::json::parse(in);
-    } catch (const nlohmann::json::exception& e) {
-        throw_input_error(path, "", std::string("not valid JSON: ") + e.what());
-    }
+    // A regular file only (a FIFO would block), nesting bounded (deep JSON would overflow the stack).
+    return read_json_checked(path);
 }
 
 std::string run_file_name(const std::string& snapshot_id, const std::string& label)

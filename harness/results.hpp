@@ -1,19 +1,18 @@
 #pragma once
 /// The results folder (INTERFACES.md "Results folder"): atomic file writes, per-run JSON files
 /// DIR/runs/<snapshot-id>__<label>.json and DIR/summary.csv built from them.
+#include "problems/io_util.hpp"  // write_file_atomic
+
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 namespace cb {
 
-/// Writes `content` to `path` atomically: a temporary file in the same folder (PATH.tmp.<pid>),
-/// flushed, then renamed over `path`. Creates missing parent folders. Throws std::runtime_error
-/// on an IO failure (the message names the path).
-void write_file_atomic(const std::string& path, const std::string& content);
 /// JSON, indented by 1, NaN/Inf as null, written atomically.
 void write_json_atomic(const std::string& path, const nlohmann::json& value);
-/// Reads a JSON file; throws InputError("PATH: ...") when it is missing or not JSON.
+/// Reads a JSON file; throws InputError("PATH: ...") when it is missing, not a regular file,
+/// nested deeper than kMaxJsonDepth or not JSON.
 nlohmann::json read_json_file(const std::string& path);
 
 /// File name of a run: "<snapshot-id>__<label>.json".

@@ -273,4 +273,29 @@ RunOutcome run_solver(const SolverRegistry& registry, const Qp& original, const 
     return out;
 }
 
+nlohmann::json run_identity(const nlohmann::json& snapshot_hash, const std::string& solver,
+                            const nlohmann::json& settings, const nlohmann::json& entry)
+{
+    return {{"snapshot_hash", snapshot_hash}, {"solver", solver}, {"settings", settings}, {"entry", entry},
+            {"build", build_identity()}};
+}
+
+std::string stale_reason(const nlohmann::json& record, const nlohmann::json& identity)
+{
+    if (!record.is_object()) return "the run file is not a JSON object";
+    if (!record.value("final", true))
+        return "it failed for an input or harness error (" + record.value("status", std::string("?")) + "), retried";
+    const auto it = record.find("identity");
+    if (it == record.end() || !it->is_object()) return "it has no run identity (written by an older contactbench)";
+    const nlohmann::json& old = *it;
+    auto differs = [&](const char* key) { return !old.contains(key) || old[key] != identity[key]; };
+    if (differs("snapshot_hash")) return "the snapshot's content changed";
+    if (differs("solver")) return "the solver changed";
+    if (differs("settings")) return "the settings changed";
+    if (differs("entry")) return "the suite entry changed";
+    if (differs("build")) return "the build changed (commit or binary)";
+    if (old != identity) return "its identity differs";
+    return "";
+}
+
 } // namespace cb

@@ -69,4 +69,20 @@ RunOutcome run_solver(const SolverRegistry& registry, const Qp& qp, const std::s
                       const nlohmann::json& settings, const RunOptions& options,
                       const nlohmann::json& snapshot_info, const SolveContext& warm);
 
+/// Identity of one job of a suite run: what its result depends on. A stored run is reused only
+/// when its "identity" equals this one (harness/README.md "Resume and run identity").
+///   snapshot_hash  content hash of the snapshot file (null when it could not be read)
+///   solver, settings  the registry name and the settings given to it (suite defaults merged)
+///   entry          the suite's entry: snapshot id and path, label, and the suite-wide options
+///                  that change a run (tol, time_limit_s, repeat, history_max, reference,
+///                  decouple, decouple_seed, chain)
+///   build          build_identity(): commit and binary hash
+nlohmann::json run_identity(const nlohmann::json& snapshot_hash, const std::string& solver,
+                            const nlohmann::json& settings, const nlohmann::json& entry);
+
+/// Why a stored run record cannot stand for `identity` ("" when it can be reused): a record
+/// without an identity, a different snapshot / solver / settings / suite entry / build, or a run
+/// that failed for an input or harness error ("final": false), which is always retried.
+std::string stale_reason(const nlohmann::json& record, const nlohmann::json& identity);
+
 } // namespace cb

@@ -6,6 +6,7 @@
 #include "solvers/types.hpp"
 
 #include <algorithm>
+#include <climits>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -59,6 +60,8 @@ long get_integer(const nlohmann::json& j, const std::string& key, const std::str
     if (!j.contains(key)) return fallback;
     const auto& v = j[key];
     if (!v.is_number_integer()) throw_input_error(where, "/" + key, "expected an integer, got " + v.dump());
+    if (v.is_number_unsigned() && v.get<std::uint64_t>() > std::uint64_t(LONG_MAX))  // would wrap negative
+        throw_input_error(where, "/" + key, "too large: " + v.dump() + " > " + std::to_string(LONG_MAX));
     const long d = v.get<long>();
     if (d < min_inclusive) throw_input_error(where, "/" + key, "must be >= " + std::to_string(min_inclusive) + ", got " + v.dump());
     return d;
@@ -191,6 +194,8 @@ Suite parse_suite(const nlohmann::json& j, const std::string& where)
     s.time_limit_s = get_number(j, "time_limit_s", where, s.time_limit_s, -1.0);
     if (s.time_limit_s < 0) throw_input_error(where, "/time_limit_s", "must be >= 0 (0 disables), got " + j["time_limit_s"].dump());
     s.repeat = static_cast<int>(get_integer(j, "repeat", where, 1, 1));
+    if (s.repeat > 1000 || get_integer(j, "repeat", where, 1, 1) > 1000)  // no int wrap-around
+        throw_input_error(where, "/repeat", "must be <= 1000, got " + j["repeat"].dump());
     s.history_max = get_integer(j, "history_max", where, s.history_max, 2);
     s.reference = get_bool(j, "reference", where, false);
     s.decouple = get_string(j, "decouple", where, "auto");

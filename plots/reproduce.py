@@ -6,10 +6,13 @@ usage: reproduce.py --contactbench build/bin/contactbench [--data DIR (default $
 
 Steps (each printed as it runs):
 1. simulate the scenes (contactbench simulate SCENE --frames N --out OUT/sim/<scene> --data DATA),
-   skipped when OUT/sim/<scene> already holds a simulation of the same scene file with >= N frames;
+   skipped when OUT/sim/<scene> already holds a finished simulation (simulation.json) of the same
+   scene file content, data source and simulator version, with >= N frames and unchanged mesh files;
 2. pick the snapshots each figure needs and instantiate suites/paper/*.json into OUT/suites/;
 3. contactbench run OUT/suites/<name>.json --out OUT/runs/<name>, skipped when that folder already
-   holds the results of the identical suite (the harness caches reference solutions itself);
+   holds the results of the identical suite from the same contactbench binary (after a rebuild the
+   harness resumes and redoes the runs whose identity changed; it caches reference solutions by
+   snapshot content and reference method, so a rebuild does not redo them);
 4. profiles.md per suite, the figures (fig6, fig8, fig9, fig10, fig11, table1) and the report.
 A figure whose inputs are missing is reported as "not produced: <reason>".
 --quick: the coarsest two-dinosaur meshes stand in for the eight dinosaurs, few frames, short time
@@ -176,18 +179,58 @@ def two_dino_keys(found: Dict[str, str]) -> List[str]:
     return sorted(keys, key=lambda k: int(k.rsplit("_", 1)[1]))
 
 
+def simulator_version(runner: Runner) -> Optional[str]:
+    """`contactbench simulate --version` ("simulator N"), once per Runner; None when it fails."""
+    if not hasattr(runner, "_simulator_version"):
+        try:
+            done = subprocess.run([runner.cb, "simulate", "--version"], capture_output=True, text=True, timeout=60)
+            runner._simulator_version = done.stdout.strip() if done.returncode == 0 else None
+        except OSError:
+            runner._simulator_version = None
+    return runner._simulator_version
+
+
+def simulation_key(runner: Runner, scene: str, data: Optional[str]) -> dict:
+    """Every input of a simulation but its frame count and mesh files (those are checked apart):
+    the scene file's content, the data source and the simulator's version."""
+    return {"scene_sha": file_sha(scene), "data": os.path.abspath(data) if data else None,
+            "data_present": bool(data and os.path.isdir(data)), "simulator": simulator_version(runner)}
+
+
+def simulation_meshes(folder: str) -> Optional[Dict[str, str]]:
+    """Mesh file -> sha of a finished simulation (its simulation.json, written last), else None."""
+    path = os.path.join(folder, "simulation.json")
+    if not os.path.isfile(path):
+        return None
+    try:
+        with open(path, encoding="utf-8") as f:
+            meshes = json.load(f).get("meshes", [])
+        return {m: file_sha(m) for m in meshes}
+    except (OSError, ValueError, AttributeError):
+        return None
+
+
 def simulate(runner: Runner, ctx: PaperContext, key: str, scene: str, frames: int, data: Optional[str],
              force: bool) -> Optional[str]:
-    """Simulates once (cached); returns the folder, or None with ctx.reasons[key] set."""
+    """Simulates once (cached on the scene file, mesh files, data source, frames and simulator
+    version); returns the folder, or None with ctx.reasons[key] set."""
     folder = os.path.join(ctx.out, "sim", key)
-    sha = file_sha(scene)
+    inputs = simulation_key(runner, scene, data)
     marker = read_marker(folder)
-    if not force and marker.get("scene_sha") == sha and marker.get("frames", 0) >= frames and \
+    meshes = simulation_meshes(folder)
+    if not force and marker.get("inputs") == inputs and marker.get("frames", 0) >= frames and \
+            meshes is not None and marker.get("meshes") == meshes and \
             os.path.isdir(os.path.join(folder, "snapshots")):
         runner.say(f"simulate {key}: cached ({marker['frames']} frames in {folder})")
         runner.steps.append(f"simulate {key}: cached ({marker['frames']} frames)")
         ctx.sims[key] = folder
         return folder
+    if marker:
+        why = [k for k in inputs if marker.get("inputs", {}).get(k) != inputs[k]]
+        if meshes is not None and marker.get("meshes") != meshes:
+            why.append("mesh files")
+        if why:
+            runner.say(f"simulate {key}: not reused, changed: {', '.join(why)}")
     if os.path.isdir(folder):
         shutil.rmtree(folder)
     os.makedirs(folder, exist_ok=True)
@@ -201,7 +244,8 @@ def simulate(runner: Runner, ctx: PaperContext, key: str, scene: str, frames: in
         ctx.reasons[key] = f"simulation of {os.path.basename(scene)} failed (exit {rc}{': ' + err if err else ''})" \
             if rc != 0 else f"simulation of {os.path.basename(scene)} wrote no snapshots"
         return None
-    write_marker(folder, {"scene": scene, "scene_sha": sha, "frames": frames})
+    write_marker(folder, {"scene": scene, "inputs": inputs, "frames": frames,
+                          "meshes": simulation_meshes(folder) or {}})
     ctx.sims[key] = folder
     return folder
 
@@ -240,20 +284,24 @@ def run_suite(runner: Runner, ctx: PaperContext, name: str, template: str, snaps
         suite = json.load(f)
     folder = os.path.join(ctx.out, "runs", name)
     marker = read_marker(folder)
-    if not force and marker.get("suite") == suite and os.path.isfile(os.path.join(folder, "summary.csv")):
+    # The suite and the build: contactbench itself redoes a run whose snapshot, settings or build
+    # changed (run identity), and keys reference solutions on content and method, not the binary.
+    build = file_sha(runner.cb) if os.path.isfile(runner.cb) else None
+    if not force and marker.get("suite") == suite and marker.get("build") == build and \
+            os.path.isfile(os.path.join(folder, "summary.csv")):
         runner.say(f"run {name}: cached ({folder})")
         runner.steps.append(f"run {name}: cached")
         ctx.results[name] = folder
         return
-    if os.path.isdir(folder):
-        shutil.rmtree(folder)
+    if os.path.isdir(folder) and (force or marker.get("suite") != suite):
+        shutil.rmtree(folder)  # another suite: start over; same suite, new build: resume (identity decides)
     rc, err = runner.call(["run", suite_path, "--out", folder], f"run {name}")
     ctx.results[name] = folder
     has_runs = os.path.isdir(os.path.join(folder, "runs")) and any(
         n.endswith(".json") for n in os.listdir(os.path.join(folder, "runs")))
     refused = unmeasured_count(folder)
     if rc == 0 and has_runs and not refused:
-        write_marker(folder, {"suite": suite})
+        write_marker(folder, {"suite": suite, "build": build})
     elif has_runs and refused:
         # not cached: a solver that is missing today may be registered by the next build
         ctx.notes.setdefault(name, []).append(f"{refused} run(s) refused by contactbench (see the notes below); "

@@ -1,10 +1,13 @@
 // Matrix Market reader and writer, and the snapshot folder built from them.
 #include "problems/matrix_market.hpp"
 
+#include "problems/io_util.hpp"
+
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <cmath>
+#include <cstdarg>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -43,10 +46,10 @@ class LineReader {
 public:
     explicit LineReader(const std::string& path) : m_path(path)
     {
-        std::ifstream in(path, std::ios::binary);
-        if (!in) throw_input_error(path, "", std::string("cannot open: ") + std::strerror(errno));
-        m_text.assign(std::istreambuf_iterator<char>(in), {});
+        m_text = read_regular_file(path, std::uint64_t(16) << 30);  // FIFO or folder: refused
     }
+    /// Bytes not yet returned by next().
+    size_t remaining() const { return m_pos >= m_text.size() ? 0 : m_text.size() - m_pos; }
     /// Next line (without the newline), false at the end.
     bool next(const char*& begin, const char*& end)
     {
@@ -99,7 +102,16 @@ int parse_numbers(const char* b, const char* e, double* out, int want, bool* ext
     return k;
 }
 
-MtxFile parse_mtx(const std::string& path)
+/// Upper bounds on the declared size known from elsewhere (the other files of a folder).
+struct MtxLimits {
+    long max_rows = 2147483647L, max_cols = 2147483647L;
+    std::string why_rows, why_cols;
+    bool plus_entries = false;  ///< max_rows grows by the entries the file declares (rows of J)
+    bool vector_size = false;   ///< a vector of exactly max_rows entries: the folder's "size" message
+    bool diagonal_needed = false;  ///< every row needs a stored entry (A: SPD, diagonal present)
+};
+
+MtxFile parse_mtx(const std::string& path, const MtxLimits& limits = {})
 {
     LineReader lines(path);
     const char *b = nullptr, *e = nullptr;
@@ -151,7 +163,27 @@ MtxFile parse_mtx(const std::string& path)
     long expected = 0;
     if (f.format == "coordinate") expected = long(size[2]);
     else expected = symmetric ? f.rows * (f.rows + 1) / 2 : f.rows * f.cols;
-    f.entries.reserve(size_t(expected));
+    if (limits.vector_size) {
+        const long got = (f.cols == 1 || f.rows == 0) ? f.rows : f.cols;
+        if (got > limits.max_rows) throw_input_error(path, "size", limits.why_rows + ", got " + std::to_string(got));
+    }
+    const long max_rows = limits.plus_entries ? std::min(2147483647L, limits.max_rows + expected) : limits.max_rows;
+    if (f.rows > max_rows)
+        throw_input_error(path, line_field(lines.line()),
+                          "declares " + std::to_string(f.rows) + " rows, at most " + std::to_string(max_rows) + " possible (" +
+                              limits.why_rows + (limits.plus_entries ? ", this file declares " + std::to_string(expected) + " entries" : "") +
+                              ")");
+    if (f.cols > limits.max_cols)
+        throw_input_error(path, line_field(lines.line()), "declares " + std::to_string(f.cols) + " columns, at most " +
+                                                              std::to_string(limits.max_cols) + " possible (" + limits.why_cols + ")");
+    if (limits.diagonal_needed && f.format == "coordinate" && expected < f.rows)
+        throw_input_error(path, line_field(lines.line()), "declares " + std::to_string(f.rows) + " rows but only " +
+                                                              std::to_string(expected) + " entries (every row needs its diagonal entry)");
+    // Reserve for what the bytes present can hold, not for what the size line declares (an entry
+    // takes at least 2 bytes, "v\n"; 6 in coordinate format): a 70-byte file declaring 2e8 entries
+    // ends in "the file ends after ..." having allocated next to nothing.
+    const size_t min_bytes = f.format == "coordinate" ? 6 : 2;
+    f.entries.reserve(std::min(size_t(expected), lines.remaining() / min_bytes + 1));
     long count = 0, ai = 0, aj = 0;  // array format: column-major position
     while (count < expected) {
         if (!lines.next(b, e))
@@ -190,11 +222,21 @@ MtxFile parse_mtx(const std::string& path)
     return f;
 }
 
+SpMat read_mtx_matrix_bounded(const std::string& path, const MtxLimits& limits);
+Vec read_mtx_vector_bounded(const std::string& path, const MtxLimits& limits);
+
 } // namespace
 
 SpMat read_mtx_matrix(const std::string& path)
 {
-    MtxFile f = parse_mtx(path);
+    return read_mtx_matrix_bounded(path, {});
+}
+
+namespace {
+
+SpMat read_mtx_matrix_bounded(const std::string& path, const MtxLimits& limits)
+{
+    MtxFile f = parse_mtx(path, limits);
     if (f.format == "array") {  // dense: keep nonzeros and the diagonal
         std::vector<MtxFile::Entry> kept;
         for (const auto& e : f.entries)
@@ -222,9 +264,18 @@ SpMat read_mtx_matrix(const std::string& path)
     return M;
 }
 
+} // namespace
+
 Vec read_mtx_vector(const std::string& path)
 {
-    const MtxFile f = parse_mtx(path);
+    return read_mtx_vector_bounded(path, {});
+}
+
+namespace {
+
+Vec read_mtx_vector_bounded(const std::string& path, const MtxLimits& limits)
+{
+    const MtxFile f = parse_mtx(path, limits);
     if (f.cols != 1 && f.rows != 1 && !(f.rows == 0 || f.cols == 0))
         throw_input_error(path, "line 1", "expected a vector (k x 1 or 1 x k), got " + std::to_string(f.rows) + " x " +
                                               std::to_string(f.cols));
@@ -240,44 +291,49 @@ Vec read_mtx_vector(const std::string& path)
     return v;
 }
 
+} // namespace
+
+namespace {
+
+/// printf into a growing string (the files are built in memory, then written atomically).
+void append(std::string& out, const char* format, ...) __attribute__((format(printf, 2, 3)));
+void append(std::string& out, const char* format, ...)
+{
+    char buffer[128];
+    va_list args;
+    va_start(args, format);
+    const int len = std::vsnprintf(buffer, sizeof buffer, format, args);
+    va_end(args);
+    if (len > 0) out.append(buffer, size_t(std::min<int>(len, int(sizeof buffer) - 1)));
+}
+
+} // namespace
+
 void write_mtx_matrix(const std::string& path, const SpMat& M0, const std::string& comment)
 {
     SpMat M = M0;
     M.makeCompressed();
-    FILE* out = std::fopen(path.c_str(), "w");
-    if (!out) throw_input_error(path, "", std::string("cannot write: ") + std::strerror(errno));
-    std::fprintf(out, "%%%%MatrixMarket matrix coordinate real general\n");
-    if (!comment.empty()) std::fprintf(out, "%% %s\n", comment.c_str());
-    std::fprintf(out, "%ld %ld %ld\n", long(M.rows()), long(M.cols()), long(M.nonZeros()));
+    std::string text = "%%MatrixMarket matrix coordinate real general\n";
+    if (!comment.empty()) text += "% " + comment + "\n";
+    append(text, "%ld %ld %ld\n", long(M.rows()), long(M.cols()), long(M.nonZeros()));
     for (Eigen::Index r = 0; r < M.rows(); ++r)
         for (int e = M.outerIndexPtr()[r]; e < M.outerIndexPtr()[r + 1]; ++e)
-            std::fprintf(out, "%ld %d %.17g\n", long(r) + 1, M.innerIndexPtr()[e] + 1, M.valuePtr()[e]);
-    if (std::fclose(out) != 0) throw_input_error(path, "", std::string("cannot write: ") + std::strerror(errno));
+            append(text, "%ld %d %.17g\n", long(r) + 1, M.innerIndexPtr()[e] + 1, M.valuePtr()[e]);
+    write_file_atomic(path, text);
 }
 
 void write_mtx_vector(const std::string& path, const Vec& v, const std::string& comment)
 {
-    FILE* out = std::fopen(path.c_str(), "w");
-    if (!out) throw_input_error(path, "", std::string("cannot write: ") + std::strerror(errno));
-    std::fprintf(out, "%%%%MatrixMarket matrix array real general\n");
-    if (!comment.empty()) std::fprintf(out, "%% %s\n", comment.c_str());
-    std::fprintf(out, "%ld 1\n", long(v.size()));
-    for (Eigen::Index i = 0; i < v.size(); ++i) std::fprintf(out, "%.17g\n", v[i]);
-    if (std::fclose(out) != 0) throw_input_error(path, "", std::string("cannot write: ") + std::strerror(errno));
+    std::string text = "%%MatrixMarket matrix array real general\n";
+    if (!comment.empty()) text += "% " + comment + "\n";
+    append(text, "%ld 1\n", long(v.size()));
+    for (Eigen::Index i = 0; i < v.size(); ++i) append(text, "%.17g\n", v[i]);
+    write_file_atomic(path, text);
 }
 
 namespace {
 
-nlohmann::json read_json_file(const std::string& path)
-{
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw_input_error(path, "", std::string("cannot open: ") + std::strerror(errno));
-    try {
-        return nlohmann::json::parse(in);
-    } catch (const nlohmann::json::parse_error& e) {
-        throw_input_error(path, "", "not valid JSON (parse error at byte " + std::to_string(e.byte) + ")");
-    }
-}
+nlohmann::json read_json_file(const std::string& path) { return read_json_checked(path); }
 
 void read_contacts(const std::string& path, long m, ContactRows& ct)
 {
@@ -329,13 +385,19 @@ Qp read_matrix_market_folder(const std::string& dir, SnapshotExtras* extras)
     for (const char* name : {"A.mtx", "b.mtx", "J.mtx", "c.mtx", "x0.mtx"})
         if (!fs::exists(d / name)) throw_input_error(dir, name, "missing");
     Qp qp;
-    qp.A = read_mtx_matrix((d / "A.mtx").string());
+    MtxLimits a_limits;
+    a_limits.diagonal_needed = true;
+    qp.A = read_mtx_matrix_bounded((d / "A.mtx").string(), a_limits);
     const long n = long(qp.A.rows());
     if (qp.A.cols() != n)
         throw_input_error((d / "A.mtx").string(), "size", "A must be square, got " + std::to_string(n) + " x " + std::to_string(long(qp.A.cols())));
     auto vector_of = [&](const char* name, long size, const char* what) {
         const std::string path = (d / name).string();
-        Vec v = read_mtx_vector(path);
+        MtxLimits limits;  // a vector longer than expected is refused before it is allocated
+        limits.vector_size = true;
+        limits.max_rows = limits.max_cols = std::max(size, 1L);
+        limits.why_rows = limits.why_cols = std::string("expected ") + what + " = " + std::to_string(size) + " entries";
+        Vec v = read_mtx_vector_bounded(path, limits);
         if (v.size() != size)
             throw_input_error(path, "size", "expected " + std::string(what) + " = " + std::to_string(size) + " entries, got " +
                                                 std::to_string(long(v.size())));
@@ -343,7 +405,17 @@ Qp read_matrix_market_folder(const std::string& dir, SnapshotExtras* extras)
     };
     qp.b = vector_of("b.mtx", n, "n (from A.mtx)");
     qp.x0 = vector_of("x0.mtx", n, "n (from A.mtx)");
-    qp.J = read_mtx_matrix((d / "J.mtx").string());
+    // A row of J holds an entry of J.mtx or a value of c.mtx (2 bytes at least; a row with neither is
+    // the vacuous 0 >= 0): rows beyond that are refused before J's row index is allocated.
+    MtxLimits j_limits;
+    std::error_code size_ec;
+    const auto c_bytes = fs::file_size(d / "c.mtx", size_ec);
+    if (!size_ec) {
+        j_limits.max_rows = long(std::min<std::uintmax_t>(c_bytes / 2, 2147483647u));
+        j_limits.why_rows = "c.mtx holds " + std::to_string(c_bytes) + " bytes";
+        j_limits.plus_entries = true;
+    }
+    qp.J = read_mtx_matrix_bounded((d / "J.mtx").string(), j_limits);
     if (qp.J.cols() != n)
         throw_input_error((d / "J.mtx").string(), "size", "expected n = " + std::to_string(n) + " columns (from A.mtx), got " +
                                                               std::to_string(long(qp.J.cols())));
@@ -380,10 +452,7 @@ void write_matrix_market_folder(const std::string& dir, const Qp& qp, const Snap
         if (J.cols() != qp.A.rows() && J.rows() == 0) J.resize(0, qp.A.rows());
         write_mtx_matrix((tmp / "J.mtx").string(), J, "J: subject to J x >= c");
         write_mtx_vector((tmp / "c.mtx").string(), qp.c, "c");
-        {
-            std::ofstream meta(tmp / "meta.json");
-            meta << qp.meta.dump(2) << "\n";
-        }
+        write_file_atomic((tmp / "meta.json").string(), qp.meta.dump(2) + "\n");
         if (!qp.contacts.empty()) {
             nlohmann::json ct = nlohmann::json::object();
             if (!qp.contacts.kind.empty()) ct["kind"] = qp.contacts.kind;
@@ -395,8 +464,7 @@ void write_matrix_market_folder(const std::string& dir, const Qp& qp, const Snap
                                     qp.contacts.vertex[4 * r + 3]});
                 ct["vertex"] = rows;
             }
-            std::ofstream out(tmp / "contact.json");
-            out << ct.dump() << "\n";
+            write_file_atomic((tmp / "contact.json").string(), ct.dump() + "\n");
         }
         if (extras && extras->x_ref.size()) write_mtx_vector((tmp / "x_ref.mtx").string(), extras->x_ref, "x_ref");
         if (extras && extras->lambda_ref.size())
@@ -405,17 +473,9 @@ void write_matrix_market_folder(const std::string& dir, const Qp& qp, const Snap
         fs::remove_all(tmp, ec);
         throw;
     }
-    // Replace an older folder of ours: move it aside first so that DIR is never half written.
-    const fs::path old = target.string() + ".old." + std::to_string(::getpid());
-    const bool had_old = fs::exists(target);
-    if (had_old) fs::rename(target, old, ec);
-    if (!ec) fs::rename(tmp, target, ec);
-    if (ec) {
-        const std::string why = ec.message();
-        fs::remove_all(tmp, ec);
-        throw_input_error(dir, "", "cannot write: " + why);
-    }
-    if (had_old) fs::remove_all(old, ec);
+    // Replace an older folder of ours in one step (no half-written DIR, no DIR.old.<pid> left).
+    fsync_dir(tmp.string());
+    replace_dir(tmp.string(), target.string());
 }
 
 } // namespace cb

@@ -4,6 +4,8 @@
 // a second. Nothing is returned unless everything passed.
 #include "problems/qpsnap.hpp"
 
+#include "problems/io_util.hpp"
+
 #include <zlib.h>
 
 #include <algorithm>
@@ -41,14 +43,18 @@ struct FileBytes {
     std::uint64_t file_size = 0;  ///< bytes in the file
 };
 
+void refuse_sparse(const std::string& path, int fd, std::uint64_t size);
+
 FileBytes read_all(const std::string& path, std::uint64_t limit = ~0ULL)
 {
-    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0) throw_input_error(path, "", std::string("cannot open: ") + std::strerror(errno));
+    const int fd = open_regular_file(path);  // a FIFO or folder is refused, not waited on
     struct stat st{};
-    if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    ::fstat(fd, &st);
+    try {
+        refuse_sparse(path, fd, std::uint64_t(st.st_size));  // a header length into a hole: no 4 GB buffer
+    } catch (...) {
         ::close(fd);
-        throw_input_error(path, "", "not a regular file");
+        throw;
     }
     FileBytes f;
     f.file_size = std::uint64_t(st.st_size);
@@ -68,19 +74,44 @@ FileBytes read_all(const std::string& path, std::uint64_t limit = ~0ULL)
     return f;
 }
 
+/// Bytes of `fd` that are holes (never written: a sparse file reads them as zeros without
+/// storing them). Our writer leaves none; a declared array that lies in a hole would make the
+/// reader commit memory for data the file does not hold, so more than a little is refused.
+void refuse_sparse(const std::string& path, int fd, std::uint64_t size)
+{
+    std::uint64_t holes = 0, first_hole = size;
+    off_t pos = 0;
+    while (std::uint64_t(pos) < size) {
+        const off_t hole = ::lseek(fd, pos, SEEK_HOLE);
+        if (hole < 0 || std::uint64_t(hole) >= size) break;  // no (more) holes, or not supported
+        off_t data = ::lseek(fd, hole, SEEK_DATA);
+        if (data < 0) data = off_t(size);                     // a hole up to the end
+        if (holes == 0) first_hole = std::uint64_t(hole);
+        holes += std::uint64_t(data - hole);
+        pos = data;
+    }
+    ::lseek(fd, 0, SEEK_SET);
+    const std::uint64_t allowed = std::max<std::uint64_t>(std::uint64_t(64) << 20, (size - holes));
+    if (holes > allowed)
+        throw_input_error(path, "data", "sparse file: " + str(holes) + " of its " + str(size) + " bytes (from byte " +
+                                            str(first_hole) + ") are holes, not data written to the file");
+}
+
 /// The whole file mapped read-only (no copy out of the page cache); empty files are not mapped.
 class MappedFile {
 public:
     explicit MappedFile(const std::string& path)
     {
-        const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-        if (fd < 0) throw_input_error(path, "", std::string("cannot open: ") + std::strerror(errno));
+        const int fd = open_regular_file(path);  // a FIFO or folder is refused, not waited on
         struct stat st{};
-        if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-            ::close(fd);
-            throw_input_error(path, "", "not a regular file");
-        }
+        ::fstat(fd, &st);
         m_size = std::uint64_t(st.st_size);
+        try {
+            refuse_sparse(path, fd, m_size);
+        } catch (...) {
+            ::close(fd);
+            throw;
+        }
         if (m_size > 0) {
             void* p = ::mmap(nullptr, m_size, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
             if (p == MAP_FAILED) {
@@ -136,6 +167,9 @@ nlohmann::json parse_header(const std::string& path, const unsigned char* bytes,
     if (N > file_size - 8)
         throw_input_error(path, "header", "header length " + str(N) + " exceeds the file (" + str(file_size - 8) +
                                               " bytes after the length field)");
+    // Deep nesting would overflow the stack of the parser (and of the JSON destructor).
+    check_json_depth(reinterpret_cast<const char*>(bytes + 8), reinterpret_cast<const char*>(bytes + 8 + N), path,
+                     "header");
     nlohmann::json h;
     try {
         h = nlohmann::json::parse(bytes + 8, bytes + 8 + N);
@@ -642,23 +676,17 @@ void write_qpsnap(const std::string& path, const Qp& qp, const SnapshotExtras* e
     unsigned char len[8];
     for (int i = 0; i < 8; ++i) len[i] = static_cast<unsigned char>((std::uint64_t(text.size()) >> (8 * i)) & 0xff);
 
-    const std::string tmp = path + ".tmp." + std::to_string(::getpid());
-    FILE* out = std::fopen(tmp.c_str(), "wb");
-    if (!out) throw_input_error(path, "", std::string("cannot write: ") + std::strerror(errno));
-    bool ok = std::fwrite(len, 1, 8, out) == 8 && std::fwrite(text.data(), 1, text.size(), out) == text.size();
+    AtomicFile out(path);  // checked writes, fsync, rename: no partial snapshot on a full disk
+    out.write(len, 8);
+    out.write(text);
     for (const auto& a : arrays)
-        ok = ok && (a.bytes.empty() || std::fwrite(a.bytes.data(), 1, a.bytes.size(), out) == a.bytes.size());
-    ok = (std::fclose(out) == 0) && ok;
-    if (!ok || std::rename(tmp.c_str(), path.c_str()) != 0) {
-        const std::string why = std::strerror(errno);
-        std::remove(tmp.c_str());
-        throw_input_error(path, "", "cannot write: " + why);
-    }
+        if (!a.bytes.empty()) out.write(a.bytes.data(), a.bytes.size());
+    out.commit();
 }
 
 std::string qpsnap_content_hash(const std::string& path)
 {
-    FILE* in = std::fopen(path.c_str(), "rb");
+    FILE* in = ::fdopen(open_regular_file(path), "rb");
     if (!in) throw_input_error(path, "", std::string("cannot open: ") + std::strerror(errno));
     std::uint64_t h = 14695981039346656037ULL;  // FNV-1a 64 offset basis
     std::vector<unsigned char> buf(1 << 20);

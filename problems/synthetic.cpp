@@ -139,6 +139,10 @@ nlohmann::json effective_params(const std::string& family, const FamilySpec& spe
     return out;
 }
 
+/// Bounds of the generator (problems/synthetic.hpp): what a laptop holds, stated in the messages.
+constexpr double kMaxGridVertices = 1e6;
+constexpr long kMaxRows = 10000000;
+
 [[noreturn]] void bad_param(const std::string& family, const std::string& key, const std::string& what,
                             const nlohmann::json& got)
 {
@@ -171,8 +175,9 @@ void validate(const FemGridParams& p, const std::string& where)
     if (p.nx < 1) bad("nx", "an integer >= 1", p.nx);
     if (p.ny < 1) bad("ny", "an integer >= 1", p.ny);
     if (p.nz < 1) bad("nz", "an integer >= 1", p.nz);
-    const double vertices = double(p.nx + 1) * (p.ny + 1) * (p.nz + 1);
-    if (3 * vertices > 3e7) bad("nx", "at most 1e7 vertices in all (nx+1)(ny+1)(nz+1)", vertices);
+    // Memory grows with the grid (about 1 kB per vertex while assembling): bounded before it is built.
+    const double vertices = double(p.nx + 1) * (double(p.ny) + 1) * (double(p.nz) + 1);
+    if (vertices > kMaxGridVertices) bad("nx", "at most 1e6 vertices in all (nx+1)(ny+1)(nz+1)", vertices);
     if (!(p.spacing > 0) || !std::isfinite(p.spacing)) bad("spacing", "> 0", p.spacing);
     if (!(p.youngs > 0) || !std::isfinite(p.youngs)) bad("youngs", "> 0", p.youngs);
     if (!(p.poisson > -1 && p.poisson < 0.5)) bad("poisson", "a value in (-1, 0.5)", p.poisson);
@@ -538,6 +543,8 @@ Qp make_coupled(const std::string& family, const nlohmann::json& p, std::uint64_
     if (!(scale > 0 && scale < 1)) bad_param(family, "upper_scale", "a value in (0, 1)", p["upper_scale"]);
     const int upper_ny = p["upper_ny"].get<int>();
     if (upper_ny < 1) bad_param(family, "upper_ny", "an integer >= 1", p["upper_ny"]);
+    if (double(fp.nx + 1) * (double(upper_ny) + 1) * (double(fp.nz) + 1) > kMaxGridVertices)
+        bad_param(family, "upper_ny", "at most 1e6 vertices in the upper body", p["upper_ny"]);
     std::mt19937_64 rng(seed);
     const double s = fp.spacing;
     const double gap = p["gap"].get<double>();
@@ -621,7 +628,7 @@ Qp make_random_spd(const std::string& family, const nlohmann::json& p, std::uint
     const long n = p["n"].get<long>(), m = p["m"].get<long>(), row_nnz = p["row_nnz"].get<long>();
     const double cond = p["condition"].get<double>();
     if (n < 1 || n > 3000) bad_param(family, "n", "an integer in [1, 3000] (A is dense)", p["n"]);
-    if (m < 0) bad_param(family, "m", "an integer >= 0", p["m"]);
+    if (m < 0 || m > kMaxRows) bad_param(family, "m", "an integer in [0, 1e7]", p["m"]);
     if (row_nnz < 1 || row_nnz > n) bad_param(family, "row_nnz", "an integer in [1, n]", p["row_nnz"]);
     if (!(cond >= 1)) bad_param(family, "condition", "a number >= 1", p["condition"]);
     if (!(p["length_scale"].get<double>() > 0)) bad_param(family, "length_scale", "> 0", p["length_scale"]);
@@ -710,7 +717,7 @@ Qp make_variant(const std::string& family, const nlohmann::json& p, std::uint64_
     } else if (family == "zero-rows") {
         const long count = p["count"].get<long>();
         zero_c = p["c"].get<double>();
-        if (count < 0) bad_param(family, "count", "an integer >= 0", p["count"]);
+        if (count < 0 || count > kMaxRows) bad_param(family, "count", "an integer in [0, 1e7]", p["count"]);
         if (!(zero_c <= 0)) bad_param(family, "c", "a number <= 0 (a zero row must be satisfiable)", p["c"]);
         for (long r = 0; r < m; ++r) order.push_back(r);
         for (long k = 0; k < count; ++k) {
@@ -720,7 +727,7 @@ Qp make_variant(const std::string& family, const nlohmann::json& p, std::uint64_
         scale.assign(order.size(), 1.0);
     } else {  // infeasible
         const long pairs = p["pairs"].get<long>();
-        if (pairs < 1) bad_param(family, "pairs", "an integer >= 1", p["pairs"]);
+        if (pairs < 1 || pairs > kMaxRows / 2) bad_param(family, "pairs", "an integer in [1, 5e6]", p["pairs"]);
         RowBuilder rb;
         // Copy the plane rows, then append the contradictory pairs.
         for (long r = 0; r < m; ++r) {
@@ -745,6 +752,31 @@ Qp make_variant(const std::string& family, const nlohmann::json& p, std::uint64_
 
 } // namespace
 
+namespace {
+
+/// Extreme parameters (youngs 1e308, length_scale 1e-300) overflow to inf or NaN: refused here,
+/// so that `generate` never writes a snapshot its own reader rejects.
+void require_finite(const std::string& family, const Qp& qp)
+{
+    auto check = [&](const char* field, const double* v, Eigen::Index count) {
+        for (Eigen::Index i = 0; i < count; ++i)
+            if (!std::isfinite(v[i]))
+                throw_input_error("synthetic family '" + family + "'", "params",
+                                  std::string("the parameters give a non-finite value in ") + field + " (" +
+                                      std::to_string(v[i]) + " at index " + std::to_string(long(i)) +
+                                      "); choose less extreme values");
+    };
+    check("A", qp.A.valuePtr(), qp.A.nonZeros());
+    check("b", qp.b.data(), qp.b.size());
+    check("x0", qp.x0.data(), qp.x0.size());
+    check("J", qp.J.valuePtr(), qp.J.nonZeros());
+    check("c", qp.c.data(), qp.c.size());
+    for (size_t r = 0; r < qp.contacts.depth.size(); ++r)
+        if (!std::isfinite(qp.contacts.depth[r])) check("contact.depth", &qp.contacts.depth[r], 1);
+}
+
+} // namespace
+
 SpMat fem_like_matrix(const FemGridParams& p)
 {
     validate(p, "fem_like_matrix");
@@ -760,7 +792,11 @@ Qp make_synthetic(const std::string& family, const nlohmann::json& params, std::
         throw_input_error("synthetic", "family", "unknown family '" + family + "'; known: " + known);
     }
     const nlohmann::json p = effective_params(family, it->second, params);
-    if (family == "random-spd") return make_random_spd(family, p, seed);  // applies its own units
+    if (family == "random-spd") {  // applies its own units
+        Qp qp = make_random_spd(family, p, seed);
+        require_finite(family, qp);
+        return qp;
+    }
     // Built in one initialisation: Eigen 3.4's SparseMatrix has no move assignment.
     Qp qp = family == "unconstrained" ? make_plane_like(family, p, seed, false)
             : family == "plane"       ? make_plane_like(family, p, seed, true)
@@ -768,6 +804,7 @@ Qp make_synthetic(const std::string& family, const nlohmann::json& params, std::
             : family == "coupled"     ? make_coupled(family, p, seed)
                                       : make_variant(family, p, seed);
     apply_units(qp, p["length_scale"].get<double>(), p["mass_scale"].get<double>());
+    require_finite(family, qp);
     return qp;
 }
 

@@ -24,7 +24,10 @@ struct FemGridParams {            ///< a box of nx*ny*nz cubes, 6 tets each, lin
 SpMat fem_like_matrix(const FemGridParams& p);
 
 /// A seeded synthetic QP. Throws InputError naming the family or parameter when unknown/bad.
-/// Same (family, params, seed) -> the same QP, bit for bit.
+/// Same (family, params, seed) -> the same QP, bit for bit. Bounded before anything is built:
+/// grids of at most 1e6 vertices, at most 1e7 rows (random-spd m, zero-rows count, 2 x
+/// infeasible pairs); parameters that make any value non-finite (youngs 1e308) are refused, so a
+/// generated snapshot always passes read_qpsnap.
 Qp make_synthetic(const std::string& family, const nlohmann::json& params, std::uint64_t seed);
 
 std::vector<std::string> synthetic_families();                 ///< sorted

@@ -1,6 +1,7 @@
 #include "solvers/settings.hpp"
 
 #include <climits>
+#include <cstdint>
 #include <cmath>
 #include <sstream>
 
@@ -58,16 +59,29 @@ long SettingsReader::integer(const std::string& key, long fallback, long min_inc
 {
     const nlohmann::json* value = find(key);
     if (!value) return fallback;
-    double v = 0;
-    if (value->is_number_integer()) v = static_cast<double>(value->get<long>());
-    else if (value->is_number_float() && std::floor(value->get<double>()) == value->get<double>())
-        v = value->get<double>();
-    else fail(key, "expected an integer, got " + value->dump());
-    if (v < static_cast<double>(min_inclusive))
+    // Compared as integers, never through a double: 9223372036854775807 as a double rounds up to
+    // 2^63, which no long holds (the cast wrapped to a negative cap).
+    long v = 0;
+    bool above = false, below = false;
+    if (value->is_number_unsigned()) {
+        const std::uint64_t u = value->get<std::uint64_t>();
+        above = u > static_cast<std::uint64_t>(LONG_MAX);
+        if (!above) v = static_cast<long>(u);
+    } else if (value->is_number_integer()) {
+        v = static_cast<long>(value->get<std::int64_t>());
+    } else if (value->is_number_float() && std::floor(value->get<double>()) == value->get<double>()) {
+        const double d = value->get<double>();
+        above = d >= 9223372036854775808.0;  // 2^63
+        below = d < -9223372036854775808.0;
+        if (!above && !below) v = static_cast<long>(d);
+    } else {
+        fail(key, "expected an integer, got " + value->dump());
+    }
+    if (below || (!above && v < min_inclusive))
         fail(key, "must be >= " + std::to_string(min_inclusive) + ", got " + value->dump());
-    if (v > static_cast<double>(max_inclusive))
+    if (above || v > max_inclusive)
         fail(key, "must be <= " + std::to_string(max_inclusive) + ", got " + value->dump());
-    return static_cast<long>(v);
+    return v;
 }
 
 bool SettingsReader::boolean(const std::string& key, bool fallback)
@@ -97,7 +111,7 @@ CommonSettings SettingsReader::common()
     CommonSettings s;
     s.tol = number("tol", s.tol, 0.0);
     s.stop = choice("stop", "kkt", {"kkt", "native"}) == "kkt" ? StopRule::KKT : StopRule::NATIVE;
-    s.max_iterations = integer("max_iterations", s.max_iterations, 0);
+    s.max_iterations = integer("max_iterations", s.max_iterations, 0, kMaxIterationsLimit);
     s.time_limit_s = number("time_limit_s", s.time_limit_s, -1e-300);
     s.seed = static_cast<std::uint64_t>(integer("seed", 0, 0));
     return s;
@@ -117,7 +131,7 @@ std::vector<SettingDoc> common_setting_docs()
 {
     return {{"tol", "1e-6", "stop tolerance on the accuracy error e, dimensionless: residual lengths as a fraction of the scene size (stop=kkt); or on the native residual in the paper's units (stop=native)"},
             {"stop", "kkt", "kkt | native: which criterion ends the solve (kkt = the accuracy error e of docs/accuracy.md)"},
-            {"max_iterations", "10000", "cap on outer iterations"},
+            {"max_iterations", "10000", "cap on outer iterations (at most 10^12; bound long runs with time_limit_s)"},
             {"time_limit_s", "0", "wall-time limit of the solve in seconds; 0 = none"},
             {"seed", "0", "seed of every random choice"}};
 }

@@ -16,6 +16,10 @@ enum class StopRule {
     NATIVE,  ///< the solver's published criterion; `tol` is then the paper's absolute tolerance
 };
 
+/// Largest accepted max_iterations: counters stay far from overflow (a larger value is an error
+/// naming the key, not a silent clamp).
+constexpr long kMaxIterationsLimit = 1000000000000L;
+
 /// Settings every solver accepts.
 struct CommonSettings {
     double tol = 1e-6;          ///< on the accuracy error e (a fraction of the scene size), or the native residual (stop=native)

@@ -1,5 +1,7 @@
 #include "problems/sim/mesh_io.hpp"
 
+#include "problems/io_util.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -40,7 +42,7 @@ std::string trim(const std::string& s)
 /// Line-by-line reader that knows where it is, for error messages.
 class LineReader {
 public:
-    LineReader(const std::string& path, char comment) : m_path(path), m_comment(comment), m_in(path)
+    LineReader(const std::string& path, char comment) : m_path(path), m_comment(comment), m_in((require_regular_file(path), path))
     {
         if (!m_in) throw_input_error(path, "", "cannot open file");
     }

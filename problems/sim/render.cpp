@@ -1,5 +1,7 @@
 #include "problems/sim/render.hpp"
 
+#include "problems/io_util.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -47,11 +49,9 @@ void write_png(const std::string& path, const Image& image)
     chunk(png, "IHDR", ihdr);
     chunk(png, "IDAT", z);
     chunk(png, "IEND", {});
-    const std::string tmp = path + ".tmp";
-    std::FILE* f = std::fopen(tmp.c_str(), "wb");
-    if (!f) throw_input_error(path, "", "cannot write file");
-    const bool ok = std::fwrite(png.data(), 1, png.size(), f) == png.size();
-    if (std::fclose(f) != 0 || !ok || std::rename(tmp.c_str(), path.c_str()) != 0) throw_input_error(path, "", "write failed");
+    AtomicFile out(path);  // every write checked, no partial picture left behind
+    out.write(png.data(), png.size());
+    out.commit();
 }
 
 View make_view(const Vec3& view_deg, const Vec3& lo, const Vec3& hi)

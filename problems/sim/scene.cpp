@@ -1,8 +1,10 @@
 #include "problems/sim/scene.hpp"
 
+#include "problems/io_util.hpp"
 #include "problems/sim/mesh_io.hpp"
 #include "problems/sim/tetrahedralize.hpp"
 
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <set>
@@ -10,6 +12,15 @@
 
 namespace cb::sim {
 namespace {
+
+/// A count for messages: "3e+09" style beyond 64-bit integers, exact below.
+std::string fmt_count(double v)
+{
+    if (v < 9e18) return std::to_string(static_cast<long long>(v));
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.3g", v);
+    return buf;
+}
 
 bool file_exists(const std::string& path)
 {
@@ -163,7 +174,7 @@ std::string resolve(const std::string& path, const PathRoots& roots, bool& avail
 
 struct MeshChoice {
     TetMesh mesh;
-    std::string source, quality;
+    std::string source, quality, file;
 };
 
 MeshChoice load_body_mesh(Reader& body, const PathRoots& roots)
@@ -177,6 +188,12 @@ MeshChoice load_body_mesh(Reader& body, const PathRoots& roots)
         const std::vector<long> cells = b.integers("cells");
         if (cells.size() != 3 || *std::min_element(cells.begin(), cells.end()) < 1)
             b.fail("cells", "expected 3 positive integers [nx, ny, nz]");
+        // Bounded before anything is allocated (a product of three longs can overflow: doubles).
+        const double n_cells = double(cells[0]) * double(cells[1]) * double(cells[2]);
+        if (n_cells * 6 > double(roots.max_tets))
+            b.fail("cells", "[" + std::to_string(cells[0]) + ", " + std::to_string(cells[1]) + ", " +
+                                std::to_string(cells[2]) + "] is " + fmt_count(n_cells) + " cells, more than the limit of " +
+                                std::to_string(roots.max_tets / 6) + " (" + std::to_string(roots.max_tets) + " tets)");
         const Vec3 size = b.vec3("size", Vec3(1, 1, 1));
         if (size.minCoeff() <= 0) b.fail("size", "must be > 0 in every direction");
         const bool center = b.boolean("center", true);
@@ -220,9 +237,11 @@ MeshChoice load_body_mesh(Reader& body, const PathRoots& roots)
             out.mesh = tetrahedralize(s, opt, full);
             out.quality = mesh_quality(out.mesh).to_string();
             out.source = full + " (tetrahedralised, resolution " + std::to_string(resolution) + ")";
+            out.file = full;
         } else {
             out.mesh = read_tet_mesh(full);
             out.source = full;
+            out.file = full;
         }
         Vec3 lo, hi;
         bounding_box(out.mesh.positions, lo, hi);
@@ -301,14 +320,8 @@ PathRoots default_path_roots(const std::string& scene_path, const std::string& d
 
 Scene load_scene(const std::string& path, const PathRoots& roots)
 {
-    std::ifstream in(path);
-    if (!in) throw_input_error(path, "", "cannot open scene file");
-    nlohmann::json j;
-    try {
-        j = nlohmann::json::parse(in, nullptr, true, /*ignore_comments=*/true);
-    } catch (const nlohmann::json::parse_error& e) {
-        throw_input_error(path, "", std::string("invalid JSON: ") + e.what());
-    }
+    // A regular file only (a FIFO would block), nesting bounded (deep JSON overflows the stack).
+    nlohmann::json j = read_json_checked(path, /*allow_comments=*/true);
     const auto dot = path.find_last_of('.');
     if (dot != std::string::npos && path.substr(dot) == ".ini") j = import_authors_ini(j, path);
     return load_scene_json(j, path, roots);
@@ -359,12 +372,18 @@ Scene load_scene_json(const nlohmann::json& j, const std::string& file, const Pa
         }
         s.output.strip_frames = static_cast<int>(o.integer("strip_frames", 6, 0, 64));
         s.output.image_size = static_cast<int>(o.integer("image_size", 256, 16, 4096));
+        // The strip is one image of strip_frames tiles: bounded (64 Mpixel) before it is allocated.
+        if (double(s.output.strip_frames) * s.output.image_size * s.output.image_size > 67108864.0)
+            o.fail("image_size", "strip_frames x image_size^2 = " +
+                                     fmt_count(double(s.output.strip_frames) * s.output.image_size * s.output.image_size) +
+                                     " pixels, more than the limit of 67108864");
         s.output.view_deg = o.vec3("view_deg", s.output.view_deg);
         s.output.export_frames = o.integers("export_frames");
         o.finish();
     }
     const auto* bodies = r.find("bodies");
     if (!bodies || !bodies->is_array() || bodies->empty()) r.fail("bodies", "expected a non-empty array of bodies");
+    double total_tets = 0;
     for (size_t bi = 0; bi < bodies->size(); ++bi) {
         Reader b((*bodies)[bi], file, "/bodies/" + std::to_string(bi));
         Body proto;
@@ -387,15 +406,24 @@ Scene load_scene_json(const nlohmann::json& j, const std::string& file, const Pa
             const std::vector<long> c = a.integers("count");
             if (c.size() != 3 || *std::min_element(c.begin(), c.end()) < 1) a.fail("count", "expected 3 positive integers");
             for (int k = 0; k < 3; ++k) count[k] = c[static_cast<size_t>(k)];
+            const double copies = double(count[0]) * double(count[1]) * double(count[2]);
+            if (copies > double(roots.max_tets))
+                a.fail("count", fmt_count(copies) + " copies, more than the limit of " + std::to_string(roots.max_tets) + " tets allows");
             spacing = a.vec3("spacing", Vec3::Zero());
             a.finish();
         } else
             b.find("array");
         MeshChoice mc = load_body_mesh(b, roots);
         b.finish();
+        const double body_tets = double(mc.mesh.tet_count()) * double(count[0]) * double(count[1]) * double(count[2]);
+        total_tets += body_tets;
+        if (total_tets > double(roots.max_tets))
+            b.fail(b.has("array") ? "array/count" : "mesh", "the scene reaches " + fmt_count(total_tets) +
+                                                                " tets, more than the limit of " + std::to_string(roots.max_tets));
         transform_positions(mc.mesh.positions, scale, rotation_from_euler_deg(rot), trans);
         proto.source = mc.source;
         proto.quality = mc.quality;
+        proto.mesh_file = mc.file;
         for (long k = 0; k < count[2]; ++k)
             for (long jj = 0; jj < count[1]; ++jj)
                 for (long i = 0; i < count[0]; ++i) {

@@ -20,6 +20,9 @@ struct PathRoots {
     std::string data;   ///< --data DIR (the authors' files); empty: "data:" paths unavailable
     std::string cache;  ///< $CB_CACHE or ~/.cache/contactbench
     std::string scene_dir;  ///< relative paths are relative to the scene file
+    /// Bound on the scene's tets (every body, array copies included; a box cell is 6 tets):
+    /// larger scenes are refused before their meshes are built (scenes/README.md "Limits").
+    long max_tets = 6000000;
 };
 PathRoots default_path_roots(const std::string& scene_path, const std::string& data_dir);
 
@@ -30,6 +33,7 @@ struct Body {
     Material material;
     Vec3 velocity = Vec3::Zero();  ///< m/s, initial
     std::string source;   ///< the mesh path actually used (or "box 16x16x32")
+    std::string mesh_file;  ///< the mesh file read (empty for a box): an input of the simulation
     std::string quality;  ///< mesh quality report (tetrahedralised surfaces)
 };
 

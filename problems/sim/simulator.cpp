@@ -1,5 +1,6 @@
 #include "problems/sim/simulator.hpp"
 
+#include "problems/io_util.hpp"
 #include "problems/qpsnap.hpp"
 #include "problems/sim/mesh_io.hpp"
 #include "problems/sim/render.hpp"
@@ -9,12 +10,16 @@
 
 #include <chrono>
 #include <cmath>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <ostream>
 #include <sstream>
 #include <sys/stat.h>
+#include <unistd.h>
 
 namespace cb::sim {
 namespace {
@@ -33,8 +38,79 @@ void make_dirs(const std::string& path)
         cur += part + "/";
         ::mkdir(cur.c_str(), 0755);
     }
-    struct stat st {};
-    if (::stat(path.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) throw_input_error(path, "", "cannot create output folder");
+    struct stat st{};
+    if (::stat(path.c_str(), &st) != 0 || !S_ISDIR(st.st_mode))
+        throw_input_error(path, "--out", "cannot create the output folder: " + std::string(std::strerror(errno)));
+}
+
+} // namespace
+
+/// A table written as PATH.partial while the simulation runs: rows are appended a frame at a
+/// time, each append flushed and checked (a full disk or file-size limit is an error naming the
+/// file), and finish() fsyncs and renames it to PATH. An interrupted run leaves only .partial
+/// tables (clearly incomplete); a failed one leaves none.
+class PartialTable {
+public:
+    void open(const std::string& path, const std::string& header)
+    {
+        m_path = path;
+        m_partial = path + ".partial";
+        m_file = std::fopen(m_partial.c_str(), "w");
+        if (!m_file) throw_input_error(m_path, "", std::string("cannot write: ") + std::strerror(errno));
+        append(header);
+    }
+    void append(const std::string& rows)
+    {
+        if (std::fwrite(rows.data(), 1, rows.size(), m_file) != rows.size() || std::fflush(m_file) != 0) fail();
+    }
+    void finish()
+    {
+        if (::fsync(::fileno(m_file)) != 0) fail();
+        const int rc = std::fclose(m_file);
+        m_file = nullptr;
+        if (rc != 0 || std::rename(m_partial.c_str(), m_path.c_str()) != 0) fail();
+    }
+    void abandon()
+    {
+        if (m_file) std::fclose(m_file);
+        m_file = nullptr;
+        if (!m_partial.empty()) std::remove(m_partial.c_str());
+    }
+    ~PartialTable()
+    {
+        if (m_file) std::fclose(m_file);
+    }
+
+private:
+    [[noreturn]] void fail()
+    {
+        const std::string why = std::strerror(errno);
+        abandon();
+        throw_input_error(m_path, "", "write failed: " + why + " (the simulation's tables are incomplete; nothing kept)");
+    }
+    std::string m_path, m_partial;
+    std::FILE* m_file = nullptr;
+};
+
+namespace {
+
+/// Removes the files of an earlier simulation in `dir` (and only those): a new simulation into
+/// an old --out replaces it instead of mixing its snapshots with the old ones.
+void remove_old_output(const std::string& dir, const std::string& scene_name)
+{
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    for (const char* name : {"simulation.json", "steps.csv", "frames.csv", "steps.csv.partial", "frames.csv.partial"})
+        fs::remove(fs::path(dir) / name, ec);
+    fs::remove(fs::path(dir) / (scene_name + "_strip.png"), ec);
+    using Kind = std::pair<const char*, const char*>;  // (folder, extension)
+    for (const Kind& kind : {Kind{"snapshots", ".qpsnap"}, Kind{"frames", ".obj"}}) {
+        const auto& [sub, ext] = kind;
+        const fs::path folder = fs::path(dir) / sub;
+        if (!fs::is_directory(folder, ec)) continue;
+        for (const auto& entry : fs::directory_iterator(folder, ec))
+            if (entry.path().extension() == ext) fs::remove(entry.path(), ec);
+    }
 }
 } // namespace
 
@@ -221,19 +297,43 @@ bool Simulator::run()
 {
     const long frames = m_opt.frames >= 0 ? m_opt.frames : m_scene.frames;
     const bool write = !m_opt.out_dir.empty();
-    std::ofstream steps_csv, frames_csv;
+    PartialTable steps_csv, frames_csv;
     if (write) {
         make_dirs(m_opt.out_dir);
+        remove_old_output(m_opt.out_dir, m_scene.name);
         if (m_opt.snapshots && m_scene.output.snapshots) make_dirs(m_opt.out_dir + "/snapshots");
-        steps_csv.open(m_opt.out_dir + "/steps.csv");
-        frames_csv.open(m_opt.out_dir + "/frames.csv");
-        if (!steps_csv || !frames_csv) throw_input_error(m_opt.out_dir, "", "cannot write steps.csv/frames.csv");
-        steps_csv << "frame,step,newton_iteration,solver,status,iterations,kkt_rel,time_assembly_s,time_detection_s,"
-                     "time_solve_s,rows,rows_solved,snapshot\n";
-        frames_csv << "frame,time_s,max_penetration,max_detected_depth,kinetic_energy,elastic_energy,max_speed,rows,blow_up\n";
-        steps_csv << std::setprecision(9);
-        frames_csv << std::setprecision(9);
+        steps_csv.open(m_opt.out_dir + "/steps.csv",
+                       "frame,step,newton_iteration,solver,status,iterations,kkt_rel,time_assembly_s,time_detection_s,"
+                       "time_solve_s,rows,rows_solved,snapshot\n");
+        frames_csv.open(m_opt.out_dir + "/frames.csv",
+                        "frame,time_s,max_penetration,max_detected_depth,kinetic_energy,elastic_energy,max_speed,rows,blow_up\n");
     }
+    try {
+        const bool ok = run_frames(frames, write, steps_csv, frames_csv);
+        if (write) {
+            steps_csv.finish();
+            frames_csv.finish();
+            // Written last: its presence says the folder holds a whole simulation, and of what.
+            nlohmann::json meshes = nlohmann::json::array();
+            for (const auto& b : m_scene.bodies)
+                if (!b.mesh_file.empty() && std::find(meshes.begin(), meshes.end(), b.mesh_file) == meshes.end())
+                    meshes.push_back(b.mesh_file);
+            const nlohmann::json record = {{"scene", m_scene.name}, {"scene_file", m_scene.file}, {"meshes", meshes},
+                                           {"data", m_opt.data_dir}, {"frames", frames}, {"frames_done", m_frame},
+                                           {"blow_up", !ok}, {"solver", m_solver_name},
+                                           {"simulator_version", kSimulatorVersion}};
+            write_file_atomic(m_opt.out_dir + "/simulation.json", record.dump(1) + "\n");
+        }
+        return ok;
+    } catch (...) {
+        steps_csv.abandon();
+        frames_csv.abandon();
+        throw;
+    }
+}
+
+bool Simulator::run_frames(long frames, bool write, PartialTable& steps_csv, PartialTable& frames_csv)
+{
     // Frames pictured in the strip: evenly spread over the run, last frame included.
     std::vector<long> strip;
     const int ns = write ? m_scene.output.strip_frames : 0;
@@ -257,6 +357,9 @@ bool Simulator::run()
         long iters = 0;
         double ta = 0, td = 0, tsv = 0, kkt = 0;
         std::string status;
+        std::ostringstream step_rows, frame_row;  // appended together once the frame is whole
+        step_rows << std::setprecision(9);
+        frame_row << std::setprecision(9);
         for (const StepRecord& r : recs) {
             iters += r.iterations;
             ta += r.time_assembly_s;
@@ -265,7 +368,7 @@ bool Simulator::run()
             kkt = r.kkt_rel;
             status = r.status;
             if (write)
-                steps_csv << r.frame << ',' << r.step << ',' << r.newton << ',' << r.solver << ',' << r.status << ','
+                step_rows << r.frame << ',' << r.step << ',' << r.newton << ',' << r.solver << ',' << r.status << ','
                           << r.iterations << ',' << r.kkt_rel << ',' << r.time_assembly_s << ',' << r.time_detection_s << ','
                           << r.time_solve_s << ',' << r.rows << ',' << r.rows_solved << ',' << r.snapshot << '\n';
         }
@@ -274,9 +377,14 @@ bool Simulator::run()
         sum_solve += tsv;
         nsteps += static_cast<long>(recs.size());
         if (write)
-            frames_csv << fr.frame << ',' << fr.time_s << ',' << fr.max_penetration << ',' << fr.max_detected_depth << ','
+            frame_row << fr.frame << ',' << fr.time_s << ',' << fr.max_penetration << ',' << fr.max_detected_depth << ','
                        << fr.kinetic_energy << ',' << fr.elastic_energy << ',' << fr.max_speed << ',' << fr.rows << ','
                        << (fr.blow_up ? 1 : 0) << '\n';
+        if (write) {
+            // steps first: a frame is recorded when its frames.csv row is there.
+            steps_csv.append(step_rows.str());
+            frames_csv.append(frame_row.str());
+        }
         if (m_opt.progress) {
             char line[256];
             std::snprintf(line, sizeof line,

@@ -24,7 +24,12 @@ struct SimulatorOptions {
     bool snapshots = true;        ///< false: --no-snapshots
     long frames = -1;             ///< overrides the scene's frame count when >= 0
     std::ostream* progress = nullptr;  ///< one line per frame
+    std::string data_dir;         ///< --data (recorded in simulation.json)
 };
+
+/// Bump when a change alters what a simulation of the same scene writes (physics, detection,
+/// snapshot content): caches keyed on it (plots/reproduce.py) then simulate again.
+constexpr int kSimulatorVersion = 1;
 
 /// What one QP solve of a step produced.
 struct StepRecord {
@@ -48,6 +53,8 @@ struct FrameRecord {
     long rows = 0;
     bool blow_up = false;
 };
+
+class PartialTable;  // simulator.cpp: a CSV written as .partial, renamed when whole
 
 class Simulator {
 public:
@@ -75,6 +82,7 @@ public:
     const std::vector<ContactRow>& last_rows() const { return m_rows; }
 
 private:
+    bool run_frames(long frames, bool write, PartialTable& steps_csv, PartialTable& frames_csv);
     std::string snapshot_path(long frame, int newton) const;
     Scene m_scene;
     SimulatorOptions m_opt;

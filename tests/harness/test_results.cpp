@@ -77,7 +77,7 @@ TEST(Results, AtomicWriteReplacesAndLeavesNoTemporary)
     EXPECT_TRUE(back["nan"].is_null());
     EXPECT_EQ(count_tmp(dir), 0u);
     EXPECT_EQ(error_of([&] { read_json_file((dir / "missing.json").string()); }),
-              (dir / "missing.json").string() + ": cannot open (missing or unreadable)");
+              (dir / "missing.json").string() + ": cannot open: No such file or directory");
 }
 
 TEST(Results, SummaryColumnsAndRow)
@@ -169,7 +169,7 @@ TEST(Suite, RejectsBadSuitesNamingTheField)
     EXPECT_EQ(error_of([&] { parse_suite(no_solvers, "s.json"); }),
               "s.json: /solvers: missing (an array of {label, solver, settings})");
     EXPECT_EQ(error_of([&] { load_suite("/nonexistent/suite.json"); }),
-              "/nonexistent/suite.json: cannot open (missing or unreadable)");
+              "/nonexistent/suite.json: cannot open: No such file or directory");
 }
 
 TEST(Suite, ResolvesGlobsFoldersDuplicatesAndGenerated)
@@ -213,10 +213,21 @@ TEST(Reference, CachedByKeyAndAttached)
     const nlohmann::json ref = reference_solution(qp, "k1", dir.string());
     ASSERT_TRUE(ref["objective"].is_number()) << ref.dump();
     EXPECT_FALSE(ref["cached"].get<bool>());
-    EXPECT_TRUE(fs::exists(dir / "reference" / "k1.json"));
+    // Keyed on the snapshot key and the reference method (solver, settings, version): k1-<method>.json.
+    EXPECT_EQ(ref["method"]["solver"], "active-set");
+    EXPECT_EQ(ref["method"]["version"], kReferenceVersion);
+    std::vector<fs::path> files;
+    for (const auto& e : fs::directory_iterator(dir / "reference")) files.push_back(e.path());
+    ASSERT_EQ(files.size(), 1u);
+    EXPECT_EQ(files[0].filename().string().rfind("k1-", 0), 0u) << files[0];
     const nlohmann::json again = reference_solution(qp, "k1", dir.string());
     EXPECT_TRUE(again["cached"].get<bool>());
     EXPECT_EQ(again["objective"], ref["objective"]);
+    // An entry made by another method under that name is recomputed, not trusted.
+    nlohmann::json other = read_json_file(files[0].string());
+    other["method"]["settings"]["tol"] = 1e-3;
+    write_json_atomic(files[0].string(), other);
+    EXPECT_FALSE(reference_solution(qp, "k1", dir.string())["cached"].get<bool>());
     // An independent solver agrees with F* to its tolerance.
     if (builtin_registry().contains("mprgp")) {
         RunOptions options;

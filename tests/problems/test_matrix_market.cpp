@@ -183,5 +183,27 @@ TEST(MatrixMarketErrors, ContactJsonWrongLength)
     expect_error(d, d + "/contact.json: kind: expected an array of m = 1 entries");
 }
 
+TEST(MatrixMarketErrors, DeclaredSizesBeyondTheBytesPresent)
+{
+    // Issue 15: the size line is checked against what the files can hold before allocating.
+    const std::string a = tiny_folder("huge_a", "A.mtx", "%%MatrixMarket matrix coordinate real general\n200000000 200000000 1\n1 1 4\n");
+    expect_error(a, a + "/A.mtx: line 2: declares 200000000 rows but only 1 entries (every row needs its diagonal entry)");
+    const std::string j = tiny_folder("huge_j", "J.mtx", "%%MatrixMarket matrix coordinate real general\n200000000 2 1\n1 1 1\n");
+    const auto c_bytes = fs::file_size(fs::path(j) / "c.mtx");
+    expect_error(j, j + "/J.mtx: line 2: declares 200000000 rows, at most " + std::to_string(c_bytes / 2 + 1) +
+                        " possible (c.mtx holds " + std::to_string(c_bytes) + " bytes, this file declares 1 entries)");
+    const std::string b = tiny_folder("huge_b", "b.mtx", "%%MatrixMarket matrix array real general\n200000000 1\n1\n");
+    expect_error(b, b + "/b.mtx: size: expected n (from A.mtx) = 2 entries, got 200000000");
+    // A lone file: the reserve follows the bytes present, the error is the missing entries.
+    const std::string v = temp_dir("huge_v") + "/v.mtx";
+    put(v, "%%MatrixMarket matrix array real general\n200000000 1\n1\n");
+    try {
+        read_mtx_vector(v);
+        ADD_FAILURE() << "no error";
+    } catch (const InputError& e) {
+        EXPECT_EQ(std::string(e.what()), v + ": entries: expected 200000000 entries, the file ends after 1");
+    }
+}
+
 } // namespace
 } // namespace cb

@@ -332,6 +332,62 @@ class TestReproduce(TempDirCase):
         self.assertEqual(suite["time_limit_s"], reproduce.QUICK_TIME_LIMIT_S)
         self.assertTrue(os.path.isabs(suite["snapshots"][0]))
 
+    def test_simulation_cache_is_keyed_on_every_input(self):
+        """The stand-in meshes of `make demo` are not reused by `make reproduce` with other inputs:
+        a changed mesh file, data source or simulator version simulates again (issue 15)."""
+        out = os.path.join(self.tmp, "out")
+        ctx = PaperContext(out=out, quick=True)
+        scene = os.path.join(self.scenes, "two_dinos_1303.json")
+        mesh = os.path.join(self.tmp, "dino.off")
+        with open(mesh, "w") as f:
+            f.write("OFF stand-in\n")
+        data = os.path.join(self.tmp, "paper-data")
+        os.makedirs(data)
+        old_env = dict(os.environ)
+        os.environ["FAKE_CB_MESH"] = mesh
+        try:
+            with redirect_stdout(io.StringIO()):
+                runner = reproduce.Runner(FAKE_CB, None, os.path.join(self.tmp, "log"))
+                sim = lambda d=None: reproduce.simulate(runner, ctx, "two_dinos_1303", scene, 12, d, False)  # noqa: E731
+                sim()
+                sim()                                   # cached
+                with open(mesh, "a") as f:
+                    f.write("another mesh\n")
+                sim()                                   # mesh file changed
+                sim(data)                               # data source changed
+                sim(data)                               # cached
+                os.environ["FAKE_CB_SIMULATOR_VERSION"] = "2"
+                runner2 = reproduce.Runner(FAKE_CB, None, os.path.join(self.tmp, "log2"))
+                reproduce.simulate(runner2, ctx, "two_dinos_1303", scene, 12, data, False)  # new simulator
+        finally:
+            os.environ.clear()
+            os.environ.update(old_env)
+        kinds = [s.split(":")[1].strip().split(" ")[0] for s in runner.steps]
+        self.assertEqual(kinds, ["exit", "cached", "exit", "exit", "cached"])
+        self.assertTrue(runner2.steps[0].startswith("simulate two_dinos_1303: exit 0"))
+
+    def test_suite_cache_is_keyed_on_the_binary(self):
+        """A rebuilt contactbench resumes the suite (the harness redoes runs whose identity changed)."""
+        out = os.path.join(self.tmp, "out")
+        ctx = PaperContext(out=out, quick=True)
+        cb = os.path.join(self.tmp, "contactbench")
+        with open(cb, "w") as f:  # a binary of its own, so that it can be "rebuilt"
+            f.write(f'#!/bin/sh\nexec /usr/bin/python3 "{FAKE_CB}" "$@"\n')
+        os.chmod(cb, 0o755)
+        with redirect_stdout(io.StringIO()):
+            runner = reproduce.Runner(cb, None, os.path.join(self.tmp, "log"))
+            scene = os.path.join(self.scenes, "two_dinos_1303.json")
+            reproduce.simulate(runner, ctx, "two_dinos_1303", scene, 12, None, False)
+            snaps = reproduce.pick_frame(reproduce.snapshots_of(ctx, "two_dinos_1303"), 11)
+            tpl = os.path.join(ROOT, "suites", "paper", "fig11.json")
+            reproduce.run_suite(runner, ctx, "fig11", tpl, snaps, False)
+            reproduce.run_suite(runner, ctx, "fig11", tpl, snaps, False)
+            with open(cb, "a") as f:
+                f.write("# rebuilt\n")
+            reproduce.run_suite(runner, ctx, "fig11", tpl, snaps, False)
+        self.assertEqual(runner.steps[2], "run fig11: cached")
+        self.assertTrue(runner.steps[3].startswith("run fig11: exit 0"), runner.steps[3])
+
 
 class TestSuiteTemplates(unittest.TestCase):
     KEYS = {"name", "snapshots", "generate", "solvers", "tol", "time_limit_s", "repeat", "history_max",

@@ -1,0 +1,563 @@
+// Issue 15 through the contactbench binary (env CB_CONTACTBENCH): run identity and resume rules,
+// one suite per --out, the lock, merge's checks, atomic and checked writes under a file-size
+// limit, and hostile inputs (tests/hostile/, FIFOs, folders, symlink loops, deep JSON, huge
+// declared sizes under a memory limit) that must end in exit 2 with the file and field named.
+#include "harness/results.hpp"
+#include "problems/qpsnap.hpp"
+#include "problems/synthetic.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sys/file.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <fcntl.h>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+using namespace cb;
+
+namespace {
+
+std::string binary()
+{
+    if (const char* b = std::getenv("CB_CONTACTBENCH"); b && *b) return b;
+    return std::string(CB_BINARY_DIR) + "/bin/contactbench";
+}
+
+const fs::path& work_dir()
+{
+    static const fs::path dir = [] {
+        const fs::path d = fs::temp_directory_path() / ("cb_test_hostile_" + std::to_string(::getpid()));
+        fs::remove_all(d);
+        fs::create_directories(d);
+        ::setenv("CB_CACHE", (d / "cache").c_str(), 1);
+        ::setenv("OPENBLAS_NUM_THREADS", "1", 1);
+        return d;
+    }();
+    return dir;
+}
+
+const fs::path kHostile = fs::path(CB_TEST_DATA_DIR).parent_path() / "hostile";
+
+std::string slurp(const fs::path& p)
+{
+    std::ifstream in(p);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+struct Output {
+    int status = -1;
+    std::string out, err;
+};
+
+/// Runs `[PREFIX;] timeout 120 contactbench ARGS` in bash (PREFIX: ulimit ...); a hang ends as 124.
+Output run(const std::string& args, const std::string& prefix = "", const std::string& program = binary())
+{
+    const fs::path out = work_dir() / "stdout.txt", err = work_dir() / "stderr.txt";
+    const std::string inner = (prefix.empty() ? "" : prefix + "; ") + "exec timeout 120 '" + program + "' " + args +
+                              " >'" + out.string() + "' 2>'" + err.string() + "'";
+    std::string quoted;
+    for (char ch : inner) quoted += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
+    const int raw = std::system(("bash -c '" + quoted + "'").c_str());
+    Output o;
+    o.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+    o.out = slurp(out);
+    o.err = slurp(err);
+    return o;
+}
+
+std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
+
+size_t count_matching(const fs::path& dir, const std::string& needle)
+{
+    size_t n = 0;
+    if (!fs::exists(dir)) return 0;
+    for (const auto& e : fs::recursive_directory_iterator(dir))
+        if (e.path().filename().string().find(needle) != std::string::npos) ++n;
+    return n;
+}
+
+void write_snapshot(const fs::path& p, int seed, int nx = 2)
+{
+    write_qpsnap(p.string(), make_synthetic("plane", {{"nx", nx}, {"ny", 2}, {"nz", 2}}, std::uint64_t(seed)));
+}
+
+/// A suite over the snapshots a.qpsnap and b.qpsnap of `dir`.
+fs::path write_suite(const fs::path& dir, const std::string& name, const nlohmann::json& solvers, double tol = 1e-6)
+{
+    const nlohmann::json suite = {{"name", name}, {"snapshots", {"a.qpsnap", "b.qpsnap"}}, {"solvers", solvers},
+                                  {"tol", tol}, {"time_limit_s", 20}};
+    const fs::path p = dir / (name + ".json");
+    write_json_atomic(p.string(), suite);
+    return p;
+}
+
+const nlohmann::json kTwoSolvers = {{{"label", "mprgp"}, {"solver", "mprgp"}},
+                                    {{"label", "exact"}, {"solver", "active-set"}}};
+
+fs::path fresh_dir(const std::string& name)
+{
+    const fs::path d = work_dir() / name;
+    fs::remove_all(d);
+    fs::create_directories(d);
+    return d;
+}
+
+class CleanUp : public ::testing::Environment {
+public:
+    void TearDown() override { fs::remove_all(work_dir()); }
+};
+const auto* const kCleanUp = ::testing::AddGlobalTestEnvironment(new CleanUp);
+
+} // namespace
+
+// ---- run identity -----------------------------------------------------------------------------
+
+TEST(RunIdentity, EditedSuiteReplacedSnapshotAndFixedInputAreRedone)
+{
+    const fs::path dir = fresh_dir("identity");
+    write_snapshot(dir / "a.qpsnap", 1);
+    write_snapshot(dir / "b.qpsnap", 2);
+    const fs::path out = dir / "out";
+    const fs::path suite = write_suite(dir, "ident", kTwoSolvers);
+    ASSERT_EQ(run("run " + q(suite) + " --out " + q(out)).status, 0);
+    const nlohmann::json first = read_json_file((out / "runs" / "a__mprgp.json").string());
+    ASSERT_TRUE(first["identity"].is_object()) << first.dump();
+    EXPECT_EQ(first["identity"]["snapshot_hash"], qpsnap_content_hash((dir / "a.qpsnap").string()));
+    EXPECT_EQ(first["identity"]["solver"], "mprgp");
+    EXPECT_EQ(first["identity"]["settings"]["tol"], 1e-6);
+    EXPECT_TRUE(first["identity"]["build"]["binary"].is_string());
+    EXPECT_TRUE(first["final"].get<bool>());
+
+    // Unchanged: nothing reruns.
+    const Output same = run("run " + q(suite) + " --out " + q(out));
+    ASSERT_EQ(same.status, 0) << same.err;
+    EXPECT_NE(same.err.find("ran 0 of 4 jobs"), std::string::npos) << same.err;
+
+    // The suite's tol edited: every run is redone and suite.json describes the new suite.
+    write_suite(dir, "ident", kTwoSolvers, 1e-8);
+    const Output edited = run("run " + q(suite) + " --out " + q(out));
+    ASSERT_EQ(edited.status, 0) << edited.err;
+    EXPECT_NE(edited.err.find("ran 4 of 4 jobs"), std::string::npos) << edited.err;
+    EXPECT_NE(edited.err.find("a x mprgp: stored run not reused: the settings changed\n"), std::string::npos) << edited.err;
+    EXPECT_EQ(read_json_file((out / "suite.json").string())["tol"], 1e-8);
+    EXPECT_EQ(read_json_file((out / "runs" / "b__exact.json").string())["tol"], 1e-8);
+    EXPECT_FALSE(fs::exists(out / "suite.pending.json"));
+
+    // One solver's settings edited: only its runs are redone.
+    write_json_atomic(suite.string(), {{"name", "ident"}, {"snapshots", {"a.qpsnap", "b.qpsnap"}},
+                                       {"solvers", {{{"label", "mprgp"}, {"solver", "mprgp"}, {"settings", {{"precond", "none"}}}},
+                                                    {{"label", "exact"}, {"solver", "active-set"}}}},
+                                       {"tol", 1e-8}, {"time_limit_s", 20}});
+    const Output one = run("run " + q(suite) + " --out " + q(out));
+    ASSERT_EQ(one.status, 0) << one.err;
+    EXPECT_NE(one.err.find("ran 2 of 4 jobs"), std::string::npos) << one.err;
+    EXPECT_NE(one.err.find("b x exact: done before, skipped"), std::string::npos) << one.err;
+
+    // A snapshot replaced at the same path: its runs are redone.
+    write_snapshot(dir / "b.qpsnap", 7);
+    const Output replaced = run("run " + q(suite) + " --out " + q(out));
+    ASSERT_EQ(replaced.status, 0) << replaced.err;
+    EXPECT_NE(replaced.err.find("ran 2 of 4 jobs"), std::string::npos) << replaced.err;
+    EXPECT_NE(replaced.err.find("b x exact: stored run not reused: the snapshot's content changed\n"), std::string::npos)
+        << replaced.err;
+
+    // A run that failed because its snapshot was corrupt is retried once the file is fixed.
+    const std::string good = slurp(dir / "a.qpsnap");
+    std::ofstream(dir / "a.qpsnap", std::ios::trunc) << "not a snapshot";
+    ASSERT_EQ(run("run " + q(suite) + " --out " + q(out)).status, 0);
+    const nlohmann::json failed = read_json_file((out / "runs" / "a__mprgp.json").string());
+    EXPECT_EQ(failed["status"], "invalid_input");
+    EXPECT_FALSE(failed["final"].get<bool>());
+    std::ofstream(dir / "a.qpsnap", std::ios::binary | std::ios::trunc) << good;
+    const Output fixed = run("run " + q(suite) + " --out " + q(out));
+    ASSERT_EQ(fixed.status, 0) << fixed.err;
+    EXPECT_NE(fixed.err.find("ran 2 of 4 jobs"), std::string::npos) << fixed.err;
+    EXPECT_EQ(read_json_file((out / "runs" / "a__mprgp.json").string())["status"], "converged");
+
+    // A run file of an older contactbench (no identity) is redone, not trusted.
+    nlohmann::json old = read_json_file((out / "runs" / "b__mprgp.json").string());
+    old.erase("identity");
+    write_json_atomic((out / "runs" / "b__mprgp.json").string(), old);
+    const Output legacy = run("run " + q(suite) + " --out " + q(out));
+    EXPECT_NE(legacy.err.find("b x mprgp: stored run not reused: it has no run identity (written by an older contactbench)\n"),
+              std::string::npos) << legacy.err;
+    EXPECT_NE(legacy.err.find("ran 1 of 4 jobs"), std::string::npos) << legacy.err;
+}
+
+TEST(RunIdentity, SolverOutcomesAreFinal)
+{
+    const fs::path dir = fresh_dir("final");
+    write_snapshot(dir / "a.qpsnap", 1);
+    write_snapshot(dir / "b.qpsnap", 2);
+    // max_iterations 1: the solver's outcome, kept on resume.
+    const fs::path suite = write_suite(dir, "final", {{{"label", "capped"}, {"solver", "mprgp"}, {"settings", {{"max_iterations", 1}}}}});
+    const fs::path out = dir / "out";
+    ASSERT_EQ(run("run " + q(suite) + " --out " + q(out)).status, 0);
+    const nlohmann::json capped = read_json_file((out / "runs" / "a__capped.json").string());
+    EXPECT_EQ(capped["status"], "max_iterations");
+    EXPECT_TRUE(capped["final"].get<bool>());
+    const Output again = run("run " + q(suite) + " --out " + q(out));
+    EXPECT_NE(again.err.find("ran 0 of 2 jobs"), std::string::npos) << again.err;
+}
+
+TEST(RunIdentity, AnotherBuildRedoesTheRuns)
+{
+    const fs::path dir = fresh_dir("rebuild");
+    write_snapshot(dir / "a.qpsnap", 1);
+    write_snapshot(dir / "b.qpsnap", 2);
+    const fs::path suite = write_suite(dir, "rebuild", {"mprgp"}), out = dir / "out";
+    ASSERT_EQ(run("run " + q(suite) + " --out " + q(out)).status, 0);
+    // "Rebuilt": the same program with one byte more (an ELF file runs with trailing bytes).
+    const fs::path rebuilt = dir / "contactbench-rebuilt";
+    fs::copy_file(binary(), rebuilt);
+    std::ofstream(rebuilt, std::ios::app) << '\n';
+    fs::permissions(rebuilt, fs::perms::owner_exec, fs::perm_options::add);
+    const Output again = run("run " + q(suite) + " --out " + q(out), "", rebuilt.string());
+    ASSERT_EQ(again.status, 0) << again.err;
+    EXPECT_NE(again.err.find("a x mprgp: stored run not reused: the build changed (commit or binary)\n"), std::string::npos)
+        << again.err;
+    EXPECT_NE(again.err.find("ran 2 of 2 jobs"), std::string::npos) << again.err;
+}
+
+TEST(RunIdentity, OneSuitePerOutAndFresh)
+{
+    const fs::path dir = fresh_dir("onesuite");
+    write_snapshot(dir / "a.qpsnap", 1);
+    write_snapshot(dir / "b.qpsnap", 2);
+    const fs::path out = dir / "out";
+    const fs::path first = write_suite(dir, "first", {"mprgp"});
+    const fs::path second = write_suite(dir, "second", {"mprgp"});
+    ASSERT_EQ(run("run " + q(first) + " --out " + q(out)).status, 0);
+    const Output other = run("run " + q(second) + " --out " + q(out));
+    EXPECT_EQ(other.status, 2);
+    EXPECT_EQ(other.err, "contactbench run: error: " + out.string() +
+                             ": suite.json: holds results of suite 'first', not 'second'; use another --out, or --fresh "
+                             "to discard the results in " + out.string() + "\n");
+    // A label removed from the suite: its run files would be mixed into summary.csv.
+    write_suite(dir, "first", {"cg"});
+    const Output shrunk = run("run " + q(first) + " --out " + q(out));
+    EXPECT_EQ(shrunk.status, 2);
+    EXPECT_EQ(shrunk.err, "contactbench run: error: " + (out / "runs" / "a__mprgp.json").string() +
+                              ": not a job of suite 'first' (2 such run files: an earlier suite or shard?); use another "
+                              "--out, or --fresh "
+                              "to discard the results in " + out.string() + "\n");
+    // Another shard into the same --out is refused the same way.
+    write_suite(dir, "first", {"mprgp"});
+    const Output shard = run("run " + q(first) + " --out " + q(out) + " --shard 2/2");
+    EXPECT_EQ(shard.status, 2);
+    EXPECT_NE(shard.err.find((out / "runs" / "a__mprgp.json").string() + ": not a job of suite 'first' shard 2/2 (1 such"),
+              std::string::npos) << shard.err;
+    // --fresh starts over.
+    const Output fresh = run("run " + q(second) + " --out " + q(out) + " --fresh");
+    ASSERT_EQ(fresh.status, 0) << fresh.err;
+    EXPECT_NE(fresh.err.find("ran 2 of 2 jobs"), std::string::npos) << fresh.err;
+    EXPECT_EQ(read_json_file((out / "suite.json").string())["name"], "second");
+    const std::string summary = slurp(out / "summary.csv");
+    EXPECT_EQ(summary.find("first,"), std::string::npos) << summary;
+}
+
+TEST(RunIdentity, LockKeepsTwoRunsApart)
+{
+    const fs::path dir = fresh_dir("lock");
+    write_snapshot(dir / "a.qpsnap", 1);
+    write_snapshot(dir / "b.qpsnap", 2);
+    const fs::path out = dir / "out";
+    fs::create_directories(out);
+    // Another run holds the lock (this process plays it).
+    const int fd = ::open((out / ".lock").c_str(), O_RDWR | O_CREAT, 0644);
+    ASSERT_GE(fd, 0);
+    ASSERT_EQ(::flock(fd, LOCK_EX | LOCK_NB), 0);
+    const std::string pid = std::to_string(::getpid()) + "\n";
+    ASSERT_EQ(::write(fd, pid.data(), pid.size()), ssize_t(pid.size()));
+    const fs::path suite = write_suite(dir, "locked", {"mprgp"});
+    const Output locked = run("run " + q(suite) + " --out " + q(out));
+    EXPECT_EQ(locked.status, 2);
+    EXPECT_EQ(locked.err, "contactbench run: error: " + out.string() + ": another `contactbench run` (pid " +
+                              std::to_string(::getpid()) +
+                              ") is writing to this folder; wait for it to finish or use another --out\n");
+    EXPECT_EQ(count_matching(out / "runs", ".json"), 0u);
+    ::close(fd);  // released: the run goes ahead
+    EXPECT_EQ(run("run " + q(suite) + " --out " + q(out)).status, 0);
+}
+
+TEST(Merge, RefusesIncompleteOrMixedShards)
+{
+    const fs::path dir = fresh_dir("merge");
+    write_snapshot(dir / "a.qpsnap", 1);
+    write_snapshot(dir / "b.qpsnap", 2);
+    const fs::path suite = write_suite(dir, "sharded", kTwoSolvers);
+    const fs::path s1 = dir / "s1", s2 = dir / "s2", other = dir / "other";
+    ASSERT_EQ(run("run " + q(suite) + " --out " + q(s1) + " --shard 1/2").status, 0);
+    const Output lonely = run("merge " + q(dir / "m1") + " " + q(s1));
+    EXPECT_EQ(lonely.status, 2);
+    EXPECT_EQ(lonely.err, "contactbench merge: error: merge: shards: missing shard(s) 2/2 of suite \"sharded\"\n");
+    EXPECT_FALSE(fs::exists(dir / "m1"));
+    // A shard of an edited suite is not of the same suite.
+    const fs::path edited = write_suite(dir, "sharded", kTwoSolvers, 1e-8);
+    ASSERT_EQ(run("run " + q(edited) + " --out " + q(other) + " --shard 2/2").status, 0);
+    const Output mixed = run("merge " + q(dir / "m2") + " " + q(s1) + " " + q(other));
+    EXPECT_EQ(mixed.status, 2);
+    EXPECT_NE(mixed.err.find((other / "jobs.json").string() + ": suite: shard of suite \"sharded\""), std::string::npos)
+        << mixed.err;
+    EXPECT_NE(mixed.err.find("not one suite"), std::string::npos) << mixed.err;
+    // The right shard 2/2, but one of its runs lost.
+    write_suite(dir, "sharded", kTwoSolvers);
+    ASSERT_EQ(run("run " + q(suite) + " --out " + q(s2) + " --shard 2/2").status, 0);
+    fs::remove(s2 / "runs" / "a__exact.json");
+    const Output holes = run("merge " + q(dir / "m3") + " " + q(s1) + " " + q(s2));
+    EXPECT_EQ(holes.status, 2);
+    EXPECT_EQ(holes.err, "contactbench merge: error: " + (s2 / "runs" / "a__exact.json").string() +
+                             ": missing: shard 2 is incomplete (run it again)\n");
+    ASSERT_EQ(run("run " + q(suite) + " --out " + q(s2) + " --shard 2/2").status, 0);
+    const Output ok = run("merge " + q(dir / "m4") + " " + q(s1) + " " + q(s2));
+    ASSERT_EQ(ok.status, 0) << ok.err;
+    EXPECT_EQ(count_matching(dir / "m4" / "runs", ".json"), 4u);
+}
+
+// ---- writes -----------------------------------------------------------------------------------
+
+namespace {
+
+/// A scene small enough to simulate in well under a second.
+fs::path tiny_scene(const fs::path& dir, long frames)
+{
+    const fs::path p = dir / "tiny.json";
+    write_json_atomic(p.string(),
+                      {{"name", "tiny"}, {"h", 0.01}, {"frames", frames},
+                       {"bodies", {{{"name", "cube"}, {"box", {{"cells", {1, 1, 1}}, {"size", {0.2, 0.2, 0.2}}}},
+                                    {"translate", {0, 0.11, 0}}, {"velocity", {0, -1, 0}}}}},
+                       {"obstacles", {{{"type", "plane"}, {"normal", {0, 1, 0}}, {"point", {0, 0, 0}}}}},
+                       {"output", {{"strip_frames", 0}}}});
+    return p;
+}
+
+} // namespace
+
+TEST(Writes, SimulateReplacesAnOldOutAndFinishesItsTables)
+{
+    const fs::path dir = fresh_dir("simulate");
+    const fs::path scene = tiny_scene(dir, 4), out = dir / "out";
+    ASSERT_EQ(run("simulate " + q(scene) + " --out " + q(out)).status, 0);
+    EXPECT_EQ(count_matching(out / "snapshots", ".qpsnap"), 4u);
+    // Again with fewer frames: the old snapshots do not survive next to the new ones.
+    const Output again = run("simulate " + q(scene) + " --out " + q(out) + " --frames 2");
+    ASSERT_EQ(again.status, 0) << again.err;
+    EXPECT_EQ(count_matching(out / "snapshots", ".qpsnap"), 2u);
+    const std::string steps = slurp(out / "steps.csv"), frames = slurp(out / "frames.csv");
+    EXPECT_EQ(std::count(steps.begin(), steps.end(), '\n'), 3);   // header + 2 frames x 1 Newton step
+    EXPECT_EQ(std::count(frames.begin(), frames.end(), '\n'), 3);
+    EXPECT_EQ(count_matching(out, ".partial"), 0u);
+    const nlohmann::json record = read_json_file((out / "simulation.json").string());
+    EXPECT_EQ(record["frames_done"], 2);
+    EXPECT_EQ(record["simulator_version"], 1);
+    const Output version = run("simulate --version");
+    EXPECT_EQ(version.out, "simulator 1\n");
+}
+
+TEST(Writes, FileSizeLimitIsAClearErrorWithNoPartialOutput)
+{
+    const fs::path dir = fresh_dir("fsize");
+    // simulate: the first snapshot passes 4 kB (ulimit -f counts 1024-byte blocks).
+    const fs::path scene = tiny_scene(dir, 3), out = dir / "sim";
+    const Output sim = run("simulate " + q(scene) + " --out " + q(out), "ulimit -f 4");
+    EXPECT_EQ(sim.status, 2) << sim.err;
+    EXPECT_NE(sim.err.find("contactbench simulate: error: " + (out / "snapshots" / "tiny_f0000_n0.qpsnap").string() +
+                           ": write failed: File too large (nothing written)\n"),
+              std::string::npos) << sim.err;
+    EXPECT_EQ(count_matching(out, ".tmp"), 0u);
+    EXPECT_EQ(count_matching(out, ".csv"), 0u);  // neither tables nor .partial tables are left
+    EXPECT_FALSE(fs::exists(out / "simulation.json"));
+
+    // convert to a folder: nothing of OUT, no OUT.tmp.* or OUT.old.* left.
+    const fs::path snap = dir / "big.qpsnap", folder = dir / "folder";
+    write_snapshot(snap, 3, 4);
+    const Output conv = run("convert " + q(snap) + " " + q(folder), "ulimit -f 8");
+    EXPECT_EQ(conv.status, 2) << conv.err;
+    EXPECT_NE(conv.err.find(": write failed: File too large (nothing written)"), std::string::npos) << conv.err;
+    EXPECT_FALSE(fs::exists(folder));
+    for (const auto& e : fs::directory_iterator(dir))
+        EXPECT_EQ(e.path().filename().string().find("folder."), std::string::npos) << e.path();
+    // An existing folder is replaced whole or kept whole.
+    ASSERT_EQ(run("convert " + q(snap) + " " + q(folder)).status, 0);
+    const std::string meta = slurp(folder / "meta.json"), a = slurp(folder / "A.mtx");
+    const Output keep = run("convert " + q(snap) + " " + q(folder), "ulimit -f 8");
+    EXPECT_EQ(keep.status, 2);
+    EXPECT_EQ(slurp(folder / "meta.json"), meta);
+    EXPECT_EQ(slurp(folder / "A.mtx"), a);
+
+    // run: a results file that cannot be written ends the run with exit 2, no partial file.
+    write_snapshot(dir / "a.qpsnap", 1);
+    write_snapshot(dir / "b.qpsnap", 2);
+    const fs::path suite = write_suite(dir, "fsize", {"mprgp"});
+    const Output r = run("run " + q(suite) + " --out " + q(dir / "runout"), "ulimit -f 4");
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_NE(r.err.find(": write failed: File too large (nothing written)"), std::string::npos) << r.err;
+    EXPECT_EQ(count_matching(dir / "runout", ".tmp"), 0u);
+}
+
+// ---- hostile inputs ---------------------------------------------------------------------------
+
+TEST(Hostile, SpecialFilesAreRefusedNamingTheFile)
+{
+    const fs::path dir = fresh_dir("special");
+    const fs::path fifo = dir / "pipe.qpsnap";
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
+    const std::string fifo_error = fifo.string() + ": not a regular file (a FIFO)\n";
+    const Output info = run("info " + q(fifo));
+    EXPECT_EQ(info.status, 2);
+    EXPECT_EQ(info.err, "contactbench info: error: " + fifo_error);
+    const Output suite = run("run " + q(fifo));
+    EXPECT_EQ(suite.status, 2);
+    EXPECT_EQ(suite.err, "contactbench run: error: " + fifo_error);
+    const Output scene = run("simulate " + q(fifo));
+    EXPECT_EQ(scene.status, 2);
+    EXPECT_EQ(scene.err, "contactbench simulate: error: " + fifo_error);
+    // A FIFO matched by a suite glob fails its own runs, the others go ahead.
+    write_snapshot(dir / "good.qpsnap", 1);
+    write_json_atomic((dir / "glob.json").string(), {{"name", "glob"}, {"snapshots", {"*.qpsnap"}}, {"solvers", {"mprgp"}}});
+    const Output glob = run("run " + q(dir / "glob.json") + " --out " + q(dir / "out"));
+    ASSERT_EQ(glob.status, 0) << glob.err;
+    EXPECT_NE(glob.err.find("pipe x mprgp: invalid_input: " + fifo.string() + ": not a regular file (a FIFO)"),
+              std::string::npos) << glob.err;
+    EXPECT_NE(glob.err.find("good x mprgp: converged"), std::string::npos) << glob.err;
+
+    // A folder as suite or scene, a symlink loop.
+    const Output folder = run("run " + q(dir));
+    EXPECT_EQ(folder.status, 2);
+    EXPECT_EQ(folder.err, "contactbench run: error: " + dir.string() + ": not a regular file (a folder)\n");
+    const Output folder_scene = run("simulate " + q(dir));
+    EXPECT_EQ(folder_scene.status, 2);
+    EXPECT_EQ(folder_scene.err, "contactbench simulate: error: " + dir.string() + ": not a regular file (a folder)\n");
+    fs::create_symlink(dir / "loop2.json", dir / "loop1.json");
+    fs::create_symlink(dir / "loop1.json", dir / "loop2.json");
+    const Output loop = run("run " + q(dir / "loop1.json"));
+    EXPECT_EQ(loop.status, 2);
+    EXPECT_EQ(loop.err, "contactbench run: error: " + (dir / "loop1.json").string() +
+                            ": cannot open: Too many levels of symbolic links\n");
+    // An --out that cannot be a folder.
+    write_snapshot(dir / "a.qpsnap", 1);
+    write_snapshot(dir / "b.qpsnap", 2);
+    const fs::path s = write_suite(dir, "unwritable", {"mprgp"});
+    const Output unwritable = run("run " + q(s) + " --out " + q(dir / "a.qpsnap" / "out"));
+    EXPECT_EQ(unwritable.status, 2);
+    EXPECT_EQ(unwritable.err, "contactbench run: error: " + (dir / "a.qpsnap" / "out").string() +
+                                  ": --out: cannot create the results folder: Not a directory\n");
+}
+
+TEST(Hostile, DeepJsonIsRefusedNotACrash)
+{
+    const fs::path dir = fresh_dir("deep");
+    const std::string deep = std::string(1000000, '[') + std::string(1000000, ']');
+    // A suite comment nested 10^6 deep.
+    // The 64th '[' opens level 65 (the object is level 1): its byte is reported.
+    const std::string suite_head = R"({"name": "deep", "comment": )";
+    std::ofstream(dir / "suite.json") << suite_head << deep << R"(, "solvers": ["cg"]})";
+    const Output suite = run("run " + q(dir / "suite.json"));
+    EXPECT_EQ(suite.status, 2);
+    EXPECT_EQ(suite.err, "contactbench run: error: " + (dir / "suite.json").string() +
+                             ": JSON nested deeper than 64 levels (at byte " + std::to_string(suite_head.size() + 63) + ")\n");
+    // A scene.
+    const std::string scene_head = R"({"name": "deep", "description": )";
+    std::ofstream(dir / "scene.json") << scene_head << deep << "}";
+    const Output scene = run("simulate " + q(dir / "scene.json"));
+    EXPECT_EQ(scene.status, 2);
+    EXPECT_EQ(scene.err, "contactbench simulate: error: " + (dir / "scene.json").string() +
+                             ": JSON nested deeper than 64 levels (at byte " + std::to_string(scene_head.size() + 63) + ")\n");
+    // A snapshot header: meta nested 10^6 deep.
+    const std::string header_head = R"({"format": "qpsnap", "version": 1, "n": 0, "m": 0, "arrays": {}, "meta": )";
+    const std::string header = header_head + deep + "}";
+    std::string bytes(8, '\0');
+    for (int i = 0; i < 8; ++i) bytes[size_t(i)] = char((std::uint64_t(header.size()) >> (8 * i)) & 0xff);
+    std::ofstream(dir / "deep.qpsnap", std::ios::binary) << bytes << header;
+    const Output snap = run("info " + q(dir / "deep.qpsnap"));
+    EXPECT_EQ(snap.status, 2);
+    EXPECT_EQ(snap.err, "contactbench info: error: " + (dir / "deep.qpsnap").string() +
+                            ": header: JSON nested deeper than 64 levels (at byte " + std::to_string(header_head.size() + 63) +
+                            ")\n");
+}
+
+TEST(Hostile, HugeDeclaredSizesUnderAMemoryLimit)
+{
+    // 600 MB of address space: enough for the binary and its libraries, far from the 1.6 GB the
+    // declared 2e8 rows once cost.
+    const std::string limit = "ulimit -v 600000";
+    const fs::path rows = kHostile / "mtx_huge_rows";
+    const Output a = run("convert " + q(rows) + " " + q(work_dir() / "huge.qpsnap"), limit);
+    EXPECT_EQ(a.status, 2);
+    EXPECT_EQ(a.err, "contactbench convert: error: " + (rows / "A.mtx").string() +
+                         ": line 2: declares 200000000 rows but only 1 entries (every row needs its diagonal entry)\n");
+    const fs::path vec = kHostile / "mtx_huge_vector";
+    const Output b = run("convert " + q(vec) + " " + q(work_dir() / "huge.qpsnap"), limit);
+    EXPECT_EQ(b.status, 2);
+    EXPECT_EQ(b.err, "contactbench convert: error: " + (vec / "b.mtx").string() +
+                         ": size: expected n (from A.mtx) = 1 entries, got 200000000\n");
+    const fs::path j = kHostile / "mtx_huge_j";
+    const Output jj = run("convert " + q(j) + " " + q(work_dir() / "huge.qpsnap"), limit);
+    EXPECT_EQ(jj.status, 2);
+    const auto c_bytes = fs::file_size(j / "c.mtx");
+    EXPECT_EQ(jj.err, "contactbench convert: error: " + (j / "J.mtx").string() + ": line 2: declares 200000000 rows, at most " +
+                          std::to_string(c_bytes / 2 + 1) + " possible (c.mtx holds " + std::to_string(c_bytes) +
+                          " bytes, this file declares 1 entries)\n");
+    EXPECT_FALSE(fs::exists(work_dir() / "huge.qpsnap"));
+
+    // A snapshot with a 4 GB sparse tail: refused before it is mapped.
+    const fs::path sparse = work_dir() / "sparse.qpsnap";
+    write_snapshot(sparse, 1);
+    ASSERT_EQ(::truncate(sparse.c_str(), off_t(4) << 30), 0);
+    const Output s = run("solve " + q(sparse) + " --solver cg", limit);
+    EXPECT_EQ(s.status, 2);
+    EXPECT_EQ(s.err.rfind("contactbench solve: error: " + sparse.string() + ": data: sparse file: ", 0), 0u) << s.err;
+    EXPECT_NE(s.err.find(" of its 4294967296 bytes (from byte "), std::string::npos) << s.err;
+}
+
+TEST(Hostile, SceneAndGeneratorParametersAreBounded)
+{
+    const Output cells = run("simulate " + q(kHostile / "scene_box_cells.json") + " --out " + q(work_dir() / "x"));
+    EXPECT_EQ(cells.status, 2);
+    EXPECT_EQ(cells.err, "contactbench simulate: error: " + (kHostile / "scene_box_cells.json").string() +
+                             ": /bodies/0/box/cells: [3000000000, 1, 1] is 3000000000 cells, more than the limit of "
+                             "1000000 (6000000 tets)\n");
+    const Output count = run("simulate " + q(kHostile / "scene_array_count.json") + " --out " + q(work_dir() / "x"));
+    EXPECT_EQ(count.status, 2);
+    EXPECT_EQ(count.err, "contactbench simulate: error: " + (kHostile / "scene_array_count.json").string() +
+                             ": /bodies/0/array/count: 1000000000000000 copies, more than the limit of 6000000 tets allows\n");
+    const Output many = run("simulate " + q(kHostile / "scene_many_bodies.json") + " --out " + q(work_dir() / "x"));
+    EXPECT_EQ(many.status, 2);
+    EXPECT_EQ(many.err, "contactbench simulate: error: " + (kHostile / "scene_many_bodies.json").string() +
+                            ": /bodies/0/array/count: the scene reaches 13500000 tets, more than the limit of 6000000\n");
+    EXPECT_FALSE(fs::exists(work_dir() / "x"));
+
+    const fs::path out = work_dir() / "gen.qpsnap";
+    const Output nx = run("generate plane --out " + q(out) + " --param nx=1000 --param ny=1000 --param nz=1000");
+    EXPECT_EQ(nx.status, 2);
+    EXPECT_EQ(nx.err, "contactbench generate: error: synthetic family 'plane': params: nx: expected at most 1e6 "
+                      "vertices in all (nx+1)(ny+1)(nz+1), got 1.003e+09\n");
+    const Output inf = run("generate plane --out " + q(out) + " --param youngs=1e308");
+    EXPECT_EQ(inf.status, 2);
+    EXPECT_EQ(inf.err.rfind("contactbench generate: error: synthetic family 'plane': params: the parameters give a "
+                            "non-finite value in A (", 0), 0u) << inf.err;
+    EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(Hostile, IntegerSettingsDoNotOverflow)
+{
+    const fs::path snap = fs::path(CB_TEST_DATA_DIR) / "plane_2x2x2.qpsnap";
+    const Output o = run("solve " + q(snap) + " --solver mprgp --set max_iterations=9223372036854775807");
+    EXPECT_EQ(o.status, 2);
+    EXPECT_EQ(o.err, "contactbench solve: error: mprgp: /max_iterations: must be <= 1000000000000, got 9223372036854775807\n");
+    const Output big = run("solve " + q(snap) + " --solver mprgp --set max_iterations=1e19");
+    EXPECT_EQ(big.status, 2);
+    EXPECT_EQ(big.err, "contactbench solve: error: mprgp: /max_iterations: must be <= 1000000000000, got 1e+19\n");
+    // The same through a suite (tests/hostile/suite_overflow.json): the run is refused, named.
+    const fs::path out = work_dir() / "overflow";
+    const Output r = run("run " + q(kHostile / "suite_overflow.json") + " --out " + q(out));
+    ASSERT_EQ(r.status, 0) << r.err;
+    const nlohmann::json rec = read_json_file((out / "runs" / "plane_2x2x2__mprgp.json").string());
+    EXPECT_EQ(rec["status"], "invalid_input");
+    EXPECT_EQ(rec["message"], "mprgp: /max_iterations: must be <= 1000000000000, got 9223372036854775807");
+}
