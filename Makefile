@@ -19,7 +19,8 @@ export MPLBACKEND ?= Agg
 
 DEB_PACKAGES := build-essential cmake git zlib1g-dev libeigen3-dev libsuitesparse-dev nlohmann-json3-dev \
   libgtest-dev libbenchmark-dev libopenblas0-pthread \
-  python3-numpy python3-pandas python3-matplotlib python3-scipy libcgal-demo ccache valgrind
+  python3-numpy python3-pandas python3-matplotlib python3-scipy libcgal-demo ccache valgrind \
+  pkg-config coinor-libipopt-dev libsiconos-numerics-dev libfclib-dev
 
 .PHONY: help deps build test demo bench baseline reproduce stress fuzz clean meshes paper-data docs-check tidy \
   ci-perf perf-gate perf-gate-selftest contactbench-binary

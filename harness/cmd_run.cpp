@@ -403,11 +403,11 @@ int cmd_run(const Args& args)
     const size_t runs = write_summary(out, suite.name);
     // Which jobs this folder holds, for `merge` to check that the shards are complete and of one suite.
     size_t all_jobs = snapshots.size() * labels, done_jobs = 0, final_jobs = 0;
-    nlohmann::json job_files = nlohmann::json::array();
+    nlohmann::json shard_jobs = nlohmann::json::array();
     for (size_t s = 0; s < snapshots.size(); ++s)
         for (size_t v = 0; v < labels; ++v)
             if (in_shard(s, v)) {
-                job_files.push_back(run_file_name(snapshots[s].id, suite.solvers[v].label));
+                shard_jobs.push_back(run_file_name(snapshots[s].id, suite.solvers[v].label));
                 if (fs::exists(run_path(s, v))) ++done_jobs;
                 try {
                     if (read_json_file(run_path(s, v)).value("final", true)) ++final_jobs;
@@ -417,7 +417,7 @@ int cmd_run(const Args& args)
     write_json_atomic((fs::path(out) / "jobs.json").string(),
                       {{"suite", suite.name}, {"suite_hash", fnv1a_hex(suite.raw.dump())},
                        {"shard", {{"index", shard.index}, {"count", shard.count}}}, {"all_jobs", all_jobs},
-                       {"jobs", job_files}, {"complete", done_jobs == job_files.size()}, {"retry", job_files.size() - final_jobs}});
+                       {"jobs", shard_jobs}, {"complete", done_jobs == shard_jobs.size()}, {"retry", shard_jobs.size() - final_jobs}});
     write_json_atomic((fs::path(out) / "provenance.json").string(), provenance());
     write_json_atomic((fs::path(out) / "suite.json").string(), suite.raw);
     std::error_code ec;

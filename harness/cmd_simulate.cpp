@@ -39,18 +39,17 @@ int cmd_simulate(const Args& args)
     const std::string scene_path = cl.positional()[0];
     // The authors' data: --data, else where `make paper-data` puts it, else none (stand-in meshes).
     std::string data = cl.value("--data");
-    if (!cl.has("--data")) {
-        const std::string cached = cache_dir() + "/paper-data";
-        if (std::filesystem::is_directory(cached)) data = cached;
-        else
-            std::cerr << "simulate: no authors' data in " << cached
-                      << " (`make paper-data` writes it); \"data:\" meshes use their stand-ins\n";
-    }
+    const std::string cached = cache_dir() + "/paper-data";
+    const bool no_data = !cl.has("--data") && !std::filesystem::is_directory(cached);
+    if (!cl.has("--data") && !no_data) data = cached;
     sim::Scene scene = sim::load_scene(scene_path, sim::default_path_roots(scene_path, data));
+    if (no_data)  // said once the scene is known to be valid, so that an input error stands alone
+        std::cerr << "simulate: no authors' data in " << cached
+                  << " (`make paper-data` writes it); \"data:\" meshes use their stand-ins\n";
     sim::SimulatorOptions opt;
     opt.out_dir = cl.value("--out", "results/sim/" + scene.name);
     opt.solver = cl.value("--solver");
-    opt.data_dir = cl.value("--data");
+    opt.data_dir = data;  // the folder actually used, for simulation.json and the caches keyed on it
     opt.snapshots = !cl.has("--no-snapshots");
     opt.frames = cl.integer("--frames", -1);
     if (cl.has("--frames") && opt.frames < 0) throw_input_error("--frames", "", "must be >= 0");

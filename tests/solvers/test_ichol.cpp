@@ -53,7 +53,9 @@ TEST(IcholFace, FaceMatrixInverseKeepsTheFaceAndInvertsQAQOnIt)
     ASSERT_EQ(ldlt.info(), Eigen::Success);
     const Vec w = ldlt.solve(phi);
     for (Eigen::Index i = 0; i < f.qp.m(); ++i)
-        if (f.active[static_cast<size_t>(i)]) EXPECT_LE(std::abs(f.row_dot(i, w)), 1e-9 * w.norm()) << "row " << i;
+        if (f.active[static_cast<size_t>(i)]) {
+            EXPECT_LE(std::abs(f.row_dot(i, w)), 1e-9 * w.norm()) << "row " << i;
+        }
     Vec Aw = f.qp.A * w, QAw;
     cb::free_gradient(f.qp.J, f.rows, f.active, Aw, QAw);
     EXPECT_LE((QAw - phi).norm(), 1e-8 * phi.norm());
@@ -70,7 +72,9 @@ TEST(IcholFace, PreconditionedDirectionStaysOnTheFaceAndDescends)
     Vec work(f.qp.n()), z;
     cb::ichol_face_precondition(ic, f.qp.J, f.rows, f.active, g, work, z);
     for (Eigen::Index i = 0; i < f.qp.m(); ++i)
-        if (f.active[static_cast<size_t>(i)]) EXPECT_LE(std::abs(f.row_dot(i, z)), 1e-12 * z.norm()) << "row " << i;
+        if (f.active[static_cast<size_t>(i)]) {
+            EXPECT_LE(std::abs(f.row_dot(i, z)), 1e-12 * z.norm()) << "row " << i;
+        }
     EXPECT_GT(z.dot(g), 0.0);  // a descent direction: Q M^-1 Q is positive definite on the face
 }
 
