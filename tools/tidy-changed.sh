@@ -22,7 +22,7 @@ for h in "${headers[@]}"; do
   src=${h%.hpp}.cpp
   [ -f "$src" ] && files+=("$src")
 done
-mapfile -t files < <(printf '%s\n' "${files[@]}" | sort -u | grep -v '^tests/fuzz/' || true)
+mapfile -t files < <(printf '%s\n' "${files[@]}" | sort -u | grep -v -e '^tests/fuzz/' -e '^$' || true)
 if [ ${#files[@]} -eq 0 ]; then
   echo "tidy: no C++ source changed against $base"
   exit 0
