@@ -25,7 +25,7 @@ std::string binary()
 const fs::path& work_dir()
 {
     static const fs::path dir = [] {
-        const fs::path d = fs::temp_directory_path() / ("cb_test_run_env_" + std::to_string(::getpid()));
+        fs::path d = fs::temp_directory_path() / ("cb_test_run_env_" + std::to_string(::getpid()));
         fs::remove_all(d);
         fs::create_directories(d);
         ::setenv("CB_CACHE", (d / "cache").c_str(), 1);
