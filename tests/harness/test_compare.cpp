@@ -220,14 +220,14 @@ TEST(ComparePerfRecord, InstructionsAndHarnessCountedProductsOnOneMachine)
     EXPECT_TRUE(regressed_of(compare_inputs(old, n), "c").empty());
 }
 
-TEST(ComparePerfRecord, WallTimeIsJudgedOnlyBeyondTheRatioAndOutsideTheNoiseBand)
+TEST(ComparePerfRecord, WallTimeIsJudgedOnlyBeyondTheRatioTimesTheNoiseBand)
 {
     const std::vector<PerfRow> base = {row("a", "cg"), row("b", "cg"), row("c", "cg"), row("d", "cg")};
     std::vector<PerfRow> next = base;
-    next[0].time_min_s = 0.016;  // 1.6x, band 0.10: regressed
-    next[1].time_min_s = 0.016;  // 1.6x but noisy (band 0.05 + 0.60): not judged a regression
+    next[0].time_min_s = 0.018;  // 1.8x, band 0.10: beyond 1.5 x 1.10, regressed
+    next[1].time_min_s = 0.018;  // 1.8x but noisy (band 0.05 + 0.60): within 1.5 x 1.65, not judged a regression
     next[1].time_noise = 0.6;
-    next[2].time_min_s = 0.014;  // 1.4x: under the 1.5x threshold
+    next[2].time_min_s = 0.016;  // 1.6x, band 0.10: within 1.5 x 1.10 = 1.65x
     next[3].time_min_s = 0.03;   // 3x from a single sample: never judged
     next[3].time_samples = 1;
     const CompareReport report = compare_inputs(read_compare_input(write_perf("tb", base)),
@@ -236,9 +236,9 @@ TEST(ComparePerfRecord, WallTimeIsJudgedOnlyBeyondTheRatioAndOutsideTheNoiseBand
     EXPECT_TRUE(regressed_of(report, "b").empty());
     EXPECT_TRUE(regressed_of(report, "c").empty());
     EXPECT_TRUE(regressed_of(report, "d").empty());
-    EXPECT_NEAR(report.rows[0].time_ratio, 1.6, 1e-12);
+    EXPECT_NEAR(report.rows[0].time_ratio, 1.8, 1e-12);
     EXPECT_NEAR(report.rows[0].time_band, 0.1, 1e-12);
-    EXPECT_NE(report.table().find("1.60x ±0.10"), std::string::npos) << report.table();
+    EXPECT_NE(report.table().find("1.80x ±0.10"), std::string::npos) << report.table();
     CompareOptions never;
     never.time_ratio_max = 0.0;
     EXPECT_FALSE(compare_inputs(read_compare_input(write_perf("tb", base)), read_compare_input(write_perf("tn", next)),
