@@ -145,7 +145,7 @@ std::string perf_line(const PerfRow& r)
 
 fs::path perf_dir()
 {
-    const fs::path dir = fs::temp_directory_path() / ("cb_test_compare_csv_" + std::to_string(::getpid()));
+    fs::path dir = fs::temp_directory_path() / ("cb_test_compare_csv_" + std::to_string(::getpid()));
     fs::create_directories(dir);
     return dir;
 }
