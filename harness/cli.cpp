@@ -80,4 +80,4 @@ void CommandLine::expect_positional(size_t min, size_t max, const std::string& u
                          " arguments, got " + std::to_string(m_positional.size()) + "\nusage: " + usage);
 }
 
-} // namespace cb
+}  // namespace cb

@@ -37,4 +37,4 @@ private:
     bool m_help = false;
 };
 
-} // namespace cb
+}  // namespace cb

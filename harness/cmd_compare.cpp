@@ -14,15 +14,14 @@ namespace {
 /// Exit status of a comparison that found a regression (2 and 1 are bad input and internal error).
 constexpr int kRegression = 3;
 
-} // namespace
+}  // namespace
 
 int cmd_compare(const Args& args)
 {
     const char* const usage =
         "contactbench compare BASE NEW [--only-changes] [--filter REGEX] [--kkt-rtol 0.1]\n"
         "                     [--instructions-rtol 0.03] [--time-ratio 1.5] [--cross-machine] [--json FILE]";
-    const CommandLine cl("compare", args,
-                         {"--kkt-rtol", "--instructions-rtol", "--time-ratio", "--filter", "--json"},
+    const CommandLine cl("compare", args, {"--kkt-rtol", "--instructions-rtol", "--time-ratio", "--filter", "--json"},
                          {"--only-changes", "--cross-machine"});
     if (cl.help()) {
         std::cout << "usage: " << usage
@@ -64,4 +63,4 @@ int cmd_compare(const Args& args)
     return report.failed() ? kRegression : 0;
 }
 
-} // namespace cb
+}  // namespace cb

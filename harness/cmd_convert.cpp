@@ -26,7 +26,7 @@ bool ends_with(const std::string& s, const std::string& tail)
     return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
 }
 
-} // namespace
+}  // namespace
 
 int cmd_convert(const Args& args)
 {
@@ -39,21 +39,26 @@ int cmd_convert(const Args& args)
     const std::string in = cl.positional()[0], out = cl.positional()[1];
     Qp qp;
     SnapshotExtras extras;
-    if (std::filesystem::is_directory(in)) qp = read_matrix_market_folder(in, &extras);
-    else if (is_fclib_path(in)) qp = read_fclib_global(in, &extras);
-    else qp = read_qpsnap(in, &extras);
+    if (std::filesystem::is_directory(in))
+        qp = read_matrix_market_folder(in, &extras);
+    else if (is_fclib_path(in))
+        qp = read_fclib_global(in, &extras);
+    else
+        qp = read_qpsnap(in, &extras);
     if (is_fclib_path(out)) {
         write_fclib_global(out, qp, &extras);
-        std::cout << "wrote " << out << " (FCLIB fclib_global, n = " << qp.n() << ", " << qp.m() << " contacts, mu = 0)\n";
+        std::cout << "wrote " << out << " (FCLIB fclib_global, n = " << qp.n() << ", " << qp.m()
+                  << " contacts, mu = 0)\n";
     } else if (ends_with(out, ".qpsnap")) {
         write_qpsnap(out, qp, &extras);
         std::cout << "wrote " << out << " (n = " << qp.n() << ", m = " << qp.m() << ", nnz(A) = " << qp.A.nonZeros()
                   << ", hash " << qpsnap_content_hash(out) << ")\n";
     } else {
         write_matrix_market_folder(out, qp, &extras);
-        std::cout << "wrote " << out << "/ (n = " << qp.n() << ", m = " << qp.m() << ", nnz(A) = " << qp.A.nonZeros() << ")\n";
+        std::cout << "wrote " << out << "/ (n = " << qp.n() << ", m = " << qp.m() << ", nnz(A) = " << qp.A.nonZeros()
+                  << ")\n";
     }
     return 0;
 }
 
-} // namespace cb
+}  // namespace cb

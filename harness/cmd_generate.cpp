@@ -11,11 +11,10 @@
 namespace cb {
 namespace {
 
-const char* const kUsage =
-    "contactbench generate FAMILY --out FILE.qpsnap [--seed S] [--param key=value ...]\n"
-    "       contactbench generate --list            (families and their parameters)\n"
-    "       contactbench generate FAMILY --help     (one family's parameters)\n"
-    "  values are JSON: --param nx=8 --param youngs=1e9 --param rotate=false";
+const char* const kUsage = "contactbench generate FAMILY --out FILE.qpsnap [--seed S] [--param key=value ...]\n"
+                           "       contactbench generate --list            (families and their parameters)\n"
+                           "       contactbench generate FAMILY --help     (one family's parameters)\n"
+                           "  values are JSON: --param nx=8 --param youngs=1e9 --param rotate=false";
 
 void print_list(std::ostream& out)
 {
@@ -23,7 +22,7 @@ void print_list(std::ostream& out)
     for (const auto& f : synthetic_families()) out << "\n" << synthetic_family_help(f);
 }
 
-} // namespace
+}  // namespace
 
 int cmd_generate(const Args& args)
 {
@@ -38,7 +37,8 @@ int cmd_generate(const Args& args)
     }
     cl.expect_positional(1, 1, kUsage);
     const std::string family = cl.positional()[0];
-    if (!cl.has("--out")) throw_input_error("generate", "--out", "missing (the .qpsnap file to write)\nusage: " + std::string(kUsage));
+    if (!cl.has("--out"))
+        throw_input_error("generate", "--out", "missing (the .qpsnap file to write)\nusage: " + std::string(kUsage));
     const long seed = cl.integer("--seed", 0);
     if (seed < 0) throw_input_error("generate", "--seed", "expected an integer >= 0, got " + std::to_string(seed));
     nlohmann::json params = nlohmann::json::object();
@@ -60,10 +60,10 @@ int cmd_generate(const Args& args)
     write_qpsnap(out, qp);
     long violated = 0;
     if (qp.m()) violated = long(((qp.J * qp.x0 - qp.c).array() < 0).count());
-    std::cout << "wrote " << out << ": family " << family << ", seed " << seed << ", n = " << qp.n() << ", m = " << qp.m()
-              << ", nnz(A) = " << qp.A.nonZeros() << ", violated at x0 = " << violated << ", hash "
-              << qpsnap_content_hash(out) << "\n";
+    std::cout << "wrote " << out << ": family " << family << ", seed " << seed << ", n = " << qp.n()
+              << ", m = " << qp.m() << ", nnz(A) = " << qp.A.nonZeros() << ", violated at x0 = " << violated
+              << ", hash " << qpsnap_content_hash(out) << "\n";
     return 0;
 }
 
-} // namespace cb
+}  // namespace cb

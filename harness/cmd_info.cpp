@@ -22,11 +22,16 @@ const char* const kUsage = "contactbench info SNAP [--json] [--time]\n"
 const char* kind_name(std::int64_t k)
 {
     switch (ContactKind(k)) {
-    case ContactKind::PLANE: return "plane";
-    case ContactKind::OBSTACLE: return "obstacle";
-    case ContactKind::INTER_BODY: return "inter_body";
-    case ContactKind::SELF: return "self";
-    case ContactKind::OTHER: return "other";
+    case ContactKind::PLANE:
+        return "plane";
+    case ContactKind::OBSTACLE:
+        return "obstacle";
+    case ContactKind::INTER_BODY:
+        return "inter_body";
+    case ContactKind::SELF:
+        return "self";
+    case ContactKind::OTHER:
+        return "other";
     }
     return "unknown";
 }
@@ -40,7 +45,7 @@ nlohmann::json row_histogram(const SpMat& M)
     return out;
 }
 
-} // namespace
+}  // namespace
 
 int cmd_info(const Args& args)
 {
@@ -72,7 +77,8 @@ int cmd_info(const Args& args)
         info["file_bytes"] = std::filesystem::file_size(path);
         nlohmann::json arrays = nlohmann::json::object();
         for (auto it = header["arrays"].begin(); it != header["arrays"].end(); ++it)
-            arrays[it.key()] = {{"dtype", it.value()["dtype"]}, {"shape", it.value()["shape"]}, {"nbytes", it.value()["nbytes"]}};
+            arrays[it.key()] = {
+                {"dtype", it.value()["dtype"]}, {"shape", it.value()["shape"]}, {"nbytes", it.value()["nbytes"]}};
         info["arrays"] = arrays;
     }
     if (cl.has("--time")) info["load_time"] = {{"wall_s", load_wall}, {"cpu_s", load_cpu}};
@@ -107,7 +113,8 @@ int cmd_info(const Args& args)
     std::cout << "contacts:    ";
     if (kinds.empty()) std::cout << "no kinds recorded";
     for (auto it = kinds.begin(); it != kinds.end(); ++it) std::cout << it.key() << " " << it.value() << "  ";
-    std::cout << "\nat x0:       " << info["violated_at_x0"] << " violated rows, max violation " << info["max_violation_at_x0"] << "\n";
+    std::cout << "\nat x0:       " << info["violated_at_x0"] << " violated rows, max violation "
+              << info["max_violation_at_x0"] << "\n";
     auto print_hist = [](const char* name, const nlohmann::json& h) {
         std::cout << name;
         for (auto it = h.begin(); it != h.end(); ++it) std::cout << " " << it.key() << ":" << it.value();
@@ -118,8 +125,8 @@ int cmd_info(const Args& args)
     if (info.contains("arrays")) {
         std::cout << "arrays:\n";
         for (auto it = info["arrays"].begin(); it != info["arrays"].end(); ++it)
-            std::cout << "  " << it.key() << "  " << it.value()["dtype"].get<std::string>() << " " << it.value()["shape"].dump()
-                      << "  " << it.value()["nbytes"] << " bytes\n";
+            std::cout << "  " << it.key() << "  " << it.value()["dtype"].get<std::string>() << " "
+                      << it.value()["shape"].dump() << "  " << it.value()["nbytes"] << " bytes\n";
     }
     std::cout << "meta:        " << qp.meta.dump(2) << "\n";
     if (cl.has("--time"))
@@ -127,4 +134,4 @@ int cmd_info(const Args& args)
     return 0;
 }
 
-} // namespace cb
+}  // namespace cb

@@ -35,7 +35,7 @@ void warn_mixed_cpu_models(const std::string& out, const nlohmann::json& suite)
     if (!warning.empty()) std::cerr << "merge: warning: " << warning << "\n";
 }
 
-} // namespace
+}  // namespace
 
 int cmd_merge(const Args& args)
 {
@@ -60,27 +60,30 @@ int cmd_merge(const Args& args)
             throw_input_error(dir.string(), "runs/", "missing: not a results folder of `contactbench run`");
         const fs::path jobs_path = dir / "jobs.json";
         if (!fs::exists(jobs_path))
-            throw_input_error(jobs_path.string(), "", "missing: the shard's `contactbench run` did not finish (run it again)");
+            throw_input_error(jobs_path.string(), "",
+                              "missing: the shard's `contactbench run` did not finish (run it again)");
         const nlohmann::json jobs = read_json_file(jobs_path.string());
-        if (!jobs.is_object() || !jobs.contains("suite_hash") || !jobs.contains("shard") || !jobs["shard"].is_object() ||
-            !jobs["shard"].value("index", nlohmann::json()).is_number_integer() ||
+        if (!jobs.is_object() || !jobs.contains("suite_hash") || !jobs.contains("shard") ||
+            !jobs["shard"].is_object() || !jobs["shard"].value("index", nlohmann::json()).is_number_integer() ||
             !jobs["shard"].value("count", nlohmann::json()).is_number_integer() || !jobs.contains("jobs") ||
             !jobs["jobs"].is_array() || !jobs.value("all_jobs", nlohmann::json()).is_number_integer())
             throw_input_error(jobs_path.string(), "", "not a jobs file of `contactbench run`");
         if (!fs::exists(dir / "suite.json"))
-            throw_input_error((dir / "suite.json").string(), "", "missing: the shard's `contactbench run` did not finish");
+            throw_input_error((dir / "suite.json").string(), "",
+                              "missing: the shard's `contactbench run` did not finish");
         if (first_jobs.is_null()) {
             first_jobs = jobs;
             first_dir = dir.string();
             suite = read_json_file((dir / "suite.json").string());
         } else if (jobs["suite_hash"] != first_jobs["suite_hash"] || jobs["suite"] != first_jobs["suite"]) {
-            throw_input_error(jobs_path.string(), "suite", "shard of suite " + jobs["suite"].dump() + " (hash " +
-                                                               jobs["suite_hash"].dump() + "), but " + first_dir + " is of suite " +
-                                                               first_jobs["suite"].dump() + " (hash " +
-                                                               first_jobs["suite_hash"].dump() + "): not one suite");
+            throw_input_error(jobs_path.string(), "suite",
+                              "shard of suite " + jobs["suite"].dump() + " (hash " + jobs["suite_hash"].dump() +
+                                  "), but " + first_dir + " is of suite " + first_jobs["suite"].dump() + " (hash " +
+                                  first_jobs["suite_hash"].dump() + "): not one suite");
         } else if (jobs["shard"]["count"] != first_jobs["shard"]["count"]) {
-            throw_input_error(jobs_path.string(), "shard", "of " + jobs["shard"]["count"].dump() + " shards, but " + first_dir +
-                                                               " is of " + first_jobs["shard"]["count"].dump());
+            throw_input_error(jobs_path.string(), "shard",
+                              "of " + jobs["shard"]["count"].dump() + " shards, but " + first_dir + " is of " +
+                                  first_jobs["shard"]["count"].dump());
         }
         const long index = jobs["shard"].value("index", 0L);
         if (!indices.insert(index).second)
@@ -90,19 +93,22 @@ int cmd_merge(const Args& args)
                 throw_input_error(jobs_path.string(), "jobs", "expected run file names, got " + f.dump());
             const std::string name = f.get<std::string>();
             if (!fs::is_regular_file(dir / "runs" / name))
-                throw_input_error((dir / "runs" / name).string(), "", "missing: shard " + std::to_string(index) +
-                                                                         " is incomplete (run it again)");
+                throw_input_error((dir / "runs" / name).string(), "",
+                                  "missing: shard " + std::to_string(index) + " is incomplete (run it again)");
             all_files.insert(name);
         }
     }
     const long count = first_jobs["shard"].value("count", 1L);
     std::string missing;
     for (long i = 1; i <= count; ++i)
-        if (!indices.count(i)) missing += (missing.empty() ? "" : ", ") + std::to_string(i) + "/" + std::to_string(count);
-    if (!missing.empty()) throw_input_error("merge", "shards", "missing shard(s) " + missing + " of suite " + first_jobs["suite"].dump());
+        if (!indices.count(i))
+            missing += (missing.empty() ? "" : ", ") + std::to_string(i) + "/" + std::to_string(count);
+    if (!missing.empty())
+        throw_input_error("merge", "shards", "missing shard(s) " + missing + " of suite " + first_jobs["suite"].dump());
     if (all_files.size() != first_jobs.value("all_jobs", size_t(0)))
-        throw_input_error("merge", "shards", "the shards hold " + std::to_string(all_files.size()) + " jobs, the suite has " +
-                                                 first_jobs["all_jobs"].dump());
+        throw_input_error("merge", "shards",
+                          "the shards hold " + std::to_string(all_files.size()) + " jobs, the suite has " +
+                              first_jobs["all_jobs"].dump());
 
     std::error_code ec;
     fs::create_directories(fs::path(out) / "runs", ec);
@@ -112,7 +118,8 @@ int cmd_merge(const Args& args)
     for (size_t k = 1; k < cl.positional().size(); ++k) {
         const fs::path dir = cl.positional()[k];
         if (fs::is_regular_file(dir / "provenance.json"))
-            shards.push_back({{"dir", dir.string()}, {"provenance", read_json_file((dir / "provenance.json").string())}});
+            shards.push_back(
+                {{"dir", dir.string()}, {"provenance", read_json_file((dir / "provenance.json").string())}});
         const nlohmann::json jobs = read_json_file((dir / "jobs.json").string());
         for (const auto& f : jobs["jobs"]) {
             const fs::path source = dir / "runs" / f.get<std::string>();
@@ -144,4 +151,4 @@ int cmd_merge(const Args& args)
     return 0;
 }
 
-} // namespace cb
+}  // namespace cb

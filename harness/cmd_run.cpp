@@ -30,13 +30,13 @@
 #include <cstring>
 #include <fcntl.h>
 #include <filesystem>
-#include <set>
-#include <sys/file.h>
-#include <unistd.h>
 #include <iostream>
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
+#include <sys/file.h>
+#include <unistd.h>
 
 namespace cb {
 
@@ -74,15 +74,34 @@ Shard parse_shard(const std::string& text)
 nlohmann::json failed_record(const SuiteSolver& sv, const nlohmann::json& settings, const nlohmann::json& snapshot,
                              const std::string& status, const std::string& message, double tol)
 {
-    const nlohmann::json null_kkt = {{"stationarity", nullptr}, {"primal", nullptr}, {"dual", nullptr},
-                                     {"complementarity", nullptr}, {"max", nullptr}};
-    return {{"solver", sv.solver}, {"label", sv.label}, {"settings", settings}, {"snapshot", snapshot},
-            {"decouple", {{"applied", false}}}, {"status", status}, {"criterion", ""}, {"message", message},
-            {"iterations", 0}, {"objective", nullptr}, {"kkt", null_kkt}, {"kkt_relative", null_kkt},
-            {"violation", nullptr}, {"native_residual", nullptr}, {"lambda_fitted", false}, {"nonfinite", false},
-            {"monotone", true}, {"status_confirmed", true}, {"tol", tol}, {"counters", Counters{}.to_json()},
+    const nlohmann::json null_kkt = {{"stationarity", nullptr},
+                                     {"primal", nullptr},
+                                     {"dual", nullptr},
+                                     {"complementarity", nullptr},
+                                     {"max", nullptr}};
+    return {{"solver", sv.solver},
+            {"label", sv.label},
+            {"settings", settings},
+            {"snapshot", snapshot},
+            {"decouple", {{"applied", false}}},
+            {"status", status},
+            {"criterion", ""},
+            {"message", message},
+            {"iterations", 0},
+            {"objective", nullptr},
+            {"kkt", null_kkt},
+            {"kkt_relative", null_kkt},
+            {"violation", nullptr},
+            {"native_residual", nullptr},
+            {"lambda_fitted", false},
+            {"nonfinite", false},
+            {"monotone", true},
+            {"status_confirmed", true},
+            {"tol", tol},
+            {"counters", Counters{}.to_json()},
             {"time", {{"setup_s", 0.0}, {"solve_s", 0.0}, {"total_s", 0.0}, {"repeat", 0}}},
-            {"info", nlohmann::json::object()}, {"provenance", provenance()}};
+            {"info", nlohmann::json::object()},
+            {"provenance", provenance()}};
 }
 
 /// Holds an exclusive flock on DIR/.lock for the life of the process (released by the kernel
@@ -98,8 +117,9 @@ void lock_out_dir(const std::string& out)
         std::string pid = got > 0 ? std::string(holder, size_t(got)) : std::string("?");
         while (!pid.empty() && (pid.back() == '\n' || pid.back() == ' ')) pid.pop_back();
         ::close(fd);
-        throw_input_error(out, "", "another `contactbench run` (pid " + pid +
-                                       ") is writing to this folder; wait for it to finish or use another --out");
+        throw_input_error(out, "",
+                          "another `contactbench run` (pid " + pid +
+                              ") is writing to this folder; wait for it to finish or use another --out");
     }
     const std::string me = std::to_string(::getpid()) + "\n";
     if (::ftruncate(fd, 0) == 0 && ::pwrite(fd, me.data(), me.size(), 0) < 0) {
@@ -145,7 +165,7 @@ struct WarmState {
     bool has_lambda = false;
 };
 
-} // namespace
+}  // namespace
 
 int cmd_run(const Args& args)
 {
@@ -207,8 +227,9 @@ int cmd_run(const Args& args)
     // One DIR holds one suite: another suite's results are never mixed into this summary.
     const nlohmann::json held = suite_in(out);
     if (held.is_object() && held.value("name", std::string()) != suite.name)
-        throw_input_error(out, "suite.json", "holds results of suite '" + held.value("name", std::string("?")) +
-                                                 "', not '" + suite.name + "'; " + how_to_force);
+        throw_input_error(out, "suite.json",
+                          "holds results of suite '" + held.value("name", std::string("?")) + "', not '" + suite.name +
+                              "'; " + how_to_force);
     std::set<std::string> job_files;
     for (size_t s = 0; s < snapshots.size(); ++s)
         for (size_t v = 0; v < labels; ++v)
@@ -219,10 +240,11 @@ int cmd_run(const Args& args)
             foreign.push_back(entry.path().string());
     std::sort(foreign.begin(), foreign.end());
     if (!foreign.empty())
-        throw_input_error(foreign.front(), "", "not a job of suite '" + suite.name + "'" +
-                                                   (shard.count > 1 ? " shard " + cl.value("--shard") : "") + " (" +
-                                                   std::to_string(foreign.size()) +
-                                                   " such run files: an earlier suite or shard?); " + how_to_force);
+        throw_input_error(foreign.front(), "",
+                          "not a job of suite '" + suite.name + "'" +
+                              (shard.count > 1 ? " shard " + cl.value("--shard") : "") + " (" +
+                              std::to_string(foreign.size()) + " such run files: an earlier suite or shard?); " +
+                              how_to_force);
 
     // Identities: what each job's result depends on (the snapshot by content).
     std::vector<nlohmann::json> hashes(snapshots.size());
@@ -236,10 +258,14 @@ int cmd_run(const Args& args)
             hashes[s] = nullptr;  // the run fails on loading and is retried next time
         }
     }
-    const nlohmann::json options_entry = {
-        {"tol", suite.tol}, {"time_limit_s", suite.time_limit_s}, {"repeat", suite.repeat},
-        {"history_max", suite.history_max}, {"reference", suite.reference}, {"decouple", suite.decouple},
-        {"decouple_seed", suite.decouple_seed}, {"chain", suite.chain}};
+    const nlohmann::json options_entry = {{"tol", suite.tol},
+                                          {"time_limit_s", suite.time_limit_s},
+                                          {"repeat", suite.repeat},
+                                          {"history_max", suite.history_max},
+                                          {"reference", suite.reference},
+                                          {"decouple", suite.decouple},
+                                          {"decouple_seed", suite.decouple_seed},
+                                          {"chain", suite.chain}};
     auto settings_of = [&](size_t v) {
         nlohmann::json settings = suite.solvers[v].settings;
         // Suite-wide tol and time limit are defaults: a solver's own setting wins.
@@ -248,8 +274,10 @@ int cmd_run(const Args& args)
         return settings;
     };
     auto identity_of = [&](size_t s, size_t v) {
-        const nlohmann::json entry = {{"snapshot", snapshots[s].id}, {"path", snapshots[s].path},
-                                      {"generated", snapshots[s].generated}, {"label", suite.solvers[v].label},
+        const nlohmann::json entry = {{"snapshot", snapshots[s].id},
+                                      {"path", snapshots[s].path},
+                                      {"generated", snapshots[s].generated},
+                                      {"label", suite.solvers[v].label},
                                       {"options", options_entry}};
         return run_identity(hashes[s], suite.solvers[v].solver, settings_of(v), entry);
     };
@@ -303,7 +331,7 @@ int cmd_run(const Args& args)
     options.decouple_seed = suite.decouple_seed;
     options.repeat = suite.repeat;
     std::map<std::string, nlohmann::json> references;  // by key, within this process
-    std::map<std::string, WarmState> warm;            // by label
+    std::map<std::string, WarmState> warm;             // by label
     size_t done = 0, ran = 0;
     for (size_t s = 0; s < snapshots.size(); ++s) {
         bool any = false;
@@ -315,8 +343,13 @@ int cmd_run(const Args& args)
         if (any) {
             try {
                 qp = std::make_unique<Qp>(read_qpsnap(snap.path));
-                info = {{"id", snap.id}, {"path", snap.path}, {"hash", hashes[s].is_string() ? hashes[s] : nlohmann::json(qpsnap_content_hash(snap.path))},
-                        {"n", qp->n()}, {"m", qp->m()}, {"meta", qp->meta}, {"generated", snap.generated}};
+                info = {{"id", snap.id},
+                        {"path", snap.path},
+                        {"hash", hashes[s].is_string() ? hashes[s] : nlohmann::json(qpsnap_content_hash(snap.path))},
+                        {"n", qp->n()},
+                        {"m", qp->m()},
+                        {"meta", qp->meta},
+                        {"generated", snap.generated}};
             } catch (const InputError& e) {
                 load_error = e.what();
                 info = {{"id", snap.id}, {"path", snap.path}, {"generated", snap.generated}};
@@ -326,8 +359,8 @@ int cmd_run(const Args& args)
             if (!in_shard(s, v)) continue;
             ++done;
             const SuiteSolver& sv = suite.solvers[v];
-            const std::string prefix = "[" + std::to_string(done) + "/" + std::to_string(total) + "] " + snap.id +
-                                       " x " + sv.label + ": ";
+            const std::string prefix =
+                "[" + std::to_string(done) + "/" + std::to_string(total) + "] " + snap.id + " x " + sv.label + ": ";
             if (!todo[s][v]) {
                 std::cerr << prefix << "done before, skipped\n";
                 continue;
@@ -399,7 +432,8 @@ int cmd_run(const Args& args)
         }
     }
     if (const size_t failed = pool.wait_all())
-        throw std::runtime_error(std::to_string(failed) + " parallel job(s) failed; rerun to redo them (finished runs are kept)");
+        throw std::runtime_error(std::to_string(failed) +
+                                 " parallel job(s) failed; rerun to redo them (finished runs are kept)");
     const size_t runs = write_summary(out, suite.name);
     // Which jobs this folder holds, for `merge` to check that the shards are complete and of one suite.
     size_t all_jobs = snapshots.size() * labels, done_jobs = 0, final_jobs = 0;
@@ -415,9 +449,13 @@ int cmd_run(const Args& args)
                 }
             }
     write_json_atomic((fs::path(out) / "jobs.json").string(),
-                      {{"suite", suite.name}, {"suite_hash", fnv1a_hex(suite.raw.dump())},
-                       {"shard", {{"index", shard.index}, {"count", shard.count}}}, {"all_jobs", all_jobs},
-                       {"jobs", shard_jobs}, {"complete", done_jobs == shard_jobs.size()}, {"retry", shard_jobs.size() - final_jobs}});
+                      {{"suite", suite.name},
+                       {"suite_hash", fnv1a_hex(suite.raw.dump())},
+                       {"shard", {{"index", shard.index}, {"count", shard.count}}},
+                       {"all_jobs", all_jobs},
+                       {"jobs", shard_jobs},
+                       {"complete", done_jobs == shard_jobs.size()},
+                       {"retry", shard_jobs.size() - final_jobs}});
     write_json_atomic((fs::path(out) / "provenance.json").string(), provenance());
     write_json_atomic((fs::path(out) / "suite.json").string(), suite.raw);
     std::error_code ec;
@@ -426,4 +464,4 @@ int cmd_run(const Args& args)
     return 0;
 }
 
-} // namespace cb
+}  // namespace cb

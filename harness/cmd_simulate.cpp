@@ -11,9 +11,11 @@ namespace cb {
 
 int cmd_simulate(const Args& args)
 {
-    const CommandLine cl("simulate", args, {"--frames", "--out", "--data", "--solver"}, {"--no-snapshots", "--version"});
+    const CommandLine cl("simulate", args, {"--frames", "--out", "--data", "--solver"},
+                         {"--no-snapshots", "--version"});
     const std::string usage =
-        "usage: contactbench simulate SCENE.json [--frames N] [--out DIR] [--data DIR] [--solver NAME] [--no-snapshots]\n"
+        "usage: contactbench simulate SCENE.json [--frames N] [--out DIR] [--data DIR] [--solver NAME] "
+        "[--no-snapshots]\n"
         "  SCENE.json     a scene (keys: scenes/README.md), or one of the authors' .ini scene files\n"
         "  --frames N     simulate N frames instead of the scene's \"frames\"\n"
         "  --out DIR      output folder (default results/sim/<scene name>): snapshots/*.qpsnap (one per\n"
@@ -55,13 +57,15 @@ int cmd_simulate(const Args& args)
     if (cl.has("--frames") && opt.frames < 0) throw_input_error("--frames", "", "must be >= 0");
     opt.progress = &std::cerr;
     for (const auto& b : scene.bodies)
-        std::cerr << scene.name << ": body " << b.name << ": " << b.mesh.vertices() << " vertices, " << b.mesh.tet_count()
-                  << " tets from " << b.source << (b.quality.empty() ? "" : "; " + b.quality) << "\n";
+        std::cerr << scene.name << ": body " << b.name << ": " << b.mesh.vertices() << " vertices, "
+                  << b.mesh.tet_count() << " tets from " << b.source << (b.quality.empty() ? "" : "; " + b.quality)
+                  << "\n";
     sim::Simulator simulator(std::move(scene), opt);
-    std::cerr << simulator.scene().name << ": " << simulator.vertices() << " vertices, " << simulator.dofs() << " DOFs, "
-              << simulator.tets() << " tets, solver " << simulator.solver_name() << ", output in " << opt.out_dir << "\n";
+    std::cerr << simulator.scene().name << ": " << simulator.vertices() << " vertices, " << simulator.dofs()
+              << " DOFs, " << simulator.tets() << " tets, solver " << simulator.solver_name() << ", output in "
+              << opt.out_dir << "\n";
     simulator.run();
     return 0;
 }
 
-} // namespace cb
+}  // namespace cb

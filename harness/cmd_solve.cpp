@@ -42,7 +42,8 @@ void print_solver_list(std::ostream& out)
     size_t width = 0;
     for (const auto& name : registry.names()) width = std::max(width, name.size());
     for (const auto& name : registry.names())
-        out << "  " << std::left << std::setw(static_cast<int>(width) + 2) << name << registry.entry(name).description << "\n";
+        out << "  " << std::left << std::setw(static_cast<int>(width) + 2) << name << registry.entry(name).description
+            << "\n";
 }
 
 void print_solver_settings(std::ostream& out, const std::string& name)
@@ -65,17 +66,19 @@ std::string sci(double v)
     return buffer;
 }
 
-} // namespace
+}  // namespace
 
 int cmd_solve(const Args& args)
 {
-    const CommandLine cl("solve", args,
-                         {"--solver", "--set", "--json", "--save-solution", "--decouple", "--decouple-seed",
-                          "--repeat", "--time-limit"},
-                         {"--history"});
+    const CommandLine cl(
+        "solve", args,
+        {"--solver", "--set", "--json", "--save-solution", "--decouple", "--decouple-seed", "--repeat", "--time-limit"},
+        {"--history"});
     if (cl.help()) {
-        if (cl.has("--solver")) print_solver_settings(std::cout, cl.value("--solver"));
-        else print_solver_list(std::cout);
+        if (cl.has("--solver"))
+            print_solver_settings(std::cout, cl.value("--solver"));
+        else
+            print_solver_list(std::cout);
         return 0;
     }
     cl.expect_positional(1, 1, kUsage);
@@ -95,7 +98,8 @@ int cmd_solve(const Args& args)
     if (seed < 0) throw_input_error("solve", "--decouple-seed", "must be >= 0");
     options.decouple_seed = static_cast<std::uint64_t>(seed);
     const long repeat = cl.integer("--repeat", 1);
-    if (repeat < 1 || repeat > 1000) throw_input_error("solve", "--repeat", "must be in 1..1000, got " + std::to_string(repeat));
+    if (repeat < 1 || repeat > 1000)
+        throw_input_error("solve", "--repeat", "must be in 1..1000, got " + std::to_string(repeat));
     options.repeat = static_cast<int>(repeat);
     options.time_limit_s = cl.number("--time-limit", 0.0);
     if (options.time_limit_s < 0) throw_input_error("solve", "--time-limit", "must be >= 0");
@@ -130,11 +134,12 @@ int cmd_solve(const Args& args)
     out << "error       " << sci(run.accuracy.max()) << " of the scene size l = " << sci(run.scale.length) << " ("
         << run.scale.length_source << "); stationarity " << sci(run.accuracy.stationarity) << ", primal "
         << sci(run.accuracy.primal) << ", dual " << sci(run.accuracy.dual) << ", complementarity "
-        << sci(run.accuracy.complementarity) << ", gap " << sci(run.accuracy.gap) << (r["lambda_fitted"].get<bool>() ? ", lambda fitted" : "")
-        << "; tol " << sci(r["accuracy_tol"].get<double>()) << "\n";
+        << sci(run.accuracy.complementarity) << ", gap " << sci(run.accuracy.gap)
+        << (r["lambda_fitted"].get<bool>() ? ", lambda fitted" : "") << "; tol " << sci(r["accuracy_tol"].get<double>())
+        << "\n";
     if (r.contains("accuracy_solved"))
-        out << "solved QP   error " << sci(run.accuracy_solved.max()) << " on the " << r["solved_problem"].get<std::string>()
-            << " QP (" << run.m_solved << " of " << qp.m() << " rows)\n";
+        out << "solved QP   error " << sci(run.accuracy_solved.max()) << " on the "
+            << r["solved_problem"].get<std::string>() << " QP (" << run.m_solved << " of " << qp.m() << " rows)\n";
     out << "objective   " << std::setprecision(10) << run.objective << ", violation " << sci(run.violation)
         << ", native residual " << sci(run.result.native_residual) << "\n";
     out << "time        setup " << sci(r["time"]["setup_s"].get<double>()) << " s, solve "
@@ -156,4 +161,4 @@ int cmd_solve(const Args& args)
     return 0;
 }
 
-} // namespace cb
+}  // namespace cb

@@ -24,7 +24,7 @@ std::vector<std::string> split_list(const std::string& text)
     return out;
 }
 
-} // namespace
+}  // namespace
 
 int cmd_stress(const Args& args)
 {
@@ -64,4 +64,4 @@ int cmd_stress(const Args& args)
     return 0;
 }
 
-} // namespace cb
+}  // namespace cb

@@ -22,4 +22,4 @@ int cmd_version(const Args& args);
 // Slurm job arrays (issue 19).
 int cmd_cluster(const Args& args);
 
-} // namespace cb
+}  // namespace cb

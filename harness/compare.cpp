@@ -147,7 +147,7 @@ bool machine_known(const nlohmann::json& m)
     return false;
 }
 
-} // namespace
+}  // namespace
 
 const std::vector<std::string>& compared_counters()
 {
@@ -173,14 +173,16 @@ CompareInput read_compare_input(const std::string& path)
         input.machine = folder_machine(path, input.runs);
         return input;
     }
-    if (!std::filesystem::exists(path)) throw_input_error(path, "", "no such results folder or performance record (.csv)");
+    if (!std::filesystem::exists(path))
+        throw_input_error(path, "", "no such results folder or performance record (.csv)");
     if (std::filesystem::path(path).extension() != ".csv")
         throw_input_error(path, "", "expected a results folder or a performance record (.csv)");
     input.runs = read_perf_record(path);
     const std::string machine_file = machine_file_for(path);
     if (std::filesystem::is_regular_file(machine_file)) {
         const nlohmann::json machine = read_json_file(machine_file);
-        if (!machine.is_object()) throw_input_error(machine_file, "", "expected a JSON object (the machine fingerprint)");
+        if (!machine.is_object())
+            throw_input_error(machine_file, "", "expected a JSON object (the machine fingerprint)");
         input.machine = machine_fingerprint(machine);
     }
     return input;
@@ -219,9 +221,9 @@ CompareReport compare_inputs(const CompareInput& base_input, const CompareInput&
     report.new_source = next_input.source;
     report.base_machine = base_input.machine;
     report.new_machine = next_input.machine;
-    report.cross_machine = options.cross_machine || (machine_known(base_input.machine) &&
-                                                     machine_known(next_input.machine) &&
-                                                     base_input.machine != next_input.machine);
+    report.cross_machine =
+        options.cross_machine || (machine_known(base_input.machine) && machine_known(next_input.machine) &&
+                                  base_input.machine != next_input.machine);
     const bool exact = !report.cross_machine;
 
     for (const auto& [key, b] : base_by_key) {
@@ -258,18 +260,24 @@ CompareReport compare_inputs(const CompareInput& base_input, const CompareInput&
                 continue;
             }
             const double x = bv.get<double>(), y = nv.get<double>();
-            const double allowed = exact ? x : x * (1.0 + options.counter_rtol) + static_cast<double>(options.counter_atol);
-            const double better = exact ? x : (x - static_cast<double>(options.counter_atol)) / (1.0 + options.counter_rtol);
-            if (y > allowed) row.regressed.push_back(c);
-            else if (y < better) row.improved.push_back(c);
+            const double allowed =
+                exact ? x : x * (1.0 + options.counter_rtol) + static_cast<double>(options.counter_atol);
+            const double better =
+                exact ? x : (x - static_cast<double>(options.counter_atol)) / (1.0 + options.counter_rtol);
+            if (y > allowed)
+                row.regressed.push_back(c);
+            else if (y < better)
+                row.improved.push_back(c);
         }
         const double tol = n.value("tol", b->value("tol", 0.0));
         const auto& bk = row.base["kkt_rel"];
         const auto& nk = row.next["kkt_rel"];
         if (nk.is_number() && bk.is_number()) {
             const double bkv = bk.get<double>(), nkv = nk.get<double>();
-            if (nkv > bkv * (1.0 + options.kkt_rtol) && nkv > tol) row.regressed.push_back("kkt_rel");
-            else if (nkv * (1.0 + options.kkt_rtol) < bkv && bkv > tol) row.improved.push_back("kkt_rel");
+            if (nkv > bkv * (1.0 + options.kkt_rtol) && nkv > tol)
+                row.regressed.push_back("kkt_rel");
+            else if (nkv * (1.0 + options.kkt_rtol) < bkv && bkv > tol)
+                row.improved.push_back("kkt_rel");
         } else if (bk.is_number() && !nk.is_number()) {
             row.regressed.push_back("kkt_rel");  // NaN or absent now
         }
@@ -277,8 +285,10 @@ CompareReport compare_inputs(const CompareInput& base_input, const CompareInput&
         const auto& ni = row.next["instructions"];
         if (exact && bi.is_number() && ni.is_number() && bi.get<double>() > 0.0) {
             const double change = ni.get<double>() / bi.get<double>() - 1.0;
-            if (change > options.instructions_rtol) row.regressed.push_back("instructions");
-            else if (change < -options.instructions_rtol) row.improved.push_back("instructions");
+            if (change > options.instructions_rtol)
+                row.regressed.push_back("instructions");
+            else if (change < -options.instructions_rtol)
+                row.improved.push_back("instructions");
         }
         if (bt.min > 0.0 && nt.min > 0.0) {
             row.time_ratio = nt.min / bt.min;
@@ -333,7 +343,7 @@ std::string CompareReport::header() const
         << describe_machine(base_machine) << "\n";
     out << "NEW   " << (new_source.empty() ? "(records)" : new_source) << "  measured on "
         << (same && base_machine == new_machine && machine_known(new_machine) ? "the same machine"
-                                                                               : describe_machine(new_machine))
+                                                                              : describe_machine(new_machine))
         << "\n";
     if (same) {
         out << "rules (same machine): statuses equal; work counters exact (" << compared_counters().size()
@@ -349,9 +359,8 @@ std::string CompareReport::header() const
         const bool differ = machine_known(base_machine) && machine_known(new_machine) && base_machine != new_machine;
         out << (differ ? "machines DIFFER: " : "") << "across-machines rules"
             << (differ ? "" : " (asked for: the sides may come from different machines)")
-            << ": statuses equal; work counters within +"
-            << format_g(100.0 * options.counter_rtol, 3) << "% + " << options.counter_atol << "; kkt_rel within +"
-            << format_g(100.0 * options.kkt_rtol, 3)
+            << ": statuses equal; work counters within +" << format_g(100.0 * options.counter_rtol, 3) << "% + "
+            << options.counter_atol << "; kkt_rel within +" << format_g(100.0 * options.kkt_rtol, 3)
             << "% above tol; instructions and wall time shown, not judged\n";
     }
     return out.str();
@@ -381,11 +390,16 @@ std::string CompareReport::table(bool only_changes) const
         if (r.time_ratio > 0.0 && r.time_band >= 0.0) time += " ±" + format_fixed(r.time_band, 2);
         line.push_back(time);
         std::string verdict;
-        if (r.verdict == "status-changed") verdict = "FAIL status changed";
-        else if (r.verdict == "regressed") verdict = "FAIL regressed:";
-        else if (r.verdict == "improved") verdict = "improved:";
-        else verdict = "equal";
-        const bool solver_counted = std::find(r.regressed.begin(), r.regressed.end(), "a_products") != r.regressed.end();
+        if (r.verdict == "status-changed")
+            verdict = "FAIL status changed";
+        else if (r.verdict == "regressed")
+            verdict = "FAIL regressed:";
+        else if (r.verdict == "improved")
+            verdict = "improved:";
+        else
+            verdict = "equal";
+        const bool solver_counted =
+            std::find(r.regressed.begin(), r.regressed.end(), "a_products") != r.regressed.end();
         if (r.verdict == "regressed" || r.verdict == "status-changed")
             for (const auto& q : r.regressed)
                 verdict += " " + q + (q == "a_products_harness" && !solver_counted ? " (uncounted by the solver)" : "");
@@ -425,9 +439,15 @@ nlohmann::json CompareReport::to_json() const
 {
     nlohmann::json rows_json = nlohmann::json::array();
     for (const auto& r : rows)
-        rows_json.push_back({{"snapshot", r.snapshot}, {"label", r.label}, {"base_status", r.base_status},
-                             {"new_status", r.new_status}, {"verdict", r.verdict}, {"regressed", r.regressed},
-                             {"improved", r.improved}, {"base", r.base}, {"new", r.next},
+        rows_json.push_back({{"snapshot", r.snapshot},
+                             {"label", r.label},
+                             {"base_status", r.base_status},
+                             {"new_status", r.new_status},
+                             {"verdict", r.verdict},
+                             {"regressed", r.regressed},
+                             {"improved", r.improved},
+                             {"base", r.base},
+                             {"new", r.next},
                              {"time_ratio", r.time_ratio},
                              {"time_band", r.time_band >= 0.0 ? nlohmann::json(r.time_band) : nlohmann::json()}});
     return {{"failed", failed()},
@@ -450,4 +470,4 @@ nlohmann::json CompareReport::to_json() const
             {"rows", rows_json}};
 }
 
-} // namespace cb
+}  // namespace cb

@@ -50,12 +50,12 @@ CompareInput read_compare_input(const std::string& path);
 struct CompareRow {
     std::string snapshot, label;
     std::string base_status, new_status;
-    std::string verdict;                   ///< "equal", "improved", "regressed", "status-changed", "missing", "new"
-    std::vector<std::string> regressed;    ///< names of regressed quantities ("a_products", "instructions" ...)
+    std::string verdict;                 ///< "equal", "improved", "regressed", "status-changed", "missing", "new"
+    std::vector<std::string> regressed;  ///< names of regressed quantities ("a_products", "instructions" ...)
     std::vector<std::string> improved;
-    nlohmann::json base, next;             ///< compared values (counters, kkt_rel, instructions, time)
-    double time_ratio = 0.0;               ///< NEW/BASE minimum time (0 when unknown)
-    double time_band = -1.0;               ///< relative noise band of the ratio (< 0: unknown, not judged)
+    nlohmann::json base, next;  ///< compared values (counters, kkt_rel, instructions, time)
+    double time_ratio = 0.0;    ///< NEW/BASE minimum time (0 when unknown)
+    double time_band = -1.0;    ///< relative noise band of the ratio (< 0: unknown, not judged)
     bool failure() const { return verdict == "regressed" || verdict == "status-changed" || verdict == "missing"; }
     /// True when anything differs (a counter, instructions, the status), judged or not.
     bool changed() const;
@@ -88,4 +88,4 @@ CompareReport compare_inputs(const CompareInput& base, const CompareInput& next,
 CompareReport compare_folders(const std::string& base_dir, const std::string& new_dir,
                               const CompareOptions& options = {});
 
-} // namespace cb
+}  // namespace cb

@@ -11,7 +11,7 @@ bool all_finite(const Vec& v) { return v.size() == 0 || v.allFinite(); }
 
 nlohmann::json number_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
 
-} // namespace
+}  // namespace
 
 HistoryMonitor::HistoryMonitor(const QpView& qp, const AccuracyScale& scale, long history_max, bool record,
                                std::vector<int> kept_rows)
@@ -22,8 +22,8 @@ HistoryMonitor::HistoryMonitor(const QpView& qp, const AccuracyScale& scale, lon
 
 std::vector<std::string> HistoryMonitor::columns()
 {
-    return {"iteration", "time_s", "a_products", "step", "stationarity", "primal", "dual",
-            "complementarity", "gap", "kkt_rel", "objective", "native_residual", "active_set"};
+    return {"iteration",       "time_s", "a_products", "step",      "stationarity",    "primal",    "dual",
+            "complementarity", "gap",    "kkt_rel",    "objective", "native_residual", "active_set"};
 }
 
 HistoryRow HistoryMonitor::measure(long call, long iteration, StepKind step, const Vec& x, const Vec* lambda,
@@ -41,7 +41,8 @@ HistoryRow HistoryMonitor::measure(long call, long iteration, StepKind step, con
     row.objective = 0.5 * x.dot(g) - 0.5 * m_qp.b.dot(x);
     if (lambda && !m_kept_rows.empty() && lambda->size() == static_cast<Eigen::Index>(m_kept_rows.size())) {
         Vec padded = Vec::Zero(m_qp.m());
-        for (size_t k = 0; k < m_kept_rows.size(); ++k) padded[m_kept_rows[k]] = (*lambda)[static_cast<Eigen::Index>(k)];
+        for (size_t k = 0; k < m_kept_rows.size(); ++k)
+            padded[m_kept_rows[k]] = (*lambda)[static_cast<Eigen::Index>(k)];
         row.accuracy = accuracy_from_gradient(m_qp, m_scale, x, g, padded);
     } else if (lambda && lambda->size() == m_qp.m()) {
         row.accuracy = accuracy_from_gradient(m_qp, m_scale, x, g, *lambda);
@@ -117,11 +118,10 @@ nlohmann::json HistoryMonitor::to_json() const
         rows.push_back({r.iteration, number_or_null(r.time_s), r.a_products, to_string(r.step),
                         number_or_null(r.accuracy.stationarity), number_or_null(r.accuracy.primal),
                         number_or_null(r.accuracy.dual), number_or_null(r.accuracy.complementarity),
-                        number_or_null(r.accuracy.gap),
-                        number_or_null(r.accuracy.max()), number_or_null(r.objective),
+                        number_or_null(r.accuracy.gap), number_or_null(r.accuracy.max()), number_or_null(r.objective),
                         number_or_null(r.native_residual), r.active_set});
     }
     return {{"columns", columns()}, {"rows", rows}, {"stride", m_stride}, {"monitor_calls", m_calls}};
 }
 
-} // namespace cb
+}  // namespace cb

@@ -54,8 +54,8 @@ public:
     nlohmann::json to_json() const;
 
 private:
-    HistoryRow measure(long call, long iteration, StepKind step, const Vec& x, const Vec* lambda,
-                       double time_s, long a_products, double native, long active);
+    HistoryRow measure(long call, long iteration, StepKind step, const Vec& x, const Vec* lambda, double time_s,
+                       long a_products, double native, long active);
     void push(HistoryRow row);
 
     QpView m_qp;
@@ -73,4 +73,4 @@ private:
     std::vector<HistoryRow> m_rows;
 };
 
-} // namespace cb
+}  // namespace cb

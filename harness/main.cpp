@@ -23,11 +23,14 @@ const std::map<std::string, Command>& commands()
         {"run", {cb::cmd_run, "run SUITE.json [--out DIR] [--shard i/N]: a suite of snapshots x solvers"}},
         {"merge", {cb::cmd_merge, "merge OUT DIR...: join the shard folders DIR... of a suite run into OUT"}},
         {"generate", {cb::cmd_generate, "generate FAMILY --out FILE [--seed S ...]: write a synthetic snapshot"}},
-        {"simulate", {cb::cmd_simulate, "simulate SCENE.json [--frames N] [--out DIR] [--data DIR]: snapshots of a scene"}},
-        {"solvers", {cb::cmd_solvers, "solvers [--json]: every registered solver, one line each, with what it applies to"}},
+        {"simulate",
+         {cb::cmd_simulate, "simulate SCENE.json [--frames N] [--out DIR] [--data DIR]: snapshots of a scene"}},
+        {"solvers",
+         {cb::cmd_solvers, "solvers [--json]: every registered solver, one line each, with what it applies to"}},
         {"stress", {cb::cmd_stress, "stress [--out DIR]: the stress suite and its stability table"}},
         {"compare", {cb::cmd_compare, "compare BASE NEW: regression judge between two result sets"}},
-        {"cluster", {cb::cmd_cluster, "cluster slurm SUITE.json --out DIR --shards N: sbatch files of a job array + merge"}},
+        {"cluster",
+         {cb::cmd_cluster, "cluster slurm SUITE.json --out DIR --shards N: sbatch files of a job array + merge"}},
     };
     return table;
 }
@@ -42,7 +45,7 @@ void usage(std::ostream& out)
            "\nexit status: 0 the command ran (whatever a solver's status), 2 bad input, 1 internal error\n";
 }
 
-} // namespace
+}  // namespace
 
 int main(int argc, char** argv)
 {

@@ -19,14 +19,20 @@ enum class Kind { TEXT, INTEGER, REAL };
 
 const std::map<std::string, Kind>& column_kinds()
 {
-    static const std::map<std::string, Kind> kinds = {
-        {"snapshot", Kind::TEXT},          {"label", Kind::TEXT},
-        {"status", Kind::TEXT},            {"iterations", Kind::INTEGER},
-        {"a_products", Kind::INTEGER},     {"a_products_harness", Kind::INTEGER},
-        {"cholmod_factorizations", Kind::INTEGER}, {"precond_applications", Kind::INTEGER},
-        {"kkt_rel", Kind::REAL},           {"tol", Kind::REAL},
-        {"instructions", Kind::INTEGER},   {"time_min_s", Kind::REAL},
-        {"time_noise", Kind::REAL},        {"time_samples", Kind::INTEGER}};
+    static const std::map<std::string, Kind> kinds = {{"snapshot", Kind::TEXT},
+                                                      {"label", Kind::TEXT},
+                                                      {"status", Kind::TEXT},
+                                                      {"iterations", Kind::INTEGER},
+                                                      {"a_products", Kind::INTEGER},
+                                                      {"a_products_harness", Kind::INTEGER},
+                                                      {"cholmod_factorizations", Kind::INTEGER},
+                                                      {"precond_applications", Kind::INTEGER},
+                                                      {"kkt_rel", Kind::REAL},
+                                                      {"tol", Kind::REAL},
+                                                      {"instructions", Kind::INTEGER},
+                                                      {"time_min_s", Kind::REAL},
+                                                      {"time_noise", Kind::REAL},
+                                                      {"time_samples", Kind::INTEGER}};
     return kinds;
 }
 
@@ -58,13 +64,24 @@ nlohmann::json parse_cell(const std::string& text, Kind kind, const std::string&
     return v;
 }
 
-} // namespace
+}  // namespace
 
 const std::vector<std::string>& perf_record_columns()
 {
-    static const std::vector<std::string> columns = {
-        "snapshot", "label", "status", "iterations", "a_products", "a_products_harness", "cholmod_factorizations",
-        "precond_applications", "kkt_rel", "tol", "instructions", "time_min_s", "time_noise", "time_samples"};
+    static const std::vector<std::string> columns = {"snapshot",
+                                                     "label",
+                                                     "status",
+                                                     "iterations",
+                                                     "a_products",
+                                                     "a_products_harness",
+                                                     "cholmod_factorizations",
+                                                     "precond_applications",
+                                                     "kkt_rel",
+                                                     "tol",
+                                                     "instructions",
+                                                     "time_min_s",
+                                                     "time_noise",
+                                                     "time_samples"};
     return columns;
 }
 
@@ -82,7 +99,8 @@ std::vector<nlohmann::json> read_perf_record(const std::string& csv_path)
         if (!seen.insert(column).second) throw_input_error(csv_path, "line 1", "column '" + column + "' appears twice");
     }
     for (const char* required : {"snapshot", "label", "status"})
-        if (!seen.count(required)) throw_input_error(csv_path, "line 1", std::string("missing column '") + required + "'");
+        if (!seen.count(required))
+            throw_input_error(csv_path, "line 1", std::string("missing column '") + required + "'");
 
     std::vector<nlohmann::json> runs;
     std::set<std::pair<std::string, std::string>> keys;
@@ -94,8 +112,8 @@ std::vector<nlohmann::json> read_perf_record(const std::string& csv_path)
         const std::string where = csv_path + ": line " + std::to_string(number);
         const std::vector<std::string> cells = split_csv_line(line);
         if (cells.size() != header.size())
-            throw_input_error(where, "", "expected " + std::to_string(header.size()) + " cells, got " +
-                                             std::to_string(cells.size()));
+            throw_input_error(
+                where, "", "expected " + std::to_string(header.size()) + " cells, got " + std::to_string(cells.size()));
         std::map<std::string, nlohmann::json> row;
         for (size_t i = 0; i < header.size(); ++i)
             row[header[i]] = parse_cell(cells[i], column_kinds().at(header[i]), where, header[i]);
@@ -149,7 +167,7 @@ std::string describe_machine(const nlohmann::json& fingerprint)
     if (!fingerprint.is_object() || fingerprint.empty()) return "unknown machine";
     auto field = [&](const char* key) {
         return fingerprint.contains(key) && fingerprint[key].is_string() ? fingerprint[key].get<std::string>()
-                                                                          : std::string("unknown");
+                                                                         : std::string("unknown");
     };
     // The BLAS alternative is a library path; its folder names the flavour (openblas-pthread ...).
     std::string blas = field("blas");
@@ -159,4 +177,4 @@ std::string describe_machine(const nlohmann::json& fingerprint)
     return field("cpu") + ", " + blas + ", SuiteSparse " + field("suitesparse") + ", " + field("compiler");
 }
 
-} // namespace cb
+}  // namespace cb

@@ -29,4 +29,4 @@ nlohmann::json machine_fingerprint(const nlohmann::json& provenance);
 /// One line: "AMD EPYC, openblas-pthread, SuiteSparse 5.12.0 (CHOLMOD 3.0.14), gcc 12.2.0".
 std::string describe_machine(const nlohmann::json& fingerprint);
 
-} // namespace cb
+}  // namespace cb

@@ -78,8 +78,10 @@ long concurrent_jobs(long jobs, bool suite_timed, bool chain, bool jobs_timed, s
         return 1;
     }
     if (suite_timed && !jobs_timed) {
-        note = "--jobs " + n + ": this suite's times are judged, so its runs go one at a time (\"timed\": false in "
-               "the suite, or --jobs-timed, runs them " + n + " at a time)";
+        note = "--jobs " + n +
+               ": this suite's times are judged, so its runs go one at a time (\"timed\": false in "
+               "the suite, or --jobs-timed, runs them " +
+               n + " at a time)";
         return 1;
     }
     note = "--jobs " + n + ": runs go " + n + " at a time in child processes" +
@@ -88,4 +90,4 @@ long concurrent_jobs(long jobs, bool suite_timed, bool chain, bool jobs_timed, s
     return jobs;
 }
 
-} // namespace cb
+}  // namespace cb

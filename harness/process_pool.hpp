@@ -33,7 +33,7 @@ private:
     size_t m_failed = 0;
 };
 
-} // namespace cb
+}  // namespace cb
 
 namespace cb {
 
@@ -42,4 +42,4 @@ namespace cb {
 /// a timed suite (its runs share no core) and for a chain (each job needs the previous one's state).
 long concurrent_jobs(long jobs, bool suite_timed, bool chain, bool jobs_timed, std::string& note);
 
-} // namespace cb
+}  // namespace cb

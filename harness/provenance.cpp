@@ -11,8 +11,8 @@
 #include <fstream>
 #include <string>
 #include <thread>
-#include <vector>
 #include <unistd.h>
+#include <vector>
 
 #ifndef CB_BUILD_TYPE
 #define CB_BUILD_TYPE "unknown"
@@ -119,7 +119,7 @@ nlohmann::json compute()
     return p;
 }
 
-} // namespace
+}  // namespace
 
 std::string utc_now_iso()
 {
@@ -172,4 +172,4 @@ nlohmann::json provenance()
     return p;
 }
 
-} // namespace cb
+}  // namespace cb

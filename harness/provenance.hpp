@@ -20,4 +20,4 @@ const nlohmann::json& build_identity();
 /// Current UTC time as "YYYY-MM-DDTHH:MM:SSZ".
 std::string utc_now_iso();
 
-} // namespace cb
+}  // namespace cb

@@ -23,7 +23,8 @@ nlohmann::json reference_solution(const Qp& qp, const std::string& key, const st
     if (fs::is_regular_file(path)) {
         try {
             nlohmann::json cached = read_json_file(path);
-            if (cached.is_object() && cached.value("key", "") == key && cached.value("method", nlohmann::json()) == method) {
+            if (cached.is_object() && cached.value("key", "") == key &&
+                cached.value("method", nlohmann::json()) == method) {
                 cached["cached"] = true;
                 return cached;
             }
@@ -91,4 +92,4 @@ void attach_reference(nlohmann::json& record, const nlohmann::json& reference)
     for (auto& row : history["rows"]) row.push_back(gap(row[objective_column]));
 }
 
-} // namespace cb
+}  // namespace cb

@@ -25,4 +25,4 @@ nlohmann::json reference_solution(const Qp& qp, const std::string& key, const st
 /// record's snapshot hash (a reduced QP's F* is not the original's).
 void attach_reference(nlohmann::json& record, const nlohmann::json& reference);
 
-} // namespace cb
+}  // namespace cb

@@ -20,7 +20,7 @@ void prefetch_snapshot(const SuiteSnapshot& snap)
     }
 }
 
-} // namespace
+}  // namespace
 
 size_t prefetch_references(const Suite& suite, const std::vector<SuiteSnapshot>& snapshots,
                            const std::vector<std::vector<bool>>& todo, long jobs)
@@ -41,4 +41,4 @@ size_t prefetch_references(const Suite& suite, const std::vector<SuiteSnapshot>&
     return handled;
 }
 
-} // namespace cb
+}  // namespace cb

@@ -16,4 +16,4 @@ namespace cb {
 size_t prefetch_references(const Suite& suite, const std::vector<SuiteSnapshot>& snapshots,
                            const std::vector<std::vector<bool>>& todo, long jobs);
 
-} // namespace cb
+}  // namespace cb

@@ -52,12 +52,39 @@ std::vector<nlohmann::json> read_runs(const std::string& dir)
 
 const std::vector<std::string>& summary_columns()
 {
-    static const std::vector<std::string> columns = {
-        "suite", "snapshot", "label", "solver", "status", "solver_status", "criterion", "status_confirmed",
-        "iterations", "a_products", "cholmod_factorizations", "kkt_rel", "stationarity", "primal", "dual",
-        "complementarity", "gap", "kkt_rel_solved", "m_solved", "objective", "energy_gap", "violation",
-        "native_residual", "nonfinite", "monotone", "setup_s", "solve_s", "time_s", "n", "m", "tol",
-        "length_scale", "length_scale_source"};
+    static const std::vector<std::string> columns = {"suite",
+                                                     "snapshot",
+                                                     "label",
+                                                     "solver",
+                                                     "status",
+                                                     "solver_status",
+                                                     "criterion",
+                                                     "status_confirmed",
+                                                     "iterations",
+                                                     "a_products",
+                                                     "cholmod_factorizations",
+                                                     "kkt_rel",
+                                                     "stationarity",
+                                                     "primal",
+                                                     "dual",
+                                                     "complementarity",
+                                                     "gap",
+                                                     "kkt_rel_solved",
+                                                     "m_solved",
+                                                     "objective",
+                                                     "energy_gap",
+                                                     "violation",
+                                                     "native_residual",
+                                                     "nonfinite",
+                                                     "monotone",
+                                                     "setup_s",
+                                                     "solve_s",
+                                                     "time_s",
+                                                     "n",
+                                                     "m",
+                                                     "tol",
+                                                     "length_scale",
+                                                     "length_scale_source"};
     return columns;
 }
 
@@ -101,7 +128,7 @@ const nlohmann::json& at(const nlohmann::json& j, std::initializer_list<const ch
     return *p;
 }
 
-} // namespace
+}  // namespace
 
 std::string summary_row(const nlohmann::json& run, const std::string& suite_name)
 {
@@ -161,4 +188,4 @@ size_t write_summary(const std::string& dir, const std::string& suite_name)
     return runs.size();
 }
 
-} // namespace cb
+}  // namespace cb

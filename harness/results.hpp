@@ -30,4 +30,4 @@ std::string summary_csv(const std::vector<nlohmann::json>& runs, const std::stri
 /// Rewrites DIR/summary.csv from DIR/runs/*.json (atomic). Returns the number of runs.
 size_t write_summary(const std::string& dir, const std::string& suite_name);
 
-} // namespace cb
+}  // namespace cb

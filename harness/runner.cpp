@@ -50,7 +50,7 @@ AccuracyParts measure_point(const QpView& qp, const AccuracyScale& scale, const 
     return best;
 }
 
-} // namespace
+}  // namespace
 
 RunOutcome run_solver(const Qp& qp, const std::string& solver_name, const nlohmann::json& settings,
                       const RunOptions& options, const nlohmann::json& snapshot_info)
@@ -65,14 +65,15 @@ RunOutcome run_solver(const Qp& qp, const std::string& solver_name, const nlohma
 }
 
 RunOutcome run_solver(const SolverRegistry& registry, const Qp& original, const std::string& solver_name,
-                      const nlohmann::json& settings_in, const RunOptions& options,
-                      const nlohmann::json& snapshot_info, const SolveContext& warm)
+                      const nlohmann::json& settings_in, const RunOptions& options, const nlohmann::json& snapshot_info,
+                      const SolveContext& warm)
 {
     nlohmann::json settings = settings_in.is_object() ? settings_in : nlohmann::json::object();
     if (!settings_in.is_null() && !settings_in.is_object())
         throw_input_error(solver_name, "settings", "expected a JSON object, got " + settings_in.dump());
     if (options.time_limit_s > 0.0) settings["time_limit_s"] = options.time_limit_s;
-    if (options.repeat < 1) throw_input_error(solver_name, "repeat", "must be >= 1, got " + std::to_string(options.repeat));
+    if (options.repeat < 1)
+        throw_input_error(solver_name, "repeat", "must be >= 1, got " + std::to_string(options.repeat));
     // Creating the solver validates the settings (InputError names the key).
     std::unique_ptr<Solver> solver = registry.create(solver_name, settings);
 
@@ -80,8 +81,11 @@ RunOutcome run_solver(const SolverRegistry& registry, const Qp& original, const 
     const Qp* qp = &original;
     Qp decoupled;
     std::vector<int> decoupled_rows;
-    nlohmann::json decouple = {{"order", options.decouple}, {"seed", options.decouple_seed},
-                               {"rows_before", original.m()}, {"rows_after", original.m()}, {"applied", false}};
+    nlohmann::json decouple = {{"order", options.decouple},
+                               {"seed", options.decouple_seed},
+                               {"rows_before", original.m()},
+                               {"rows_after", original.m()},
+                               {"applied", false}};
     bool want = false;
     DecoupleOrder order = DecoupleOrder::AUTHORS;
     if (options.decouple == "auto") {
@@ -115,7 +119,8 @@ RunOutcome run_solver(const SolverRegistry& registry, const Qp& original, const 
     const Vec* lambda0 = nullptr;
     if (warm.lambda0 && qp != &original && warm.lambda0->size() == original.m()) {
         lambda0_kept.resize(static_cast<Eigen::Index>(kept_rows.size()));
-        for (size_t k = 0; k < kept_rows.size(); ++k) lambda0_kept[static_cast<Eigen::Index>(k)] = (*warm.lambda0)[kept_rows[k]];
+        for (size_t k = 0; k < kept_rows.size(); ++k)
+            lambda0_kept[static_cast<Eigen::Index>(k)] = (*warm.lambda0)[kept_rows[k]];
         lambda0 = &lambda0_kept;
     } else if (warm.lambda0 && warm.lambda0->size() == qp->m()) {
         lambda0 = warm.lambda0;
@@ -163,7 +168,8 @@ RunOutcome run_solver(const SolverRegistry& registry, const Qp& original, const 
     Vec own_full;
     if (own_valid && qp != &original) {
         own_full = Vec::Zero(original.m());
-        for (size_t k = 0; k < kept_rows.size(); ++k) own_full[kept_rows[k]] = result.lambda[static_cast<Eigen::Index>(k)];
+        for (size_t k = 0; k < kept_rows.size(); ++k)
+            own_full[kept_rows[k]] = result.lambda[static_cast<Eigen::Index>(k)];
     } else if (own_valid) {
         own_full = result.lambda;
     }
@@ -259,8 +265,10 @@ RunOutcome run_solver(const SolverRegistry& registry, const Qp& original, const 
     rec["tol"] = tol;
     rec["counters"] = result.counters.to_json();
     rec["counters"]["a_products_harness"] = a_products_harness;  // counted by the harness, not the solver
-    nlohmann::json time = {{"setup_s", median(setup_times)}, {"solve_s", median(solve_times)},
-                           {"total_s", median(totals)}, {"repeat", options.repeat}};
+    nlohmann::json time = {{"setup_s", median(setup_times)},
+                           {"solve_s", median(solve_times)},
+                           {"total_s", median(totals)},
+                           {"repeat", options.repeat}};
     if (options.repeat > 1) {
         time["min_total_s"] = *std::min_element(totals.begin(), totals.end());
         time["max_total_s"] = *std::max_element(totals.begin(), totals.end());
@@ -276,7 +284,10 @@ RunOutcome run_solver(const SolverRegistry& registry, const Qp& original, const 
 nlohmann::json run_identity(const nlohmann::json& snapshot_hash, const std::string& solver,
                             const nlohmann::json& settings, const nlohmann::json& entry)
 {
-    return {{"snapshot_hash", snapshot_hash}, {"solver", solver}, {"settings", settings}, {"entry", entry},
+    return {{"snapshot_hash", snapshot_hash},
+            {"solver", solver},
+            {"settings", settings},
+            {"entry", entry},
             {"build", build_identity()}};
 }
 
@@ -298,4 +309,4 @@ std::string stale_reason(const nlohmann::json& record, const nlohmann::json& ide
     return "";
 }
 
-} // namespace cb
+}  // namespace cb

@@ -21,12 +21,12 @@
 namespace cb {
 
 struct RunOptions {
-    double time_limit_s = 0.0;      ///< overrides the solver's time_limit_s when > 0
-    long history_max = 2000;        ///< records kept (stride chosen to stay under it)
+    double time_limit_s = 0.0;  ///< overrides the solver's time_limit_s when > 0
+    long history_max = 2000;    ///< records kept (stride chosen to stay under it)
     bool record_history = true;
     std::string decouple = "auto";  ///< auto (decouple when the solver requires it) | none | authors | random | depth
     std::uint64_t decouple_seed = 0;
-    int repeat = 1;                 ///< median time of k runs
+    int repeat = 1;  ///< median time of k runs
 };
 
 /// Run statuses beside the solver's own (SolveStatus names).
@@ -36,20 +36,20 @@ inline constexpr const char* STATUS_UNCONFIRMED = "unconfirmed";
 inline constexpr double DEFAULT_ACCURACY_TOL = 1e-6;
 
 struct RunOutcome {
-    SolverResult result;            ///< as the solver returned it (result.status: the solver's word)
-    std::string status;             ///< the run's status (above); record "status"
-    AccuracyScale scale;            ///< of the original QP
-    AccuracyParts accuracy;         ///< e on the ORIGINAL QP at the returned (x, lambda)
-    AccuracyParts accuracy_solved;  ///< e on the QP the solver solved (== accuracy when unchanged)
-    long m_solved = 0;              ///< rows of the QP the solver solved (0 for a solver ignoring J)
+    SolverResult result;                  ///< as the solver returned it (result.status: the solver's word)
+    std::string status;                   ///< the run's status (above); record "status"
+    AccuracyScale scale;                  ///< of the original QP
+    AccuracyParts accuracy;               ///< e on the ORIGINAL QP at the returned (x, lambda)
+    AccuracyParts accuracy_solved;        ///< e on the QP the solver solved (== accuracy when unchanged)
+    long m_solved = 0;                    ///< rows of the QP the solver solved (0 for a solver ignoring J)
     double objective = 0, violation = 0;  ///< F(x) and max(0, c - Jx) of the original QP
-    bool nonfinite = false;         ///< NaN/Inf seen in any iterate or the result
-    bool monotone = true;           ///< objective non-increasing over the recorded feasible iterates
-    bool status_confirmed = true;   ///< false only for `unconfirmed` (the solver's claim fails on its own QP)
-    nlohmann::json record;          ///< the full per-run results JSON (schema below)
+    bool nonfinite = false;               ///< NaN/Inf seen in any iterate or the result
+    bool monotone = true;                 ///< objective non-increasing over the recorded feasible iterates
+    bool status_confirmed = true;         ///< false only for `unconfirmed` (the solver's claim fails on its own QP)
+    nlohmann::json record;                ///< the full per-run results JSON (schema below)
     // Extensions beyond INTERFACES.md:
-    std::vector<int> kept_rows;     ///< rows of the original J the solver saw (empty: all of them)
-    Vec lambda_full;                ///< lambda on the original rows (0 on rows dropped by decoupling)
+    std::vector<int> kept_rows;  ///< rows of the original J the solver saw (empty: all of them)
+    Vec lambda_full;             ///< lambda on the original rows (0 on rows dropped by decoupling)
 };
 
 /// Runs one solver on one QP with the monitor recording history on a paused stopwatch.
@@ -60,14 +60,13 @@ RunOutcome run_solver(const Qp& qp, const std::string& solver_name, const nlohma
 /// monitor field is ignored: the harness installs its own). lambda0 is used when its size is
 /// the original m (restricted to the kept rows when decoupling applies) or the solved QP's m.
 RunOutcome run_solver(const Qp& qp, const std::string& solver_name, const nlohmann::json& settings,
-                      const RunOptions& options, const nlohmann::json& snapshot_info,
-                      const SolveContext& warm);
+                      const RunOptions& options, const nlohmann::json& snapshot_info, const SolveContext& warm);
 
 class SolverRegistry;
 /// Same, with the solver taken from `registry` (tests register small local solvers).
 RunOutcome run_solver(const SolverRegistry& registry, const Qp& qp, const std::string& solver_name,
-                      const nlohmann::json& settings, const RunOptions& options,
-                      const nlohmann::json& snapshot_info, const SolveContext& warm);
+                      const nlohmann::json& settings, const RunOptions& options, const nlohmann::json& snapshot_info,
+                      const SolveContext& warm);
 
 /// Identity of one job of a suite run: what its result depends on. A stored run is reused only
 /// when its "identity" equals this one (harness/README.md "Resume and run identity").
@@ -85,4 +84,4 @@ nlohmann::json run_identity(const nlohmann::json& snapshot_hash, const std::stri
 /// that failed for an input or harness error ("final": false), which is always retried.
 std::string stale_reason(const nlohmann::json& record, const nlohmann::json& identity);
 
-} // namespace cb
+}  // namespace cb

@@ -50,7 +50,7 @@ void sbatch_common(std::ostringstream& s, const SbatchOptions& o)
     for (const auto& line : o.extra) s << "#SBATCH " << line << "\n";
 }
 
-} // namespace
+}  // namespace
 
 Environment slurm_environment()
 {
@@ -67,17 +67,20 @@ std::optional<ArrayShard> shard_from_slurm(const Environment& env)
     const long min = required_integer(env, "SLURM_ARRAY_TASK_MIN");
     const std::optional<long> max = integer_variable(env, "SLURM_ARRAY_TASK_MAX");
     const std::optional<long> count = integer_variable(env, "SLURM_ARRAY_TASK_COUNT");
-    if (!count && !max) throw_input_error("run", "SLURM_ARRAY_TASK_COUNT", "not set and neither is SLURM_ARRAY_TASK_MAX");
+    if (!count && !max)
+        throw_input_error("run", "SLURM_ARRAY_TASK_COUNT", "not set and neither is SLURM_ARRAY_TASK_MAX");
     if (max && *max < min)
         throw_input_error("run", "SLURM_ARRAY_TASK_MAX",
                           std::to_string(*max) + " is below SLURM_ARRAY_TASK_MIN " + std::to_string(min));
     const long span = max ? *max - min + 1 : *count;
-    if (count && *count < 1) throw_input_error("run", "SLURM_ARRAY_TASK_COUNT", "must be >= 1, got " + std::to_string(*count));
+    if (count && *count < 1)
+        throw_input_error("run", "SLURM_ARRAY_TASK_COUNT", "must be >= 1, got " + std::to_string(*count));
     // A stepped or listed array (0-15:4, 1,3,7) has holes: task ids no longer number the shards.
     if (count && *count != span)
         throw_input_error("run", "SLURM_ARRAY_TASK_COUNT",
                           std::to_string(*count) + " tasks over the ids " + std::to_string(min) + ".." +
-                              std::to_string(*max) + ": only a contiguous array (e.g. --array=0-3 or 5-8) maps to shards");
+                              std::to_string(*max) +
+                              ": only a contiguous array (e.g. --array=0-3 or 5-8) maps to shards");
     if (*task < min || *task >= min + span)
         throw_input_error("run", "SLURM_ARRAY_TASK_ID",
                           std::to_string(*task) + " is outside the array " + std::to_string(min) + ".." +
@@ -112,8 +115,10 @@ std::string shell_quote(const std::string& word)
 {
     std::string quoted = "'";
     for (const char c : word) {
-        if (c == '\'') quoted += "'\\''";
-        else quoted += c;
+        if (c == '\'')
+            quoted += "'\\''";
+        else
+            quoted += c;
     }
     return quoted + "'";
 }
@@ -130,7 +135,8 @@ std::string sbatch_array_script(const SbatchOptions& o)
     if (o.max_parallel > 0) s << "%" << o.max_parallel;
     s << "\n"
       << "#SBATCH --ntasks=1\n"
-      << "#SBATCH --cpus-per-task=" << o.cpus_per_task << "\n"
+      << "#SBATCH --cpus-per-task=" << o.cpus_per_task
+      << "\n"
       // Timing hygiene: whole cores (no hyperthread sibling shared with another job).
       << "#SBATCH --hint=nomultithread\n";
     if (o.exclusive) s << "#SBATCH --exclusive\n";
@@ -166,4 +172,4 @@ std::string sbatch_merge_script(const SbatchOptions& o)
     return s.str();
 }
 
-} // namespace cb
+}  // namespace cb

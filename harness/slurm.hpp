@@ -66,4 +66,4 @@ std::string sbatch_merge_script(const SbatchOptions& options);
 /// Shell-quotes a word with single quotes.
 std::string shell_quote(const std::string& word);
 
-} // namespace cb
+}  // namespace cb

@@ -13,8 +13,8 @@
 #include <iomanip>
 #include <map>
 #include <ostream>
-#include <sstream>
 #include <poll.h>
+#include <sstream>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -51,13 +51,27 @@ double json_number(const json& j)
 
 json row_to_json(const StressRow& r)
 {
-    return {{"solver", r.solver}, {"case", r.case_id}, {"family", r.family}, {"severity", r.severity},
-            {"status", r.status}, {"kkt", number_json(r.kkt)}, {"tol", r.tol},
-            {"violation", number_json(r.violation)}, {"nonfinite", r.nonfinite}, {"monotone", r.monotone},
-            {"time_s", number_json(r.time_s)}, {"iterations", r.iterations},
-            {"status_confirmed", r.status_confirmed}, {"message", r.message}, {"n", r.n}, {"m", r.m},
-            {"criterion", r.criterion}, {"m_solved", r.m_solved}, {"solver_status", r.solver_status},
-            {"kkt_solved", number_json(r.kkt_solved)}, {"primal", number_json(r.primal)},
+    return {{"solver", r.solver},
+            {"case", r.case_id},
+            {"family", r.family},
+            {"severity", r.severity},
+            {"status", r.status},
+            {"kkt", number_json(r.kkt)},
+            {"tol", r.tol},
+            {"violation", number_json(r.violation)},
+            {"nonfinite", r.nonfinite},
+            {"monotone", r.monotone},
+            {"time_s", number_json(r.time_s)},
+            {"iterations", r.iterations},
+            {"status_confirmed", r.status_confirmed},
+            {"message", r.message},
+            {"n", r.n},
+            {"m", r.m},
+            {"criterion", r.criterion},
+            {"m_solved", r.m_solved},
+            {"solver_status", r.solver_status},
+            {"kkt_solved", number_json(r.kkt_solved)},
+            {"primal", number_json(r.primal)},
             {"energy_gap", number_json(r.energy_gap)}};
 }
 StressRow row_from_json(const json& j)
@@ -212,15 +226,17 @@ std::pair<StressRow, json> run_isolated(const Qp& qp, const StressCase& c, const
         if (ready > 0) {
             char buffer[65536];
             const ssize_t k = ::read(fds[0], buffer, sizeof buffer);
-            if (k > 0) data.append(buffer, static_cast<size_t>(k));
-            else if (k == 0) break;  // EOF: the child closed its end
-            else if (errno != EINTR) break;
+            if (k > 0)
+                data.append(buffer, static_cast<size_t>(k));
+            else if (k == 0)
+                break;  // EOF: the child closed its end
+            else if (errno != EINTR)
+                break;
         }
     }
     ::close(fds[0]);
     int wstatus = 0;
-    while (::waitpid(pid, &wstatus, 0) < 0 && errno == EINTR) {
-    }
+    while (::waitpid(pid, &wstatus, 0) < 0 && errno == EINTR) {}
     StressRow row = blank_row(c, solver, options, qp.n(), qp.m());
     row.status_confirmed = false;
     if (killed) {
@@ -261,21 +277,31 @@ std::string csv_field(const std::string& s)
     if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
     std::string out = "\"";
     for (char ch : s) {
-        if (ch == '"') out += "\"\"";
-        else if (ch == '\n' || ch == '\r') out += ' ';
-        else out += ch;
+        if (ch == '"')
+            out += "\"\"";
+        else if (ch == '\n' || ch == '\r')
+            out += ' ';
+        else
+            out += ch;
     }
     return out + "\"";
 }
 
 std::string short_status(const StressRow& r)
 {
-    static const std::map<std::string, std::string> names = {
-        {"converged", "ok"},        {"max_iterations", "maxit"}, {"time_limit", "time"},
-        {"solved_relaxation", "relax"}, {"unconfirmed", "unconf"},
-        {"stalled", "stalled"},     {"diverged", "diverged"},    {"infeasible", "infeas"},
-        {"invalid_input", "refused"}, {"stopped_by_monitor", "stopped"}, {"crashed", "CRASH"},
-        {"hung", "HUNG"},           {"error", "ERROR"}};
+    static const std::map<std::string, std::string> names = {{"converged", "ok"},
+                                                             {"max_iterations", "maxit"},
+                                                             {"time_limit", "time"},
+                                                             {"solved_relaxation", "relax"},
+                                                             {"unconfirmed", "unconf"},
+                                                             {"stalled", "stalled"},
+                                                             {"diverged", "diverged"},
+                                                             {"infeasible", "infeas"},
+                                                             {"invalid_input", "refused"},
+                                                             {"stopped_by_monitor", "stopped"},
+                                                             {"crashed", "CRASH"},
+                                                             {"hung", "HUNG"},
+                                                             {"error", "ERROR"}};
     const auto it = names.find(r.status);
     return it == names.end() ? r.status : it->second;
 }
@@ -295,7 +321,7 @@ std::string md_cell(const std::string& s)
     return out;
 }
 
-} // namespace
+}  // namespace
 
 StressReport run_stress(const StressOptions& options)
 {
@@ -325,8 +351,8 @@ StressReport run_stress(const StressOptions& options)
             ref_options.tol = REFERENCE_TOL;
             const auto ref = options.isolate ? run_isolated(qp, c, REFERENCE_SOLVER, ref_options)
                                              : run_one(qp, c, REFERENCE_SOLVER, ref_options);
-            const bool usable = ref.first.status == "converged" ||
-                                (ref.first.solver_status == "stalled" && ref.first.kkt <= 1e-7);
+            const bool usable =
+                ref.first.status == "converged" || (ref.first.solver_status == "stalled" && ref.first.kkt <= 1e-7);
             if (usable && ref.second.value("objective", json()).is_number()) {
                 f_star = ref.second["objective"].get<double>();
                 const double l = ref.second.value("length_scale", NAN);
@@ -401,11 +427,11 @@ std::string stability_markdown(const StressReport& report)
     }
     std::ostringstream s;
     s << "# Stability table\n\n"
-      << report.rows.size() << " runs (" << cases.size() << " cases x " << solvers.size()
-      << " solvers), time limit " << report.time_limit_s << " s per run, tol " << report.tol
+      << report.rows.size() << " runs (" << cases.size() << " cases x " << solvers.size() << " solvers), time limit "
+      << report.time_limit_s << " s per run, tol " << report.tol
       << " on the accuracy error e (docs/accuracy.md: residual lengths as a fraction of the scene size, "
-         "measured on the original QP); wall time " << std::fixed << std::setprecision(1) << report.wall_s
-      << " s.\n\n"
+         "measured on the original QP); wall time "
+      << std::fixed << std::setprecision(1) << report.wall_s << " s.\n\n"
       << std::defaultfloat
       << "Cell: the run's status and the error e reached on the original QP (ok = converged: the solver "
          "said so and e <= tol; relax = solved_relaxation: tol met only on the problem the solver changed "
@@ -447,19 +473,28 @@ std::string stability_markdown(const StressReport& report)
         for (const StressRow& r : report.rows) {
             if (r.solver != sv) continue;
             ++runs;
-            if (!r.honest()) ++wrong;
-            else if (r.status == "converged") ++ok;
-            else if (r.status == "solved_relaxation") ++relax;
-            else if (r.status == "invalid_input") ++refused;
-            else if (r.status == "infeasible") ++infeasible;
-            else if (r.status == "time_limit") ++time;
-            else if (r.status == "max_iterations") ++maxit;
-            else ++other;
+            if (!r.honest())
+                ++wrong;
+            else if (r.status == "converged")
+                ++ok;
+            else if (r.status == "solved_relaxation")
+                ++relax;
+            else if (r.status == "invalid_input")
+                ++refused;
+            else if (r.status == "infeasible")
+                ++infeasible;
+            else if (r.status == "time_limit")
+                ++time;
+            else if (r.status == "max_iterations")
+                ++maxit;
+            else
+                ++other;
             if (r.nonfinite) ++nonfinite;
             if (!r.monotone) ++nonmonotone;
         }
-        s << "| " << sv << " | " << runs << " | " << ok << " | " << relax << " | " << wrong << " | " << refused << " | " << infeasible
-          << " | " << time << " | " << maxit << " | " << other << " | " << nonfinite << " | " << nonmonotone << " |\n";
+        s << "| " << sv << " | " << runs << " | " << ok << " | " << relax << " | " << wrong << " | " << refused << " | "
+          << infeasible << " | " << time << " | " << maxit << " | " << other << " | " << nonfinite << " | "
+          << nonmonotone << " |\n";
     }
     s << "\n## Wrong statuses\n\n";
     long wrong = 0;
@@ -471,7 +506,8 @@ std::string stability_markdown(const StressReport& report)
           << " (on the problem it solved " << sci(r.kkt_solved) << ")"
           << " vs tol " << sci(r.tol) << ", violation " << sci(r.violation) << ": " << md_cell(r.message) << "\n";
     }
-    if (wrong == 0) s << "None: every solver's \"converged\" held under the accuracy measure on the problem it solved.\n";
+    if (wrong == 0)
+        s << "None: every solver's \"converged\" held under the accuracy measure on the problem it solved.\n";
     s << "\n## Accuracy of converged runs\n\nPer solver, over its runs with status converged: the error e "
          "(fraction of the scene size), the violation of the original rows (e's primal part, fraction of the "
          "scene size) and the energy gap |F - F*| / (d_ref l^2) against active-set's F* of the original QP "
@@ -498,4 +534,4 @@ std::string stability_markdown(const StressReport& report)
     return s.str();
 }
 
-} // namespace cb
+}  // namespace cb

@@ -13,37 +13,37 @@
 namespace cb {
 
 struct StressOptions {
-    std::string out_dir;              ///< "" = write nothing
-    double time_limit_s = 5.0;        ///< per run (solver time)
-    double tol = 1e-6;                ///< tolerance on the accuracy error e given to every solver
-    bool reference = true;            ///< solve each case with active-set (tol 1e-10) for F* and the energy gap
-    std::vector<std::string> solvers; ///< empty = every registered solver
-    std::vector<std::string> cases;   ///< ids or families; empty = all (of the quick set if quick)
-    bool quick = false;               ///< the 4-case subset
-    bool isolate = true;              ///< fork a child per run (crash and hang safe)
-    std::ostream* progress = nullptr; ///< one line per run (stderr from the command)
+    std::string out_dir;               ///< "" = write nothing
+    double time_limit_s = 5.0;         ///< per run (solver time)
+    double tol = 1e-6;                 ///< tolerance on the accuracy error e given to every solver
+    bool reference = true;             ///< solve each case with active-set (tol 1e-10) for F* and the energy gap
+    std::vector<std::string> solvers;  ///< empty = every registered solver
+    std::vector<std::string> cases;    ///< ids or families; empty = all (of the quick set if quick)
+    bool quick = false;                ///< the 4-case subset
+    bool isolate = true;               ///< fork a child per run (crash and hang safe)
+    std::ostream* progress = nullptr;  ///< one line per run (stderr from the command)
 };
 
 /// One run: the columns of stability.csv.
 struct StressRow {
     std::string solver, case_id, family;
     int severity = 0;
-    std::string status;               ///< the run's status (harness/runner.hpp), or "crashed" / "hung" / "error"
-    std::string solver_status;        ///< the solver's own word (a SolveStatus name), "" when it gave none
-    double kkt = 0.0;                 ///< the accuracy error e on the original QP at the returned point
-    double kkt_solved = 0.0;          ///< e on the QP the solver solved (decoupled / unconstrained)
+    std::string status;         ///< the run's status (harness/runner.hpp), or "crashed" / "hung" / "error"
+    std::string solver_status;  ///< the solver's own word (a SolveStatus name), "" when it gave none
+    double kkt = 0.0;           ///< the accuracy error e on the original QP at the returned point
+    double kkt_solved = 0.0;    ///< e on the QP the solver solved (decoupled / unconstrained)
     double tol = 0.0;
-    double violation = 0.0;           ///< max(0, c - Jx) on the original rows, length units
-    double primal = 0.0;              ///< the same as a fraction of the scene size (e's primal part)
-    double energy_gap = 0.0;          ///< |F - F*| / (d_ref l^2), NaN without a reference
+    double violation = 0.0;   ///< max(0, c - Jx) on the original rows, length units
+    double primal = 0.0;      ///< the same as a fraction of the scene size (e's primal part)
+    double energy_gap = 0.0;  ///< |F - F*| / (d_ref l^2), NaN without a reference
     bool nonfinite = false, monotone = true;
-    double time_s = 0.0;              ///< setup + solve
+    double time_s = 0.0;  ///< setup + solve
     long iterations = 0;
-    bool status_confirmed = true;     ///< false for "unconfirmed" (the solver's claim fails on its own QP)
+    bool status_confirmed = true;  ///< false for "unconfirmed" (the solver's claim fails on its own QP)
     std::string message;
     long n = 0, m = 0;
     std::string criterion;
-    long m_solved = 0;                ///< rows the solver saw (fewer than m when the harness decoupled J)
+    long m_solved = 0;  ///< rows the solver saw (fewer than m when the harness decoupled J)
 
     /// An honest outcome: "converged" (which the measure confirmed), "solved_relaxation" (the
     /// solver's claim holds on the problem it solved, and the status says so), or any
@@ -68,4 +68,4 @@ std::string stability_csv(const std::vector<StressRow>& rows);
 /// A case x solver table (status and KKT reached) and a summary of wrong statuses.
 std::string stability_markdown(const StressReport& report);
 
-} // namespace cb
+}  // namespace cb

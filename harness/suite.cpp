@@ -22,9 +22,9 @@ namespace {
 
 const std::set<std::string>& known_keys()
 {
-    static const std::set<std::string> keys = {"name", "snapshots", "generate", "solvers", "tol", "time_limit_s",
-                                               "repeat", "history_max", "reference", "decouple", "decouple_seed",
-                                               "chain", "description", "tiers", "comment", "timed"};
+    static const std::set<std::string> keys = {
+        "name",      "snapshots", "generate",      "solvers", "tol",         "time_limit_s", "repeat",  "history_max",
+        "reference", "decouple",  "decouple_seed", "chain",   "description", "tiers",        "comment", "timed"};
     return keys;
 }
 
@@ -63,7 +63,8 @@ long get_integer(const nlohmann::json& j, const std::string& key, const std::str
     if (v.is_number_unsigned() && v.get<std::uint64_t>() > std::uint64_t(LONG_MAX))  // would wrap negative
         throw_input_error(where, "/" + key, "too large: " + v.dump() + " > " + std::to_string(LONG_MAX));
     const long d = v.get<long>();
-    if (d < min_inclusive) throw_input_error(where, "/" + key, "must be >= " + std::to_string(min_inclusive) + ", got " + v.dump());
+    if (d < min_inclusive)
+        throw_input_error(where, "/" + key, "must be >= " + std::to_string(min_inclusive) + ", got " + v.dump());
     return d;
 }
 
@@ -82,7 +83,7 @@ std::string get_string(const nlohmann::json& j, const std::string& key, const st
     return j[key].get<std::string>();
 }
 
-} // namespace
+}  // namespace
 
 std::string fnv1a_hex(const std::string& bytes)
 {
@@ -117,10 +118,12 @@ Suite parse_suite(const nlohmann::json& j, const std::string& where)
     s.raw = j;
     if (!j.contains("name")) throw_input_error(where, "/name", "missing (a file-name safe suite name)");
     s.name = get_string(j, "name", where, "");
-    if (!safe_name(s.name)) throw_input_error(where, "/name", "expected letters, digits, '-', '_', '.', '+', got '" + s.name + "'");
+    if (!safe_name(s.name))
+        throw_input_error(where, "/name", "expected letters, digits, '-', '_', '.', '+', got '" + s.name + "'");
     if (j.contains("snapshots")) {
         const auto& v = j["snapshots"];
-        if (!v.is_array()) throw_input_error(where, "/snapshots", "expected an array of paths/globs, got " + type_name(v));
+        if (!v.is_array())
+            throw_input_error(where, "/snapshots", "expected an array of paths/globs, got " + type_name(v));
         for (size_t i = 0; i < v.size(); ++i) {
             if (v[i].is_object()) {  // a simulation folder with a frame selection
                 s.simulations.push_back(parse_suite_simulation(v[i], where + ": /snapshots/" + std::to_string(i)));
@@ -129,7 +132,8 @@ Suite parse_suite(const nlohmann::json& j, const std::string& where)
                 continue;
             }
             if (!v[i].is_string() || v[i].get<std::string>().empty())
-                throw_input_error(where, "/snapshots/" + std::to_string(i), "expected a non-empty string, got " + v[i].dump());
+                throw_input_error(where, "/snapshots/" + std::to_string(i),
+                                  "expected a non-empty string, got " + v[i].dump());
             s.snapshots.push_back(v[i].get<std::string>());
         }
     }
@@ -149,11 +153,13 @@ Suite parse_suite(const nlohmann::json& j, const std::string& where)
             g.family = get_string(e, "family", at, "");
             g.seed = static_cast<std::uint64_t>(get_integer(e, "seed", at, 0, 0));
             if (e.contains("params")) {
-                if (!e["params"].is_object()) throw_input_error(at, "/params", "expected an object, got " + type_name(e["params"]));
+                if (!e["params"].is_object())
+                    throw_input_error(at, "/params", "expected an object, got " + type_name(e["params"]));
                 g.params = e["params"];
             }
             g.id = get_string(e, "id", at, g.family + "-s" + std::to_string(g.seed));
-            if (!safe_name(g.id)) throw_input_error(at, "/id", "expected a file-name safe id without '__', got '" + g.id + "'");
+            if (!safe_name(g.id))
+                throw_input_error(at, "/id", "expected a file-name safe id without '__', got '" + g.id + "'");
             if (!ids.insert(g.id).second) throw_input_error(at, "/id", "duplicate id '" + g.id + "'");
             s.generate.push_back(std::move(g));
         }
@@ -186,13 +192,15 @@ Suite parse_suite(const nlohmann::json& j, const std::string& where)
         } else {
             throw_input_error(at, "", "expected an object {label, solver, settings} or a name, got " + e.dump());
         }
-        if (!safe_name(sv.label)) throw_input_error(at, "/label", "expected a file-name safe label without '__', got '" + sv.label + "'");
+        if (!safe_name(sv.label))
+            throw_input_error(at, "/label", "expected a file-name safe label without '__', got '" + sv.label + "'");
         if (!labels.insert(sv.label).second) throw_input_error(at, "/label", "duplicate label '" + sv.label + "'");
         s.solvers.push_back(std::move(sv));
     }
     s.tol = get_number(j, "tol", where, s.tol, 0.0);
     s.time_limit_s = get_number(j, "time_limit_s", where, s.time_limit_s, -1.0);
-    if (s.time_limit_s < 0) throw_input_error(where, "/time_limit_s", "must be >= 0 (0 disables), got " + j["time_limit_s"].dump());
+    if (s.time_limit_s < 0)
+        throw_input_error(where, "/time_limit_s", "must be >= 0 (0 disables), got " + j["time_limit_s"].dump());
     s.repeat = static_cast<int>(get_integer(j, "repeat", where, 1, 1));
     if (s.repeat > 1000 || get_integer(j, "repeat", where, 1, 1) > 1000)  // no int wrap-around
         throw_input_error(where, "/repeat", "must be <= 1000, got " + j["repeat"].dump());
@@ -201,7 +209,8 @@ Suite parse_suite(const nlohmann::json& j, const std::string& where)
     s.decouple = get_string(j, "decouple", where, "auto");
     static const std::set<std::string> orders = {"auto", "none", "authors", "random", "depth"};
     if (!orders.count(s.decouple))
-        throw_input_error(where, "/decouple", "expected one of auto, none, authors, random, depth, got '" + s.decouple + "'");
+        throw_input_error(where, "/decouple",
+                          "expected one of auto, none, authors, random, depth, got '" + s.decouple + "'");
     s.decouple_seed = static_cast<std::uint64_t>(get_integer(j, "decouple_seed", where, 0, 0));
     s.chain = get_bool(j, "chain", where, false);
     s.timed = get_bool(j, "timed", where, true);
@@ -214,10 +223,7 @@ Suite parse_suite(const nlohmann::json& j, const std::string& where)
     return s;
 }
 
-Suite load_suite(const std::string& path)
-{
-    return parse_suite(read_json_file(path), path);
-}
+Suite load_suite(const std::string& path) { return parse_suite(read_json_file(path), path); }
 
 std::vector<SuiteSnapshot> resolve_snapshots(const Suite& suite, const std::string& generated_dir)
 {
@@ -245,7 +251,8 @@ std::vector<SuiteSnapshot> resolve_snapshots(const Suite& suite, const std::stri
             for (const auto& entry : fs::directory_iterator(full))
                 if (entry.is_regular_file() && entry.path().extension() == ".qpsnap") files.push_back(entry.path());
             std::sort(files.begin(), files.end());
-            if (files.empty()) throw_input_error(suite.path, field, "folder '" + full.string() + "' holds no .qpsnap file");
+            if (files.empty())
+                throw_input_error(suite.path, field, "folder '" + full.string() + "' holds no .qpsnap file");
             for (const auto& f : files) add(f);
         } else if (pattern.find_first_of("*?[") != std::string::npos) {
             glob_t g{};
@@ -255,10 +262,12 @@ std::vector<SuiteSnapshot> resolve_snapshots(const Suite& suite, const std::stri
                 for (size_t k = 0; k < g.gl_pathc; ++k) matches.push_back(g.gl_pathv[k]);
             ::globfree(&g);
             std::sort(matches.begin(), matches.end());
-            if (matches.empty()) throw_input_error(suite.path, field, "pattern '" + full.string() + "' matches no file");
+            if (matches.empty())
+                throw_input_error(suite.path, field, "pattern '" + full.string() + "' matches no file");
             for (const auto& m : matches) add(m);
         } else {
-            if (!fs::is_regular_file(full)) throw_input_error(suite.path, field, "no such file '" + full.string() + "'");
+            if (!fs::is_regular_file(full))
+                throw_input_error(suite.path, field, "no such file '" + full.string() + "'");
             add(full);
         }
     }
@@ -292,4 +301,4 @@ std::vector<SuiteSnapshot> resolve_snapshots(const Suite& suite, const std::stri
     return out;
 }
 
-} // namespace cb
+}  // namespace cb

@@ -26,34 +26,34 @@ struct SuiteGenerate {
 /// "newton": i, "scene": SCENE.json}. Frames a..b-1 (either end may be omitted; "a" is one frame),
 /// every k-th of them, steps with at least r contact rows, Newton iteration i (default: all).
 struct SuiteSimulation {
-    size_t position = 0;     ///< number of string patterns listed before it (keeps the suite's order)
-    std::string field;       ///< "/snapshots/<i>", for messages
-    std::string folder;      ///< as written (relative to the suite file)
-    long first = 0;          ///< first frame
-    long end = -1;           ///< one past the last frame; -1: to the end
+    size_t position = 0;  ///< number of string patterns listed before it (keeps the suite's order)
+    std::string field;    ///< "/snapshots/<i>", for messages
+    std::string folder;   ///< as written (relative to the suite file)
+    long first = 0;       ///< first frame
+    long end = -1;        ///< one past the last frame; -1: to the end
     long stride = 1;
     long min_rows = 0;
-    long newton = -1;        ///< -1: every Newton iteration
-    std::string scene;       ///< optional: the scene file, so that errors print the exact command
+    long newton = -1;   ///< -1: every Newton iteration
+    std::string scene;  ///< optional: the scene file, so that errors print the exact command
 };
 
 struct Suite {
-    std::string path;                   ///< the suite file
+    std::string path;  ///< the suite file
     std::string name;
-    std::vector<std::string> snapshots; ///< patterns, as written (relative to the suite file)
+    std::vector<std::string> snapshots;        ///< patterns, as written (relative to the suite file)
     std::vector<SuiteSimulation> simulations;  ///< simulation entries of `snapshots`
     std::vector<SuiteGenerate> generate;
     std::vector<SuiteSolver> solvers;
-    double tol = 1e-6;                  ///< default `tol` of every solver (a solver's own setting wins)
-    double time_limit_s = 60.0;         ///< default `time_limit_s` of every solver (0 disables)
+    double tol = 1e-6;           ///< default `tol` of every solver (a solver's own setting wins)
+    double time_limit_s = 60.0;  ///< default `time_limit_s` of every solver (0 disables)
     int repeat = 1;
     long history_max = 2000;
     bool reference = false;
     std::string decouple = "auto";
     std::uint64_t decouple_seed = 0;
     bool chain = false;
-    bool timed = true;                  ///< false: times are not judged (counters only); `run --jobs` runs it in parallel
-    nlohmann::json raw;                 ///< the file as read
+    bool timed = true;   ///< false: times are not judged (counters only); `run --jobs` runs it in parallel
+    nlohmann::json raw;  ///< the file as read
 };
 
 /// Reads and validates a suite file; InputError("SUITE: /field: problem") on any bad or unknown key.
@@ -64,7 +64,7 @@ Suite parse_suite(const nlohmann::json& j, const std::string& where);
 
 /// One snapshot of a suite, resolved to a file.
 struct SuiteSnapshot {
-    std::string id;    ///< file stem (duplicates get "-2", "-3" ...) or the generate entry's id
+    std::string id;  ///< file stem (duplicates get "-2", "-3" ...) or the generate entry's id
     std::string path;
     bool generated = false;
 };
@@ -89,4 +89,4 @@ std::vector<std::string> expand_suite_simulation(const SuiteSimulation& sim, con
 /// 64-bit FNV-1a as 16 hex digits.
 std::string fnv1a_hex(const std::string& bytes);
 
-} // namespace cb
+}  // namespace cb

@@ -23,7 +23,8 @@ std::string mixed_cpu_warning(const std::map<std::string, size_t>& models)
                        " CPU models, so their times do not compare (counters do):";
     for (const auto& [model, count] : models) text += " '" + model + "' (" + std::to_string(count) + " runs);";
     text.pop_back();
-    return text + ". Pin the partition (cluster slurm --partition, or --sbatch-option=--constraint=...) to time on one model.";
+    return text +
+           ". Pin the partition (cluster slurm --partition, or --sbatch-option=--constraint=...) to time on one model.";
 }
 
-} // namespace cb
+}  // namespace cb

@@ -16,4 +16,4 @@ std::map<std::string, size_t> cpu_models_of_timed_runs(const std::vector<nlohman
 /// Empty when at most one model; else one line naming each model with its run count.
 std::string mixed_cpu_warning(const std::map<std::string, size_t>& models);
 
-} // namespace cb
+}  // namespace cb

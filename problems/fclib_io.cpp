@@ -7,9 +7,9 @@
 extern "C" {
 #include <fclib.h>
 }
+#include <cstdlib>
 #include <hdf5.h>
 #include <unistd.h>
-#include <cstdlib>
 #include <vector>
 #endif
 
@@ -114,8 +114,10 @@ SpMat to_eigen(const std::string& path, const std::string& field, const fclib_ma
         const int outer = f->nz == -2 ? f->m : f->n;
         for (int o = 0; o < outer; ++o)
             for (int k = f->p[o]; k < f->p[o + 1]; ++k) {
-                if (f->nz == -2) add(o, f->i[k], f->x[k]);
-                else add(f->i[k], o, f->x[k]);
+                if (f->nz == -2)
+                    add(o, f->i[k], f->x[k]);
+                else
+                    add(f->i[k], o, f->x[k]);
             }
     }
     SpMat out(f->m, f->n);
@@ -135,7 +137,7 @@ bool has_group(const std::string& path, const char* group)
     return exists;
 }
 
-} // namespace
+}  // namespace
 
 void write_fclib_global(const std::string& path, const Qp& qp, const SnapshotExtras* extras)
 {
@@ -207,7 +209,8 @@ Qp read_fclib_global(const std::string& path, SnapshotExtras* extras)
     const SpMat H = to_eigen(path, "/fclib_global/H", p->H);
     const Eigen::Index n = qp.A.rows();
     if (qp.A.cols() != n) fail(path, "/fclib_global/M", "not square");
-    if (H.rows() != n) fail(path, "/fclib_global/H", "has " + std::to_string(H.rows()) + " rows, M has " + std::to_string(n));
+    if (H.rows() != n)
+        fail(path, "/fclib_global/H", "has " + std::to_string(H.rows()) + " rows, M has " + std::to_string(n));
     if (H.cols() % 3 != 0) fail(path, "/fclib_global/H", "column count is not a multiple of 3");
     const Eigen::Index m = H.cols() / 3;
     if (!p->f || (n > 0 && !p->w && m > 0)) fail(path, "/fclib_global", "f or w missing");
@@ -218,12 +221,14 @@ Qp read_fclib_global(const std::string& path, SnapshotExtras* extras)
     for (Eigen::Index i = 0; i < m; ++i) {
         const std::string contact = "contact " + std::to_string(i);
         if (p->mu && p->mu[i] != 0.0)
-            fail(path, "/fclib_global/mu", contact + " has mu = " + std::to_string(p->mu[i]) +
-                                               " (friction is not supported: only mu = 0 maps onto the QP)");
+            fail(path, "/fclib_global/mu",
+                 contact + " has mu = " + std::to_string(p->mu[i]) +
+                     " (friction is not supported: only mu = 0 maps onto the QP)");
         if (p->w[3 * i + 1] != 0.0 || p->w[3 * i + 2] != 0.0)
             fail(path, "/fclib_global/w", contact + " has a tangential entry (only (w_N, 0, 0) maps onto the QP)");
         if (Ht.outerIndexPtr()[3 * i + 1] != Ht.outerIndexPtr()[3 * i + 3])
-            fail(path, "/fclib_global/H", contact + " has tangential columns (only the normal column maps onto the QP)");
+            fail(path, "/fclib_global/H",
+                 contact + " has tangential columns (only the normal column maps onto the QP)");
         qp.c[i] = -p->w[3 * i];
         for (SpMat::InnerIterator it(Ht, 3 * i); it; ++it) jt.emplace_back(static_cast<int>(i), it.col(), it.value());
     }
@@ -256,4 +261,4 @@ Qp read_fclib_global(const std::string& path, SnapshotExtras* extras)
 
 #endif
 
-} // namespace cb
+}  // namespace cb

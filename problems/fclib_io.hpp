@@ -32,4 +32,4 @@ Qp read_fclib_global(const std::string& path, SnapshotExtras* extras = nullptr);
 /// The FCLIB library version compiled against, or "" when not built.
 std::string fclib_version();
 
-} // namespace cb
+}  // namespace cb

@@ -25,14 +25,14 @@ std::string kind_of(mode_t mode)
     return "not a plain file";
 }
 
-} // namespace
+}  // namespace
 
 int open_regular_file(const std::string& path)
 {
     // O_NONBLOCK: opening a FIFO without a writer would otherwise wait forever.
     const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
     if (fd < 0) throw_input_error(path, "", std::string("cannot open: ") + std::strerror(errno));
-    struct stat st{};
+    struct stat st {};
     if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
         const mode_t mode = st.st_mode;
         ::close(fd);
@@ -48,12 +48,13 @@ void require_regular_file(const std::string& path) { ::close(open_regular_file(p
 std::string read_regular_file(const std::string& path, std::uint64_t max_bytes)
 {
     const int fd = open_regular_file(path);
-    struct stat st{};
+    struct stat st {};
     ::fstat(fd, &st);
     if (std::uint64_t(st.st_size) > max_bytes) {
         ::close(fd);
-        throw_input_error(path, "", "too large: " + std::to_string(st.st_size) + " bytes (at most " +
-                                        std::to_string(max_bytes) + ")");
+        throw_input_error(path, "",
+                          "too large: " + std::to_string(st.st_size) + " bytes (at most " + std::to_string(max_bytes) +
+                              ")");
     }
     std::string text(std::size_t(st.st_size), '\0');
     std::size_t done = 0;
@@ -81,16 +82,21 @@ void check_json_depth(const char* begin, const char* end, const std::string& whe
     for (const char* p = begin; p < end; ++p) {
         const char ch = *p;
         if (in_string) {
-            if (escaped) escaped = false;
-            else if (ch == '\\') escaped = true;
-            else if (ch == '"') in_string = false;
+            if (escaped)
+                escaped = false;
+            else if (ch == '\\')
+                escaped = true;
+            else if (ch == '"')
+                in_string = false;
             continue;
         }
-        if (ch == '"') in_string = true;
+        if (ch == '"')
+            in_string = true;
         else if (ch == '[' || ch == '{') {
             if (++depth > max_depth)
-                throw_input_error(where, field, "JSON nested deeper than " + std::to_string(max_depth) +
-                                                    " levels (at byte " + std::to_string(p - begin) + ")");
+                throw_input_error(where, field,
+                                  "JSON nested deeper than " + std::to_string(max_depth) + " levels (at byte " +
+                                      std::to_string(p - begin) + ")");
         } else if ((ch == ']' || ch == '}') && depth > 0) {
             --depth;
         }
@@ -225,4 +231,4 @@ void replace_dir(const std::string& staged, const std::string& target)
     fs::remove_all(old, ec);
 }
 
-} // namespace cb
+}  // namespace cb

@@ -71,4 +71,4 @@ void fsync_dir(const std::string& dir);
 /// the second fails; the old content is removed afterwards. No "target.old.*" folder survives.
 void replace_dir(const std::string& staged, const std::string& target);
 
-} // namespace cb
+}  // namespace cb

@@ -106,8 +106,8 @@ int parse_numbers(const char* b, const char* e, double* out, int want, bool* ext
 struct MtxLimits {
     long max_rows = 2147483647L, max_cols = 2147483647L;
     std::string why_rows, why_cols;
-    bool plus_entries = false;  ///< max_rows grows by the entries the file declares (rows of J)
-    bool vector_size = false;   ///< a vector of exactly max_rows entries: the folder's "size" message
+    bool plus_entries = false;     ///< max_rows grows by the entries the file declares (rows of J)
+    bool vector_size = false;      ///< a vector of exactly max_rows entries: the folder's "size" message
     bool diagonal_needed = false;  ///< every row needs a stored entry (A: SPD, diagonal present)
 };
 
@@ -129,7 +129,8 @@ MtxFile parse_mtx(const std::string& path, const MtxLimits& limits = {})
         }
     }
     if (words.size() != 5 || words[0] != "%%matrixmarket" || words[1] != "matrix")
-        throw_input_error(path, "line 1", "expected '%%MatrixMarket matrix FORMAT FIELD SYMMETRY', got '" + std::string(b, e) + "'");
+        throw_input_error(path, "line 1",
+                          "expected '%%MatrixMarket matrix FORMAT FIELD SYMMETRY', got '" + std::string(b, e) + "'");
     MtxFile f;
     f.format = words[2], f.field = words[3], f.symmetry = words[4];
     if (f.format != "coordinate" && f.format != "array")
@@ -149,36 +150,44 @@ MtxFile parse_mtx(const std::string& path, const MtxLimits& limits = {})
         const int got = parse_numbers(b, e, size, want, &extra);
         const char* expect = want == 3 ? "'rows cols entries'" : "'rows cols'";
         if (got != want || extra)
-            throw_input_error(path, line_field(lines.line()), std::string("expected the size line ") + expect + ", got '" + std::string(b, e) + "'");
+            throw_input_error(path, line_field(lines.line()),
+                              std::string("expected the size line ") + expect + ", got '" + std::string(b, e) + "'");
         for (int k = 0; k < want; ++k)
             if (size[k] < 0 || size[k] != std::floor(size[k]) || size[k] > 2147483647.0)
-                throw_input_error(path, line_field(lines.line()), "sizes must be integers in [0, 2^31), got '" + std::string(b, e) + "'");
+                throw_input_error(path, line_field(lines.line()),
+                                  "sizes must be integers in [0, 2^31), got '" + std::string(b, e) + "'");
         break;
     }
     f.rows = long(size[0]);
     f.cols = long(size[1]);
     const bool symmetric = f.symmetry == "symmetric";
     if (symmetric && f.rows != f.cols)
-        throw_input_error(path, "line 1", "symmetric but not square (" + std::to_string(f.rows) + " x " + std::to_string(f.cols) + ")");
+        throw_input_error(path, "line 1",
+                          "symmetric but not square (" + std::to_string(f.rows) + " x " + std::to_string(f.cols) + ")");
     long expected = 0;
-    if (f.format == "coordinate") expected = long(size[2]);
-    else expected = symmetric ? f.rows * (f.rows + 1) / 2 : f.rows * f.cols;
+    if (f.format == "coordinate")
+        expected = long(size[2]);
+    else
+        expected = symmetric ? f.rows * (f.rows + 1) / 2 : f.rows * f.cols;
     if (limits.vector_size) {
         const long got = (f.cols == 1 || f.rows == 0) ? f.rows : f.cols;
         if (got > limits.max_rows) throw_input_error(path, "size", limits.why_rows + ", got " + std::to_string(got));
     }
     const long max_rows = limits.plus_entries ? std::min(2147483647L, limits.max_rows + expected) : limits.max_rows;
     if (f.rows > max_rows)
-        throw_input_error(path, line_field(lines.line()),
-                          "declares " + std::to_string(f.rows) + " rows, at most " + std::to_string(max_rows) + " possible (" +
-                              limits.why_rows + (limits.plus_entries ? ", this file declares " + std::to_string(expected) + " entries" : "") +
-                              ")");
+        throw_input_error(
+            path, line_field(lines.line()),
+            "declares " + std::to_string(f.rows) + " rows, at most " + std::to_string(max_rows) + " possible (" +
+                limits.why_rows +
+                (limits.plus_entries ? ", this file declares " + std::to_string(expected) + " entries" : "") + ")");
     if (f.cols > limits.max_cols)
-        throw_input_error(path, line_field(lines.line()), "declares " + std::to_string(f.cols) + " columns, at most " +
-                                                              std::to_string(limits.max_cols) + " possible (" + limits.why_cols + ")");
+        throw_input_error(path, line_field(lines.line()),
+                          "declares " + std::to_string(f.cols) + " columns, at most " +
+                              std::to_string(limits.max_cols) + " possible (" + limits.why_cols + ")");
     if (limits.diagonal_needed && f.format == "coordinate" && expected < f.rows)
-        throw_input_error(path, line_field(lines.line()), "declares " + std::to_string(f.rows) + " rows but only " +
-                                                              std::to_string(expected) + " entries (every row needs its diagonal entry)");
+        throw_input_error(path, line_field(lines.line()),
+                          "declares " + std::to_string(f.rows) + " rows but only " + std::to_string(expected) +
+                              " entries (every row needs its diagonal entry)");
     // Reserve for what the bytes present can hold, not for what the size line declares (an entry
     // takes at least 2 bytes, "v\n"; 6 in coordinate format): a 70-byte file declaring 2e8 entries
     // ends in "the file ends after ..." having allocated next to nothing.
@@ -187,23 +196,27 @@ MtxFile parse_mtx(const std::string& path, const MtxLimits& limits = {})
     long count = 0, ai = 0, aj = 0;  // array format: column-major position
     while (count < expected) {
         if (!lines.next(b, e))
-            throw_input_error(path, "entries", "expected " + std::to_string(expected) + " entries, the file ends after " +
-                                                   std::to_string(count));
+            throw_input_error(path, "entries",
+                              "expected " + std::to_string(expected) + " entries, the file ends after " +
+                                  std::to_string(count));
         if ((b < e && *b == '%') || blank(b, e)) continue;
         double v[3];
         if (f.format == "coordinate") {
             const int got = parse_numbers(b, e, v, 3, &extra);
             if (got != 3 || extra)
-                throw_input_error(path, line_field(lines.line()), "expected 'row col value', got '" + std::string(b, e) + "'");
+                throw_input_error(path, line_field(lines.line()),
+                                  "expected 'row col value', got '" + std::string(b, e) + "'");
             if (v[0] != std::floor(v[0]) || v[1] != std::floor(v[1]) || v[0] < 1 || v[0] > double(f.rows) || v[1] < 1 ||
                 v[1] > double(f.cols))
-                throw_input_error(path, line_field(lines.line()), "entry (" + std::string(b, e) + ") outside [1, " +
-                                                                      std::to_string(f.rows) + "] x [1, " + std::to_string(f.cols) + "]");
+                throw_input_error(path, line_field(lines.line()),
+                                  "entry (" + std::string(b, e) + ") outside [1, " + std::to_string(f.rows) +
+                                      "] x [1, " + std::to_string(f.cols) + "]");
             f.entries.push_back({long(v[0]) - 1, long(v[1]) - 1, v[2], lines.line()});
         } else {
             const int got = parse_numbers(b, e, v, 1, &extra);
             if (got != 1 || extra)
-                throw_input_error(path, line_field(lines.line()), "expected one value, got '" + std::string(b, e) + "'");
+                throw_input_error(path, line_field(lines.line()),
+                                  "expected one value, got '" + std::string(b, e) + "'");
             f.entries.push_back({ai, aj, v[0], lines.line()});
             if (++ai == f.rows) ++aj, ai = symmetric ? aj : 0;
         }
@@ -211,7 +224,8 @@ MtxFile parse_mtx(const std::string& path, const MtxLimits& limits = {})
     }
     while (lines.next(b, e))
         if (!blank(b, e) && *b != '%')
-            throw_input_error(path, line_field(lines.line()), "unexpected data after the " + std::to_string(expected) + " declared entries");
+            throw_input_error(path, line_field(lines.line()),
+                              "unexpected data after the " + std::to_string(expected) + " declared entries");
     if (symmetric) {
         const size_t stored = f.entries.size();
         for (size_t k = 0; k < stored; ++k) {
@@ -225,12 +239,9 @@ MtxFile parse_mtx(const std::string& path, const MtxLimits& limits = {})
 SpMat read_mtx_matrix_bounded(const std::string& path, const MtxLimits& limits);
 Vec read_mtx_vector_bounded(const std::string& path, const MtxLimits& limits);
 
-} // namespace
+}  // namespace
 
-SpMat read_mtx_matrix(const std::string& path)
-{
-    return read_mtx_matrix_bounded(path, {});
-}
+SpMat read_mtx_matrix(const std::string& path) { return read_mtx_matrix_bounded(path, {}); }
 
 namespace {
 
@@ -264,12 +275,9 @@ SpMat read_mtx_matrix_bounded(const std::string& path, const MtxLimits& limits)
     return M;
 }
 
-} // namespace
+}  // namespace
 
-Vec read_mtx_vector(const std::string& path)
-{
-    return read_mtx_vector_bounded(path, {});
-}
+Vec read_mtx_vector(const std::string& path) { return read_mtx_vector_bounded(path, {}); }
 
 namespace {
 
@@ -277,8 +285,9 @@ Vec read_mtx_vector_bounded(const std::string& path, const MtxLimits& limits)
 {
     const MtxFile f = parse_mtx(path, limits);
     if (f.cols != 1 && f.rows != 1 && !(f.rows == 0 || f.cols == 0))
-        throw_input_error(path, "line 1", "expected a vector (k x 1 or 1 x k), got " + std::to_string(f.rows) + " x " +
-                                              std::to_string(f.cols));
+        throw_input_error(path, "line 1",
+                          "expected a vector (k x 1 or 1 x k), got " + std::to_string(f.rows) + " x " +
+                              std::to_string(f.cols));
     const bool column = f.cols == 1 || f.rows == 0;
     Vec v = Vec::Zero(column ? f.rows : f.cols);
     std::vector<char> seen(size_t(v.size()), 0);
@@ -291,7 +300,7 @@ Vec read_mtx_vector_bounded(const std::string& path, const MtxLimits& limits)
     return v;
 }
 
-} // namespace
+}  // namespace
 
 namespace {
 
@@ -307,7 +316,7 @@ void append(std::string& out, const char* format, ...)
     if (len > 0) out.append(buffer, size_t(std::min<int>(len, int(sizeof buffer) - 1)));
 }
 
-} // namespace
+}  // namespace
 
 void write_mtx_matrix(const std::string& path, const SpMat& M0, const std::string& comment)
 {
@@ -364,7 +373,8 @@ void read_contacts(const std::string& path, long m, ContactRows& ct)
             }
         if (j.contains("vertex"))
             for (const auto& row : array_of_m("vertex")) {
-                if (!row.is_array() || row.size() != 4) throw_input_error(path, "vertex", "expected rows of 4 integers, got " + row.dump());
+                if (!row.is_array() || row.size() != 4)
+                    throw_input_error(path, "vertex", "expected rows of 4 integers, got " + row.dump());
                 for (const auto& v : row) {
                     if (!v.is_number_integer() || v.get<std::int64_t>() < -1)
                         throw_input_error(path, "vertex", "expected vertex ids >= -1, got " + v.dump());
@@ -376,7 +386,7 @@ void read_contacts(const std::string& path, long m, ContactRows& ct)
     }
 }
 
-} // namespace
+}  // namespace
 
 Qp read_matrix_market_folder(const std::string& dir, SnapshotExtras* extras)
 {
@@ -390,7 +400,8 @@ Qp read_matrix_market_folder(const std::string& dir, SnapshotExtras* extras)
     qp.A = read_mtx_matrix_bounded((d / "A.mtx").string(), a_limits);
     const long n = long(qp.A.rows());
     if (qp.A.cols() != n)
-        throw_input_error((d / "A.mtx").string(), "size", "A must be square, got " + std::to_string(n) + " x " + std::to_string(long(qp.A.cols())));
+        throw_input_error((d / "A.mtx").string(), "size",
+                          "A must be square, got " + std::to_string(n) + " x " + std::to_string(long(qp.A.cols())));
     auto vector_of = [&](const char* name, long size, const char* what) {
         const std::string path = (d / name).string();
         MtxLimits limits;  // a vector longer than expected is refused before it is allocated
@@ -399,8 +410,9 @@ Qp read_matrix_market_folder(const std::string& dir, SnapshotExtras* extras)
         limits.why_rows = limits.why_cols = std::string("expected ") + what + " = " + std::to_string(size) + " entries";
         Vec v = read_mtx_vector_bounded(path, limits);
         if (v.size() != size)
-            throw_input_error(path, "size", "expected " + std::string(what) + " = " + std::to_string(size) + " entries, got " +
-                                                std::to_string(long(v.size())));
+            throw_input_error(path, "size",
+                              "expected " + std::string(what) + " = " + std::to_string(size) + " entries, got " +
+                                  std::to_string(long(v.size())));
         return v;
     };
     qp.b = vector_of("b.mtx", n, "n (from A.mtx)");
@@ -417,8 +429,9 @@ Qp read_matrix_market_folder(const std::string& dir, SnapshotExtras* extras)
     }
     qp.J = read_mtx_matrix_bounded((d / "J.mtx").string(), j_limits);
     if (qp.J.cols() != n)
-        throw_input_error((d / "J.mtx").string(), "size", "expected n = " + std::to_string(n) + " columns (from A.mtx), got " +
-                                                              std::to_string(long(qp.J.cols())));
+        throw_input_error((d / "J.mtx").string(), "size",
+                          "expected n = " + std::to_string(n) + " columns (from A.mtx), got " +
+                              std::to_string(long(qp.J.cols())));
     const long m = long(qp.J.rows());
     qp.c = vector_of("c.mtx", m, "m (rows of J.mtx)");
     if (fs::exists(d / "meta.json")) {
@@ -443,7 +456,8 @@ void write_matrix_market_folder(const std::string& dir, const Qp& qp, const Snap
     const fs::path tmp = target.string() + ".tmp." + std::to_string(::getpid());
     std::error_code ec;
     fs::remove_all(tmp, ec);
-    if (!fs::create_directories(tmp, ec) || ec) throw_input_error(tmp.string(), "", "cannot create folder: " + ec.message());
+    if (!fs::create_directories(tmp, ec) || ec)
+        throw_input_error(tmp.string(), "", "cannot create folder: " + ec.message());
     try {
         write_mtx_matrix((tmp / "A.mtx").string(), qp.A, "A: n x n SPD, both triangles (contactbench snapshot)");
         write_mtx_vector((tmp / "b.mtx").string(), qp.b, "b: minimize 1/2 x'Ax - b'x");
@@ -456,12 +470,13 @@ void write_matrix_market_folder(const std::string& dir, const Qp& qp, const Snap
         if (!qp.contacts.empty()) {
             nlohmann::json ct = nlohmann::json::object();
             if (!qp.contacts.kind.empty()) ct["kind"] = qp.contacts.kind;
-            if (!qp.contacts.depth.empty()) ct["depth"] = qp.contacts.depth;  // nlohmann prints doubles round-trip exact
+            if (!qp.contacts.depth.empty())
+                ct["depth"] = qp.contacts.depth;  // nlohmann prints doubles round-trip exact
             if (!qp.contacts.vertex.empty()) {
                 nlohmann::json rows = nlohmann::json::array();
                 for (size_t r = 0; 4 * r < qp.contacts.vertex.size(); ++r)
-                    rows.push_back({qp.contacts.vertex[4 * r], qp.contacts.vertex[4 * r + 1], qp.contacts.vertex[4 * r + 2],
-                                    qp.contacts.vertex[4 * r + 3]});
+                    rows.push_back({qp.contacts.vertex[4 * r], qp.contacts.vertex[4 * r + 1],
+                                    qp.contacts.vertex[4 * r + 2], qp.contacts.vertex[4 * r + 3]});
                 ct["vertex"] = rows;
             }
             write_file_atomic((tmp / "contact.json").string(), ct.dump() + "\n");
@@ -478,4 +493,4 @@ void write_matrix_market_folder(const std::string& dir, const Qp& qp, const Snap
     replace_dir(tmp.string(), target.string());
 }
 
-} // namespace cb
+}  // namespace cb

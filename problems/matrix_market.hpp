@@ -32,4 +32,4 @@ Qp read_matrix_market_folder(const std::string& dir, SnapshotExtras* extras = nu
 /// replaced only if it holds an A.mtx (i.e. looks like a snapshot folder).
 void write_matrix_market_folder(const std::string& dir, const Qp& qp, const SnapshotExtras* extras = nullptr);
 
-} // namespace cb
+}  // namespace cb

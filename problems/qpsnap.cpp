@@ -16,9 +16,9 @@
 #include <cstring>
 #include <fcntl.h>
 #include <memory>
-#include <thread>
 #include <sys/mman.h>
 #include <sys/stat.h>
+#include <thread>
 #include <unistd.h>
 
 namespace cb {
@@ -48,7 +48,7 @@ void refuse_sparse(const std::string& path, int fd, std::uint64_t size);
 FileBytes read_all(const std::string& path, std::uint64_t limit = ~0ULL)
 {
     const int fd = open_regular_file(path);  // a FIFO or folder is refused, not waited on
-    struct stat st{};
+    struct stat st {};
     ::fstat(fd, &st);
     try {
         refuse_sparse(path, fd, std::uint64_t(st.st_size));  // a header length into a hole: no 4 GB buffer
@@ -85,7 +85,7 @@ void refuse_sparse(const std::string& path, int fd, std::uint64_t size)
         const off_t hole = ::lseek(fd, pos, SEEK_HOLE);
         if (hole < 0 || std::uint64_t(hole) >= size) break;  // no (more) holes, or not supported
         off_t data = ::lseek(fd, hole, SEEK_DATA);
-        if (data < 0) data = off_t(size);                     // a hole up to the end
+        if (data < 0) data = off_t(size);  // a hole up to the end
         if (holes == 0) first_hole = std::uint64_t(hole);
         holes += std::uint64_t(data - hole);
         pos = data;
@@ -93,8 +93,9 @@ void refuse_sparse(const std::string& path, int fd, std::uint64_t size)
     ::lseek(fd, 0, SEEK_SET);
     const std::uint64_t allowed = std::max<std::uint64_t>(std::uint64_t(64) << 20, (size - holes));
     if (holes > allowed)
-        throw_input_error(path, "data", "sparse file: " + str(holes) + " of its " + str(size) + " bytes (from byte " +
-                                            str(first_hole) + ") are holes, not data written to the file");
+        throw_input_error(path, "data",
+                          "sparse file: " + str(holes) + " of its " + str(size) + " bytes (from byte " +
+                              str(first_hole) + ") are holes, not data written to the file");
 }
 
 /// The whole file mapped read-only (no copy out of the page cache); empty files are not mapped.
@@ -103,7 +104,7 @@ public:
     explicit MappedFile(const std::string& path)
     {
         const int fd = open_regular_file(path);  // a FIFO or folder is refused, not waited on
-        struct stat st{};
+        struct stat st {};
         ::fstat(fd, &st);
         m_size = std::uint64_t(st.st_size);
         try {
@@ -162,11 +163,14 @@ nlohmann::json parse_header(const std::string& path, const unsigned char* bytes,
                             std::uint64_t* header_len)
 {
     if (file_size < 8)
-        throw_input_error(path, "header", "file too short: " + str(file_size) + " bytes, a .qpsnap starts with an 8-byte header length");
+        throw_input_error(path, "header",
+                          "file too short: " + str(file_size) +
+                              " bytes, a .qpsnap starts with an 8-byte header length");
     const std::uint64_t N = load_u64_le(bytes);
     if (N > file_size - 8)
-        throw_input_error(path, "header", "header length " + str(N) + " exceeds the file (" + str(file_size - 8) +
-                                              " bytes after the length field)");
+        throw_input_error(path, "header",
+                          "header length " + str(N) + " exceeds the file (" + str(file_size - 8) +
+                              " bytes after the length field)");
     // Deep nesting would overflow the stack of the parser (and of the JSON destructor).
     check_json_depth(reinterpret_cast<const char*>(bytes + 8), reinterpret_cast<const char*>(bytes + 8 + N), path,
                      "header");
@@ -174,7 +178,8 @@ nlohmann::json parse_header(const std::string& path, const unsigned char* bytes,
     try {
         h = nlohmann::json::parse(bytes + 8, bytes + 8 + N);
     } catch (const nlohmann::json::parse_error& e) {
-        throw_input_error(path, "header", "not valid UTF-8 JSON (parse error at header byte " + str(std::uint64_t(e.byte)) + ")");
+        throw_input_error(path, "header",
+                          "not valid UTF-8 JSON (parse error at header byte " + str(std::uint64_t(e.byte)) + ")");
     } catch (const nlohmann::json::exception& e) {
         // e.g. out_of_range 406: a number literal too large for a double (found by the fuzzer)
         throw_input_error(path, "header", std::string("not a valid JSON header: ") + e.what());
@@ -184,7 +189,8 @@ nlohmann::json parse_header(const std::string& path, const unsigned char* bytes,
     if (h["format"] != "qpsnap") throw_input_error(path, "format", "expected \"qpsnap\", got " + h["format"].dump());
     if (!h.contains("version")) throw_input_error(path, "version", "missing (expected 1)");
     if (h["version"] != 1)
-        throw_input_error(path, "version", "unsupported version " + h["version"].dump() + " (this reader knows version 1)");
+        throw_input_error(path, "version",
+                          "unsupported version " + h["version"].dump() + " (this reader knows version 1)");
     for (const char* key : {"n", "m"}) {
         if (!h.contains(key)) throw_input_error(path, key, "missing");
         const auto& v = h[key];
@@ -193,8 +199,10 @@ nlohmann::json parse_header(const std::string& path, const unsigned char* bytes,
         if (v.get<std::uint64_t>() > kMaxInt32)
             throw_input_error(path, key, "too large: " + v.dump() + " > 2147483647 (indices are 32-bit)");
     }
-    if (!h.contains("arrays") || !h["arrays"].is_object()) throw_input_error(path, "arrays", "missing or not an object");
-    if (h.contains("meta") && !h["meta"].is_object()) throw_input_error(path, "meta", "expected an object, got " + h["meta"].dump());
+    if (!h.contains("arrays") || !h["arrays"].is_object())
+        throw_input_error(path, "arrays", "missing or not an object");
+    if (h.contains("meta") && !h["meta"].is_object())
+        throw_input_error(path, "meta", "expected an object, got " + h["meta"].dump());
     if (header_len) *header_len = N;
     return h;
 }
@@ -206,11 +214,20 @@ struct ArraySpec {
 };
 
 const ArraySpec kArrays[] = {
-    {"A.indptr", "int64", true},     {"A.indices", "int64", true},     {"A.data", "float64", true},
-    {"b", "float64", true},          {"x0", "float64", true},          {"J.indptr", "int64", true},
-    {"J.indices", "int64", true},    {"J.data", "float64", true},      {"c", "float64", true},
-    {"contact.kind", "int64", false}, {"contact.depth", "float64", false}, {"contact.vertex", "int64", false},
-    {"x_ref", "float64", false},     {"lambda_ref", "float64", false},
+    {"A.indptr", "int64", true},
+    {"A.indices", "int64", true},
+    {"A.data", "float64", true},
+    {"b", "float64", true},
+    {"x0", "float64", true},
+    {"J.indptr", "int64", true},
+    {"J.indices", "int64", true},
+    {"J.data", "float64", true},
+    {"c", "float64", true},
+    {"contact.kind", "int64", false},
+    {"contact.depth", "float64", false},
+    {"contact.vertex", "int64", false},
+    {"x_ref", "float64", false},
+    {"lambda_ref", "float64", false},
 };
 
 /// One array, located and CRC-checked.
@@ -252,9 +269,11 @@ Located locate(const std::string& path, const std::string& name, const char* dty
     for (const char* key : {"dtype", "shape", "offset", "nbytes", "crc32"})
         if (!entry.contains(key)) throw_input_error(path, name + "." + key, "missing");
     if (entry["dtype"] != dtype)
-        throw_input_error(path, name + ".dtype", std::string("expected \"") + dtype + "\", got " + entry["dtype"].dump());
+        throw_input_error(path, name + ".dtype",
+                          std::string("expected \"") + dtype + "\", got " + entry["dtype"].dump());
     const auto& shape = entry["shape"];
-    if (!shape.is_array()) throw_input_error(path, name + ".shape", "expected an array of integers, got " + shape.dump());
+    if (!shape.is_array())
+        throw_input_error(path, name + ".shape", "expected an array of integers, got " + shape.dump());
     a.count = 1;
     for (const auto& s : shape) {
         const std::uint64_t d = get_uint(path, name + ".shape", s);
@@ -266,12 +285,14 @@ Located locate(const std::string& path, const std::string& name, const char* dty
     const std::uint64_t nbytes = get_uint(path, name + ".nbytes", entry["nbytes"]);
     const std::uint64_t crc = get_uint(path, name + ".crc32", entry["crc32"]);
     if (nbytes != a.count * 8)
-        throw_input_error(path, name + ".nbytes", str(nbytes) + " does not match shape " + shape.dump() + " (expected " +
-                                                      str(a.count * 8) + ")");
+        throw_input_error(path, name + ".nbytes",
+                          str(nbytes) + " does not match shape " + shape.dump() + " (expected " + str(a.count * 8) +
+                              ")");
     if (offset % 8 != 0) throw_input_error(path, name + ".offset", str(offset) + " is not 8-byte aligned");
     if (offset > buffer_size || nbytes > buffer_size - offset)
-        throw_input_error(path, name + ".offset", "bytes [" + str(offset) + ", " + str(offset + nbytes) +
-                                                      ") lie outside the data buffer of " + str(buffer_size) + " bytes");
+        throw_input_error(path, name + ".offset",
+                          "bytes [" + str(offset) + ", " + str(offset + nbytes) + ") lie outside the data buffer of " +
+                              str(buffer_size) + " bytes");
     a.ptr = buffer + offset;
     const std::uint64_t actual = crc32_of(a.ptr, nbytes);
     if (actual != crc)
@@ -301,7 +322,8 @@ void check_finite(const std::string& path, const std::string& name, const double
     for (; i < count; ++i) acc[0] += v[i] * 0.0;
     if (acc[0] + acc[1] + acc[2] + acc[3] == 0.0) return;
     for (i = 0; i < count; ++i)
-        if (!std::isfinite(v[i])) throw_input_error(path, name, "non-finite value " + fmt_double(v[i]) + " at index " + str(i));
+        if (!std::isfinite(v[i]))
+            throw_input_error(path, name, "non-finite value " + fmt_double(v[i]) + " at index " + str(i));
 }
 
 /// Checks a CSR structure (indptr, indices) of `rows` rows with `cols` columns.
@@ -314,21 +336,24 @@ void check_csr(const std::string& path, const std::string& mat, const Located& i
     if (p[0] != 0) throw_input_error(path, mat + ".indptr", "must start at 0, starts at " + str(p[0]));
     for (std::uint64_t r = 0; r < rows; ++r)
         if (p[r + 1] < p[r])
-            throw_input_error(path, mat + ".indptr", "decreases at row " + str(r) + " (" + str(p[r]) + " then " +
-                                                         str(p[r + 1]) + ")");
+            throw_input_error(path, mat + ".indptr",
+                              "decreases at row " + str(r) + " (" + str(p[r]) + " then " + str(p[r + 1]) + ")");
     if (p[rows] != nnz)
-        throw_input_error(path, mat + ".indptr", "ends at " + str(p[rows]) + ", expected nnz = " + str(nnz) +
-                                                     " (the length of " + mat + ".indices)");
+        throw_input_error(path, mat + ".indptr",
+                          "ends at " + str(p[rows]) + ", expected nnz = " + str(nnz) + " (the length of " + mat +
+                              ".indices)");
     const std::int64_t ncols = std::int64_t(cols);
     for (std::uint64_t r = 0; r < rows; ++r) {
         std::int64_t prev = -1;
         for (std::int64_t e = p[r]; e < p[r + 1]; ++e) {
             const std::int64_t j = ix[e];
             if (j < 0 || j >= ncols)
-                throw_input_error(path, mat + ".indices", "column " + str(j) + " out of range [0, " + str(ncols) + ") in row " + str(r));
+                throw_input_error(path, mat + ".indices",
+                                  "column " + str(j) + " out of range [0, " + str(ncols) + ") in row " + str(r));
             if (j <= prev)
-                throw_input_error(path, mat + ".indices", "columns not strictly increasing in row " + str(r) + " (" +
-                                                              str(prev) + " then " + str(j) + ")");
+                throw_input_error(path, mat + ".indices",
+                                  "columns not strictly increasing in row " + str(r) + " (" + str(prev) + " then " +
+                                      str(j) + ")");
             prev = j;
         }
     }
@@ -411,10 +436,11 @@ void symmetrise(const std::string& path, SpMat& A)
         }
     if (worst > tol) {
         // Report the stored pair as (i, j) with A(i, j) the stored value and A(j, i) its mirror.
-        throw_input_error(path, "A", "not symmetric: A(" + str(std::int64_t(wi)) + ", " + str(std::int64_t(wj)) + ") = " +
-                                         fmt_double(wa) + " but A(" + str(std::int64_t(wj)) + ", " + str(std::int64_t(wi)) +
-                                         ") = " + fmt_double(wb) + " (difference " + fmt_double(worst) +
-                                         " > 1e-12 * max|A_ij| = " + fmt_double(tol) + ")");
+        throw_input_error(path, "A",
+                          "not symmetric: A(" + str(std::int64_t(wi)) + ", " + str(std::int64_t(wj)) +
+                              ") = " + fmt_double(wa) + " but A(" + str(std::int64_t(wj)) + ", " +
+                              str(std::int64_t(wi)) + ") = " + fmt_double(wb) + " (difference " + fmt_double(worst) +
+                              " > 1e-12 * max|A_ij| = " + fmt_double(tol) + ")");
     }
     if (one_sided) {
         SpMat At = A.transpose();
@@ -431,20 +457,23 @@ void check_diagonal(const std::string& path, const SpMat& A)
         const int* end = A.innerIndexPtr() + A.outerIndexPtr()[i + 1];
         const int* at = std::lower_bound(begin, end, int(i));
         const std::string entry = "A(" + str(std::int64_t(i)) + ", " + str(std::int64_t(i)) + ")";
-        if (at == end || *at != i) throw_input_error(path, "A", "diagonal entry " + entry + " is missing (A must be SPD)");
+        if (at == end || *at != i)
+            throw_input_error(path, "A", "diagonal entry " + entry + " is missing (A must be SPD)");
         const double d = A.valuePtr()[at - A.innerIndexPtr()];
-        if (!(d > 0)) throw_input_error(path, "A", "diagonal entry " + entry + " = " + fmt_double(d) + " is not positive (A must be SPD)");
+        if (!(d > 0))
+            throw_input_error(path, "A",
+                              "diagonal entry " + entry + " = " + fmt_double(d) + " is not positive (A must be SPD)");
     }
 }
 
-} // namespace
+}  // namespace
 
 void validate_qp(const std::string& where, Qp& qp)
 {
     const Eigen::Index n = qp.A.rows(), m = qp.J.rows();
     auto size_error = [&](const std::string& field, const std::string& what, Eigen::Index expected, Eigen::Index got) {
-        throw_input_error(where, field, "expected " + what + " = " + str(std::int64_t(expected)) + ", got " +
-                                            str(std::int64_t(got)));
+        throw_input_error(where, field,
+                          "expected " + what + " = " + str(std::int64_t(expected)) + ", got " + str(std::int64_t(got)));
     };
     if (qp.A.cols() != n) size_error("A", "columns = n", n, qp.A.cols());
     if (qp.b.size() != n) size_error("b", "size n", n, qp.b.size());
@@ -468,7 +497,8 @@ void validate_qp(const std::string& where, Qp& qp)
         for (Eigen::Index r = 0; r < M->rows(); ++r)
             for (int e = M->outerIndexPtr()[r] + 1; e < M->outerIndexPtr()[r + 1]; ++e)
                 if (M->innerIndexPtr()[e] <= M->innerIndexPtr()[e - 1])
-                    throw_input_error(where, M == &qp.A ? "A" : "J", "columns not strictly increasing in row " + str(std::int64_t(r)));
+                    throw_input_error(where, M == &qp.A ? "A" : "J",
+                                      "columns not strictly increasing in row " + str(std::int64_t(r)));
     symmetrise(where, qp.A);
     check_diagonal(where, qp.A);
 }
@@ -490,8 +520,7 @@ Qp read_qpsnap(const std::string& path, SnapshotExtras* extras)
     return read_qpsnap_bytes(path, f.data(), f.size(), extras);
 }
 
-Qp read_qpsnap_bytes(const std::string& path, const unsigned char* bytes, std::uint64_t size,
-                     SnapshotExtras* extras)
+Qp read_qpsnap_bytes(const std::string& path, const unsigned char* bytes, std::uint64_t size, SnapshotExtras* extras)
 {
     std::uint64_t N = 0;
     const nlohmann::json h = parse_header(path, bytes, size, &N);
@@ -522,21 +551,26 @@ Qp read_qpsnap_bytes(const std::string& path, const unsigned char* bytes, std::u
     // Shapes.
     const std::string nn = "n = " + str(n), mm = "m = " + str(m);
     expect_shape(path, "A.indptr", a["A.indptr"], {n + 1}, nn + ", n + 1 entries");
-    if (a["A.indices"].shape.size() != 1) expect_shape(path, "A.indices", a["A.indices"], {a["A.indices"].count}, "one dimension");
+    if (a["A.indices"].shape.size() != 1)
+        expect_shape(path, "A.indices", a["A.indices"], {a["A.indices"].count}, "one dimension");
     const std::uint64_t nnzA = a["A.indices"].count;
-    if (nnzA > kMaxInt32) throw_input_error(path, "A.indices", "nnz " + str(nnzA) + " > 2147483647 (indices are 32-bit)");
+    if (nnzA > kMaxInt32)
+        throw_input_error(path, "A.indices", "nnz " + str(nnzA) + " > 2147483647 (indices are 32-bit)");
     expect_shape(path, "A.data", a["A.data"], {nnzA}, "the length of A.indices");
     expect_shape(path, "b", a["b"], {n}, nn);
     expect_shape(path, "x0", a["x0"], {n}, nn);
     expect_shape(path, "J.indptr", a["J.indptr"], {m + 1}, mm + ", m + 1 entries");
-    if (a["J.indices"].shape.size() != 1) expect_shape(path, "J.indices", a["J.indices"], {a["J.indices"].count}, "one dimension");
+    if (a["J.indices"].shape.size() != 1)
+        expect_shape(path, "J.indices", a["J.indices"], {a["J.indices"].count}, "one dimension");
     const std::uint64_t nnzJ = a["J.indices"].count;
-    if (nnzJ > kMaxInt32) throw_input_error(path, "J.indices", "nnz " + str(nnzJ) + " > 2147483647 (indices are 32-bit)");
+    if (nnzJ > kMaxInt32)
+        throw_input_error(path, "J.indices", "nnz " + str(nnzJ) + " > 2147483647 (indices are 32-bit)");
     expect_shape(path, "J.data", a["J.data"], {nnzJ}, "the length of J.indices");
     expect_shape(path, "c", a["c"], {m}, mm);
     if (a["contact.kind"].present) expect_shape(path, "contact.kind", a["contact.kind"], {m}, mm);
     if (a["contact.depth"].present) expect_shape(path, "contact.depth", a["contact.depth"], {m}, mm);
-    if (a["contact.vertex"].present) expect_shape(path, "contact.vertex", a["contact.vertex"], {m, 4}, mm + ", 4 vertices per row");
+    if (a["contact.vertex"].present)
+        expect_shape(path, "contact.vertex", a["contact.vertex"], {m, 4}, mm + ", 4 vertices per row");
     if (a["x_ref"].present) expect_shape(path, "x_ref", a["x_ref"], {n}, nn);
     if (a["lambda_ref"].present) expect_shape(path, "lambda_ref", a["lambda_ref"], {m}, mm);
     // Structure and values.
@@ -548,17 +582,20 @@ Qp read_qpsnap_bytes(const std::string& path, const unsigned char* bytes, std::u
         for (std::uint64_t r = 0; r < m; ++r) {
             const std::int64_t k = a["contact.kind"].i64()[r];
             if (k < 0 || k > std::int64_t(ContactKind::OTHER))
-                throw_input_error(path, "contact.kind", "value " + str(k) + " at row " + str(r) + " is not a contact kind (0..4)");
+                throw_input_error(path, "contact.kind",
+                                  "value " + str(k) + " at row " + str(r) + " is not a contact kind (0..4)");
         }
     if (a["contact.depth"].present)
         for (std::uint64_t r = 0; r < m; ++r)
             if (a["contact.depth"].f64()[r] < 0)
-                throw_input_error(path, "contact.depth", "negative depth " + fmt_double(a["contact.depth"].f64()[r]) + " at row " + str(r));
+                throw_input_error(path, "contact.depth",
+                                  "negative depth " + fmt_double(a["contact.depth"].f64()[r]) + " at row " + str(r));
     if (a["contact.vertex"].present)
         for (std::uint64_t e = 0; e < 4 * m; ++e) {
             const std::int64_t v = a["contact.vertex"].i64()[e];
             if (v < -1 || v > std::int64_t(kMaxInt32))
-                throw_input_error(path, "contact.vertex", "value " + str(v) + " at row " + str(e / 4) + " is not a vertex id or -1");
+                throw_input_error(path, "contact.vertex",
+                                  "value " + str(v) + " at row " + str(e / 4) + " is not a vertex id or -1");
         }
 
     Qp qp;
@@ -591,7 +628,8 @@ struct OutArray {
 };
 
 template <typename T, typename S>
-OutArray out_array(const std::string& name, const char* dtype, std::vector<std::uint64_t> shape, const S* src, size_t count)
+OutArray out_array(const std::string& name, const char* dtype, std::vector<std::uint64_t> shape, const S* src,
+                   size_t count)
 {
     OutArray o{name, dtype, std::move(shape), {}};
     o.bytes.resize(count * 8);
@@ -617,12 +655,14 @@ void csr_arrays(std::vector<OutArray>& out, const std::string& prefix, const SpM
     out.push_back(out_array<double>(prefix + ".data", "float64", {nnz}, M->valuePtr(), nnz));
 }
 
-} // namespace
+}  // namespace
 
 void write_qpsnap(const std::string& path, const Qp& qp, const SnapshotExtras* extras)
 {
     const std::uint64_t n = std::uint64_t(qp.A.rows()), m = std::uint64_t(qp.J.rows());
-    auto bad = [&](const std::string& field, const std::string& what) { throw_input_error(path + " (writing)", field, what); };
+    auto bad = [&](const std::string& field, const std::string& what) {
+        throw_input_error(path + " (writing)", field, what);
+    };
     if (qp.A.cols() != qp.A.rows()) bad("A", "not square");
     if (std::uint64_t(qp.b.size()) != n) bad("b", "size " + str(std::uint64_t(qp.b.size())) + " != n = " + str(n));
     if (std::uint64_t(qp.x0.size()) != n) bad("x0", "size " + str(std::uint64_t(qp.x0.size())) + " != n = " + str(n));
@@ -666,7 +706,8 @@ void write_qpsnap(const std::string& path, const Qp& qp, const SnapshotExtras* e
     std::uint64_t offset = 0;
     for (const auto& a : arrays) {
         const std::uint64_t crc = crc32_z(crc32_z(0L, Z_NULL, 0), a.bytes.data(), a.bytes.size());
-        entries[a.name] = {{"dtype", a.dtype}, {"shape", a.shape}, {"offset", offset}, {"nbytes", a.bytes.size()}, {"crc32", crc}};
+        entries[a.name] = {
+            {"dtype", a.dtype}, {"shape", a.shape}, {"offset", offset}, {"nbytes", a.bytes.size()}, {"crc32", crc}};
         offset += a.bytes.size();  // multiples of 8: every array stays aligned
     }
     header["arrays"] = entries;
@@ -702,4 +743,4 @@ std::string qpsnap_content_hash(const std::string& path)
     return hex;
 }
 
-} // namespace cb
+}  // namespace cb

@@ -40,4 +40,4 @@ void validate_qp(const std::string& where, Qp& qp);
 /// the reference-solution cache.
 std::string qpsnap_content_hash(const std::string& path);
 
-} // namespace cb
+}  // namespace cb

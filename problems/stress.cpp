@@ -146,8 +146,12 @@ json fem_slab_scene(const json& params)
         {"gravity", {0, -9.8, 0}},
         {"detection", {{"margin", 0.06}}},
         {"bodies",
-         {{{"name", "slab"}, {"box", {{"cells", {16, 4, 16}}, {"size", {1.6, 0.4, 1.6}}}}, {"material", material},
-           {"rotate_deg", {0, 0, 2}}, {"translate", {0, 0.228, 0}}, {"velocity", {0, -0.5, 0}}}}},
+         {{{"name", "slab"},
+           {"box", {{"cells", {16, 4, 16}}, {"size", {1.6, 0.4, 1.6}}}},
+           {"material", material},
+           {"rotate_deg", {0, 0, 2}},
+           {"translate", {0, 0.228, 0}},
+           {"velocity", {0, -0.5, 0}}}}},
         {"obstacles", {{{"type", "plane"}, {"normal", {0, 1, 0}}, {"point", {0, 0, 0}}}}},
         {"output", {{"strip_frames", 0}}},
     };
@@ -170,10 +174,17 @@ json fem_demo_scene(const json& params)
         {"solver_settings", {{"tol", 1e-8}, {"max_iterations", 5000}}},
         {"detection", {{"margin", 0.005}}},
         {"bodies",
-         {{{"name", "lower"}, {"box", {{"cells", {4, 4, 4}}, {"size", {0.4, 0.4, 0.4}}}}, {"material", material},
-           {"translate", {0, 0.22, 0}}, {"velocity", {0, -1.0 - speed, 0}}},
-          {{"name", "upper"}, {"box", {{"cells", {4, 4, 4}}, {"size", {0.3, 0.3, 0.3}}}}, {"material", material},
-           {"translate", {0.05, 0.75, 0.03}}, {"rotate_deg", {20, 0, 15}}, {"velocity", {0, -2.5 - speed, 0}}}}},
+         {{{"name", "lower"},
+           {"box", {{"cells", {4, 4, 4}}, {"size", {0.4, 0.4, 0.4}}}},
+           {"material", material},
+           {"translate", {0, 0.22, 0}},
+           {"velocity", {0, -1.0 - speed, 0}}},
+          {{"name", "upper"},
+           {"box", {{"cells", {4, 4, 4}}, {"size", {0.3, 0.3, 0.3}}}},
+           {"material", material},
+           {"translate", {0.05, 0.75, 0.03}},
+           {"rotate_deg", {20, 0, 15}},
+           {"velocity", {0, -2.5 - speed, 0}}}}},
         {"obstacles", {{{"type", "plane"}, {"normal", {0, 1, 0}}, {"point", {0, 0, 0}}}}},
         {"output", {{"strip_frames", 0}}},
     };
@@ -224,11 +235,12 @@ Qp make_fem_sim_qp(const StressCase& c)
     }
     if (last_step < 0 || last.m() == 0)
         throw_input_error(where, "frames", "no step with contact rows in " + std::to_string(frames) + " steps");
-    last.meta["stress_source"] = {{"step", last_step}, {"frames", frames}, {"scene", slab ? "stiff slab (in memory)" : "demo (in memory)"}};
+    last.meta["stress_source"] = {
+        {"step", last_step}, {"frames", frames}, {"scene", slab ? "stiff slab (in memory)" : "demo (in memory)"}};
     return last;
 }
 
-} // namespace
+}  // namespace
 
 std::vector<StressCase> stress_cases(bool quick)
 {
@@ -242,7 +254,8 @@ std::vector<StressCase> stress_cases(bool quick)
         make_case("stiffness-1e8", "stiffness", 2, "plane", {{"youngs", 1e8}}, "stiff body (E = 1e8 Pa)"),
         make_case("stiffness-1e10", "stiffness", 2, "plane", {{"youngs", 1e10}}, "very stiff body (E = 1e10 Pa)"),
         make_case("stiffness-1e12", "stiffness", 3, "plane", {{"youngs", 1e12}}, "steel-like and beyond (E = 1e12 Pa)"),
-        make_case("stiffness-coupled-1e9", "stiffness", 3, "coupled", {{"youngs", 1e9}}, "stiff bodies with coupled rows"),
+        make_case("stiffness-coupled-1e9", "stiffness", 3, "coupled", {{"youngs", 1e9}},
+                  "stiff bodies with coupled rows"),
         make_case("units-mm-g", "units", 2, "plane", {{"length_scale", 1e-3}, {"mass_scale", 1e-3}},
                   "lengths in mm, masses in g"),
         make_case("units-km-t", "units", 2, "plane", {{"length_scale", 1e3}, {"mass_scale", 1e3}},
@@ -254,8 +267,10 @@ std::vector<StressCase> stress_cases(bool quick)
                   "rows of J scaled by factors in [1e-3, 1e3]"),
         make_case("rows-scaled-1e6", "scaled-rows", 3, "scaled-rows", {{"row_scale", 1e6}},
                   "rows of J scaled by factors in [1e-6, 1e6]"),
-        make_case("rows-duplicate-50", "degenerate-J", 1, "duplicate-rows", {{"fraction", 0.5}}, "half the rows duplicated"),
-        make_case("rows-duplicate-all", "degenerate-J", 2, "duplicate-rows", {{"fraction", 1.0}}, "every row duplicated"),
+        make_case("rows-duplicate-50", "degenerate-J", 1, "duplicate-rows", {{"fraction", 0.5}},
+                  "half the rows duplicated"),
+        make_case("rows-duplicate-all", "degenerate-J", 2, "duplicate-rows", {{"fraction", 1.0}},
+                  "every row duplicated"),
         make_case("rows-parallel", "degenerate-J", 2, "plane", base, "parallel rows (scaled copies, some weaker)",
                   "parallel-rows"),
         make_case("rows-zero", "degenerate-J", 1, "zero-rows", {{"count", 5}}, "five zero rows with c = 0"),
@@ -333,12 +348,16 @@ std::vector<StressCase> select_stress_cases(const std::vector<StressCase>& all, 
 Qp make_stress_qp(const StressCase& c)
 {
     Qp qp = c.synthetic == "fem-sim" ? make_fem_sim_qp(c) : make_synthetic(c.synthetic, c.params, c.seed);
-    if (c.modifier == "parallel-rows") add_parallel_rows(qp, c.seed);
-    else if (c.modifier == "one-vertex") add_rows_on_one_vertex(qp, c.seed);
-    else if (c.modifier == "translate-100m") translate_problem(qp, Eigen::Vector3d(100.0, 0.0, 0.0));
-    else if (!c.modifier.empty()) throw_input_error("stress case " + c.id, "modifier", "unknown '" + c.modifier + "'");
+    if (c.modifier == "parallel-rows")
+        add_parallel_rows(qp, c.seed);
+    else if (c.modifier == "one-vertex")
+        add_rows_on_one_vertex(qp, c.seed);
+    else if (c.modifier == "translate-100m")
+        translate_problem(qp, Eigen::Vector3d(100.0, 0.0, 0.0));
+    else if (!c.modifier.empty())
+        throw_input_error("stress case " + c.id, "modifier", "unknown '" + c.modifier + "'");
     qp.meta["stress"] = {{"case", c.id}, {"family", c.family}, {"severity", c.severity}, {"modifier", c.modifier}};
     return qp;
 }
 
-} // namespace cb
+}  // namespace cb

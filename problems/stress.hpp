@@ -15,13 +15,14 @@
 namespace cb {
 
 struct StressCase {
-    std::string id;           ///< unique, e.g. "stiffness-1e12"
-    std::string family;       ///< stress family, e.g. "stiffness" (several cases share one)
-    int severity = 0;         ///< 0 = baseline, 1 mild, 2 hard, 3 extreme
-    std::string synthetic;    ///< make_synthetic family the case starts from, or "fem-sim": a snapshot
-                              ///< of our simulator on the demo scene (params: youngs, speed, h, frames)
+    std::string id;         ///< unique, e.g. "stiffness-1e12"
+    std::string family;     ///< stress family, e.g. "stiffness" (several cases share one)
+    int severity = 0;       ///< 0 = baseline, 1 mild, 2 hard, 3 extreme
+    std::string synthetic;  ///< make_synthetic family the case starts from, or "fem-sim": a snapshot
+                            ///< of our simulator on the demo scene (params: youngs, speed, h, frames)
     nlohmann::json params = nlohmann::json::object();  ///< its params
-    std::string modifier;     ///< "" or a transform applied after generation ("parallel-rows", "one-vertex", "translate-100m")
+    std::string
+        modifier;  ///< "" or a transform applied after generation ("parallel-rows", "one-vertex", "translate-100m")
     std::uint64_t seed = 1;
     std::string description;  ///< one line
 };
@@ -36,4 +37,4 @@ std::vector<StressCase> select_stress_cases(const std::vector<StressCase>& all, 
 /// Generates the QP of a case (deterministic). Throws InputError on a bad case.
 Qp make_stress_qp(const StressCase& stress_case);
 
-} // namespace cb
+}  // namespace cb

@@ -78,8 +78,9 @@ const std::map<std::string, FamilySpec>& families()
                       plane};
         t["box"] = {"bounds x_i >= l_i or -x_i >= -u_i (signed unit rows) on a random subset of DOFs",
                     with(fem, {{"fraction", 0.3, "share of DOFs with a bound"},
-                               {"spread", 0.1, "bound offsets uniform in +-spread * spacing around the "
-                                               "unconstrained minimiser"}})};
+                               {"spread", 0.1,
+                                "bound offsets uniform in +-spread * spacing around the "
+                                "unconstrained minimiser"}})};
         t["coupled"] = {"a smaller body pressed onto a lower body: vertex-triangle rows of eq. (8), 12 nnz, "
                         "c = 0, rows share vertices (not decoupled); the scene is randomly rotated",
                         with(scene, {{"upper_scale", 0.77, "upper body spacing / lower body spacing, in (0, 1)"},
@@ -124,7 +125,8 @@ nlohmann::json effective_params(const std::string& family, const FamilySpec& spe
         const nlohmann::json& def = out[it.key()];
         const nlohmann::json& v = it.value();
         if (def.is_boolean()) {
-            if (!v.is_boolean()) throw_input_error(where, "params." + it.key(), "expected true or false, got " + v.dump());
+            if (!v.is_boolean())
+                throw_input_error(where, "params." + it.key(), "expected true or false, got " + v.dump());
             out[it.key()] = v;
         } else if (def.is_number_integer()) {
             if (!v.is_number() || std::floor(v.get<double>()) != v.get<double>() || std::abs(v.get<double>()) > 1e9)
@@ -212,8 +214,8 @@ GridBody make_grid(int nx, int ny, int nz, double spacing, const V3& origin)
 }
 
 struct Assembled {
-    SpMat A;    ///< M + h^2 K
-    Vec mass;   ///< lumped mass per DOF
+    SpMat A;   ///< M + h^2 K
+    Vec mass;  ///< lumped mass per DOF
 };
 
 /// The 15 stencil offsets of the Kuhn split, coded as (ox+1) + 3 (oy+1) + 9 (oz+1).
@@ -300,16 +302,16 @@ Assembled assemble(const GridBody& g, const FemGridParams& p)
                     for (int a = 0; a < 4; ++a) {
                         out.mass.segment<3>(3 * vid[a]).array() += p.density * volume / 4.0;
                         for (int b = 0; b < 4; ++b) {
-                            const int code = (c[b][0] - c[a][0] + 1) + 3 * (c[b][1] - c[a][1] + 1) +
-                                             9 * (c[b][2] - c[a][2] + 1);
+                            const int code =
+                                (c[b][0] - c[a][0] + 1) + 3 * (c[b][1] - c[a][1] + 1) + 9 * (c[b][2] - c[a][2] + 1);
                             const int sl = slot[size_t(vid[a]) * 27 + code];
                             const double gab = grad[a].dot(grad[b]);
                             for (int di = 0; di < 3; ++di)
                                 for (int dj = 0; dj < 3; ++dj) {
                                     // K_ab = V (lambda g_a g_b' + mu (g_a.g_b) I + mu g_b g_a'); each
                                     // product is written so that K_ba(j, i) rounds exactly like K_ab(i, j).
-                                    double kab = lambda * (grad[a][di] * grad[b][dj]) +
-                                                 mu * (grad[b][di] * grad[a][dj]);
+                                    double kab =
+                                        lambda * (grad[a][di] * grad[b][dj]) + mu * (grad[b][di] * grad[a][dj]);
                                     if (di == dj) kab += mu * gab;
                                     val[base[vid[a]] + 3L * di * count[vid[a]] + 3L * sl + dj] += volume * kab;
                                 }
@@ -334,7 +336,8 @@ SpMat block_diag(const SpMat& A1, const SpMat& A2)
     std::copy(A1.outerIndexPtr(), A1.outerIndexPtr() + n1, A.outerIndexPtr());
     for (Eigen::Index r = 0; r <= A2.rows(); ++r) A.outerIndexPtr()[n1 + r] = nnz1 + A2.outerIndexPtr()[r];
     std::copy(A1.innerIndexPtr(), A1.innerIndexPtr() + nnz1, A.innerIndexPtr());
-    for (Eigen::Index e = 0; e < A2.nonZeros(); ++e) A.innerIndexPtr()[nnz1 + e] = int(A1.cols()) + A2.innerIndexPtr()[e];
+    for (Eigen::Index e = 0; e < A2.nonZeros(); ++e)
+        A.innerIndexPtr()[nnz1 + e] = int(A1.cols()) + A2.innerIndexPtr()[e];
     std::copy(A1.valuePtr(), A1.valuePtr() + nnz1, A.valuePtr());
     std::copy(A2.valuePtr(), A2.valuePtr() + A2.nonZeros(), A.valuePtr() + nnz1);
     return A;
@@ -376,7 +379,7 @@ struct RowBuilder {
 
 struct Scene {
     Assembled fem;
-    Vec rest, pred;       ///< rest positions X and predicted positions x_n + h v_n (3 per vertex)
+    Vec rest, pred;  ///< rest positions X and predicted positions x_n + h v_n (3 per vertex)
     V3 gravity;
     FemGridParams fp;
     int vertices = 0, tets = 0;
@@ -410,7 +413,8 @@ Scene plane_scene(const FemGridParams& fp, const nlohmann::json& p, const V3& no
 {
     Scene s;
     s.fp = fp;
-    GridBody g = make_grid(fp.nx, fp.ny, fp.nz, fp.spacing, V3(-0.5 * fp.nx * fp.spacing, 0, -0.5 * fp.nz * fp.spacing));
+    GridBody g =
+        make_grid(fp.nx, fp.ny, fp.nz, fp.spacing, V3(-0.5 * fp.nx * fp.spacing, 0, -0.5 * fp.nz * fp.spacing));
     double lowest = 1e300;
     for (const auto& x : g.rest) lowest = std::min(lowest, normal.dot(x));
     const V3 lift = (p["gap"].get<double>() - lowest) / normal.y() * V3::UnitY();
@@ -435,9 +439,10 @@ nlohmann::json base_meta(const std::string& family, const nlohmann::json& p, std
     nlohmann::json meta;
     meta["generator"] = {{"name", "synthetic"}, {"family", family}, {"seed", seed}, {"params", p}};
     if (p.contains("length_scale"))
-        meta["units"] = (p["length_scale"] == 1.0 && p["mass_scale"] == 1.0)
-                            ? nlohmann::json("SI")
-                            : nlohmann::json{{"length_m", p["length_scale"]}, {"mass_kg", p["mass_scale"]}, {"time_s", 1.0}};
+        meta["units"] =
+            (p["length_scale"] == 1.0 && p["mass_scale"] == 1.0)
+                ? nlohmann::json("SI")
+                : nlohmann::json{{"length_m", p["length_scale"]}, {"mass_kg", p["mass_scale"]}, {"time_s", 1.0}};
     return meta;
 }
 
@@ -517,8 +522,7 @@ Qp make_box(const std::string& family, const nlohmann::json& p, std::uint64_t se
         const double sign = uniform(rng, 0, 1) < 0.5 ? 1.0 : -1.0;
         const double bound = target[i] + uniform(rng, -spread, spread);
         const double rhs = sign * bound;
-        rb.add({{int(i), sign}}, rhs, ContactKind::OTHER, std::max(0.0, rhs - sign * target[i]),
-               {i / 3, -1, -1, -1});
+        rb.add({{int(i), sign}}, rhs, ContactKind::OTHER, std::max(0.0, rhs - sign * target[i]), {i / 3, -1, -1, -1});
     }
     rb.finish(qp, n);
     qp.meta = base_meta(family, p, seed);
@@ -558,7 +562,11 @@ Qp make_coupled(const std::string& family, const nlohmann::json& p, std::uint64_
 
     // Rows from the rest configuration (before rotation): bottom vertex i of the upper body over
     // triangle (j, k, l) of the lower top face, the face split along the Kuhn diagonal.
-    struct Row { int i; std::array<int, 3> tri; std::array<double, 3> w; };
+    struct Row {
+        int i;
+        std::array<int, 3> tri;
+        std::array<double, 3> w;
+    };
     std::vector<Row> rows;
     for (int k = 0; k <= fp.nz; ++k)
         for (int i = 0; i <= fp.nx; ++i) {
@@ -569,8 +577,10 @@ Qp make_coupled(const std::string& family, const nlohmann::json& p, std::uint64_
             const double u = fx - ci, w = fz - ck;
             const int p00 = lower.vertex(ci, fp.ny, ck), p10 = lower.vertex(ci + 1, fp.ny, ck);
             const int p01 = lower.vertex(ci, fp.ny, ck + 1), p11 = lower.vertex(ci + 1, fp.ny, ck + 1);
-            if (u >= w) rows.push_back({vi, {p00, p10, p11}, {1 - u, u - w, w}});
-            else rows.push_back({vi, {p00, p01, p11}, {1 - w, w - u, u}});
+            if (u >= w)
+                rows.push_back({vi, {p00, p10, p11}, {1 - u, u - w, w}});
+            else
+                rows.push_back({vi, {p00, p01, p11}, {1 - w, w - u, u}});
         }
 
     // Rotate the whole scene (positions, velocities, gravity, normal) so that normals are generic.
@@ -750,7 +760,7 @@ Qp make_variant(const std::string& family, const nlohmann::json& p, std::uint64_
     return qp;
 }
 
-} // namespace
+}  // namespace
 
 namespace {
 
@@ -775,7 +785,7 @@ void require_finite(const std::string& family, const Qp& qp)
         if (!std::isfinite(qp.contacts.depth[r])) check("contact.depth", &qp.contacts.depth[r], 1);
 }
 
-} // namespace
+}  // namespace
 
 SpMat fem_like_matrix(const FemGridParams& p)
 {
@@ -829,4 +839,4 @@ std::string synthetic_family_help(const std::string& family)
     return out.str();
 }
 
-} // namespace cb
+}  // namespace cb

@@ -11,11 +11,11 @@
 
 namespace cb {
 
-struct FemGridParams {            ///< a box of nx*ny*nz cubes, 6 tets each, linear elasticity
+struct FemGridParams {  ///< a box of nx*ny*nz cubes, 6 tets each, linear elasticity
     int nx = 4, ny = 4, nz = 4;
-    double spacing = 0.1;         ///< m
+    double spacing = 0.1;                                  ///< m
     double youngs = 1e6, poisson = 0.4, density = 1000.0;  ///< Pa, -, kg/m^3
-    double h = 0.01;              ///< s; A = M + h^2 K (SPD), the QP of one backward-Euler step
+    double h = 0.01;  ///< s; A = M + h^2 K (SPD), the QP of one backward-Euler step
 };
 
 /// A = M + h^2 K of the grid body (vertex (i, j, k) at spacing * (i, j, k)), full CSR, exactly
@@ -33,4 +33,4 @@ Qp make_synthetic(const std::string& family, const nlohmann::json& params, std::
 std::vector<std::string> synthetic_families();                 ///< sorted
 std::string synthetic_family_help(const std::string& family);  ///< params with defaults
 
-} // namespace cb
+}  // namespace cb

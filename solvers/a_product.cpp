@@ -8,7 +8,7 @@ namespace {
 
 std::atomic<long> g_a_products{0};
 
-} // namespace
+}  // namespace
 
 // Out of line on purpose: one symbol that every counted product goes through.
 void a_product(const SpMat& A, const Vec& x, Vec& y)
@@ -26,4 +26,4 @@ Vec a_product(const SpMat& A, const Vec& x)
 
 long a_product_count() { return g_a_products.load(std::memory_order_relaxed); }
 
-} // namespace cb
+}  // namespace cb

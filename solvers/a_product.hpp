@@ -16,4 +16,4 @@ Vec a_product(const SpMat& A, const Vec& x);
 /// A-products done through a_product() by this process so far (all threads).
 long a_product_count();
 
-} // namespace cb
+}  // namespace cb

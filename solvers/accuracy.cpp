@@ -41,7 +41,7 @@ double extent(const Vec& x, std::string& source)
     return x.maxCoeff() - x.minCoeff();
 }
 
-} // namespace
+}  // namespace
 
 double AccuracyParts::max() const
 {
@@ -50,14 +50,18 @@ double AccuracyParts::max() const
 
 nlohmann::json AccuracyParts::to_json() const
 {
-    return {{"stationarity", finite_or_null(stationarity)}, {"primal", finite_or_null(primal)},
-            {"dual", finite_or_null(dual)}, {"complementarity", finite_or_null(complementarity)},
-            {"gap", finite_or_null(gap)}, {"max", finite_or_null(max())}};
+    return {{"stationarity", finite_or_null(stationarity)},
+            {"primal", finite_or_null(primal)},
+            {"dual", finite_or_null(dual)},
+            {"complementarity", finite_or_null(complementarity)},
+            {"gap", finite_or_null(gap)},
+            {"max", finite_or_null(max())}};
 }
 
 nlohmann::json AccuracyScale::to_json() const
 {
-    return {{"length_scale", finite_or_null(length)}, {"length_scale_source", length_source},
+    return {{"length_scale", finite_or_null(length)},
+            {"length_scale_source", length_source},
             {"stiffness_scale", finite_or_null(stiffness)}};
 }
 
@@ -272,4 +276,4 @@ Vec fit_multipliers(const QpView& qp, const AccuracyScale& scale, const Vec& x, 
     return lambda;
 }
 
-} // namespace cb
+}  // namespace cb

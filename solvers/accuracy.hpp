@@ -31,22 +31,22 @@ struct AccuracyParts {
     double dual = 0.0;
     double complementarity = 0.0;
     double gap = 0.0;
-    double max() const;      ///< the error e
+    double max() const;              ///< the error e
     nlohmann::json to_json() const;  ///< {stationarity, primal, dual, complementarity, gap, max}; non-finite -> null
 };
 
 /// What the measure needs from the problem alone, computed once per QP: O(nnz(A) + nnz(J)),
 /// plus the A-products of the length-scale fallback for a point-like start (in a_products).
 struct AccuracyScale {
-    Vec inv_diag;              ///< 1 / D_jj (a non-positive D_jj uses the largest D)
-    Vec inv_row_norm;          ///< 1 / n_i, or 0 for a zero row
-    Vec length_per_multiplier; ///< n_i / k_i: the displacement a unit multiplier causes along row i
-    double length = 1.0;       ///< the scene size l, in the problem's length unit
+    Vec inv_diag;               ///< 1 / D_jj (a non-positive D_jj uses the largest D)
+    Vec inv_row_norm;           ///< 1 / n_i, or 0 for a zero row
+    Vec length_per_multiplier;  ///< n_i / k_i: the displacement a unit multiplier causes along row i
+    double length = 1.0;        ///< the scene size l, in the problem's length unit
     double inv_length = 1.0;
-    std::string length_source; ///< x0_extent | x0_range | unconstrained_extent | constraint_gap | unit
-    double stiffness = 1.0;    ///< d_ref = mean of D: the energy scale is d_ref * l^2
-    double inv_energy = 1.0;   ///< 1 / (d_ref l^2)
-    long a_products = 0;       ///< A-products spent computing this scale
+    std::string length_source;       ///< x0_extent | x0_range | unconstrained_extent | constraint_gap | unit
+    double stiffness = 1.0;          ///< d_ref = mean of D: the energy scale is d_ref * l^2
+    double inv_energy = 1.0;         ///< 1 / (d_ref l^2)
+    long a_products = 0;             ///< A-products spent computing this scale
     nlohmann::json to_json() const;  ///< {length_scale, length_scale_source, stiffness_scale}
 };
 
@@ -86,4 +86,4 @@ inline double active_tolerance(double c_i) { return 1e-9 * std::max(1.0, std::ab
 /// Largest constraint violation max_i max(0, c_i - J_i x) in the problem's length units.
 double max_violation(const QpView& qp, const Vec& x);
 
-} // namespace cb
+}  // namespace cb

@@ -43,9 +43,11 @@ nlohmann::json ActiveSetSettings::to_json() const
 std::vector<SettingDoc> active_set_setting_docs()
 {
     return {{"tol", "1e-10", "(overrides the common default) accuracy error e required for 'converged'"},
-            {"monitor_every", "1", "monitor call every k-th pivot (each forms x with one untimed solve); 0 = start and end only"},
+            {"monitor_every", "1",
+             "monitor call every k-th pivot (each forms x with one untimed solve); 0 = start and end only"},
             {"polish_rounds", "4", "iterative-refinement rounds of the equality QP on the final working set"},
-            {"dependency_tol", "1e-10", "row p depends on the working set when K_pp - K_pW S_W^-1 K_Wp <= dependency_tol * K_pp"}};
+            {"dependency_tol", "1e-10",
+             "row p depends on the working set when K_pp - K_pW S_W^-1 K_Wp <= dependency_tol * K_pp"}};
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -118,7 +120,7 @@ constexpr double FEASIBILITY_EPS = 1e-12;
 constexpr int INITIAL_BATCH_MAX = 1024;
 constexpr int SOLVE_BLOCK = 32;
 
-} // namespace
+}  // namespace
 
 SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& context)
 {
@@ -139,12 +141,10 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
         result.setup_s = watch.seconds();
         return result;
     };
-    if (qp.A.cols() != n || qp.b.size() != n || qp.x0.size() != n || qp.c.size() != m ||
-        (m > 0 && qp.J.cols() != n)) {
+    if (qp.A.cols() != n || qp.b.size() != n || qp.x0.size() != n || qp.c.size() != m || (m > 0 && qp.J.cols() != n)) {
         std::ostringstream msg;
-        msg << "sizes disagree: A " << qp.A.rows() << "x" << qp.A.cols() << ", b " << qp.b.size()
-            << ", x0 " << qp.x0.size() << ", J " << qp.J.rows() << "x" << qp.J.cols() << ", c "
-            << qp.c.size();
+        msg << "sizes disagree: A " << qp.A.rows() << "x" << qp.A.cols() << ", b " << qp.b.size() << ", x0 "
+            << qp.x0.size() << ", J " << qp.J.rows() << "x" << qp.J.cols() << ", c " << qp.c.size();
         return invalid(msg.str());
     }
 
@@ -193,8 +193,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
     const double x_scale = std::max(x_unc.size() ? x_unc.lpNorm<Eigen::Infinity>() : 0.0,
                                     qp.x0.size() ? qp.x0.lpNorm<Eigen::Infinity>() : 0.0);
     Vec tau(m);
-    for (Eigen::Index i = 0; i < m; ++i)
-        tau[i] = FEASIBILITY_EPS * (std::abs(qp.c[i]) + row_norm1[i] * x_scale);
+    for (Eigen::Index i = 0; i < m; ++i) tau[i] = FEASIBILITY_EPS * (std::abs(qp.c[i]) + row_norm1[i] * x_scale);
 
     // Columns of K = J A^-1 J', computed on first use.
     std::vector<int> slot(m, -1);
@@ -222,7 +221,8 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
     {
         std::vector<std::pair<double, int>> violated;
         for (Eigen::Index i = 0; i < m; ++i)
-            if (!zero_row[i] && s_base[i] < -tau[i]) violated.emplace_back(s_base[i] / row_norm[i], static_cast<int>(i));
+            if (!zero_row[i] && s_base[i] < -tau[i])
+                violated.emplace_back(s_base[i] / row_norm[i], static_cast<int>(i));
         std::sort(violated.begin(), violated.end());
         std::vector<int> rows;
         for (size_t k = 0; k < violated.size() && k < static_cast<size_t>(INITIAL_BATCH_MAX); ++k)
@@ -230,9 +230,9 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
         cache_rows(rows);
     }
 
-    std::vector<int> W;              // working set, in the order of the Cholesky factor
+    std::vector<int> W;  // working set, in the order of the Cholesky factor
     std::vector<char> in_W(m, 0);
-    GrowingCholesky schur;           // S_W = L L'
+    GrowingCholesky schur;  // S_W = L L'
     Vec lambda = Vec::Zero(m);
     Vec s(m);
     long added = 0, dropped = 0, dependent_steps = 0, gi_restarts = 0, polish_done = 0;
@@ -285,8 +285,8 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
     recompute_slack(-1);
     if (infeasible_zero_row >= 0) {
         std::ostringstream msg;
-        msg << "active-set: infeasible: row " << infeasible_zero_row << " of J is zero and c = "
-            << qp.c[infeasible_zero_row] << " > 0";
+        msg << "active-set: infeasible: row " << infeasible_zero_row
+            << " of J is zero and c = " << qp.c[infeasible_zero_row] << " > 0";
         result.status = SolveStatus::INFEASIBLE;
         result.message = msg.str();
     } else if (!monitor(StepKind::START)) {
@@ -364,7 +364,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
                     ++added;
                     ++counters.pivots;
                     p_added = true;
-                } else {         // partial (or, when dependent, pure dual) step: k leaves
+                } else {  // partial (or, when dependent, pure dual) step: k leaves
                     if (dependent) ++dependent_steps;
                     drop(k);
                 }
@@ -398,8 +398,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
             const Vec r1 = Jt(lambda) - g;
             const Vec v = solve_A(r1);
             Vec rhs(q);
-            for (int a = 0; a < q; ++a)
-                rhs[a] = qp.c[W[a]] - qp.J.row(W[a]).dot(x) - qp.J.row(W[a]).dot(v);
+            for (int a = 0; a < q; ++a) rhs[a] = qp.c[W[a]] - qp.J.row(W[a]).dot(x) - qp.J.row(W[a]).dot(v);
             const Vec dlam = schur.solve(rhs);
             Vec dlam_full = Vec::Zero(m);
             for (int a = 0; a < q; ++a) dlam_full[W[a]] = dlam[a];
@@ -420,8 +419,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
         // (slacks tracked in K carried solve errors), resume from it.
         const Vec s_exact = m > 0 ? Vec(qp.J * x - qp.c) : Vec(0);
         bool violated = false;
-        for (Eigen::Index i = 0; i < m && !violated; ++i)
-            violated = !zero_row[i] && !in_W[i] && s_exact[i] < -tau[i];
+        for (Eigen::Index i = 0; i < m && !violated; ++i) violated = !zero_row[i] && !in_W[i] && s_exact[i] < -tau[i];
         if (!violated || gi_restarts >= 3) break;
         ++gi_restarts;
         s_base = s_exact;
@@ -444,20 +442,20 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
         if (ok) {
             result.status = SolveStatus::CONVERGED;
             result.criterion = common.stop == StopRule::KKT ? "kkt" : "native";
-            msg << "active-set: optimal working set of " << W.size() << " rows after "
-                << counters.iterations << " steps; accuracy error " << rel;
+            msg << "active-set: optimal working set of " << W.size() << " rows after " << counters.iterations
+                << " steps; accuracy error " << rel;
         } else {
             result.status = SolveStatus::STALLED;
             msg << "active-set: working set of " << W.size() << " rows found, but the polished "
                 << (common.stop == StopRule::KKT ? "accuracy error " : "native residual ")
-                << (common.stop == StopRule::KKT ? rel : result.native_residual) << " > tol "
-                << common.tol << " (ill-conditioned A or dependent rows)";
+                << (common.stop == StopRule::KKT ? rel : result.native_residual) << " > tol " << common.tol
+                << " (ill-conditioned A or dependent rows)";
         }
         result.message = msg.str();
     } else if (result.message.empty()) {
         std::ostringstream msg;
-        msg << "active-set: " << to_string(result.status) << " after " << counters.iterations
-            << " steps; working set " << W.size() << " rows; accuracy error " << rel;
+        msg << "active-set: " << to_string(result.status) << " after " << counters.iterations << " steps; working set "
+            << W.size() << " rows; accuracy error " << rel;
         result.message = msg.str();
     }
     result.x = x;
@@ -484,9 +482,10 @@ SolverEntry active_set_entry()
     entry.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
         return std::make_unique<ActiveSetSolver>(ActiveSetSettings::from_json(settings));
     };
-    entry.description = "Goldfarb-Idnani dual active-set QP on a CHOLMOD factor of A (the reference; detects infeasibility)";
+    entry.description =
+        "Goldfarb-Idnani dual active-set QP on a CHOLMOD factor of A (the reference; detects infeasibility)";
     entry.settings = active_set_setting_docs();
     return entry;
 }
 
-} // namespace cb
+}  // namespace cb

@@ -69,4 +69,4 @@ private:
 /// Registry entry (factory, description, setting docs) for builtin_solvers.cpp.
 SolverEntry active_set_entry();
 
-} // namespace cb
+}  // namespace cb

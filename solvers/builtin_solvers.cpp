@@ -1,12 +1,12 @@
 // The list of built-in solvers: one line per solver (see README "Adding a solver").
-#include "solvers/registry.hpp"
 #include "solvers/active_set.hpp"
 #include "solvers/cg.hpp"
+#include "solvers/ica.hpp"
 #include "solvers/mprgp.hpp"
 #include "solvers/mprgp_box.hpp"
 #include "solvers/mprgp_coupled.hpp"
-#include "solvers/ica.hpp"
 #include "solvers/pgs.hpp"
+#include "solvers/registry.hpp"
 #ifdef CB_HAVE_IPOPT
 #include "solvers/peers/ipopt_solver.hpp"
 #endif
@@ -26,7 +26,7 @@ SolverEntry applies_to(SolverEntry entry, const char* problems)
     return entry;
 }
 
-} // namespace
+}  // namespace
 
 void register_builtin_solvers(SolverRegistry& registry)
 {
@@ -43,9 +43,10 @@ void register_builtin_solvers(SolverRegistry& registry)
     registry.add("ipopt", applies_to(ipopt_entry(), "any J (interior point on the primal QP)"));
 #endif
 #ifdef CB_HAVE_SICONOS
-    registry.add("siconos-lemke", applies_to(siconos_lemke_entry(), "any J with at most max_rows rows (dense dual LCP)"));
+    registry.add("siconos-lemke",
+                 applies_to(siconos_lemke_entry(), "any J with at most max_rows rows (dense dual LCP)"));
     registry.add("siconos-nsn", applies_to(siconos_nsn_entry(), "any J (global problem, mu = 0)"));
 #endif
 }
 
-} // namespace cb
+}  // namespace cb

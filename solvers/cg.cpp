@@ -31,8 +31,12 @@ nlohmann::json CgSettings::to_json() const
 
 std::vector<SettingDoc> cg_setting_docs()
 {
-    return {{"precond", "jacobi", "none | jacobi: preconditioner (diagonal of A) | ichol: incomplete Cholesky of A (Eigen, AMD, no fill; docs/preconditioners.md)"},
-            {"start", "x0", "x0 | zero: start point (zero: a 1e-8 reduction of |b|, free of the rounding floor eps |A||x0| that a start near the solution meets; docs/preconditioners.md)"}};
+    return {{"precond", "jacobi",
+             "none | jacobi: preconditioner (diagonal of A) | ichol: incomplete Cholesky of A (Eigen, AMD, no fill; "
+             "docs/preconditioners.md)"},
+            {"start", "x0",
+             "x0 | zero: start point (zero: a 1e-8 reduction of |b|, free of the rounding floor eps |A||x0| that a "
+             "start near the solution meets; docs/preconditioners.md)"}};
 }
 
 namespace {
@@ -50,7 +54,7 @@ struct CgStopTest {
     }
 };
 
-} // namespace
+}  // namespace
 
 SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
 {
@@ -66,9 +70,8 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
     result.lambda = Vec::Zero(qp.m());
     if (qp.A.cols() != n || qp.b.size() != n || qp.x0.size() != n) {
         result.status = SolveStatus::INVALID_INPUT;
-        result.message = "cg: sizes disagree (A " + std::to_string(qp.A.rows()) + "x" +
-                         std::to_string(qp.A.cols()) + ", b " + std::to_string(qp.b.size()) +
-                         ", x0 " + std::to_string(qp.x0.size()) + ")";
+        result.message = "cg: sizes disagree (A " + std::to_string(qp.A.rows()) + "x" + std::to_string(qp.A.cols()) +
+                         ", b " + std::to_string(qp.b.size()) + ", x0 " + std::to_string(qp.x0.size()) + ")";
         result.x = qp.x0;
         return result;
     }
@@ -100,7 +103,8 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
             return result;
         }
         ++counters.precond_factorizations;
-        result.info["ichol"] = {{"factor_nonzeros", ic.factor_nonzeros()}, {"a_nonzeros", static_cast<long>(qp.A.nonZeros())}};
+        result.info["ichol"] = {{"factor_nonzeros", ic.factor_nonzeros()},
+                                {"a_nonzeros", static_cast<long>(qp.A.nonZeros())}};
     }
     auto precondition = [&](const Vec& r) -> Vec {
         if (ichol) {
@@ -215,9 +219,8 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
         n ? r.cwiseProduct(scale.inv_diag).lpNorm<Eigen::Infinity>() * scale.inv_length : 0.0;
     if (result.message.empty()) {
         std::ostringstream msg;
-        msg << "cg (" << m_settings.precond << "): " << to_string(result.status) << " after "
-            << counters.iterations << " iterations, |b - Ax|_2 = " << result.native_residual
-            << " (constraints ignored)";
+        msg << "cg (" << m_settings.precond << "): " << to_string(result.status) << " after " << counters.iterations
+            << " iterations, |b - Ax|_2 = " << result.native_residual << " (constraints ignored)";
         result.message = msg.str();
     }
     result.solve_s = watch.seconds();
@@ -230,9 +233,10 @@ SolverEntry cg_entry()
     entry.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
         return std::make_unique<CgSolver>(CgSettings::from_json(settings));
     };
-    entry.description = "preconditioned (jacobi | ichol) CG on Ax = b ignoring J (Fig. 8 baseline); stop=kkt is the accuracy error of the unconstrained relaxation";
+    entry.description = "preconditioned (jacobi | ichol) CG on Ax = b ignoring J (Fig. 8 baseline); stop=kkt is the "
+                        "accuracy error of the unconstrained relaxation";
     entry.settings = cg_setting_docs();
     return entry;
 }
 
-} // namespace cb
+}  // namespace cb

@@ -41,4 +41,4 @@ private:
 /// Registry entry (factory, description, setting docs) for builtin_solvers.cpp.
 SolverEntry cg_entry();
 
-} // namespace cb
+}  // namespace cb

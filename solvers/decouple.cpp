@@ -19,9 +19,12 @@ DecoupleOrder decouple_order_from_string(const std::string& name)
 const char* to_string(DecoupleOrder order)
 {
     switch (order) {
-    case DecoupleOrder::AUTHORS: return "authors";
-    case DecoupleOrder::RANDOM: return "random";
-    case DecoupleOrder::DEPTH: return "depth";
+    case DecoupleOrder::AUTHORS:
+        return "authors";
+    case DecoupleOrder::RANDOM:
+        return "random";
+    case DecoupleOrder::DEPTH:
+        return "depth";
     }
     return "unknown";
 }
@@ -38,7 +41,7 @@ void row_vertices(const SpMat& J, Eigen::Index i, std::vector<Eigen::Index>& out
     out.erase(std::unique(out.begin(), out.end()), out.end());
 }
 
-} // namespace
+}  // namespace
 
 bool is_decoupled(const SpMat& J)
 {
@@ -55,8 +58,7 @@ bool is_decoupled(const SpMat& J)
     return true;
 }
 
-DecoupleReport decouple_rows(const QpView& qp, const ContactRows& contacts, DecoupleOrder order,
-                             std::uint64_t seed)
+DecoupleReport decouple_rows(const QpView& qp, const ContactRows& contacts, DecoupleOrder order, std::uint64_t seed)
 {
     const Eigen::Index m = qp.m();
     DecoupleReport report;
@@ -79,8 +81,7 @@ DecoupleReport decouple_rows(const QpView& qp, const ContactRows& contacts, Deco
     case DecoupleOrder::AUTHORS: {
         // Planes, then obstacles, then inter-body (then self / other), each in detection order.
         auto rank = [&](int i) -> std::int64_t {
-            return has_kind ? contacts.kind[static_cast<size_t>(i)]
-                            : static_cast<std::int64_t>(ContactKind::OTHER);
+            return has_kind ? contacts.kind[static_cast<size_t>(i)] : static_cast<std::int64_t>(ContactKind::OTHER);
         };
         std::stable_sort(visit.begin(), visit.end(), [&](int a, int b) { return rank(a) < rank(b); });
         break;
@@ -102,9 +103,8 @@ DecoupleReport decouple_rows(const QpView& qp, const ContactRows& contacts, Deco
             const Vec residual = qp.c - qp.J * qp.x0;  // c_i - J_i x0: penetration in row units
             for (Eigen::Index i = 0; i < m; ++i) depth[static_cast<size_t>(i)] = residual[i];
         }
-        std::stable_sort(visit.begin(), visit.end(), [&](int a, int b) {
-            return depth[static_cast<size_t>(a)] > depth[static_cast<size_t>(b)];
-        });
+        std::stable_sort(visit.begin(), visit.end(),
+                         [&](int a, int b) { return depth[static_cast<size_t>(a)] > depth[static_cast<size_t>(b)]; });
         break;
     }
     }
@@ -135,8 +135,8 @@ Qp select_rows(const Qp& qp, const std::vector<int>& rows)
     for (size_t r = 0; r < rows.size(); ++r) {
         const int i = rows[r];
         if (i < 0 || i >= qp.m())
-            throw_input_error("select_rows", "rows", "row " + std::to_string(i) + " out of range [0, " +
-                                                         std::to_string(qp.m()) + ")");
+            throw_input_error("select_rows", "rows",
+                              "row " + std::to_string(i) + " out of range [0, " + std::to_string(qp.m()) + ")");
         for (SpMat::InnerIterator it(qp.J, i); it; ++it)
             triplets.emplace_back(static_cast<int>(r), static_cast<int>(it.col()), it.value());
         out.c[static_cast<Eigen::Index>(r)] = qp.c[i];
@@ -155,4 +155,4 @@ Qp select_rows(const Qp& qp, const std::vector<int>& rows)
     return out;
 }
 
-} // namespace cb
+}  // namespace cb

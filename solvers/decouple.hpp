@@ -18,7 +18,7 @@ const char* to_string(DecoupleOrder order);
 bool is_decoupled(const SpMat& J);
 
 struct DecoupleReport {
-    std::vector<int> kept_rows;   ///< indices into the original J, ascending
+    std::vector<int> kept_rows;  ///< indices into the original J, ascending
     bool already_decoupled = false;
     DecoupleOrder order = DecoupleOrder::AUTHORS;
     std::uint64_t seed = 0;
@@ -27,10 +27,9 @@ struct DecoupleReport {
 
 /// Chooses the rows to keep. `contacts` may be empty (kinds then default to OTHER, depth
 /// to c_i - J_i x0).
-DecoupleReport decouple_rows(const QpView& qp, const ContactRows& contacts, DecoupleOrder order,
-                             std::uint64_t seed);
+DecoupleReport decouple_rows(const QpView& qp, const ContactRows& contacts, DecoupleOrder order, std::uint64_t seed);
 
 /// The QP restricted to the given rows of J (contacts metadata restricted too).
 Qp select_rows(const Qp& qp, const std::vector<int>& rows);
 
-} // namespace cb
+}  // namespace cb

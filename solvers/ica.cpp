@@ -66,8 +66,8 @@ bool build_block_diagonal(const SpMat& A, BlockDiagonal& d, std::string& error)
         Eigen::LLT<Eigen::Matrix3d> llt(blk);
         if (llt.info() != Eigen::Success) {
             std::ostringstream s_err;
-            s_err << "3x3 diagonal block of vertex " << k << " (rows " << d.begin(k) << ".."
-                  << d.begin(k) + s - 1 << ") is not positive definite";
+            s_err << "3x3 diagonal block of vertex " << k << " (rows " << d.begin(k) << ".." << d.begin(k) + s - 1
+                  << ") is not positive definite";
             error = s_err.str();
             return false;
         }
@@ -134,7 +134,7 @@ Vec block_times(const BlockDiagonal& d, const Vec& x)
 
 bool time_up(const Stopwatch& watch, double limit) { return limit > 0.0 && watch.seconds() >= limit; }
 
-} // namespace
+}  // namespace
 
 SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
 {
@@ -161,8 +161,8 @@ SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
         return result;
     }
     const SpMat Dinv = block_inverse_matrix(d);
-    const SpMat JD = qp.J * Dinv;                            // J D3^-1, m x n
-    const SpMat B = SpMat(JD * qp.J.transpose()).pruned();   // J D3^-1 J', m x m
+    const SpMat JD = qp.J * Dinv;                           // J D3^-1, m x n
+    const SpMat B = SpMat(JD * qp.J.transpose()).pruned();  // J D3^-1 J', m x m
     Vec B_diag = Vec::Zero(m);
     for (Eigen::Index i = 0; i < m; ++i) B_diag[i] = B.coeff(i, i);
     long zero_rows = 0;
@@ -223,8 +223,7 @@ SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
         return accuracy_converged(qp, scale, x, g, lambda, s.common.tol) ? "kkt" : "";
     };
 
-    if (!notify_monitor(context, solve_watch,
-                        {0, StepKind::START, &x, &lambda, native, -1, &counters, 0.0}))
+    if (!notify_monitor(context, solve_watch, {0, StepKind::START, &x, &lambda, native, -1, &counters, 0.0}))
         return finish(SolveStatus::STOPPED_BY_MONITOR, "", "ica: stopped by the monitor");
     if (!x.allFinite()) return finish(SolveStatus::DIVERGED, "", "ica: non-finite start point");
     {
@@ -290,7 +289,9 @@ SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
             result.info["last_pgs_sweeps"] = last_sweeps;
             result.info["last_pgs_dlambda"] = last_dlambda;
             std::ostringstream msg;
-            msg << "ica: " << (c == "native" ? "native residual ||Ax-b-J'lambda||_2 = " : "accuracy error <= tol; native residual = ")
+            msg << "ica: "
+                << (c == "native" ? "native residual ||Ax-b-J'lambda||_2 = "
+                                  : "accuracy error <= tol; native residual = ")
                 << native << (c == "native" ? " <= tol (stationarity only; feasibility not checked)" : "");
             return finish(SolveStatus::CONVERGED, c, msg.str());
         }
@@ -303,11 +304,12 @@ SolverEntry ica_entry()
     e.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
         return std::make_unique<IcaSolver>(IcaSettings::from_json(settings));
     };
-    e.description = "iterative constraint anticipation (Otaduy et al. 2009) with PGS on J D3^-1 J', as the authors ran it";
+    e.description =
+        "iterative constraint anticipation (Otaduy et al. 2009) with PGS on J D3^-1 J', as the authors ran it";
     e.settings = {{"pgs_sweeps", "20", "max projected Gauss-Seidel sweeps per outer iteration"},
                   {"pgs_tol", "1e-3", "PGS stops when ||dlambda||_2 <= pgs_tol"},
                   {"start", "x0", "x0 | unconstrained (CHOLMOD solve of A x = b, timed in setup_s, reported in info)"}};
     return e;
 }
 
-} // namespace cb
+}  // namespace cb

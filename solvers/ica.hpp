@@ -15,9 +15,9 @@
 ///
 /// Counting (Counters::a_products): one A-product equivalent per block Gauss-Seidel sweep and one
 /// per residual product A x; the residual's A x is reused by the next anticipation ((L+U)x =
-/// Ax - D3 x), so an outer iteration costs 2 A-products (+1 for A x0 at the start, + those of the accuracy scale's fallback for a point-like start). The published
-/// implementation recomputes (L+U)x, i.e. about 3 per outer iteration. PGS sweeps on B are counted
-/// in pgs_sweeps (and lcp_iterations), not as A-products.
+/// Ax - D3 x), so an outer iteration costs 2 A-products (+1 for A x0 at the start, + those of the accuracy scale's
+/// fallback for a point-like start). The published implementation recomputes (L+U)x, i.e. about 3 per outer iteration.
+/// PGS sweeps on B are counted in pgs_sweeps (and lcp_iterations), not as A-products.
 #include "solvers/registry.hpp"
 #include "solvers/solver.hpp"
 
@@ -27,9 +27,9 @@ namespace cb {
 
 struct IcaSettings {
     CommonSettings common;
-    long pgs_sweeps = 20;         ///< max PGS sweeps per outer iteration (authors: 20)
-    double pgs_tol = 1e-3;        ///< PGS stops when ||dlambda||_2 <= pgs_tol (authors: 1e-3)
-    std::string start = "x0";     ///< x0 | unconstrained (CHOLMOD solve of A x = b, timed in setup_s)
+    long pgs_sweeps = 20;      ///< max PGS sweeps per outer iteration (authors: 20)
+    double pgs_tol = 1e-3;     ///< PGS stops when ||dlambda||_2 <= pgs_tol (authors: 1e-3)
+    std::string start = "x0";  ///< x0 | unconstrained (CHOLMOD solve of A x = b, timed in setup_s)
 
     static IcaSettings from_json(const nlohmann::json& settings);  ///< throws InputError
     nlohmann::json to_json() const;
@@ -49,4 +49,4 @@ private:
 /// Registry entry (factory, description, setting docs).
 SolverEntry ica_entry();
 
-} // namespace cb
+}  // namespace cb

@@ -67,4 +67,4 @@ void ichol_face_precondition(const IncompleteCholeskyPreconditioner& ic, const S
         if (active[static_cast<size_t>(i)]) row_axpy(J, i, -row_dot(J, i, z) * rows.inv_s[i], z);
 }
 
-} // namespace cb
+}  // namespace cb

@@ -39,4 +39,4 @@ SpMat face_matrix(const SpMat& A, const SpMat& J, const DecoupledRows& rows, con
 void ichol_face_precondition(const IncompleteCholeskyPreconditioner& ic, const SpMat& J, const DecoupledRows& rows,
                              const std::vector<char>& active, const Vec& g, Vec& work, Vec& z);
 
-} // namespace cb
+}  // namespace cb

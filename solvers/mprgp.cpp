@@ -7,8 +7,8 @@
 #include "solvers/mprgp.hpp"
 
 #include "solvers/a_product.hpp"
-#include "solvers/decouple.hpp"
 #include "solvers/accuracy.hpp"
+#include "solvers/decouple.hpp"
 #include "solvers/ichol.hpp"
 #include "solvers/mprgp_kernels.hpp"
 
@@ -55,13 +55,23 @@ nlohmann::json MprgpSettings::to_json() const
 std::vector<SettingDoc> mprgp_setting_docs()
 {
     return {{"gamma", "1", "proportioning constant Gamma > 0 (Alg. 1); default 10 with precond = ichol"},
-            {"precond", "jacobi", "none | jacobi: D-weighted projection of D^-1 g onto the face (J_A z = 0) | ichol: Q M^-1 Q g with M the incomplete Cholesky factor of the face matrix Q A Q + normal block, refactored when the face changes (docs/preconditioners.md)"},
-            {"alpha", "power", "power (stop at rel. change 1e-3, warm start) | authors (||v_k+1 - v_k|| <= tol, <= 1001 products, cold)"},
+            {"precond", "jacobi",
+             "none | jacobi: D-weighted projection of D^-1 g onto the face (J_A z = 0) | ichol: Q M^-1 Q g with M the "
+             "incomplete Cholesky factor of the face matrix Q A Q + normal block, refactored when the face changes "
+             "(docs/preconditioners.md)"},
+            {"alpha", "power",
+             "power (stop at rel. change 1e-3, warm start) | authors (||v_k+1 - v_k|| <= tol, <= 1001 products, cold)"},
             {"power_max", "100", "max power-method products (alpha = power)"},
-            {"objective", "cheap", "cheap: F(P(y)) without an extra A-product | recompute: the authors' 2 products per CG step"},
+            {"objective", "cheap",
+             "cheap: F(P(y)) without an extra A-product | recompute: the authors' 2 products per CG step"},
             {"safeguard_max", "100", "max repeats of Alg. 3's safeguard after one step"},
-            {"expansion", "paper", "paper: x = P(x - alpha_bar phi), alpha_bar = 2/||A|| (Alg. 1) | precond: x = P(x - a z) with z the preconditioner's face direction and a = z'g / z'Az (one more A-product; Alg. 3's safeguard still guarantees descent); docs/preconditioners.md"},
-            {"ichol_refactor", "0.1", "precond = ichol: refactor the face matrix when more than this fraction of the rows changed face since the last factorization (0: at every face change; 1: factor once)"}};
+            {"expansion", "paper",
+             "paper: x = P(x - alpha_bar phi), alpha_bar = 2/||A|| (Alg. 1) | precond: x = P(x - a z) with z the "
+             "preconditioner's face direction and a = z'g / z'Az (one more A-product; Alg. 3's safeguard still "
+             "guarantees descent); docs/preconditioners.md"},
+            {"ichol_refactor", "0.1",
+             "precond = ichol: refactor the face matrix when more than this fraction of the rows changed face since "
+             "the last factorization (0: at every face change; 1: factor once)"}};
 }
 
 SolverEntry mprgp_entry()
@@ -95,8 +105,7 @@ bool stopwatch_over(void* data)
 class MprgpRun {
 public:
     MprgpRun(const QpView& qp, const MprgpSettings& settings, const SolveContext& context)
-        : m_qp(qp), m_A(qp.A), m_J(qp.J), m_b(qp.b), m_c(qp.c), m_st(settings), m_ctx(context),
-          m_n(qp.n()), m_m(qp.m())
+        : m_qp(qp), m_A(qp.A), m_J(qp.J), m_b(qp.b), m_c(qp.c), m_st(settings), m_ctx(context), m_n(qp.n()), m_m(qp.m())
     {
     }
 
@@ -185,13 +194,13 @@ private:
     std::vector<int> m_touched;
 
     // Scalars along the chain.
-    double m_rz = 0.0;       // z'g
-    double m_gg_out = 0.0;   // sum of g_j^2 over DOFs in no row
-    double m_pg_rows = 0.0;  // p'phi over the DOFs of rows (from evaluate_rows)
-    double m_ginf_free = 0;  // max |g_j| / D_jj over DOFs in no row (the measure's stationarity part)
-    double m_f_x = 0.0;      // F(x)
-    double m_corr_x = 0.0;   // F(P(x)) - F(x)
-    double m_f_proj_x = 0.0; // F(P(x)) (objective = recompute keeps it directly)
+    double m_rz = 0.0;        // z'g
+    double m_gg_out = 0.0;    // sum of g_j^2 over DOFs in no row
+    double m_pg_rows = 0.0;   // p'phi over the DOFs of rows (from evaluate_rows)
+    double m_ginf_free = 0;   // max |g_j| / D_jj over DOFs in no row (the measure's stationarity part)
+    double m_f_x = 0.0;       // F(x)
+    double m_corr_x = 0.0;    // F(P(x)) - F(x)
+    double m_f_proj_x = 0.0;  // F(P(x)) (objective = recompute keeps it directly)
 
     // Row pass results.
     double m_beta2 = 0.0, m_phitilde_phi = 0.0, m_native = 0.0, m_error = 0.0;
@@ -232,8 +241,10 @@ void MprgpRun::restart()
             m_face_factored = m_active;
             ++m_cnt.precond_factorizations;
         }
-        if (m_ic.ready()) ichol_face_precondition(m_ic, m_J, m_rows, m_active, m_g, m_work, m_z);
-        else m_z.setZero(m_n);
+        if (m_ic.ready())
+            ichol_face_precondition(m_ic, m_J, m_rows, m_active, m_g, m_work, m_z);
+        else
+            m_z.setZero(m_n);
     } else {
         jacobi_face_precondition(m_J, m_rows, m_active, m_dinv, m_g, m_z);
     }
@@ -301,7 +312,8 @@ void MprgpRun::evaluate_rows()
         // The accuracy measure's row parts (solvers/accuracy.hpp): lengths along the unit normal.
         const double inv_norm = m_scale.inv_row_norm[i];
         primal = std::max(primal, (m_c[i] - jx) * inv_norm);
-        compl_ = std::max(compl_, std::min(lambda * m_scale.length_per_multiplier[i], std::abs(jx - m_c[i]) * inv_norm));
+        compl_ =
+            std::max(compl_, std::min(lambda * m_scale.length_per_multiplier[i], std::abs(jx - m_c[i]) * inv_norm));
         if (inv_norm > 0.0) gap += std::abs(lambda * (jx - m_c[i]));
     }
     m_beta2 = beta2;
@@ -388,8 +400,10 @@ bool MprgpRun::expansion()
         // The preconditioned free gradient with its exact step: on stiff problems alpha_bar =
         // 2/||A|| moves the soft DOFs by almost nothing, so the face grows by a few rows per
         // expansion; this step reaches the rows the CG chain was heading for.
-        if (m_ichol && m_ic.ready()) ichol_face_precondition(m_ic, m_J, m_rows, m_active, m_g, m_work, m_tmp);
-        else jacobi_face_precondition(m_J, m_rows, m_active, m_dinv, m_g, m_tmp);
+        if (m_ichol && m_ic.ready())
+            ichol_face_precondition(m_ic, m_J, m_rows, m_active, m_g, m_work, m_tmp);
+        else
+            jacobi_face_precondition(m_J, m_rows, m_active, m_dinv, m_g, m_tmp);
         ++m_cnt.precond_applications;
         product(m_tmp, m_Ap);
         const double dad = m_tmp.dot(m_Ap);
@@ -421,8 +435,10 @@ bool MprgpRun::proportioning()
     m_x -= alpha_p * m_tmp;
     // -beta keeps active rows feasible and free rows untouched (rows share no DOF), so the
     // projection is a no-op in exact arithmetic; refresh g only when it did move x.
-    if (project_x() > 0) refresh_gradient();
-    else m_g -= alpha_p * m_Ap;
+    if (project_x() > 0)
+        refresh_gradient();
+    else
+        m_g -= alpha_p * m_Ap;
     double f_now = objective_from_gradient();
     ++m_cnt.proportioning_steps;
     const bool ok = safeguard(f_before, f_now);
@@ -492,8 +508,8 @@ SolverResult MprgpRun::run()
     const PowerRule rule = m_st.alpha == "authors" ? PowerRule::AUTHORS : PowerRule::POWER;
     const long power_max = rule == PowerRule::AUTHORS ? 1001 : m_st.power_max;
     std::pair<Stopwatch*, double> deadline{&m_watch, common.time_limit_s};
-    const PowerResult power = power_method(m_A, eigenvector, rule, power_max, common.tol, warm, common.seed,
-                                           &stopwatch_over, &deadline);
+    const PowerResult power =
+        power_method(m_A, eigenvector, rule, power_max, common.tol, warm, common.seed, &stopwatch_over, &deadline);
     m_cnt.power_products = power.products;
     m_cnt.a_products += power.products;
     if (m_ctx.eigenvector) *m_ctx.eigenvector = eigenvector;
@@ -501,8 +517,11 @@ SolverResult MprgpRun::run()
     // so our default rounds rho up by 1%. The authors' variant uses the estimate as is.
     const double rho = power.estimate * (rule == PowerRule::POWER ? 1.01 : 1.0);
     m_alpha_bar = rho > 0.0 ? 2.0 / rho : 1.0;
-    result.info["power"] = {{"rule", m_st.alpha}, {"products", power.products}, {"estimate", power.estimate},
-                            {"rho", rho}, {"warm_start", power.warm}};
+    result.info["power"] = {{"rule", m_st.alpha},
+                            {"products", power.products},
+                            {"estimate", power.estimate},
+                            {"rho", rho},
+                            {"warm_start", power.warm}};
     result.info["alpha_bar"] = m_alpha_bar;
     m_scale = accuracy_scale(m_qp);
     m_cnt.a_products += m_scale.a_products;
@@ -557,8 +576,8 @@ SolverResult MprgpRun::run()
             refresh_gradient();
             restart();
             evaluate_rows();
-            converged = native ? m_native <= common.tol
-                               : accuracy_converged(m_qp, m_scale, m_x, m_g, m_lambda, common.tol);
+            converged =
+                native ? m_native <= common.tol : accuracy_converged(m_qp, m_scale, m_x, m_g, m_lambda, common.tol);
         }
         if (!call_monitor(last_step)) {
             status = SolveStatus::STOPPED_BY_MONITOR;
@@ -651,29 +670,30 @@ SolverResult MprgpRun::run()
                     zg = face_dot(m_z);
                     zap = m_z.dot(m_Ap);
                 } else {
-                // Face correction of z on active rows (J_A z = 0) and the rows' part of the dots.
-                const int* outer = m_J.outerIndexPtr();
-                const int* inner = m_J.innerIndexPtr();
-                const double* val = m_J.valuePtr();
-                for (Eigen::Index i = 0; i < m_m; ++i) {
-                    double t = 0.0;
-                    if (m_active[static_cast<size_t>(i)]) {
-                        double wg = 0.0, jg = 0.0;  // (W g)_i = J_i D^-1 g; J_i g
-                        for (int k = outer[i]; k < outer[i + 1]; ++k) {
-                            wg += val[k] * m_z[inner[k]];
-                            jg += val[k] * m_g[inner[k]];
+                    // Face correction of z on active rows (J_A z = 0) and the rows' part of the dots.
+                    const int* outer = m_J.outerIndexPtr();
+                    const int* inner = m_J.innerIndexPtr();
+                    const double* val = m_J.valuePtr();
+                    for (Eigen::Index i = 0; i < m_m; ++i) {
+                        double t = 0.0;
+                        if (m_active[static_cast<size_t>(i)]) {
+                            double wg = 0.0, jg = 0.0;  // (W g)_i = J_i D^-1 g; J_i g
+                            for (int k = outer[i]; k < outer[i + 1]; ++k) {
+                                wg += val[k] * m_z[inner[k]];
+                                jg += val[k] * m_g[inner[k]];
+                            }
+                            const double mu = m_rows.r[i] * wg;
+                            t = jg * m_rows.inv_s[i];
+                            for (int k = outer[i]; k < outer[i + 1]; ++k)
+                                m_z[inner[k]] -= mu * val[k] * m_dinv[inner[k]];
                         }
-                        const double mu = m_rows.r[i] * wg;
-                        t = jg * m_rows.inv_s[i];
-                        for (int k = outer[i]; k < outer[i + 1]; ++k) m_z[inner[k]] -= mu * val[k] * m_dinv[inner[k]];
+                        for (int k = outer[i]; k < outer[i + 1]; ++k) {
+                            if (val[k] == 0.0) continue;
+                            const int j = inner[k];
+                            zg += m_z[j] * (m_g[j] - t * val[k]);
+                            zap += m_z[j] * m_Ap[j];
+                        }
                     }
-                    for (int k = outer[i]; k < outer[i + 1]; ++k) {
-                        if (val[k] == 0.0) continue;
-                        const int j = inner[k];
-                        zg += m_z[j] * (m_g[j] - t * val[k]);
-                        zap += m_z[j] * m_Ap[j];
-                    }
-                }
                 }
                 ++m_cnt.precond_applications;
                 const double beta_cg = zap / pap;
@@ -752,7 +772,9 @@ SolverResult MprgpRun::run()
     result.info["safeguard_firings"] = m_cnt.safeguard_steps;
     result.info["alpha_bar"] = m_alpha_bar;
     result.info["active_rows"] = m_active_count;
-    if (m_ichol) result.info["ichol"] = {{"factor_nonzeros", m_ic.factor_nonzeros()}, {"a_nonzeros", static_cast<long>(m_A.nonZeros())}};
+    if (m_ichol)
+        result.info["ichol"] = {{"factor_nonzeros", m_ic.factor_nonzeros()},
+                                {"a_nonzeros", static_cast<long>(m_A.nonZeros())}};
     {
         IterationInfo info;
         info.iteration = m_cnt.iterations;
@@ -768,7 +790,7 @@ SolverResult MprgpRun::run()
     return result;
 }
 
-} // namespace
+}  // namespace
 
 SolverResult MprgpSolver::solve(const QpView& qp, const SolveContext& context)
 {
@@ -776,4 +798,4 @@ SolverResult MprgpSolver::solve(const QpView& qp, const SolveContext& context)
     return run.run();
 }
 
-} // namespace cb
+}  // namespace cb

@@ -15,14 +15,16 @@ namespace cb {
 
 struct MprgpSettings {
     CommonSettings common;
-    double gamma = 1.0;               ///< proportioning constant Gamma (> 0)
-    std::string precond = "jacobi";   ///< none | jacobi (D-weighted projection onto the face) | ichol (face IC, docs/preconditioners.md)
+    double gamma = 1.0;  ///< proportioning constant Gamma (> 0)
+    std::string precond =
+        "jacobi";  ///< none | jacobi (D-weighted projection onto the face) | ichol (face IC, docs/preconditioners.md)
     std::string alpha = "power";      ///< power (rel. change 1e-3, warm start) | authors
     long power_max = 100;             ///< max power-method products (alpha = power)
     std::string objective = "cheap";  ///< cheap (1 A-product per CG step) | recompute (authors: 2)
     long safeguard_max = 100;         ///< max Alg. 3 safeguard repeats after one step
-    double ichol_refactor = 0.1;      ///< precond = ichol: refactor when more than this fraction of the rows changed face
-    std::string expansion = "paper";  ///< paper: P(x - alpha_bar phi) | precond: P(x - a z), z the preconditioned free gradient, a its exact step
+    double ichol_refactor = 0.1;  ///< precond = ichol: refactor when more than this fraction of the rows changed face
+    std::string expansion = "paper";  ///< paper: P(x - alpha_bar phi) | precond: P(x - a z), z the preconditioned free
+                                      ///< gradient, a its exact step
 
     static MprgpSettings from_json(const nlohmann::json& settings);
     nlohmann::json to_json() const;
@@ -45,4 +47,4 @@ private:
 /// Registry entry (factory, description, settings docs).
 SolverEntry mprgp_entry();
 
-} // namespace cb
+}  // namespace cb

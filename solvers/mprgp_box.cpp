@@ -73,7 +73,7 @@ std::string fmt(double v)
     return s.str();
 }
 
-} // namespace
+}  // namespace
 
 SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context)
 {
@@ -117,7 +117,10 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
         const int j = row_dof[static_cast<size_t>(i)];
         const double bound = qp.c[i] / row_coef[i];
         if (row_coef[i] > 0.0) {
-            if (bound > lower[j]) { lower[j] = bound; lower_row[static_cast<size_t>(j)] = static_cast<int>(i); }
+            if (bound > lower[j]) {
+                lower[j] = bound;
+                lower_row[static_cast<size_t>(j)] = static_cast<int>(i);
+            }
         } else if (bound < upper[j]) {
             upper[j] = bound;
             upper_row[static_cast<size_t>(j)] = static_cast<int>(i);
@@ -150,8 +153,8 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
     Vec eigenvector;
     const bool warm = context.eigenvector && context.eigenvector->size() == n;
     if (warm) eigenvector = *context.eigenvector;
-    const PowerResult power = power_method(qp.A, eigenvector, PowerRule::POWER, m_settings.power_max, common.tol,
-                                           warm, common.seed);
+    const PowerResult power =
+        power_method(qp.A, eigenvector, PowerRule::POWER, m_settings.power_max, common.tol, warm, common.seed);
     if (context.eigenvector) *context.eigenvector = eigenvector;
     cnt.power_products = power.products;
     cnt.a_products += power.products;
@@ -190,8 +193,10 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
     auto phitilde_dot_phi = [&]() {
         double s = 0.0;
         for (Eigen::Index j = 0; j < n; ++j) {
-            if (phi[j] > 0.0) s += std::min((x[j] - lower[j]) / alpha_bar, phi[j]) * phi[j];
-            else if (phi[j] < 0.0) s += std::max((x[j] - upper[j]) / alpha_bar, phi[j]) * phi[j];
+            if (phi[j] > 0.0)
+                s += std::min((x[j] - lower[j]) / alpha_bar, phi[j]) * phi[j];
+            else if (phi[j] < 0.0)
+                s += std::max((x[j] - upper[j]) / alpha_bar, phi[j]) * phi[j];
         }
         return s;
     };
@@ -222,7 +227,8 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
             gradients();
             multipliers();
             native_residual = (phi + beta).norm();
-            converged = native ? native_residual <= common.tol : accuracy_converged(qp, scale, x, g, lambda, common.tol);
+            converged =
+                native ? native_residual <= common.tol : accuracy_converged(qp, scale, x, g, lambda, common.tol);
             p = z;
         }
         IterationInfo info;
@@ -265,8 +271,10 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
             const double alpha_cg = z.dot(g) / pap;
             double alpha_f = inf;  // largest feasible step along -p
             for (Eigen::Index j = 0; j < n; ++j) {
-                if (p[j] > 0.0 && std::isfinite(lower[j])) alpha_f = std::min(alpha_f, (x[j] - lower[j]) / p[j]);
-                else if (p[j] < 0.0 && std::isfinite(upper[j])) alpha_f = std::min(alpha_f, (x[j] - upper[j]) / p[j]);
+                if (p[j] > 0.0 && std::isfinite(lower[j]))
+                    alpha_f = std::min(alpha_f, (x[j] - lower[j]) / p[j]);
+                else if (p[j] < 0.0 && std::isfinite(upper[j]))
+                    alpha_f = std::min(alpha_f, (x[j] - upper[j]) / p[j]);
             }
             if (alpha_cg <= alpha_f) {
                 x -= alpha_cg * p;
@@ -334,12 +342,14 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
     result.native_residual = native_residual;
     if (status == SolveStatus::CONVERGED) {
         result.criterion = native ? "native" : "kkt";
-        result.message = "converged: " + std::string(native ? "||phi+beta||_2 = " + fmt(native_residual)
-                                                            : "accuracy error = " + fmt(error)) + " <= tol";
+        result.message =
+            "converged: " +
+            std::string(native ? "||phi+beta||_2 = " + fmt(native_residual) : "accuracy error = " + fmt(error)) +
+            " <= tol";
     } else {
         result.message = "not converged: " + why + " (accuracy error " + fmt(error) + ")";
     }
     return result;
 }
 
-} // namespace cb
+}  // namespace cb

@@ -43,4 +43,4 @@ private:
 
 SolverEntry mprgp_box_entry();
 
-} // namespace cb
+}  // namespace cb

@@ -47,7 +47,8 @@ nlohmann::json MprgpCoupledSettings::to_json() const
 std::vector<SettingDoc> mprgp_coupled_setting_docs()
 {
     return {{"gamma", "1", "proportioning constant Gamma > 0"},
-            {"precond", "jacobi", "none (the authors' Fig. 6 setting) | jacobi (D-weighted face projection, J_A D^-1 J_A' solve)"},
+            {"precond", "jacobi",
+             "none (the authors' Fig. 6 setting) | jacobi (D-weighted face projection, J_A D^-1 J_A' solve)"},
             {"power_max", "100", "max power-method products"},
             {"lcp_max_pivots", "200", "block principal pivoting iterations per LCP before the PGS fallback"},
             {"pgs_max_sweeps", "10000", "PGS fallback sweeps per LCP"},
@@ -127,8 +128,8 @@ struct Factor {
 /// pivoting (Judice-Pires, Murty's single pivot when the infeasible count stops dropping),
 /// warm-started from `set` (in/out); falls back to projected Gauss-Seidel.
 /// @return false when neither method met the tolerance.
-bool solve_lcp(const SpMatCol& M, const Vec& q, std::vector<char>& set, Vec& lambda, Counters& cnt,
-               long max_pivots, long max_sweeps, long& pgs_fallbacks)
+bool solve_lcp(const SpMatCol& M, const Vec& q, std::vector<char>& set, Vec& lambda, Counters& cnt, long max_pivots,
+               long max_sweeps, long& pgs_fallbacks)
 {
     const Eigen::Index k = q.size();
     lambda = Vec::Zero(k);
@@ -196,7 +197,7 @@ bool solve_lcp(const SpMatCol& M, const Vec& q, std::vector<char>& set, Vec& lam
     return w.minCoeff() >= -1e-8 * std::max(1.0, q.lpNorm<Eigen::Infinity>());
 }
 
-} // namespace
+}  // namespace
 
 SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& context)
 {
@@ -222,7 +223,7 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
         dinv = diag.cwiseInverse();
     }
     const SpMatCol Jt = SpMatCol(J.transpose());
-    const SpMatCol gram = SpMatCol(J * J.transpose());                     // J J'
+    const SpMatCol gram = SpMatCol(J * J.transpose());                        // J J'
     const SpMatCol gram_d = SpMatCol(J * dinv.asDiagonal() * J.transpose());  // J D^-1 J'
     for (Eigen::Index i = 0; i < m; ++i)
         if (!(gram.coeff(i, i) > 0.0) && qp.c[i] > active_tolerance(qp.c[i])) {
@@ -233,7 +234,8 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
     Vec eigenvector;
     const bool warm = context.eigenvector && context.eigenvector->size() == n;
     if (warm) eigenvector = *context.eigenvector;
-    const PowerResult power = power_method(A, eigenvector, PowerRule::POWER, st.power_max, common.tol, warm, common.seed);
+    const PowerResult power =
+        power_method(A, eigenvector, PowerRule::POWER, st.power_max, common.tol, warm, common.seed);
     if (context.eigenvector) *context.eigenvector = eigenvector;
     cnt.power_products = power.products;
     cnt.a_products += power.products;
@@ -253,7 +255,8 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
         const Vec q = qp.c - J * v;
         if (m == 0 || q.maxCoeff() <= 0.0) return false;
         Vec lambda;
-        if (!solve_lcp(gram, q, proj_set, lambda, cnt, st.lcp_max_pivots, st.pgs_max_sweeps, pgs_fallbacks)) ++lcp_failures;
+        if (!solve_lcp(gram, q, proj_set, lambda, cnt, st.lcp_max_pivots, st.pgs_max_sweeps, pgs_fallbacks))
+            ++lcp_failures;
         v += Jt * lambda;
         return true;
     };
@@ -283,7 +286,8 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
         const Vec slack = J * v - qp.c;
         std::vector<int> next;
         for (Eigen::Index i = 0; i < m; ++i)
-            if (std::abs(slack[i]) <= active_tolerance(qp.c[i]) && gram.coeff(i, i) > 0.0) next.push_back(static_cast<int>(i));
+            if (std::abs(slack[i]) <= active_tolerance(qp.c[i]) && gram.coeff(i, i) > 0.0)
+                next.push_back(static_cast<int>(i));
         if (next == face && (face.empty() || face_factor.ok)) return;
         if (next != face) ++cnt.pivots;  // an active-set change
         face = next;
@@ -291,7 +295,8 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
         for (int i : face) active[static_cast<size_t>(i)] = 1;
         std::vector<Triplet> t;
         for (size_t r = 0; r < face.size(); ++r)
-            for (SpMat::InnerIterator it(J, face[r]); it; ++it) t.emplace_back(static_cast<int>(r), static_cast<int>(it.col()), it.value());
+            for (SpMat::InnerIterator it(J, face[r]); it; ++it)
+                t.emplace_back(static_cast<int>(r), static_cast<int>(it.col()), it.value());
         JA.resize(static_cast<Eigen::Index>(face.size()), n);
         JA.setFromTriplets(t.begin(), t.end());
         beta_set.assign(face.size(), 0);
@@ -322,7 +327,8 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
             return Vec::Zero(n);
         }
         const SpMatCol MA = submatrix(gram, face);
-        if (!solve_lcp(MA, Vec(JA * gb), beta_set, mu, cnt, st.lcp_max_pivots, st.pgs_max_sweeps, pgs_fallbacks)) ++lcp_failures;
+        if (!solve_lcp(MA, Vec(JA * gb), beta_set, mu, cnt, st.lcp_max_pivots, st.pgs_max_sweeps, pgs_fallbacks))
+            ++lcp_failures;
         return gb - JA.transpose() * mu;
     };
     auto safeguard = [&](Vec& x, Vec& g, double f_before, double& f_now) {
@@ -404,9 +410,9 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
         // An infeasible chain iterate whose face problem is solved cannot improve along the face.
         // (The face residual phi measured like the stationarity part of the accuracy error.)
         const bool face_done =
-            !x_feasible && (native ? phi.norm() <= common.tol
-                                   : phi.cwiseProduct(scale.inv_diag).lpNorm<Eigen::Infinity>() * scale.inv_length <=
-                                         common.tol);
+            !x_feasible &&
+            (native ? phi.norm() <= common.tol
+                    : phi.cwiseProduct(scale.inv_diag).lpNorm<Eigen::Infinity>() * scale.inv_length <= common.tol);
         const bool proportional = !face_done && beta.squaredNorm() <= st.gamma * st.gamma * phitilde_phi;
         bool do_expansion = false;
         if (proportional) {
@@ -500,9 +506,10 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
                    {"dependent_rows", "handled by a shift 1e-12 of the unit-diagonal-scaled J_A J_A' and J J'"}};
     if (status == SolveStatus::CONVERGED) {
         result.criterion = native ? "native" : "kkt";
-        result.message = "converged: " + std::string(native ? "||phi+beta||_2 = " + fmt(native_residual)
-                                                            : "accuracy error = " + fmt(error)) +
-                         " <= tol; safeguard firings " + std::to_string(cnt.safeguard_steps);
+        result.message =
+            "converged: " +
+            std::string(native ? "||phi+beta||_2 = " + fmt(native_residual) : "accuracy error = " + fmt(error)) +
+            " <= tol; safeguard firings " + std::to_string(cnt.safeguard_steps);
     } else {
         result.message = "not converged: " + why + " (accuracy error " + fmt(error) + ")";
     }
@@ -510,4 +517,4 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
     return result;
 }
 
-} // namespace cb
+}  // namespace cb

@@ -43,4 +43,4 @@ private:
 
 SolverEntry mprgp_coupled_entry();
 
-} // namespace cb
+}  // namespace cb

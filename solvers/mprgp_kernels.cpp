@@ -33,8 +33,7 @@ DecoupledRows make_decoupled_rows(const SpMat& J, const Vec& dinv)
     return rows;
 }
 
-void active_rows(const SpMat& J, const Vec& c, const DecoupledRows& rows, const Vec& x,
-                 std::vector<char>& active)
+void active_rows(const SpMat& J, const Vec& c, const DecoupledRows& rows, const Vec& x, std::vector<char>& active)
 {
     active.assign(static_cast<size_t>(J.rows()), 0);
     for (Eigen::Index i = 0; i < J.rows(); ++i) {
@@ -43,8 +42,7 @@ void active_rows(const SpMat& J, const Vec& c, const DecoupledRows& rows, const 
     }
 }
 
-long project_decoupled(const SpMat& J, const Vec& c, const DecoupledRows& rows, const Vec& x, Vec& y,
-                       Vec* lambda)
+long project_decoupled(const SpMat& J, const Vec& c, const DecoupledRows& rows, const Vec& x, Vec& y, Vec* lambda)
 {
     if (&y != &x) y = x;
     if (lambda) lambda->setZero(J.rows());
@@ -62,16 +60,15 @@ long project_decoupled(const SpMat& J, const Vec& c, const DecoupledRows& rows, 
     return moved;
 }
 
-void free_gradient(const SpMat& J, const DecoupledRows& rows, const std::vector<char>& active,
-                   const Vec& g, Vec& phi)
+void free_gradient(const SpMat& J, const DecoupledRows& rows, const std::vector<char>& active, const Vec& g, Vec& phi)
 {
     phi = g;
     for (Eigen::Index i = 0; i < J.rows(); ++i)
         if (active[static_cast<size_t>(i)]) row_axpy(J, i, -row_dot(J, i, g) * rows.inv_s[i], phi);
 }
 
-void chopped_gradient(const SpMat& J, const DecoupledRows& rows, const std::vector<char>& active,
-                      const Vec& g, Vec& beta)
+void chopped_gradient(const SpMat& J, const DecoupledRows& rows, const std::vector<char>& active, const Vec& g,
+                      Vec& beta)
 {
     beta.setZero(g.size());
     for (Eigen::Index i = 0; i < J.rows(); ++i) {
@@ -81,8 +78,8 @@ void chopped_gradient(const SpMat& J, const DecoupledRows& rows, const std::vect
     }
 }
 
-double reduced_free_gradient_dot(const SpMat& J, const Vec& c, const DecoupledRows& rows, const Vec& x,
-                                 const Vec& phi, double alpha_bar)
+double reduced_free_gradient_dot(const SpMat& J, const Vec& c, const DecoupledRows& rows, const Vec& x, const Vec& phi,
+                                 double alpha_bar)
 {
     const Vec trial = x - alpha_bar * phi;
     Vec projected;
@@ -90,8 +87,8 @@ double reduced_free_gradient_dot(const SpMat& J, const Vec& c, const DecoupledRo
     return (x - projected).dot(phi) / alpha_bar;
 }
 
-void decoupled_multipliers(const SpMat& J, const DecoupledRows& rows, const std::vector<char>& active,
-                           const Vec& g, Vec& lambda)
+void decoupled_multipliers(const SpMat& J, const DecoupledRows& rows, const std::vector<char>& active, const Vec& g,
+                           Vec& lambda)
 {
     lambda.setZero(J.rows());
     for (Eigen::Index i = 0; i < J.rows(); ++i)
@@ -114,8 +111,8 @@ void jacobi_face_precondition(const SpMat& J, const DecoupledRows& rows, const s
     }
 }
 
-PowerResult power_method(const SpMat& A, Vec& v, PowerRule rule, long max_products, double tol,
-                         bool warm, std::uint64_t seed, bool (*deadline_check)(void*), void* deadline_data)
+PowerResult power_method(const SpMat& A, Vec& v, PowerRule rule, long max_products, double tol, bool warm,
+                         std::uint64_t seed, bool (*deadline_check)(void*), void* deadline_data)
 {
     PowerResult result;
     const Eigen::Index n = A.rows();
@@ -156,4 +153,4 @@ PowerResult power_method(const SpMat& A, Vec& v, PowerRule rule, long max_produc
     return result;
 }
 
-} // namespace cb
+}  // namespace cb

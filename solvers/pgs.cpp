@@ -36,7 +36,7 @@ constexpr double kMaxStoredEntries = 16e6;
 
 bool time_up(const Stopwatch& watch, double limit) { return limit > 0.0 && watch.seconds() >= limit; }
 
-} // namespace
+}  // namespace
 
 SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
 {
@@ -51,8 +51,7 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
 
     if (m > s.max_rows) {
         result.status = SolveStatus::INVALID_INPUT;
-        result.message = "pgs: m = " + std::to_string(m) + " rows exceeds max_rows = " +
-                         std::to_string(s.max_rows) +
+        result.message = "pgs: m = " + std::to_string(m) + " rows exceeds max_rows = " + std::to_string(s.max_rows) +
                          " (S = J A^-1 J' is a dense m x m matrix formed with m CHOLMOD solves); "
                          "raise the max_rows setting to allow it";
         return result;
@@ -250,4 +249,4 @@ SolverEntry pgs_entry()
     return e;
 }
 
-} // namespace cb
+}  // namespace cb

@@ -22,8 +22,8 @@ namespace cb {
 
 struct PgsSettings {
     CommonSettings common;
-    long max_rows = 2000;   ///< refuse problems with m > max_rows (S is a dense m x m matrix)
-    long block = 64;        ///< right-hand sides per CHOLMOD solve when forming S
+    long max_rows = 2000;  ///< refuse problems with m > max_rows (S is a dense m x m matrix)
+    long block = 64;       ///< right-hand sides per CHOLMOD solve when forming S
 
     static PgsSettings from_json(const nlohmann::json& settings);  ///< throws InputError
     nlohmann::json to_json() const;
@@ -42,4 +42,4 @@ private:
 
 SolverEntry pgs_entry();
 
-} // namespace cb
+}  // namespace cb

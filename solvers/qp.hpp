@@ -49,4 +49,4 @@ struct Qp {
 /// F(x) = 1/2 x'Ax - b'x.
 inline double objective(const QpView& qp, const Vec& x) { return 0.5 * x.dot(qp.A * x) - qp.b.dot(x); }
 
-} // namespace cb
+}  // namespace cb

@@ -43,4 +43,4 @@ const SolverRegistry& builtin_registry()
     return registry;
 }
 
-} // namespace cb
+}  // namespace cb

@@ -16,9 +16,9 @@ using SolverFactory = std::function<std::unique_ptr<Solver>(const nlohmann::json
 
 struct SolverEntry {
     SolverFactory make;
-    std::string description;             ///< one line for `--help`
-    std::vector<SettingDoc> settings;    ///< solver-specific keys (the common ones are implied)
-    std::string applies_to = "any J";    ///< which problems it accepts, for `contactbench solvers`
+    std::string description;           ///< one line for `--help`
+    std::vector<SettingDoc> settings;  ///< solver-specific keys (the common ones are implied)
+    std::string applies_to = "any J";  ///< which problems it accepts, for `contactbench solvers`
 };
 
 class SolverRegistry {
@@ -41,4 +41,4 @@ void register_builtin_solvers(SolverRegistry& registry);
 /// The registry with every built-in solver.
 const SolverRegistry& builtin_registry();
 
-} // namespace cb
+}  // namespace cb

@@ -1,8 +1,8 @@
 #include "solvers/settings.hpp"
 
 #include <climits>
-#include <cstdint>
 #include <cmath>
+#include <cstdint>
 #include <sstream>
 
 namespace cb {
@@ -34,8 +34,7 @@ const nlohmann::json* SettingsReader::find(const std::string& key)
     return it == m_settings.end() ? nullptr : &*it;
 }
 
-double SettingsReader::number(const std::string& key, double fallback, double min_exclusive,
-                              double max_inclusive)
+double SettingsReader::number(const std::string& key, double fallback, double min_exclusive, double max_inclusive)
 {
     const nlohmann::json* value = find(key);
     if (!value) return fallback;
@@ -79,8 +78,7 @@ long SettingsReader::integer(const std::string& key, long fallback, long min_inc
     }
     if (below || (!above && v < min_inclusive))
         fail(key, "must be >= " + std::to_string(min_inclusive) + ", got " + value->dump());
-    if (above || v > max_inclusive)
-        fail(key, "must be <= " + std::to_string(max_inclusive) + ", got " + value->dump());
+    if (above || v > max_inclusive) fail(key, "must be <= " + std::to_string(max_inclusive) + ", got " + value->dump());
     return v;
 }
 
@@ -129,8 +127,11 @@ void SettingsReader::finish() const
 
 std::vector<SettingDoc> common_setting_docs()
 {
-    return {{"tol", "1e-6", "stop tolerance on the accuracy error e, dimensionless: residual lengths as a fraction of the scene size (stop=kkt); or on the native residual in the paper's units (stop=native)"},
-            {"stop", "kkt", "kkt | native: which criterion ends the solve (kkt = the accuracy error e of docs/accuracy.md)"},
+    return {{"tol", "1e-6",
+             "stop tolerance on the accuracy error e, dimensionless: residual lengths as a fraction of the scene size "
+             "(stop=kkt); or on the native residual in the paper's units (stop=native)"},
+            {"stop", "kkt",
+             "kkt | native: which criterion ends the solve (kkt = the accuracy error e of docs/accuracy.md)"},
             {"max_iterations", "10000", "cap on outer iterations (at most 10^12; bound long runs with time_limit_s)"},
             {"time_limit_s", "0", "wall-time limit of the solve in seconds; 0 = none"},
             {"seed", "0", "seed of every random choice"}};
@@ -141,11 +142,12 @@ nlohmann::json parse_set_arguments(const std::vector<std::string>& assignments)
     nlohmann::json out = nlohmann::json::object();
     for (const auto& a : assignments) {
         const auto eq = a.find('=');
-        if (eq == std::string::npos || eq == 0)
-            throw_input_error("--set", a, "expected key=value");
+        if (eq == std::string::npos || eq == 0) throw_input_error("--set", a, "expected key=value");
         const std::string key = a.substr(0, eq), value = a.substr(eq + 1);
-        if (value == "true") out[key] = true;
-        else if (value == "false") out[key] = false;
+        if (value == "true")
+            out[key] = true;
+        else if (value == "false")
+            out[key] = false;
         else {
             char* end = nullptr;
             const long long as_int = std::strtoll(value.c_str(), &end, 10);
@@ -154,11 +156,13 @@ nlohmann::json parse_set_arguments(const std::vector<std::string>& assignments)
                 continue;
             }
             const double as_double = std::strtod(value.c_str(), &end);
-            if (!value.empty() && end && *end == '\0') out[key] = as_double;
-            else out[key] = value;
+            if (!value.empty() && end && *end == '\0')
+                out[key] = as_double;
+            else
+                out[key] = value;
         }
     }
     return out;
 }
 
-} // namespace cb
+}  // namespace cb

@@ -22,7 +22,8 @@ constexpr long kMaxIterationsLimit = 1000000000000L;
 
 /// Settings every solver accepts.
 struct CommonSettings {
-    double tol = 1e-6;          ///< on the accuracy error e (a fraction of the scene size), or the native residual (stop=native)
+    double tol =
+        1e-6;  ///< on the accuracy error e (a fraction of the scene size), or the native residual (stop=native)
     StopRule stop = StopRule::KKT;
     long max_iterations = 10000;  ///< outer iterations
     double time_limit_s = 0.0;    ///< 0 disables the limit
@@ -47,14 +48,11 @@ public:
     /// Reads the common block (tol, stop, max_iterations, time_limit_s, seed).
     CommonSettings common();
 
-    double number(const std::string& key, double fallback, double min_exclusive = -1e300,
-                  double max_inclusive = 1e300);
-    long integer(const std::string& key, long fallback, long min_inclusive = LONG_MIN,
-                 long max_inclusive = LONG_MAX);
+    double number(const std::string& key, double fallback, double min_exclusive = -1e300, double max_inclusive = 1e300);
+    long integer(const std::string& key, long fallback, long min_inclusive = LONG_MIN, long max_inclusive = LONG_MAX);
     bool boolean(const std::string& key, bool fallback);
     /// A string that must be one of `allowed`.
-    std::string choice(const std::string& key, const std::string& fallback,
-                       const std::vector<std::string>& allowed);
+    std::string choice(const std::string& key, const std::string& fallback, const std::vector<std::string>& allowed);
     /// Throws on any key that no accessor asked for.
     void finish() const;
 
@@ -73,4 +71,4 @@ std::vector<SettingDoc> common_setting_docs();
 /// Converts "key=value" strings (command line --set) to JSON: numbers, true/false, else string.
 nlohmann::json parse_set_arguments(const std::vector<std::string>& assignments);
 
-} // namespace cb
+}  // namespace cb

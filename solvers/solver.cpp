@@ -5,15 +5,24 @@ namespace cb {
 const char* to_string(SolveStatus status)
 {
     switch (status) {
-    case SolveStatus::NOT_RUN: return "not_run";
-    case SolveStatus::CONVERGED: return "converged";
-    case SolveStatus::MAX_ITERATIONS: return "max_iterations";
-    case SolveStatus::TIME_LIMIT: return "time_limit";
-    case SolveStatus::STALLED: return "stalled";
-    case SolveStatus::DIVERGED: return "diverged";
-    case SolveStatus::INFEASIBLE: return "infeasible";
-    case SolveStatus::INVALID_INPUT: return "invalid_input";
-    case SolveStatus::STOPPED_BY_MONITOR: return "stopped_by_monitor";
+    case SolveStatus::NOT_RUN:
+        return "not_run";
+    case SolveStatus::CONVERGED:
+        return "converged";
+    case SolveStatus::MAX_ITERATIONS:
+        return "max_iterations";
+    case SolveStatus::TIME_LIMIT:
+        return "time_limit";
+    case SolveStatus::STALLED:
+        return "stalled";
+    case SolveStatus::DIVERGED:
+        return "diverged";
+    case SolveStatus::INFEASIBLE:
+        return "infeasible";
+    case SolveStatus::INVALID_INPUT:
+        return "invalid_input";
+    case SolveStatus::STOPPED_BY_MONITOR:
+        return "stopped_by_monitor";
     }
     return "unknown";
 }
@@ -21,8 +30,8 @@ const char* to_string(SolveStatus status)
 SolveStatus solve_status_from_string(const std::string& name)
 {
     for (SolveStatus s : {SolveStatus::NOT_RUN, SolveStatus::CONVERGED, SolveStatus::MAX_ITERATIONS,
-                          SolveStatus::TIME_LIMIT, SolveStatus::STALLED, SolveStatus::DIVERGED,
-                          SolveStatus::INFEASIBLE, SolveStatus::INVALID_INPUT, SolveStatus::STOPPED_BY_MONITOR})
+                          SolveStatus::TIME_LIMIT, SolveStatus::STALLED, SolveStatus::DIVERGED, SolveStatus::INFEASIBLE,
+                          SolveStatus::INVALID_INPUT, SolveStatus::STOPPED_BY_MONITOR})
         if (name == to_string(s)) return s;
     throw InputError("unknown solve status '" + name + "'");
 }
@@ -30,15 +39,24 @@ SolveStatus solve_status_from_string(const std::string& name)
 const char* to_string(StepKind kind)
 {
     switch (kind) {
-    case StepKind::START: return "start";
-    case StepKind::CG: return "cg";
-    case StepKind::EXPANSION: return "expansion";
-    case StepKind::PROPORTIONING: return "proportioning";
-    case StepKind::SAFEGUARD: return "safeguard";
-    case StepKind::PGS_SWEEP: return "pgs-sweep";
-    case StepKind::PIVOT: return "pivot";
-    case StepKind::OUTER: return "outer";
-    case StepKind::FINAL: return "final";
+    case StepKind::START:
+        return "start";
+    case StepKind::CG:
+        return "cg";
+    case StepKind::EXPANSION:
+        return "expansion";
+    case StepKind::PROPORTIONING:
+        return "proportioning";
+    case StepKind::SAFEGUARD:
+        return "safeguard";
+    case StepKind::PGS_SWEEP:
+        return "pgs-sweep";
+    case StepKind::PIVOT:
+        return "pivot";
+    case StepKind::OUTER:
+        return "outer";
+    case StepKind::FINAL:
+        return "final";
     }
     return "unknown";
 }
@@ -71,10 +89,10 @@ bool notify_monitor(const SolveContext& context, Stopwatch& watch, IterationInfo
     return context.monitor->on_iteration(info);
 }
 
-bool accuracy_converged(const QpView& qp, const AccuracyScale& scale, const Vec& x, const Vec& g,
-                        const Vec& lambda, double tol)
+bool accuracy_converged(const QpView& qp, const AccuracyScale& scale, const Vec& x, const Vec& g, const Vec& lambda,
+                        double tol)
 {
     return accuracy_from_gradient(qp, scale, x, g, lambda).max() <= tol;
 }
 
-} // namespace cb
+}  // namespace cb

@@ -14,13 +14,13 @@ namespace cb {
 /// Why a solve ended. Numerical failure is a status, never an exception.
 enum class SolveStatus {
     NOT_RUN,
-    CONVERGED,           ///< the stop rule it was given was met (see SolverResult::criterion)
+    CONVERGED,  ///< the stop rule it was given was met (see SolverResult::criterion)
     MAX_ITERATIONS,
     TIME_LIMIT,
-    STALLED,             ///< no progress possible (e.g. a zero step), criterion not met
-    DIVERGED,            ///< NaN/Inf or an objective that blew up
-    INFEASIBLE,          ///< the constraint set is empty (detected)
-    INVALID_INPUT,       ///< the problem does not satisfy the solver's preconditions
+    STALLED,        ///< no progress possible (e.g. a zero step), criterion not met
+    DIVERGED,       ///< NaN/Inf or an objective that blew up
+    INFEASIBLE,     ///< the constraint set is empty (detected)
+    INVALID_INPUT,  ///< the problem does not satisfy the solver's preconditions
     STOPPED_BY_MONITOR,
 };
 const char* to_string(SolveStatus status);
@@ -36,18 +36,18 @@ struct Counters {
     long cg_steps = 0;
     long expansion_steps = 0;
     long proportioning_steps = 0;
-    long safeguard_steps = 0;        ///< Alg. 3 safeguard firings
-    long a_products = 0;             ///< products with A (or equivalents, e.g. one GS sweep = 1)
+    long safeguard_steps = 0;  ///< Alg. 3 safeguard firings
+    long a_products = 0;       ///< products with A (or equivalents, e.g. one GS sweep = 1)
     long precond_applications = 0;
-    long precond_factorizations = 0; ///< incomplete Cholesky factorizations (precond = ichol)
+    long precond_factorizations = 0;  ///< incomplete Cholesky factorizations (precond = ichol)
     long projections = 0;
-    long power_products = 0;         ///< A-products spent in the power method (also in a_products)
+    long power_products = 0;  ///< A-products spent in the power method (also in a_products)
     long cholmod_analyses = 0;
     long cholmod_factorizations = 0;
     long cholmod_solves = 0;
-    long lcp_iterations = 0;         ///< inner LCP pivots or PGS sweeps
+    long lcp_iterations = 0;  ///< inner LCP pivots or PGS sweeps
     long pgs_sweeps = 0;
-    long pivots = 0;                 ///< active-set changes
+    long pivots = 0;  ///< active-set changes
     nlohmann::json to_json() const;
 };
 
@@ -55,12 +55,12 @@ struct Counters {
 struct IterationInfo {
     long iteration = 0;
     StepKind step = StepKind::START;
-    const Vec* x = nullptr;          ///< current primal iterate (may be infeasible)
-    const Vec* lambda = nullptr;     ///< multiplier estimate, or nullptr (harness then fits one)
-    double native_residual = 0.0;    ///< the solver's own residual (MPRGP ||phi+beta||, ICA ||Ax-b-J'l||)
-    long active_set_size = -1;       ///< -1 when the solver has no notion of it
+    const Vec* x = nullptr;        ///< current primal iterate (may be infeasible)
+    const Vec* lambda = nullptr;   ///< multiplier estimate, or nullptr (harness then fits one)
+    double native_residual = 0.0;  ///< the solver's own residual (MPRGP ||phi+beta||, ICA ||Ax-b-J'l||)
+    long active_set_size = -1;     ///< -1 when the solver has no notion of it
     const Counters* counters = nullptr;
-    double elapsed_s = 0.0;          ///< solver time so far (monitor time excluded)
+    double elapsed_s = 0.0;  ///< solver time so far (monitor time excluded)
 };
 
 /// Called at every outer iteration; its time is excluded from the solver's time.
@@ -74,21 +74,21 @@ public:
 /// Options the harness passes along with the problem (warm starts across a chain).
 struct SolveContext {
     Monitor* monitor = nullptr;
-    const Vec* lambda0 = nullptr;         ///< warm-start multipliers, or nullptr
-    Vec* eigenvector = nullptr;           ///< in/out: power-method vector kept along a time-step chain
+    const Vec* lambda0 = nullptr;  ///< warm-start multipliers, or nullptr
+    Vec* eigenvector = nullptr;    ///< in/out: power-method vector kept along a time-step chain
 };
 
 struct SolverResult {
     Vec x, lambda;
     SolveStatus status = SolveStatus::NOT_RUN;
-    std::string criterion;            ///< which stop rule was met: "kkt", "native", or "" if none
-    std::string message;              ///< human-readable detail (why it stopped, what was dropped)
+    std::string criterion;  ///< which stop rule was met: "kkt", "native", or "" if none
+    std::string message;    ///< human-readable detail (why it stopped, what was dropped)
     long iterations = 0;
     Counters counters;
-    double setup_s = 0.0;             ///< factorisations, power method ...
-    double solve_s = 0.0;             ///< the iterations
-    double native_residual = 0.0;     ///< at the returned x
-    bool lambda_fitted = false;       ///< true when lambda came from fit_multipliers, not the solver
+    double setup_s = 0.0;                            ///< factorisations, power method ...
+    double solve_s = 0.0;                            ///< the iterations
+    double native_residual = 0.0;                    ///< at the returned x
+    bool lambda_fitted = false;                      ///< true when lambda came from fit_multipliers, not the solver
     nlohmann::json info = nlohmann::json::object();  ///< solver-specific facts (power method, rows dropped ...)
 };
 
@@ -111,7 +111,7 @@ bool notify_monitor(const SolveContext& context, Stopwatch& watch, IterationInfo
 /// Helper for solvers: the common stopping test (docs/accuracy.md). True when the accuracy error
 /// e of (x, lambda) on `qp` (gradient g = Ax - b given) is <= tol. Every solver's `stop=kkt`
 /// test and its confirmation of `stop=native` call this, on the QP it solves.
-bool accuracy_converged(const QpView& qp, const AccuracyScale& scale, const Vec& x, const Vec& g,
-                        const Vec& lambda, double tol);
+bool accuracy_converged(const QpView& qp, const AccuracyScale& scale, const Vec& x, const Vec& g, const Vec& lambda,
+                        double tol);
 
-} // namespace cb
+}  // namespace cb

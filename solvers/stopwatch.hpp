@@ -46,10 +46,7 @@ private:
 /// Pauses a stopwatch for the lifetime of the guard (used around monitor calls).
 class PausedScope {
 public:
-    explicit PausedScope(Stopwatch& watch) : m_watch(watch), m_was_running(watch.running())
-    {
-        m_watch.pause();
-    }
+    explicit PausedScope(Stopwatch& watch) : m_watch(watch), m_was_running(watch.running()) { m_watch.pause(); }
     ~PausedScope()
     {
         if (m_was_running) m_watch.start();
@@ -62,4 +59,4 @@ private:
     bool m_was_running;
 };
 
-} // namespace cb
+}  // namespace cb

@@ -30,4 +30,4 @@ public:
     throw InputError(message + ": " + problem);
 }
 
-} // namespace cb
+}  // namespace cb

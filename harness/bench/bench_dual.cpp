@@ -64,4 +64,4 @@ void BM_ica_reference_a_product(benchmark::State& state)
 }
 BENCHMARK(BM_ica_reference_a_product)->Unit(benchmark::kMillisecond);
 
-} // namespace
+}  // namespace

@@ -68,8 +68,10 @@ void BM_AProduct(benchmark::State& state)
     const cb::Vec x = cb::Vec::Ones(A.cols());
     cb::Vec y(A.rows());
     for (auto _ : state) {
-        if (state.range(0) == 0) csr_product(A, x, y);
-        else y.noalias() = A * x;  // Eigen's kernel, for comparison
+        if (state.range(0) == 0)
+            csr_product(A, x, y);
+        else
+            y.noalias() = A * x;  // Eigen's kernel, for comparison
         benchmark::DoNotOptimize(y.data());
         benchmark::ClobberMemory();
     }
@@ -258,6 +260,6 @@ void BM_Ratios(benchmark::State& state)
 }
 BENCHMARK(BM_Ratios)->Iterations(1)->Unit(benchmark::kMillisecond);
 
-} // namespace
+}  // namespace
 
 // main() is harness/bench/bench_main.cpp (it prints the note on Debian's DEBUG-built library).

@@ -79,7 +79,9 @@ CorotatedFem::CorotatedFem(const Positions& rest, const Tets& tets, const std::v
     for (long i = 0; i < m_vertices; ++i) nbr[static_cast<size_t>(i)].push_back(static_cast<int>(i));
     for (size_t t = 0; t < nt; ++t)
         for (int a = 0; a < 4; ++a)
-            for (int b = 0; b < 4; ++b) nbr[static_cast<size_t>(tets(static_cast<Eigen::Index>(t), a))].push_back(tets(static_cast<Eigen::Index>(t), b));
+            for (int b = 0; b < 4; ++b)
+                nbr[static_cast<size_t>(tets(static_cast<Eigen::Index>(t), a))].push_back(
+                    tets(static_cast<Eigen::Index>(t), b));
     long nnz = 0;
     for (auto& list : nbr) {
         std::sort(list.begin(), list.end());
@@ -127,7 +129,7 @@ Eigen::Matrix3d deformation_gradient(const Vec& x, const Tets& tets, Eigen::Inde
     for (int k = 0; k < 3; ++k) Ds.col(k) = x.segment<3>(3 * tets(t, k + 1)) - x0;
     return Ds * dm_inv;
 }
-} // namespace
+}  // namespace
 
 double CorotatedFem::energy(const Vec& x) const
 {
@@ -191,4 +193,4 @@ void CorotatedFem::assemble(double mass_coef, double stiff_coef, SpMat& out) con
         for (int r = 0; r < 3; ++r) v[m_diag_pos[static_cast<size_t>(3 * i + r)]] += mass_coef * m_vertex_mass[i];
 }
 
-} // namespace cb::sim
+}  // namespace cb::sim

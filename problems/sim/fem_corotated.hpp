@@ -66,10 +66,10 @@ private:
     Vec m_gradient;
     SpMat m_pattern;
     std::vector<std::array<int, 16>> m_block_pos;  ///< per tet, per (a,b): 3*position of b in row 3a
-    std::vector<int> m_diag_pos;                    ///< value index of (i,i) for every DOF i
+    std::vector<int> m_diag_pos;                   ///< value index of (i,i) for every DOF i
 };
 
 /// Polar rotation of F, inversion-safe (det = +1), and the stretch S = R'F.
 void polar_rotation(const Eigen::Matrix3d& F, Eigen::Matrix3d& R, Eigen::Matrix3d& S);
 
-} // namespace cb::sim
+}  // namespace cb::sim

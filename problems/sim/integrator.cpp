@@ -39,4 +39,4 @@ void assemble_newton_qp(CorotatedFem& fem, const StepParameters& p, const Vec& x
     b = A * x_k - grad;
 }
 
-} // namespace cb::sim
+}  // namespace cb::sim

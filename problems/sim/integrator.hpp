@@ -19,9 +19,9 @@
 namespace cb::sim {
 
 struct StepParameters {
-    double h = 0.01;        ///< s
-    double a_M = 0.0;       ///< 1/s: Rayleigh mass damping (C = a_M M + a_K K)
-    double a_K = 0.0;       ///< s: Rayleigh stiffness damping
+    double h = 0.01;                  ///< s
+    double a_M = 0.0;                 ///< 1/s: Rayleigh mass damping (C = a_M M + a_K K)
+    double a_K = 0.0;                 ///< s: Rayleigh stiffness damping
     Vec3 gravity = Vec3(0, -9.8, 0);  ///< m/s^2
 };
 
@@ -37,4 +37,4 @@ Vec gravity_force(const CorotatedFem& fem, const Vec3& gravity);
 /// 1/2 v'Mv.
 double kinetic_energy(const CorotatedFem& fem, const Vec& v);
 
-} // namespace cb::sim
+}  // namespace cb::sim

@@ -4,12 +4,12 @@
 
 #include <algorithm>
 #include <array>
-#include <cmath>
-#include <cstring>
 #include <cctype>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 #include <unordered_map>
@@ -42,7 +42,8 @@ std::string trim(const std::string& s)
 /// Line-by-line reader that knows where it is, for error messages.
 class LineReader {
 public:
-    LineReader(const std::string& path, char comment) : m_path(path), m_comment(comment), m_in((require_regular_file(path), path))
+    LineReader(const std::string& path, char comment)
+        : m_path(path), m_comment(comment), m_in((require_regular_file(path), path))
     {
         if (!m_in) throw_input_error(path, "", "cannot open file");
     }
@@ -128,7 +129,8 @@ struct IdMesh {
                 throw_input_error(path, "", "vertex id " + std::to_string(node_ids[i]) + " defined twice");
         TetMesh mesh;
         mesh.positions.resize(static_cast<Eigen::Index>(nodes.size()), 3);
-        for (size_t i = 0; i < nodes.size(); ++i) mesh.positions.row(static_cast<Eigen::Index>(i)) = nodes[i].transpose();
+        for (size_t i = 0; i < nodes.size(); ++i)
+            mesh.positions.row(static_cast<Eigen::Index>(i)) = nodes[i].transpose();
         mesh.tets.resize(static_cast<Eigen::Index>(tets.size()), 4);
         for (size_t t = 0; t < tets.size(); ++t)
             for (int k = 0; k < 4; ++k) {
@@ -143,7 +145,7 @@ struct IdMesh {
     }
 };
 
-} // namespace
+}  // namespace
 
 TetMesh read_abq(const std::string& path)
 {
@@ -278,22 +280,26 @@ TetMesh read_gmsh(const std::string& path)
                     const long type = in.integer(tok[1]), ntags = in.integer(tok[2]);
                     if (type != 4) continue;  // only 4-node tets; points, lines, triangles are skipped
                     if (static_cast<long>(tok.size()) != 3 + ntags + 4)
-                        in.fail("tet element needs 4 node ids after " + std::to_string(ntags) + " tags, got '" + in.text() + "'");
+                        in.fail("tet element needs 4 node ids after " + std::to_string(ntags) + " tags, got '" +
+                                in.text() + "'");
                     const size_t o = static_cast<size_t>(3 + ntags);
-                    m.tets.push_back({in.integer(tok[o]), in.integer(tok[o + 1]), in.integer(tok[o + 2]), in.integer(tok[o + 3])});
+                    m.tets.push_back(
+                        {in.integer(tok[o]), in.integer(tok[o + 1]), in.integer(tok[o + 2]), in.integer(tok[o + 3])});
                     m.tet_lines.push_back(in.line());
                 }
             } else {
                 const long blocks = in.integer(tok[0]);
                 for (long b = 0; b < blocks; ++b) {
                     if (!in.next(tok) || tok.size() < 4)
-                        in.fail("expected 'entityDim entityTag elementType numElementsInBlock', got '" + in.text() + "'");
+                        in.fail("expected 'entityDim entityTag elementType numElementsInBlock', got '" + in.text() +
+                                "'");
                     const long type = in.integer(tok[2]), n = in.integer(tok[3]);
                     for (long i = 0; i < n; ++i) {
                         if (!in.next(tok)) in.fail_eof("element");
                         if (type != 4) continue;
                         if (tok.size() != 5) in.fail("expected 'tag n1 n2 n3 n4', got '" + in.text() + "'");
-                        m.tets.push_back({in.integer(tok[1]), in.integer(tok[2]), in.integer(tok[3]), in.integer(tok[4])});
+                        m.tets.push_back(
+                            {in.integer(tok[1]), in.integer(tok[2]), in.integer(tok[3]), in.integer(tok[4])});
                         m.tet_lines.push_back(in.line());
                     }
                 }
@@ -301,8 +307,7 @@ TetMesh read_gmsh(const std::string& path)
             expect_end("$EndElements");
         } else if (key[0] == '$' && key.rfind("$End", 0) != 0) {
             const std::string end = "$End" + key.substr(1);  // skip unknown sections
-            while (in.next(tok) && tok[0] != end) {
-            }
+            while (in.next(tok) && tok[0] != end) {}
         } else
             in.fail("unexpected '" + in.text() + "'");
     }
@@ -372,7 +377,8 @@ void add_polygon(LineReader& in, std::vector<std::array<int, 3>>& faces, const s
 {
     if (ids.size() < 3) in.fail("a face needs at least 3 vertices, got " + std::to_string(ids.size()));
     for (long id : ids)
-        if (id < 0 || id >= nv) in.fail("vertex index " + std::to_string(id) + " out of range (" + std::to_string(nv) + " vertices)");
+        if (id < 0 || id >= nv)
+            in.fail("vertex index " + std::to_string(id) + " out of range (" + std::to_string(nv) + " vertices)");
     for (size_t k = 1; k + 1 < ids.size(); ++k)
         faces.push_back({static_cast<int>(ids[0]), static_cast<int>(ids[k]), static_cast<int>(ids[k + 1])});
 }
@@ -389,7 +395,7 @@ SurfaceMesh to_surface(const std::vector<Vec3>& v, const std::vector<std::array<
         for (int k = 0; k < 3; ++k) s.faces(static_cast<Eigen::Index>(i), k) = f[i][k];
     return s;
 }
-} // namespace
+}  // namespace
 
 SurfaceMesh read_off(const std::string& path)
 {
@@ -484,4 +490,4 @@ void write_obj(const std::string& path, const SurfaceMesh& mesh)
     if (std::rename(tmp.c_str(), path.c_str()) != 0) throw_input_error(path, "", "cannot rename temporary file");
 }
 
-} // namespace cb::sim
+}  // namespace cb::sim

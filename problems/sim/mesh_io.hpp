@@ -28,4 +28,4 @@ bool is_surface_mesh_path(const std::string& path);
 /// Writes a triangle surface as Wavefront OBJ (atomic: temporary file, then rename).
 void write_obj(const std::string& path, const SurfaceMesh& mesh);
 
-} // namespace cb::sim
+}  // namespace cb::sim

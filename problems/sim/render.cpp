@@ -25,7 +25,7 @@ void chunk(std::vector<std::uint8_t>& out, const char* type, const std::vector<s
     const uLong crc = crc32(0L, out.data() + start, static_cast<uInt>(out.size() - start));
     put_u32(out, static_cast<std::uint32_t>(crc));
 }
-} // namespace
+}  // namespace
 
 void write_png(const std::string& path, const Image& image)
 {
@@ -116,10 +116,12 @@ void render_tile(Image& image, int x0, int size, const View& view, const std::ve
                     if (z <= zb) continue;
                     zb = z;
                     std::uint8_t* p = image.rgb.data() + (static_cast<size_t>(y) * image.width + x0 + x) * 3;
-                    for (int k = 0; k < 3; ++k) p[k] = static_cast<std::uint8_t>(std::clamp(255.0 * shade * s.color[static_cast<size_t>(k)], 0.0, 255.0));
+                    for (int k = 0; k < 3; ++k)
+                        p[k] = static_cast<std::uint8_t>(
+                            std::clamp(255.0 * shade * s.color[static_cast<size_t>(k)], 0.0, 255.0));
                 }
         }
     }
 }
 
-} // namespace cb::sim
+}  // namespace cb::sim

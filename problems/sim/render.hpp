@@ -36,4 +36,4 @@ View make_view(const Vec3& view_deg, const Vec3& lo, const Vec3& hi);
 /// Draws surfaces into the tile of `image` starting at column x0 (tile is size x size).
 void render_tile(Image& image, int x0, int size, const View& view, const std::vector<ColoredSurface>& surfaces);
 
-} // namespace cb::sim
+}  // namespace cb::sim

@@ -28,10 +28,7 @@ bool file_exists(const std::string& path)
     return ::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
 }
 
-std::string json_type(const nlohmann::json& j)
-{
-    return std::string(j.type_name()) + " " + j.dump().substr(0, 60);
-}
+std::string json_type(const nlohmann::json& j) { return std::string(j.type_name()) + " " + j.dump().substr(0, 60); }
 
 /// Strict reader of one JSON object: typed getters with defaults, JSON pointers in errors,
 /// and finish() rejecting keys nobody asked for.
@@ -74,7 +71,8 @@ public:
         if (!v->is_number_integer()) fail(key, "expected an integer, got " + json_type(*v));
         const long x = v->get<long>();
         if (x < min_inclusive || x > max_inclusive)
-            fail(key, "must be in [" + std::to_string(min_inclusive) + ", " + std::to_string(max_inclusive) + "], got " + std::to_string(x));
+            fail(key, "must be in [" + std::to_string(min_inclusive) + ", " + std::to_string(max_inclusive) +
+                          "], got " + std::to_string(x));
         return x;
     }
     bool boolean(const std::string& key, bool fallback)
@@ -84,7 +82,8 @@ public:
         if (!v->is_boolean()) fail(key, "expected true or false, got " + json_type(*v));
         return v->get<bool>();
     }
-    std::string string(const std::string& key, const std::string& fallback, const std::vector<std::string>& allowed = {})
+    std::string string(const std::string& key, const std::string& fallback,
+                       const std::vector<std::string>& allowed = {})
     {
         const auto* v = find(key);
         if (!v) return fallback;
@@ -133,7 +132,8 @@ public:
     void finish() const
     {
         for (auto it = m_j.begin(); it != m_j.end(); ++it)
-            if (!m_read.count(it.key())) fail(it.key(), "unknown key (see scenes/README.md for the keys of this object)");
+            if (!m_read.count(it.key()))
+                fail(it.key(), "unknown key (see scenes/README.md for the keys of this object)");
     }
 
 private:
@@ -192,16 +192,18 @@ MeshChoice load_body_mesh(Reader& body, const PathRoots& roots)
         const double n_cells = double(cells[0]) * double(cells[1]) * double(cells[2]);
         if (n_cells * 6 > double(roots.max_tets))
             b.fail("cells", "[" + std::to_string(cells[0]) + ", " + std::to_string(cells[1]) + ", " +
-                                std::to_string(cells[2]) + "] is " + fmt_count(n_cells) + " cells, more than the limit of " +
-                                std::to_string(roots.max_tets / 6) + " (" + std::to_string(roots.max_tets) + " tets)");
+                                std::to_string(cells[2]) + "] is " + fmt_count(n_cells) +
+                                " cells, more than the limit of " + std::to_string(roots.max_tets / 6) + " (" +
+                                std::to_string(roots.max_tets) + " tets)");
         const Vec3 size = b.vec3("size", Vec3(1, 1, 1));
         if (size.minCoeff() <= 0) b.fail("size", "must be > 0 in every direction");
         const bool center = b.boolean("center", true);
         b.finish();
         const Vec3 cell(size.x() / cells[0], size.y() / cells[1], size.z() / cells[2]);
-        out.mesh = make_box_mesh(static_cast<int>(cells[0]), static_cast<int>(cells[1]), static_cast<int>(cells[2]), cell,
-                                 center ? Vec3(-0.5 * size) : Vec3::Zero());
-        out.source = "box " + std::to_string(cells[0]) + "x" + std::to_string(cells[1]) + "x" + std::to_string(cells[2]);
+        out.mesh = make_box_mesh(static_cast<int>(cells[0]), static_cast<int>(cells[1]), static_cast<int>(cells[2]),
+                                 cell, center ? Vec3(-0.5 * size) : Vec3::Zero());
+        out.source =
+            "box " + std::to_string(cells[0]) + "x" + std::to_string(cells[1]) + "x" + std::to_string(cells[2]);
         return out;
     }
     if (!spec) body.fail("mesh", "missing: every body needs 'mesh' or 'box'");
@@ -246,17 +248,20 @@ MeshChoice load_body_mesh(Reader& body, const PathRoots& roots)
         Vec3 lo, hi;
         bounding_box(out.mesh.positions, lo, hi);
         if (center) transform_positions(out.mesh.positions, 1.0, Eigen::Matrix3d::Identity(), -0.5 * (lo + hi));
-        if (pre_rot.squaredNorm() > 0) transform_positions(out.mesh.positions, 1.0, rotation_from_euler_deg(pre_rot), Vec3::Zero());
+        if (pre_rot.squaredNorm() > 0)
+            transform_positions(out.mesh.positions, 1.0, rotation_from_euler_deg(pre_rot), Vec3::Zero());
         if (fit > 0) {
             bounding_box(out.mesh.positions, lo, hi);
-            transform_positions(out.mesh.positions, fit / (hi - lo).maxCoeff(), Eigen::Matrix3d::Identity(), Vec3::Zero());
+            transform_positions(out.mesh.positions, fit / (hi - lo).maxCoeff(), Eigen::Matrix3d::Identity(),
+                                Vec3::Zero());
         }
         return out;
     }
     throw_input_error(body.file(), body.pointer() + "/mesh", "no mesh alternative is available: tried " + tried);
 }
 
-std::unique_ptr<Obstacle> load_obstacle(Reader& o, const PathRoots& roots, std::vector<std::unique_ptr<Obstacle>>& extra)
+std::unique_ptr<Obstacle> load_obstacle(Reader& o, const PathRoots& roots,
+                                        std::vector<std::unique_ptr<Obstacle>>& extra)
 {
     const std::string type = o.string("type", "", {"plane", "sphere", "box", "cylinder", "mesh", "stairs"});
     if (type.empty()) o.fail("type", "missing: one of plane, sphere, box, cylinder, mesh, stairs");
@@ -274,14 +279,16 @@ std::unique_ptr<Obstacle> load_obstacle(Reader& o, const PathRoots& roots, std::
     if (type == "cylinder") {
         const Vec3 axis = o.vec3("axis", Vec3(0, 1, 0));
         if (axis.norm() == 0) o.fail("axis", "must be non-zero");
-        return make_cylinder(o.vec3("center", Vec3::Zero()), axis, o.number("radius", 0.1, 0.0), o.number("height", 1.0, 0.0));
+        return make_cylinder(o.vec3("center", Vec3::Zero()), axis, o.number("radius", 0.1, 0.0),
+                             o.number("height", 1.0, 0.0));
     }
     if (type == "stairs") {
         // n steps climbing along -z from `origin` (front bottom of the first step), each
         // `run` deep (z) and `rise` high (y), `width` wide (x), as solid boxes down to origin.y.
         const long n = o.integer("steps", 4, 1, 1000);
         const Vec3 origin = o.vec3("origin", Vec3::Zero());
-        const double width = o.number("width", 2.0, 0.0), rise = o.number("rise", 0.2, 0.0), run = o.number("run", 0.4, 0.0);
+        const double width = o.number("width", 2.0, 0.0), rise = o.number("rise", 0.2, 0.0),
+                     run = o.number("run", 0.4, 0.0);
         for (long k = 0; k < n; ++k) {
             const Vec3 lo(origin.x() - 0.5 * width, origin.y(), origin.z() - (k + 1) * run);
             const Vec3 hi(origin.x() + 0.5 * width, origin.y() + (k + 1) * rise, origin.z() - k * run);
@@ -299,12 +306,12 @@ std::unique_ptr<Obstacle> load_obstacle(Reader& o, const PathRoots& roots, std::
     const std::string full = resolve(path, roots, ok, why);
     if (!ok) o.fail("path", "mesh unavailable: " + why);
     SurfaceMesh s = read_surface_mesh(full);
-    transform_positions(s.positions, o.number("scale", 1.0, 0.0), rotation_from_euler_deg(o.vec3("rotate_deg", Vec3::Zero())),
-                        o.vec3("translate", Vec3::Zero()));
+    transform_positions(s.positions, o.number("scale", 1.0, 0.0),
+                        rotation_from_euler_deg(o.vec3("rotate_deg", Vec3::Zero())), o.vec3("translate", Vec3::Zero()));
     return make_mesh_obstacle(std::move(s), o.number("thickness", 0.05, 0.0));
 }
 
-} // namespace
+}  // namespace
 
 PathRoots default_path_roots(const std::string& scene_path, const std::string& data_dir)
 {
@@ -374,9 +381,10 @@ Scene load_scene_json(const nlohmann::json& j, const std::string& file, const Pa
         s.output.image_size = static_cast<int>(o.integer("image_size", 256, 16, 4096));
         // The strip is one image of strip_frames tiles: bounded (64 Mpixel) before it is allocated.
         if (double(s.output.strip_frames) * s.output.image_size * s.output.image_size > 67108864.0)
-            o.fail("image_size", "strip_frames x image_size^2 = " +
-                                     fmt_count(double(s.output.strip_frames) * s.output.image_size * s.output.image_size) +
-                                     " pixels, more than the limit of 67108864");
+            o.fail("image_size",
+                   "strip_frames x image_size^2 = " +
+                       fmt_count(double(s.output.strip_frames) * s.output.image_size * s.output.image_size) +
+                       " pixels, more than the limit of 67108864");
         s.output.view_deg = o.vec3("view_deg", s.output.view_deg);
         s.output.export_frames = o.integers("export_frames");
         o.finish();
@@ -404,11 +412,13 @@ Scene load_scene_json(const nlohmann::json& j, const std::string& file, const Pa
         if (b.has("array")) {
             Reader a = b.object("array");
             const std::vector<long> c = a.integers("count");
-            if (c.size() != 3 || *std::min_element(c.begin(), c.end()) < 1) a.fail("count", "expected 3 positive integers");
+            if (c.size() != 3 || *std::min_element(c.begin(), c.end()) < 1)
+                a.fail("count", "expected 3 positive integers");
             for (int k = 0; k < 3; ++k) count[k] = c[static_cast<size_t>(k)];
             const double copies = double(count[0]) * double(count[1]) * double(count[2]);
             if (copies > double(roots.max_tets))
-                a.fail("count", fmt_count(copies) + " copies, more than the limit of " + std::to_string(roots.max_tets) + " tets allows");
+                a.fail("count", fmt_count(copies) + " copies, more than the limit of " +
+                                    std::to_string(roots.max_tets) + " tets allows");
             spacing = a.vec3("spacing", Vec3::Zero());
             a.finish();
         } else
@@ -419,7 +429,8 @@ Scene load_scene_json(const nlohmann::json& j, const std::string& file, const Pa
         total_tets += body_tets;
         if (total_tets > double(roots.max_tets))
             b.fail(b.has("array") ? "array/count" : "mesh", "the scene reaches " + fmt_count(total_tets) +
-                                                                " tets, more than the limit of " + std::to_string(roots.max_tets));
+                                                                " tets, more than the limit of " +
+                                                                std::to_string(roots.max_tets));
         transform_positions(mc.mesh.positions, scale, rotation_from_euler_deg(rot), trans);
         proto.source = mc.source;
         proto.quality = mc.quality;
@@ -431,8 +442,7 @@ Scene load_scene_json(const nlohmann::json& j, const std::string& file, const Pa
                     body.mesh = mc.mesh;
                     const Vec3 off(i * spacing.x(), jj * spacing.y(), k * spacing.z());
                     transform_positions(body.mesh.positions, 1.0, Eigen::Matrix3d::Identity(), off);
-                    if (count[0] * count[1] * count[2] > 1)
-                        body.name += "_" + std::to_string(s.bodies.size());
+                    if (count[0] * count[1] * count[2] > 1) body.name += "_" + std::to_string(s.bodies.size());
                     s.bodies.push_back(std::move(body));
                 }
     }
@@ -471,7 +481,8 @@ nlohmann::json import_authors_ini(const nlohmann::json& ini, const std::string& 
     s["newton_iterations"] = static_cast<long>(num("newton_max_iteration", 1));
     const std::string solver = ini.value("fem_solver", "mprgp");
     s["solver"] = solver == "ica" ? "ica" : solver == "general_mprgp" ? "mprgp-coupled" : "mprgp";
-    s["solver_settings"] = {{"stop", "native"}, {"tol", num("mprgp_tolerance", 1e-5)},
+    s["solver_settings"] = {{"stop", "native"},
+                            {"tol", num("mprgp_tolerance", 1e-5)},
                             {"max_iterations", static_cast<long>(num("mprgp_max_iteration", 1000))}};
     s["detection"] = {{"self_contact", ini.value("enable_self_con", false)}};
     auto mesh_path = [](const std::string& p) {
@@ -497,13 +508,14 @@ nlohmann::json import_authors_ini(const nlohmann::json& ini, const std::string& 
     if (ini.contains("vol_file") && ini["vol_file"].is_array())
         for (size_t i = 0; i < ini["vol_file"].size(); ++i)
             add_body(ini["vol_file"][i].get<std::string>(),
-                     ini.contains("trans_rot_scale") && i < ini["trans_rot_scale"].size() ? ini["trans_rot_scale"][i] : json(),
+                     ini.contains("trans_rot_scale") && i < ini["trans_rot_scale"].size() ? ini["trans_rot_scale"][i]
+                                                                                          : json(),
                      ini.contains("init_vel") && i < ini["init_vel"].size() ? ini["init_vel"][i] : json(), json());
     if (ini.contains("group_vol_mtl_file") && ini.contains("group_trans_rot_scale_vel")) {
         const json& g = ini["group_trans_rot_scale_vel"];
         const json& d = ini.value("group_dx_dy_dz_nx_ny_nz", json::array({0, 0, 0, 1, 1, 1}));
-        add_body(ini["group_vol_mtl_file"][0].get<std::string>(), json::array({g[0], g[1], g[2], g[3], g[4], g[5], g[6]}),
-                 json::array({g[7], g[8], g[9]}),
+        add_body(ini["group_vol_mtl_file"][0].get<std::string>(),
+                 json::array({g[0], g[1], g[2], g[3], g[4], g[5], g[6]}), json::array({g[7], g[8], g[9]}),
                  json{{"count", {d[3], d[4], d[5]}}, {"spacing", {d[0], d[1], d[2]}}});
     }
     s["bodies"] = bodies;
@@ -513,10 +525,13 @@ nlohmann::json import_authors_ini(const nlohmann::json& ini, const std::string& 
             obstacles.push_back({{"type", "plane"}, {"normal", {p[0], p[1], p[2]}}, {"point", {p[3], p[4], p[5]}}});
     if (ini.contains("cylinder_rad_y_ori_trans"))
         for (const auto& c : ini["cylinder_rad_y_ori_trans"])
-            obstacles.push_back({{"type", "cylinder"}, {"radius", c[0]}, {"height", 2.0 * c[1].get<double>()},
-                                 {"axis", {c[2], c[3], c[4]}}, {"center", {c[5], c[6], c[7]}}});
+            obstacles.push_back({{"type", "cylinder"},
+                                 {"radius", c[0]},
+                                 {"height", 2.0 * c[1].get<double>()},
+                                 {"axis", {c[2], c[3], c[4]}},
+                                 {"center", {c[5], c[6], c[7]}}});
     if (!obstacles.empty()) s["obstacles"] = obstacles;
     return s;
 }
 
-} // namespace cb::sim
+}  // namespace cb::sim

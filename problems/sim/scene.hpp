@@ -17,8 +17,8 @@ namespace cb::sim {
 
 /// Where "data:" and "cache:" mesh paths point.
 struct PathRoots {
-    std::string data;   ///< --data DIR (the authors' files); empty: "data:" paths unavailable
-    std::string cache;  ///< $CB_CACHE or ~/.cache/contactbench
+    std::string data;       ///< --data DIR (the authors' files); empty: "data:" paths unavailable
+    std::string cache;      ///< $CB_CACHE or ~/.cache/contactbench
     std::string scene_dir;  ///< relative paths are relative to the scene file
     /// Bound on the scene's tets (every body, array copies included; a box cell is 6 tets):
     /// larger scenes are refused before their meshes are built (scenes/README.md "Limits").
@@ -29,26 +29,26 @@ PathRoots default_path_roots(const std::string& scene_path, const std::string& d
 /// One body after loading: its tet mesh already placed in the world, and where it came from.
 struct Body {
     std::string name;
-    TetMesh mesh;         ///< world rest positions
+    TetMesh mesh;  ///< world rest positions
     Material material;
     Vec3 velocity = Vec3::Zero();  ///< m/s, initial
-    std::string source;   ///< the mesh path actually used (or "box 16x16x32")
-    std::string mesh_file;  ///< the mesh file read (empty for a box): an input of the simulation
-    std::string quality;  ///< mesh quality report (tetrahedralised surfaces)
+    std::string source;            ///< the mesh path actually used (or "box 16x16x32")
+    std::string mesh_file;         ///< the mesh file read (empty for a box): an input of the simulation
+    std::string quality;           ///< mesh quality report (tetrahedralised surfaces)
 };
 
 struct OutputSettings {
     bool snapshots = true;
-    long snapshot_first = 0;   ///< frames [first, last] get snapshots (-1: to the end)
+    long snapshot_first = 0;  ///< frames [first, last] get snapshots (-1: to the end)
     long snapshot_last = -1;
-    int strip_frames = 6;      ///< pictures in the PNG strip (0: none)
-    int image_size = 256;      ///< pixels per picture (square)
+    int strip_frames = 6;             ///< pictures in the PNG strip (0: none)
+    int image_size = 256;             ///< pixels per picture (square)
     Vec3 view_deg = Vec3(20, 30, 0);  ///< camera: [pitch (down), yaw, roll] in degrees
-    std::vector<long> export_frames;   ///< OBJ surfaces of these frames
+    std::vector<long> export_frames;  ///< OBJ surfaces of these frames
 };
 
 struct Scene {
-    std::string file;     ///< the scene file (for messages)
+    std::string file;  ///< the scene file (for messages)
     std::string name;
     std::string description;
     StepParameters step;
@@ -75,4 +75,4 @@ Scene load_scene_json(const nlohmann::json& j, const std::string& file, const Pa
 /// alpha_m -> a_K. Mesh files "model/<name>.abq" map to "data:meshes/<mapped>".
 nlohmann::json import_authors_ini(const nlohmann::json& ini, const std::string& file);
 
-} // namespace cb::sim
+}  // namespace cb::sim

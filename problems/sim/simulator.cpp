@@ -4,13 +4,13 @@
 #include "problems/qpsnap.hpp"
 #include "problems/sim/mesh_io.hpp"
 #include "problems/sim/render.hpp"
-#include "solvers/decouple.hpp"
 #include "solvers/accuracy.hpp"
+#include "solvers/decouple.hpp"
 #include "solvers/registry.hpp"
 
+#include <cerrno>
 #include <chrono>
 #include <cmath>
-#include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -23,10 +23,7 @@
 
 namespace cb::sim {
 namespace {
-double now_s()
-{
-    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
+double now_s() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 void make_dirs(const std::string& path)
 {
     std::string cur;
@@ -38,12 +35,12 @@ void make_dirs(const std::string& path)
         cur += part + "/";
         ::mkdir(cur.c_str(), 0755);
     }
-    struct stat st{};
+    struct stat st {};
     if (::stat(path.c_str(), &st) != 0 || !S_ISDIR(st.st_mode))
         throw_input_error(path, "--out", "cannot create the output folder: " + std::string(std::strerror(errno)));
 }
 
-} // namespace
+}  // namespace
 
 /// A table written as PATH.partial while the simulation runs: rows are appended a frame at a
 /// time, each append flushed and checked (a full disk or file-size limit is an error naming the
@@ -86,7 +83,8 @@ private:
     {
         const std::string why = std::strerror(errno);
         abandon();
-        throw_input_error(m_path, "", "write failed: " + why + " (the simulation's tables are incomplete; nothing kept)");
+        throw_input_error(m_path, "",
+                          "write failed: " + why + " (the simulation's tables are incomplete; nothing kept)");
     }
     std::string m_path, m_partial;
     std::FILE* m_file = nullptr;
@@ -112,7 +110,7 @@ void remove_old_output(const std::string& dir, const std::string& scene_name)
             if (entry.path().extension() == ext) fs::remove(entry.path(), ec);
     }
 }
-} // namespace
+}  // namespace
 
 Simulator::Simulator(Scene scene, SimulatorOptions options) : m_scene(std::move(scene)), m_opt(std::move(options))
 {
@@ -138,10 +136,14 @@ Simulator::Simulator(Scene scene, SimulatorOptions options) : m_scene(std::move(
         const Faces local = boundary_faces(b.mesh);
         m_body_faces.push_back(local);
         cb.faces = local.array() + static_cast<int>(v0);
-        for (int v : boundary_vertices(local, b.mesh.vertices())) cb.surface_vertices.push_back(v + static_cast<int>(v0));
+        for (int v : boundary_vertices(local, b.mesh.vertices()))
+            cb.surface_vertices.push_back(v + static_cast<int>(v0));
         cbodies.push_back(std::move(cb));
-        m_material.push_back({{"body", b.name}, {"youngs", b.material.youngs}, {"poisson", b.material.poisson},
-                              {"density", b.material.density}, {"mesh", b.source}});
+        m_material.push_back({{"body", b.name},
+                              {"youngs", b.material.youngs},
+                              {"poisson", b.material.poisson},
+                              {"density", b.material.density},
+                              {"mesh", b.source}});
         v0 += b.mesh.vertices();
         t0 += b.mesh.tet_count();
     }
@@ -160,7 +162,8 @@ Simulator::Simulator(Scene scene, SimulatorOptions options) : m_scene(std::move(
     const SolverRegistry& reg = builtin_registry();
     m_solver_name = m_opt.solver.empty() ? m_scene.solver : m_opt.solver;
     if (m_opt.solver.empty() && m_solver_name == "mprgp" && !reg.contains("mprgp") && reg.contains("active-set")) {
-        if (m_opt.progress) *m_opt.progress << "simulate: solver 'mprgp' is not registered; stepping with 'active-set'\n";
+        if (m_opt.progress)
+            *m_opt.progress << "simulate: solver 'mprgp' is not registered; stepping with 'active-set'\n";
         m_solver_name = "active-set";
     }
     m_solver = reg.create(m_solver_name, m_scene.solver_settings);
@@ -211,16 +214,28 @@ std::vector<StepRecord> Simulator::step()
                               (m_scene.output.snapshot_last < 0 || frame <= m_scene.output.snapshot_last);
         if (!m_opt.out_dir.empty() && m_opt.snapshots && m_scene.output.snapshots && in_range &&
             m_scene.steps_per_frame == 1) {
-            qp.meta = {{"scene", m_scene.name}, {"frame", frame}, {"step", m_step}, {"newton_iteration", k},
-                       {"h", h}, {"vertices", vertices()}, {"tets", tets()}, {"bodies", m_scene.bodies.size()},
-                       {"material", m_material}, {"units", "SI"},
-                       {"damping", {{"a_M", m_scene.step.a_M}, {"a_K", m_scene.step.a_K}}},
-                       {"gravity", {m_scene.step.gravity.x(), m_scene.step.gravity.y(), m_scene.step.gravity.z()}},
-                       {"contacts", {{"rows", qp.m()}, {"obstacle_rows", dstats.obstacle_rows},
-                                     {"inter_body_rows", dstats.inter_body_rows}, {"self_rows", dstats.self_rows},
-                                     {"detect_at", m_scene.detect_at}, {"margin", m_scene.detection.margin},
-                                     {"decoupled", is_decoupled(qp.J)}}},
-                       {"generator", {{"command", "simulate"}, {"scene_file", m_scene.file}, {"solver", m_solver_name}}}};
+            qp.meta = {
+                {"scene", m_scene.name},
+                {"frame", frame},
+                {"step", m_step},
+                {"newton_iteration", k},
+                {"h", h},
+                {"vertices", vertices()},
+                {"tets", tets()},
+                {"bodies", m_scene.bodies.size()},
+                {"material", m_material},
+                {"units", "SI"},
+                {"damping", {{"a_M", m_scene.step.a_M}, {"a_K", m_scene.step.a_K}}},
+                {"gravity", {m_scene.step.gravity.x(), m_scene.step.gravity.y(), m_scene.step.gravity.z()}},
+                {"contacts",
+                 {{"rows", qp.m()},
+                  {"obstacle_rows", dstats.obstacle_rows},
+                  {"inter_body_rows", dstats.inter_body_rows},
+                  {"self_rows", dstats.self_rows},
+                  {"detect_at", m_scene.detect_at},
+                  {"margin", m_scene.detection.margin},
+                  {"decoupled", is_decoupled(qp.J)}}},
+                {"generator", {{"command", "simulate"}, {"scene_file", m_scene.file}, {"solver", m_solver_name}}}};
             rec.snapshot = snapshot_path(frame, k);
             write_qpsnap(rec.snapshot, qp);
         }
@@ -234,7 +249,8 @@ std::vector<StepRecord> Simulator::step()
         }
         rec.rows_solved = solve_qp->m();
         SolveContext ctx;
-        if (m_eigenvector.size() == dofs()) ctx.eigenvector = &m_eigenvector;
+        if (m_eigenvector.size() == dofs())
+            ctx.eigenvector = &m_eigenvector;
         else {
             m_eigenvector.resize(0);
             ctx.eigenvector = &m_eigenvector;
@@ -305,8 +321,9 @@ bool Simulator::run()
         steps_csv.open(m_opt.out_dir + "/steps.csv",
                        "frame,step,newton_iteration,solver,status,iterations,kkt_rel,time_assembly_s,time_detection_s,"
                        "time_solve_s,rows,rows_solved,snapshot\n");
-        frames_csv.open(m_opt.out_dir + "/frames.csv",
-                        "frame,time_s,max_penetration,max_detected_depth,kinetic_energy,elastic_energy,max_speed,rows,blow_up\n");
+        frames_csv.open(
+            m_opt.out_dir + "/frames.csv",
+            "frame,time_s,max_penetration,max_detected_depth,kinetic_energy,elastic_energy,max_speed,rows,blow_up\n");
     }
     try {
         const bool ok = run_frames(frames, write, steps_csv, frames_csv);
@@ -318,10 +335,10 @@ bool Simulator::run()
             for (const auto& b : m_scene.bodies)
                 if (!b.mesh_file.empty() && std::find(meshes.begin(), meshes.end(), b.mesh_file) == meshes.end())
                     meshes.push_back(b.mesh_file);
-            const nlohmann::json record = {{"scene", m_scene.name}, {"scene_file", m_scene.file}, {"meshes", meshes},
-                                           {"data", m_opt.data_dir}, {"frames", frames}, {"frames_done", m_frame},
-                                           {"blow_up", !ok}, {"solver", m_solver_name},
-                                           {"simulator_version", kSimulatorVersion}};
+            const nlohmann::json record = {
+                {"scene", m_scene.name},  {"scene_file", m_scene.file}, {"meshes", meshes},
+                {"data", m_opt.data_dir}, {"frames", frames},           {"frames_done", m_frame},
+                {"blow_up", !ok},         {"solver", m_solver_name},    {"simulator_version", kSimulatorVersion}};
             write_file_atomic(m_opt.out_dir + "/simulation.json", record.dump(1) + "\n");
         }
         return ok;
@@ -338,7 +355,8 @@ bool Simulator::run_frames(long frames, bool write, PartialTable& steps_csv, Par
     std::vector<long> strip;
     const int ns = write ? m_scene.output.strip_frames : 0;
     for (int i = 0; i < ns && frames > 0; ++i) {
-        const long f = ns == 1 ? frames - 1 : static_cast<long>(std::llround(static_cast<double>(i) * (frames - 1) / (ns - 1)));
+        const long f =
+            ns == 1 ? frames - 1 : static_cast<long>(std::llround(static_cast<double>(i) * (frames - 1) / (ns - 1)));
         if (strip.empty() || strip.back() != f) strip.push_back(f);
     }
     std::vector<std::vector<SurfaceMesh>> strip_meshes;
@@ -369,17 +387,18 @@ bool Simulator::run_frames(long frames, bool write, PartialTable& steps_csv, Par
             status = r.status;
             if (write)
                 step_rows << r.frame << ',' << r.step << ',' << r.newton << ',' << r.solver << ',' << r.status << ','
-                          << r.iterations << ',' << r.kkt_rel << ',' << r.time_assembly_s << ',' << r.time_detection_s << ','
-                          << r.time_solve_s << ',' << r.rows << ',' << r.rows_solved << ',' << r.snapshot << '\n';
+                          << r.iterations << ',' << r.kkt_rel << ',' << r.time_assembly_s << ',' << r.time_detection_s
+                          << ',' << r.time_solve_s << ',' << r.rows << ',' << r.rows_solved << ',' << r.snapshot
+                          << '\n';
         }
         sum_asm += ta;
         sum_det += td;
         sum_solve += tsv;
         nsteps += static_cast<long>(recs.size());
         if (write)
-            frame_row << fr.frame << ',' << fr.time_s << ',' << fr.max_penetration << ',' << fr.max_detected_depth << ','
-                       << fr.kinetic_energy << ',' << fr.elastic_energy << ',' << fr.max_speed << ',' << fr.rows << ','
-                       << (fr.blow_up ? 1 : 0) << '\n';
+            frame_row << fr.frame << ',' << fr.time_s << ',' << fr.max_penetration << ',' << fr.max_detected_depth
+                      << ',' << fr.kinetic_energy << ',' << fr.elastic_energy << ',' << fr.max_speed << ',' << fr.rows
+                      << ',' << (fr.blow_up ? 1 : 0) << '\n';
         if (write) {
             // steps first: a frame is recorded when its frames.csv row is there.
             steps_csv.append(step_rows.str());
@@ -388,9 +407,10 @@ bool Simulator::run_frames(long frames, bool write, PartialTable& steps_csv, Par
         if (m_opt.progress) {
             char line[256];
             std::snprintf(line, sizeof line,
-                          "%s frame %04ld (%ld of %ld)  rows %ld  %s %s  it %ld  kkt %.1e  pen %.2e  asm %.3fs det %.3fs solve %.3fs%s\n",
-                          m_scene.name.c_str(), m_frame, m_frame + 1, frames, fr.rows, m_solver_name.c_str(), status.c_str(), iters,
-                          kkt, fr.max_penetration, ta, td, tsv, fr.blow_up ? "  BLOW-UP" : "");
+                          "%s frame %04ld (%ld of %ld)  rows %ld  %s %s  it %ld  kkt %.1e  pen %.2e  asm %.3fs det "
+                          "%.3fs solve %.3fs%s\n",
+                          m_scene.name.c_str(), m_frame, m_frame + 1, frames, fr.rows, m_solver_name.c_str(),
+                          status.c_str(), iters, kkt, fr.max_penetration, ta, td, tsv, fr.blow_up ? "  BLOW-UP" : "");
             *m_opt.progress << line << std::flush;
         }
         if (write) {
@@ -446,7 +466,8 @@ bool Simulator::run_frames(long frames, bool write, PartialTable& steps_csv, Par
         for (size_t f = 0; f < strip_meshes.size(); ++f) {
             std::vector<ColoredSurface> surfaces;
             for (const auto& s : obstacle_surfaces) surfaces.push_back({&s, {0.75, 0.75, 0.75}});
-            for (size_t b = 0; b < strip_meshes[f].size(); ++b) surfaces.push_back({&strip_meshes[f][b], palette[b % 6]});
+            for (size_t b = 0; b < strip_meshes[f].size(); ++b)
+                surfaces.push_back({&strip_meshes[f][b], palette[b % 6]});
             render_tile(image, static_cast<int>(f) * size, size, view, surfaces);
         }
         write_png(m_opt.out_dir + "/" + m_scene.name + "_strip.png", image);
@@ -454,4 +475,4 @@ bool Simulator::run_frames(long frames, bool write, PartialTable& steps_csv, Par
     return ok;
 }
 
-} // namespace cb::sim
+}  // namespace cb::sim

@@ -19,12 +19,12 @@
 namespace cb::sim {
 
 struct SimulatorOptions {
-    std::string out_dir;          ///< empty: write nothing (tests)
-    std::string solver;           ///< overrides the scene's solver when not empty
-    bool snapshots = true;        ///< false: --no-snapshots
-    long frames = -1;             ///< overrides the scene's frame count when >= 0
+    std::string out_dir;               ///< empty: write nothing (tests)
+    std::string solver;                ///< overrides the scene's solver when not empty
+    bool snapshots = true;             ///< false: --no-snapshots
+    long frames = -1;                  ///< overrides the scene's frame count when >= 0
     std::ostream* progress = nullptr;  ///< one line per frame
-    std::string data_dir;         ///< --data (recorded in simulation.json)
+    std::string data_dir;              ///< --data (recorded in simulation.json)
 };
 
 /// Bump when a change alters what a simulation of the same scene writes (physics, detection,
@@ -47,7 +47,7 @@ struct StepRecord {
 struct FrameRecord {
     long frame = 0;
     double time_s = 0;
-    double max_penetration = 0;   ///< max violation of the step's rows after the solve (m)
+    double max_penetration = 0;     ///< max violation of the step's rows after the solve (m)
     double max_detected_depth = 0;  ///< deepest penetration found by detection at the step's start (m)
     double kinetic_energy = 0, elastic_energy = 0, max_speed = 0;
     long rows = 0;
@@ -88,8 +88,8 @@ private:
     SimulatorOptions m_opt;
     std::unique_ptr<CorotatedFem> m_fem;
     std::unique_ptr<CollisionDetector> m_detector;
-    std::vector<long> m_body_first;  ///< first global vertex of each body
-    std::vector<Faces> m_body_faces; ///< per body, local vertex ids
+    std::vector<long> m_body_first;   ///< first global vertex of each body
+    std::vector<Faces> m_body_faces;  ///< per body, local vertex ids
     Vec m_x, m_v;
     SpMat m_A;
     std::unique_ptr<Solver> m_solver;
@@ -102,4 +102,4 @@ private:
     nlohmann::json m_material;
 };
 
-} // namespace cb::sim
+}  // namespace cb::sim

@@ -117,7 +117,8 @@ Eigen::Matrix3d rotation_from_euler_deg(const Vec3& degrees)
 
 void transform_positions(Positions& p, double scale, const Eigen::Matrix3d& R, const Vec3& translation)
 {
-    for (Eigen::Index i = 0; i < p.rows(); ++i) p.row(i) = (R * (scale * p.row(i).transpose()) + translation).transpose();
+    for (Eigen::Index i = 0; i < p.rows(); ++i)
+        p.row(i) = (R * (scale * p.row(i).transpose()) + translation).transpose();
 }
 
 TetMesh make_box_mesh(int nx, int ny, int nz, const Vec3& cell, const Vec3& lo)
@@ -201,4 +202,4 @@ MeshQuality mesh_quality(const TetMesh& mesh)
     return q;
 }
 
-} // namespace cb::sim
+}  // namespace cb::sim

@@ -68,4 +68,4 @@ struct MeshQuality {
 };
 MeshQuality mesh_quality(const TetMesh& mesh);
 
-} // namespace cb::sim
+}  // namespace cb::sim

@@ -16,7 +16,8 @@ InsideTest::InsideTest(const SurfaceMesh& surface) : m_surface(surface), m_impl(
 {
     std::vector<Box3> boxes(static_cast<size_t>(surface.faces.rows()));
     for (Eigen::Index f = 0; f < surface.faces.rows(); ++f)
-        for (int k = 0; k < 3; ++k) boxes[static_cast<size_t>(f)].extend(Vec3(surface.positions.row(surface.faces(f, k)).transpose()));
+        for (int k = 0; k < 3; ++k)
+            boxes[static_cast<size_t>(f)].extend(Vec3(surface.positions.row(surface.faces(f, k)).transpose()));
     m_impl->bvh.build(boxes);
     m_impl->xmax = surface.positions.col(0).maxCoeff() + 1.0;
 }
@@ -44,7 +45,8 @@ bool InsideTest::inside(const Vec3& p) const
 
 TetMesh tetrahedralize(const SurfaceMesh& surface, const TetrahedralizeOptions& options, const std::string& where)
 {
-    if (options.resolution < 1) throw_input_error(where, "resolution", "must be >= 1, got " + std::to_string(options.resolution));
+    if (options.resolution < 1)
+        throw_input_error(where, "resolution", "must be >= 1, got " + std::to_string(options.resolution));
     Vec3 lo, hi;
     bounding_box(surface.positions, lo, hi);
     const double cell = (hi - lo).maxCoeff() / options.resolution;
@@ -54,7 +56,8 @@ TetMesh tetrahedralize(const SurfaceMesh& surface, const TetrahedralizeOptions& 
     // Centre the grid on the box, and shift it by an irrational fraction of a cell so that tet
     // centroids never sit exactly on the surface's (often axis-aligned) facets.
     Vec3 origin;
-    for (int k = 0; k < 3; ++k) origin[k] = 0.5 * (lo[k] + hi[k]) - 0.5 * dims[k] * cell + cell * 1e-3 * std::sqrt(2.0 + k);
+    for (int k = 0; k < 3; ++k)
+        origin[k] = 0.5 * (lo[k] + hi[k]) - 0.5 * dims[k] * cell + cell * 1e-3 * std::sqrt(2.0 + k);
     TetMesh grid = make_box_mesh(dims[0], dims[1], dims[2], Vec3::Constant(cell), origin);
     const InsideTest test(surface);
     std::vector<int> keep;
@@ -64,8 +67,9 @@ TetMesh tetrahedralize(const SurfaceMesh& surface, const TetrahedralizeOptions& 
         if (test.inside(c / 4.0)) keep.push_back(static_cast<int>(t));
     }
     if (keep.empty())
-        throw_input_error(where, "resolution", "no tet of the " + std::to_string(options.resolution) +
-                                                   "-cell grid lies inside the surface (is it closed?)");
+        throw_input_error(where, "resolution",
+                          "no tet of the " + std::to_string(options.resolution) +
+                              "-cell grid lies inside the surface (is it closed?)");
     std::vector<int> remap(static_cast<size_t>(grid.positions.rows()), -1);
     TetMesh out;
     out.tets.resize(static_cast<Eigen::Index>(keep.size()), 4);
@@ -82,4 +86,4 @@ TetMesh tetrahedralize(const SurfaceMesh& surface, const TetrahedralizeOptions& 
     return out;
 }
 
-} // namespace cb::sim
+}  // namespace cb::sim

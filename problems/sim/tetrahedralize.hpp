@@ -29,4 +29,4 @@ private:
     std::shared_ptr<Impl> m_impl;
 };
 
-} // namespace cb::sim
+}  // namespace cb::sim

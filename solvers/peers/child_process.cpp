@@ -13,8 +13,7 @@
 
 namespace cb {
 
-ChildOutcome run_in_child(const std::function<std::vector<char>()>& work, const Stopwatch& watch,
-                          double time_limit_s)
+ChildOutcome run_in_child(const std::function<std::vector<char>()>& work, const Stopwatch& watch, double time_limit_s)
 {
     int fds[2];
     if (::pipe(fds) != 0) throw std::runtime_error(std::string("pipe: ") + std::strerror(errno));
@@ -57,8 +56,7 @@ ChildOutcome run_in_child(const std::function<std::vector<char>()>& work, const 
     ::close(fds[0]);
     if (outcome.timed_out) ::kill(pid, SIGKILL);
     int wstatus = 0;
-    while (::waitpid(pid, &wstatus, 0) < 0 && errno == EINTR) {
-    }
+    while (::waitpid(pid, &wstatus, 0) < 0 && errno == EINTR) {}
     if (!outcome.timed_out) {
         std::ostringstream msg;
         if (WIFSIGNALED(wstatus)) {
@@ -73,4 +71,4 @@ ChildOutcome run_in_child(const std::function<std::vector<char>()>& work, const 
     return outcome;
 }
 
-} // namespace cb
+}  // namespace cb

@@ -11,16 +11,15 @@
 namespace cb {
 
 struct ChildOutcome {
-    std::vector<char> bytes;   ///< what the child sent
-    bool timed_out = false;    ///< the deadline passed; the child was killed
-    bool failed = false;       ///< the child died (signal) or exited non-zero
-    std::string failure;       ///< e.g. "was killed by signal 6 (Aborted)"
+    std::vector<char> bytes;  ///< what the child sent
+    bool timed_out = false;   ///< the deadline passed; the child was killed
+    bool failed = false;      ///< the child died (signal) or exited non-zero
+    std::string failure;      ///< e.g. "was killed by signal 6 (Aborted)"
 };
 
 /// Forks; the child runs `work` and writes its bytes, then _exit(0). The parent collects them
 /// until EOF or until `watch` reaches `time_limit_s` (0: no limit). Throws std::runtime_error
 /// when pipe or fork fail.
-ChildOutcome run_in_child(const std::function<std::vector<char>()>& work, const Stopwatch& watch,
-                          double time_limit_s);
+ChildOutcome run_in_child(const std::function<std::vector<char>()>& work, const Stopwatch& watch, double time_limit_s);
 
-} // namespace cb
+}  // namespace cb

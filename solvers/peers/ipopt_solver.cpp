@@ -101,8 +101,10 @@ public:
         Index k = 0;
         for (int i = 0; i < m_qp.J.outerSize(); ++i)
             for (SpMat::InnerIterator it(m_qp.J, i); it; ++it, ++k) {
-                if (values) values[k] = it.value();
-                else rows[k] = i, cols[k] = static_cast<Index>(it.col());
+                if (values)
+                    values[k] = it.value();
+                else
+                    rows[k] = i, cols[k] = static_cast<Index>(it.col());
             }
         return true;
     }
@@ -113,8 +115,10 @@ public:
         for (int i = 0; i < m_qp.A.outerSize(); ++i)
             for (SpMat::InnerIterator it(m_qp.A, i); it; ++it) {
                 if (it.col() > i) continue;  // lower triangle
-                if (values) values[k] = obj_factor * it.value();
-                else rows[k] = i, cols[k] = static_cast<Index>(it.col());
+                if (values)
+                    values[k] = obj_factor * it.value();
+                else
+                    rows[k] = i, cols[k] = static_cast<Index>(it.col());
                 ++k;
             }
         return true;
@@ -128,8 +132,8 @@ public:
         m_lambda = -Eigen::Map<const Vec>(y, m);
     }
 
-    bool intermediate_callback(Ipopt::AlgorithmMode, Index iter, Number, Number, Number inf_du, Number, Number,
-                               Number, Number, Number, Index, const Ipopt::IpoptData* ip_data,
+    bool intermediate_callback(Ipopt::AlgorithmMode, Index iter, Number, Number, Number inf_du, Number, Number, Number,
+                               Number, Number, Index, const Ipopt::IpoptData* ip_data,
                                Ipopt::IpoptCalculatedQuantities* ip_cq) override
     {
         m_result.counters.iterations = m_base_iterations + iter;  // summed over re-solves
@@ -140,8 +144,7 @@ public:
                             accuracy_converged(m_qp, m_scale, m_x, g, m_lambda, m_settings.common.tol);
         m_native = inf_du;
         const StepKind step = iter == 0 ? StepKind::START : StepKind::OUTER;
-        if (!notify_monitor(m_context, m_watch,
-                            {iter, step, &m_x, &m_lambda, inf_du, -1, &m_result.counters, 0.0})) {
+        if (!notify_monitor(m_context, m_watch, {iter, step, &m_x, &m_lambda, inf_du, -1, &m_result.counters, 0.0})) {
             m_stopped_by_monitor = true;
             return false;
         }
@@ -174,8 +177,8 @@ private:
         auto* adapter = dynamic_cast<Ipopt::TNLPAdapter*>(Ipopt::GetRawPtr(orig->nlp()));
         if (!adapter) return;
         adapter->ResortX(*ip_data->curr()->x(), m_x.data());
-        Ipopt::SmartPtr<Ipopt::Vector> y_d = orig->NLP_scaling()->apply_vector_scaling_d_NonConst(
-            ip_data->curr()->y_d());
+        Ipopt::SmartPtr<Ipopt::Vector> y_d =
+            orig->NLP_scaling()->apply_vector_scaling_d_NonConst(ip_data->curr()->y_d());
         y_d->Scal(orig->NLP_scaling()->unapply_obj_scaling(1.0));
         adapter->ResortG(*ip_data->curr()->y_c(), *y_d, m_lambda.data());
         m_lambda = -m_lambda;
@@ -197,30 +200,49 @@ private:
 const char* ipopt_status_name(Ipopt::ApplicationReturnStatus s)
 {
     switch (s) {
-    case Ipopt::Solve_Succeeded: return "Solve_Succeeded";
-    case Ipopt::Solved_To_Acceptable_Level: return "Solved_To_Acceptable_Level";
-    case Ipopt::Infeasible_Problem_Detected: return "Infeasible_Problem_Detected";
-    case Ipopt::Search_Direction_Becomes_Too_Small: return "Search_Direction_Becomes_Too_Small";
-    case Ipopt::Diverging_Iterates: return "Diverging_Iterates";
-    case Ipopt::User_Requested_Stop: return "User_Requested_Stop";
-    case Ipopt::Feasible_Point_Found: return "Feasible_Point_Found";
-    case Ipopt::Maximum_Iterations_Exceeded: return "Maximum_Iterations_Exceeded";
-    case Ipopt::Restoration_Failed: return "Restoration_Failed";
-    case Ipopt::Error_In_Step_Computation: return "Error_In_Step_Computation";
-    case Ipopt::Maximum_CpuTime_Exceeded: return "Maximum_CpuTime_Exceeded";
-    case Ipopt::Not_Enough_Degrees_Of_Freedom: return "Not_Enough_Degrees_Of_Freedom";
-    case Ipopt::Invalid_Problem_Definition: return "Invalid_Problem_Definition";
-    case Ipopt::Invalid_Option: return "Invalid_Option";
-    case Ipopt::Invalid_Number_Detected: return "Invalid_Number_Detected";
-    case Ipopt::Unrecoverable_Exception: return "Unrecoverable_Exception";
-    case Ipopt::NonIpopt_Exception_Thrown: return "NonIpopt_Exception_Thrown";
-    case Ipopt::Insufficient_Memory: return "Insufficient_Memory";
-    case Ipopt::Internal_Error: return "Internal_Error";
+    case Ipopt::Solve_Succeeded:
+        return "Solve_Succeeded";
+    case Ipopt::Solved_To_Acceptable_Level:
+        return "Solved_To_Acceptable_Level";
+    case Ipopt::Infeasible_Problem_Detected:
+        return "Infeasible_Problem_Detected";
+    case Ipopt::Search_Direction_Becomes_Too_Small:
+        return "Search_Direction_Becomes_Too_Small";
+    case Ipopt::Diverging_Iterates:
+        return "Diverging_Iterates";
+    case Ipopt::User_Requested_Stop:
+        return "User_Requested_Stop";
+    case Ipopt::Feasible_Point_Found:
+        return "Feasible_Point_Found";
+    case Ipopt::Maximum_Iterations_Exceeded:
+        return "Maximum_Iterations_Exceeded";
+    case Ipopt::Restoration_Failed:
+        return "Restoration_Failed";
+    case Ipopt::Error_In_Step_Computation:
+        return "Error_In_Step_Computation";
+    case Ipopt::Maximum_CpuTime_Exceeded:
+        return "Maximum_CpuTime_Exceeded";
+    case Ipopt::Not_Enough_Degrees_Of_Freedom:
+        return "Not_Enough_Degrees_Of_Freedom";
+    case Ipopt::Invalid_Problem_Definition:
+        return "Invalid_Problem_Definition";
+    case Ipopt::Invalid_Option:
+        return "Invalid_Option";
+    case Ipopt::Invalid_Number_Detected:
+        return "Invalid_Number_Detected";
+    case Ipopt::Unrecoverable_Exception:
+        return "Unrecoverable_Exception";
+    case Ipopt::NonIpopt_Exception_Thrown:
+        return "NonIpopt_Exception_Thrown";
+    case Ipopt::Insufficient_Memory:
+        return "Insufficient_Memory";
+    case Ipopt::Internal_Error:
+        return "Internal_Error";
     }
     return "unknown";
 }
 
-} // namespace
+}  // namespace
 
 SolverResult IpoptSolver::solve(const QpView& qp, const SolveContext& context)
 {
@@ -292,8 +314,8 @@ SolverResult IpoptSolver::solve(const QpView& qp, const SolveContext& context)
     result.iterations = result.counters.iterations;
     result.info["ipopt_status"] = ipopt_status_name(rc);
     std::ostringstream msg;
-    msg << "ipopt: Ipopt " << IPOPT_VERSION << " returned " << ipopt_status_name(rc) << " after "
-        << result.iterations << " iterations";
+    msg << "ipopt: Ipopt " << IPOPT_VERSION << " returned " << ipopt_status_name(rc) << " after " << result.iterations
+        << " iterations";
     if (retries > 0) msg << " (" << retries << " re-solve(s) with a tighter Ipopt tol, last " << tol_used << ")";
 
     // The verdict is the common KKT test at the returned point, never Ipopt's own flag.
@@ -343,4 +365,4 @@ SolverEntry ipopt_entry()
     return e;
 }
 
-} // namespace cb
+}  // namespace cb

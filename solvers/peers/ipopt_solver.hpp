@@ -48,4 +48,4 @@ SolverEntry ipopt_entry();
 /// The library version compiled against (e.g. "3.11.9").
 std::string ipopt_version();
 
-} // namespace cb
+}  // namespace cb

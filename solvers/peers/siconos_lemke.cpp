@@ -68,7 +68,7 @@ std::vector<char> run_lemke(Eigen::MatrixXd& W, Vec& q, long max_iterations, dou
     return out;
 }
 
-} // namespace
+}  // namespace
 
 SolverResult SiconosLemkeSolver::solve(const QpView& qp, const SolveContext& context)
 {
@@ -84,8 +84,9 @@ SolverResult SiconosLemkeSolver::solve(const QpView& qp, const SolveContext& con
     result.info["native_residual_definition"] = "Siconos's LCP error (SICONOS_DPARAM_RESIDU)";
     if (m > s.max_rows) {
         result.status = SolveStatus::INVALID_INPUT;
-        result.message = "siconos-lemke: m = " + std::to_string(m) + " rows exceeds max_rows = " +
-                         std::to_string(s.max_rows) + " (W = J A^-1 J' is dense m x m); raise max_rows to allow it";
+        result.message = "siconos-lemke: m = " + std::to_string(m) +
+                         " rows exceeds max_rows = " + std::to_string(s.max_rows) +
+                         " (W = J A^-1 J' is dense m x m); raise max_rows to allow it";
         return result;
     }
     Stopwatch watch;
@@ -151,8 +152,8 @@ SolverResult SiconosLemkeSolver::solve(const QpView& qp, const SolveContext& con
         result.status = SolveStatus::DIVERGED;
         result.info["crashed"] = true;
         std::ostringstream msg;
-        msg << "siconos-lemke: the Siconos child process " << (child.failed ? child.failure : "sent")
-            << " (" << bytes.size() << " of " << expected << " bytes received)";
+        msg << "siconos-lemke: the Siconos child process " << (child.failed ? child.failure : "sent") << " ("
+            << bytes.size() << " of " << expected << " bytes received)";
         result.message = msg.str();
         return result;
     }
@@ -169,8 +170,9 @@ SolverResult SiconosLemkeSolver::solve(const QpView& qp, const SolveContext& con
     primal();
 
     Stopwatch paused;  // the monitor sees the final point only
-    notify_monitor(context, paused, {report.iterations, StepKind::FINAL, &result.x, &result.lambda,
-                                     report.residual, -1, &counters, result.solve_s});
+    notify_monitor(context, paused,
+                   {report.iterations, StepKind::FINAL, &result.x, &result.lambda, report.residual, -1, &counters,
+                    result.solve_s});
     const Vec g = qp.A * result.x - qp.b;
     ++counters.a_products;
     const bool finite = result.x.allFinite() && result.lambda.allFinite();
@@ -180,8 +182,9 @@ SolverResult SiconosLemkeSolver::solve(const QpView& qp, const SolveContext& con
         << report.residual;
     if (!finite) {
         result.status = SolveStatus::DIVERGED;
-    } else if (s.common.stop == StopRule::NATIVE ? (report.info == 0 && report.residual <= s.common.tol)
-                                                 : accuracy_converged(qp, accuracy_scale(qp), result.x, g, result.lambda, s.common.tol)) {
+    } else if (s.common.stop == StopRule::NATIVE
+                   ? (report.info == 0 && report.residual <= s.common.tol)
+                   : accuracy_converged(qp, accuracy_scale(qp), result.x, g, result.lambda, s.common.tol)) {
         result.status = SolveStatus::CONVERGED;
         result.criterion = s.common.stop == StopRule::NATIVE ? "native" : "kkt";
     } else if (report.info != 0 && report.iterations >= s.common.max_iterations) {
@@ -206,4 +209,4 @@ SolverEntry siconos_lemke_entry()
     return e;
 }
 
-} // namespace cb
+}  // namespace cb

@@ -34,4 +34,4 @@ private:
 
 SolverEntry siconos_lemke_entry();
 
-} // namespace cb
+}  // namespace cb

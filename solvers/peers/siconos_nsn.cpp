@@ -35,16 +35,17 @@ struct ChildReport {
 };
 
 /// A sparse (triplet) NumericsMatrix; `transpose_of_rows` stores the transpose of `S`.
-NumericsMatrix* numerics_matrix(const SpMat& S, Eigen::Index rows, Eigen::Index cols, bool transpose,
-                                long col_stride)
+NumericsMatrix* numerics_matrix(const SpMat& S, Eigen::Index rows, Eigen::Index cols, bool transpose, long col_stride)
 {
     NumericsMatrix* N = NM_create(NM_SPARSE, static_cast<int>(rows), static_cast<int>(cols));
     NM_triplet_alloc(N, S.nonZeros());
     N->matrix2->origin = NSM_TRIPLET;
     for (int i = 0; i < S.outerSize(); ++i)
         for (SpMat::InnerIterator it(S, i); it; ++it) {
-            if (transpose) NM_zentry(N, static_cast<int>(it.col()), static_cast<int>(col_stride * i), it.value(), 0.0);
-            else NM_zentry(N, i, static_cast<int>(it.col()), it.value(), 0.0);
+            if (transpose)
+                NM_zentry(N, static_cast<int>(it.col()), static_cast<int>(col_stride * i), it.value(), 0.0);
+            else
+                NM_zentry(N, i, static_cast<int>(it.col()), it.value(), 0.0);
         }
     return N;
 }
@@ -83,7 +84,7 @@ std::vector<char> run_nsn(const QpView& qp, long max_iterations, double tol)
     return out;
 }
 
-} // namespace
+}  // namespace
 
 SolverResult SiconosNsnSolver::solve(const QpView& qp, const SolveContext& context)
 {
@@ -100,8 +101,8 @@ SolverResult SiconosNsnSolver::solve(const QpView& qp, const SolveContext& conte
     Stopwatch watch;
     watch.start();
     const size_t expected = static_cast<size_t>(n + 3 * m) * sizeof(double) + sizeof(ChildReport);
-    const ChildOutcome child =
-        run_in_child([&]() { return run_nsn(qp, s.common.max_iterations, s.common.tol); }, watch, s.common.time_limit_s);
+    const ChildOutcome child = run_in_child([&]() { return run_nsn(qp, s.common.max_iterations, s.common.tol); }, watch,
+                                            s.common.time_limit_s);
     result.solve_s = watch.seconds();
     if (child.timed_out) {
         result.status = SolveStatus::TIME_LIMIT;
@@ -112,8 +113,8 @@ SolverResult SiconosNsnSolver::solve(const QpView& qp, const SolveContext& conte
         result.status = SolveStatus::DIVERGED;
         result.info["crashed"] = true;
         std::ostringstream msg;
-        msg << "siconos-nsn: the Siconos child process " << (child.failed ? child.failure : "sent")
-            << " (" << child.bytes.size() << " of " << expected << " bytes received)";
+        msg << "siconos-nsn: the Siconos child process " << (child.failed ? child.failure : "sent") << " ("
+            << child.bytes.size() << " of " << expected << " bytes received)";
         result.message = msg.str();
         return result;
     }
@@ -131,8 +132,9 @@ SolverResult SiconosNsnSolver::solve(const QpView& qp, const SolveContext& conte
     result.info["siconos_info"] = report.info;
 
     Stopwatch paused;  // the monitor sees the final point only
-    notify_monitor(context, paused, {report.iterations, StepKind::FINAL, &result.x, &result.lambda, report.residual,
-                                     -1, &counters, result.solve_s});
+    notify_monitor(context, paused,
+                   {report.iterations, StepKind::FINAL, &result.x, &result.lambda, report.residual, -1, &counters,
+                    result.solve_s});
     const Vec g = qp.A * result.x - qp.b;
     ++counters.a_products;
     const bool finite = result.x.allFinite() && result.lambda.allFinite();
@@ -142,8 +144,9 @@ SolverResult SiconosNsnSolver::solve(const QpView& qp, const SolveContext& conte
         << report.residual;
     if (!finite) {
         result.status = SolveStatus::DIVERGED;
-    } else if (s.common.stop == StopRule::NATIVE ? (report.info == 0 && report.residual <= s.common.tol)
-                                                 : accuracy_converged(qp, accuracy_scale(qp), result.x, g, result.lambda, s.common.tol)) {
+    } else if (s.common.stop == StopRule::NATIVE
+                   ? (report.info == 0 && report.residual <= s.common.tol)
+                   : accuracy_converged(qp, accuracy_scale(qp), result.x, g, result.lambda, s.common.tol)) {
         result.status = SolveStatus::CONVERGED;
         result.criterion = s.common.stop == StopRule::NATIVE ? "native" : "kkt";
     } else if (report.info != 0 && report.iterations >= s.common.max_iterations) {
@@ -167,4 +170,4 @@ SolverEntry siconos_nsn_entry()
     return e;
 }
 
-} // namespace cb
+}  // namespace cb

@@ -30,4 +30,4 @@ private:
 
 SolverEntry siconos_nsn_entry();
 
-} // namespace cb
+}  // namespace cb

@@ -16,8 +16,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (size) std::memcpy(copy.get(), data, size);
     try {
         cb::SnapshotExtras extras;
-        const cb::Qp qp = cb::read_qpsnap_bytes("fuzz-input", copy.get(),
-                                                size, &extras);
+        const cb::Qp qp = cb::read_qpsnap_bytes("fuzz-input", copy.get(), size, &extras);
         // A returned problem must be whole: the dimensions agree.
         if (qp.b.size() != qp.n() || qp.x0.size() != qp.n() || qp.J.cols() != qp.n() || qp.c.size() != qp.m() ||
             qp.A.cols() != qp.n())

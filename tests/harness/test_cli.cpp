@@ -71,8 +71,9 @@ std::string write_suite(const std::string& name, const nlohmann::json& solvers)
 {
     const nlohmann::json suite = {
         {"name", name},
-        {"generate", {{{"id", "p1"}, {"family", "plane"}, {"seed", 1}, {"params", {{"nx", 2}, {"ny", 2}, {"nz", 2}}}},
-                      {{"id", "p2"}, {"family", "plane"}, {"seed", 2}, {"params", {{"nx", 3}, {"ny", 2}, {"nz", 2}}}}}},
+        {"generate",
+         {{{"id", "p1"}, {"family", "plane"}, {"seed", 1}, {"params", {{"nx", 2}, {"ny", 2}, {"nz", 2}}}},
+          {{"id", "p2"}, {"family", "plane"}, {"seed", 2}, {"params", {{"nx", 3}, {"ny", 2}, {"nz", 2}}}}}},
         {"solvers", solvers},
         {"tol", 1e-6},
         {"time_limit_s", 20}};
@@ -101,7 +102,7 @@ public:
 };
 const auto* const kCleanUp = ::testing::AddGlobalTestEnvironment(new CleanUp);
 
-} // namespace
+}  // namespace
 
 TEST(Cli, SolveMissingFileIsBadInput)
 {
@@ -139,8 +140,8 @@ TEST(Cli, SolveWritesJsonAndSolution)
     ASSERT_EQ(o.status, 0) << o.err;
     EXPECT_NE(o.out.find("status      converged (kkt)"), std::string::npos) << o.out;
     const nlohmann::json r = read_json_file(json.string());
-    for (const char* key : {"solver", "settings", "status", "iterations", "objective", "accuracy", "kkt_relative", "counters",
-                            "time", "provenance", "history", "snapshot"})
+    for (const char* key : {"solver", "settings", "status", "iterations", "objective", "accuracy", "kkt_relative",
+                            "counters", "time", "provenance", "history", "snapshot"})
         EXPECT_TRUE(r.contains(key)) << key;
     EXPECT_DOUBLE_EQ(r["settings"]["tol"].get<double>(), 1e-8);
     EXPECT_LE(r["accuracy"]["max"].get<double>(), 1e-8);
@@ -222,10 +223,10 @@ TEST(Cli, RunResumesShardsMergesAndIsDeterministic)
     EXPECT_NE(judge.out.find("verdict: PASS (6 runs compared: 6 equal"), std::string::npos) << judge.out;
 
     // A deliberately worse variant under the same labels: MPRGP without its preconditioner.
-    const std::string worse_suite = write_suite(
-        "e2e", {{{"label", "mprgp"}, {"solver", "mprgp"}, {"settings", {{"precond", "none"}}}},
-                {{"label", "exact"}, {"solver", "active-set"}},
-                {{"label", "ghost"}, {"solver", "no-such-solver"}}});
+    const std::string worse_suite =
+        write_suite("e2e", {{{"label", "mprgp"}, {"solver", "mprgp"}, {"settings", {{"precond", "none"}}}},
+                            {{"label", "exact"}, {"solver", "active-set"}},
+                            {{"label", "ghost"}, {"solver", "no-such-solver"}}});
     const fs::path worse = work_dir() / "worse";
     ASSERT_EQ(run("run '" + worse_suite + "' --out '" + worse.string() + "'").status, 0);
     const Output regression = run("compare '" + out.string() + "' '" + worse.string() + "'");
@@ -242,20 +243,27 @@ TEST(Cli, RunRejectsBadSuite)
 {
     const Output missing = run("run /nonexistent/suite.json");
     EXPECT_EQ(missing.status, 2);
-    EXPECT_EQ(missing.err, "contactbench run: error: /nonexistent/suite.json: cannot open: No such file or directory\n");
+    EXPECT_EQ(missing.err,
+              "contactbench run: error: /nonexistent/suite.json: cannot open: No such file or directory\n");
     const fs::path p = work_dir() / "bad.json";
-    write_json_atomic(p.string(), {{"name", "bad"}, {"generate", nlohmann::json::array()}, {"solvers", {"cg"}}, {"tol", "x"}});
+    write_json_atomic(p.string(),
+                      {{"name", "bad"}, {"generate", nlohmann::json::array()}, {"solvers", {"cg"}}, {"tol", "x"}});
     const Output bad = run("run '" + p.string() + "'");
     EXPECT_EQ(bad.status, 2);
-    EXPECT_EQ(bad.err, "contactbench run: error: " + p.string() + ": /snapshots: the suite names no snapshots and generates none\n");
+    EXPECT_EQ(bad.err, "contactbench run: error: " + p.string() +
+                           ": /snapshots: the suite names no snapshots and generates none\n");
 }
 
 TEST(Cli, ChainCarriesWarmStateAndReferenceAddsEnergyGap)
 {
     nlohmann::json suite = {
         {"name", "chain"},
-        {"generate", {{{"id", "f1"}, {"family", "plane"}, {"seed", 1}, {"params", {{"nx", 2}, {"ny", 2}, {"nz", 2}}}},
-                      {{"id", "f2"}, {"family", "plane"}, {"seed", 1}, {"params", {{"nx", 2}, {"ny", 2}, {"nz", 2}, {"h", 0.011}}}}}},
+        {"generate",
+         {{{"id", "f1"}, {"family", "plane"}, {"seed", 1}, {"params", {{"nx", 2}, {"ny", 2}, {"nz", 2}}}},
+          {{"id", "f2"},
+           {"family", "plane"},
+           {"seed", 1},
+           {"params", {{"nx", 2}, {"ny", 2}, {"nz", 2}, {"h", 0.011}}}}}},
         {"solvers", {{{"label", "mprgp"}, {"solver", "mprgp"}}}},
         {"chain", true},
         {"reference", true}};
@@ -290,8 +298,7 @@ TEST(Cli, CorruptSnapshotFailsItsRunsOnly)
     fs::copy_file(small_snapshot(), dir / "good.qpsnap", fs::copy_options::overwrite_existing);
     std::ofstream(dir / "bad.qpsnap") << "not a snapshot";
     write_json_atomic((dir / "suite.json").string(),
-                      {{"name", "corrupt"}, {"snapshots", {"*.qpsnap"}}, {"solvers", {"mprgp"}},
-                       {"time_limit_s", 5}});
+                      {{"name", "corrupt"}, {"snapshots", {"*.qpsnap"}}, {"solvers", {"mprgp"}}, {"time_limit_s", 5}});
     const Output o = run("run '" + (dir / "suite.json").string() + "' --out '" + (dir / "out").string() + "'");
     ASSERT_EQ(o.status, 0) << o.err;
     const nlohmann::json bad = read_json_file((dir / "out" / "runs" / "bad__mprgp.json").string());

@@ -23,18 +23,19 @@ namespace {
 nlohmann::json record(const std::string& snapshot, const std::string& label, long iterations, long a_products,
                       double kkt_rel, const std::string& status = "converged")
 {
-    return {{"label", label},
-            {"solver", label},
-            {"snapshot", {{"id", snapshot}}},
-            {"status", status},
-            {"iterations", iterations},
-            {"tol", 1e-6},
-            {"kkt_relative", {{"max", kkt_rel}}},
-            {"counters", {{"a_products", a_products}, {"cholmod_factorizations", 0}, {"precond_applications", iterations}}},
-            {"time", {{"total_s", 0.01}, {"repeat", 1}}}};
+    return {
+        {"label", label},
+        {"solver", label},
+        {"snapshot", {{"id", snapshot}}},
+        {"status", status},
+        {"iterations", iterations},
+        {"tol", 1e-6},
+        {"kkt_relative", {{"max", kkt_rel}}},
+        {"counters", {{"a_products", a_products}, {"cholmod_factorizations", 0}, {"precond_applications", iterations}}},
+        {"time", {{"total_s", 0.01}, {"repeat", 1}}}};
 }
 
-} // namespace
+}  // namespace
 
 TEST(Compare, IdenticalRunsAreEqual)
 {
@@ -42,7 +43,9 @@ TEST(Compare, IdenticalRunsAreEqual)
     const CompareReport r = compare_runs(runs, runs);
     EXPECT_FALSE(r.failed());
     EXPECT_EQ(r.equal, 2);
-    EXPECT_EQ(r.verdict(), "verdict: PASS (2 runs compared: 2 equal, 0 improved, 0 regressed, 0 status changed, 0 missing in NEW; 0 new)");
+    EXPECT_EQ(
+        r.verdict(),
+        "verdict: PASS (2 runs compared: 2 equal, 0 improved, 0 regressed, 0 status changed, 0 missing in NEW; 0 new)");
 }
 
 TEST(Compare, CountersKktStatusAndMissing)
@@ -51,11 +54,11 @@ TEST(Compare, CountersKktStatusAndMissing)
                                               record("c", "mprgp", 12, 25, 8e-7), record("d", "mprgp", 12, 25, 8e-7),
                                               record("e", "mprgp", 12, 25, 8e-7)};
     const std::vector<nlohmann::json> next = {
-        record("a", "mprgp", 10, 21, 5e-7),                  // one more A-product: regressed
-        record("b", "mprgp", 11, 24, 8e-7),                  // fewer: improved
+        record("a", "mprgp", 10, 21, 5e-7),                    // one more A-product: regressed
+        record("b", "mprgp", 11, 24, 8e-7),                    // fewer: improved
         record("c", "mprgp", 12, 25, 8e-7, "max_iterations"),  // status change
-        record("e", "mprgp", 12, 25, 9.5e-7),                // kkt worse by 19% but below tol: fine
-        record("f", "mprgp", 1, 1, 1e-7)};                   // new
+        record("e", "mprgp", 12, 25, 9.5e-7),                  // kkt worse by 19% but below tol: fine
+        record("f", "mprgp", 1, 1, 1e-7)};                     // new
     const CompareReport r = compare_runs(base, next);
     EXPECT_TRUE(r.failed());
     EXPECT_EQ(r.regressed, 1);
@@ -105,7 +108,8 @@ TEST(Compare, BinaryExitCodesOnFolders)
     EXPECT_EQ(judge("'" + (dir / "base").string() + "' '" + (dir / "same").string() + "'", out), 0) << out;
     EXPECT_NE(out.find("verdict: PASS"), std::string::npos) << out;
     const std::string json = (dir / "judge.json").string();
-    EXPECT_EQ(judge("'" + (dir / "base").string() + "' '" + (dir / "worse").string() + "' --json '" + json + "'", out), 3)
+    EXPECT_EQ(judge("'" + (dir / "base").string() + "' '" + (dir / "worse").string() + "' --json '" + json + "'", out),
+              3)
         << out;
     EXPECT_NE(out.find("25 -> 40 (+60%)"), std::string::npos) << out;
     EXPECT_NE(out.find("FAIL regressed: a_products"), std::string::npos) << out;
@@ -159,8 +163,10 @@ std::string write_perf(const std::string& name, const std::vector<PerfRow>& rows
     write_file_atomic(csv.string(), text);
     if (!cpu.empty())
         write_json_atomic((perf_dir() / (name + "-machine.json")).string(),
-                          {{"cpu", cpu}, {"blas", "/usr/lib/x86_64-linux-gnu/openblas-pthread/libblas.so.3"},
-                           {"suitesparse", "5.12.0 (CHOLMOD 3.0.14)"}, {"compiler", "gcc 12.2.0"}});
+                          {{"cpu", cpu},
+                           {"blas", "/usr/lib/x86_64-linux-gnu/openblas-pthread/libblas.so.3"},
+                           {"suitesparse", "5.12.0 (CHOLMOD 3.0.14)"},
+                           {"compiler", "gcc 12.2.0"}});
     return csv.string();
 }
 
@@ -180,16 +186,16 @@ std::vector<std::string> regressed_of(const CompareReport& report, const std::st
     return {};
 }
 
-} // namespace
+}  // namespace
 
 TEST(ComparePerfRecord, InstructionsAndHarnessCountedProductsOnOneMachine)
 {
     const std::vector<PerfRow> base = {row("a", "mprgp"), row("b", "mprgp"), row("c", "mprgp"), row("d", "mprgp")};
     std::vector<PerfRow> next = base;
-    next[0].instructions = 1020000;     // +2%: under the 3% threshold
-    next[1].instructions = 1040000;     // +4%: regressed
-    next[2].a_products_harness = 19;    // one product the solver did not count
-    next[3].a_products = 21;            // counted by both
+    next[0].instructions = 1020000;   // +2%: under the 3% threshold
+    next[1].instructions = 1040000;   // +4%: regressed
+    next[2].a_products_harness = 19;  // one product the solver did not count
+    next[3].a_products = 21;          // counted by both
     next[3].a_products_harness = 19;
     const CompareInput b = read_compare_input(write_perf("base", base, "AMD EPYC"));
     const CompareInput n = read_compare_input(write_perf("next", next, "AMD EPYC"));
@@ -208,7 +214,8 @@ TEST(ComparePerfRecord, InstructionsAndHarnessCountedProductsOnOneMachine)
     EXPECT_NE(table.find("FAIL regressed: a_products a_products_harness\n"), std::string::npos) << table;
     const std::string header = report.header();
     EXPECT_NE(header.find("measured on AMD EPYC, openblas-pthread, SuiteSparse 5.12.0 (CHOLMOD 3.0.14), gcc 12.2.0"),
-              std::string::npos) << header;
+              std::string::npos)
+        << header;
     EXPECT_NE(header.find("NEW   " + n.source + "  measured on the same machine"), std::string::npos) << header;
     EXPECT_NE(header.find("instructions in the solve within +3%"), std::string::npos) << header;
 
@@ -230,8 +237,8 @@ TEST(ComparePerfRecord, WallTimeIsJudgedOnlyBeyondTheRatioTimesTheNoiseBand)
     next[2].time_min_s = 0.016;  // 1.6x, band 0.10: within 1.5 x 1.10 = 1.65x
     next[3].time_min_s = 0.03;   // 3x from a single sample: never judged
     next[3].time_samples = 1;
-    const CompareReport report = compare_inputs(read_compare_input(write_perf("tb", base)),
-                                                read_compare_input(write_perf("tn", next)));
+    const CompareReport report =
+        compare_inputs(read_compare_input(write_perf("tb", base)), read_compare_input(write_perf("tn", next)));
     EXPECT_EQ(regressed_of(report, "a"), std::vector<std::string>{"time"});
     EXPECT_TRUE(regressed_of(report, "b").empty());
     EXPECT_TRUE(regressed_of(report, "c").empty());
@@ -241,19 +248,19 @@ TEST(ComparePerfRecord, WallTimeIsJudgedOnlyBeyondTheRatioTimesTheNoiseBand)
     EXPECT_NE(report.table().find("1.80x ±0.10"), std::string::npos) << report.table();
     CompareOptions never;
     never.time_ratio_max = 0.0;
-    EXPECT_FALSE(compare_inputs(read_compare_input(write_perf("tb", base)), read_compare_input(write_perf("tn", next)),
-                                never)
-                     .failed());
+    EXPECT_FALSE(
+        compare_inputs(read_compare_input(write_perf("tb", base)), read_compare_input(write_perf("tn", next)), never)
+            .failed());
 }
 
 TEST(ComparePerfRecord, AcrossMachinesCountersGetTolerancesAndInstructionsAreNotJudged)
 {
     const std::vector<PerfRow> base = {row("a", "active-set"), row("b", "active-set"), row("c", "active-set")};
     std::vector<PerfRow> next = base;
-    next[0].a_products = 21;              // one more product (rounding on another CPU): within 25% + 2
+    next[0].a_products = 21;  // one more product (rounding on another CPU): within 25% + 2
     next[0].a_products_harness = 19;
-    next[0].instructions = 1500000;       // another CPU's BLAS kernels: not judged
-    next[1].iterations = 16;              // 10 -> 16: beyond 10 * 1.25 + 2 = 14.5
+    next[0].instructions = 1500000;  // another CPU's BLAS kernels: not judged
+    next[1].iterations = 16;         // 10 -> 16: beyond 10 * 1.25 + 2 = 14.5
     next[2].status = "max_iterations";
     const CompareReport report = compare_inputs(read_compare_input(write_perf("xb", base, "AMD EPYC")),
                                                 read_compare_input(write_perf("xn", next, "Intel Xeon")));
@@ -329,6 +336,7 @@ TEST(ComparePerfRecord, BinaryOnlyChangesFilterAndExitCodes)
     EXPECT_EQ(judge("'" + base_csv + "' '" + next_csv + "' --instructions-rtol 0.2", out), 0) << out;
     EXPECT_EQ(judge("'" + base_csv + "' '" + next_csv + "' --filter '('", out), 2) << out;
     EXPECT_NE(out.find("contactbench compare: error: compare: --filter: not a regular expression: '('"),
-              std::string::npos) << out;
+              std::string::npos)
+        << out;
     fs::remove_all(perf_dir());
 }

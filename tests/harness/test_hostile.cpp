@@ -9,12 +9,12 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <fcntl.h>
 #include <filesystem>
 #include <fstream>
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
-#include <fcntl.h>
 #include <unistd.h>
 
 namespace fs = std::filesystem;
@@ -89,8 +89,11 @@ void write_snapshot(const fs::path& p, int seed, int nx = 2)
 /// A suite over the snapshots a.qpsnap and b.qpsnap of `dir`.
 fs::path write_suite(const fs::path& dir, const std::string& name, const nlohmann::json& solvers, double tol = 1e-6)
 {
-    const nlohmann::json suite = {{"name", name}, {"snapshots", {"a.qpsnap", "b.qpsnap"}}, {"solvers", solvers},
-                                  {"tol", tol}, {"time_limit_s", 20}};
+    const nlohmann::json suite = {{"name", name},
+                                  {"snapshots", {"a.qpsnap", "b.qpsnap"}},
+                                  {"solvers", solvers},
+                                  {"tol", tol},
+                                  {"time_limit_s", 20}};
     const fs::path p = dir / (name + ".json");
     write_json_atomic(p.string(), suite);
     return p;
@@ -113,7 +116,7 @@ public:
 };
 const auto* const kCleanUp = ::testing::AddGlobalTestEnvironment(new CleanUp);
 
-} // namespace
+}  // namespace
 
 // ---- run identity -----------------------------------------------------------------------------
 
@@ -143,16 +146,20 @@ TEST(RunIdentity, EditedSuiteReplacedSnapshotAndFixedInputAreRedone)
     const Output edited = run("run " + q(suite) + " --out " + q(out));
     ASSERT_EQ(edited.status, 0) << edited.err;
     EXPECT_NE(edited.err.find("ran 4 of 4 jobs"), std::string::npos) << edited.err;
-    EXPECT_NE(edited.err.find("a x mprgp: stored run not reused: the settings changed\n"), std::string::npos) << edited.err;
+    EXPECT_NE(edited.err.find("a x mprgp: stored run not reused: the settings changed\n"), std::string::npos)
+        << edited.err;
     EXPECT_EQ(read_json_file((out / "suite.json").string())["tol"], 1e-8);
     EXPECT_EQ(read_json_file((out / "runs" / "b__exact.json").string())["tol"], 1e-8);
     EXPECT_FALSE(fs::exists(out / "suite.pending.json"));
 
     // One solver's settings edited: only its runs are redone.
-    write_json_atomic(suite.string(), {{"name", "ident"}, {"snapshots", {"a.qpsnap", "b.qpsnap"}},
-                                       {"solvers", {{{"label", "mprgp"}, {"solver", "mprgp"}, {"settings", {{"precond", "none"}}}},
-                                                    {{"label", "exact"}, {"solver", "active-set"}}}},
-                                       {"tol", 1e-8}, {"time_limit_s", 20}});
+    write_json_atomic(suite.string(), {{"name", "ident"},
+                                       {"snapshots", {"a.qpsnap", "b.qpsnap"}},
+                                       {"solvers",
+                                        {{{"label", "mprgp"}, {"solver", "mprgp"}, {"settings", {{"precond", "none"}}}},
+                                         {{"label", "exact"}, {"solver", "active-set"}}}},
+                                       {"tol", 1e-8},
+                                       {"time_limit_s", 20}});
     const Output one = run("run " + q(suite) + " --out " + q(out));
     ASSERT_EQ(one.status, 0) << one.err;
     EXPECT_NE(one.err.find("ran 2 of 4 jobs"), std::string::npos) << one.err;
@@ -163,7 +170,8 @@ TEST(RunIdentity, EditedSuiteReplacedSnapshotAndFixedInputAreRedone)
     const Output replaced = run("run " + q(suite) + " --out " + q(out));
     ASSERT_EQ(replaced.status, 0) << replaced.err;
     EXPECT_NE(replaced.err.find("ran 2 of 4 jobs"), std::string::npos) << replaced.err;
-    EXPECT_NE(replaced.err.find("b x exact: stored run not reused: the snapshot's content changed\n"), std::string::npos)
+    EXPECT_NE(replaced.err.find("b x exact: stored run not reused: the snapshot's content changed\n"),
+              std::string::npos)
         << replaced.err;
 
     // A run that failed because its snapshot was corrupt is retried once the file is fixed.
@@ -184,8 +192,10 @@ TEST(RunIdentity, EditedSuiteReplacedSnapshotAndFixedInputAreRedone)
     old.erase("identity");
     write_json_atomic((out / "runs" / "b__mprgp.json").string(), old);
     const Output legacy = run("run " + q(suite) + " --out " + q(out));
-    EXPECT_NE(legacy.err.find("b x mprgp: stored run not reused: it has no run identity (written by an older contactbench)\n"),
-              std::string::npos) << legacy.err;
+    EXPECT_NE(legacy.err.find(
+                  "b x mprgp: stored run not reused: it has no run identity (written by an older contactbench)\n"),
+              std::string::npos)
+        << legacy.err;
     EXPECT_NE(legacy.err.find("ran 1 of 4 jobs"), std::string::npos) << legacy.err;
 }
 
@@ -195,7 +205,8 @@ TEST(RunIdentity, SolverOutcomesAreFinal)
     write_snapshot(dir / "a.qpsnap", 1);
     write_snapshot(dir / "b.qpsnap", 2);
     // max_iterations 1: the solver's outcome, kept on resume.
-    const fs::path suite = write_suite(dir, "final", {{{"label", "capped"}, {"solver", "mprgp"}, {"settings", {{"max_iterations", 1}}}}});
+    const fs::path suite =
+        write_suite(dir, "final", {{{"label", "capped"}, {"solver", "mprgp"}, {"settings", {{"max_iterations", 1}}}}});
     const fs::path out = dir / "out";
     ASSERT_EQ(run("run " + q(suite) + " --out " + q(out)).status, 0);
     const nlohmann::json capped = read_json_file((out / "runs" / "a__capped.json").string());
@@ -219,7 +230,8 @@ TEST(RunIdentity, AnotherBuildRedoesTheRuns)
     fs::permissions(rebuilt, fs::perms::owner_exec, fs::perm_options::add);
     const Output again = run("run " + q(suite) + " --out " + q(out), "", rebuilt.string());
     ASSERT_EQ(again.status, 0) << again.err;
-    EXPECT_NE(again.err.find("a x mprgp: stored run not reused: the build changed (commit or binary)\n"), std::string::npos)
+    EXPECT_NE(again.err.find("a x mprgp: stored run not reused: the build changed (commit or binary)\n"),
+              std::string::npos)
         << again.err;
     EXPECT_NE(again.err.find("ran 2 of 2 jobs"), std::string::npos) << again.err;
 }
@@ -235,23 +247,29 @@ TEST(RunIdentity, OneSuitePerOutAndFresh)
     ASSERT_EQ(run("run " + q(first) + " --out " + q(out)).status, 0);
     const Output other = run("run " + q(second) + " --out " + q(out));
     EXPECT_EQ(other.status, 2);
-    EXPECT_EQ(other.err, "contactbench run: error: " + out.string() +
-                             ": suite.json: holds results of suite 'first', not 'second'; use another --out, or --fresh "
-                             "to discard the results in " + out.string() + "\n");
+    EXPECT_EQ(other.err,
+              "contactbench run: error: " + out.string() +
+                  ": suite.json: holds results of suite 'first', not 'second'; use another --out, or --fresh "
+                  "to discard the results in " +
+                  out.string() + "\n");
     // A label removed from the suite: its run files would be mixed into summary.csv.
     write_suite(dir, "first", {"cg"});
     const Output shrunk = run("run " + q(first) + " --out " + q(out));
     EXPECT_EQ(shrunk.status, 2);
-    EXPECT_EQ(shrunk.err, "contactbench run: error: " + (out / "runs" / "a__mprgp.json").string() +
-                              ": not a job of suite 'first' (2 such run files: an earlier suite or shard?); use another "
-                              "--out, or --fresh "
-                              "to discard the results in " + out.string() + "\n");
+    EXPECT_EQ(shrunk.err,
+              "contactbench run: error: " + (out / "runs" / "a__mprgp.json").string() +
+                  ": not a job of suite 'first' (2 such run files: an earlier suite or shard?); use another "
+                  "--out, or --fresh "
+                  "to discard the results in " +
+                  out.string() + "\n");
     // Another shard into the same --out is refused the same way.
     write_suite(dir, "first", {"mprgp"});
     const Output shard = run("run " + q(first) + " --out " + q(out) + " --shard 2/2");
     EXPECT_EQ(shard.status, 2);
-    EXPECT_NE(shard.err.find((out / "runs" / "a__mprgp.json").string() + ": not a job of suite 'first' shard 2/2 (1 such"),
-              std::string::npos) << shard.err;
+    EXPECT_NE(
+        shard.err.find((out / "runs" / "a__mprgp.json").string() + ": not a job of suite 'first' shard 2/2 (1 such"),
+        std::string::npos)
+        << shard.err;
     // --fresh starts over.
     const Output fresh = run("run " + q(second) + " --out " + q(out) + " --fresh");
     ASSERT_EQ(fresh.status, 0) << fresh.err;
@@ -327,16 +345,20 @@ namespace {
 fs::path tiny_scene(const fs::path& dir, long frames)
 {
     const fs::path p = dir / "tiny.json";
-    write_json_atomic(p.string(),
-                      {{"name", "tiny"}, {"h", 0.01}, {"frames", frames},
-                       {"bodies", {{{"name", "cube"}, {"box", {{"cells", {1, 1, 1}}, {"size", {0.2, 0.2, 0.2}}}},
-                                    {"translate", {0, 0.11, 0}}, {"velocity", {0, -1, 0}}}}},
-                       {"obstacles", {{{"type", "plane"}, {"normal", {0, 1, 0}}, {"point", {0, 0, 0}}}}},
-                       {"output", {{"strip_frames", 0}}}});
+    write_json_atomic(p.string(), {{"name", "tiny"},
+                                   {"h", 0.01},
+                                   {"frames", frames},
+                                   {"bodies",
+                                    {{{"name", "cube"},
+                                      {"box", {{"cells", {1, 1, 1}}, {"size", {0.2, 0.2, 0.2}}}},
+                                      {"translate", {0, 0.11, 0}},
+                                      {"velocity", {0, -1, 0}}}}},
+                                   {"obstacles", {{{"type", "plane"}, {"normal", {0, 1, 0}}, {"point", {0, 0, 0}}}}},
+                                   {"output", {{"strip_frames", 0}}}});
     return p;
 }
 
-} // namespace
+}  // namespace
 
 TEST(Writes, SimulateReplacesAnOldOutAndFinishesItsTables)
 {
@@ -349,7 +371,7 @@ TEST(Writes, SimulateReplacesAnOldOutAndFinishesItsTables)
     ASSERT_EQ(again.status, 0) << again.err;
     EXPECT_EQ(count_matching(out / "snapshots", ".qpsnap"), 2u);
     const std::string steps = slurp(out / "steps.csv"), frames = slurp(out / "frames.csv");
-    EXPECT_EQ(std::count(steps.begin(), steps.end(), '\n'), 3);   // header + 2 frames x 1 Newton step
+    EXPECT_EQ(std::count(steps.begin(), steps.end(), '\n'), 3);  // header + 2 frames x 1 Newton step
     EXPECT_EQ(std::count(frames.begin(), frames.end(), '\n'), 3);
     EXPECT_EQ(count_matching(out, ".partial"), 0u);
     const nlohmann::json record = read_json_file((out / "simulation.json").string());
@@ -368,7 +390,8 @@ TEST(Writes, FileSizeLimitIsAClearErrorWithNoPartialOutput)
     EXPECT_EQ(sim.status, 2) << sim.err;
     EXPECT_NE(sim.err.find("contactbench simulate: error: " + (out / "snapshots" / "tiny_f0000_n0.qpsnap").string() +
                            ": write failed: File too large (nothing written)\n"),
-              std::string::npos) << sim.err;
+              std::string::npos)
+        << sim.err;
     EXPECT_EQ(count_matching(out, ".tmp"), 0u);
     EXPECT_EQ(count_matching(out, ".csv"), 0u);  // neither tables nor .partial tables are left
     EXPECT_FALSE(fs::exists(out / "simulation.json"));
@@ -419,11 +442,13 @@ TEST(Hostile, SpecialFilesAreRefusedNamingTheFile)
     EXPECT_EQ(scene.err, "contactbench simulate: error: " + fifo_error);
     // A FIFO matched by a suite glob fails its own runs, the others go ahead.
     write_snapshot(dir / "good.qpsnap", 1);
-    write_json_atomic((dir / "glob.json").string(), {{"name", "glob"}, {"snapshots", {"*.qpsnap"}}, {"solvers", {"mprgp"}}});
+    write_json_atomic((dir / "glob.json").string(),
+                      {{"name", "glob"}, {"snapshots", {"*.qpsnap"}}, {"solvers", {"mprgp"}}});
     const Output glob = run("run " + q(dir / "glob.json") + " --out " + q(dir / "out"));
     ASSERT_EQ(glob.status, 0) << glob.err;
     EXPECT_NE(glob.err.find("pipe x mprgp: invalid_input: " + fifo.string() + ": not a regular file (a FIFO)"),
-              std::string::npos) << glob.err;
+              std::string::npos)
+        << glob.err;
     EXPECT_NE(glob.err.find("good x mprgp: converged"), std::string::npos) << glob.err;
 
     // A folder as suite or scene, a symlink loop.
@@ -460,14 +485,16 @@ TEST(Hostile, DeepJsonIsRefusedNotACrash)
     const Output suite = run("run " + q(dir / "suite.json"));
     EXPECT_EQ(suite.status, 2);
     EXPECT_EQ(suite.err, "contactbench run: error: " + (dir / "suite.json").string() +
-                             ": JSON nested deeper than 64 levels (at byte " + std::to_string(suite_head.size() + 63) + ")\n");
+                             ": JSON nested deeper than 64 levels (at byte " + std::to_string(suite_head.size() + 63) +
+                             ")\n");
     // A scene.
     const std::string scene_head = R"({"name": "deep", "description": )";
     std::ofstream(dir / "scene.json") << scene_head << deep << "}";
     const Output scene = run("simulate " + q(dir / "scene.json"));
     EXPECT_EQ(scene.status, 2);
     EXPECT_EQ(scene.err, "contactbench simulate: error: " + (dir / "scene.json").string() +
-                             ": JSON nested deeper than 64 levels (at byte " + std::to_string(scene_head.size() + 63) + ")\n");
+                             ": JSON nested deeper than 64 levels (at byte " + std::to_string(scene_head.size() + 63) +
+                             ")\n");
     // A snapshot header: meta nested 10^6 deep.
     const std::string header_head = R"({"format": "qpsnap", "version": 1, "n": 0, "m": 0, "arrays": {}, "meta": )";
     const std::string header = header_head + deep + "}";
@@ -477,8 +504,8 @@ TEST(Hostile, DeepJsonIsRefusedNotACrash)
     const Output snap = run("info " + q(dir / "deep.qpsnap"));
     EXPECT_EQ(snap.status, 2);
     EXPECT_EQ(snap.err, "contactbench info: error: " + (dir / "deep.qpsnap").string() +
-                            ": header: JSON nested deeper than 64 levels (at byte " + std::to_string(header_head.size() + 63) +
-                            ")\n");
+                            ": header: JSON nested deeper than 64 levels (at byte " +
+                            std::to_string(header_head.size() + 63) + ")\n");
 }
 
 TEST(Hostile, HugeDeclaredSizesUnderAMemoryLimit)
@@ -500,8 +527,9 @@ TEST(Hostile, HugeDeclaredSizesUnderAMemoryLimit)
     const Output jj = run("convert " + q(j) + " " + q(work_dir() / "huge.qpsnap"), limit);
     EXPECT_EQ(jj.status, 2);
     const auto c_bytes = fs::file_size(j / "c.mtx");
-    EXPECT_EQ(jj.err, "contactbench convert: error: " + (j / "J.mtx").string() + ": line 2: declares 200000000 rows, at most " +
-                          std::to_string(c_bytes / 2 + 1) + " possible (c.mtx holds " + std::to_string(c_bytes) +
+    EXPECT_EQ(jj.err, "contactbench convert: error: " + (j / "J.mtx").string() +
+                          ": line 2: declares 200000000 rows, at most " + std::to_string(c_bytes / 2 + 1) +
+                          " possible (c.mtx holds " + std::to_string(c_bytes) +
                           " bytes, this file declares 1 entries)\n");
     EXPECT_FALSE(fs::exists(work_dir() / "huge.qpsnap"));
 
@@ -524,12 +552,14 @@ TEST(Hostile, SceneAndGeneratorParametersAreBounded)
                              "1000000 (6000000 tets)\n");
     const Output count = run("simulate " + q(kHostile / "scene_array_count.json") + " --out " + q(work_dir() / "x"));
     EXPECT_EQ(count.status, 2);
-    EXPECT_EQ(count.err, "contactbench simulate: error: " + (kHostile / "scene_array_count.json").string() +
-                             ": /bodies/0/array/count: 1000000000000000 copies, more than the limit of 6000000 tets allows\n");
+    EXPECT_EQ(count.err,
+              "contactbench simulate: error: " + (kHostile / "scene_array_count.json").string() +
+                  ": /bodies/0/array/count: 1000000000000000 copies, more than the limit of 6000000 tets allows\n");
     const Output many = run("simulate " + q(kHostile / "scene_many_bodies.json") + " --out " + q(work_dir() / "x"));
     EXPECT_EQ(many.status, 2);
-    EXPECT_EQ(many.err, "contactbench simulate: error: " + (kHostile / "scene_many_bodies.json").string() +
-                            ": /bodies/0/array/count: the scene reaches 13500000 tets, more than the limit of 6000000\n");
+    EXPECT_EQ(many.err,
+              "contactbench simulate: error: " + (kHostile / "scene_many_bodies.json").string() +
+                  ": /bodies/0/array/count: the scene reaches 13500000 tets, more than the limit of 6000000\n");
     EXPECT_FALSE(fs::exists(work_dir() / "x"));
 
     const fs::path out = work_dir() / "gen.qpsnap";
@@ -540,7 +570,10 @@ TEST(Hostile, SceneAndGeneratorParametersAreBounded)
     const Output inf = run("generate plane --out " + q(out) + " --param youngs=1e308");
     EXPECT_EQ(inf.status, 2);
     EXPECT_EQ(inf.err.rfind("contactbench generate: error: synthetic family 'plane': params: the parameters give a "
-                            "non-finite value in A (", 0), 0u) << inf.err;
+                            "non-finite value in A (",
+                            0),
+              0u)
+        << inf.err;
     EXPECT_FALSE(fs::exists(out));
 }
 
@@ -549,7 +582,8 @@ TEST(Hostile, IntegerSettingsDoNotOverflow)
     const fs::path snap = fs::path(CB_TEST_DATA_DIR) / "plane_2x2x2.qpsnap";
     const Output o = run("solve " + q(snap) + " --solver mprgp --set max_iterations=9223372036854775807");
     EXPECT_EQ(o.status, 2);
-    EXPECT_EQ(o.err, "contactbench solve: error: mprgp: /max_iterations: must be <= 1000000000000, got 9223372036854775807\n");
+    EXPECT_EQ(o.err,
+              "contactbench solve: error: mprgp: /max_iterations: must be <= 1000000000000, got 9223372036854775807\n");
     const Output big = run("solve " + q(snap) + " --solver mprgp --set max_iterations=1e19");
     EXPECT_EQ(big.status, 2);
     EXPECT_EQ(big.err, "contactbench solve: error: mprgp: /max_iterations: must be <= 1000000000000, got 1e+19\n");

@@ -64,7 +64,7 @@ public:
 };
 const auto* const kCleanUp = ::testing::AddGlobalTestEnvironment(new CleanUp);
 
-} // namespace
+}  // namespace
 
 TEST(Results, AtomicWriteReplacesAndLeavesNoTemporary)
 {
@@ -90,18 +90,35 @@ TEST(Results, SummaryColumnsAndRow)
     std::string header;
     for (size_t i = 0; i < summary_columns().size(); ++i) header += (i ? "," : "") + summary_columns()[i];
     EXPECT_EQ(header, expected);
-    const nlohmann::json run = {
-        {"solver", "mprgp"}, {"label", "mprgp-jacobi"}, {"status", "solved_relaxation"},
-        {"solver_status", "converged"}, {"criterion", "kkt"},
-        {"status_confirmed", true}, {"iterations", 54}, {"snapshot", {{"id", "plane-s1"}, {"n", 375}, {"m", 25}}},
-        {"counters", {{"a_products", 120}, {"cholmod_factorizations", 0}}},
-        {"accuracy", {{"max", 0.25}, {"stationarity", 0.25}, {"primal", 0.0}, {"dual", 0.0}, {"complementarity", 0.125},
-                      {"gap", 0.0625}}},
-        {"accuracy_solved", {{"max", 0.5}}}, {"m_solved", 12}, {"energy_gap", 0.75},
-        {"objective", -4.5}, {"violation", 0.0}, {"native_residual", nullptr}, {"nonfinite", false},
-        {"monotone", true}, {"time", {{"setup_s", 0.5}, {"solve_s", 1.5}, {"total_s", 2.0}}}, {"tol", 1e-6},
-        {"length_scale", 2.0}, {"length_scale_source", "x0_extent"},
-        {"message", "a, \"quoted\" message"}};
+    const nlohmann::json run = {{"solver", "mprgp"},
+                                {"label", "mprgp-jacobi"},
+                                {"status", "solved_relaxation"},
+                                {"solver_status", "converged"},
+                                {"criterion", "kkt"},
+                                {"status_confirmed", true},
+                                {"iterations", 54},
+                                {"snapshot", {{"id", "plane-s1"}, {"n", 375}, {"m", 25}}},
+                                {"counters", {{"a_products", 120}, {"cholmod_factorizations", 0}}},
+                                {"accuracy",
+                                 {{"max", 0.25},
+                                  {"stationarity", 0.25},
+                                  {"primal", 0.0},
+                                  {"dual", 0.0},
+                                  {"complementarity", 0.125},
+                                  {"gap", 0.0625}}},
+                                {"accuracy_solved", {{"max", 0.5}}},
+                                {"m_solved", 12},
+                                {"energy_gap", 0.75},
+                                {"objective", -4.5},
+                                {"violation", 0.0},
+                                {"native_residual", nullptr},
+                                {"nonfinite", false},
+                                {"monotone", true},
+                                {"time", {{"setup_s", 0.5}, {"solve_s", 1.5}, {"total_s", 2.0}}},
+                                {"tol", 1e-6},
+                                {"length_scale", 2.0},
+                                {"length_scale_source", "x0_extent"},
+                                {"message", "a, \"quoted\" message"}};
     EXPECT_EQ(summary_row(run, "demo"),
               "demo,plane-s1,mprgp-jacobi,mprgp,solved_relaxation,converged,kkt,true,54,120,0,0.25,0.25,0,0,0.125,"
               "0.0625,0.5,12,-4.5,0.75,0,,false,true,0.5,1.5,2,375,25,9.9999999999999995e-07,2,x0_extent");
@@ -133,9 +150,11 @@ TEST(Results, WriteSummaryReadsEveryRunFile)
 
 TEST(Suite, ParsesDefaultsAndSolvers)
 {
-    const Suite s = parse_suite({{"name", "t"}, {"snapshots", {"x.qpsnap"}},
-                                 {"solvers", {{{"label", "m1"}, {"solver", "mprgp"}, {"settings", {{"tol", 1e-4}}}}, "cg"}}},
-                                "suite.json");
+    const Suite s =
+        parse_suite({{"name", "t"},
+                     {"snapshots", {"x.qpsnap"}},
+                     {"solvers", {{{"label", "m1"}, {"solver", "mprgp"}, {"settings", {{"tol", 1e-4}}}}, "cg"}}},
+                    "suite.json");
     EXPECT_EQ(s.name, "t");
     ASSERT_EQ(s.solvers.size(), 2u);
     EXPECT_EQ(s.solvers[0].label, "m1");
@@ -161,7 +180,9 @@ TEST(Suite, RejectsBadSuitesNamingTheField)
     EXPECT_EQ(error_of([&] { parse_suite(with("tol", -1), "s.json"); }), "s.json: /tol: must be > 0, got -1");
     EXPECT_EQ(error_of([&] { parse_suite(with("decouple", "up"), "s.json"); }),
               "s.json: /decouple: expected one of auto, none, authors, random, depth, got 'up'");
-    EXPECT_EQ(error_of([&] { parse_suite(with("solvers", nlohmann::json::array({"cg", "cg"})), "s.json"); }),
+    EXPECT_EQ(error_of([&] {
+                  parse_suite(with("solvers", nlohmann::json::array({"cg", "cg"})), "s.json");
+              }),
               "s.json: /solvers/1: /label: duplicate label 'cg'");
     EXPECT_EQ(error_of([&] { parse_suite(with("repeat", 0), "s.json"); }), "s.json: /repeat: must be >= 1, got 0");
     nlohmann::json no_solvers = good;
@@ -181,10 +202,11 @@ TEST(Suite, ResolvesGlobsFoldersDuplicatesAndGenerated)
     write_qpsnap((dir / "a" / "f1.qpsnap").string(), qp);
     write_qpsnap((dir / "a" / "f2.qpsnap").string(), qp);
     write_qpsnap((dir / "b" / "f1.qpsnap").string(), qp);
-    const nlohmann::json j = {{"name", "r"},
-                              {"snapshots", {"a/f*.qpsnap", "b/", "a/f1.qpsnap"}},
-                              {"generate", {{{"id", "gen"}, {"family", "plane"}, {"seed", 3}, {"params", {{"nx", 2}}}}}},
-                              {"solvers", {"cg"}}};
+    const nlohmann::json j = {
+        {"name", "r"},
+        {"snapshots", {"a/f*.qpsnap", "b/", "a/f1.qpsnap"}},
+        {"generate", {{{"id", "gen"}, {"family", "plane"}, {"seed", 3}, {"params", {{"nx", 2}}}}}},
+        {"solvers", {"cg"}}};
     const Suite s = parse_suite(j, (dir / "suite.json").string());
     const auto snaps = resolve_snapshots(s, (dir / "cache").string());
     ASSERT_EQ(snaps.size(), 4u);  // a/f1 listed twice counts once
@@ -198,8 +220,8 @@ TEST(Suite, ResolvesGlobsFoldersDuplicatesAndGenerated)
     EXPECT_EQ(again[3].path, snaps[3].path);  // cached by content key, not rewritten
     EXPECT_EQ(fs::last_write_time(again[3].path), first_time);
     EXPECT_EQ(read_qpsnap(snaps[3].path).n(), make_synthetic("plane", {{"nx", 2}}, 3).n());
-    const Suite missing = parse_suite({{"name", "r"}, {"snapshots", {"zz*.qpsnap"}}, {"solvers", {"cg"}}},
-                                      (dir / "suite.json").string());
+    const Suite missing =
+        parse_suite({{"name", "r"}, {"snapshots", {"zz*.qpsnap"}}, {"solvers", {"cg"}}}, (dir / "suite.json").string());
     EXPECT_EQ(error_of([&] { resolve_snapshots(missing, (dir / "cache").string()); }),
               (dir / "suite.json").string() + ": /snapshots/0: pattern '" + (dir / "zz*.qpsnap").string() +
                   "' matches no file");
@@ -241,7 +263,8 @@ TEST(Reference, CachedByKeyAndAttached)
         const auto& rows = record["history"]["rows"];
         ASSERT_FALSE(rows.empty());
         // |F - F*| / (d_ref l^2), from the record's own scales.
-        const double energy = record["stiffness_scale"].get<double>() * std::pow(record["length_scale"].get<double>(), 2);
+        const double energy =
+            record["stiffness_scale"].get<double>() * std::pow(record["length_scale"].get<double>(), 2);
         EXPECT_DOUBLE_EQ(record["energy_gap"].get<double>(), std::abs(run.objective - f_star) / energy);
         EXPECT_LT(record["energy_gap"].get<double>(), 1e-9);
         EXPECT_DOUBLE_EQ(rows.back().back().get<double>(), record["energy_gap"].get<double>());

@@ -68,8 +68,9 @@ std::string write_suite(const std::string& name, bool timed)
 {
     nlohmann::json suite = {
         {"name", name},
-        {"generate", {{{"id", "p1"}, {"family", "plane"}, {"seed", 1}, {"params", {{"nx", 2}, {"ny", 2}, {"nz", 2}}}},
-                      {{"id", "p2"}, {"family", "plane"}, {"seed", 2}, {"params", {{"nx", 3}, {"ny", 2}, {"nz", 2}}}}}},
+        {"generate",
+         {{{"id", "p1"}, {"family", "plane"}, {"seed", 1}, {"params", {{"nx", 2}, {"ny", 2}, {"nz", 2}}}},
+          {{"id", "p2"}, {"family", "plane"}, {"seed", 2}, {"params", {{"nx", 3}, {"ny", 2}, {"nz", 2}}}}}},
         {"solvers", {"mprgp", "pgs", "active-set"}},
         {"tol", 1e-6},
         {"time_limit_s", 20}};
@@ -106,7 +107,7 @@ public:
 };
 const auto* const kCleanUp = ::testing::AddGlobalTestEnvironment(new CleanUp);
 
-} // namespace
+}  // namespace
 
 TEST(RunEnv, SlurmArrayTaskRunsItsShardInItsOwnFolder)
 {
@@ -116,9 +117,11 @@ TEST(RunEnv, SlurmArrayTaskRunsItsShardInItsOwnFolder)
     // --array=5-7: three tasks, shards 1..3 of 3, each in OUT/shard-<i>-of-3.
     std::string merge_args = "merge '" + out.string() + "'";
     for (int task = 5; task <= 7; ++task) {
-        const std::string env = "SLURM_JOB_ID=" + std::to_string(100 + task) + " SLURM_ARRAY_JOB_ID=100 SLURM_ARRAY_TASK_ID=" +
-                                std::to_string(task) + " SLURM_ARRAY_TASK_MIN=5 SLURM_ARRAY_TASK_MAX=7 "
-                                "SLURM_ARRAY_TASK_COUNT=3 SLURMD_NODENAME=node-" + std::to_string(task);
+        const std::string env = "SLURM_JOB_ID=" + std::to_string(100 + task) +
+                                " SLURM_ARRAY_JOB_ID=100 SLURM_ARRAY_TASK_ID=" + std::to_string(task) +
+                                " SLURM_ARRAY_TASK_MIN=5 SLURM_ARRAY_TASK_MAX=7 "
+                                "SLURM_ARRAY_TASK_COUNT=3 SLURMD_NODENAME=node-" +
+                                std::to_string(task);
         const Output o = run("run '" + suite + "' --out '" + out.string() + "'", env);
         ASSERT_EQ(o.status, 0) << o.err;
         const fs::path shard = out / ("shard-" + std::to_string(task - 4) + "-of-3");
@@ -201,10 +204,12 @@ TEST(RunEnv, JobsRunUntimedSuitesInParallelWithTheSameCounters)
     const std::string timed = write_suite("timed", true);
     const Output t = run("run '" + timed + "' --out '" + (work_dir() / "timed").string() + "' --jobs 3");
     ASSERT_EQ(t.status, 0) << t.err;
-    EXPECT_NE(t.err.find("run: --jobs 3: this suite's times are judged, so its runs go one at a time"), std::string::npos)
+    EXPECT_NE(t.err.find("run: --jobs 3: this suite's times are judged, so its runs go one at a time"),
+              std::string::npos)
         << t.err;
     EXPECT_FALSE(read_json_file((work_dir() / "timed" / "runs" / "p2__pgs.json").string()).contains("concurrent_jobs"));
-    const Output forced = run("run '" + timed + "' --out '" + (work_dir() / "timed-par").string() + "' --jobs 2 --jobs-timed");
+    const Output forced =
+        run("run '" + timed + "' --out '" + (work_dir() / "timed-par").string() + "' --jobs 2 --jobs-timed");
     ASSERT_EQ(forced.status, 0) << forced.err;
     EXPECT_NE(forced.err.find("runs go 2 at a time in child processes (--jobs-timed"), std::string::npos) << forced.err;
     EXPECT_EQ(summary_without_times(work_dir() / "timed-par"), summary_without_times(work_dir() / "timed"));
@@ -221,13 +226,16 @@ TEST(RunEnv, ClusterSlurmWritesFilesAndPrintsCommands)
     const Output o = run("cluster slurm '" + suite + "' --out '" + out.string() +
                          "' --shards 4 --partition short --time 00:20:00 --mem 1G --exclusive");
     ASSERT_EQ(o.status, 0) << o.err;
-    const std::string array = (out / "slurm" / "array.sbatch").string(), merge = (out / "slurm" / "merge.sbatch").string();
-    EXPECT_EQ(o.out, "jobid=$(sbatch --parsable '" + array + "')\nsbatch --dependency=afterok:$jobid '" + merge + "'\n");
+    const std::string array = (out / "slurm" / "array.sbatch").string(),
+                      merge = (out / "slurm" / "merge.sbatch").string();
+    EXPECT_EQ(o.out,
+              "jobid=$(sbatch --parsable '" + array + "')\nsbatch --dependency=afterok:$jobid '" + merge + "'\n");
     const std::string text = slurp(array);
     EXPECT_NE(text.find("\n#SBATCH --array=0-3\n"), std::string::npos) << text;
     EXPECT_NE(text.find("\n#SBATCH --partition=short\n"), std::string::npos) << text;
     EXPECT_NE(text.find("\n#SBATCH --exclusive\n"), std::string::npos) << text;
-    EXPECT_NE(text.find(" run '" + fs::canonical(suite).string() + "' --out '" + out.string() + "'\n"), std::string::npos)
+    EXPECT_NE(text.find(" run '" + fs::canonical(suite).string() + "' --out '" + out.string() + "'\n"),
+              std::string::npos)
         << text;
     EXPECT_NE(slurp(merge).find(" merge '" + out.string() + "'"), std::string::npos);
 
@@ -242,7 +250,8 @@ TEST(RunEnv, ClusterSlurmWritesFilesAndPrintsCommands)
     const fs::path spaced = work_dir() / "with space";
     const Output space = run("cluster slurm '" + suite + "' --out '" + spaced.string() + "' --shards 2");
     EXPECT_EQ(space.status, 2);
-    EXPECT_NE(space.err.find("holds a space, quote or %, which #SBATCH lines cannot carry"), std::string::npos) << space.err;
+    EXPECT_NE(space.err.find("holds a space, quote or %, which #SBATCH lines cannot carry"), std::string::npos)
+        << space.err;
     EXPECT_FALSE(fs::exists(spaced));
 }
 
@@ -250,9 +259,11 @@ TEST(RunEnv, JobsComputeReferencesBeforeTheTimedRuns)
 {
     const nlohmann::json suite = {
         {"name", "refs"},
-        {"generate", {{{"id", "plane"}, {"family", "plane"}, {"seed", 1}, {"params", {{"nx", 3}, {"ny", 2}, {"nz", 3}}}},
-                      {{"id", "coupled"}, {"family", "coupled"}, {"seed", 13}, {"params", {{"nx", 4}, {"ny", 2}, {"nz", 4}}}}}},
-        {"solvers", {"mprgp", "pgs"}},  // mprgp sees the coupled snapshot decoupled: still one reference, of the original QP
+        {"generate",
+         {{{"id", "plane"}, {"family", "plane"}, {"seed", 1}, {"params", {{"nx", 3}, {"ny", 2}, {"nz", 3}}}},
+          {{"id", "coupled"}, {"family", "coupled"}, {"seed", 13}, {"params", {{"nx", 4}, {"ny", 2}, {"nz", 4}}}}}},
+        {"solvers",
+         {"mprgp", "pgs"}},  // mprgp sees the coupled snapshot decoupled: still one reference, of the original QP
         {"reference", true},
         {"tol", 1e-6},
         {"time_limit_s", 20}};

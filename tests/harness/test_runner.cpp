@@ -131,7 +131,7 @@ RunOutcome run_toy(const nlohmann::json& settings, RunOptions options = {})
     return run_solver(toy_registry(), diagonal_qp(), "toy", settings, options, {{"id", "diag"}}, SolveContext{});
 }
 
-} // namespace
+}  // namespace
 
 TEST(Runner, HonestSolverMatchesHandSolution)
 {
@@ -159,11 +159,37 @@ TEST(Runner, HonestSolverMatchesHandSolution)
 TEST(Runner, RecordHasEverySchemaKey)
 {
     const RunOutcome run = run_toy({{"tol", 1e-8}});
-    for (const char* key : {"solver", "label", "settings", "snapshot", "decouple", "status", "criterion", "message",
-                            "iterations", "objective", "accuracy", "kkt_relative", "violation", "native_residual",
-                            "lambda_fitted", "nonfinite", "monotone", "status_confirmed", "tol", "counters", "time",
-                            "info", "history", "provenance", "solver_status", "m_solved", "length_scale",
-                            "length_scale_source", "stiffness_scale", "accuracy_tol", "violation_original"})
+    for (const char* key : {"solver",
+                            "label",
+                            "settings",
+                            "snapshot",
+                            "decouple",
+                            "status",
+                            "criterion",
+                            "message",
+                            "iterations",
+                            "objective",
+                            "accuracy",
+                            "kkt_relative",
+                            "violation",
+                            "native_residual",
+                            "lambda_fitted",
+                            "nonfinite",
+                            "monotone",
+                            "status_confirmed",
+                            "tol",
+                            "counters",
+                            "time",
+                            "info",
+                            "history",
+                            "provenance",
+                            "solver_status",
+                            "m_solved",
+                            "length_scale",
+                            "length_scale_source",
+                            "stiffness_scale",
+                            "accuracy_tol",
+                            "violation_original"})
         EXPECT_TRUE(run.record.contains(key)) << key;
     for (const char* key : {"stationarity", "primal", "dual", "complementarity", "gap", "max"}) {
         EXPECT_TRUE(run.record["accuracy"].contains(key)) << key;
@@ -174,8 +200,9 @@ TEST(Runner, RecordHasEverySchemaKey)
     EXPECT_EQ(run.record["length_scale_source"], "unconstrained_extent");
     EXPECT_DOUBLE_EQ(run.record["length_scale"].get<double>(), 2.0);
     EXPECT_DOUBLE_EQ(run.record["stiffness_scale"].get<double>(), 3.5);  // mean of 1..6
-    EXPECT_FALSE(run.record.contains("accuracy_solved"));  // the problem was not changed
-    for (const char* key : {"setup_s", "solve_s", "total_s", "repeat"}) EXPECT_TRUE(run.record["time"].contains(key)) << key;
+    EXPECT_FALSE(run.record.contains("accuracy_solved"));                // the problem was not changed
+    for (const char* key : {"setup_s", "solve_s", "total_s", "repeat"})
+        EXPECT_TRUE(run.record["time"].contains(key)) << key;
     for (const char* key : {"git_commit", "git_dirty", "build_type", "compiler", "cpu", "cores", "date", "eigen",
                             "suitesparse", "blas", "hostname"})
         EXPECT_TRUE(run.record["provenance"].contains(key)) << key;
@@ -232,8 +259,8 @@ TEST(Runner, StrideKeepsHistoryUnderMaxWithFirstAndLast)
     const auto& rows = run.record["history"]["rows"];
     EXPECT_LE(rows.size(), 16u);
     EXPECT_GE(rows.size(), 8u);
-    EXPECT_EQ(rows.front()[0].get<long>(), 1);       // first monitor call (iteration 1)
-    EXPECT_EQ(rows.back()[0].get<long>(), 1000);     // the returned point
+    EXPECT_EQ(rows.front()[0].get<long>(), 1);                    // first monitor call (iteration 1)
+    EXPECT_EQ(rows.back()[0].get<long>(), 1000);                  // the returned point
     EXPECT_EQ(run.record["history"]["stride"].get<long>(), 128);  // 1000 calls into 15 rows
     // Recorded iterations are on the stride: call index = iteration - 1.
     for (size_t i = 0; i + 1 < rows.size(); ++i) EXPECT_EQ((rows[i][0].get<long>() - 1) % 128, 0);
@@ -314,8 +341,8 @@ TEST(Runner, DecouplesCoupledRowsForMprgp)
         EXPECT_EQ(run.record["solved_problem"], "decoupled");
         ASSERT_TRUE(run.record.contains("accuracy_solved"));
         const Vec g = qp.A * run.result.x - qp.b;
-        const AccuracyParts full = accuracy_from_gradient(qp.view(), accuracy_scale(qp.view()), run.result.x, g,
-                                                          run.lambda_full);
+        const AccuracyParts full =
+            accuracy_from_gradient(qp.view(), accuracy_scale(qp.view()), run.result.x, g, run.lambda_full);
         EXPECT_DOUBLE_EQ(full.max(), run.accuracy.max());
         EXPECT_DOUBLE_EQ(run.record["violation_original"].get<double>(), max_violation(qp.view(), run.result.x));
         // Its status says on which problem tol was met.

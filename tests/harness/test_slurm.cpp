@@ -29,7 +29,7 @@ std::string input_error(const Environment& env)
     return "no error";
 }
 
-} // namespace
+}  // namespace
 
 TEST(SlurmShard, NoArrayNoShard)
 {
@@ -63,14 +63,14 @@ TEST(SlurmShard, OffsetArrayMapsThroughMin)
         EXPECT_EQ(shard->count, 4);
     }
     // COUNT absent (older Slurm): MAX - MIN + 1.
-    const auto no_count = shard_from_slurm({{"SLURM_ARRAY_TASK_ID", "12"}, {"SLURM_ARRAY_TASK_MIN", "10"},
-                                            {"SLURM_ARRAY_TASK_MAX", "12"}});
+    const auto no_count = shard_from_slurm(
+        {{"SLURM_ARRAY_TASK_ID", "12"}, {"SLURM_ARRAY_TASK_MIN", "10"}, {"SLURM_ARRAY_TASK_MAX", "12"}});
     ASSERT_TRUE(no_count.has_value());
     EXPECT_EQ(no_count->index, 3);
     EXPECT_EQ(no_count->count, 3);
     // MAX absent: COUNT alone.
-    const auto no_max = shard_from_slurm({{"SLURM_ARRAY_TASK_ID", "7"}, {"SLURM_ARRAY_TASK_MIN", "7"},
-                                          {"SLURM_ARRAY_TASK_COUNT", "2"}});
+    const auto no_max = shard_from_slurm(
+        {{"SLURM_ARRAY_TASK_ID", "7"}, {"SLURM_ARRAY_TASK_MIN", "7"}, {"SLURM_ARRAY_TASK_COUNT", "2"}});
     ASSERT_TRUE(no_max.has_value());
     EXPECT_EQ(no_max->index, 1);
     EXPECT_EQ(no_max->count, 2);
@@ -79,33 +79,42 @@ TEST(SlurmShard, OffsetArrayMapsThroughMin)
 
 TEST(SlurmShard, BadVariablesAreNamed)
 {
-    EXPECT_EQ(input_error({{"SLURM_ARRAY_TASK_ID", "x1"}, {"SLURM_ARRAY_TASK_MIN", "0"}, {"SLURM_ARRAY_TASK_COUNT", "4"}}),
-              "run: SLURM_ARRAY_TASK_ID: expected an integer, got 'x1'");
+    EXPECT_EQ(
+        input_error({{"SLURM_ARRAY_TASK_ID", "x1"}, {"SLURM_ARRAY_TASK_MIN", "0"}, {"SLURM_ARRAY_TASK_COUNT", "4"}}),
+        "run: SLURM_ARRAY_TASK_ID: expected an integer, got 'x1'");
     EXPECT_EQ(input_error({{"SLURM_ARRAY_TASK_ID", "1"}, {"SLURM_ARRAY_TASK_COUNT", "4"}}),
               "run: SLURM_ARRAY_TASK_MIN: not set, but SLURM_ARRAY_TASK_ID is (an array task needs both)");
     EXPECT_EQ(input_error({{"SLURM_ARRAY_TASK_ID", "1"}, {"SLURM_ARRAY_TASK_MIN", "0"}}),
               "run: SLURM_ARRAY_TASK_COUNT: not set and neither is SLURM_ARRAY_TASK_MAX");
-    EXPECT_EQ(input_error({{"SLURM_ARRAY_TASK_ID", "9"}, {"SLURM_ARRAY_TASK_MIN", "5"}, {"SLURM_ARRAY_TASK_MAX", "8"},
+    EXPECT_EQ(input_error({{"SLURM_ARRAY_TASK_ID", "9"},
+                           {"SLURM_ARRAY_TASK_MIN", "5"},
+                           {"SLURM_ARRAY_TASK_MAX", "8"},
                            {"SLURM_ARRAY_TASK_COUNT", "4"}}),
               "run: SLURM_ARRAY_TASK_ID: 9 is outside the array 5..8");
-    EXPECT_EQ(input_error({{"SLURM_ARRAY_TASK_ID", "4"}, {"SLURM_ARRAY_TASK_MIN", "5"}, {"SLURM_ARRAY_TASK_COUNT", "4"}}),
-              "run: SLURM_ARRAY_TASK_ID: 4 is outside the array 5..8");
+    EXPECT_EQ(
+        input_error({{"SLURM_ARRAY_TASK_ID", "4"}, {"SLURM_ARRAY_TASK_MIN", "5"}, {"SLURM_ARRAY_TASK_COUNT", "4"}}),
+        "run: SLURM_ARRAY_TASK_ID: 4 is outside the array 5..8");
     // --array=0-15:4 gives ids 0, 4, 8, 12: four tasks over sixteen ids.
-    EXPECT_EQ(input_error({{"SLURM_ARRAY_TASK_ID", "4"}, {"SLURM_ARRAY_TASK_MIN", "0"}, {"SLURM_ARRAY_TASK_MAX", "12"},
+    EXPECT_EQ(input_error({{"SLURM_ARRAY_TASK_ID", "4"},
+                           {"SLURM_ARRAY_TASK_MIN", "0"},
+                           {"SLURM_ARRAY_TASK_MAX", "12"},
                            {"SLURM_ARRAY_TASK_COUNT", "4"}}),
               "run: SLURM_ARRAY_TASK_COUNT: 4 tasks over the ids 0..12: only a contiguous array (e.g. --array=0-3 or "
               "5-8) maps to shards");
     EXPECT_EQ(input_error({{"SLURM_ARRAY_TASK_ID", "3"}, {"SLURM_ARRAY_TASK_MIN", "3"}, {"SLURM_ARRAY_TASK_MAX", "1"}}),
               "run: SLURM_ARRAY_TASK_MAX: 1 is below SLURM_ARRAY_TASK_MIN 3");
-    EXPECT_EQ(input_error({{"SLURM_ARRAY_TASK_ID", "0"}, {"SLURM_ARRAY_TASK_MIN", "0"}, {"SLURM_ARRAY_TASK_COUNT", "0"}}),
-              "run: SLURM_ARRAY_TASK_COUNT: must be >= 1, got 0");
+    EXPECT_EQ(
+        input_error({{"SLURM_ARRAY_TASK_ID", "0"}, {"SLURM_ARRAY_TASK_MIN", "0"}, {"SLURM_ARRAY_TASK_COUNT", "0"}}),
+        "run: SLURM_ARRAY_TASK_COUNT: must be >= 1, got 0");
 }
 
 TEST(SlurmProvenance, JobNodeAndArrayTask)
 {
     EXPECT_TRUE(slurm_job_provenance({}).is_null());
-    const nlohmann::json p = slurm_job_provenance({{"SLURM_JOB_ID", "42"}, {"SLURM_ARRAY_JOB_ID", "40"},
-                                                   {"SLURM_ARRAY_TASK_ID", "6"}, {"SLURMD_NODENAME", "node07"},
+    const nlohmann::json p = slurm_job_provenance({{"SLURM_JOB_ID", "42"},
+                                                   {"SLURM_ARRAY_JOB_ID", "40"},
+                                                   {"SLURM_ARRAY_TASK_ID", "6"},
+                                                   {"SLURMD_NODENAME", "node07"},
                                                    {"SLURM_JOB_PARTITION", "short"}});
     EXPECT_EQ(p["job_id"], "42");
     EXPECT_EQ(p["array_job_id"], "40");
@@ -141,7 +150,8 @@ TEST(SlurmSbatch, ArrayAndMergeFiles)
           "\n#SBATCH --mem=2G\n", "\n#SBATCH --partition=short\n", "\n#SBATCH --time=00:30:00\n",
           "\n#SBATCH --account=abc\n", "\n#SBATCH --output=/scratch/u/ci/slurm/%x-%A_%a.out\n",
           "\nexport OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1\n",
-          "\nsrun --ntasks=1 --cpus-per-task=2 --cpu-bind=cores '/opt/cb/bin/contactbench' run '/home/u/suites/ci.json' --out "
+          "\nsrun --ntasks=1 --cpus-per-task=2 --cpu-bind=cores '/opt/cb/bin/contactbench' run "
+          "'/home/u/suites/ci.json' --out "
           "'/scratch/u/ci'\n"})
         EXPECT_NE(array.find(line), std::string::npos) << line << "\nnot in\n" << array;
     // Every #SBATCH line comes before the first command (sbatch stops reading them there).
@@ -168,8 +178,9 @@ TEST(TimingHygiene, MixedCpuModelsWarn)
     const auto models = cpu_models_of_timed_runs({a, b, a, failed});
     ASSERT_EQ(models.size(), 2u);
     EXPECT_EQ(models.at("Xeon A"), 2u);
-    EXPECT_EQ(mixed_cpu_warning(models),
-              "timed runs come from 2 CPU models, so their times do not compare (counters do): 'EPYC B' (1 runs); "
-              "'Xeon A' (2 runs). Pin the partition (cluster slurm --partition, or --sbatch-option=--constraint=...) to "
-              "time on one model.");
+    EXPECT_EQ(
+        mixed_cpu_warning(models),
+        "timed runs come from 2 CPU models, so their times do not compare (counters do): 'EPYC B' (1 runs); "
+        "'Xeon A' (2 runs). Pin the partition (cluster slurm --partition, or --sbatch-option=--constraint=...) to "
+        "time on one model.");
 }

@@ -45,7 +45,9 @@ TEST(StressCases, AreDistinctSeededAndBuildable)
         select_stress_cases(all, {"no-such-case"});
         FAIL();
     } catch (const InputError& e) {
-        EXPECT_EQ(std::string(e.what()).rfind("--cases: no-such-case: no stress case or family of that name; known: baseline-plane, ", 0), 0u);
+        EXPECT_EQ(std::string(e.what()).rfind(
+                      "--cases: no-such-case: no stress case or family of that name; known: baseline-plane, ", 0),
+                  0u);
     }
 }
 
@@ -87,8 +89,9 @@ TEST(StressRun, QuickRunGivesHonestOutcomesAndWritesTheTable)
     std::ifstream csv(dir + "/stability.csv");
     std::string header;
     std::getline(csv, header);
-    EXPECT_EQ(header, "solver,case,severity,status,kkt,tol,violation,nonfinite,monotone,time_s,iterations,"
-                      "status_confirmed,message,family,n,m,criterion,m_solved,solver_status,kkt_solved,primal,energy_gap");
+    EXPECT_EQ(header,
+              "solver,case,severity,status,kkt,tol,violation,nonfinite,monotone,time_s,iterations,"
+              "status_confirmed,message,family,n,m,criterion,m_solved,solver_status,kkt_solved,primal,energy_gap");
     long lines = 0;
     for (std::string line; std::getline(csv, line);) ++lines;
     EXPECT_EQ(lines, 8);
@@ -211,5 +214,5 @@ TEST(StressReportText, ListsAWrongStatus)
         << csv;
 }
 
-} // namespace
-} // namespace cb
+}  // namespace
+}  // namespace cb

@@ -30,7 +30,7 @@ bool same_bits(const cb::SpMat& a, const cb::SpMat& b)
     return true;
 }
 
-} // namespace
+}  // namespace
 
 TEST(FclibIo, RoundTripIsBitExactWithSolution)
 {
@@ -77,12 +77,15 @@ TEST(FclibIo, NotAnFclibFileIsAnInputErrorNamingTheGroup)
 {
     if (cb::fclib_version().empty()) GTEST_SKIP() << "FCLIB export not built";
     const fs::path path = scratch("garbage.hdf5");
-    { std::ofstream(path) << "not hdf5"; }
+    {
+        std::ofstream(path) << "not hdf5";
+    }
     try {
         cb::read_fclib_global(path.string());
         FAIL() << "no error";
     } catch (const cb::InputError& e) {
-        EXPECT_EQ(std::string(e.what()), path.string() + ": /fclib_global: not an HDF5 file with an FCLIB global problem");
+        EXPECT_EQ(std::string(e.what()),
+                  path.string() + ": /fclib_global: not an HDF5 file with an FCLIB global problem");
     }
     fs::remove_all(path.parent_path());
 }

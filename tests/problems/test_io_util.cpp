@@ -29,8 +29,7 @@ fs::path scratch()
     return dir;
 }
 
-template <typename F>
-std::string error_of(F&& f)
+template <typename F> std::string error_of(F&& f)
 {
     try {
         f();
@@ -45,7 +44,8 @@ TEST(IoUtil, SpecialFilesAreRefusedWithoutBlocking)
     const fs::path fifo = scratch() / "fifo";
     ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
     EXPECT_EQ(error_of([&] { read_regular_file(fifo.string()); }), fifo.string() + ": not a regular file (a FIFO)");
-    EXPECT_EQ(error_of([&] { read_json_checked(scratch().string()); }), scratch().string() + ": not a regular file (a folder)");
+    EXPECT_EQ(error_of([&] { read_json_checked(scratch().string()); }),
+              scratch().string() + ": not a regular file (a folder)");
     EXPECT_EQ(error_of([&] { require_regular_file("/dev/null"); }), "/dev/null: not a regular file (a device)");
     EXPECT_EQ(error_of([&] { read_regular_file((scratch() / "missing").string()); }),
               (scratch() / "missing").string() + ": cannot open: No such file or directory");
@@ -57,7 +57,8 @@ TEST(IoUtil, JsonDepthCountsBracketsOutsideStringsOnly)
     const std::string ok = std::string(64, '[') + std::string(64, ']');
     EXPECT_NO_THROW(parse_json_text(ok, "ok.json"));
     const std::string deep = std::string(65, '[') + std::string(65, ']');
-    EXPECT_EQ(error_of([&] { parse_json_text(deep, "deep.json"); }), "deep.json: JSON nested deeper than 64 levels (at byte 64)");
+    EXPECT_EQ(error_of([&] { parse_json_text(deep, "deep.json"); }),
+              "deep.json: JSON nested deeper than 64 levels (at byte 64)");
     const std::string text = R"({"a": "[[[[\"{{{{", "b": [1, {"c": "]]]]"}]})";
     const nlohmann::json j = parse_json_text(std::string(60, '[') + text + std::string(60, ']'), "s.json");
     EXPECT_EQ(j[0][0][0][0].size(), 1u);
@@ -114,5 +115,5 @@ public:
 };
 const auto* const kCleanUp = ::testing::AddGlobalTestEnvironment(new CleanUp);
 
-} // namespace
-} // namespace cb
+}  // namespace
+}  // namespace cb

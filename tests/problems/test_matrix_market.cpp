@@ -40,7 +40,8 @@ std::string file_bytes(const std::string& path)
 std::string tiny_folder(const std::string& name, const std::string& file = "", const std::string& text = "")
 {
     const std::string d = temp_dir(name);
-    put(d + "/A.mtx", "%%MatrixMarket matrix coordinate real symmetric\n% lower triangle\n2 2 3\n1 1 4\n2 1 1\n2 2 3\n");
+    put(d + "/A.mtx",
+        "%%MatrixMarket matrix coordinate real symmetric\n% lower triangle\n2 2 3\n1 1 4\n2 1 1\n2 2 3\n");
     put(d + "/b.mtx", "%%MatrixMarket matrix array real general\n2 1\n1\n2\n");
     put(d + "/x0.mtx", "%%MatrixMarket matrix array real general\n2 1\n0\n0\n");
     put(d + "/J.mtx", "%%MatrixMarket matrix coordinate integer general\n1 2 2\n1 1 1\n1 2 -1\n");
@@ -140,19 +141,22 @@ TEST(MatrixMarketErrors, BadEntryLine)
 
 TEST(MatrixMarketErrors, EntryOutOfRange)
 {
-    const std::string d = tiny_folder("range", "J.mtx", "%%MatrixMarket matrix coordinate real general\n1 2 2\n1 1 1\n1 3 -1\n");
+    const std::string d =
+        tiny_folder("range", "J.mtx", "%%MatrixMarket matrix coordinate real general\n1 2 2\n1 1 1\n1 3 -1\n");
     expect_error(d, d + "/J.mtx: line 4: entry (1 3 -1) outside [1, 1] x [1, 2]");
 }
 
 TEST(MatrixMarketErrors, TooFewEntries)
 {
-    const std::string d = tiny_folder("few", "J.mtx", "%%MatrixMarket matrix coordinate real general\n1 2 3\n1 1 1\n1 2 -1\n");
+    const std::string d =
+        tiny_folder("few", "J.mtx", "%%MatrixMarket matrix coordinate real general\n1 2 3\n1 1 1\n1 2 -1\n");
     expect_error(d, d + "/J.mtx: entries: expected 3 entries, the file ends after 2");
 }
 
 TEST(MatrixMarketErrors, DuplicateEntry)
 {
-    const std::string d = tiny_folder("dup", "J.mtx", "%%MatrixMarket matrix coordinate real general\n1 2 2\n1 1 1\n1 1 2\n");
+    const std::string d =
+        tiny_folder("dup", "J.mtx", "%%MatrixMarket matrix coordinate real general\n1 2 2\n1 1 1\n1 1 2\n");
     expect_error(d, d + "/J.mtx: line 4: duplicate entry (1, 1)");
 }
 
@@ -171,8 +175,8 @@ TEST(MatrixMarketErrors, MissingFile)
 
 TEST(MatrixMarketErrors, AsymmetricGeneralA)
 {
-    const std::string d = tiny_folder("asym", "A.mtx",
-                                      "%%MatrixMarket matrix coordinate real general\n2 2 4\n1 1 4\n1 2 1\n2 1 2\n2 2 3\n");
+    const std::string d = tiny_folder(
+        "asym", "A.mtx", "%%MatrixMarket matrix coordinate real general\n2 2 4\n1 1 4\n1 2 1\n2 1 2\n2 2 3\n");
     expect_error(d, d + ": A: not symmetric: A(0, 1) = 1 but A(1, 0) = 2 (difference 1 > 1e-12 * max|A_ij| = "
                         "3.9999999999999999e-12)");
 }
@@ -186,9 +190,12 @@ TEST(MatrixMarketErrors, ContactJsonWrongLength)
 TEST(MatrixMarketErrors, DeclaredSizesBeyondTheBytesPresent)
 {
     // Issue 15: the size line is checked against what the files can hold before allocating.
-    const std::string a = tiny_folder("huge_a", "A.mtx", "%%MatrixMarket matrix coordinate real general\n200000000 200000000 1\n1 1 4\n");
-    expect_error(a, a + "/A.mtx: line 2: declares 200000000 rows but only 1 entries (every row needs its diagonal entry)");
-    const std::string j = tiny_folder("huge_j", "J.mtx", "%%MatrixMarket matrix coordinate real general\n200000000 2 1\n1 1 1\n");
+    const std::string a =
+        tiny_folder("huge_a", "A.mtx", "%%MatrixMarket matrix coordinate real general\n200000000 200000000 1\n1 1 4\n");
+    expect_error(a,
+                 a + "/A.mtx: line 2: declares 200000000 rows but only 1 entries (every row needs its diagonal entry)");
+    const std::string j =
+        tiny_folder("huge_j", "J.mtx", "%%MatrixMarket matrix coordinate real general\n200000000 2 1\n1 1 1\n");
     const auto c_bytes = fs::file_size(fs::path(j) / "c.mtx");
     expect_error(j, j + "/J.mtx: line 2: declares 200000000 rows, at most " + std::to_string(c_bytes / 2 + 1) +
                         " possible (c.mtx holds " + std::to_string(c_bytes) + " bytes, this file declares 1 entries)");
@@ -205,5 +212,5 @@ TEST(MatrixMarketErrors, DeclaredSizesBeyondTheBytesPresent)
     }
 }
 
-} // namespace
-} // namespace cb
+}  // namespace
+}  // namespace cb

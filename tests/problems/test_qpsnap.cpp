@@ -8,9 +8,9 @@
 #include <zlib.h>
 
 #include <chrono>
-#include <ctime>
 #include <cmath>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -76,11 +76,16 @@ std::string write_raw(const std::string& name, const std::map<std::string, Raw>&
     std::string data;
     for (const auto& kv : arrays) {
         std::string bytes;
-        if (kv.second.dtype == "int64") bytes.assign(reinterpret_cast<const char*>(kv.second.i.data()), 8 * kv.second.i.size());
-        else bytes.assign(reinterpret_cast<const char*>(kv.second.f.data()), 8 * kv.second.f.size());
+        if (kv.second.dtype == "int64")
+            bytes.assign(reinterpret_cast<const char*>(kv.second.i.data()), 8 * kv.second.i.size());
+        else
+            bytes.assign(reinterpret_cast<const char*>(kv.second.f.data()), 8 * kv.second.f.size());
         const auto crc = crc32(0L, reinterpret_cast<const Bytef*>(bytes.data()), uInt(bytes.size()));
-        header["arrays"][kv.first] = {{"dtype", kv.second.dtype}, {"shape", kv.second.shape}, {"offset", data.size()},
-                                      {"nbytes", bytes.size()}, {"crc32", crc}};
+        header["arrays"][kv.first] = {{"dtype", kv.second.dtype},
+                                      {"shape", kv.second.shape},
+                                      {"offset", data.size()},
+                                      {"nbytes", bytes.size()},
+                                      {"crc32", crc}};
         data += bytes;
     }
     if (edit) edit(header);
@@ -237,7 +242,8 @@ TEST(QpsnapCorrupt, HeaderNotUtf8)
         read_qpsnap(path);
         FAIL();
     } catch (const InputError& e) {
-        EXPECT_EQ(std::string(e.what()).rfind(path + ": header: not valid UTF-8 JSON (parse error at header byte ", 0), 0u)
+        EXPECT_EQ(std::string(e.what()).rfind(path + ": header: not valid UTF-8 JSON (parse error at header byte ", 0),
+                  0u)
             << e.what();
     }
 }
@@ -256,7 +262,8 @@ TEST(QpsnapCorrupt, VersionUnsupported)
 
 TEST(QpsnapCorrupt, NMissingOrNegative)
 {
-    expect_error(write_raw("nmissing.qpsnap", tiny_arrays(), 3, 2, [](nlohmann::json& h) { h.erase("n"); }), "n: missing");
+    expect_error(write_raw("nmissing.qpsnap", tiny_arrays(), 3, 2, [](nlohmann::json& h) { h.erase("n"); }),
+                 "n: missing");
     expect_error(write_raw("mneg.qpsnap", tiny_arrays(), 3, -1), "m: expected a non-negative integer, got -1");
 }
 
@@ -295,21 +302,24 @@ TEST(QpsnapCorrupt, WrongShape)
 
 TEST(QpsnapCorrupt, OffsetMisaligned)
 {
-    expect_error(write_raw("align.qpsnap", tiny_arrays(), 3, 2,
-                           [](nlohmann::json& h) { h["arrays"]["b"]["offset"] = h["arrays"]["b"]["offset"].get<int>() + 4; }),
-                 "b.offset: 220 is not 8-byte aligned");
+    expect_error(
+        write_raw("align.qpsnap", tiny_arrays(), 3, 2,
+                  [](nlohmann::json& h) { h["arrays"]["b"]["offset"] = h["arrays"]["b"]["offset"].get<int>() + 4; }),
+        "b.offset: 220 is not 8-byte aligned");
 }
 
 TEST(QpsnapCorrupt, OffsetOutsideBuffer)
 {
-    expect_error(write_raw("outside.qpsnap", tiny_arrays(), 3, 2, [](nlohmann::json& h) { h["arrays"]["c"]["offset"] = 400; }),
-                 "c.offset: bytes [400, 416) lie outside the data buffer of 280 bytes");
+    expect_error(
+        write_raw("outside.qpsnap", tiny_arrays(), 3, 2, [](nlohmann::json& h) { h["arrays"]["c"]["offset"] = 400; }),
+        "c.offset: bytes [400, 416) lie outside the data buffer of 280 bytes");
 }
 
 TEST(QpsnapCorrupt, NbytesMismatch)
 {
-    expect_error(write_raw("nbytes.qpsnap", tiny_arrays(), 3, 2, [](nlohmann::json& h) { h["arrays"]["b"]["nbytes"] = 16; }),
-                 "b.nbytes: 16 does not match shape [3] (expected 24)");
+    expect_error(
+        write_raw("nbytes.qpsnap", tiny_arrays(), 3, 2, [](nlohmann::json& h) { h["arrays"]["b"]["nbytes"] = 16; }),
+        "b.nbytes: 16 does not match shape [3] (expected 24)");
 }
 
 TEST(QpsnapCorrupt, CrcMismatch)
@@ -324,7 +334,8 @@ TEST(QpsnapCorrupt, CrcMismatch)
         read_qpsnap(path);
         FAIL();
     } catch (const InputError& e) {
-        EXPECT_EQ(std::string(e.what()).rfind(path + ": x0.crc32: mismatch: header says " + expected + ", data has ", 0), 0u)
+        EXPECT_EQ(
+            std::string(e.what()).rfind(path + ": x0.crc32: mismatch: header says " + expected + ", data has ", 0), 0u)
             << e.what();
     }
 }
@@ -419,7 +430,8 @@ TEST(QpsnapCorrupt, ContactArraysNeedMRows)
     expect_error(write_raw("kind.qpsnap", a), "contact.kind.shape: expected [2] (m = 2), got [3]");
     auto v = tiny_arrays();
     v["contact.vertex"] = ints({0, -1, -1, -1, 1, 2, -1, -1});
-    expect_error(write_raw("vertex.qpsnap", v), "contact.vertex.shape: expected [2, 4] (m = 2, 4 vertices per row), got [8]");
+    expect_error(write_raw("vertex.qpsnap", v),
+                 "contact.vertex.shape: expected [2, 4] (m = 2, 4 vertices per row), got [8]");
     auto k = tiny_arrays();
     k["contact.kind"] = ints({0, 9});
     expect_error(write_raw("kind9.qpsnap", k), "contact.kind: value 9 at row 1 is not a contact kind (0..4)");
@@ -453,8 +465,8 @@ TEST(QpsnapPerf, LoadTimeOf107kDofSnapshot)
     std::filesystem::remove(path);
 }
 
-} // namespace
-} // namespace cb
+}  // namespace
+}  // namespace cb
 
 namespace cb {
 namespace {
@@ -472,8 +484,8 @@ TEST(QpsnapFixture, CommittedFileReads)
     EXPECT_EQ(qpsnap_content_hash(path).size(), 16u);
 }
 
-} // namespace
-} // namespace cb
+}  // namespace
+}  // namespace cb
 
 // Regression (found by tests/fuzz): a header number too large for a double made nlohmann::json
 // throw out_of_range, which escaped read_qpsnap instead of becoming an InputError.

@@ -102,8 +102,8 @@ TEST(Synthetic, FamiliesSortedWithHelp)
 {
     const auto f = synthetic_families();
     EXPECT_TRUE(std::is_sorted(f.begin(), f.end()));
-    for (const char* name : {"unconstrained", "plane", "box", "coupled", "random-spd", "infeasible",
-                             "duplicate-rows", "scaled-rows", "zero-rows"})
+    for (const char* name : {"unconstrained", "plane", "box", "coupled", "random-spd", "infeasible", "duplicate-rows",
+                             "scaled-rows", "zero-rows"})
         EXPECT_NE(std::find(f.begin(), f.end(), name), f.end()) << name;
     EXPECT_NE(synthetic_family_help("plane").find("tilt_deg"), std::string::npos);
 }
@@ -121,7 +121,9 @@ TEST(Synthetic, UnknownFamilyAndParameter)
         make_synthetic("box", {{"tilt_deg", 3}}, 1);
         FAIL();
     } catch (const InputError& e) {
-        EXPECT_EQ(std::string(e.what()).rfind("synthetic family 'box': params.tilt_deg: unknown parameter; known: nx, ny", 0), 0u)
+        EXPECT_EQ(
+            std::string(e.what()).rfind("synthetic family 'box': params.tilt_deg: unknown parameter; known: nx, ny", 0),
+            0u)
             << e.what();
     }
     try {
@@ -247,7 +249,8 @@ TEST(Synthetic, RowVariants)
     EXPECT_GT(dup.m(), plane.m());
     int repeats = 0;
     for (Eigen::Index r = 1; r < dup.m(); ++r)
-        repeats += Vec(dup.J.row(r).transpose()).isApprox(Vec(dup.J.row(r - 1).transpose()), 0.0) && dup.c[r] == dup.c[r - 1];
+        repeats +=
+            Vec(dup.J.row(r).transpose()).isApprox(Vec(dup.J.row(r - 1).transpose()), 0.0) && dup.c[r] == dup.c[r - 1];
     EXPECT_EQ(repeats, dup.m() - plane.m());
     nlohmann::json zero = small;
     zero["count"] = 4;
@@ -296,5 +299,5 @@ TEST(Synthetic, SameSeedSameBytesOtherSeedOtherBytes)
     }
 }
 
-} // namespace
-} // namespace cb
+}  // namespace
+}  // namespace cb

@@ -24,7 +24,7 @@ std::vector<Box3> random_boxes(int n, unsigned seed)
     }
     return boxes;
 }
-} // namespace
+}  // namespace
 
 TEST(Bvh, PointAndBoxQueriesEqualBruteForce)
 {
@@ -67,7 +67,10 @@ TEST(Bvh, NearestEqualsBruteForce)
         double best = 1e300;
         int want = -1;
         for (int i = 0; i < static_cast<int>(boxes.size()); ++i)
-            if (d2(i) < best) { best = d2(i); want = i; }
+            if (d2(i) < best) {
+                best = d2(i);
+                want = i;
+            }
         double got_d2 = 0;
         EXPECT_EQ(bvh.nearest(p, d2, &got_d2), want);
         EXPECT_DOUBLE_EQ(got_d2, best);
@@ -119,8 +122,9 @@ TEST(Dcd, InterBodyRowsEqualBruteForceAndHaveTwelveNonzeros)
             const Vec3 p = x.segment<3>(3 * v);
             bool inside = false;
             for (Eigen::Index t = 0; t < bodies[b].tets.rows() && !inside; ++t) {
-                const auto w = tet_barycentric(p, x.segment<3>(3 * bodies[b].tets(t, 0)), x.segment<3>(3 * bodies[b].tets(t, 1)),
-                                               x.segment<3>(3 * bodies[b].tets(t, 2)), x.segment<3>(3 * bodies[b].tets(t, 3)));
+                const auto w =
+                    tet_barycentric(p, x.segment<3>(3 * bodies[b].tets(t, 0)), x.segment<3>(3 * bodies[b].tets(t, 1)),
+                                    x.segment<3>(3 * bodies[b].tets(t, 2)), x.segment<3>(3 * bodies[b].tets(t, 3)));
                 inside = w.minCoeff() >= -1e-9;
             }
             if (!inside) continue;
@@ -128,7 +132,8 @@ TEST(Dcd, InterBodyRowsEqualBruteForceAndHaveTwelveNonzeros)
             double best = 1e300;
             for (Eigen::Index f = 0; f < bodies[b].faces.rows(); ++f) {
                 Eigen::Vector3d w;
-                const Vec3 q = closest_point_triangle(p, x.segment<3>(3 * bodies[b].faces(f, 0)), x.segment<3>(3 * bodies[b].faces(f, 1)),
+                const Vec3 q = closest_point_triangle(p, x.segment<3>(3 * bodies[b].faces(f, 0)),
+                                                      x.segment<3>(3 * bodies[b].faces(f, 1)),
                                                       x.segment<3>(3 * bodies[b].faces(f, 2)), w);
                 best = std::min(best, (p - q).norm());
             }
@@ -209,7 +214,8 @@ TEST(Dcd, SelfContactFindsOverlapWithinOneBodyAndNothingAtRest)
     one.faces.resize(two[0].faces.rows() + two[1].faces.rows(), 3);
     one.faces << two[0].faces, two[1].faces;
     one.surface_vertices = two[0].surface_vertices;
-    one.surface_vertices.insert(one.surface_vertices.end(), two[1].surface_vertices.begin(), two[1].surface_vertices.end());
+    one.surface_vertices.insert(one.surface_vertices.end(), two[1].surface_vertices.begin(),
+                                two[1].surface_vertices.end());
     DetectionSettings self;
     self.self_contact = true;
     DetectionStats st_self, st_inter, st_rest;

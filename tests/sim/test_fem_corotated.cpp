@@ -24,7 +24,7 @@ Vec random_perturbation(long n, double scale, unsigned seed)
     for (long i = 0; i < n; ++i) d[i] = scale * u(rng);
     return d;
 }
-} // namespace
+}  // namespace
 
 TEST(FemCorotated, LumpedMassSumsToDensityTimesVolume)
 {
@@ -164,5 +164,6 @@ TEST(Integrator, FreeFallQpMatchesBackwardEuler)
     SpMat K;
     fem.assemble(0.0, 1.0, K);
     const double m0 = fem.vertex_mass()[0];
-    EXPECT_NEAR(A.coeff(0, 0), (1 + p.h * p.a_M) * m0 + (p.h * p.h + p.h * p.a_K) * K.coeff(0, 0), 1e-12 * A.coeff(0, 0));
+    EXPECT_NEAR(A.coeff(0, 0), (1 + p.h * p.a_M) * m0 + (p.h * p.h + p.h * p.a_K) * K.coeff(0, 0),
+                1e-12 * A.coeff(0, 0));
 }

@@ -41,52 +41,64 @@ void expect_unit_tet(const TetMesh& m)
     ASSERT_EQ(m.tet_count(), 1);
     EXPECT_NEAR(mesh_volume(m), 1.0 / 6.0, 1e-15);  // oriented positively whatever the file order
 }
-} // namespace
+}  // namespace
 
 TEST(MeshIo, ReadsEveryTetFormat)
 {
     // The file lists the tet with negative orientation (0 2 1 3) so orientation is fixed on read.
-    expect_unit_tet(read_abq(write("t.abq", "*HEADING\n*NODE\n1, 0,0,0\n2, 1,0,0\n3, 0,1,0\n4, 0,0,1\n"
-                                            "*ELEMENT, TYPE=C3D4, ELSET=E\n1, 1,3,2,4\n*ELSET, ELSET=EALL, GENERATE\n1,1,1\n")));
+    expect_unit_tet(
+        read_abq(write("t.abq", "*HEADING\n*NODE\n1, 0,0,0\n2, 1,0,0\n3, 0,1,0\n4, 0,0,1\n"
+                                "*ELEMENT, TYPE=C3D4, ELSET=E\n1, 1,3,2,4\n*ELSET, ELSET=EALL, GENERATE\n1,1,1\n")));
     write("t.node", "# nodes\n4 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 0 1\n");
     expect_unit_tet(read_tetgen(write("t.ele", "1 4 0\n0 0 2 1 3\n")));
-    expect_unit_tet(read_gmsh(write("t22.msh", "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n$EndNodes\n"
-                                               "$Elements\n2\n1 2 2 0 1 1 2 3\n2 4 2 0 1 1 3 2 4\n$EndElements\n")));
-    expect_unit_tet(read_gmsh(write("t41.msh", "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Entities\n0 0 0 1\n1 0 0 0 1 1 1 0 0\n$EndEntities\n"
-                                               "$Nodes\n1 4 1 4\n3 1 0 4\n1\n2\n3\n4\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n$EndNodes\n"
-                                               "$Elements\n1 1 1 1\n3 1 4 1\n1 1 3 2 4\n$EndElements\n")));
-    expect_unit_tet(read_medit(write("t.mesh", "MeshVersionFormatted 1\nDimension\n3\nVertices\n4\n0 0 0 0\n1 0 0 0\n0 1 0 0\n0 0 1 0\n"
-                                               "Triangles\n1\n1 2 3 0\nTetrahedra\n1\n1 3 2 4 0\nEnd\n")));
+    expect_unit_tet(read_gmsh(write(
+        "t22.msh", "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n$EndNodes\n"
+                   "$Elements\n2\n1 2 2 0 1 1 2 3\n2 4 2 0 1 1 3 2 4\n$EndElements\n")));
+    expect_unit_tet(read_gmsh(
+        write("t41.msh", "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Entities\n0 0 0 1\n1 0 0 0 1 1 1 0 0\n$EndEntities\n"
+                         "$Nodes\n1 4 1 4\n3 1 0 4\n1\n2\n3\n4\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n$EndNodes\n"
+                         "$Elements\n1 1 1 1\n3 1 4 1\n1 1 3 2 4\n$EndElements\n")));
+    expect_unit_tet(read_medit(
+        write("t.mesh", "MeshVersionFormatted 1\nDimension\n3\nVertices\n4\n0 0 0 0\n1 0 0 0\n0 1 0 0\n0 0 1 0\n"
+                        "Triangles\n1\n1 2 3 0\nTetrahedra\n1\n1 3 2 4 0\nEnd\n")));
     expect_unit_tet(read_tet_mesh(tmp_path("t.abq")));
 }
 
 TEST(MeshIo, ReadsSurfaces)
 {
     // COFF with colour columns, a quad fan-triangulated.
-    const SurfaceMesh off = read_off(write("s.off", "COFF\n# comment\n4 2 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n1 1 0 0 0 255 255\n"
-                                                   "0 1 0 9 9 9 255\n4 0 1 2 3\n3 0 2 1 10 20 30\n"));
+    const SurfaceMesh off =
+        read_off(write("s.off", "COFF\n# comment\n4 2 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n1 1 0 0 0 255 255\n"
+                                "0 1 0 9 9 9 255\n4 0 1 2 3\n3 0 2 1 10 20 30\n"));
     EXPECT_EQ(off.positions.rows(), 4);
     EXPECT_EQ(off.faces.rows(), 3);
-    const SurfaceMesh obj = read_obj(write("s.obj", "mtllib x.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\nf -3 -1 -2\n"));
+    const SurfaceMesh obj =
+        read_obj(write("s.obj", "mtllib x.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\nf -3 -1 -2\n"));
     EXPECT_EQ(obj.faces.rows(), 2);
     EXPECT_EQ(obj.faces(1, 1), 2);
 }
 
 TEST(MeshIo, ErrorsNameFileLineAndProblem)
 {
-    const std::string abq = write("bad.abq", "*NODE\n1, 0,0,0\n2, 1,0,0\n3, 0,1,0\n4, 0,0,1\n*ELEMENT, TYPE=C3D4\n1, 1,2,3\n");
+    const std::string abq =
+        write("bad.abq", "*NODE\n1, 0,0,0\n2, 1,0,0\n3, 0,1,0\n4, 0,0,1\n*ELEMENT, TYPE=C3D4\n1, 1,2,3\n");
     EXPECT_EQ(error_of([&] { read_abq(abq); }), abq + ": line 7: expected 5 integers 'id,n1,n2,n3,n4', got '1, 1,2,3'");
     const std::string abq2 = write("bad2.abq", "*NODE\n1, 0,0,zero\n");
     EXPECT_EQ(error_of([&] { read_abq(abq2); }), abq2 + ": line 2: expected a finite number, got 'zero'");
-    const std::string abq3 = write("bad3.abq", "*NODE\n1, 0,0,0\n2, 1,0,0\n3, 0,1,0\n4, 0,0,1\n*ELEMENT, TYPE=C3D4\n1, 1,2,3,9\n");
+    const std::string abq3 =
+        write("bad3.abq", "*NODE\n1, 0,0,0\n2, 1,0,0\n3, 0,1,0\n4, 0,0,1\n*ELEMENT, TYPE=C3D4\n1, 1,2,3,9\n");
     EXPECT_EQ(error_of([&] { read_abq(abq3); }), abq3 + ": line 7: tet refers to undefined vertex id 9");
-    const std::string flat = write("flat.abq", "*NODE\n1, 0,0,0\n2, 1,0,0\n3, 0,1,0\n4, 1,1,0\n*ELEMENT, TYPE=C3D4\n1, 1,2,3,4\n");
+    const std::string flat =
+        write("flat.abq", "*NODE\n1, 0,0,0\n2, 1,0,0\n3, 0,1,0\n4, 1,1,0\n*ELEMENT, TYPE=C3D4\n1, 1,2,3,4\n");
     EXPECT_NE(error_of([&] { read_abq(flat); }).find(flat + ": tet 1: degenerate"), std::string::npos);
     const std::string off = write("bad.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n");
     EXPECT_EQ(error_of([&] { read_off(off); }), off + ": line 6: vertex index 7 out of range (3 vertices)");
     const std::string msh = write("bad.msh", "$MeshFormat\n2.2 1 8\n$EndMeshFormat\n");
     EXPECT_NE(error_of([&] { read_gmsh(msh); }).find(msh + ": line 2: only ASCII"), std::string::npos);
-    EXPECT_NE(error_of([&] { read_tet_mesh(tmp_path("missing.abq")); }).find("missing.abq: cannot open: No such file or directory"), std::string::npos);
+    EXPECT_NE(error_of([&] {
+                  read_tet_mesh(tmp_path("missing.abq"));
+              }).find("missing.abq: cannot open: No such file or directory"),
+              std::string::npos);
     EXPECT_NE(error_of([&] { read_tet_mesh("x.vtk"); }).find("unknown tet mesh extension '.vtk'"), std::string::npos);
 }
 

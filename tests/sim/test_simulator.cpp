@@ -53,7 +53,7 @@ Vec3 momentum(const Simulator& s)
     for (long i = 0; i < s.vertices(); ++i) p += s.fem().vertex_mass()[i] * s.velocities().segment<3>(3 * i);
     return p;
 }
-} // namespace
+}  // namespace
 
 TEST(Simulator, LongCubeHasThePapersSize)
 {
@@ -71,8 +71,13 @@ TEST(Simulator, LongCubeHasThePapersSize)
 
 TEST(Simulator, BoxRestingOnPlaneStaysOnItFor100Steps)
 {
-    const json j = {{"name", "rest"}, {"h", 0.01}, {"frames", 100}, {"a_M", 0.02}, {"a_K", 0.01},
-                    {"solver", reference_solver()}, {"detection", {{"margin", 0.005}}},
+    const json j = {{"name", "rest"},
+                    {"h", 0.01},
+                    {"frames", 100},
+                    {"a_M", 0.02},
+                    {"a_K", 0.01},
+                    {"solver", reference_solver()},
+                    {"detection", {{"margin", 0.005}}},
                     {"bodies", {box_body(Vec3(0, 0.15, 0), Vec3::Zero())}},
                     {"obstacles", {{{"type", "plane"}, {"normal", {0, 1, 0}}, {"point", {0, 0, 0}}}}}};
     Simulator sim(load_scene_json(j, "rest.json", PathRoots{}), SimulatorOptions{});
@@ -98,7 +103,11 @@ TEST(Simulator, BoxRestingOnPlaneStaysOnItFor100Steps)
 TEST(Simulator, TwoBodiesInFreeFlightConserveLinearMomentum)
 {
     // a_M = 0: stiffness damping a_K K annihilates translations, so momentum is conserved exactly.
-    json j = {{"name", "flight"}, {"h", 0.01}, {"gravity", {0, 0, 0}}, {"a_M", 0.0}, {"a_K", 0.02},
+    json j = {{"name", "flight"},
+              {"h", 0.01},
+              {"gravity", {0, 0, 0}},
+              {"a_M", 0.0},
+              {"a_K", 0.02},
               {"bodies", {box_body(Vec3(0, 0, 0), Vec3(1, 0, 0)), box_body(Vec3(1, 0.1, 0), Vec3(-2, 0.5, 0.3))}}};
     j["bodies"][1]["rotate_deg"] = {10, 20, 30};
     Simulator sim(load_scene_json(j, "flight.json", PathRoots{}), SimulatorOptions{});
@@ -124,30 +133,42 @@ TEST(Simulator, MalformedScenesNameFileAndKey)
     EXPECT_EQ(error_of([&] { load_scene_json(j, "s.json", PathRoots{}); }),
               "s.json: /bodies/0/materal: unknown key (see scenes/README.md for the keys of this object)");
     json k = {{"h", "0.01"}, {"bodies", {box_body(Vec3::Zero(), Vec3::Zero())}}};
-    EXPECT_EQ(error_of([&] { load_scene_json(k, "s.json", PathRoots{}); }), "s.json: /h: expected a number, got string \"0.01\"");
+    EXPECT_EQ(error_of([&] { load_scene_json(k, "s.json", PathRoots{}); }),
+              "s.json: /h: expected a number, got string \"0.01\"");
     json l = {{"bodies", {{{"mesh", {"data:meshes/nope.abq", "missing.off"}}}}}};
     const std::string e = error_of([&] { load_scene_json(l, "s.json", PathRoots{"", "", "/nonexistent"}); });
-    EXPECT_EQ(e, "s.json: /bodies/0/mesh: no mesh alternative is available: tried data:meshes/nope.abq (no --data given); "
-                 "/nonexistent/missing.off (not found)");
+    EXPECT_EQ(e,
+              "s.json: /bodies/0/mesh: no mesh alternative is available: tried data:meshes/nope.abq (no --data given); "
+              "/nonexistent/missing.off (not found)");
     json m = {{"bodies", {box_body(Vec3::Zero(), Vec3::Zero())}}, {"obstacles", {{{"type", "cone"}}}}};
     EXPECT_EQ(error_of([&] { load_scene_json(m, "s.json", PathRoots{}); }),
               "s.json: /obstacles/0/type: must be one of plane, sphere, box, cylinder, mesh, stairs, got 'cone'");
     json n = {{"bodies", {box_body(Vec3::Zero(), Vec3::Zero())}}, {"solver", "no-such-solver"}};
-    EXPECT_NE(error_of([&] { Simulator(load_scene_json(n, "s.json", PathRoots{}), SimulatorOptions{}); }).find("no-such-solver"),
+    EXPECT_NE(error_of([&] {
+                  Simulator(load_scene_json(n, "s.json", PathRoots{}), SimulatorOptions{});
+              }).find("no-such-solver"),
               std::string::npos);
     // A malformed mesh file is reported with its file and line through the scene.
     const std::string dir = tmp_dir("badmesh");
     std::ofstream(dir + "/bad.abq") << "*NODE\n1, 0,0,0\n*ELEMENT, TYPE=C3D4\n1, 1,1\n";
     json o = {{"bodies", {{{"mesh", "bad.abq"}}}}};
-    EXPECT_EQ(error_of([&] { load_scene_json(o, "s.json", PathRoots{"", "", dir}); }),
+    EXPECT_EQ(error_of([&] {
+                  load_scene_json(o, "s.json", PathRoots{"", "", dir});
+              }),
               dir + "/bad.abq: line 4: expected 5 integers 'id,n1,n2,n3,n4', got '1, 1,1'");
 }
 
 TEST(Simulator, AuthorsIniImportMapsSwappedDampingNames)
 {
-    const json ini = {{"h", 0.005}, {"alpha_k", 0.02}, {"alpha_m", 0.01}, {"gravity", {0, 0, 0}}, {"num_frames", 35},
-                      {"mprgp_tolerance", 1e-5}, {"vol_file", {"model/mesh_1303_4014.abq"}},
-                      {"trans_rot_scale", {{0, 0, 0.5, 0, 0, 0, 1}}}, {"init_vel", {{0, 0, -4}}}};
+    const json ini = {{"h", 0.005},
+                      {"alpha_k", 0.02},
+                      {"alpha_m", 0.01},
+                      {"gravity", {0, 0, 0}},
+                      {"num_frames", 35},
+                      {"mprgp_tolerance", 1e-5},
+                      {"vol_file", {"model/mesh_1303_4014.abq"}},
+                      {"trans_rot_scale", {{0, 0, 0.5, 0, 0, 0, 1}}},
+                      {"init_vel", {{0, 0, -4}}}};
     const json s = import_authors_ini(ini, "x/dino_two.ini");
     EXPECT_EQ(s["a_M"], 0.02);  // their "alpha_k" multiplies M
     EXPECT_EQ(s["a_K"], 0.01);

@@ -14,9 +14,9 @@ namespace cb::test {
 struct GridQpParams {
     int nx = 4, ny = 3, nz = 4;
     double mass = 1.0, stiffness = 20.0;
-    double drop = 0.25;          ///< how far below its rest position the predicted body sits
-    double tilt = 0.2;           ///< plane normal (sin tilt, cos tilt, 0)
-    bool coupled = false;        ///< add rows that share vertices (J J' not diagonal)
+    double drop = 0.25;    ///< how far below its rest position the predicted body sits
+    double tilt = 0.2;     ///< plane normal (sin tilt, cos tilt, 0)
+    bool coupled = false;  ///< add rows that share vertices (J J' not diagonal)
 };
 
 inline int grid_vertex(const GridQpParams& p, int i, int j, int k) { return i + p.nx * (j + p.ny * k); }
@@ -70,8 +70,7 @@ inline Qp make_grid_qp(const GridQpParams& p)
         // Vertex-"triangle"-like rows: y_v - 0.5 (y_a + y_b) >= -0.02 between neighbours.
         for (int k = 0; k + 1 < p.nz; ++k)
             for (int i = 0; i + 1 < p.nx; ++i) {
-                const int v = grid_vertex(p, i, 1, k), a = grid_vertex(p, i, 0, k),
-                          b = grid_vertex(p, i + 1, 0, k + 1);
+                const int v = grid_vertex(p, i, 1, k), a = grid_vertex(p, i, 0, k), b = grid_vertex(p, i + 1, 0, k + 1);
                 jt.emplace_back(row, 3 * v + 1, 1.0);
                 jt.emplace_back(row, 3 * a + 1, -0.5);
                 jt.emplace_back(row, 3 * b + 1, -0.5);
@@ -92,4 +91,4 @@ inline double relative_kkt(const Qp& qp, const Vec& x, const Vec& lambda)
     return accuracy(qp.view(), x, lambda).max();
 }
 
-} // namespace cb::test
+}  // namespace cb::test

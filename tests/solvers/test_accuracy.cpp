@@ -29,11 +29,11 @@ Qp worked_qp(const Vec& b, const Vec& c, const Vec& x0)
 /// A = 2I, b = (0, b1), J = I, c given.
 Qp diag_qp(double b1, const Eigen::Vector2d& c, const Eigen::Vector2d& x0 = Eigen::Vector2d::Zero())
 {
-    return dense_qp(2.0 * Eigen::MatrixXd::Identity(2, 2), Eigen::Vector2d(0, b1), Eigen::MatrixXd::Identity(2, 2),
-                    c, x0);
+    return dense_qp(2.0 * Eigen::MatrixXd::Identity(2, 2), Eigen::Vector2d(0, b1), Eigen::MatrixXd::Identity(2, 2), c,
+                    x0);
 }
 
-} // namespace
+}  // namespace
 
 TEST(Accuracy, ScaleOfTheWorkedQp)
 {
@@ -204,8 +204,8 @@ TEST(Accuracy, FitMultipliersSplitsDependentRows)
 {
     Eigen::MatrixXd J(3, 2);
     J << 1, 0, 1, 0, 2, 0;
-    const Qp qp = dense_qp(2.0 * Eigen::MatrixXd::Identity(2, 2), Eigen::Vector2d(0, 2), J,
-                           Eigen::Vector3d(1, 1, 2), Vec::Zero(2));
+    const Qp qp = dense_qp(2.0 * Eigen::MatrixXd::Identity(2, 2), Eigen::Vector2d(0, 2), J, Eigen::Vector3d(1, 1, 2),
+                           Vec::Zero(2));
     const Vec x = Eigen::Vector2d(1, 1);
     const Vec g = qp.A * x - qp.b;
     const Vec lambda = cb::fit_multipliers(qp.view(), cb::accuracy_scale(qp.view()), x, g);

@@ -156,7 +156,7 @@ void expect_same_measure(const AccuracyParts& e, const AccuracyParts& f, bool ex
     }
 }
 
-} // namespace
+}  // namespace
 
 TEST(AccuracyMetamorphic, MeasureOfMappedPointsAgrees)
 {
@@ -277,4 +277,4 @@ TEST(AccuracyMetamorphic, StartMovedOneKilometreGivesTheSameConvergedAccuracy)
     }
 }
 
-} // namespace cb
+}  // namespace cb

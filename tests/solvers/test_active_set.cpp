@@ -2,13 +2,13 @@
 // solutions, degenerate and infeasible sets, agreement with cg and with a brute-force
 // enumeration of active sets, and the synthetic families at 1e-10 relative KKT.
 #include "problems/synthetic.hpp"
+#include "solvers/accuracy.hpp"
 #include "solvers/active_set.hpp"
 #include "solvers/cg.hpp"
-#include "solvers/accuracy.hpp"
 #include "tests/solvers/tiny_qps.hpp"
 
-#include <gtest/gtest.h>
 #include <Eigen/Dense>
+#include <gtest/gtest.h>
 #include <iostream>
 #include <random>
 
@@ -26,10 +26,7 @@ SolverResult run_active_set(const Qp& qp, const nlohmann::json& settings = nlohm
     return solver.solve(qp.view(), cb::SolveContext{});
 }
 
-double relative_kkt(const Qp& qp, const SolverResult& r)
-{
-    return cb::accuracy(qp.view(), r.x, r.lambda).max();
-}
+double relative_kkt(const Qp& qp, const SolverResult& r) { return cb::accuracy(qp.view(), r.x, r.lambda).max(); }
 
 /// Checks the multiplier sign and the exact zero on clearly inactive rows.
 void expect_multipliers_clean(const Qp& qp, const SolverResult& r)
@@ -51,7 +48,7 @@ Eigen::MatrixXd row(std::initializer_list<double> values)
     return r;
 }
 
-} // namespace
+}  // namespace
 
 // 1-D: min 2 x^2 - 2 x s.t. x >= 1. Unconstrained 0.5 violates, so x* = 1, lambda* = 4 - 2 = 2.
 TEST(ActiveSet, OneDimensionalActiveRow)
@@ -146,8 +143,8 @@ TEST(ActiveSet, ZeroRowWithPositiveCIsInfeasible)
 {
     Eigen::MatrixXd J(2, 2);
     J << 1, 0, 0, 0;
-    const Qp qp = dense_qp(2.0 * Eigen::MatrixXd::Identity(2, 2), Eigen::Vector2d(0, 2), J,
-                           Eigen::Vector2d(1, 0.5), Vec::Zero(2));
+    const Qp qp = dense_qp(2.0 * Eigen::MatrixXd::Identity(2, 2), Eigen::Vector2d(0, 2), J, Eigen::Vector2d(1, 0.5),
+                           Vec::Zero(2));
     const SolverResult r = run_active_set(qp);
     EXPECT_EQ(r.status, SolveStatus::INFEASIBLE);
     EXPECT_EQ(r.message, "active-set: infeasible: row 1 of J is zero and c = 0.5 > 0");
@@ -158,8 +155,8 @@ TEST(ActiveSet, ContradictoryRowsAreInfeasible)
 {
     Eigen::MatrixXd J(2, 2);
     J << 1, 0, -1, 0;
-    const Qp qp = dense_qp(2.0 * Eigen::MatrixXd::Identity(2, 2), Eigen::Vector2d(0, 2), J,
-                           Eigen::Vector2d(1, 0), Vec::Zero(2));
+    const Qp qp =
+        dense_qp(2.0 * Eigen::MatrixXd::Identity(2, 2), Eigen::Vector2d(0, 2), J, Eigen::Vector2d(1, 0), Vec::Zero(2));
     const SolverResult r = run_active_set(qp);
     EXPECT_EQ(r.status, SolveStatus::INFEASIBLE);
     EXPECT_NE(r.message.find("infeasible"), std::string::npos) << r.message;
@@ -397,8 +394,8 @@ TEST(ActiveSet, DependentRowTakesADualStep)
 {
     Eigen::MatrixXd J(3, 2);
     J << 1, 0, 0, 1, 1, 2;
-    const Qp qp = dense_qp(Eigen::MatrixXd::Identity(2, 2), Eigen::Vector2d(0, -10), J, Eigen::Vector3d(1, 1, 3.5),
-                           Vec::Zero(2));
+    const Qp qp =
+        dense_qp(Eigen::MatrixXd::Identity(2, 2), Eigen::Vector2d(0, -10), J, Eigen::Vector3d(1, 1, 3.5), Vec::Zero(2));
     const SolverResult r = run_active_set(qp);
     ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
     EXPECT_NEAR(r.x[0], 1.5, 1e-14);
@@ -435,7 +432,7 @@ struct PivotMonitor : cb::Monitor {
         return true;
     }
 };
-} // namespace
+}  // namespace
 
 TEST(ActiveSet, MonitorSeesEveryPivot)
 {

@@ -6,8 +6,8 @@
 #include "solvers/registry.hpp"
 #include "tests/solvers/tiny_qps.hpp"
 
-#include <gtest/gtest.h>
 #include <Eigen/Dense>
+#include <gtest/gtest.h>
 
 namespace {
 
@@ -31,16 +31,17 @@ std::vector<HandCase> hand_cases()
     namespace tq = cb::testing_qps;
     std::vector<HandCase> cases;
     cases.push_back({"style_example", tq::tiny_active_qp(), Eigen::Vector2d(1, 1), Vec::Constant(1, 2.0), true});
-    cases.push_back({"two_rows_decoupled", tq::two_row_decoupled_qp(), tq::two_row_decoupled_x(),
-                     Eigen::Vector2d(2, 4), true});
+    cases.push_back(
+        {"two_rows_decoupled", tq::two_row_decoupled_qp(), tq::two_row_decoupled_x(), Eigen::Vector2d(2, 4), true});
     cases.push_back({"unconstrained", tq::unconstrained_qp(), tq::unconstrained_x(), Vec(0), true});
-    cases.push_back({"two_rows_coupled", tq::two_row_coupled_qp(), Eigen::Vector2d(1, 1), Eigen::Vector2d(3, 3), false});
+    cases.push_back(
+        {"two_rows_coupled", tq::two_row_coupled_qp(), Eigen::Vector2d(1, 1), Eigen::Vector2d(3, 3), false});
     return cases;
 }
 
 class AllSolvers : public ::testing::TestWithParam<std::string> {};
 
-} // namespace
+}  // namespace
 
 TEST_P(AllSolvers, TinyHandDerivedQpsSatisfyKkt)
 {
@@ -85,8 +86,8 @@ TEST_P(AllSolvers, ConvergedStatusIsConfirmedByTheAccuracyMeasure)
     for (int i = 0; i + 3 < n; ++i) A(i, i + 3) = A(i + 3, i) = -1.0;
     Vec b = Vec::LinSpaced(n, -1.0, 1.0);
     Eigen::MatrixXd J = Eigen::MatrixXd::Zero(2, n);
-    J(0, 1) = 1.0;                   // vertex 0, y >= 0.5
-    J(1, 7) = 1.0;                   // vertex 2, y >= 1
+    J(0, 1) = 1.0;  // vertex 0, y >= 0.5
+    J(1, 7) = 1.0;  // vertex 2, y >= 1
     const Qp qp = cb::testing_qps::dense_qp(A, b, J, Eigen::Vector2d(0.5, 1.0), Vec::Zero(n));
     for (double tol : {1e-4, 1e-8}) {
         const auto solver = cb::builtin_registry().create(GetParam(), {{"tol", tol}});

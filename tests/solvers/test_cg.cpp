@@ -1,12 +1,12 @@
 // Tests of `cg` (PCG on A x = b, constraints ignored): hand-derived solutions, its stop rules,
 // counters, monitor calls, breakdown and settings errors.
 #include "problems/synthetic.hpp"
-#include "solvers/cg.hpp"
 #include "solvers/accuracy.hpp"
+#include "solvers/cg.hpp"
 #include "tests/solvers/tiny_qps.hpp"
 
-#include <gtest/gtest.h>
 #include <Eigen/Dense>
+#include <gtest/gtest.h>
 
 namespace {
 
@@ -38,7 +38,7 @@ struct RecordingMonitor : cb::Monitor {
     }
 };
 
-} // namespace
+}  // namespace
 
 // A = [[4,1,0],[1,3,1],[0,1,2]], b = (3,0,3): x* = (1,-1,2). Plain CG is exact in n = 3 steps.
 TEST(Cg, SolvesHandUnconstrainedQpInThreeSteps)
@@ -65,8 +65,8 @@ TEST(Cg, JacobiIsExactOnDiagonalA)
 {
     Eigen::MatrixXd A = Eigen::MatrixXd::Zero(4, 4);
     A.diagonal() << 1, 10, 100, 1000;
-    const Qp qp = cb::testing_qps::dense_qp(A, Eigen::Vector4d(1, 20, 300, 4000), Eigen::MatrixXd(0, 4), Vec(0),
-                                            Vec::Zero(4));
+    const Qp qp =
+        cb::testing_qps::dense_qp(A, Eigen::Vector4d(1, 20, 300, 4000), Eigen::MatrixXd(0, 4), Vec(0), Vec::Zero(4));
     const SolverResult r = run_cg(qp, {{"tol", 1e-14}});
     ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
     EXPECT_EQ(r.iterations, 1);

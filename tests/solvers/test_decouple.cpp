@@ -45,7 +45,8 @@ TEST(Decouple, ColumnStructureDecidesDecoupled)
 TEST(Decouple, GreedyKeepsOneRowPerVertexInEachOrder)
 {
     // Row 0: vertices {0,1}; row 1: {1}; row 2: {2}; row 3: {0, 2}; row 4: {3}.
-    const cb::SpMat J = rows_matrix(12, {{{0, 1.0}, {3, 1.0}}, {{4, 1.0}}, {{6, 1.0}}, {{1, 1.0}, {8, 1.0}}, {{9, 1.0}}});
+    const cb::SpMat J =
+        rows_matrix(12, {{{0, 1.0}, {3, 1.0}}, {{4, 1.0}}, {{6, 1.0}}, {{1, 1.0}, {8, 1.0}}, {{9, 1.0}}});
     cb::Qp qp = qp_with(J);
     // authors: kinds plane (rows 2, 4) first, then inter-body (rows 0, 1, 3), detection order.
     qp.contacts.kind = {2, 2, 0, 2, 0};
@@ -67,7 +68,8 @@ TEST(Decouple, GreedyKeepsOneRowPerVertexInEachOrder)
         const cb::DecoupleReport r = cb::decouple_rows(qp.view(), {}, cb::DecoupleOrder::RANDOM, seed);
         const cb::Qp sub = cb::select_rows(qp, r.kept_rows);
         EXPECT_TRUE(cb::is_decoupled(sub.J));
-        EXPECT_TRUE(std::find(r.kept_rows.begin(), r.kept_rows.end(), 4) != r.kept_rows.end());  // row 4 clashes with none
+        EXPECT_TRUE(std::find(r.kept_rows.begin(), r.kept_rows.end(), 4) !=
+                    r.kept_rows.end());  // row 4 clashes with none
         choices.insert(r.kept_rows);
     }
     EXPECT_GE(choices.size(), 2u);  // the seed matters
@@ -129,4 +131,4 @@ TEST(Decouple, OrderNames)
     }
 }
 
-} // namespace
+}  // namespace

@@ -175,5 +175,5 @@ TEST(Ica, SettingsAreCheckedByName)
     EXPECT_EQ(solver->settings().at("start"), "x0");
 }
 
-} // namespace
-} // namespace cb
+}  // namespace
+}  // namespace cb

@@ -2,12 +2,12 @@
 // decoupled rows, and cg / mprgp with it (counters, convergence on a stiff case).
 #include "problems/stress.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/ichol.hpp"
 #include "solvers/accuracy.hpp"
+#include "solvers/ichol.hpp"
 #include "solvers/registry.hpp"
 
-#include <gtest/gtest.h>
 #include <Eigen/SparseCholesky>
+#include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
@@ -106,9 +106,10 @@ TEST_P(IcholStiffFamily, MprgpWithinTwiceCg)
 {
     const auto cases = cb::select_stress_cases(cb::stress_cases(false), {GetParam()});
     const Qp qp = cb::make_stress_qp(cases.at(0));
-    const cb::SolverResult cg = cb::builtin_registry()
-                                    .create("cg", {{"precond", "ichol"}, {"tol", 1e-8}, {"start", "zero"}, {"max_iterations", 20000}})
-                                    ->solve(qp.view(), {});
+    const cb::SolverResult cg =
+        cb::builtin_registry()
+            .create("cg", {{"precond", "ichol"}, {"tol", 1e-8}, {"start", "zero"}, {"max_iterations", 20000}})
+            ->solve(qp.view(), {});
     const cb::SolverResult mp = cb::builtin_registry()
                                     .create("mprgp", {{"precond", "ichol"}, {"tol", 1e-8}, {"max_iterations", 20000}})
                                     ->solve(qp.view(), {});
@@ -117,9 +118,10 @@ TEST_P(IcholStiffFamily, MprgpWithinTwiceCg)
     EXPECT_LE(relative_kkt(qp, mp.x, mp.lambda), 1e-8);
     EXPECT_LE(mp.iterations, 2 * cg.iterations) << "mprgp " << mp.iterations << ", cg " << cg.iterations;
     EXPECT_GE(mp.counters.precond_factorizations, 1);
-    std::printf("%s: cg ichol %ld iterations, mprgp ichol %ld (%ld factorizations, %ld expansions, %ld proportionings)\n",
-                GetParam(), cg.iterations, mp.iterations, mp.counters.precond_factorizations,
-                mp.counters.expansion_steps, mp.counters.proportioning_steps);
+    std::printf(
+        "%s: cg ichol %ld iterations, mprgp ichol %ld (%ld factorizations, %ld expansions, %ld proportionings)\n",
+        GetParam(), cg.iterations, mp.iterations, mp.counters.precond_factorizations, mp.counters.expansion_steps,
+        mp.counters.proportioning_steps);
 }
 
 INSTANTIATE_TEST_SUITE_P(Stiffness, IcholStiffFamily,
@@ -134,4 +136,4 @@ TEST(IcholReproducer, SlabIsAtTheSnapshotsScale)
     EXPECT_GT(cb::max_violation(qp.view(), qp.x0), 0.0);
 }
 
-} // namespace
+}  // namespace

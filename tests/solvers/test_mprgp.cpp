@@ -2,10 +2,10 @@
 // synthetic families, monotone F(P(x)), no safeguard firing on decoupled J, options, statuses,
 // and the iteration count against Jacobi-PCG on the same A (paper Fig. 8 claim).
 #include "problems/synthetic.hpp"
+#include "solvers/accuracy.hpp"
 #include "solvers/active_set.hpp"
 #include "solvers/cg.hpp"
 #include "solvers/decouple.hpp"
-#include "solvers/accuracy.hpp"
 #include "solvers/mprgp.hpp"
 #include "solvers/mprgp_kernels.hpp"
 #include "solvers/registry.hpp"
@@ -27,10 +27,7 @@ std::unique_ptr<cb::Solver> reference_solver()
     return cb::active_set_entry().make(settings);
 }
 
-std::unique_ptr<cb::Solver> mprgp(nlohmann::json settings)
-{
-    return cb::builtin_registry().create("mprgp", settings);
-}
+std::unique_ptr<cb::Solver> mprgp(nlohmann::json settings) { return cb::builtin_registry().create("mprgp", settings); }
 
 Qp decoupled(const Qp& qp, cb::DecoupleOrder order = cb::DecoupleOrder::RANDOM, std::uint64_t seed = 3)
 {
@@ -90,7 +87,8 @@ TEST_P(MprgpAgreement, MatchesActiveSetObjectiveAndKkt)
         const cb::SolverResult r = mprgp({{"tol", 1e-10}, {"max_iterations", 20000}})->solve(qp.view(), context);
         ASSERT_EQ(r.status, SolveStatus::CONVERGED) << tc.name << " seed " << seed << ": " << r.message;
         const double f = cb::objective(qp.view(), r.x);
-        EXPECT_LE(std::abs(f - f_ref), 1e-8 * std::max(std::abs(f_ref), 1e-300)) << tc.name << " F " << f << " F* " << f_ref;
+        EXPECT_LE(std::abs(f - f_ref), 1e-8 * std::max(std::abs(f_ref), 1e-300))
+            << tc.name << " F " << f << " F* " << f_ref;
         EXPECT_LE(relative_kkt(qp, r.x, r.lambda), 1e-8) << tc.name;
         EXPECT_LE(cb::max_violation(qp.view(), r.x), 1e-9 * std::max(1.0, qp.c.lpNorm<Eigen::Infinity>())) << tc.name;
         // Appendix B: with decoupled rows the safeguards never fire.
@@ -114,18 +112,17 @@ nlohmann::json with(nlohmann::json base, const nlohmann::json& extra)
     return base;
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Families, MprgpAgreement,
-    ::testing::Values(Case{"plane", "plane", small, false},
-                      Case{"tilted", "plane", with(small, {{"tilt_deg", 17.0}}), false},
-                      Case{"stiff", "plane", with(small, {{"youngs", 1e10}}), false},
-                      Case{"mm", "plane", with(small, {{"length_scale", 1e-3}}), false},
-                      Case{"box", "box", small, true},
-                      Case{"coupled", "coupled", {{"nx", 3}, {"ny", 2}, {"nz", 3}}, true},
-                      Case{"duplicate", "duplicate-rows", small, true},
-                      Case{"scaled", "scaled-rows", small, true},
-                      Case{"zero", "zero-rows", small, true}),
-    [](const auto& info) { return std::string(info.param.name); });
+INSTANTIATE_TEST_SUITE_P(Families, MprgpAgreement,
+                         ::testing::Values(Case{"plane", "plane", small, false},
+                                           Case{"tilted", "plane", with(small, {{"tilt_deg", 17.0}}), false},
+                                           Case{"stiff", "plane", with(small, {{"youngs", 1e10}}), false},
+                                           Case{"mm", "plane", with(small, {{"length_scale", 1e-3}}), false},
+                                           Case{"box", "box", small, true},
+                                           Case{"coupled", "coupled", {{"nx", 3}, {"ny", 2}, {"nz", 3}}, true},
+                                           Case{"duplicate", "duplicate-rows", small, true},
+                                           Case{"scaled", "scaled-rows", small, true},
+                                           Case{"zero", "zero-rows", small, true}),
+                         [](const auto& info) { return std::string(info.param.name); });
 
 // A tiny hand-solved problem: min (x0^2+x1^2+x2^2) - 2 x1 s.t. x0 >= 1 (one row on vertex 0).
 // x* = (1, 1, 0), lambda* = 2.
@@ -167,10 +164,9 @@ TEST(Mprgp, OptionsReachTheSameSolution)
     const cb::SolverResult ref = mprgp({{"tol", 1e-10}})->solve(qp.view(), {});
     ASSERT_EQ(ref.status, SolveStatus::CONVERGED) << ref.message;
     const double f_ref = cb::objective(qp.view(), ref.x);
-    for (const nlohmann::json& s :
-         {nlohmann::json{{"precond", "none"}}, nlohmann::json{{"alpha", "authors"}},
-          nlohmann::json{{"objective", "recompute"}}, nlohmann::json{{"gamma", 0.5}},
-          nlohmann::json{{"power_max", 5}}}) {
+    for (const nlohmann::json& s : {nlohmann::json{{"precond", "none"}}, nlohmann::json{{"alpha", "authors"}},
+                                    nlohmann::json{{"objective", "recompute"}}, nlohmann::json{{"gamma", 0.5}},
+                                    nlohmann::json{{"power_max", 5}}}) {
         nlohmann::json settings = s;
         settings["tol"] = 1e-10;
         settings["max_iterations"] = 20000;
@@ -192,7 +188,9 @@ TEST(Mprgp, RecomputeObjectiveCostsTwoProductsPerCgStep)
               1e-9 * std::abs(cb::objective(qp.view(), rec.x)));
     // Products outside the power method: cheap = one per CG step (+2 per expansion, +1 per
     // proportioning, +2 at start/end); recompute = two per CG step.
-    const auto solve_products = [](const cb::SolverResult& r) { return r.counters.a_products - r.counters.power_products; };
+    const auto solve_products = [](const cb::SolverResult& r) {
+        return r.counters.a_products - r.counters.power_products;
+    };
     EXPECT_LE(solve_products(cheap), cheap.counters.cg_steps + 3 * cheap.counters.expansion_steps +
                                          2 * cheap.counters.proportioning_steps + 4);
     EXPECT_GE(solve_products(rec), 2 * rec.counters.cg_steps);
@@ -228,8 +226,8 @@ TEST(Mprgp, NonConvergenceIsReported)
     EXPECT_LE(cb::max_violation(qp.view(), r.x), 1e-9);  // the returned x is projected
 
     const Qp big = cb::make_synthetic("plane", {{"nx", 16}, {"ny", 8}, {"nz", 16}}, 8);
-    const cb::SolverResult t = mprgp({{"tol", 1e-14}, {"time_limit_s", 1e-4}, {"max_iterations", 1000000}})
-                                   ->solve(big.view(), {});
+    const cb::SolverResult t =
+        mprgp({{"tol", 1e-14}, {"time_limit_s", 1e-4}, {"max_iterations", 1000000}})->solve(big.view(), {});
     EXPECT_EQ(t.status, SolveStatus::TIME_LIMIT) << t.message;
 }
 
@@ -302,4 +300,4 @@ TEST(Mprgp, IterationsWithinOneAndAHalfOfPcgOnTheSameMatrix)
     EXPECT_LE(static_cast<double>(r.iterations), 1.5 * static_cast<double>(pcg.iterations));
 }
 
-} // namespace
+}  // namespace

@@ -66,9 +66,10 @@ TEST(MprgpBox, AgreesWithActiveSetOnLowerAndUpperBounds)
                 Monotone monitor(qp);
                 cb::SolveContext context;
                 context.monitor = &monitor;
-                const cb::SolverResult r = cb::builtin_registry()
-                                               .create("mprgp-box", {{"tol", 1e-10}, {"precond", precond}, {"max_iterations", 50000}})
-                                               ->solve(qp.view(), context);
+                const cb::SolverResult r =
+                    cb::builtin_registry()
+                        .create("mprgp-box", {{"tol", 1e-10}, {"precond", precond}, {"max_iterations", 50000}})
+                        ->solve(qp.view(), context);
                 ASSERT_EQ(r.status, SolveStatus::CONVERGED) << family << " " << precond << ": " << r.message;
                 EXPECT_LE(std::abs(cb::objective(qp.view(), r.x) - f_ref), 1e-8 * std::abs(f_ref)) << family;
                 EXPECT_LE(relative_kkt(qp, r.x, r.lambda), 1e-8) << family;
@@ -77,7 +78,8 @@ TEST(MprgpBox, AgreesWithActiveSetOnLowerAndUpperBounds)
                     EXPECT_LE(monitor.values[k], monitor.values[k - 1] + 1e-11 * std::abs(monitor.values[k - 1]));
             }
             if (std::string(family) == "plane") {
-                const cb::SolverResult m = cb::builtin_registry().create("mprgp", {{"tol", 1e-10}})->solve(qp.view(), {});
+                const cb::SolverResult m =
+                    cb::builtin_registry().create("mprgp", {{"tol", 1e-10}})->solve(qp.view(), {});
                 ASSERT_EQ(m.status, SolveStatus::CONVERGED);
                 EXPECT_LE(std::abs(cb::objective(qp.view(), m.x) - f_ref), 1e-8 * std::abs(f_ref));
             }
@@ -108,4 +110,4 @@ TEST(MprgpBox, ContradictoryBoundsAreInfeasibleAndCapsAreReported)
     EXPECT_EQ(capped.iterations, 2);
 }
 
-} // namespace
+}  // namespace

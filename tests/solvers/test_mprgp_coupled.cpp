@@ -1,8 +1,8 @@
 // Tests of `mprgp-coupled` (ALGORITHMS.md §4): general J on CHOLMOD subproblems, agreement with
 // the active-set reference, dependent rows, both preconditioner settings, safeguard counts.
 #include "problems/synthetic.hpp"
-#include "solvers/decouple.hpp"
 #include "solvers/accuracy.hpp"
+#include "solvers/decouple.hpp"
 #include "solvers/registry.hpp"
 
 #include <gtest/gtest.h>
@@ -93,4 +93,4 @@ TEST(MprgpCoupled, NonConvergenceIsReported)
     EXPECT_NE(r.message.find("not converged"), std::string::npos);
 }
 
-} // namespace
+}  // namespace

@@ -48,4 +48,4 @@ INSTANTIATE_TEST_SUITE_P(Stress, CoupledTranslation,
                          ::testing::Values(Pair{"baseline-coupled", "coupled-translated-100m"},
                                            Pair{"stiffness-coupled-1e9", "coupled-stiff-translated-100m"}));
 
-} // namespace
+}  // namespace

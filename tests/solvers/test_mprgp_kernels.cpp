@@ -46,7 +46,8 @@ Fixture make_fixture(std::uint64_t seed)
     f.dinv = Vec::NullaryExpr(n, [&]() { return 0.5 + std::abs(normal(rng)); });
     const Vec jx = f.J * f.x;
     f.c.resize(row);
-    for (int i = 0; i < row; ++i) f.c[i] = jx[i] + (i % 3 == 0 ? 0.0 : (i % 3 == 1 ? -0.5 : 0.7));  // active / slack / violated
+    for (int i = 0; i < row; ++i)
+        f.c[i] = jx[i] + (i % 3 == 0 ? 0.0 : (i % 3 == 1 ? -0.5 : 0.7));  // active / slack / violated
     f.rows = cb::make_decoupled_rows(f.J, f.dinv);
     // Put x on the feasible set first (the operators are defined at feasible points).
     cb::project_decoupled(f.J, f.c, f.rows, f.x, f.x);
@@ -195,4 +196,4 @@ TEST(MprgpKernels, PowerMethodEstimatesTheNormFromBelowAndWarmStartHelps)
     EXPECT_EQ(capped.products, 2);
 }
 
-} // namespace
+}  // namespace

@@ -37,7 +37,7 @@ std::vector<CiCase> ci_cases()
 
 class Peers : public ::testing::TestWithParam<std::string> {};
 
-} // namespace
+}  // namespace
 
 TEST_P(Peers, AgreeWithActiveSetOnTheCiSuite)
 {
@@ -49,7 +49,8 @@ TEST_P(Peers, AgreeWithActiveSetOnTheCiSuite)
         const SolverResult ref =
             cb::builtin_registry().create("active-set", {{"tol", 1e-9}})->solve(view, cb::SolveContext{});
         ASSERT_EQ(ref.status, SolveStatus::CONVERGED) << ref.message;
-        const SolverResult r = cb::builtin_registry().create(GetParam(), {{"tol", 1e-8}})->solve(view, cb::SolveContext{});
+        const SolverResult r =
+            cb::builtin_registry().create(GetParam(), {{"tol", 1e-8}})->solve(view, cb::SolveContext{});
         ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
         ASSERT_EQ(r.x.size(), qp.n());
         ASSERT_EQ(r.lambda.size(), qp.m());
@@ -77,9 +78,8 @@ TEST(SiconosLemke, TimeLimitEndsTheChildProcess)
 {
     if (!cb::builtin_registry().contains("siconos-lemke")) GTEST_SKIP() << "siconos-lemke is not built";
     const Qp qp = cb::make_synthetic("plane", {{"nx", 4}, {"ny", 4}, {"nz", 4}}, 11);
-    const SolverResult r = cb::builtin_registry()
-                               .create("siconos-lemke", {{"time_limit_s", 1e-9}})
-                               ->solve(qp.view(), cb::SolveContext{});
+    const SolverResult r =
+        cb::builtin_registry().create("siconos-lemke", {{"time_limit_s", 1e-9}})->solve(qp.view(), cb::SolveContext{});
     EXPECT_EQ(r.status, SolveStatus::TIME_LIMIT) << r.message;
     EXPECT_EQ(r.message, "siconos-lemke: time limit reached; the child process was killed");
 }
@@ -105,7 +105,8 @@ TEST(Siconos, OnArraysReadBackFromFclibAgreesWithActiveSet)
         if (!cb::builtin_registry().contains(name)) continue;
         SCOPED_TRACE(name);
         ++ran;
-        const SolverResult r = cb::builtin_registry().create(name, {{"tol", 1e-8}})->solve(back.view(), cb::SolveContext{});
+        const SolverResult r =
+            cb::builtin_registry().create(name, {{"tol", 1e-8}})->solve(back.view(), cb::SolveContext{});
         ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
         EXPECT_LE(std::abs(cb::objective(qp.view(), r.x) - f_ref), 1e-6 * std::max(1.0, std::abs(f_ref)));
         const Vec g = qp.A * r.x - qp.b;

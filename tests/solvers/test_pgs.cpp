@@ -140,8 +140,8 @@ TEST(Pgs, SweepCapIsReported)
     EXPECT_EQ(r.criterion, "");
 }
 
-} // namespace
-} // namespace cb
+}  // namespace
+}  // namespace cb
 
 // Seeded synthetic FEM-like families of the io helper: both dual solvers reach the tolerance
 // they are given (or say they did not), and `pgs` agrees with the reference in objective.
@@ -169,15 +169,17 @@ TEST_P(SyntheticFamilies, PgsAndIcaMeetTheirToleranceAndAgreeWithActiveSet)
 
     const SolverResult i = run("ica", qp, {{"tol", 1e-6}, {"max_iterations", 200000}, {"time_limit_s", 20}});
     const double kkt_i = relative_kkt(qp, i.x, i.lambda);
-    if (i.status == SolveStatus::CONVERGED) EXPECT_LE(kkt_i, 1e-6);
-    else EXPECT_GT(kkt_i, 1e-6) << i.message;  // an honest "not converged"
+    if (i.status == SolveStatus::CONVERGED)
+        EXPECT_LE(kkt_i, 1e-6);
+    else
+        EXPECT_GT(kkt_i, 1e-6) << i.message;  // an honest "not converged"
     std::cout << GetParam() << ": n=" << qp.n() << " m=" << qp.m() << " |F_pgs-F*|/max(1,|F*|)=" << gap
               << " pgs sweeps=" << p.iterations << "; ica " << to_string(i.status) << " kkt_rel=" << kkt_i
-              << " iterations=" << i.iterations << " |F_ica-F*|/max(1,|F*|)="
-              << relative_gap(objective(qp.view(), i.x), f_ref) << "\n";
+              << " iterations=" << i.iterations
+              << " |F_ica-F*|/max(1,|F*|)=" << relative_gap(objective(qp.view(), i.x), f_ref) << "\n";
 }
 
 INSTANTIATE_TEST_SUITE_P(Dual, SyntheticFamilies, ::testing::Values("plane", "coupled", "box"));
 
-} // namespace
-} // namespace cb
+}  // namespace
+}  // namespace cb

@@ -31,7 +31,8 @@ TEST(TemplateSolver, SolvesTinyBoundQpToTheAskedKktError)
     EXPECT_NEAR(r.x[0], 1.0, 1e-9);
     EXPECT_NEAR(r.x[1], 1.0, 1e-9);
     EXPECT_NEAR(r.lambda[0], 2.0, 1e-8);
-    EXPECT_EQ(r.counters.a_products, r.iterations + 1 + cb::accuracy_scale(qp.view()).a_products);  // a step each, the start, the scale
+    EXPECT_EQ(r.counters.a_products,
+              r.iterations + 1 + cb::accuracy_scale(qp.view()).a_products);  // a step each, the start, the scale
 }
 
 TEST(TemplateSolver, CoupledMatrixWithTwoBoundsAndNativeStop)

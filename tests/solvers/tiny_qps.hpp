@@ -8,8 +8,7 @@
 namespace cb::testing_qps {
 
 /// Builds an owned Qp from dense matrices (rows of J given as dense rows).
-inline Qp dense_qp(const Eigen::MatrixXd& A, const Vec& b, const Eigen::MatrixXd& J, const Vec& c,
-                   const Vec& x0)
+inline Qp dense_qp(const Eigen::MatrixXd& A, const Vec& b, const Eigen::MatrixXd& J, const Vec& c, const Vec& x0)
 {
     Qp qp;
     qp.A = A.sparseView();
@@ -72,4 +71,4 @@ inline Qp unconstrained_qp()
 }
 inline Vec unconstrained_x() { return Eigen::Vector3d(1, -1, 2); }
 
-} // namespace cb::testing_qps
+}  // namespace cb::testing_qps

@@ -40,7 +40,9 @@ int Bvh::build_node(int first, int count, std::vector<Eigen::Vector3d>& centroid
     (cbox.max() - cbox.min()).maxCoeff(&axis);
     const int mid = first + count / 2;
     std::nth_element(m_order.begin() + first, m_order.begin() + mid, m_order.begin() + first + count,
-                     [&](int a, int b) { return centroids[static_cast<size_t>(a)][axis] < centroids[static_cast<size_t>(b)][axis]; });
+                     [&](int a, int b) {
+                         return centroids[static_cast<size_t>(a)][axis] < centroids[static_cast<size_t>(b)][axis];
+                     });
     const int left = build_node(first, mid - first, centroids, depth + 1);
     const int right = build_node(mid, first + count - mid, centroids, depth + 1);
     m_nodes[static_cast<size_t>(index)].left = left;
@@ -89,4 +91,4 @@ int Bvh::nearest(const Eigen::Vector3d& p, const std::function<double(int)>& dis
     return best_prim;
 }
 
-} // namespace cb::sim
+}  // namespace cb::sim

@@ -20,8 +20,7 @@ public:
     const Box3& bounds() const { return m_nodes.front().box; }
 
     /// Calls visit(primitive) for every primitive whose box contains p.
-    template <class Visit>
-    void query_point(const Eigen::Vector3d& p, Visit&& visit) const
+    template <class Visit> void query_point(const Eigen::Vector3d& p, Visit&& visit) const
     {
         if (m_nodes.empty()) return;
         int stack[128];
@@ -43,8 +42,7 @@ public:
     }
 
     /// Calls visit(primitive) for every primitive whose box intersects `box`.
-    template <class Visit>
-    void query_box(const Box3& box, Visit&& visit) const
+    template <class Visit> void query_box(const Box3& box, Visit&& visit) const
     {
         if (m_nodes.empty()) return;
         int stack[128];
@@ -81,4 +79,4 @@ private:
     std::vector<Box3> m_boxes;
 };
 
-} // namespace cb::sim
+}  // namespace cb::sim

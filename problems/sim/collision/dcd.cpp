@@ -38,7 +38,7 @@ struct BodyTrees {
     Bvh tets, faces;
     std::vector<std::vector<int>> vertex_faces;  ///< only for self-contact exclusion
 };
-} // namespace
+}  // namespace
 
 std::vector<ContactRow> CollisionDetector::detect(const Vec& x, DetectionStats* stats) const
 {
@@ -110,13 +110,17 @@ std::vector<ContactRow> CollisionDetector::detect(const Vec& x, DetectionStats* 
                     if (!inside) continue;
                     Eigen::Vector3d wbest;
                     double d2 = 0;
-                    const int f = trees[b].faces.nearest(p, [&](int face) {
-                        if (self && (B.faces(face, 0) == v || B.faces(face, 1) == v || B.faces(face, 2) == v)) return 1e300;
-                        Eigen::Vector3d w;
-                        const Vec3 q = closest_point_triangle(p, pos(x, B.faces(face, 0)), pos(x, B.faces(face, 1)),
-                                                              pos(x, B.faces(face, 2)), w);
-                        return (p - q).squaredNorm();
-                    }, &d2);
+                    const int f = trees[b].faces.nearest(
+                        p,
+                        [&](int face) {
+                            if (self && (B.faces(face, 0) == v || B.faces(face, 1) == v || B.faces(face, 2) == v))
+                                return 1e300;
+                            Eigen::Vector3d w;
+                            const Vec3 q = closest_point_triangle(p, pos(x, B.faces(face, 0)), pos(x, B.faces(face, 1)),
+                                                                  pos(x, B.faces(face, 2)), w);
+                            return (p - q).squaredNorm();
+                        },
+                        &d2);
                     if (f < 0 || d2 >= 1e300) continue;
                     const Vec3 xa = pos(x, B.faces(f, 0)), xb = pos(x, B.faces(f, 1)), xc = pos(x, B.faces(f, 2));
                     closest_point_triangle(p, xa, xb, xc, wbest);
@@ -160,7 +164,8 @@ void assemble_constraints(const std::vector<ContactRow>& rows, Eigen::Index n, S
             if (r.vertex[k] < 0) continue;
             // Weights of exactly 0 (closest point on an edge/vertex) still get entries: a row
             // of eq. 8 always has 12 structural nonzeros, so the row's sparsity is the kind's.
-            for (int d = 0; d < 3; ++d) trip.emplace_back(static_cast<int>(i), 3 * r.vertex[k] + d, r.weight[k] * r.normal[d]);
+            for (int d = 0; d < 3; ++d)
+                trip.emplace_back(static_cast<int>(i), 3 * r.vertex[k] + d, r.weight[k] * r.normal[d]);
         }
         c[i] = r.c;
         meta.kind.push_back(static_cast<std::int64_t>(r.kind));
@@ -171,4 +176,4 @@ void assemble_constraints(const std::vector<ContactRow>& rows, Eigen::Index n, S
     J.setFromTriplets(trip.begin(), trip.end());
 }
 
-} // namespace cb::sim
+}  // namespace cb::sim

@@ -17,31 +17,31 @@ namespace cb::sim {
 /// One constraint row: sum_k weight_k n'x_{vertex_k} >= c.
 struct ContactRow {
     ContactKind kind = ContactKind::OTHER;
-    double depth = 0;             ///< penetration at detection (>= 0; 0 for rows within the margin)
+    double depth = 0;  ///< penetration at detection (>= 0; 0 for rows within the margin)
     int vertex[4] = {-1, -1, -1, -1};
     double weight[4] = {0, 0, 0, 0};
     Vec3 normal = Vec3::Zero();
     double c = 0;
-    int other = -1;               ///< obstacle index or other body index
+    int other = -1;  ///< obstacle index or other body index
 };
 
 /// A body as collision detection sees it (global vertex ids).
 struct CollisionBody {
     Tets tets;
-    Faces faces;                       ///< outward boundary triangles
+    Faces faces;  ///< outward boundary triangles
     std::vector<int> surface_vertices;
 };
 
 struct DetectionSettings {
-    double margin = 0.0;       ///< m: obstacle rows also for vertices this close outside
-    bool inter_body = true;    ///< vertex-in-other-body rows (only built when there are >= 2 bodies)
-    bool self_contact = false; ///< vertex-in-own-body rows (non-incident tets)
+    double margin = 0.0;             ///< m: obstacle rows also for vertices this close outside
+    bool inter_body = true;          ///< vertex-in-other-body rows (only built when there are >= 2 bodies)
+    bool self_contact = false;       ///< vertex-in-own-body rows (non-incident tets)
     double inside_tolerance = 1e-9;  ///< barycentric slack of the point-in-tet test
 };
 
 struct DetectionStats {
     long obstacle_rows = 0, inter_body_rows = 0, self_rows = 0;
-    long tet_candidates = 0;   ///< point-in-box hits before the exact point-in-tet test
+    long tet_candidates = 0;  ///< point-in-box hits before the exact point-in-tet test
 };
 
 class CollisionDetector {
@@ -65,4 +65,4 @@ void assemble_constraints(const std::vector<ContactRow>& rows, Eigen::Index n, S
 /// Barycentric coordinates of p in tet (a, b, c, d) (sum to 1).
 Eigen::Vector4d tet_barycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d);
 
-} // namespace cb::sim
+}  // namespace cb::sim

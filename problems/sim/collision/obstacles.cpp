@@ -10,10 +10,16 @@ Vec3 closest_point_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const V
     // Voronoi-region walk (Ericson, Real-Time Collision Detection, Sec. 5.1.5).
     const Vec3 ab = b - a, ac = c - a, ap = p - a;
     const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-    if (d1 <= 0 && d2 <= 0) { w = {1, 0, 0}; return a; }
+    if (d1 <= 0 && d2 <= 0) {
+        w = {1, 0, 0};
+        return a;
+    }
     const Vec3 bp = p - b;
     const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-    if (d3 >= 0 && d4 <= d3) { w = {0, 1, 0}; return b; }
+    if (d3 >= 0 && d4 <= d3) {
+        w = {0, 1, 0};
+        return b;
+    }
     const double vc = d1 * d4 - d3 * d2;
     if (vc <= 0 && d1 >= 0 && d3 <= 0) {
         const double v = d1 / (d1 - d3);
@@ -22,7 +28,10 @@ Vec3 closest_point_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const V
     }
     const Vec3 cp = p - c;
     const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-    if (d6 >= 0 && d5 <= d6) { w = {0, 0, 1}; return c; }
+    if (d6 >= 0 && d5 <= d6) {
+        w = {0, 0, 1};
+        return c;
+    }
     const double vb = d5 * d2 - d1 * d6;
     if (vb <= 0 && d2 >= 0 && d6 <= 0) {
         const double t = d2 / (d2 - d6);
@@ -115,7 +124,9 @@ public:
         for (int i = 0; i <= nu; ++i)
             for (int j = 0; j < nv; ++j) {
                 const double th = M_PI * i / nu, ph = 2 * M_PI * j / nv;
-                s.positions.row(i * nv + j) = (m_c + m_r * Vec3(std::sin(th) * std::cos(ph), std::cos(th), std::sin(th) * std::sin(ph))).transpose();
+                s.positions.row(i * nv + j) =
+                    (m_c + m_r * Vec3(std::sin(th) * std::cos(ph), std::cos(th), std::sin(th) * std::sin(ph)))
+                        .transpose();
             }
         std::vector<std::array<int, 3>> f;
         for (int i = 0; i < nu; ++i)
@@ -152,8 +163,16 @@ public:
         double best = 1e300;
         int axis = 0, side = 0;
         for (int k = 0; k < 3; ++k) {
-            if (x[k] - m_lo[k] < best) { best = x[k] - m_lo[k]; axis = k; side = -1; }
-            if (m_hi[k] - x[k] < best) { best = m_hi[k] - x[k]; axis = k; side = 1; }
+            if (x[k] - m_lo[k] < best) {
+                best = x[k] - m_lo[k];
+                axis = k;
+                side = -1;
+            }
+            if (m_hi[k] - x[k] < best) {
+                best = m_hi[k] - x[k];
+                axis = k;
+                side = 1;
+            }
         }
         Vec3 n = Vec3::Zero();
         n[axis] = side;
@@ -246,7 +265,8 @@ public:
         std::vector<Box3> boxes(static_cast<size_t>(m_mesh.faces.rows()));
         m_normals.resize(boxes.size());
         for (size_t f = 0; f < boxes.size(); ++f) {
-            const Vec3 a = vertex(static_cast<int>(f), 0), b = vertex(static_cast<int>(f), 1), c = vertex(static_cast<int>(f), 2);
+            const Vec3 a = vertex(static_cast<int>(f), 0), b = vertex(static_cast<int>(f), 1),
+                       c = vertex(static_cast<int>(f), 2);
             boxes[f].extend(a);
             boxes[f].extend(b);
             boxes[f].extend(c);
@@ -263,10 +283,13 @@ public:
         Vec3 best_q;
         Eigen::Vector3d w;
         double d2 = 0;
-        const int f = m_bvh.nearest(x, [&](int face) {
-            const Vec3 q = closest_point_triangle(x, vertex(face, 0), vertex(face, 1), vertex(face, 2), w);
-            return (x - q).squaredNorm();
-        }, &d2);
+        const int f = m_bvh.nearest(
+            x,
+            [&](int face) {
+                const Vec3 q = closest_point_triangle(x, vertex(face, 0), vertex(face, 1), vertex(face, 2), w);
+                return (x - q).squaredNorm();
+            },
+            &d2);
         if (f < 0 || d2 > reach * reach) return false;
         best_q = closest_point_triangle(x, vertex(f, 0), vertex(f, 1), vertex(f, 2), w);
         const Vec3& n = m_normals[static_cast<size_t>(f)];
@@ -285,10 +308,16 @@ private:
     Bvh m_bvh;
 };
 
-} // namespace
+}  // namespace
 
-std::unique_ptr<Obstacle> make_plane(const Vec3& normal, const Vec3& point) { return std::make_unique<Plane>(normal, point); }
-std::unique_ptr<Obstacle> make_sphere(const Vec3& center, double radius) { return std::make_unique<Sphere>(center, radius); }
+std::unique_ptr<Obstacle> make_plane(const Vec3& normal, const Vec3& point)
+{
+    return std::make_unique<Plane>(normal, point);
+}
+std::unique_ptr<Obstacle> make_sphere(const Vec3& center, double radius)
+{
+    return std::make_unique<Sphere>(center, radius);
+}
 std::unique_ptr<Obstacle> make_box(const Vec3& lo, const Vec3& hi) { return std::make_unique<Box>(lo, hi); }
 std::unique_ptr<Obstacle> make_cylinder(const Vec3& center, const Vec3& axis, double radius, double height)
 {
@@ -299,4 +328,4 @@ std::unique_ptr<Obstacle> make_mesh_obstacle(SurfaceMesh mesh, double thickness)
     return std::make_unique<MeshObstacle>(std::move(mesh), thickness);
 }
 
-} // namespace cb::sim
+}  // namespace cb::sim

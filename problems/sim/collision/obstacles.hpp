@@ -44,4 +44,4 @@ std::unique_ptr<Obstacle> make_cylinder(const Vec3& center, const Vec3& axis, do
 /// below the surface a point still counts as penetrating (beyond it the point is ignored).
 std::unique_ptr<Obstacle> make_mesh_obstacle(SurfaceMesh mesh, double thickness);
 
-} // namespace cb::sim
+}  // namespace cb::sim
