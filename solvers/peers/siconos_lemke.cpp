@@ -1,6 +1,7 @@
 // Siconos numerics' Lemke on the dual LCP, in a child process (see siconos_lemke.hpp).
 #include "solvers/peers/siconos_lemke.hpp"
 #include "solvers/peers/child_process.hpp"
+#include "solvers/peers/siconos_report.hpp"
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/Dense>
@@ -38,13 +39,7 @@ nlohmann::json SiconosLemkeSettings::to_json() const
 namespace {
 
 /// What the child sends back through the pipe after the lambda values.
-struct ChildReport {
-    int info = -1;
-    int iterations = 0;
-    double residual = 0.0;
-};
-
-/// Runs Lemke on (W, q) (in the child); returns lambda (m doubles) then a ChildReport.
+/// Runs Lemke on (W, q) (in the child); returns lambda (m doubles) then a SiconosReport.
 std::vector<char> run_lemke(Eigen::MatrixXd& W, Vec& q, long max_iterations, double tol)
 {
     const int m = static_cast<int>(q.size());
@@ -58,7 +53,7 @@ std::vector<char> run_lemke(Eigen::MatrixXd& W, Vec& q, long max_iterations, dou
     SolverOptions* options = solver_options_create(SICONOS_LCP_LEMKE);
     options->iparam[SICONOS_IPARAM_MAX_ITER] = static_cast<int>(std::min<long>(max_iterations, 1L << 30));
     options->dparam[SICONOS_DPARAM_TOL] = tol;
-    ChildReport report;
+    SiconosReport report;
     report.info = linearComplementarity_driver(&problem, z.data(), w.data(), options);
     report.iterations = options->iparam[SICONOS_IPARAM_ITER_DONE];
     report.residual = options->dparam[SICONOS_DPARAM_RESIDU];
@@ -132,7 +127,7 @@ SolverResult SiconosLemkeSolver::solve(const QpView& qp, const SolveContext& con
         result.solve_s = solve_watch.seconds();
         return result;
     }
-    const size_t expected = static_cast<size_t>(m) * sizeof(double) + sizeof(ChildReport);
+    const size_t expected = static_cast<size_t>(m) * sizeof(double) + sizeof(SiconosReport);
     const ChildOutcome child = run_in_child([&]() { return run_lemke(W, q, s.common.max_iterations, s.common.tol); },
                                             watch, s.common.time_limit_s);
     const std::vector<char>& bytes = child.bytes;
@@ -159,41 +154,13 @@ SolverResult SiconosLemkeSolver::solve(const QpView& qp, const SolveContext& con
     }
     result.info["crashed"] = false;
     std::memcpy(result.lambda.data(), bytes.data(), static_cast<size_t>(m) * sizeof(double));
-    ChildReport report;
+    SiconosReport report;
     std::memcpy(&report, bytes.data() + static_cast<size_t>(m) * sizeof(double), sizeof report);
     counters.iterations = report.iterations;
     counters.pivots = report.iterations;
     counters.lcp_iterations = report.iterations;
-    result.iterations = report.iterations;
-    result.native_residual = report.residual;
-    result.info["siconos_info"] = report.info;
-    primal();
-
-    Stopwatch paused;  // the monitor sees the final point only
-    notify_monitor(context, paused,
-                   {report.iterations, StepKind::FINAL, &result.x, &result.lambda, report.residual, -1, &counters,
-                    result.solve_s});
-    const Vec g = qp.A * result.x - qp.b;
-    ++counters.a_products;
-    const bool finite = result.x.allFinite() && result.lambda.allFinite();
-    std::ostringstream msg;
-    msg << "siconos-lemke: Siconos Lemke returned info = " << report.info << " ("
-        << (report.info == 0 ? "solved" : "failed") << ") after " << report.iterations << " pivots, error "
-        << report.residual;
-    if (!finite) {
-        result.status = SolveStatus::DIVERGED;
-    } else if (s.common.stop == StopRule::NATIVE
-                   ? (report.info == 0 && report.residual <= s.common.tol)
-                   : accuracy_converged(qp, accuracy_scale(qp), result.x, g, result.lambda, s.common.tol)) {
-        result.status = SolveStatus::CONVERGED;
-        result.criterion = s.common.stop == StopRule::NATIVE ? "native" : "kkt";
-    } else if (report.info != 0 && report.iterations >= s.common.max_iterations) {
-        result.status = SolveStatus::MAX_ITERATIONS;
-    } else {
-        result.status = SolveStatus::STALLED;
-        msg << "; the relative KKT error at its point is above tol";
-    }
-    result.message = msg.str();
+    primal();  // x from lambda, before the final measure
+    finish_siconos_result(qp, s.common, context, report, "siconos-lemke: Siconos Lemke", "pivots", counters, result);
     return result;
 }
 

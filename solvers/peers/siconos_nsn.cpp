@@ -1,6 +1,7 @@
 // Siconos numerics' global nonsmooth Newton (mu = 0) in a child process (see siconos_nsn.hpp).
 #include "solvers/peers/siconos_nsn.hpp"
 #include "solvers/peers/child_process.hpp"
+#include "solvers/peers/siconos_report.hpp"
 
 #include <Friction_cst.h>
 #include <GlobalFrictionContactProblem.h>
@@ -28,12 +29,6 @@ nlohmann::json SiconosNsnSettings::to_json() const { return common.to_json(); }
 
 namespace {
 
-struct ChildReport {
-    int info = -1;
-    int iterations = 0;
-    double residual = 0.0;
-};
-
 /// A sparse (triplet) NumericsMatrix; `transpose_of_rows` stores the transpose of `S`.
 NumericsMatrix* numerics_matrix(const SpMat& S, Eigen::Index rows, Eigen::Index cols, bool transpose, long col_stride)
 {
@@ -50,7 +45,7 @@ NumericsMatrix* numerics_matrix(const SpMat& S, Eigen::Index rows, Eigen::Index 
     return N;
 }
 
-/// In the child: returns v (n doubles), r (3m doubles), then a ChildReport.
+/// In the child: returns v (n doubles), r (3m doubles), then a SiconosReport.
 std::vector<char> run_nsn(const QpView& qp, long max_iterations, double tol)
 {
     const Eigen::Index n = qp.n(), m = qp.m();
@@ -73,7 +68,7 @@ std::vector<char> run_nsn(const QpView& qp, long max_iterations, double tol)
     SolverOptions* options = solver_options_create(SICONOS_GLOBAL_FRICTION_3D_NSN_AC);
     options->iparam[SICONOS_IPARAM_MAX_ITER] = static_cast<int>(std::min<long>(max_iterations, 1L << 30));
     options->dparam[SICONOS_DPARAM_TOL] = tol;
-    ChildReport report;
+    SiconosReport report;
     report.info = gfc3d_driver(&problem, r.data(), u.data(), v.data(), options);
     report.iterations = options->iparam[SICONOS_IPARAM_ITER_DONE];
     report.residual = options->dparam[SICONOS_DPARAM_RESIDU];
@@ -100,7 +95,7 @@ SolverResult SiconosNsnSolver::solve(const QpView& qp, const SolveContext& conte
     result.info["native_residual_definition"] = "Siconos's global friction-contact error (SICONOS_DPARAM_RESIDU)";
     Stopwatch watch;
     watch.start();
-    const size_t expected = static_cast<size_t>(n + 3 * m) * sizeof(double) + sizeof(ChildReport);
+    const size_t expected = static_cast<size_t>(n + 3 * m) * sizeof(double) + sizeof(SiconosReport);
     const ChildOutcome child = run_in_child([&]() { return run_nsn(qp, s.common.max_iterations, s.common.tol); }, watch,
                                             s.common.time_limit_s);
     result.solve_s = watch.seconds();
@@ -124,38 +119,11 @@ SolverResult SiconosNsnSolver::solve(const QpView& qp, const SolveContext& conte
     Vec r(3 * m);
     std::memcpy(r.data(), p + n * sizeof(double), static_cast<size_t>(3 * m) * sizeof(double));
     for (Eigen::Index i = 0; i < m; ++i) result.lambda[i] = r[3 * i];
-    ChildReport report;
+    SiconosReport report;
     std::memcpy(&report, p + (n + 3 * m) * sizeof(double), sizeof report);
     counters.iterations = report.iterations;
-    result.iterations = report.iterations;
-    result.native_residual = report.residual;
-    result.info["siconos_info"] = report.info;
-
-    Stopwatch paused;  // the monitor sees the final point only
-    notify_monitor(context, paused,
-                   {report.iterations, StepKind::FINAL, &result.x, &result.lambda, report.residual, -1, &counters,
-                    result.solve_s});
-    const Vec g = qp.A * result.x - qp.b;
-    ++counters.a_products;
-    const bool finite = result.x.allFinite() && result.lambda.allFinite();
-    std::ostringstream msg;
-    msg << "siconos-nsn: Siconos NSN_AC returned info = " << report.info << " ("
-        << (report.info == 0 ? "solved" : "failed") << ") after " << report.iterations << " Newton iterations, error "
-        << report.residual;
-    if (!finite) {
-        result.status = SolveStatus::DIVERGED;
-    } else if (s.common.stop == StopRule::NATIVE
-                   ? (report.info == 0 && report.residual <= s.common.tol)
-                   : accuracy_converged(qp, accuracy_scale(qp), result.x, g, result.lambda, s.common.tol)) {
-        result.status = SolveStatus::CONVERGED;
-        result.criterion = s.common.stop == StopRule::NATIVE ? "native" : "kkt";
-    } else if (report.info != 0 && report.iterations >= s.common.max_iterations) {
-        result.status = SolveStatus::MAX_ITERATIONS;
-    } else {
-        result.status = SolveStatus::STALLED;
-        msg << "; the relative KKT error at its point is above tol";
-    }
-    result.message = msg.str();
+    finish_siconos_result(qp, s.common, context, report, "siconos-nsn: Siconos NSN_AC", "Newton iterations", counters,
+                          result);
     return result;
 }
 

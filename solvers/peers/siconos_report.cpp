@@ -1,0 +1,44 @@
+#include "solvers/peers/siconos_report.hpp"
+
+#include "solvers/a_product.hpp"
+#include "solvers/accuracy.hpp"
+
+#include <sstream>
+
+namespace cb {
+
+void finish_siconos_result(const QpView& qp, const CommonSettings& common, const SolveContext& context,
+                           const SiconosReport& report, const std::string& what, const std::string& steps,
+                           Counters& counters, SolverResult& result)
+{
+    result.iterations = report.iterations;
+    result.native_residual = report.residual;
+    result.info["siconos_info"] = report.info;
+
+    Stopwatch paused;  // the monitor sees the final point only
+    notify_monitor(context, paused,
+                   {report.iterations, StepKind::FINAL, &result.x, &result.lambda, report.residual, -1, &counters,
+                    result.solve_s});
+    const Vec g = a_product(qp.A, result.x) - qp.b;
+    ++counters.a_products;
+    const bool finite = result.x.allFinite() && result.lambda.allFinite();
+    std::ostringstream msg;
+    msg << what << " returned info = " << report.info << " (" << (report.info == 0 ? "solved" : "failed") << ") after "
+        << report.iterations << " " << steps << ", error " << report.residual;
+    if (!finite) {
+        result.status = SolveStatus::DIVERGED;
+    } else if (common.stop == StopRule::NATIVE
+                   ? (report.info == 0 && report.residual <= common.tol)
+                   : accuracy_converged(qp, accuracy_scale(qp), result.x, g, result.lambda, common.tol)) {
+        result.status = SolveStatus::CONVERGED;
+        result.criterion = common.stop == StopRule::NATIVE ? "native" : "kkt";
+    } else if (report.info != 0 && report.iterations >= common.max_iterations) {
+        result.status = SolveStatus::MAX_ITERATIONS;
+    } else {
+        result.status = SolveStatus::STALLED;
+        msg << "; the accuracy error at its point is above tol";
+    }
+    result.message = msg.str();
+}
+
+}  // namespace cb

@@ -1,0 +1,25 @@
+#pragma once
+/// What a Siconos child process reports, and the one rule that turns it into a result: the status
+/// is the accuracy measure's verdict at the returned point (docs/accuracy.md), the library's own
+/// word goes into the message.
+#include "solvers/solver.hpp"
+
+#include <string>
+
+namespace cb {
+
+/// Written by the child after its numbers (plain data: copied through the pipe).
+struct SiconosReport {
+    int info = -1;       ///< Siconos's return code (0: solved)
+    int iterations = 0;  ///< pivots or Newton iterations
+    double residual = 0.0;
+};
+
+/// Fills result.iterations, native_residual, info, status, criterion and message from the report at
+/// (result.x, result.lambda), after one final monitor call. `what` names the solver and the
+/// method ("siconos-lemke: Siconos Lemke"), `steps` its iterations ("pivots").
+void finish_siconos_result(const QpView& qp, const CommonSettings& common, const SolveContext& context,
+                           const SiconosReport& report, const std::string& what, const std::string& steps,
+                           Counters& counters, SolverResult& result);
+
+}  // namespace cb
