@@ -1,5 +1,7 @@
 #include "harness/cli.hpp"
 
+#include <cerrno>
+#include <climits>
 #include <cstdlib>
 
 namespace cb {
@@ -67,8 +69,12 @@ long CommandLine::integer(const std::string& option, long fallback) const
     if (!m_values.count(option)) return fallback;
     const std::string v = value(option);
     char* end = nullptr;
+    errno = 0;
     const long d = std::strtol(v.c_str(), &end, 10);
     if (v.empty() || *end != '\0') throw_input_error(m_command, option, "expected an integer, got '" + v + "'");
+    if (errno == ERANGE)
+        throw_input_error(m_command, option,
+                          "'" + v + "' is out of range (at most " + std::to_string(LONG_MAX) + " in magnitude)");
     return d;
 }
 

@@ -4,6 +4,8 @@
 #include "problems/qpsnap.hpp"
 #include "problems/synthetic.hpp"
 
+#include "tests/harness/cli_test_util.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -14,50 +16,21 @@
 
 namespace fs = std::filesystem;
 using namespace cb;
+using cb::test::Output;
+using cb::test::slurp;
 
 namespace {
 
-std::string binary()
-{
-    if (const char* b = std::getenv("CB_CONTACTBENCH"); b && *b) return b;
-    return std::string(CB_BINARY_DIR) + "/bin/contactbench";
-}
-
 const fs::path& work_dir()
 {
-    static const fs::path dir = [] {
-        const fs::path d = fs::temp_directory_path() / ("cb_test_cli_" + std::to_string(::getpid()));
-        fs::remove_all(d);
-        fs::create_directories(d);
-        ::setenv("CB_CACHE", (d / "cache").c_str(), 1);  // generated snapshots and references stay here
-        ::setenv("OPENBLAS_NUM_THREADS", "1", 1);
-        return d;
-    }();
+    static const fs::path dir = test::make_test_work_dir("cli");
     return dir;
 }
-
-std::string slurp(const fs::path& p)
-{
-    std::ifstream in(p);
-    return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
-struct Output {
-    int status = -1;
-    std::string out, err;
-};
 
 /// Runs `contactbench ARGS` (ARGS already shell-quoted where needed).
 Output run(const std::string& args)
 {
-    const fs::path out = work_dir() / "stdout.txt", err = work_dir() / "stderr.txt";
-    const std::string command = "'" + binary() + "' " + args + " >'" + out.string() + "' 2>'" + err.string() + "'";
-    const int raw = std::system(command.c_str());
-    Output o;
-    o.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-    o.out = slurp(out);
-    o.err = slurp(err);
-    return o;
+    return test::run_captured("'" + test::contactbench_binary() + "' " + args, work_dir());
 }
 
 std::string small_snapshot()

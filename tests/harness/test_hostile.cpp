@@ -6,6 +6,8 @@
 #include "problems/qpsnap.hpp"
 #include "problems/synthetic.hpp"
 
+#include "tests/harness/cli_test_util.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -19,55 +21,27 @@
 
 namespace fs = std::filesystem;
 using namespace cb;
+using cb::test::Output;
+using cb::test::slurp;
 
 namespace {
 
-std::string binary()
-{
-    if (const char* b = std::getenv("CB_CONTACTBENCH"); b && *b) return b;
-    return std::string(CB_BINARY_DIR) + "/bin/contactbench";
-}
-
 const fs::path& work_dir()
 {
-    static const fs::path dir = [] {
-        const fs::path d = fs::temp_directory_path() / ("cb_test_hostile_" + std::to_string(::getpid()));
-        fs::remove_all(d);
-        fs::create_directories(d);
-        ::setenv("CB_CACHE", (d / "cache").c_str(), 1);
-        ::setenv("OPENBLAS_NUM_THREADS", "1", 1);
-        return d;
-    }();
+    static const fs::path dir = test::make_test_work_dir("hostile");
     return dir;
 }
 
 const fs::path kHostile = fs::path(CB_TEST_DATA_DIR).parent_path() / "hostile";
 
-std::string slurp(const fs::path& p)
-{
-    std::ifstream in(p);
-    return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
-struct Output {
-    int status = -1;
-    std::string out, err;
-};
-
 /// Runs `[PREFIX;] timeout 120 contactbench ARGS` in bash (PREFIX: ulimit ...); a hang ends as 124.
-Output run(const std::string& args, const std::string& prefix = "", const std::string& program = binary())
+Output run(const std::string& args, const std::string& prefix = "",
+           const std::string& program = test::contactbench_binary())
 {
-    const fs::path out = work_dir() / "stdout.txt", err = work_dir() / "stderr.txt";
-    const std::string inner = (prefix.empty() ? "" : prefix + "; ") + "exec timeout 120 '" + program + "' " + args +
-                              " >'" + out.string() + "' 2>'" + err.string() + "'";
+    const std::string inner = (prefix.empty() ? "" : prefix + "; ") + "exec timeout 120 '" + program + "' " + args;
     std::string quoted;
     for (char ch : inner) quoted += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
-    const int raw = std::system(("bash -c '" + quoted + "'").c_str());
-    Output o;
-    o.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-    o.out = slurp(out);
-    o.err = slurp(err);
-    return o;
+    return test::run_captured("bash -c '" + quoted + "'", work_dir());
 }
 
 std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
@@ -225,7 +199,7 @@ TEST(RunIdentity, AnotherBuildRedoesTheRuns)
     ASSERT_EQ(run("run " + q(suite) + " --out " + q(out)).status, 0);
     // "Rebuilt": the same program with one byte more (an ELF file runs with trailing bytes).
     const fs::path rebuilt = dir / "contactbench-rebuilt";
-    fs::copy_file(binary(), rebuilt);
+    fs::copy_file(test::contactbench_binary(), rebuilt);
     std::ofstream(rebuilt, std::ios::app) << '\n';
     fs::permissions(rebuilt, fs::perms::owner_exec, fs::perm_options::add);
     const Output again = run("run " + q(suite) + " --out " + q(out), "", rebuilt.string());

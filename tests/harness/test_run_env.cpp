@@ -3,6 +3,8 @@
 // counters), `cluster slurm` (files, printed commands, bad options) and merge's CPU-model warning.
 #include "harness/results.hpp"
 
+#include "tests/harness/cli_test_util.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -13,23 +15,15 @@
 
 namespace fs = std::filesystem;
 using namespace cb;
+using cb::test::Output;
+using cb::test::slurp;
 
 namespace {
-
-std::string binary()
-{
-    if (const char* b = std::getenv("CB_CONTACTBENCH"); b && *b) return b;
-    return std::string(CB_BINARY_DIR) + "/bin/contactbench";
-}
 
 const fs::path& work_dir()
 {
     static const fs::path dir = [] {
-        fs::path d = fs::temp_directory_path() / ("cb_test_run_env_" + std::to_string(::getpid()));
-        fs::remove_all(d);
-        fs::create_directories(d);
-        ::setenv("CB_CACHE", (d / "cache").c_str(), 1);
-        ::setenv("OPENBLAS_NUM_THREADS", "1", 1);
+        fs::path d = test::make_test_work_dir("run_env");
         for (const char* name : {"SLURM_ARRAY_TASK_ID", "SLURM_ARRAY_TASK_MIN", "SLURM_ARRAY_TASK_MAX",
                                  "SLURM_ARRAY_TASK_COUNT", "SLURM_ARRAY_JOB_ID", "SLURM_JOB_ID", "SLURMD_NODENAME"})
             ::unsetenv(name);  // a test run inside a Slurm job must not see its own job
@@ -38,29 +32,10 @@ const fs::path& work_dir()
     return dir;
 }
 
-std::string slurp(const fs::path& p)
-{
-    std::ifstream in(p);
-    return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
-struct Output {
-    int status = -1;
-    std::string out, err;
-};
-
 /// Runs `ENV contactbench ARGS` (ENV: "NAME=value ..." for env(1), ARGS shell-quoted where needed).
 Output run(const std::string& args, const std::string& env = "")
 {
-    const fs::path out = work_dir() / "stdout.txt", err = work_dir() / "stderr.txt";
-    const std::string command =
-        "env " + env + " '" + binary() + "' " + args + " >'" + out.string() + "' 2>'" + err.string() + "'";
-    const int raw = std::system(command.c_str());
-    Output o;
-    o.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-    o.out = slurp(out);
-    o.err = slurp(err);
-    return o;
+    return test::run_captured("env " + env + " '" + test::contactbench_binary() + "' " + args, work_dir());
 }
 
 /// 2 snapshots x 3 solvers = 6 jobs.
@@ -244,6 +219,10 @@ TEST(RunEnv, ClusterSlurmWritesFilesAndPrintsCommands)
     EXPECT_EQ(no_shards.err, "contactbench cluster: error: cluster: --shards: required: the number of array tasks\n");
     const Output zero = run("cluster slurm '" + suite + "' --out '" + out.string() + "' --shards 0");
     EXPECT_EQ(zero.err, "contactbench cluster: error: cluster: --shards: must be >= 1, got 0\n");
+    const Output huge = run("cluster slurm '" + suite + "' --out '" + out.string() + "' --shards 99999999999999999999");
+    EXPECT_EQ(huge.status, 2);
+    EXPECT_EQ(huge.err, "contactbench cluster: error: cluster: --shards: '99999999999999999999' is out of range (at "
+                        "most 9223372036854775807 in magnitude)\n");
     const Output pbs = run("cluster pbs '" + suite + "' --out x --shards 2");
     EXPECT_EQ(pbs.status, 2);
     EXPECT_EQ(pbs.err, "contactbench cluster: error: cluster: scheduler: expected 'slurm', got 'pbs'\n");
