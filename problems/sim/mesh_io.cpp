@@ -475,19 +475,22 @@ bool is_surface_mesh_path(const std::string& path)
 
 void write_obj(const std::string& path, const SurfaceMesh& mesh)
 {
-    const std::string tmp = path + ".tmp";
-    {
-        std::FILE* f = std::fopen(tmp.c_str(), "w");
-        if (!f) throw_input_error(path, "", "cannot write file");
-        std::fprintf(f, "# contactbench surface, %ld vertices, %ld faces\n", static_cast<long>(mesh.positions.rows()),
-                     static_cast<long>(mesh.faces.rows()));
-        for (Eigen::Index i = 0; i < mesh.positions.rows(); ++i)
-            std::fprintf(f, "v %.9g %.9g %.9g\n", mesh.positions(i, 0), mesh.positions(i, 1), mesh.positions(i, 2));
-        for (Eigen::Index i = 0; i < mesh.faces.rows(); ++i)
-            std::fprintf(f, "f %d %d %d\n", mesh.faces(i, 0) + 1, mesh.faces(i, 1) + 1, mesh.faces(i, 2) + 1);
-        if (std::fclose(f) != 0) throw_input_error(path, "", "write failed");
+    std::string text;
+    char line[128];
+    std::snprintf(line, sizeof line, "# contactbench surface, %ld vertices, %ld faces\n",
+                  static_cast<long>(mesh.positions.rows()), static_cast<long>(mesh.faces.rows()));
+    text += line;
+    for (Eigen::Index i = 0; i < mesh.positions.rows(); ++i) {
+        std::snprintf(line, sizeof line, "v %.9g %.9g %.9g\n", mesh.positions(i, 0), mesh.positions(i, 1),
+                      mesh.positions(i, 2));
+        text += line;
     }
-    if (std::rename(tmp.c_str(), path.c_str()) != 0) throw_input_error(path, "", "cannot rename temporary file");
+    for (Eigen::Index i = 0; i < mesh.faces.rows(); ++i) {
+        std::snprintf(line, sizeof line, "f %d %d %d\n", mesh.faces(i, 0) + 1, mesh.faces(i, 1) + 1,
+                      mesh.faces(i, 2) + 1);
+        text += line;
+    }
+    write_file_atomic(path, text);  // checked writes, fsync, rename: no partial frame after a crash
 }
 
 }  // namespace cb::sim
