@@ -206,10 +206,10 @@ private:
     double m_corr_x = 0.0;    // F(P(x)) - F(x)
     double m_f_proj_x = 0.0;  // F(P(x)) (objective = recompute keeps it directly)
     // objective = recompute: what its direct F would have decided (reported in info).
-    Vec m_a_proj_y;                      // A P(y)
-    long m_trial_steps = 0;              // CG trial steps, each with the extra product
-    long m_direct_disagreements = 0;     // trials where comparing direct F values decides otherwise
-    double m_direct_gap = 0.0;           // max |(F(P(y)) - F(P(x)))_direct - delta|
+    Vec m_a_proj_y;                   // A P(y)
+    long m_trial_steps = 0;           // CG trial steps, each with the extra product
+    long m_direct_disagreements = 0;  // trials where comparing direct F values decides otherwise
+    double m_direct_gap = 0.0;        // max |(F(P(y)) - F(P(x)))_direct - delta|
 
     // Row pass results.
     double m_beta2 = 0.0, m_phitilde_phi = 0.0, m_native = 0.0, m_error = 0.0;
