@@ -646,7 +646,7 @@ SolverResult MprgpRun::run()
             const double alpha = m_rz / pap;
             const double df = -alpha * pg + 0.5 * alpha * alpha * pap;  // F(x - alpha p) - F(x)
             // Both objectives decide on F(P(y)) - F(P(x)) formed from differences: its rounding
-            // is relative to the decrease itself, not to |F| (docs/ALGORITHMS.md, "objective").
+            // is relative to the decrease itself, not to |F| (docs/ALGORITHMS.md §3, setting `objective`).
             const double corr_y = projection_correction(alpha);
             const double delta = df + corr_y - m_corr_x;
             // An infeasible trial point must strictly decrease F(P(.)): otherwise a chain
