@@ -5,7 +5,8 @@ method's share (setup_s, counters.power_products) shown apart, and the authors' 
 (figures/fig11_mprgp_vs_ica.csv) beside ours.
 
 Labels: mprgp-published / ica-published (native stopping at the authors' absolute 8e-5, MPRGP's
-cold-start power method as the authors ran it), mprgp-fair / ica-fair (stopping on the accuracy error e of docs/accuracy.md).
+cold-start power method as the authors ran it), mprgp-fair / ica-fair (stopping on the accuracy
+error e of docs/accuracy.md).
 
 usage: fig11.py RESULTS_DIR [--data DIR] [--out DIR]
 """
