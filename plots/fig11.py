@@ -5,7 +5,8 @@ method's share (setup_s, counters.power_products) shown apart, and the authors' 
 (figures/fig11_mprgp_vs_ica.csv) beside ours.
 
 Labels: mprgp-published / ica-published (native stopping at the authors' absolute 8e-5, MPRGP's
-cold-start power method as the authors ran it), mprgp-fair / ica-fair (common KKT stopping).
+cold-start power method as the authors ran it), mprgp-fair / ica-fair (stopping on the accuracy
+error e of docs/accuracy.md).
 
 usage: fig11.py RESULTS_DIR [--data DIR] [--out DIR]
 """
@@ -20,7 +21,7 @@ import numpy as np  # noqa: E402
 from plots import figutil  # noqa: E402
 from plots.claims import Claim, verdict_published_fair, verdict_threshold  # noqa: E402
 from plots.figutil import fmt, plt  # noqa: E402
-from plots.loader import measured, unmeasured_notes  # noqa: E402
+from plots.loader import measured, status_notes, unmeasured_notes  # noqa: E402
 from plots.paper_context import FigureOutcome, NotProduced, PaperContext, run_standalone  # noqa: E402
 
 SUITE = "fig11"
@@ -50,6 +51,7 @@ def produce(ctx: PaperContext) -> FigureOutcome:
     authors = ctx.authors_csv("fig11_mprgp_vs_ica.csv")
     out = FigureOutcome("fig11", "Fig. 11: scaling of MPRGP and ICA with the number of DOFs")
     out.notes += unmeasured_notes(runs)
+    out.notes += status_notes(runs)
     fig, axes = plt.subplots(1, 3, figsize=(15, 4), squeeze=False)
     for ax, (mode, (ml, il)) in zip(axes.flat[:2], PAIRS.items()):
         m, i = by_dof(runs, ml), by_dof(runs, il)
@@ -140,7 +142,7 @@ def produce(ctx: PaperContext) -> FigureOutcome:
               f"fair {fmt(small.get('fair'))}x"),
         verdict=verdict_threshold(fair_small, 1.0, greater=False),
         rule="holds when ICA takes <= the time of MPRGP at the smallest DOF count (fair settings when run)"))
-    rows = ["| label | DOFs | rows (decoupled) | status | iterations | A-products | power products | setup [s] | time [s] | KKT rel |",
+    rows = ["| label | DOFs | rows (decoupled) | status | iterations | A-products | power products | setup [s] | time [s] | accuracy error e |",
             "|---|---|---|---|---|---|---|---|---|---|"]
     for lab in [l for pair in PAIRS.values() for l in pair]:
         for _, r in by_dof(runs, lab).iterrows():

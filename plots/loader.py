@@ -176,6 +176,21 @@ def unmeasured_notes(runs: pd.DataFrame, labels=None) -> list:
     return notes
 
 
+#: what the report says about a run with status `unconfirmed` (harness/README.md, docs/accuracy.md)
+UNCONFIRMED_MEANING = ("`unconfirmed`: the solver's own stopping test was met (with stop=native the paper's "
+                       "residual at the paper's tolerance) but the accuracy error e (docs/accuracy.md) of "
+                       "the QP it solved was above the common tolerance `accuracy_tol`, so the harness "
+                       "does not confirm it as converged.")
+
+
+def status_notes(runs: pd.DataFrame) -> list:
+    """The meaning of the statuses that need one (`unconfirmed`), when some run has it, with its count."""
+    if runs.empty or "status" not in runs:
+        return []
+    count = int((runs["status"] == UNCONFIRMED_STATUS).sum())
+    return [f"{count} run(s) {UNCONFIRMED_MEANING}"] if count else []
+
+
 def history_frame(record: dict) -> pd.DataFrame:
     """The history of one run record as a DataFrame (empty when not recorded)."""
     hist = record.get("history")

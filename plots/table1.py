@@ -17,7 +17,7 @@ import pandas as pd  # noqa: E402
 
 from plots.claims import Claim, verdict_threshold  # noqa: E402
 from plots.figutil import fmt  # noqa: E402
-from plots.loader import measured  # noqa: E402
+from plots.loader import measured, status_notes  # noqa: E402
 from plots.paper_context import FigureOutcome, NotProduced, PaperContext  # noqa: E402
 
 #: paper.txt, Table 1 (Sec. 6.1): figure, vertices, tets, h [ms], cg/it, t [s per solve], frames
@@ -100,6 +100,9 @@ def produce(ctx: PaperContext) -> FigureOutcome:
             f"{fmt(r.get('t_run_s'))} | {fmt(r.get('converged'))}/{fmt(r.get('runs'))} | "
             f"{fmt(r.get('power_warm_max'))} ({fmt(r.get('power_cold'))}) |")
     out.tables.append("\n".join(lines))
+    for s in scenes:
+        if suite_name(s) in ctx.results:
+            out.notes += [f"{s}: {n}" for n in status_notes(ctx.require_results(suite_name(s)).runs)]
     for s in PAPER:
         if s not in scenes:
             out.notes.append(f"not simulated: {s} ({ctx.reasons.get(s, 'not part of this run' + (' (--quick)' if ctx.quick else ''))})")

@@ -161,6 +161,10 @@ private:
     void evaluate_rows();
     /// Correction F(P(x - a p)) - F(x - a p) with the sparse d = J' lambda (Ap known).
     double projection_correction(double alpha);
+    /// objective = recompute: the authors' F(P(x - alpha p)) from an explicit projection and a
+    /// second A-product. Returns it; the decision stays the difference form's (delta, accept),
+    /// and the direct comparison is only recorded (m_direct_*), to show where it would differ.
+    double recompute_objective(double alpha, double delta, bool accept);
     /// Alg. 3 safeguard: repeat x = P(x - alpha_bar g) while F went up. Returns false on time out.
     bool safeguard(double f_before, double& f_now);
     bool expansion();
@@ -201,6 +205,11 @@ private:
     double m_f_x = 0.0;       // F(x)
     double m_corr_x = 0.0;    // F(P(x)) - F(x)
     double m_f_proj_x = 0.0;  // F(P(x)) (objective = recompute keeps it directly)
+    // objective = recompute: what its direct F would have decided (reported in info).
+    Vec m_a_proj_y;                   // A P(y)
+    long m_trial_steps = 0;           // CG trial steps, each with the extra product
+    long m_direct_disagreements = 0;  // trials where comparing direct F values decides otherwise
+    double m_direct_gap = 0.0;        // max |(F(P(y)) - F(P(x)))_direct - delta|
 
     // Row pass results.
     double m_beta2 = 0.0, m_phitilde_phi = 0.0, m_native = 0.0, m_error = 0.0;
@@ -370,6 +379,23 @@ double MprgpRun::projection_correction(double alpha)
     // Touched DOFs may repeat (explicit zeros, shared columns): clear after the sum.
     for (int j : m_touched) m_d[j] = 0.0;
     return dg + 0.5 * dad;
+}
+
+double MprgpRun::recompute_objective(double alpha, double delta, bool accept)
+{
+    m_tmp = m_x - alpha * m_p;
+    const long moved = project_decoupled(m_J, m_c, m_rows, m_tmp, m_tmp);
+    ++m_cnt.projections;
+    product(m_tmp, m_a_proj_y);
+    const double f_proj_y = 0.5 * m_tmp.dot(m_a_proj_y) - m_b.dot(m_tmp);
+    ++m_trial_steps;
+    // The authors' rule compares the two F values: both round at about eps |F|, which exceeds
+    // the decrease of a CG step near the solution, so it rejects steps that decrease F.
+    const double direct = f_proj_y - m_f_proj_x;
+    const bool direct_accept = moved > 0 ? direct < 0.0 : direct <= 0.0;
+    if (direct_accept != accept) ++m_direct_disagreements;
+    m_direct_gap = std::max(m_direct_gap, std::abs(direct - delta));
+    return f_proj_y;
 }
 
 bool MprgpRun::safeguard(double f_before, double& f_now)
@@ -619,24 +645,15 @@ SolverResult MprgpRun::run()
             }
             const double alpha = m_rz / pap;
             const double df = -alpha * pg + 0.5 * alpha * alpha * pap;  // F(x - alpha p) - F(x)
-            bool accept;
-            double corr_y = 0.0, f_proj_y = 0.0;
-            if (recompute) {
-                // The authors' form: build P(y) and evaluate F with a second A-product.
-                m_tmp = m_x - alpha * m_p;
-                const long moved = project_decoupled(m_J, m_c, m_rows, m_tmp, m_tmp);
-                ++m_cnt.projections;
-                product(m_tmp, m_d);
-                f_proj_y = 0.5 * m_tmp.dot(m_d) - m_b.dot(m_tmp);
-                m_d.setZero();
-                accept = moved > 0 ? f_proj_y < m_f_proj_x : f_proj_y <= m_f_proj_x;
-            } else {
-                corr_y = projection_correction(alpha);
-                const double delta = df + corr_y - m_corr_x;
-                // An infeasible trial point must strictly decrease F(P(.)): otherwise a chain
-                // converging to an infeasible face minimiser would never end.
-                accept = corr_y > 0.0 ? delta < 0.0 : delta <= 0.0;
-            }
+            // Both objectives decide on F(P(y)) - F(P(x)) formed from differences: its rounding
+            // is relative to the decrease itself, not to |F| (docs/ALGORITHMS.md §3, setting `objective`).
+            const double corr_y = projection_correction(alpha);
+            const double delta = df + corr_y - m_corr_x;
+            // An infeasible trial point must strictly decrease F(P(.)): otherwise a chain
+            // converging to an infeasible face minimiser would never end.
+            const bool accept = corr_y > 0.0 ? delta < 0.0 : delta <= 0.0;
+            double f_proj_y = 0.0;
+            if (recompute) f_proj_y = recompute_objective(alpha, delta, accept);
             if (accept) {
                 // Fused update: x, g, z = D^-1 g and the dot products in one pass (DOFs in no
                 // row; the rows' DOFs are summed below in face form, see face_dot).
@@ -772,6 +789,10 @@ SolverResult MprgpRun::run()
     result.info["safeguard_firings"] = m_cnt.safeguard_steps;
     result.info["alpha_bar"] = m_alpha_bar;
     result.info["active_rows"] = m_active_count;
+    if (m_st.objective == "recompute")
+        result.info["recompute"] = {{"trial_steps", m_trial_steps},
+                                    {"direct_disagreements", m_direct_disagreements},
+                                    {"direct_gap_max", m_direct_gap}};
     if (m_ichol)
         result.info["ichol"] = {{"factor_nonzeros", m_ic.factor_nonzeros()},
                                 {"a_nonzeros", static_cast<long>(m_A.nonZeros())}};

@@ -50,6 +50,13 @@ class TestLoader(TempDirCase):
         self.assertEqual(run_b["a_products"], 8)
         self.assertEqual(res.suite["name"], "fixture")
 
+    def test_status_notes_explain_unconfirmed_once_with_the_count(self):
+        recs = [mf.make_run("s0", "a", status="unconfirmed", confirmed=False),
+                mf.make_run("s1", "a", status="unconfirmed", confirmed=False), mf.make_run("s0", "b")]
+        res = loader.load_results(mf.write_results(self.tmp, recs))
+        self.assertEqual(loader.status_notes(res.runs), [f"2 run(s) {loader.UNCONFIRMED_MEANING}"])
+        self.assertEqual(loader.status_notes(res.runs[res.runs["label"] == "b"]), [])
+
     def test_not_a_results_folder_names_the_folder(self):
         with self.assertRaisesRegex(FileNotFoundError, "not a results folder"):
             loader.load_results(os.path.join(self.tmp, "nothing"))
@@ -300,6 +307,9 @@ class TestReproduce(TempDirCase):
         low_res = next(c for c in saved if c["key"] == "fig11-ica-low-res")
         self.assertEqual(low_res["verdict"], claims.DOES_NOT_HOLD)
         self.assertIn("not simulated: dragon_stair", text)
+        # the fake's ica-published runs (stop=native) are `unconfirmed`: the report says what that means
+        self.assertIn(loader.UNCONFIRMED_MEANING, text)
+        self.assertNotIn("KKT", text)  # the measure is the accuracy error e (docs/accuracy.md)
         self.assertIn("quick", log.getvalue())
 
     def test_missing_binary_reports_reason(self):
