@@ -181,6 +181,33 @@ TEST(StressCases, FemSimSnapshotsHaveContactsAndActiveSetConverges)
     }
 }
 
+TEST(StressCases, StiffFemSnapshotIsNotSolvedAtItsStart)
+{
+    // fem-stiff-1e10 takes the step where the stiff boxes collide: the resting steps before it
+    // are solved at x0 (0 iterations), which tested nothing about stiffness.
+    const Qp qp = make_stress_qp(select_stress_cases(stress_cases(false), {"fem-stiff-1e10"}).at(0));
+    const SolverResult r =
+        builtin_registry().create("mprgp-coupled", {{"tol", 1e-6}, {"max_iterations", 20000}})->solve(qp.view(), {});
+    EXPECT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
+    EXPECT_GT(r.iterations, 50);  // 152 at the time of writing
+}
+
+TEST(StressCases, StiffDinoHasTheReproducersRows)
+{
+    // Needs the authors' dino (make paper-data) or the CGAL stand-in (make meshes).
+    const char* home = std::getenv("HOME");
+    const char* cache_env = std::getenv("CB_CACHE");
+    const std::string cache =
+        cache_env && *cache_env ? cache_env : std::string(home ? home : ".") + "/.cache/contactbench";
+    if (!std::filesystem::exists(cache + "/paper-data/meshes/dino_1303_4014.abq"))
+        GTEST_SKIP() << "the authors' dino_1303_4014.abq is not in " << cache << "/paper-data";
+    const Qp qp = make_stress_qp(select_stress_cases(stress_cases(false), {"dino-stiff-1e10"}).at(0));
+    EXPECT_EQ(qp.n(), 3909);
+    EXPECT_EQ(qp.m(), 263);  // scenes/stiff_dino.json's frame 1 (mprgp steps frame 0)
+    const Vec d = qp.A.diagonal();
+    EXPECT_GT(d.maxCoeff() / d.minCoeff(), 50.0);  // 90: graded tets, as in the snapshot
+}
+
 TEST(StressReportText, ListsAWrongStatus)
 {
     StressReport report;
