@@ -158,7 +158,8 @@ def plot_stiff_family(histories: dict, out_dir: str, tol: Optional[float] = None
     nrow = (len(cases) + ncol - 1) // ncol
     fig, axes = plt.subplots(nrow, ncol, figsize=(4.2 * ncol, 3.2 * nrow), squeeze=False)
     labels = sorted({lab for h in histories.values() for lab in h})
-    colours = {lab: plt.cm.tab10(i % 10) for i, lab in enumerate(labels)}
+    cmap = plt.cm.tab10 if len(labels) <= 10 else plt.cm.tab20  # one colour per solver
+    colours = {lab: cmap(i % cmap.N) for i, lab in enumerate(labels)}
     for k, case in enumerate(cases):
         ax = axes[k // ncol][k % ncol]
         for lab, curve in sorted(histories[case].items()):
