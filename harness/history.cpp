@@ -18,6 +18,7 @@ HistoryMonitor::HistoryMonitor(const QpView& qp, const AccuracyScale& scale, lon
     : m_qp(qp), m_scale(scale), m_kept_rows(std::move(kept_rows)), m_history_max(std::max(2L, history_max)),
       m_record(record)
 {
+    if (m_qp.x0.size() == m_qp.n()) m_g0 = m_qp.A * m_qp.x0 - m_qp.b;
 }
 
 std::vector<std::string> HistoryMonitor::columns()
@@ -37,8 +38,23 @@ HistoryRow HistoryMonitor::measure(long call, long iteration, StepKind step, con
     row.step = step;
     row.native_residual = native;
     row.active_set = active;
-    const Vec g = m_qp.A * x - m_qp.b;
+    Vec g;
+    if (m_g0.size() == x.size()) {
+        // F(x) - F(x0) and g = g0 + A d from differences d = x - x0: no cancellation against
+        // the absolute positions, and still one product per row.
+        const Vec d = x - m_qp.x0;
+        const Vec ad = m_qp.A * d;
+        g = m_g0 + ad;
+        row.objective_change = d.dot(m_g0) + 0.5 * d.dot(ad);
+        row.objective_change_terms = d.cwiseProduct(m_g0).cwiseAbs().sum() + 0.5 * d.cwiseProduct(ad).cwiseAbs().sum();
+    } else {
+        g = m_qp.A * x - m_qp.b;
+    }
     row.objective = 0.5 * x.dot(g) - 0.5 * m_qp.b.dot(x);
+    if (m_g0.size() != x.size()) {
+        row.objective_change = row.objective;
+        row.objective_change_terms = std::abs(row.objective);
+    }
     if (lambda && !m_kept_rows.empty() && lambda->size() == static_cast<Eigen::Index>(m_kept_rows.size())) {
         Vec padded = Vec::Zero(m_qp.m());
         for (size_t k = 0; k < m_kept_rows.size(); ++k)
@@ -58,12 +74,13 @@ void HistoryMonitor::push(HistoryRow row)
     if (!std::isfinite(row.objective) || !std::isfinite(row.accuracy.max())) m_nonfinite = true;
     // Monotonicity over the feasible recorded iterates only: an infeasible start may have a
     // lower objective than the solution.
-    if (std::isfinite(row.objective) && row.accuracy.primal <= 1e-9) {
-        if (m_have_feasible &&
-            row.objective > m_last_feasible_objective + 1e-12 * std::max(1.0, std::abs(m_last_feasible_objective)))
-            m_monotone = false;
+    if (std::isfinite(row.objective_change) && row.accuracy.primal <= 1e-9) {
+        const double slack = 1e-12 * std::max(std::abs(row.objective_change), std::abs(m_last_feasible_change)) +
+                             1e-13 * (row.objective_change_terms + m_last_feasible_terms);
+        if (m_have_feasible && row.objective_change > m_last_feasible_change + slack) m_monotone = false;
         m_have_feasible = true;
-        m_last_feasible_objective = row.objective;
+        m_last_feasible_change = row.objective_change;
+        m_last_feasible_terms = row.objective_change_terms;
     }
     m_rows.push_back(row);
     m_last_recorded_call = row.call;

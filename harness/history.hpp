@@ -7,8 +7,12 @@
 /// would exceed `history_max` rows (rows that are not on the new stride are dropped; the first
 /// row is always kept, and finish() appends the returned point as the last row).
 /// Monotone: the objective must be non-increasing over the recorded iterates that are feasible
-/// to 1e-9 of the scene size (the measure's primal part <= 1e-9), with a floating-point slack
-/// of 1e-12 max(1, |F|) per comparison.
+/// to 1e-9 of the scene size (the measure's primal part <= 1e-9). It is compared as the change
+/// from the start, F(x) - F(x0) = d'(g0 + 1/2 A d) with d = x - x0 and g0 = A x0 - b, not as
+/// F(x) itself: F at absolute positions is dominated by 1/2 x'Ax (a body 100 m from the origin),
+/// so its rounding and a slack relative to |F| hid or invented changes of the size of a
+/// solver's last steps. The slack per comparison is 1e-12 of the larger |change| plus 1e-13 of
+/// the sum of the absolute terms of the two dot products (their rounding bound).
 #include "solvers/accuracy.hpp"
 #include "solvers/solver.hpp"
 
@@ -26,6 +30,8 @@ struct HistoryRow {
     StepKind step = StepKind::START;
     AccuracyParts accuracy;  ///< the measure's parts; accuracy.max() is the error e (column kkt_rel)
     double objective = 0.0;
+    double objective_change = 0.0;        ///< F(x) - F(x0) in difference form (the monotonicity check)
+    double objective_change_terms = 0.0;  ///< sum of |terms| of that difference (its rounding scale)
     double native_residual = 0.0;
     long active_set = -1;
 };
@@ -69,7 +75,9 @@ private:
     bool m_nonfinite = false;
     bool m_monotone = true;
     bool m_have_feasible = false;
-    double m_last_feasible_objective = 0.0;
+    double m_last_feasible_change = 0.0;
+    double m_last_feasible_terms = 0.0;
+    Vec m_g0;  ///< A x0 - b of the original QP
     std::vector<HistoryRow> m_rows;
 };
 

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <cstdlib>
 #include <cstring>
 #include <iomanip>
 #include <map>
@@ -122,6 +123,31 @@ StressRow blank_row(const StressCase& c, const std::string& solver, const Stress
 }
 
 /// The reference of every case: F* of the ORIGINAL QP for the energy gap.
+/// A stress solver spec: a registry name, optionally followed by settings, "mprgp:precond=ichol"
+/// (several separated by ':'); values that parse as numbers become numbers. The whole spec is
+/// the run's label (the column of the tables).
+std::pair<std::string, json> parse_solver_spec(const std::string& spec)
+{
+    std::pair<std::string, json> out{spec.substr(0, spec.find(':')), json::object()};
+    size_t start = spec.find(':');
+    while (start != std::string::npos) {
+        const size_t end = spec.find(':', start + 1);
+        const std::string item = spec.substr(start + 1, end == std::string::npos ? std::string::npos : end - start - 1);
+        const size_t eq = item.find('=');
+        if (eq == std::string::npos || eq == 0)
+            throw InputError("stress: --solvers: '" + spec + "': expected NAME[:key=value...], got '" + item + "'");
+        const std::string key = item.substr(0, eq), value = item.substr(eq + 1);
+        char* end_num = nullptr;
+        const double number = std::strtod(value.c_str(), &end_num);
+        if (!value.empty() && end_num && *end_num == '\0')
+            out.second[key] = number;
+        else
+            out.second[key] = value;
+        start = end;
+    }
+    return out;
+}
+
 const char* const REFERENCE_SOLVER = "active-set";
 constexpr double REFERENCE_TOL = 1e-10;
 
@@ -137,9 +163,11 @@ std::pair<StressRow, json> run_one(const Qp& qp, const StressCase& c, const std:
     const json info = {{"id", c.id}, {"path", ""}, {"hash", ""}, {"n", qp.n()}, {"m", qp.m()}, {"meta", qp.meta}};
     json record;
     try {
-        json settings = {{"tol", options.tol}};
+        const auto spec = parse_solver_spec(solver);
+        json settings = spec.second;
+        settings["tol"] = options.tol;
         if (solver == REFERENCE_SOLVER && options.tol <= REFERENCE_TOL) settings["max_iterations"] = 100000;
-        const RunOutcome out = run_solver(qp, solver, settings, ro, info);
+        const RunOutcome out = run_solver(qp, spec.first, settings, ro, info);
         row.status = out.status;
         row.solver_status = to_string(out.result.status);
         row.criterion = out.result.criterion;
@@ -156,7 +184,9 @@ std::pair<StressRow, json> run_one(const Qp& qp, const StressCase& c, const std:
         if (out.result.status == SolveStatus::INVALID_INPUT && row.message.empty())
             row.message = "(invalid_input without a message)";
         record = out.record;
-        record.erase("history");
+        // The stiff families keep their (<= 200-row) histories for the stiff figure
+        // (plots/stability.py draws error against time from them).
+        if (c.family.rfind("stiff", 0) != 0) record.erase("history");
         row.m_solved = out.m_solved;
     } catch (const InputError& e) {
         // A refusal through an exception: still an answer with a message.
@@ -327,8 +357,17 @@ StressReport run_stress(const StressOptions& options)
 {
     const auto started = Clock::now();
     std::vector<std::string> solvers = options.solvers;
-    if (solvers.empty()) solvers = builtin_registry().names();
-    for (const auto& s : solvers) builtin_registry().entry(s);  // throws the named InputError
+    if (solvers.empty()) {
+        // Every registered solver, plus the ichol variants so that the stiff section shows the
+        // preconditioner's effect (docs/preconditioners.md).
+        solvers = builtin_registry().names();
+        for (const char* variant : {"cg:precond=ichol", "mprgp:precond=ichol"})
+            if (builtin_registry().contains(parse_solver_spec(variant).first)) solvers.push_back(variant);
+    }
+    for (const auto& s : solvers) {
+        const auto spec = parse_solver_spec(s);
+        builtin_registry().create(spec.first, spec.second);  // throws the named InputError (name or setting)
+    }
     const std::vector<StressCase> cases = select_stress_cases(stress_cases(options.quick), options.cases);
 
     StressReport report;
@@ -463,6 +502,38 @@ std::string stability_markdown(const StressReport& report)
             s << ' ' << text << " |";
         }
         s << '\n';
+    }
+    // The stiff families: time and iterations side by side, and the error-against-time figure.
+    std::vector<std::string> stiff_cases;
+    for (const auto& c : cases)
+        if (case_row[c]->family.rfind("stiff", 0) == 0) stiff_cases.push_back(c);
+    if (!stiff_cases.empty()) {
+        s << "\n## Stiff families: time and iterations\n\nPer run: the time in s (setup + solve) / iterations / "
+             "status. `python3 -m plots.stability DIR` draws the error e against time for every solver from the "
+             "runs' histories (kept for the stiff families in runs/<case>__<solver>.json); a solver given as "
+             "`NAME:key=value` runs with that setting, e.g. `--solvers cg,cg:precond=ichol,mprgp,"
+             "mprgp:precond=ichol` shows the preconditioners (docs/preconditioners.md).\n\n"
+             "![error against time on the stiff families](figures/stiff_family.png)\n\n| case | n | m |";
+        for (const auto& sv : solvers) s << ' ' << sv << " |";
+        s << "\n|---|---|---|";
+        for (size_t k = 0; k < solvers.size(); ++k) s << "---|";
+        s << '\n';
+        for (const auto& c : stiff_cases) {
+            const StressRow* any = case_row[c];
+            s << "| " << c << " | " << any->n << " | " << any->m << " |";
+            for (const auto& sv : solvers) {
+                const auto it = cell.find({c, sv});
+                if (it == cell.end()) {
+                    s << "  |";
+                    continue;
+                }
+                const StressRow& r = *it->second;
+                std::ostringstream t;
+                t << std::setprecision(3) << r.time_s << " / " << r.iterations << " / " << short_status(r);
+                s << ' ' << t.str() << " |";
+            }
+            s << '\n';
+        }
     }
     s << "\n## Summary per solver\n\n| solver | runs | converged | solved relaxation | wrong statuses | refused | "
          "infeasible | time limit | max iterations | other | non-finite | non-monotone |\n"

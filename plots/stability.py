@@ -4,6 +4,10 @@ original QP (docs/accuracy.md); a cell is marked "rel" when the run is solved_re
 only on the problem the solver changed), "!" when the solver said "converged" and the measure does
 not confirm it (status unconfirmed), N when NaN/Inf appeared, ~ when the objective was not monotone.
 
+With the stress folder's runs/ (histories kept for the stiff families), it also draws
+stiff_family.png: the error e against time (setup included) per stiff case, one line per solver
+(dashed: no "ichol" in the label), as embedded in stability.md.
+
 usage: stability.py STRESS_DIR_OR_CSV [--out FIGDIR]
 Reads STRESS_DIR/stability.csv (or the CSV given; a results folder's summary.csv also works).
 Columns are found by name: solver (label | solver), case (case | snapshot | family), error
@@ -12,6 +16,7 @@ Columns are found by name: solver (label | solver), case (case | snapshot | fami
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import os
 import sys
@@ -107,6 +112,75 @@ def plot_stability(df: pd.DataFrame, out_dir: str, stem: str = "stability") -> L
     return figutil.save_figure(fig, out_dir, stem)
 
 
+def stiff_histories(stress_dir: str, df: pd.DataFrame) -> dict:
+    """{case: {solver label: DataFrame(time_s, error)}} for the stiff families' runs whose record
+    kept its history (runs/<case>__<solver>.json; `contactbench stress` keeps them for the
+    families whose name starts with "stiff")."""
+    if "family" not in df.columns or "case" not in df.columns:
+        return {}
+    out: dict = {}
+    stiff = df[df["family"].astype(str).str.startswith("stiff")]
+    for case, label in zip(stiff["case"], stiff["solver"]):
+        path = os.path.join(stress_dir, "runs", f"{case}__{label}.json")
+        if not os.path.isfile(path):
+            continue
+        with open(path) as f:
+            run = json.load(f)
+        hist = run.get("history") or {}
+        rows, cols = hist.get("rows") or [], hist.get("columns") or []
+        if not rows or "time_s" not in cols or "kkt_rel" not in cols:
+            continue
+        h = pd.DataFrame(rows, columns=cols)
+        setup = float((run.get("time") or {}).get("setup_s") or 0.0)
+        curve = pd.DataFrame({"time_s": pd.to_numeric(h["time_s"], errors="coerce") + setup,
+                              "error": pd.to_numeric(h["kkt_rel"], errors="coerce")}).dropna()
+        if len(curve):
+            out.setdefault(str(case), {})[str(label)] = curve
+    return out
+
+
+def _case_key(case: str) -> tuple:
+    """slab-stiff-1e4 < slab-stiff-1e12: by family prefix, then by the trailing modulus."""
+    head, _, tail = case.rpartition("-")
+    try:
+        return (head, float(tail))
+    except ValueError:
+        return (case, 0.0)
+
+
+def plot_stiff_family(histories: dict, out_dir: str, tol: Optional[float] = None,
+                      stem: str = "stiff_family") -> List[str]:
+    """Error e against time (setup included) per stiff case, one line per solver."""
+    if not histories:
+        return []
+    cases = sorted(histories, key=_case_key)
+    ncol = min(3, len(cases))
+    nrow = (len(cases) + ncol - 1) // ncol
+    fig, axes = plt.subplots(nrow, ncol, figsize=(4.2 * ncol, 3.2 * nrow), squeeze=False)
+    labels = sorted({lab for h in histories.values() for lab in h})
+    cmap = plt.cm.tab10 if len(labels) <= 10 else plt.cm.tab20  # one colour per solver
+    colours = {lab: cmap(i % cmap.N) for i, lab in enumerate(labels)}
+    for k, case in enumerate(cases):
+        ax = axes[k // ncol][k % ncol]
+        for lab, curve in sorted(histories[case].items()):
+            y = curve["error"].clip(lower=1e-17)
+            ax.step(curve["time_s"].clip(lower=1e-6), y, where="post", label=lab, color=colours[lab],
+                    linestyle="-" if "ichol" in lab else "--", linewidth=1.1)
+        if tol:
+            ax.axhline(tol, color="black", linewidth=0.6, linestyle=":")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_title(case, fontsize=9)
+        ax.set_xlabel("time (s, setup included)", fontsize=8)
+        ax.set_ylabel("error e", fontsize=8)
+    for k in range(len(cases), nrow * ncol):
+        axes[k // ncol][k % ncol].axis("off")
+    handles = [plt.Line2D([], [], color=colours[lab], linestyle="-" if "ichol" in lab else "--") for lab in labels]
+    fig.legend(handles, labels, loc="lower center", ncol=min(6, len(labels)), fontsize=7, frameon=False)
+    fig.tight_layout(rect=(0, 0.06, 1, 1))
+    return figutil.save_figure(fig, out_dir, stem)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("stress", help="stress output folder (with stability.csv) or a CSV file")
@@ -116,6 +190,9 @@ def main(argv=None) -> int:
         df = read_table(args.stress)
         base = args.stress if os.path.isdir(args.stress) else os.path.dirname(os.path.abspath(args.stress))
         for p in plot_stability(df, args.out or os.path.join(base, "figures")):
+            print(p)
+        tol = float(df["tol"].iloc[0]) if "tol" in df.columns and len(df) else None
+        for p in plot_stiff_family(stiff_histories(base, df), args.out or os.path.join(base, "figures"), tol):
             print(p)
     except (FileNotFoundError, ValueError) as err:
         print(f"stability.py: {err}", file=sys.stderr)

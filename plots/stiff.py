@@ -5,6 +5,7 @@ preconditioners on the stiff-slab scene at Young's moduli 1e4..1e12 Pa.
     python3 plots/stiff.py run  --bin build/bin/contactbench --out results/stiff [--youngs 1e4,1e8,...]
     python3 plots/stiff.py plot --out results/stiff          (redraw from results/stiff/runs/*.json)
     --scene scenes/stiff_slab_graded.json                    (the irregular mesh, cond(A) = 1.1e9 at 1e10)
+    --scene scenes/stiff_dino.json --frames 2                (the dinosaur reproducer, 292 rows at frame 1)
 
 `run` simulates one step of scenes/stiff_slab.json per modulus (the stress cases slab-stiff-*),
 solves the snapshot with each configuration (tol 1e-8, history on) and writes
@@ -131,7 +132,7 @@ def write_outputs(runs: Dict[float, Dict[str, dict]], out_dir: str, tol: float) 
 
 
 def run_all(binary: str, out_dir: str, moduli: List[float], tol: float, max_iterations: int, time_limit: float,
-            scene_path_in: str = SCENE) -> None:
+            scene_path_in: str = SCENE, frames: int = 1) -> None:
     os.makedirs(os.path.join(out_dir, "runs"), exist_ok=True)
     with open(scene_path_in) as f:
         scene = json.load(f)
@@ -146,14 +147,14 @@ def run_all(binary: str, out_dir: str, moduli: List[float], tol: float, max_iter
             scene_path = os.path.join(tmp, "stiff_slab.json")
             with open(scene_path, "w") as f:
                 json.dump(scene, f)
-            subprocess.run([binary, "simulate", scene_path, "--frames", "1", "--out", tmp], check=True,
+            subprocess.run([binary, "simulate", scene_path, "--frames", str(frames), "--out", tmp], check=True,
                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
             snaps = sorted(glob.glob(os.path.join(tmp, "snapshots", "*.qpsnap")))
             if not snaps:
                 raise SystemExit(f"plots/stiff.py: no snapshot for E = {youngs:g}")
             for label, (solver, settings) in CONFIGS.items():
                 out = os.path.join(out_dir, "runs", f"{youngs:.0e}__{label}.json")
-                cmd = [binary, "solve", snaps[0], "--solver", solver, "--history", "--json", out,
+                cmd = [binary, "solve", snaps[-1], "--solver", solver, "--history", "--json", out,
                        "--time-limit", str(time_limit), "--set", f"tol={tol}", "--set", f"max_iterations={max_iterations}"]
                 for k, v in settings.items():
                     cmd += ["--set", f"{k}={v}"]
@@ -171,6 +172,8 @@ def main(argv=None) -> int:
     ap.add_argument("--tol", type=float, default=1e-8)
     ap.add_argument("--max-iterations", type=int, default=20000)
     ap.add_argument("--time-limit", type=float, default=60.0)
+    ap.add_argument("--frames", type=int, default=1,
+                    help="simulate this many frames and solve the last snapshot (scenes/stiff_dino.json: 2)")
     args = ap.parse_args(argv)
     if args.mode == "run":
         try:
@@ -178,7 +181,7 @@ def main(argv=None) -> int:
         except ValueError:
             print(f"plots/stiff.py: --youngs: expected comma-separated numbers, got '{args.youngs}'", file=sys.stderr)
             return 2
-        run_all(args.bin, args.out, moduli, args.tol, args.max_iterations, args.time_limit, args.scene)
+        run_all(args.bin, args.out, moduli, args.tol, args.max_iterations, args.time_limit, args.scene, args.frames)
     runs = load_runs(args.out)
     if not runs:
         print(f"plots/stiff.py: {args.out}/runs: no run JSON (<E>__<config>.json)", file=sys.stderr)

@@ -157,6 +157,33 @@ json fem_slab_scene(const json& params)
     };
 }
 
+/// The stiff dinosaur of scenes/stiff_dino.json (issue 17's reproducer at the unseen snapshot's
+/// scale): the authors' 1303-vertex dino (CGAL's dino.off tetrahedralised when their data is
+/// missing) with E = params["youngs"], nu = 0.45, h = 0.05 s, dropped feet first at 3 m/s; its
+/// second step has 263 vertex-plane rows.
+json fem_dino_scene(const json& params)
+{
+    const json material = {{"youngs", params.value("youngs", 1e10)}, {"poisson", 0.45}, {"density", 1000}};
+    const json fallback = {{"path", "cache:meshes/dino.off"},
+                           {"center", true},
+                           {"rotate_deg", {0, 90, 0}},
+                           {"fit_size", 1.015},
+                           {"resolution", 25}};
+    return {
+        {"name", "stress-dino"},
+        {"h", 0.05},
+        {"gravity", {0, -9.8, 0}},
+        {"bodies",
+         {{{"name", "dino"},
+           {"mesh", {"data:meshes/dino_1303_4014.abq", fallback}},
+           {"material", material},
+           {"translate", {0, 0.44, 0}},
+           {"velocity", {0, -3.0, 0}}}}},
+        {"obstacles", {{{"type", "plane"}, {"normal", {0, 1, 0}}, {"point", {0, 0, 0}}}}},
+        {"output", {{"strip_frames", 0}}},
+    };
+}
+
 /// The demo scene (scenes/demo.json: two 4x4x4-cube boxes, 750 DOF) built in memory, with the
 /// case's overrides: "youngs" (Pa, both bodies), "speed" (m/s, added downwards to both bodies'
 /// initial velocities), "h" (s).
@@ -216,13 +243,24 @@ Qp make_fem_sim_qp(const StressCase& c)
 
     sim::SimulatorOptions options;
     options.out_dir = tmp.path;
-    const bool slab = c.params.value("scene", std::string("demo")) == "slab";
-    // mprgp steps both scenes: CHOLMOD (active-set) in the parent leaves the forked children
-    // of `stress` hanging. The slab cases use the first step, whose QP no solver has touched.
+    const std::string scene = c.params.value("scene", std::string("demo"));
+    const bool slab = scene == "slab";
+    const bool dino = scene == "dino";
+    // mprgp steps every scene: CHOLMOD (active-set) in the parent leaves the forked children
+    // of `stress` hanging. The slab and dino cases use the first step with rows, whose QP no
+    // solver has touched.
     options.solver = "mprgp";
-    sim::Simulator simulator(
-        sim::load_scene_json(slab ? fem_slab_scene(c.params) : fem_demo_scene(c.params), where, sim::PathRoots{}),
-        options);
+    sim::PathRoots roots;
+    if (dino) {
+        // The authors' mesh when `make paper-data` wrote it, else the CGAL stand-in (`make meshes`).
+        roots = sim::default_path_roots("", "");
+        std::error_code ec;
+        if (std::filesystem::is_directory(roots.cache + "/paper-data", ec)) roots.data = roots.cache + "/paper-data";
+    }
+    const json scene_json = slab   ? fem_slab_scene(c.params)
+                            : dino ? fem_dino_scene(c.params)
+                                   : fem_demo_scene(c.params);
+    sim::Simulator simulator(sim::load_scene_json(scene_json, where, roots), options);
     Qp last;
     long last_step = -1;
     for (long s = 0; s < frames; ++s) {
@@ -235,8 +273,11 @@ Qp make_fem_sim_qp(const StressCase& c)
     }
     if (last_step < 0 || last.m() == 0)
         throw_input_error(where, "frames", "no step with contact rows in " + std::to_string(frames) + " steps");
-    last.meta["stress_source"] = {
-        {"step", last_step}, {"frames", frames}, {"scene", slab ? "stiff slab (in memory)" : "demo (in memory)"}};
+    last.meta["stress_source"] = {{"step", last_step},
+                                  {"frames", frames},
+                                  {"scene", slab   ? "stiff slab (in memory)"
+                                            : dino ? "stiff dino (in memory)"
+                                                   : "demo (in memory)"}};
     return last;
 }
 
@@ -294,8 +335,9 @@ std::vector<StressCase> stress_cases(bool quick)
                   "random SPD with m = 190 rows on n = 200"),
         make_case("plane-tilted-larger", "baseline", 1, "plane", {{"nx", 8}, {"ny", 4}, {"nz", 8}, {"tilt_deg", 30.0}},
                   "a larger body (1215 DOF) on a 30 degree slope"),
-        make_case("fem-stiff-1e10", "fem-sim", 2, "fem-sim", {{"youngs", 1e10}, {"frames", 6}},
-                  "simulator snapshot: demo scene (750 DOF) with E = 1e10 Pa, last step with contacts"),
+        make_case("fem-stiff-1e10", "fem-sim", 2, "fem-sim", {{"youngs", 1e10}, {"frames", 11}},
+                  "simulator snapshot: demo scene (750 DOF) with E = 1e10 Pa, step 10 (the boxes collide; "
+                  "earlier resting steps are solved at x0)"),
         make_case("fem-fast-50ms", "fem-sim", 3, "fem-sim", {{"speed", 50.0}, {"frames", 3}},
                   "simulator snapshot: demo scene (750 DOF) thrown down at ~50 m/s, last step with contacts"),
         make_case("slab-stiff-1e4", "stiff-slab", 1, "fem-sim", {{"scene", "slab"}, {"youngs", 1e4}, {"frames", 1}},
@@ -308,6 +350,9 @@ std::vector<StressCase> stress_cases(bool quick)
                   "issue 17's reproducer: stiff-slab scene with E = 1e10 Pa (cond(A) ~ 1e9), first step"),
         make_case("slab-stiff-1e12", "stiff-slab", 3, "fem-sim", {{"scene", "slab"}, {"youngs", 1e12}, {"frames", 1}},
                   "stiff-slab scene with E = 1e12 Pa, first step"),
+        make_case("dino-stiff-1e10", "stiff-dino", 3, "fem-sim", {{"scene", "dino"}, {"youngs", 1e10}, {"frames", 2}},
+                  "issue 17's reproducer (scenes/stiff_dino.json): 1303-vertex dino (3909 DOF), E = 1e10 Pa, "
+                  "h = 0.05 s, 263 plane rows at step 1; the CGAL dino without the authors' data"),
         make_case("coupled-translated-100m", "translation", 2, "coupled", base,
                   "baseline-coupled moved by 100 m along x (x0 + t, b + A t, c + J t)", "translate-100m"),
         make_case("coupled-stiff-translated-100m", "translation", 3, "coupled", {{"youngs", 1e9}},

@@ -359,3 +359,54 @@ TEST(Runner, DecouplesCoupledRowsForMprgp)
     const RunOutcome plain = run_solver(qp, "cg", {{"tol", 1e-6}}, options);
     EXPECT_FALSE(plain.record["decouple"]["applied"].get<bool>());
 }
+
+namespace {
+
+/// The monitor's verdict on a given sequence of iterates.
+bool monotone_over(const Qp& qp, const std::vector<Vec>& iterates)
+{
+    HistoryMonitor monitor(qp.view(), accuracy_scale(qp.view()), 100);
+    long it = 0;
+    for (const Vec& x : iterates) {
+        IterationInfo info;
+        info.iteration = ++it;
+        info.step = StepKind::OUTER;
+        info.x = &x;
+        monitor.on_iteration(info);
+    }
+    return monitor.monotone();
+}
+
+}  // namespace
+
+TEST(HistoryMonitor, MonotonicityIsJudgedOnChangesFromTheStartNotAbsoluteObjectives)
+{
+    // The diagonal QP moved by T = 1e6 along every axis (x0 + T, b + A T, c + T): the solution
+    // moves by T and every objective difference is unchanged, but |F| grows to ~1e13, so a
+    // slack relative to |F| (the former check: 1e-12 |F| = 10) hid an increase of 5e-3.
+    Qp qp = diagonal_qp();
+    const Vec t = Vec::Constant(qp.n(), 1e6);
+    qp.b += qp.A * t;
+    qp.c += t;
+    qp.x0 += t;
+    Vec solution(6);
+    solution << 1, 0, 1, 0, 1, 0;
+    solution += t;
+    Vec up = solution;
+    up[0] += 0.1;  // free coordinate (d_0 = 1): F rises by 0.005
+    EXPECT_FALSE(monotone_over(qp, {solution, up}));
+    // Decreases of the same size are not flagged.
+    Vec half = solution;
+    half[0] += 0.05;
+    EXPECT_TRUE(monotone_over(qp, {up, half, solution}));
+    // And untranslated, the same steps get the same verdicts.
+    const Qp plain = diagonal_qp();
+    Vec s0(6), u0(6), h0(6);
+    s0 << 1, 0, 1, 0, 1, 0;
+    u0 = s0;
+    u0[0] += 0.1;
+    h0 = s0;
+    h0[0] += 0.05;
+    EXPECT_FALSE(monotone_over(plain, {s0, u0}));
+    EXPECT_TRUE(monotone_over(plain, {u0, h0, s0}));
+}

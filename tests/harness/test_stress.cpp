@@ -181,6 +181,70 @@ TEST(StressCases, FemSimSnapshotsHaveContactsAndActiveSetConverges)
     }
 }
 
+TEST(StressCases, StiffFemSnapshotIsNotSolvedAtItsStart)
+{
+    // fem-stiff-1e10 takes the step where the stiff boxes collide: the resting steps before it
+    // are solved at x0 (0 iterations), which tested nothing about stiffness.
+    const Qp qp = make_stress_qp(select_stress_cases(stress_cases(false), {"fem-stiff-1e10"}).at(0));
+    const SolverResult r =
+        builtin_registry().create("mprgp-coupled", {{"tol", 1e-6}, {"max_iterations", 20000}})->solve(qp.view(), {});
+    EXPECT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
+    EXPECT_GT(r.iterations, 50);  // 152 at the time of writing
+}
+
+TEST(StressCases, StiffDinoHasTheReproducersRows)
+{
+    // Needs the authors' dino (make paper-data) or the CGAL stand-in (make meshes).
+    const char* home = std::getenv("HOME");
+    const char* cache_env = std::getenv("CB_CACHE");
+    const std::string cache =
+        cache_env && *cache_env ? cache_env : std::string(home ? home : ".") + "/.cache/contactbench";
+    if (!std::filesystem::exists(cache + "/paper-data/meshes/dino_1303_4014.abq"))
+        GTEST_SKIP() << "the authors' dino_1303_4014.abq is not in " << cache << "/paper-data";
+    const Qp qp = make_stress_qp(select_stress_cases(stress_cases(false), {"dino-stiff-1e10"}).at(0));
+    EXPECT_EQ(qp.n(), 3909);
+    EXPECT_EQ(qp.m(), 263);  // scenes/stiff_dino.json's frame 1 (mprgp steps frame 0)
+    const Vec d = qp.A.diagonal();
+    EXPECT_GT(d.maxCoeff() / d.minCoeff(), 50.0);  // 90: graded tets, as in the snapshot
+}
+
+TEST(StressRun, SolverSpecsWithSettingsAndTheStiffSection)
+{
+    const std::string dir = (std::filesystem::temp_directory_path() / "cb_test_stress_spec").string();
+    std::filesystem::remove_all(dir);
+    StressOptions options;
+    options.solvers = {"mprgp:precond=ichol:gamma=10", "cg"};
+    options.cases = {"stiffness-1e4"};
+    options.reference = false;
+    options.time_limit_s = 5.0;
+    options.out_dir = dir;
+    const StressReport report = run_stress(options);
+    ASSERT_EQ(report.rows.size(), 2u);
+    EXPECT_EQ(report.rows[0].solver, "mprgp:precond=ichol:gamma=10");
+    EXPECT_EQ(report.rows[0].status, "converged") << report.rows[0].message;
+    std::ifstream run_file(dir + "/runs/stiffness-1e4__mprgp:precond=ichol:gamma=10.json");
+    ASSERT_TRUE(run_file.good());
+    const nlohmann::json run = nlohmann::json::parse(run_file);
+    EXPECT_EQ(run.at("settings").at("precond"), "ichol");
+    EXPECT_EQ(run.at("settings").at("gamma"), 10.0);
+    EXPECT_GE(run.at("history").at("rows").size(), 2u);  // kept for the stiff families
+    const std::string md = stability_markdown(report);
+    EXPECT_NE(md.find("## Stiff families: time and iterations"), std::string::npos);
+    EXPECT_NE(md.find("figures/stiff_family.png"), std::string::npos);
+    EXPECT_NE(md.find(" / " + std::to_string(report.rows[0].iterations) + " / ok |"), std::string::npos) << md;
+    std::filesystem::remove_all(dir);
+
+    StressOptions bad;
+    bad.solvers = {"mprgp:precond"};
+    bad.cases = {"stiffness-1e4"};
+    try {
+        run_stress(bad);
+        ADD_FAILURE() << "expected an InputError";
+    } catch (const InputError& e) {
+        EXPECT_STREQ(e.what(), "stress: --solvers: 'mprgp:precond': expected NAME[:key=value...], got 'precond'");
+    }
+}
+
 TEST(StressReportText, ListsAWrongStatus)
 {
     StressReport report;

@@ -212,6 +212,34 @@ class TestStability(TempDirCase):
         self.assertEqual(stability.cell_marks(df.iloc[0], cols), "")
         self.assertEqual(cols["error"], "kkt")
 
+    def test_stiff_family_figure_from_kept_histories(self):
+        # Two stiff cases (family "stiff-slab") and one other; runs/ holds the stiff runs' records.
+        with open(os.path.join(self.tmp, "stability.csv"), "w") as f:
+            f.write("solver,case,severity,status,kkt,tol,violation,nonfinite,monotone,time_s,iterations,"
+                    "status_confirmed,message,family,n,m,criterion,m_solved\n"
+                    "mprgp,slab-stiff-1e12,3,converged,1e-9,1e-8,0,false,true,0.3,2,true,,stiff-slab,9,2,kkt,2\n"
+                    "mprgp:precond=ichol,slab-stiff-1e4,1,converged,1e-9,1e-8,0,false,true,0.3,2,true,,stiff-slab,"
+                    "9,2,kkt,2\n"
+                    "mprgp,baseline-plane,0,converged,1e-9,1e-8,0,false,true,0.3,2,true,,baseline,9,2,kkt,2\n")
+        os.makedirs(os.path.join(self.tmp, "runs"))
+        cols = ["iteration", "time_s", "a_products", "step", "stationarity", "primal", "dual", "complementarity",
+                "gap", "kkt_rel", "objective", "native_residual", "active_set"]
+        for case, label in (("slab-stiff-1e12", "mprgp"), ("slab-stiff-1e4", "mprgp:precond=ichol"),
+                            ("baseline-plane", "mprgp")):
+            rows = [[k, 0.1 * (k + 1), k, "cg", 0, 0, 0, 0, 0, 10.0 ** -(3 * k), 0, 0, 1] for k in range(3)]
+            with open(os.path.join(self.tmp, "runs", f"{case}__{label}.json"), "w") as f:
+                json.dump({"time": {"setup_s": 0.5}, "history": {"columns": cols, "rows": rows}}, f)
+        df = stability.read_table(self.tmp)
+        hist = stability.stiff_histories(self.tmp, df)
+        self.assertEqual(sorted(hist), ["slab-stiff-1e12", "slab-stiff-1e4"])  # not the baseline case
+        curve = hist["slab-stiff-1e4"]["mprgp:precond=ichol"]
+        self.assertEqual(list(curve["time_s"].round(6)), [0.6, 0.7, 0.8])  # setup added
+        self.assertEqual(list(curve["error"]), [1.0, 1e-3, 1e-6])
+        self.assertEqual(stability._case_key("slab-stiff-1e4") < stability._case_key("slab-stiff-1e12"), True)
+        with redirect_stdout(io.StringIO()):
+            self.assertEqual(stability.main([self.tmp]), 0)
+        self.assertTrue(os.path.isfile(os.path.join(self.tmp, "figures", "stiff_family.png")))
+
     def test_missing_columns_named(self):
         import pandas as pd
         with self.assertRaisesRegex(ValueError, "case, error"):
