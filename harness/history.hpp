@@ -28,6 +28,7 @@ struct HistoryRow {
     double objective = 0.0;
     double native_residual = 0.0;
     long active_set = -1;
+    double work = 0.0;  ///< A-product equivalents so far (solvers/work_units.hpp)
 };
 
 class HistoryMonitor : public Monitor {
@@ -41,7 +42,7 @@ public:
     bool on_iteration(const IterationInfo& info) override;
     /// Appends the returned point (x, lambda) as the final row unless the last call was recorded.
     void finish(const Vec& x, const Vec& lambda, long iterations, double time_s, long a_products,
-                double native_residual);
+                double native_residual, double work_flops = 0.0);
 
     bool nonfinite() const { return m_nonfinite; }
     bool monotone() const { return m_monotone; }

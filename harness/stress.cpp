@@ -298,6 +298,7 @@ std::string short_status(const StressRow& r)
                                                              {"diverged", "diverged"},
                                                              {"infeasible", "infeas"},
                                                              {"invalid_input", "refused"},
+                                                             {"not_applicable", "n/a"},
                                                              {"stopped_by_monitor", "stopped"},
                                                              {"crashed", "CRASH"},
                                                              {"hung", "HUNG"},
@@ -436,7 +437,7 @@ std::string stability_markdown(const StressReport& report)
       << "Cell: the run's status and the error e reached on the original QP (ok = converged: the solver "
          "said so and e <= tol; relax = solved_relaxation: tol met only on the problem the solver changed "
          "(decoupled rows, or J ignored), not on the original; maxit, time, infeas, refused = invalid_input, "
-         "...). **bold!** = a wrong status (unconf = the solver said converged and e disagrees on its own "
+         "n/a = not_applicable (a problem class the solver does not take), ...). **bold!** = a wrong status (unconf = the solver said converged and e disagrees on its own "
          "problem, or a crash/hang); NaN = non-finite values seen; nm = objective not monotone over feasible "
          "iterates; (k rows) = the harness decoupled J for this solver, which then solved a QP with k of the "
          "m rows.\n\n";
@@ -464,7 +465,7 @@ std::string stability_markdown(const StressReport& report)
         }
         s << '\n';
     }
-    s << "\n## Summary per solver\n\n| solver | runs | converged | solved relaxation | wrong statuses | refused | "
+    s << "\n## Summary per solver\n\n| solver | runs | converged | solved relaxation | wrong statuses | refused or n/a | "
          "infeasible | time limit | max iterations | other | non-finite | non-monotone |\n"
          "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for (const auto& sv : solvers) {
@@ -479,7 +480,7 @@ std::string stability_markdown(const StressReport& report)
                 ++ok;
             else if (r.status == "solved_relaxation")
                 ++relax;
-            else if (r.status == "invalid_input")
+            else if (r.status == "invalid_input" || r.status == "not_applicable")
                 ++refused;
             else if (r.status == "infeasible")
                 ++infeasible;

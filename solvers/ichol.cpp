@@ -15,6 +15,11 @@ bool IncompleteCholeskyPreconditioner::factor(const SpMat& B, std::string& error
         return false;
     }
     m_factor_nonzeros = static_cast<long>(m_ic.matrixL().nonZeros());
+    m_factor_flops = 0.0;
+    for (Eigen::Index j = 0; j < m_ic.matrixL().outerSize(); ++j) {
+        const double column = static_cast<double>(m_ic.matrixL().col(j).nonZeros());
+        m_factor_flops += column * column;
+    }
     m_ready = true;
     return true;
 }

@@ -20,11 +20,16 @@ public:
     /// z = M^-1 r.
     void apply(const Vec& r, Vec& z) const;
     long factor_nonzeros() const { return m_factor_nonzeros; }
+    /// Flops of the last factor(): sum over the columns of L of nnz(column)^2 (docs/work.md).
+    double factor_flops() const { return m_factor_flops; }
+    /// Flops of one apply(): forward and back substitution, 4 nnz(L).
+    double apply_flops() const { return 4.0 * static_cast<double>(m_factor_nonzeros); }
     bool ready() const { return m_ready; }
 
 private:
     Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>> m_ic;
     long m_factor_nonzeros = 0;
+    double m_factor_flops = 0.0;
     bool m_ready = false;
 };
 
