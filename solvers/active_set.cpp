@@ -209,8 +209,8 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
                 for (SpMat::InnerIterator it(qp.J, rows[start + j]); it; ++it) R(it.col(), j) = it.value();
             const Eigen::MatrixXd U = chol.solve(R);
             counters.cholmod_solves += k;
-            counters.work_flops += cholmod_solve_flops(chol.cholmod(), k) +
-                                   sparse_product_flops(static_cast<double>(qp.J.nonZeros()), k);
+            counters.work_flops +=
+                cholmod_solve_flops(chol.cholmod(), k) + sparse_product_flops(static_cast<double>(qp.J.nonZeros()), k);
             const Eigen::MatrixXd KU = qp.J * U;
             for (int j = 0; j < k; ++j) {
                 slot[rows[start + j]] = static_cast<int>(kcol.size());
@@ -255,7 +255,8 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
         in_W[W[k]] = 0;
         W.erase(W.begin() + k);
         schur.remove(k);  // Givens rotations of the trailing columns: about 6 q (q - k) flops
-        counters.work_flops += 6.0 * static_cast<double>(W.size() + 1) * static_cast<double>(static_cast<int>(W.size()) + 1 - k);
+        counters.work_flops +=
+            6.0 * static_cast<double>(W.size() + 1) * static_cast<double>(static_cast<int>(W.size()) + 1 - k);
         ++dropped;
         ++counters.pivots;
     };
