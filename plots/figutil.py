@@ -133,6 +133,11 @@ def solver_style(label: str, solver: Optional[str] = None) -> dict:
             "linestyle": "-"}
 
 
+def solver_colour(solver: str) -> str:
+    """The fixed colour of a solver (SOLVER_STYLES; hashed for other names)."""
+    return solver_style(solver)["color"]
+
+
 def label_solvers(runs: pd.DataFrame) -> Dict[str, str]:
     """label -> solver name, from the runs table."""
     if runs is None or runs.empty or "label" not in runs or "solver" not in runs:
