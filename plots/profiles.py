@@ -37,6 +37,7 @@ from typing import Dict, Iterable, List, Optional, Tuple
 
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
+from matplotlib.ticker import NullFormatter  # noqa: E402
 
 from plots import figutil  # noqa: E402
 from plots.figutil import TIERS, fmt, plt  # noqa: E402
@@ -238,7 +239,7 @@ def _draw_profiles(numbers: dict, labels: List[str], solvers: Dict[str, str], di
         if column == "time_s":
             ratios = performance_ratios(cost)
             finite = ratios.replace(np.inf, np.nan).stack()
-            top = max(2.0, float(finite.max()) * 1.2) if not finite.empty else 2.0
+            top = max(10.0, float(finite.max()) * 1.2) if not finite.empty else 10.0
             xs = np.logspace(0, math.log10(top), 200)
             prof = performance_profile(ratios, xs, excluded)
         else:
@@ -247,13 +248,16 @@ def _draw_profiles(numbers: dict, labels: List[str], solvers: Dict[str, str], di
             hi = max(lo * 10, float(vals.max()) * 1.5) if not vals.empty else 10.0
             xs = np.logspace(math.log10(lo), math.log10(hi), 200)
             prof = data_profile(cost, xs, excluded)
+        judged = _denominators(labels, len(cost), excluded)
         for label in labels:
+            if len(cost) - (int(excluded[label].fillna(False).astype(bool).sum()) if label in excluded else 0) <= 0:
+                continue  # every run of the label is excluded (n/a or relaxation): nothing to draw
             style = figutil.solver_style(label, solvers.get(label))
             ax.step(xs, prof[label], where="post", color=style["color"], ls=style["linestyle"], lw=1.4,
-                    label=display.get(label, label))
-            ax.plot(xs[-1:], prof[label].to_numpy()[-1:], ls="none", marker=style["marker"], color=style["color"],
-                    markersize=5)
+                    marker=style["marker"], markevery=[len(xs) - 1], markersize=5,
+                    label=f"{display.get(label, label)} ({judged[label]} judged)")
         ax.set_xscale("log")
+        ax.xaxis.set_minor_formatter(NullFormatter())  # short ranges would label every minor tick
         ax.set_ylim(-0.02, 1.02)
         ax.set_xlabel(xlabel)
         ax.set_title(f"{title}, error e <= {tier:g}", fontsize=9)
