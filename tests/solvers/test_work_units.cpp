@@ -1,5 +1,6 @@
 // Tests of the work unit (solvers/work_units.hpp, docs/work.md): the flop counts CHOLMOD reports,
 // their conversion to A-product equivalents, and the work each solver counts.
+#include "solvers/ichol.hpp"
 #include "solvers/registry.hpp"
 #include "solvers/work_units.hpp"
 #include "tests/solvers/dual_test_problems.hpp"
@@ -73,6 +74,23 @@ TEST(WorkUnits, SolversWithFactorisationsCountMoreThanTheirAProducts)
     const SolverResult m = builtin_registry().create("mprgp", {})->solve(qp.view(), SolveContext{});
     EXPECT_EQ(m.counters.work_flops, 0.0);
     EXPECT_EQ(work_units(m.counters, qp.A), static_cast<double>(m.counters.a_products));
+}
+
+TEST(WorkUnits, IncompleteCholeskyCountsItsFactorAndEveryApplication)
+{
+    const Qp qp = test::make_grid_qp(test::GridQpParams{});
+    const SolverResult cg = builtin_registry().create("cg", {{"precond", "ichol"}})->solve(qp.view(), SolveContext{});
+    IncompleteCholeskyPreconditioner ic;
+    std::string error;
+    ASSERT_TRUE(ic.factor(qp.A, error)) << error;
+    ASSERT_EQ(cg.counters.precond_factorizations, 1);
+    ASSERT_GT(cg.counters.precond_applications, 0);
+    EXPECT_EQ(cg.counters.work_flops,
+              ic.factor_flops() + static_cast<double>(cg.counters.precond_applications) * ic.apply_flops());
+    // mprgp's face factors: at least one factorisation (plus forming its face matrix, 2 A-products)
+    const SolverResult m = builtin_registry().create("mprgp", {{"precond", "ichol"}})->solve(qp.view(), SolveContext{});
+    ASSERT_GE(m.counters.precond_factorizations, 1);
+    EXPECT_GT(m.counters.work_flops, 2.0 * a_product_flops(qp.A));
 }
 
 TEST(WorkUnits, RepeatedSolvesCountTheSameWork)
