@@ -20,7 +20,7 @@ import numpy as np  # noqa: E402
 
 from plots import figutil  # noqa: E402
 from plots.figutil import plt  # noqa: E402
-from plots.loader import Results, history_time, load_results  # noqa: E402
+from plots.loader import UNMEASURED_STATUSES, Results, history_time, load_results  # noqa: E402
 
 AXES = (("time_s", "time [s] (setup + solve)", "time"),
         ("iteration", "iterations", "iterations"),
@@ -66,6 +66,8 @@ def plot_convergence(results: Results, out_dir: str, column: str = "kkt_rel",
                 if hasattr(run, "iloc") and getattr(run, "ndim", 1) > 1:
                     run = run.iloc[0]
                 n, m = run.get("n"), run.get("m")
+                if run.get("status") in UNMEASURED_STATUSES:
+                    continue  # n/a, refused or never run: there is no curve to draw
                 style = figutil.solver_style(label, solvers.get(label))
                 h = results.history(snap, label)
                 if h.empty or x not in h or column not in h:

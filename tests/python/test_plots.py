@@ -79,6 +79,19 @@ class TestConvergence(TempDirCase):
                 path = os.path.join(folder, "figures", f"convergence_{stem}.{ext}")
                 self.assertTrue(os.path.getsize(path) > 1000, path)
 
+    def test_work_figure_when_runs_record_work(self):  # an n/a run beside it is skipped
+        done = mf.make_run("s0", "pgs", iterations=4)
+        done["counters"]["work"] = 40.0
+        na = mf.make_run("s0", "mprgp-box", status="not_applicable", history=False)
+        folder = mf.write_results(self.tmp, [done, na])
+        res = loader.load_results(folder)
+        paths = convergence.plot_convergence(res, os.path.join(folder, "figures"))
+        self.assertIn(os.path.join(folder, "figures", "convergence_work.png"), paths)
+        # without a work column in any run there is no work figure
+        plain = mf.write_results(os.path.join(self.tmp, "plain"), [mf.make_run("s0", "a")])
+        paths = convergence.plot_convergence(loader.load_results(plain), os.path.join(plain, "figures"))
+        self.assertFalse(any("convergence_work" in p for p in paths))
+
     def test_empty_folder_is_an_error(self):
         self.assertEqual(convergence.main.__module__, "plots.convergence")
         os.makedirs(os.path.join(self.tmp, "runs"))
