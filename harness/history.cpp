@@ -1,5 +1,7 @@
 #include "harness/history.hpp"
 
+#include "solvers/work_units.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -23,8 +25,8 @@ HistoryMonitor::HistoryMonitor(const QpView& qp, const AccuracyScale& scale, lon
 
 std::vector<std::string> HistoryMonitor::columns()
 {
-    return {"iteration",       "time_s", "a_products", "step",      "stationarity",    "primal",    "dual",
-            "complementarity", "gap",    "kkt_rel",    "objective", "native_residual", "active_set"};
+    return {"iteration",       "time_s", "a_products", "step",      "stationarity",    "primal",     "dual",
+            "complementarity", "gap",    "kkt_rel",    "objective", "native_residual", "active_set", "work"};
 }
 
 HistoryRow HistoryMonitor::measure(long call, long iteration, StepKind step, const Vec& x, const Vec* lambda,
@@ -102,13 +104,15 @@ bool HistoryMonitor::on_iteration(const IterationInfo& info)
     if (!std::isfinite(info.native_residual)) m_nonfinite = true;
     if (!m_record || !info.x || call % m_stride != 0) return true;
     const long a_products = info.counters ? info.counters->a_products : 0;
-    push(measure(call, info.iteration, info.step, *info.x, info.lambda, info.elapsed_s, a_products,
-                 info.native_residual, info.active_set_size));
+    HistoryRow row = measure(call, info.iteration, info.step, *info.x, info.lambda, info.elapsed_s, a_products,
+                             info.native_residual, info.active_set_size);
+    row.work = work_units(a_products, info.counters ? info.counters->work_flops : 0.0, m_qp.A);
+    push(row);
     return true;
 }
 
 void HistoryMonitor::finish(const Vec& x, const Vec& lambda, long iterations, double time_s, long a_products,
-                            double native_residual)
+                            double native_residual, double work_flops)
 {
     if (!all_finite(x) || !all_finite(lambda)) m_nonfinite = true;
     if (!m_record || x.size() != m_qp.n()) return;
@@ -124,6 +128,7 @@ void HistoryMonitor::finish(const Vec& x, const Vec& lambda, long iterations, do
         return;
     }
     HistoryRow row = measure(m_calls, iterations, StepKind::FINAL, x, l, time_s, a_products, native_residual, -1);
+    row.work = work_units(a_products, work_flops, m_qp.A);
     if (!std::isfinite(row.objective) || !std::isfinite(row.accuracy.max())) m_nonfinite = true;
     m_rows.push_back(row);
 }
@@ -136,7 +141,7 @@ nlohmann::json HistoryMonitor::to_json() const
                         number_or_null(r.accuracy.stationarity), number_or_null(r.accuracy.primal),
                         number_or_null(r.accuracy.dual), number_or_null(r.accuracy.complementarity),
                         number_or_null(r.accuracy.gap), number_or_null(r.accuracy.max()), number_or_null(r.objective),
-                        number_or_null(r.native_residual), r.active_set});
+                        number_or_null(r.native_residual), r.active_set, number_or_null(r.work)});
     }
     return {{"columns", columns()}, {"rows", rows}, {"stride", m_stride}, {"monitor_calls", m_calls}};
 }

@@ -34,6 +34,7 @@ struct HistoryRow {
     double objective_change_terms = 0.0;  ///< sum of |terms| of that difference (its rounding scale)
     double native_residual = 0.0;
     long active_set = -1;
+    double work = 0.0;  ///< A-product equivalents so far (solvers/work_units.hpp)
 };
 
 class HistoryMonitor : public Monitor {
@@ -47,7 +48,7 @@ public:
     bool on_iteration(const IterationInfo& info) override;
     /// Appends the returned point (x, lambda) as the final row unless the last call was recorded.
     void finish(const Vec& x, const Vec& lambda, long iterations, double time_s, long a_products,
-                double native_residual);
+                double native_residual, double work_flops = 0.0);
 
     bool nonfinite() const { return m_nonfinite; }
     bool monotone() const { return m_monotone; }

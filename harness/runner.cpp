@@ -5,6 +5,7 @@
 #include "solvers/a_product.hpp"
 #include "solvers/decouple.hpp"
 #include "solvers/registry.hpp"
+#include "solvers/work_units.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -202,7 +203,7 @@ RunOutcome run_solver(const SolverRegistry& registry, const Qp& original, const 
                                             accuracy_tol, lambda_solved, fitted_solved);
     }
     history.finish(x, lambda, result.iterations, result.setup_s + result.solve_s, result.counters.a_products,
-                   result.native_residual);
+                   result.native_residual, result.counters.work_flops);
     out.nonfinite = history.nonfinite() || !std::isfinite(out.objective) || !std::isfinite(out.accuracy.max());
     out.monotone = history.monotone();
 
@@ -265,6 +266,7 @@ RunOutcome run_solver(const SolverRegistry& registry, const Qp& original, const 
     rec["tol"] = tol;
     rec["counters"] = result.counters.to_json();
     rec["counters"]["a_products_harness"] = a_products_harness;  // counted by the harness, not the solver
+    rec["counters"]["work"] = work_units(result.counters, original.A);  // A-product equivalents (docs/work.md)
     nlohmann::json time = {{"setup_s", median(setup_times)},
                            {"solve_s", median(solve_times)},
                            {"total_s", median(totals)},

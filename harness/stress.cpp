@@ -328,6 +328,7 @@ std::string short_status(const StressRow& r)
                                                              {"diverged", "diverged"},
                                                              {"infeasible", "infeas"},
                                                              {"invalid_input", "refused"},
+                                                             {"not_applicable", "n/a"},
                                                              {"stopped_by_monitor", "stopped"},
                                                              {"crashed", "CRASH"},
                                                              {"hung", "HUNG"},
@@ -475,10 +476,10 @@ std::string stability_markdown(const StressReport& report)
       << "Cell: the run's status and the error e reached on the original QP (ok = converged: the solver "
          "said so and e <= tol; relax = solved_relaxation: tol met only on the problem the solver changed "
          "(decoupled rows, or J ignored), not on the original; maxit, time, infeas, refused = invalid_input, "
-         "...). **bold!** = a wrong status (unconf = the solver said converged and e disagrees on its own "
-         "problem, or a crash/hang); NaN = non-finite values seen; nm = objective not monotone over feasible "
-         "iterates; (k rows) = the harness decoupled J for this solver, which then solved a QP with k of the "
-         "m rows.\n\n";
+         "n/a = not_applicable (a problem class the solver does not take), ...). **bold!** = a wrong status "
+         "(unconf = the solver said converged and e disagrees on its own problem, or a crash/hang); NaN = non-finite "
+         "values seen; nm = objective not monotone over feasible iterates; (k rows) = the harness decoupled J for this "
+         "solver, which then solved a QP with k of the m rows.\n\n";
     s << "| case | sev | n | m |";
     for (const auto& sv : solvers) s << ' ' << sv << " |";
     s << "\n|---|---|---|---|";
@@ -535,8 +536,8 @@ std::string stability_markdown(const StressReport& report)
             s << '\n';
         }
     }
-    s << "\n## Summary per solver\n\n| solver | runs | converged | solved relaxation | wrong statuses | refused | "
-         "infeasible | time limit | max iterations | other | non-finite | non-monotone |\n"
+    s << "\n## Summary per solver\n\n| solver | runs | converged | solved relaxation | wrong statuses | "
+         "refused or n/a | infeasible | time limit | max iterations | other | non-finite | non-monotone |\n"
          "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for (const auto& sv : solvers) {
         long runs = 0, ok = 0, relax = 0, wrong = 0, refused = 0, infeasible = 0, time = 0, maxit = 0, other = 0,
@@ -550,7 +551,7 @@ std::string stability_markdown(const StressReport& report)
                 ++ok;
             else if (r.status == "solved_relaxation")
                 ++relax;
-            else if (r.status == "invalid_input")
+            else if (r.status == "invalid_input" || r.status == "not_applicable")
                 ++refused;
             else if (r.status == "infeasible")
                 ++infeasible;

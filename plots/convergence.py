@@ -1,9 +1,12 @@
 #!/usr/bin/python3
-"""Convergence plots of a results folder: the common relative KKT error against time, iterations
-and A-products; one panel per snapshot, one line per solver label.
+"""Convergence plots of a results folder: the accuracy error e on the original QP against time,
+iterations, A-products and work units; one panel per snapshot (n and m in its title), one line
+per solver label in the solver's fixed colour and marker (plots/figutil.py), one legend outside
+the panels, the runs' tol drawn, and an x on the final point of every run that did not converge.
 
-usage: convergence.py RESULTS_DIR [--out FIGDIR] [--max-panels N] [--column kkt_rel]
-Writes FIGDIR (default RESULTS_DIR/figures)/convergence_{time,iterations,a_products}.{png,pdf}.
+usage: convergence.py RESULTS_DIR [--out FIGDIR] [--max-panels N] [--column kkt_rel] [--solve-only]
+Writes FIGDIR (default RESULTS_DIR/figures)/convergence_{time,iterations,a_products,work}.{png,pdf}
+(work only when the runs record work units).
 """
 from __future__ import annotations
 
@@ -13,61 +16,88 @@ import sys
 from typing import List
 
 
+import numpy as np  # noqa: E402
+
 from plots import figutil  # noqa: E402
 from plots.figutil import plt  # noqa: E402
-from plots.loader import Results, load_results  # noqa: E402
+from plots.loader import UNMEASURED_STATUSES, Results, history_time, load_results  # noqa: E402
 
-AXES = (("time_s", "time [s] (solver only)", "time"),
+AXES = (("time_s", "time [s] (setup + solve)", "time"),
         ("iteration", "iterations", "iterations"),
-        ("a_products", "A-products", "a_products"))
+        ("a_products", "A-products", "a_products"),
+        ("work", "work units (A-product equivalents)", "work"))
+
+#: final run columns standing in for a history column when a run has no history
+_FINAL = {"time_s": "time_s", "iteration": "iterations", "a_products": "a_products", "work": "work"}
+
+
+def _converged(run) -> bool:
+    return str(run.get("status", "")) == "converged"
 
 
 def plot_convergence(results: Results, out_dir: str, column: str = "kkt_rel",
-                     max_panels: int = 12) -> List[str]:
-    """Writes the three convergence figures; returns the paths written."""
+                     max_panels: int = 12, include_setup: bool = True) -> List[str]:
+    """Writes the convergence figures; returns the paths written."""
     snapshots = results.snapshots()
     labels = results.labels()
     shown = snapshots[:max_panels]
-    colours = {label: f"C{i % 10}" for i, label in enumerate(labels)}
+    solvers = figutil.label_solvers(results.runs)
+    display = {label: figutil.display_label(label, results.runs) for label in labels}
+    runs = results.runs.set_index(["snapshot", "label"], drop=False)
+    tol = float(np.nanmax(results.runs["accuracy_tol"])) if "accuracy_tol" in results.runs and \
+        results.runs["accuracy_tol"].notna().any() else float("nan")
+    has_work = "work" in results.runs and results.runs["work"].notna().any()
     written = []
     for x, xlabel, stem in AXES:
+        if x == "work" and not has_work:
+            continue
+        if x == "time_s" and not include_setup:
+            xlabel = "time [s] (solve only)"
         rows, cols = figutil.grid(max(1, len(shown)))
-        fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.3 * rows), squeeze=False)
+        fig, axes = plt.subplots(rows, cols, figsize=(4.0 * cols, 3.1 * rows), squeeze=False)
         for ax in axes.flat[len(shown):]:
             ax.axis("off")
         for ax, snap in zip(axes.flat, shown):
-            drawn = 0
+            n = m = None
             for label in labels:
+                if (snap, label) not in runs.index:
+                    continue
+                run = runs.loc[(snap, label)]
+                if hasattr(run, "iloc") and getattr(run, "ndim", 1) > 1:
+                    run = run.iloc[0]
+                n, m = run.get("n"), run.get("m")
+                if run.get("status") in UNMEASURED_STATUSES:
+                    continue  # n/a, refused or never run: there is no curve to draw
+                style = figutil.solver_style(label, solvers.get(label))
                 h = results.history(snap, label)
                 if h.empty or x not in h or column not in h:
-                    run = results.runs[(results.runs["snapshot"] == snap) & (results.runs["label"] == label)]
-                    if run.empty:
-                        continue
-                    # no history: the final point alone, so the run is still visible
-                    r = run.iloc[0]
-                    xv = {"time_s": r.get("time_s"), "iteration": r.get("iterations"),
-                          "a_products": r.get("a_products")}[x]
-                    ax.plot([xv], figutil.positive([r.get(column)]), "o", color=colours[label], label=label)
-                    drawn += 1
-                    continue
-                ax.plot(h[x], figutil.positive(h[column]), "-", color=colours[label], label=label, lw=1.3)
-                drawn += 1
+                    xv, yv = [run.get(_FINAL[x])], figutil.positive([run.get(column)])
+                    ax.plot(xv, yv, ls="none", marker=style["marker"], color=style["color"], label=display[label])
+                else:
+                    xv = history_time(h, run, include_setup) if x == "time_s" else h[x].to_numpy(dtype=float)
+                    yv = figutil.positive(h[column])
+                    ax.plot(xv, yv, color=style["color"], ls=style["linestyle"], lw=1.3, label=display[label],
+                            marker=style["marker"], markevery=[len(yv) - 1], markersize=5)
+                if not _converged(run) and len(yv):
+                    ax.plot([np.asarray(xv, dtype=float)[-1]], [yv[-1]], ls="none", marker="x", color="black",
+                            markersize=7, zorder=5)
             ax.set_yscale("log")
             if x == "time_s":
                 ax.set_xscale("symlog", linthresh=1e-4)
                 ax.set_xlim(left=0)
-            ax.set_title(snap if len(snap) < 40 else snap[:37] + "...", fontsize=8)
+            if column == "kkt_rel":
+                figutil.draw_tol(ax, tol)
+            ax.set_title(figutil.panel_title(snap, n, m), fontsize=8)
             ax.set_xlabel(xlabel)
-            ax.set_ylabel("error e on the original QP (fraction of scene size)" if column == "kkt_rel" else column)
+            ax.set_ylabel("error e on the original QP" if column == "kkt_rel" else column)
             ax.grid(True, which="both", alpha=0.3)
-            if drawn:
-                ax.legend(fontsize=7)
         title = f"{results.suite.get('name', os.path.basename(os.path.normpath(results.path)))}: {column} vs {xlabel}"
         if len(snapshots) > len(shown):
             title += f" (first {len(shown)} of {len(snapshots)} snapshots)"
         fig.suptitle(title, fontsize=10)
         fig.tight_layout()
-        written += figutil.save_figure(fig, out_dir, f"convergence_{stem}")
+        figutil.legend_outside(fig, axes.flat, notes=[figutil.failed_mark()])
+        written += figutil.save_figure_outside(fig, out_dir, f"convergence_{stem}")
     return written
 
 
@@ -77,6 +107,7 @@ def main(argv=None) -> int:
     parser.add_argument("--out", help="figure folder (default RESULTS/figures)")
     parser.add_argument("--max-panels", type=int, default=12)
     parser.add_argument("--column", default="kkt_rel", help="history column on the y axis")
+    parser.add_argument("--solve-only", action="store_true", help="time axis without setup")
     args = parser.parse_args(argv)
     try:
         results = load_results(args.results)
@@ -87,7 +118,7 @@ def main(argv=None) -> int:
         print(f"convergence.py: {args.results}: no runs", file=sys.stderr)
         return 2
     out = args.out or os.path.join(args.results, "figures")
-    for path in plot_convergence(results, out, args.column, args.max_panels):
+    for path in plot_convergence(results, out, args.column, args.max_panels, not args.solve_only):
         print(path)
     return 0
 

@@ -65,9 +65,11 @@ def produce(ctx: PaperContext) -> FigureOutcome:
     fig, axes = plt.subplots(1, 2, figsize=(11, 3.8), squeeze=False)
     for ax, column, ylabel in ((axes[0, 0], "native_residual", "native residual (absolute)"),
                                (axes[0, 1], "kkt_rel", "accuracy error e (docs/accuracy.md)")):
-        for i, lab in enumerate(labels):
+        for lab in labels:
             h = res.history(snap, lab)
-            ax.plot(h["time_s"], figutil.positive(h[column]), "-", color=f"C{i}", label=lab, lw=1.3)
+            style = figutil.solver_style(lab, figutil.label_solvers(res.runs).get(lab))
+            ax.plot(h["time_s"], figutil.positive(h[column]), color=style["color"], ls=style["linestyle"], label=lab,
+                    lw=1.3)
         ax.axhline(LEVEL, color="grey", lw=0.7)
         ax.set_xscale("symlog", linthresh=1e-3)
         ax.set_xlim(left=0)
@@ -75,10 +77,10 @@ def produce(ctx: PaperContext) -> FigureOutcome:
         ax.set_xlabel("time [s]")
         ax.set_ylabel(ylabel)
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7)
     fig.suptitle(f"{snap}: n = {fmt(run0['n'])}, m = {fmt(run0['m'])}", fontsize=9)
     fig.tight_layout()
-    out.files += figutil.save_figure(fig, ctx.fig_dir, "fig10_mprgp_vs_ica")
+    figutil.legend_outside(fig, axes.flat)
+    out.files += figutil.save_figure_outside(fig, ctx.fig_dir, "fig10_mprgp_vs_ica")
     if not run0["m"] > 0:
         out.notes.append(f"warning: the selected QP {snap} has no contact rows (m = 0): the simulation "
                          "produced no contact in the frames simulated")

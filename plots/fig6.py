@@ -64,7 +64,7 @@ def produce(ctx: PaperContext) -> FigureOutcome:
     fig, axes = plt.subplots(1, 3 if authors is not None else 2, figsize=(14 if authors is not None else 10, 3.6),
                              squeeze=False)
     for ax, (title, label) in zip(axes.flat, panels):
-        for lab, colour in ((DECOUPLED, "C0"), (label, "C3")):
+        for lab, colour in ((DECOUPLED, figutil.solver_colour("mprgp")), (label, figutil.solver_colour("mprgp-coupled"))):
             sel = per_frame(runs, lab)
             if sel.empty:
                 continue
@@ -78,23 +78,24 @@ def produce(ctx: PaperContext) -> FigureOutcome:
         ax.set_ylabel("QP time per frame [s]")
         ax.set_title("ours, " + title, fontsize=9)
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7)
     authors_ratio = authors_ratio_all = float("nan")
     if authors is not None:
         ax = axes.flat[2]
-        ax.plot(authors["frame"], authors["decoupled_time_s"], ".-", color="C0", label="decoupled (Jacobi)", lw=1)
-        ax.plot(authors["frame"], authors["coupled_time_s"], ".-", color="C3", label="coupled (no precond)", lw=1)
+        ax.plot(authors["frame"], authors["decoupled_time_s"], ".-", color=figutil.solver_colour("mprgp"),
+                label="decoupled (Jacobi)", lw=1)
+        ax.plot(authors["frame"], authors["coupled_time_s"], ".-", color=figutil.solver_colour("mprgp-coupled"),
+                label="coupled (no precond)", lw=1)
         ax.set_yscale("log")
         ax.set_xlabel("frame")
         ax.set_title("authors' data (2009 machine)", fontsize=9)
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7)
         contact = authors[authors["frame"] >= AUTHORS_FIRST_CONTACT_FRAME].dropna()
         authors_ratio = float(contact["coupled_time_s"].sum() / contact["decoupled_time_s"].sum())
         both = authors.dropna()
         authors_ratio_all = float(both["coupled_time_s"].sum() / both["decoupled_time_s"].sum())
     fig.tight_layout()
-    out.files += figutil.save_figure(fig, ctx.fig_dir, "fig6_decoupling_time")
+    figutil.legend_outside(fig, axes.flat)
+    out.files += figutil.save_figure_outside(fig, ctx.fig_dir, "fig6_decoupling_time")
 
     out.notes += unmeasured_notes(runs)
     r_pub, n_pub = time_ratio(runs, PUBLISHED)

@@ -94,7 +94,8 @@ def produce(ctx: PaperContext) -> FigureOutcome:
     out.notes += unmeasured_notes(res.runs[res.runs["snapshot"] == snap])
     authors = ctx.authors_csv("fig8_objective_history.csv")
     a_curves = authors_curves(authors) if authors is not None else {}
-    styles = {MPRGP: ("C0", "-"), CG_NONE: ("C3", "--"), CG_JACOBI: ("C2", "-.")}
+    mprgp, cg = figutil.solver_colour("mprgp"), figutil.solver_colour("cg")
+    styles = {MPRGP: (mprgp, "-"), CG_NONE: (cg, "--"), CG_JACOBI: (cg, "-.")}
     fig, axes = plt.subplots(1, 3, figsize=(14, 3.8), squeeze=False)
     for ax, (x, xlabel) in zip(axes.flat, (("iteration", "iterations"), ("a_products", "A-products"),
                                            ("time_s", "time [s]"))):
@@ -103,19 +104,20 @@ def produce(ctx: PaperContext) -> FigureOutcome:
                 continue
             h, err, source = c
             colour, ls = styles[lab]
-            ax.plot(h[x], figutil.positive(err), ls, color=colour, label=f"{lab} (F*: {source})", lw=1.3)
+            name = f"{lab} (J ignored: relaxation)" if lab in (CG_NONE, CG_JACOBI) else lab
+            ax.plot(h[x], figutil.positive(err), ls, color=colour, label=f"{name} (F*: {source})", lw=1.3)
         if x == "iteration":
-            for (name, (it, err)), colour in zip(a_curves.items(), ("C0", "C3")):
+            for (name, (it, err)), colour in zip(a_curves.items(), (mprgp, cg)):
                 ax.plot(it, figutil.positive(err), ":", color=colour, alpha=0.6, label=name)
         ax.set_yscale("log")
         ax.set_xlabel(xlabel)
         ax.axhline(LEVEL, color="grey", lw=0.6)
         ax.grid(True, which="both", alpha=0.3)
     axes.flat[0].set_ylabel("|F_k - F*| / |F_0 - F*|")
-    axes.flat[0].legend(fontsize=6)
     fig.suptitle(f"{snap}: n = {fmt(run0['n'])}, m = {fmt(run0['m'])} (paper: 35832 DOF, 691 constraints)", fontsize=9)
     fig.tight_layout()
-    out.files += figutil.save_figure(fig, ctx.fig_dir, "fig8_mprgp_vs_cg")
+    figutil.legend_outside(fig, axes.flat)
+    out.files += figutil.save_figure_outside(fig, ctx.fig_dir, "fig8_mprgp_vs_cg")
     if not run0["m"] > 0:
         out.notes.append(f"warning: the selected QP {snap} has no contact rows (m = 0): the simulation "
                          "produced no contact in the frames simulated")

@@ -34,16 +34,19 @@ def produce(ctx: PaperContext) -> FigureOutcome:
     out = FigureOutcome("fig9", "Fig. 9: ||phi + beta|| with and without preconditioning")
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.6), squeeze=False)
     for ax, x, xlabel in ((axes[0, 0], "iteration", "iterations"), (axes[0, 1], "time_s", "time [s]")):
-        ax.plot(hj[x], figutil.positive(hj["native_residual"]), "-", color="C0", label="mprgp, Jacobi")
-        ax.plot(hn[x], figutil.positive(hn["native_residual"]), "--", color="C1", label="mprgp, no precond")
+        ax.plot(hj[x], figutil.positive(hj["native_residual"]), "-", color=figutil.solver_colour("mprgp"),
+                label="mprgp, Jacobi")
+        ax.plot(hn[x], figutil.positive(hn["native_residual"]), "--", color=figutil.solver_colour("mprgp"),
+                label="mprgp, no precond")
         ax.set_yscale("log")
         ax.set_xlabel(xlabel)
         ax.set_ylabel("||phi + beta||_2")
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7)
-    fig.suptitle(snap, fontsize=9)
+    run0 = res.runs[res.runs["snapshot"] == snap].iloc[0]
+    fig.suptitle(figutil.panel_title(snap, run0.get("n"), run0.get("m"), width=80), fontsize=9)
     fig.tight_layout()
-    out.files += figutil.save_figure(fig, ctx.fig_dir, "fig9_preconditioning")
+    figutil.legend_outside(fig, axes.flat)
+    out.files += figutil.save_figure_outside(fig, ctx.fig_dir, "fig9_preconditioning")
 
     # compare at the smallest residual both runs reached
     final_j = float(np.nanmin(figutil.positive(hj["native_residual"])))

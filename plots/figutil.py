@@ -1,9 +1,13 @@
-"""Small helpers shared by the plot scripts: saving figures, reading curves off histories."""
+"""Small helpers shared by the plot scripts: saving figures, reading curves off histories, and the
+figure rules every script follows (docs/work.md "Figures"): one colour and marker per solver in
+every figure, one legend outside the panels, the tol line, failed runs marked, n and m in panel
+titles, relaxations named in the legend."""
 from __future__ import annotations
 
 import math
 import os
-from typing import List
+import zlib
+from typing import Dict, Iterable, List, Optional
 
 import matplotlib
 
@@ -87,3 +91,129 @@ def grid(count: int, max_cols: int = 4):
     cols = max(1, min(max_cols, count))
     rows = max(1, math.ceil(count / cols))
     return rows, cols
+
+
+#: one colour and marker per solver, the same in every figure (a label that is not a solver's
+#: name takes its solver's colour and marker and a dashed line style of its own)
+SOLVER_STYLES: Dict[str, tuple] = {
+    "mprgp": ("#1f77b4", "o"),
+    "mprgp-coupled": ("#ff7f0e", "s"),
+    "mprgp-box": ("#2ca02c", "^"),
+    "ica": ("#d62728", "v"),
+    "pgs": ("#9467bd", "D"),
+    "active-set": ("#8c564b", "P"),
+    "cg": ("#7f7f7f", "X"),
+    "ipopt": ("#e377c2", "*"),
+    "siconos-lemke": ("#bcbd22", "h"),
+    "siconos-nsn": ("#17becf", "p"),
+}
+#: colours and markers for names outside SOLVER_STYLES, chosen by a hash of the name (stable
+#: across runs and figures, whatever else the figure shows)
+_EXTRA_COLOURS = ("#393b79", "#637939", "#8c6d31", "#843c39", "#7b4173", "#3182bd", "#e6550d", "#31a354")
+_EXTRA_MARKERS = ("<", ">", "d", "H", "8", "1", "2", "3")
+_VARIANT_STYLES = ("--", ":", "-.", (0, (5, 1, 1, 1)))
+
+
+def _hash(name: str) -> int:
+    return zlib.crc32(name.encode("utf-8"))
+
+
+def solver_style(label: str, solver: Optional[str] = None) -> dict:
+    """Matplotlib keyword arguments (color, marker, linestyle) of a solver label: the fixed style
+    of SOLVER_STYLES for a solver's own name; its solver's colour and marker with a dashed style
+    for another label of a known solver (e.g. "mprgp-ichol"); a hashed colour otherwise."""
+    if label in SOLVER_STYLES:
+        colour, marker = SOLVER_STYLES[label]
+        return {"color": colour, "marker": marker, "linestyle": "-"}
+    if solver in SOLVER_STYLES:
+        colour, marker = SOLVER_STYLES[solver]
+        return {"color": colour, "marker": marker, "linestyle": _VARIANT_STYLES[_hash(label) % len(_VARIANT_STYLES)]}
+    h = _hash(label)
+    return {"color": _EXTRA_COLOURS[h % len(_EXTRA_COLOURS)], "marker": _EXTRA_MARKERS[(h >> 8) % len(_EXTRA_MARKERS)],
+            "linestyle": "-"}
+
+
+def solver_colour(solver: str) -> str:
+    """The fixed colour of a solver (SOLVER_STYLES; hashed for other names)."""
+    return solver_style(solver)["color"]
+
+
+def label_solvers(runs: pd.DataFrame) -> Dict[str, str]:
+    """label -> solver name, from the runs table."""
+    if runs is None or runs.empty or "label" not in runs or "solver" not in runs:
+        return {}
+    return {str(k): str(v) for k, v in runs.groupby("label", sort=False)["solver"].first().items()}
+
+
+def display_label(label: str, runs: pd.DataFrame) -> str:
+    """The legend text of a label: relaxations are named ("cg (J ignored: relaxation)"), so that a
+    solver that did not solve the contact problem is not read as one that did."""
+    if runs is None or runs.empty or "solved_problem" not in runs:
+        return label
+    solved = set(runs.loc[runs["label"] == label, "solved_problem"].dropna().astype(str))
+    if "unconstrained" in solved:
+        return f"{label} (J ignored: relaxation)"
+    if "decoupled" in solved:
+        return f"{label} (decoupled rows)"
+    return label
+
+
+def panel_title(snapshot: str, n=None, m=None, width: int = 40) -> str:
+    """A panel title with the problem's size: "id (n = 375, m = 50)"."""
+    name = snapshot if len(snapshot) < width else snapshot[:width - 3] + "..."
+    size = []
+    for key, value in (("n", n), ("m", m)):
+        try:
+            if value is not None and not math.isnan(float(value)):
+                size.append(f"{key} = {int(value)}")
+        except (TypeError, ValueError):
+            pass
+    return f"{name} ({', '.join(size)})" if size else name
+
+
+def draw_tol(ax, tol, label: str = "tol") -> None:
+    """The runs' tolerance as a horizontal line (an error axis)."""
+    try:
+        t = float(tol)
+    except (TypeError, ValueError):
+        return
+    if math.isfinite(t) and t > 0:
+        ax.axhline(t, color="black", lw=0.8, ls="--", alpha=0.6, label=label, zorder=1)
+
+
+def legend_outside(fig, axes: Iterable, title: Optional[str] = None, notes: Iterable = ()) -> None:
+    """One legend for the whole figure, right of the panels (entries of every panel, each once).
+    `notes` are extra legend handles (e.g. the failed-run mark). Call after drawing, before saving."""
+    handles, labels = [], []
+    for ax in axes:
+        for h, lab in zip(*ax.get_legend_handles_labels()):
+            if lab not in labels and not lab.startswith("_"):
+                handles.append(h)
+                labels.append(lab)
+    for h in notes:
+        if h.get_label() not in labels:
+            handles.append(h)
+            labels.append(h.get_label())
+    if not handles:
+        return
+    fig.legend(handles, labels, loc="center left", bbox_to_anchor=(1.0, 0.5), fontsize=8, title=title,
+               frameon=False)
+
+
+def failed_mark(**kwargs):
+    """The legend handle of the mark on runs that did not converge."""
+    from matplotlib.lines import Line2D
+    return Line2D([], [], color="black", marker="x", ls="none", markersize=7, label="not converged (final point)",
+                  **kwargs)
+
+
+def save_figure_outside(fig, folder: str, stem: str) -> List[str]:
+    """save_figure with the bounding box grown to hold a legend placed outside the panels."""
+    os.makedirs(folder, exist_ok=True)
+    paths = []
+    for ext in ("png", "pdf"):
+        path = os.path.join(folder, f"{stem}.{ext}")
+        fig.savefig(path, dpi=110 if ext == "png" else None, bbox_inches="tight")
+        paths.append(path)
+    plt.close(fig)
+    return paths

@@ -28,11 +28,11 @@ import pandas as pd
 #: history columns (harness/history.cpp); used when a record omits "columns". kkt_rel is the
 #: accuracy error e of docs/accuracy.md on the original QP (the name is kept for old files).
 HISTORY_COLUMNS = ["iteration", "time_s", "a_products", "step", "stationarity", "primal", "dual",
-                   "complementarity", "gap", "kkt_rel", "objective", "native_residual", "active_set"]
+                   "complementarity", "gap", "kkt_rel", "objective", "native_residual", "active_set", "work"]
 
 #: summary.csv columns (harness/results.cpp)
 SUMMARY_COLUMNS = ["suite", "snapshot", "label", "solver", "status", "solver_status", "criterion",
-                   "status_confirmed", "iterations", "a_products", "cholmod_factorizations", "kkt_rel",
+                   "status_confirmed", "iterations", "a_products", "work", "cholmod_factorizations", "kkt_rel",
                    "stationarity", "primal", "dual", "complementarity", "gap", "kkt_rel_solved", "m_solved",
                    "objective", "energy_gap", "violation", "native_residual", "nonfinite", "monotone",
                    "setup_s", "solve_s", "time_s", "n", "m", "tol", "length_scale", "length_scale_source"]
@@ -40,6 +40,33 @@ SUMMARY_COLUMNS = ["suite", "snapshot", "label", "solver", "status", "solver_sta
 #: run statuses beside the solvers' own (harness/runner.hpp)
 RELAXATION_STATUS = "solved_relaxation"
 UNCONFIRMED_STATUS = "unconfirmed"
+#: a problem class the solver does not take (mprgp-box on general rows, pgs over max_rows): "n/a",
+#: neither a success nor a failure
+NOT_APPLICABLE_STATUS = "not_applicable"
+
+#: History times are solve-only until the shared solve loop (issue 14) stamps them from the start
+#: of setup; history_time() then adds the run's setup_s. Set to False (and simplify
+#: history_time) once every history is stamped from the start of setup.
+HISTORY_TIME_IS_SOLVE_ONLY = True
+
+
+def history_time(history: pd.DataFrame, run, include_setup: bool = True) -> np.ndarray:
+    """The time axis of a history, from the start of setup (include_setup) or solve-only.
+
+    While histories are solve-only (HISTORY_TIME_IS_SOLVE_ONLY), setup_s is added to every row,
+    capped at the run's total time: the row the harness appends for the returned point is already
+    stamped with setup + solve. With include_setup=False the solve-only times are returned."""
+    t = pd.to_numeric(history["time_s"], errors="coerce").to_numpy(dtype=float) if "time_s" in history \
+        else np.full(len(history), np.nan)
+    setup = _number(run.get("setup_s")) if run is not None else float("nan")
+    total = _number(run.get("time_s")) if run is not None else float("nan")
+    setup = setup if math.isfinite(setup) else 0.0
+    if HISTORY_TIME_IS_SOLVE_ONLY:
+        if not include_setup:
+            return np.minimum(t, total - setup) if math.isfinite(total) else t
+        out = t + setup
+        return np.minimum(out, total) if math.isfinite(total) else out
+    return t if include_setup else np.maximum(t - setup, 0.0)
 
 _BOOL_COLUMNS = ("status_confirmed", "nonfinite", "monotone")
 
@@ -127,6 +154,8 @@ def flatten_run(record: dict) -> dict:
         "nonfinite": _to_bool(record.get("nonfinite", False)),
         "monotone": _to_bool(record.get("monotone", True)),
         "tol": _number(record.get("tol")),
+        "accuracy_tol": _number(record.get("accuracy_tol", record.get("tol"))),
+        "solved_problem": record.get("solved_problem"),
         "setup_s": _number(times.get("setup_s")),
         "solve_s": _number(times.get("solve_s")),
         "time_s": _number(times.get("total_s", _number(times.get("setup_s")) + _number(times.get("solve_s")))),
@@ -145,6 +174,7 @@ def flatten_run(record: dict) -> dict:
     for key, value in counters.items():
         row["counters." + key] = _number(value)
     row["a_products"] = _number(counters.get("a_products"))
+    row["work"] = _number(counters.get("work"))  # A-product equivalents (docs/work.md); NaN in older files
     for key, value in (record.get("settings") or {}).items():
         if isinstance(value, (str, int, float, bool)) or value is None:
             row["settings." + key] = value
@@ -152,11 +182,11 @@ def flatten_run(record: dict) -> dict:
 
 
 #: statuses of runs that measured nothing (the solver refused or never ran)
-UNMEASURED_STATUSES = ("invalid_input", "not_run")
+UNMEASURED_STATUSES = ("invalid_input", "not_run", NOT_APPLICABLE_STATUS)
 
 
 def measured(runs: pd.DataFrame) -> pd.DataFrame:
-    """The runs that actually ran (not invalid_input / not_run)."""
+    """The runs that actually ran (not invalid_input / not_run / not_applicable)."""
     if runs.empty or "status" not in runs:
         return runs
     return runs[~runs["status"].isin(UNMEASURED_STATUSES)]

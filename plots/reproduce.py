@@ -38,7 +38,7 @@ import pandas as pd  # noqa: E402
 
 from plots import profiles  # noqa: E402
 from plots import report  # noqa: E402
-from plots.loader import UNMEASURED_STATUSES, load_results, snapshot_table  # noqa: E402
+from plots.loader import NOT_APPLICABLE_STATUS, UNMEASURED_STATUSES, load_results, snapshot_table  # noqa: E402
 from plots.paper_context import PaperContext, default_data_dir  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -313,7 +313,8 @@ def run_suite(runner: Runner, ctx: PaperContext, name: str, template: str, snaps
 
 
 def unmeasured_count(folder: str) -> int:
-    """Runs of a results folder that did not run (invalid_input / not_run)."""
+    """Runs of a results folder that did not run (invalid_input / not_run; not_applicable runs are
+    answered, not refused)."""
     try:
         res = load_results(folder, with_history=False)
     except (FileNotFoundError, ValueError):
@@ -324,7 +325,8 @@ def unmeasured_count(folder: str) -> int:
 def measured_complement(runs: pd.DataFrame) -> pd.DataFrame:
     if runs.empty or "status" not in runs:
         return runs.iloc[0:0]
-    return runs[runs["status"].isin(UNMEASURED_STATUSES)]
+    # not_applicable is a property of the problem class, not of today's build: no reason to re-run
+    return runs[runs["status"].isin(UNMEASURED_STATUSES) & (runs["status"] != NOT_APPLICABLE_STATUS)]
 
 
 def pick_max_rows(snaps: pd.DataFrame, target: Optional[int] = None) -> List[str]:

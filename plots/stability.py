@@ -86,7 +86,8 @@ def plot_stability(df: pd.DataFrame, out_dir: str, stem: str = "stability") -> L
         grid[i, j] = math.log10(err) if np.isfinite(err) and err > 0 else (-16 if err == 0 else np.nan)
         status = str(row[cols["status"]]) if cols["status"] else ""
         short = {"converged": "", "max_iterations": "it", "time_limit": "t", "stalled": "st",
-                 "diverged": "div", "infeasible": "inf", "invalid_input": "inv", "solved_relaxation": "rel",
+                 "diverged": "div", "infeasible": "inf", "invalid_input": "inv", "not_applicable": "n/a",
+                 "solved_relaxation": "rel",
                  "unconfirmed": ""}.get(status, status[:3])
         text[i][j] = (short + cell_marks(row, cols)) if np.isfinite(err) else ("NaN" + cell_marks(row, cols))
     fig, ax = plt.subplots(figsize=(max(5, 0.55 * len(cases) + 2.5), max(2.5, 0.45 * len(solvers) + 1.5)))

@@ -43,8 +43,8 @@ CONFIGS: Dict[str, tuple] = {
     "mprgp-jacobi": ("mprgp", {"precond": "jacobi"}),
     "mprgp-ichol": ("mprgp", {"precond": "ichol"}),
 }
-STYLE = {"cg-jacobi": ("tab:gray", "--"), "cg-ichol": ("tab:gray", "-"),
-         "mprgp-jacobi": ("tab:blue", "--"), "mprgp-ichol": ("tab:blue", "-")}
+STYLE = {"cg-jacobi": (figutil.solver_colour("cg"), "--"), "cg-ichol": (figutil.solver_colour("cg"), "-"),
+         "mprgp-jacobi": (figutil.solver_colour("mprgp"), "--"), "mprgp-ichol": (figutil.solver_colour("mprgp"), "-")}
 
 
 def error_curve(run: dict) -> pd.DataFrame:
@@ -99,15 +99,16 @@ def plot(runs: Dict[float, Dict[str, dict]], out_dir: str, tol: float) -> List[s
                 continue
             color, ls = STYLE.get(label, ("k", "-"))
             ax.plot(figutil.positive(df["time_s"]), figutil.positive(df["error"]), color=color, ls=ls, label=label)
-        ax.axhline(tol, color="k", lw=0.5, ls=":")
+        figutil.draw_tol(ax, tol)
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.set_title(f"E = {youngs:.0e} Pa")
+        snap = next(iter(runs[youngs].values()), {}).get("snapshot") or {}
+        ax.set_title(figutil.panel_title(f"E = {youngs:.0e} Pa", snap.get("n"), snap.get("m")), fontsize=9)
         ax.set_xlabel("time incl. setup (s)")
     axes[0][0].set_ylabel("relative error")
-    axes[0][-1].legend(fontsize=7)
     fig.tight_layout()
-    return figutil.save_figure(fig, out_dir, "stiff")
+    figutil.legend_outside(fig, axes.flat)
+    return figutil.save_figure_outside(fig, out_dir, "stiff")
 
 
 def load_runs(out_dir: str) -> Dict[float, Dict[str, dict]]:

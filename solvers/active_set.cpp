@@ -8,6 +8,7 @@
 #include "solvers/active_set.hpp"
 
 #include "solvers/a_product.hpp"
+#include "solvers/work_units.hpp"
 
 #include <Eigen/CholmodSupport>
 #include <algorithm>
@@ -176,10 +177,12 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
     ++counters.cholmod_analyses;
     chol.factorize(A_col);
     ++counters.cholmod_factorizations;
+    counters.work_flops += cholmod_factor_flops(chol.cholmod());
     if (chol.info() != Eigen::Success)
         return invalid("A is not positive definite (CHOLMOD Cholesky factorization failed)");
     auto solve_A = [&](const Vec& rhs) -> Vec {
         ++counters.cholmod_solves;
+        counters.work_flops += cholmod_solve_flops(chol.cholmod());
         return chol.solve(rhs);
     };
     result.setup_s = watch.seconds();
@@ -206,6 +209,8 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
                 for (SpMat::InnerIterator it(qp.J, rows[start + j]); it; ++it) R(it.col(), j) = it.value();
             const Eigen::MatrixXd U = chol.solve(R);
             counters.cholmod_solves += k;
+            counters.work_flops +=
+                cholmod_solve_flops(chol.cholmod(), k) + sparse_product_flops(static_cast<double>(qp.J.nonZeros()), k);
             const Eigen::MatrixXd KU = qp.J * U;
             for (int j = 0; j < k; ++j) {
                 slot[rows[start + j]] = static_cast<int>(kcol.size());
@@ -243,12 +248,15 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
         for (int row : W)
             if (lambda[row] != 0.0) s.noalias() += lambda[row] * kcol[slot[row]];
         if (pending >= 0 && lambda[pending] != 0.0) s.noalias() += lambda[pending] * kcol[slot[pending]];
+        counters.work_flops += dense_matvec_flops(m, static_cast<double>(W.size()) + (pending >= 0 ? 1.0 : 0.0));
     };
     auto drop = [&](int k) {
         lambda[W[k]] = 0.0;
         in_W[W[k]] = 0;
         W.erase(W.begin() + k);
-        schur.remove(k);
+        schur.remove(k);  // Givens rotations of the trailing columns: about 6 q (q - k) flops
+        counters.work_flops +=
+            6.0 * static_cast<double>(W.size() + 1) * static_cast<double>(static_cast<int>(W.size()) + 1 - k);
         ++dropped;
         ++counters.pivots;
     };
@@ -329,6 +337,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
                 for (int a = 0; a < q; ++a) d[a] = kp[W[a]];
                 const Vec l = schur.forward(d);
                 const Vec r = schur.backward(l);
+                counters.work_flops += 2.0 * dense_triangular_solve_flops(q);
                 const double kpp = kp[p];
                 const double pivot = kpp - l.squaredNorm();  // n_p' z: zero when p is in span(W)
                 const bool dependent = !(pivot > m_settings.dependency_tol * kpp);
@@ -400,6 +409,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
             Vec rhs(q);
             for (int a = 0; a < q; ++a) rhs[a] = qp.c[W[a]] - qp.J.row(W[a]).dot(x) - qp.J.row(W[a]).dot(v);
             const Vec dlam = schur.solve(rhs);
+            counters.work_flops += 2.0 * dense_triangular_solve_flops(q);
             Vec dlam_full = Vec::Zero(m);
             for (int a = 0; a < q; ++a) dlam_full[W[a]] = dlam[a];
             x += solve_A(r1 + Jt(dlam_full));

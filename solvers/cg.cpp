@@ -4,6 +4,7 @@
 
 #include "solvers/a_product.hpp"
 #include "solvers/ichol.hpp"
+#include "solvers/work_units.hpp"
 
 #include <cmath>
 #include <sstream>
@@ -103,12 +104,14 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
             return result;
         }
         ++counters.precond_factorizations;
+        counters.work_flops += ic.factor_flops();
         result.info["ichol"] = {{"factor_nonzeros", ic.factor_nonzeros()},
                                 {"a_nonzeros", static_cast<long>(qp.A.nonZeros())}};
     }
     auto precondition = [&](const Vec& r) -> Vec {
         if (ichol) {
             ++counters.precond_applications;
+            counters.work_flops += ic.apply_flops();
             Vec z;
             ic.apply(r, z);
             return z;

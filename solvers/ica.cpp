@@ -3,6 +3,7 @@
 #include "solvers/ica.hpp"
 
 #include "solvers/a_product.hpp"
+#include "solvers/work_units.hpp"
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/Dense>
@@ -181,6 +182,7 @@ SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
         llt.compute(A_col);
         ++counters.cholmod_analyses;
         ++counters.cholmod_factorizations;
+        counters.work_flops += cholmod_factor_flops(llt.cholmod());
         if (llt.info() != Eigen::Success) {
             result.status = SolveStatus::INVALID_INPUT;
             result.message = "ica: start=unconstrained: CHOLMOD could not factor A (not SPD?)";
@@ -189,6 +191,7 @@ SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
         }
         x = llt.solve(qp.b);
         ++counters.cholmod_solves;
+        counters.work_flops += cholmod_solve_flops(llt.cholmod());
         result.info["start_solve_s"] = start_watch.seconds();
         result.info["start_solver"] = "cholmod";
     }
@@ -263,6 +266,7 @@ SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
             }
             ++last_sweeps;
             ++counters.pgs_sweeps;
+            counters.work_flops += sparse_product_flops(static_cast<double>(B.nonZeros()));
             ++counters.lcp_iterations;
             last_dlambda = std::sqrt(dl2);
             if (last_dlambda <= s.pgs_tol) break;

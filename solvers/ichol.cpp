@@ -1,11 +1,12 @@
 // Incomplete Cholesky preconditioner and its face form (docs/preconditioners.md).
 #include "solvers/ichol.hpp"
+#include "solvers/work_units.hpp"
 
 #include <cmath>
 
 namespace cb {
 
-bool IncompleteCholeskyPreconditioner::factor(const SpMat& B, std::string& error)
+bool IncompleteCholeskyPreconditioner::factor(const SpMat& B, std::string& error, double* work_flops)
 {
     m_ready = false;
     const SpMatCol lower = SpMatCol(B).triangularView<Eigen::Lower>();
@@ -15,14 +16,22 @@ bool IncompleteCholeskyPreconditioner::factor(const SpMat& B, std::string& error
         return false;
     }
     m_factor_nonzeros = static_cast<long>(m_ic.matrixL().nonZeros());
+    m_factor_flops = 0.0;
+    for (Eigen::Index j = 0; j < m_ic.matrixL().outerSize(); ++j) {
+        const double column = static_cast<double>(m_ic.matrixL().col(j).nonZeros());
+        m_factor_flops += column * column;
+    }
+    if (work_flops) *work_flops += m_factor_flops;
     m_ready = true;
     return true;
 }
 
 void IncompleteCholeskyPreconditioner::apply(const Vec& r, Vec& z) const { z = m_ic.solve(r); }
 
-SpMat face_matrix(const SpMat& A, const SpMat& J, const DecoupledRows& rows, const std::vector<char>& active)
+SpMat face_matrix(const SpMat& A, const SpMat& J, const DecoupledRows& rows, const std::vector<char>& active,
+                  double* work_flops)
 {
+    if (work_flops) *work_flops += sparse_product_flops(static_cast<double>(A.nonZeros()), 2.0);
     // Q as a sparse matrix: identity plus -n n' blocks on the active rows' DOFs.
     std::vector<Triplet> q;
     std::vector<char> touched(static_cast<size_t>(A.rows()), 0);
@@ -58,8 +67,9 @@ SpMat face_matrix(const SpMat& A, const SpMat& J, const DecoupledRows& rows, con
 }
 
 void ichol_face_precondition(const IncompleteCholeskyPreconditioner& ic, const SpMat& J, const DecoupledRows& rows,
-                             const std::vector<char>& active, const Vec& g, Vec& work, Vec& z)
+                             const std::vector<char>& active, const Vec& g, Vec& work, Vec& z, double* work_flops)
 {
+    if (work_flops) *work_flops += ic.apply_flops();
     free_gradient(J, rows, active, g, work);  // Q g (orthogonal projection, rows share no DOF)
     ic.apply(work, z);
     // Q again: J_A z = 0 to rounding whatever the incomplete factor's error.

@@ -246,12 +246,14 @@ void MprgpRun::restart()
         if (m_ic.ready())
             for (size_t i = 0; i < m_active.size(); ++i) changed += m_active[i] != m_face_factored[i];
         if (!m_ic.ready() || static_cast<double>(changed) > m_st.ichol_refactor * static_cast<double>(m_m)) {
-            if (!m_ic.factor(face_matrix(m_A, m_J, m_rows, m_active), m_face_factor_error)) m_face_factor_failed = true;
+            if (!m_ic.factor(face_matrix(m_A, m_J, m_rows, m_active, &m_cnt.work_flops), m_face_factor_error,
+                             &m_cnt.work_flops))
+                m_face_factor_failed = true;
             m_face_factored = m_active;
             ++m_cnt.precond_factorizations;
         }
         if (m_ic.ready())
-            ichol_face_precondition(m_ic, m_J, m_rows, m_active, m_g, m_work, m_z);
+            ichol_face_precondition(m_ic, m_J, m_rows, m_active, m_g, m_work, m_z, &m_cnt.work_flops);
         else
             m_z.setZero(m_n);
     } else {
@@ -427,7 +429,7 @@ bool MprgpRun::expansion()
         // 2/||A|| moves the soft DOFs by almost nothing, so the face grows by a few rows per
         // expansion; this step reaches the rows the CG chain was heading for.
         if (m_ichol && m_ic.ready())
-            ichol_face_precondition(m_ic, m_J, m_rows, m_active, m_g, m_work, m_tmp);
+            ichol_face_precondition(m_ic, m_J, m_rows, m_active, m_g, m_work, m_tmp, &m_cnt.work_flops);
         else
             jacobi_face_precondition(m_J, m_rows, m_active, m_dinv, m_g, m_tmp);
         ++m_cnt.precond_applications;
@@ -683,7 +685,7 @@ SolverResult MprgpRun::run()
                 }
                 if (m_ichol) {
                     // The fused pass computed z = g (dinv = 1); replace it by the face IC direction.
-                    ichol_face_precondition(m_ic, m_J, m_rows, m_active, m_g, m_work, m_z);
+                    ichol_face_precondition(m_ic, m_J, m_rows, m_active, m_g, m_work, m_z, &m_cnt.work_flops);
                     zg = face_dot(m_z);
                     zap = m_z.dot(m_Ap);
                 } else {

@@ -100,7 +100,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
             row_coef[i] = it.value();
         }
         if (nonzeros > 1) {
-            result.status = SolveStatus::INVALID_INPUT;
+            result.status = SolveStatus::NOT_APPLICABLE;
             result.message = "mprgp-box: row " + std::to_string(i) + " of J has " + std::to_string(nonzeros) +
                              " nonzeros; mprgp-box needs bound rows (one nonzero per row, a x_j >= c); use mprgp "
                              "(decoupled J) or mprgp-coupled";

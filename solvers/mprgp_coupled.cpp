@@ -7,6 +7,7 @@
 #include "solvers/a_product.hpp"
 #include "solvers/accuracy.hpp"
 #include "solvers/mprgp_kernels.hpp"
+#include "solvers/work_units.hpp"
 
 #include <Eigen/CholmodSupport>
 #include <algorithm>
@@ -114,12 +115,14 @@ struct Factor {
         chol->compute(scaled);
         ++cnt.cholmod_analyses;
         ++cnt.cholmod_factorizations;
+        cnt.work_flops += cholmod_factor_flops(chol->cholmod());
         ok = chol->info() == Eigen::Success;
         return ok;
     }
     Vec solve(const Vec& rhs, Counters& cnt)
     {
         ++cnt.cholmod_solves;
+        cnt.work_flops += cholmod_solve_flops(chol->cholmod());
         return scale.cwiseProduct(Vec(chol->solve(Vec(scale.cwiseProduct(rhs)))));
     }
 };
@@ -153,6 +156,7 @@ bool solve_lcp(const SpMatCol& M, const Vec& q, std::vector<char>& set, Vec& lam
         }
         ++cnt.lcp_iterations;
         const Vec w = M * lambda - q;
+        cnt.work_flops += sparse_product_flops(static_cast<double>(M.nonZeros()));
         const double tol_l = 1e-12 * std::max(1e-300, lambda.lpNorm<Eigen::Infinity>());
         std::vector<int> bad;
         for (Eigen::Index i = 0; i < k; ++i) {
@@ -190,6 +194,7 @@ bool solve_lcp(const SpMatCol& M, const Vec& q, std::vector<char>& set, Vec& lam
         }
         ++cnt.pgs_sweeps;
         ++cnt.lcp_iterations;
+        cnt.work_flops += sparse_product_flops(static_cast<double>(M.nonZeros()));
         if (change <= 1e-14 * std::max(1.0, lambda.lpNorm<Eigen::Infinity>())) break;
     }
     const Vec w = M * lambda - q;

@@ -1,6 +1,7 @@
 // Ref: Li et al., CGF 2015, eq. (2) (the dual LCP of the contact QP); ALGORITHMS.md §7.
 #include "solvers/pgs.hpp"
 #include "solvers/a_product.hpp"
+#include "solvers/work_units.hpp"
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/Dense>
@@ -50,7 +51,7 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
     result.info["native_residual_definition"] = "||min(lambda, S lambda - q)||_inf (LCP natural residual, absolute)";
 
     if (m > s.max_rows) {
-        result.status = SolveStatus::INVALID_INPUT;
+        result.status = SolveStatus::NOT_APPLICABLE;
         result.message = "pgs: m = " + std::to_string(m) + " rows exceeds max_rows = " + std::to_string(s.max_rows) +
                          " (S = J A^-1 J' is a dense m x m matrix formed with m CHOLMOD solves); "
                          "raise the max_rows setting to allow it";
@@ -89,6 +90,7 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
     }
     ++counters.cholmod_analyses;
     ++counters.cholmod_factorizations;
+    counters.work_flops += cholmod_factor_flops(llt.cholmod());
     if (llt.info() != Eigen::Success) {
         result.status = SolveStatus::INVALID_INPUT;
         result.message = "pgs: CHOLMOD could not factor A (not positive definite to working precision)";
@@ -97,6 +99,7 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
     }
     const Vec x_u = llt.solve(qp.b);
     ++counters.cholmod_solves;
+    counters.work_flops += cholmod_solve_flops(llt.cholmod());
     const Vec q = qp.c - qp.J * x_u;
 
     // S = J A^-1 J', column block by column block.
@@ -110,6 +113,8 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
         const Eigen::MatrixXd rhs = Eigen::MatrixXd(Jt.middleCols(j0, k));
         const Eigen::MatrixXd Yc = llt.solve(rhs);
         counters.cholmod_solves += k;  // one per right-hand side
+        counters.work_flops += cholmod_solve_flops(llt.cholmod(), k) +
+                               sparse_product_flops(static_cast<double>(qp.J.nonZeros()), static_cast<double>(k));
         S.middleCols(j0, k) = qp.J * Yc;
         if (keep_y) Y.middleCols(j0, k) = Yc;
         if (time_up(watch, limit)) {
@@ -134,6 +139,7 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
     for (Eigen::Index i = 0; i < m; ++i)
         if (zero_row[static_cast<size_t>(i)]) lambda[i] = 0.0;
     Vec w = S * lambda - q;  // = J x(lambda) - c, the slack of the primal point
+    counters.work_flops += dense_matvec_flops(m, m);
 
     Vec x = x_u;
     auto primal_point = [&](bool exact) {
@@ -144,6 +150,7 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
         } else {
             x = llt.solve(Vec(qp.b + qp.J.transpose() * lambda));
             ++counters.cholmod_solves;
+            counters.work_flops += cholmod_solve_flops(llt.cholmod());
         }
     };
     auto natural_residual = [&]() {
@@ -206,6 +213,7 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
         if (time_up(watch, limit)) return finish(SolveStatus::TIME_LIMIT, "", "pgs: time limit reached");
 
         // One ascending sweep; w = S lambda - q is kept current by rank-one updates.
+        long updates = 0;  // columns of S added to w (2m flops each; docs/work.md)
         for (Eigen::Index i = 0; i < m; ++i) {
             if (!(S_diag[i] > 0.0)) continue;  // zero row: lambda_i stays 0
             const double li = std::max(0.0, lambda[i] - w[i] / S_diag[i]);
@@ -213,12 +221,17 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
             if (delta != 0.0) {
                 w.noalias() += delta * S.col(i);
                 lambda[i] = li;
+                ++updates;
             }
         }
         ++counters.iterations;
         ++counters.pgs_sweeps;
         ++counters.lcp_iterations;
-        if (counters.iterations % 64 == 0) w = S * lambda - q;  // limit the drift of the updates
+        counters.work_flops += dense_matvec_flops(static_cast<double>(updates), m);
+        if (counters.iterations % 64 == 0) {
+            w = S * lambda - q;  // limit the drift of the updates
+            counters.work_flops += dense_matvec_flops(m, m);
+        }
         native = natural_residual();
 
         if (context.monitor) primal_point(false);
@@ -244,7 +257,7 @@ SolverEntry pgs_entry()
         return std::make_unique<PgsSolver>(PgsSettings::from_json(settings));
     };
     e.description = "projected Gauss-Seidel on the exact dual S = J A^-1 J' (CHOLMOD; small m only)";
-    e.settings = {{"max_rows", "2000", "refuse (invalid_input) problems with more rows of J (S is dense m x m)"},
+    e.settings = {{"max_rows", "2000", "refuse (not_applicable) problems with more rows of J (S is dense m x m)"},
                   {"block", "64", "right-hand sides per CHOLMOD solve when forming S"}};
     return e;
 }

@@ -21,6 +21,8 @@ const char* to_string(SolveStatus status)
         return "infeasible";
     case SolveStatus::INVALID_INPUT:
         return "invalid_input";
+    case SolveStatus::NOT_APPLICABLE:
+        return "not_applicable";
     case SolveStatus::STOPPED_BY_MONITOR:
         return "stopped_by_monitor";
     }
@@ -31,7 +33,7 @@ SolveStatus solve_status_from_string(const std::string& name)
 {
     for (SolveStatus s : {SolveStatus::NOT_RUN, SolveStatus::CONVERGED, SolveStatus::MAX_ITERATIONS,
                           SolveStatus::TIME_LIMIT, SolveStatus::STALLED, SolveStatus::DIVERGED, SolveStatus::INFEASIBLE,
-                          SolveStatus::INVALID_INPUT, SolveStatus::STOPPED_BY_MONITOR})
+                          SolveStatus::INVALID_INPUT, SolveStatus::NOT_APPLICABLE, SolveStatus::STOPPED_BY_MONITOR})
         if (name == to_string(s)) return s;
     throw InputError("unknown solve status '" + name + "'");
 }
@@ -78,7 +80,8 @@ nlohmann::json Counters::to_json() const
             {"cholmod_solves", cholmod_solves},
             {"lcp_iterations", lcp_iterations},
             {"pgs_sweeps", pgs_sweeps},
-            {"pivots", pivots}};
+            {"pivots", pivots},
+            {"work_flops", work_flops}};
 }
 
 bool notify_monitor(const SolveContext& context, Stopwatch& watch, IterationInfo info)

@@ -17,10 +17,11 @@ enum class SolveStatus {
     CONVERGED,  ///< the stop rule it was given was met (see SolverResult::criterion)
     MAX_ITERATIONS,
     TIME_LIMIT,
-    STALLED,        ///< no progress possible (e.g. a zero step), criterion not met
-    DIVERGED,       ///< NaN/Inf or an objective that blew up
-    INFEASIBLE,     ///< the constraint set is empty (detected)
-    INVALID_INPUT,  ///< the problem does not satisfy the solver's preconditions
+    STALLED,         ///< no progress possible (e.g. a zero step), criterion not met
+    DIVERGED,        ///< NaN/Inf or an objective that blew up
+    INFEASIBLE,      ///< the constraint set is empty (detected)
+    INVALID_INPUT,   ///< the problem does not satisfy the solver's preconditions
+    NOT_APPLICABLE,  ///< a problem class the solver does not take (general rows for mprgp-box, m > max_rows for pgs)
     STOPPED_BY_MONITOR,
 };
 const char* to_string(SolveStatus status);
@@ -48,6 +49,7 @@ struct Counters {
     long lcp_iterations = 0;  ///< inner LCP pivots or PGS sweeps
     long pgs_sweeps = 0;
     long pivots = 0;  ///< active-set changes
+    double work_flops = 0.0;  ///< flops of work other than A-products (solvers/work_units.hpp, docs/work.md)
     nlohmann::json to_json() const;
 };
 

@@ -84,9 +84,9 @@ TEST(Results, SummaryColumnsAndRow)
 {
     const std::string expected =
         "suite,snapshot,label,solver,status,solver_status,criterion,status_confirmed,iterations,a_products,"
-        "cholmod_factorizations,kkt_rel,stationarity,primal,dual,complementarity,gap,kkt_rel_solved,m_solved,objective,"
-        "energy_gap,violation,native_residual,nonfinite,monotone,setup_s,solve_s,time_s,n,m,tol,length_scale,"
-        "length_scale_source";
+        "work,cholmod_factorizations,kkt_rel,stationarity,primal,dual,complementarity,gap,kkt_rel_solved,m_solved,"
+        "objective,energy_gap,violation,native_residual,nonfinite,monotone,setup_s,solve_s,time_s,n,m,tol,"
+        "length_scale,length_scale_source";
     std::string header;
     for (size_t i = 0; i < summary_columns().size(); ++i) header += (i ? "," : "") + summary_columns()[i];
     EXPECT_EQ(header, expected);
@@ -98,7 +98,7 @@ TEST(Results, SummaryColumnsAndRow)
                                 {"status_confirmed", true},
                                 {"iterations", 54},
                                 {"snapshot", {{"id", "plane-s1"}, {"n", 375}, {"m", 25}}},
-                                {"counters", {{"a_products", 120}, {"cholmod_factorizations", 0}}},
+                                {"counters", {{"a_products", 120}, {"work", 137.5}, {"cholmod_factorizations", 0}}},
                                 {"accuracy",
                                  {{"max", 0.25},
                                   {"stationarity", 0.25},
@@ -120,8 +120,8 @@ TEST(Results, SummaryColumnsAndRow)
                                 {"length_scale_source", "x0_extent"},
                                 {"message", "a, \"quoted\" message"}};
     EXPECT_EQ(summary_row(run, "demo"),
-              "demo,plane-s1,mprgp-jacobi,mprgp,solved_relaxation,converged,kkt,true,54,120,0,0.25,0.25,0,0,0.125,"
-              "0.0625,0.5,12,-4.5,0.75,0,,false,true,0.5,1.5,2,375,25,9.9999999999999995e-07,2,x0_extent");
+              "demo,plane-s1,mprgp-jacobi,mprgp,solved_relaxation,converged,kkt,true,54,120,137.5,0,0.25,0.25,0,0,"
+              "0.125,0.0625,0.5,12,-4.5,0.75,0,,false,true,0.5,1.5,2,375,25,9.9999999999999995e-07,2,x0_extent");
     // A run on an unchanged problem: the solved error and rows are the original's.
     nlohmann::json plain = run;
     plain.erase("accuracy_solved");

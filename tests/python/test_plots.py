@@ -86,6 +86,19 @@ class TestConvergence(TempDirCase):
                 path = os.path.join(folder, "figures", f"convergence_{stem}.{ext}")
                 self.assertTrue(os.path.getsize(path) > 1000, path)
 
+    def test_work_figure_when_runs_record_work(self):  # an n/a run beside it is skipped
+        done = mf.make_run("s0", "pgs", iterations=4)
+        done["counters"]["work"] = 40.0
+        na = mf.make_run("s0", "mprgp-box", status="not_applicable", history=False)
+        folder = mf.write_results(self.tmp, [done, na])
+        res = loader.load_results(folder)
+        paths = convergence.plot_convergence(res, os.path.join(folder, "figures"))
+        self.assertIn(os.path.join(folder, "figures", "convergence_work.png"), paths)
+        # without a work column in any run there is no work figure
+        plain = mf.write_results(os.path.join(self.tmp, "plain"), [mf.make_run("s0", "a")])
+        paths = convergence.plot_convergence(loader.load_results(plain), os.path.join(plain, "figures"))
+        self.assertFalse(any("convergence_work" in p for p in paths))
+
     def test_empty_folder_is_an_error(self):
         self.assertEqual(convergence.main.__module__, "plots.convergence")
         os.makedirs(os.path.join(self.tmp, "runs"))
@@ -127,13 +140,93 @@ class TestProfiles(TempDirCase):
         self.assertAlmostEqual(prof.loc[2.0, "b"], 2 / 3)
         # success: b reaches 1e-2 on all three? no: its KKT is 1e-1 on p2
         self.assertAlmostEqual(numbers["success"].loc["b", 1e-6], 2 / 3)
-        self.assertAlmostEqual(numbers["success"].loc["a", 1e-8], 0.0)   # fixture final KKT 1e-7
+        # the fixture's tol is 1e-6: the 1e-8 tier asks for more than the runs were asked for
+        self.assertNotIn(1e-8, numbers["success"].columns)
+        self.assertEqual(numbers["dropped_tiers"], [1e-8])
         # shifted geomean: a = (11*14*11)^(1/3) - 10; b's failure counts at the time limit (10 s)
         self.assertEqual(numbers["penalty_s"], 10.0)
         self.assertAlmostEqual(numbers["sgm"].loc["a", 1e-6], (11 * 14 * 11) ** (1 / 3) - 10, places=9)
         self.assertAlmostEqual(numbers["sgm"].loc["b", 1e-6], (12 * 12 * 20) ** (1 / 3) - 10, places=9)
         data = profiles.data_profile(profiles.cost_matrix(numbers["tiers"], 1e-6, "a_products"), [10.0])
         self.assertAlmostEqual(data.loc[10.0, "a"], 1.0)  # 10 A-products each
+
+    def test_not_applicable_runs_leave_the_denominators(self):
+        # p0: a 1 s, b 2 s; p1: a 4 s, b n/a (a problem class b does not take); p2: a 1 s, b fails
+        na = mf.make_run("p1", "b", solve_s=0.0, final_kkt_rel=float("nan"), status="not_applicable", history=False)
+        recs = [mf.make_run("p0", "a", solve_s=1.0, history=False), mf.make_run("p0", "b", solve_s=2.0, history=False),
+                mf.make_run("p1", "a", solve_s=4.0, history=False), na,
+                mf.make_run("p2", "a", solve_s=1.0, history=False),
+                mf.make_run("p2", "b", solve_s=3.0, final_kkt_rel=1e-1, status="max_iterations", history=False)]
+        res = loader.load_results(mf.write_results(self.tmp, recs))
+        numbers = profiles.compute(res, shift=10)
+        self.assertAlmostEqual(numbers["success"].loc["b", 1e-6], 0.5)  # 1 of 2 judged runs, not 1 of 3
+        self.assertEqual(numbers["success"].loc["b", "n/a"], 1)
+        self.assertEqual(numbers["success"].loc["a", "n/a"], 0)
+        # b's mean: p0 at 2 s, p2 at the penalty 10 s; p1 left out
+        self.assertAlmostEqual(numbers["sgm"].loc["b", 1e-6], math.sqrt(12 * 20) - 10, places=9)
+        self.assertAlmostEqual(numbers["sgm"].loc["a", 1e-6], (11 * 14 * 11) ** (1 / 3) - 10, places=9)
+        # normalised to the best solver of the tier
+        self.assertAlmostEqual(numbers["sgm_ratio"].loc["a", 1e-6], 1.0)
+        self.assertAlmostEqual(numbers["sgm_ratio"].loc["b", 1e-6],
+                               (math.sqrt(12 * 20) - 10) / ((11 * 14 * 11) ** (1 / 3) - 10), places=9)
+        tt = numbers["tiers"]
+        ratios = profiles.performance_ratios(profiles.cost_matrix(tt, 1e-6))
+        prof = profiles.performance_profile(ratios, [1.0, 2.0], profiles.excluded_matrix(tt, 1e-6))
+        self.assertAlmostEqual(prof.loc[1.0, "a"], 1.0)  # best on p0 and p2, alone on p1
+        self.assertAlmostEqual(prof.loc[1.0, "b"], 0.0)
+        self.assertAlmostEqual(prof.loc[2.0, "b"], 0.5)  # p0 at ratio 2 of its 2 judged problems
+        data = profiles.data_profile(profiles.cost_matrix(tt, 1e-6, "a_products"), [10.0],
+                                     profiles.excluded_matrix(tt, 1e-6))
+        self.assertAlmostEqual(data.loc[10.0, "b"], 0.5)
+
+    def test_shift_scaled_to_the_data_is_printed(self):
+        # times to the 1e-2 .. 1e-6 tiers reached: a 1, 4, 1 s and b 2, 2 s at each of three tiers:
+        # median 2 s, shift 0.2 s
+        recs = [mf.make_run("p0", "a", solve_s=1.0, history=False), mf.make_run("p0", "b", solve_s=2.0, history=False),
+                mf.make_run("p1", "a", solve_s=4.0, history=False), mf.make_run("p1", "b", solve_s=2.0, history=False),
+                mf.make_run("p2", "a", solve_s=1.0, history=False)]
+        folder = mf.write_results(self.tmp, recs)
+        self.assertAlmostEqual(profiles.data_shift([1, 4, 1, 2, 2]), 0.2)
+        self.assertEqual(profiles.data_shift([]), 1e-6)
+        numbers = profiles.compute(loader.load_results(folder))
+        self.assertAlmostEqual(numbers["shift_s"], 0.2)
+        with redirect_stdout(io.StringIO()) as out:
+            self.assertEqual(profiles.main([folder]), 0)
+        self.assertIn("shift of the geometric mean = 0.2 s (0.1 x the median time-to-tier reached)", out.getvalue())
+        with open(os.path.join(folder, "profiles.md"), encoding="utf-8") as f:
+            md = f.read()
+        self.assertIn("shift = 0.2 s = 0.1 x the median time-to-tier reached", md)
+        self.assertIn("Tiers tighter than the runs' tol (1.00e-06) are left out: 1e-08.", md)
+
+    def test_time_to_tier_counts_setup(self):
+        # the history is solve-only (8 iterations over 8 s); setup took 0.5 s
+        rec = mf.make_run("p", "a", iterations=8, solve_s=8.0, setup_s=0.5, final_kkt_rel=10 ** -8.5)
+        res = loader.load_results(mf.write_results(self.tmp, [rec]))
+        with_setup = profiles.tier_table(res, [1e-2])
+        self.assertAlmostEqual(with_setup.iloc[0]["time_s"], 2.5, places=9)
+        solve_only = profiles.tier_table(res, [1e-2], include_setup=False)
+        self.assertAlmostEqual(solve_only.iloc[0]["time_s"], 2.0, places=9)
+        # the last row never passes the run's total time
+        h = res.history("p", "a")
+        t = loader.history_time(h, res.runs.iloc[0])
+        self.assertAlmostEqual(t[0], 0.5)
+        self.assertAlmostEqual(t[-1], 8.5)
+
+    def test_data_profile_budgets_in_work_units(self):
+        # a factorising solver: 2 A-products but 40 work units; the data profile reads work
+        fact = mf.make_run("p0", "f", iterations=2, history=False)
+        fact["counters"]["work"] = 40.0
+        cheap = mf.make_run("p0", "c", iterations=10, history=False)
+        cheap["counters"]["work"] = 10.0
+        res = loader.load_results(mf.write_results(self.tmp, [fact, cheap]))
+        numbers = profiles.compute(res, shift=1)
+        self.assertEqual(numbers["work_column"], "work")
+        work = profiles.cost_matrix(numbers["tiers"], 1e-6, "work")
+        self.assertEqual(work.loc["p0", "f"], 40.0)
+        data = profiles.data_profile(work, [10.0, 40.0])
+        self.assertEqual(data.loc[10.0, "f"], 0.0)
+        self.assertEqual(data.loc[10.0, "c"], 1.0)
+        self.assertEqual(data.loc[40.0, "f"], 1.0)
 
     def test_time_to_tier_from_history(self):
         # KKT decays by 10^-1.0625 per iteration over 8 iterations spread on 8 s: below 1e-2 first at
@@ -190,6 +283,33 @@ class TestProfiles(TempDirCase):
         self.assertIn("p2 / a: error 3.00e-06", md)
         for stem in ("profiles_performance", "profiles_data"):
             self.assertTrue(os.path.isfile(os.path.join(folder, "figures", stem + ".pdf")))
+
+
+class TestFigureRules(unittest.TestCase):
+    def test_one_colour_and_marker_per_solver(self):
+        from plots import figutil
+        self.assertEqual(figutil.solver_style("pgs"), {"color": "#9467bd", "marker": "D", "linestyle": "-"})
+        self.assertEqual(figutil.solver_style("mprgp")["color"], "#1f77b4")
+        colours = [figutil.SOLVER_STYLES[s][0] for s in figutil.SOLVER_STYLES]
+        markers = [figutil.SOLVER_STYLES[s][1] for s in figutil.SOLVER_STYLES]
+        self.assertEqual(len(set(colours)), len(colours))
+        self.assertEqual(len(set(markers)), len(markers))
+        # a label of a known solver keeps the solver's colour and marker, with a dashed style
+        variant = figutil.solver_style("mprgp-ichol", "mprgp")
+        self.assertEqual((variant["color"], variant["marker"]), ("#1f77b4", "o"))
+        self.assertNotEqual(variant["linestyle"], "-")
+        # unknown names: the same style every time, whatever else is drawn
+        self.assertEqual(figutil.solver_style("my-solver"), figutil.solver_style("my-solver"))
+
+    def test_titles_and_relaxation_labels(self):
+        import pandas as pd
+        from plots import figutil
+        self.assertEqual(figutil.panel_title("plane-s1", 375.0, 50), "plane-s1 (n = 375, m = 50)")
+        self.assertEqual(figutil.panel_title("plane-s1", float("nan"), None), "plane-s1")
+        runs = pd.DataFrame({"label": ["cg", "mprgp", "pgs"], "solved_problem": ["unconstrained", "decoupled", None]})
+        self.assertEqual(figutil.display_label("cg", runs), "cg (J ignored: relaxation)")
+        self.assertEqual(figutil.display_label("mprgp", runs), "mprgp (decoupled rows)")
+        self.assertEqual(figutil.display_label("pgs", runs), "pgs")
 
 
 class TestStability(TempDirCase):

@@ -42,7 +42,7 @@ TEST(MprgpBox, BoundRowsAreRecognised)
     const Qp tilted = cb::make_synthetic("plane", {{"nx", 3}, {"ny", 3}, {"nz", 3}, {"tilt_deg", 10.0}}, 1);
     EXPECT_FALSE(cb::is_bound_rows(tilted.J));
     const cb::SolverResult r = cb::builtin_registry().create("mprgp-box", {})->solve(tilted.view(), {});
-    EXPECT_EQ(r.status, SolveStatus::INVALID_INPUT);
+    EXPECT_EQ(r.status, SolveStatus::NOT_APPLICABLE);
     EXPECT_NE(r.message.find("needs bound rows"), std::string::npos) << r.message;
 }
 

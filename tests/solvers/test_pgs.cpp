@@ -79,7 +79,7 @@ TEST(Pgs, RefusesTooManyRowsWithTheLimitInTheMessage)
 {
     const Qp qp = make_grid_qp(GridQpParams{});
     const SolverResult r = run("pgs", qp, {{"max_rows", 10}});
-    EXPECT_EQ(r.status, SolveStatus::INVALID_INPUT);
+    EXPECT_EQ(r.status, SolveStatus::NOT_APPLICABLE);
     EXPECT_EQ(r.message, "pgs: m = " + std::to_string(qp.m()) +
                              " rows exceeds max_rows = 10 (S = J A^-1 J' is a dense m x m matrix formed "
                              "with m CHOLMOD solves); raise the max_rows setting to allow it");
