@@ -6,6 +6,7 @@
 // the slacks s = J x - c = s_unc + K lambda are tracked in the m-dimensional dual space; x is
 // only formed (one solve) when it is needed: monitor calls and the final polish.
 #include "solvers/active_set.hpp"
+#include "solvers/solve_loop.hpp"
 
 #include "solvers/a_product.hpp"
 
@@ -131,15 +132,11 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
     const Eigen::Index m = qp.m();
     result.info["method"] = "goldfarb-idnani";
 
-    Stopwatch watch;
-    watch.start();
+    SolveLoop loop("active-set", qp, common, context);
     auto invalid = [&](const std::string& message) {
-        result.status = SolveStatus::INVALID_INPUT;
-        result.message = "active-set: " + message;
         result.x = qp.x0.size() == n ? qp.x0 : Vec::Zero(n);
         result.lambda = Vec::Zero(m);
-        result.setup_s = watch.seconds();
-        return result;
+        return loop.finish(result, SolveStatus::INVALID_INPUT, "", "active-set: " + message);
     };
     if (qp.A.cols() != n || qp.b.size() != n || qp.x0.size() != n || qp.c.size() != m || (m > 0 && qp.J.cols() != n)) {
         std::ostringstream msg;
@@ -182,9 +179,11 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
         ++counters.cholmod_solves;
         return chol.solve(rhs);
     };
-    result.setup_s = watch.seconds();
-    watch.reset();
-    watch.start();
+    if (!loop.end_setup()) {
+        result.x = qp.x0;
+        result.lambda = Vec::Zero(m);
+        return loop.finish(result, SolveStatus::TIME_LIMIT, "", loop.time_limit_message());
+    }
 
     const AccuracyScale scale = accuracy_scale(qp);
     counters.a_products += scale.a_products;
@@ -267,10 +266,6 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
         if (!context.monitor) return true;
         const bool every = m_settings.monitor_every > 0 && counters.iterations % m_settings.monitor_every == 0;
         if (step == StepKind::PIVOT && !every) return true;
-        if (!returned) {
-            PausedScope paused(watch);  // forming x is monitor work, not solver work
-            x_monitor = chol.solve(Vec(qp.b + Jt(lambda)));
-        }
         IterationInfo info;
         info.iteration = counters.iterations;
         info.step = step;
@@ -279,7 +274,10 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
         info.native_residual = returned ? returned_native : (m > 0 ? max_violation_of(s) : 0.0);
         info.active_set_size = static_cast<long>(W.size());
         info.counters = &counters;
-        return notify_monitor(context, watch, info);
+        // Forming x is monitor work, not solver work: done inside the pause.
+        return loop.notify(info, [&] {
+            if (!returned) x_monitor = chol.solve(Vec(qp.b + Jt(lambda)));
+        });
     };
 
     recompute_slack(-1);
@@ -314,14 +312,8 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
             // Step 2: move until p is satisfied (full step) or a working row must leave.
             bool p_added = false;
             while (!p_added) {
-                if (counters.iterations >= common.max_iterations) {
-                    result.status = SolveStatus::MAX_ITERATIONS;
-                    break;
-                }
-                if (common.time_limit_s > 0.0 && watch.seconds() >= common.time_limit_s) {
-                    result.status = SolveStatus::TIME_LIMIT;
-                    break;
-                }
+                result.status = loop.limit_status(counters.iterations);
+                if (result.status != SolveStatus::NOT_RUN) break;
                 ++counters.iterations;
                 const Vec& kp = kcol[slot[p]];
                 const int q = static_cast<int>(W.size());
@@ -456,6 +448,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
         std::ostringstream msg;
         msg << "active-set: " << to_string(result.status) << " after " << counters.iterations << " steps; working set "
             << W.size() << " rows; accuracy error " << rel;
+        if (result.status == SolveStatus::TIME_LIMIT) msg << "; " << loop.time_limit_message();
         result.message = msg.str();
     }
     result.x = x;
@@ -472,8 +465,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
     result.info["clipped_negative_lambda"] = clipped;
     result.info["accuracy_error"] = rel;
     monitor(StepKind::FINAL, &x, result.native_residual);
-    result.solve_s = watch.seconds();
-    return result;
+    return loop.finish(result, result.status, result.criterion);
 }
 
 SolverEntry active_set_entry()

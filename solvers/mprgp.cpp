@@ -5,6 +5,7 @@
 // F(P(y)) comes from scalar recurrences plus a sparse correction), O(nnz(J)) row work, and
 // fused vector updates, so that an iteration costs about one Jacobi-PCG iteration.
 #include "solvers/mprgp.hpp"
+#include "solvers/solve_loop.hpp"
 
 #include "solvers/a_product.hpp"
 #include "solvers/accuracy.hpp"
@@ -95,17 +96,12 @@ std::string fmt(double v)
     return s.str();
 }
 
-bool stopwatch_over(void* data)
-{
-    const auto* pair = static_cast<std::pair<Stopwatch*, double>*>(data);
-    return pair->second > 0.0 && pair->first->seconds() > pair->second;
-}
-
 /// One solve: the workspace is allocated once, before the loop.
 class MprgpRun {
 public:
     MprgpRun(const QpView& qp, const MprgpSettings& settings, const SolveContext& context)
-        : m_qp(qp), m_A(qp.A), m_J(qp.J), m_b(qp.b), m_c(qp.c), m_st(settings), m_ctx(context), m_n(qp.n()), m_m(qp.m())
+        : m_qp(qp), m_A(qp.A), m_J(qp.J), m_b(qp.b), m_c(qp.c), m_st(settings), m_ctx(context), m_n(qp.n()), m_m(qp.m()),
+          m_loop("mprgp", qp, settings.common, context)
     {
     }
 
@@ -151,7 +147,7 @@ private:
         ++m_cnt.projections;
         return project_decoupled(m_J, m_c, m_rows, m_x, m_x);
     }
-    bool over_time() const { return m_st.common.time_limit_s > 0.0 && m_watch.seconds() > m_st.common.time_limit_s; }
+    bool over_time() const { return m_loop.time_up(); }
 
     /// a'g computed as a'phi on active rows (a in null(J_A)): no cancellation against J_A' lambda.
     double face_dot(const Vec& a) const;
@@ -176,7 +172,7 @@ private:
     const SolveContext& m_ctx;
     const Eigen::Index m_n, m_m;
 
-    Stopwatch m_watch;
+    SolveLoop m_loop;  ///< the clock (started with the run: setup included), limits, monitor
     Counters m_cnt;
     DecoupledRows m_rows;
     Vec m_dinv;
@@ -456,23 +452,20 @@ bool MprgpRun::call_monitor(StepKind step)
     info.native_residual = m_native;
     info.active_set_size = m_active_count;
     info.counters = &m_cnt;
-    return notify_monitor(m_ctx, m_watch, info);
+    return m_loop.notify(info);
 }
 
 SolverResult MprgpRun::run()
 {
     SolverResult result;
     const CommonSettings& common = m_st.common;
-    m_watch.start();
     result.info["precond"] = m_st.precond;
     result.info["objective"] = m_st.objective;
     if (!is_decoupled(m_J)) {
         result.status = SolveStatus::INVALID_INPUT;
         result.message = "mprgp: J is not decoupled (two rows touch the same vertex, vertex = column / 3); "
                          "decouple the problem first (decouple = authors | random | depth) or use mprgp-coupled";
-        result.x = m_qp.x0;
-        result.lambda = Vec::Zero(m_m);
-        return result;
+        return m_loop.finish(result, result.status);
     }
     // --- setup: diagonal, row data, power method ---
     m_dinv = Vec::Ones(m_n);
@@ -483,9 +476,7 @@ SolverResult MprgpRun::run()
                 result.status = SolveStatus::INVALID_INPUT;
                 result.message = "mprgp: precond=jacobi needs a positive diagonal of A; A(" + std::to_string(j) + "," +
                                  std::to_string(j) + ") = " + std::to_string(diag[j]);
-                result.x = m_qp.x0;
-                result.lambda = Vec::Zero(m_m);
-                return result;
+                return m_loop.finish(result, result.status);
             }
             m_dinv[j] = 1.0 / diag[j];
         }
@@ -497,9 +488,7 @@ SolverResult MprgpRun::run()
             result.status = SolveStatus::INFEASIBLE;
             result.message = "mprgp: row " + std::to_string(i) + " of J is zero but c_i = " + std::to_string(m_c[i]) +
                              " > 0: the feasible set is empty";
-            result.x = m_qp.x0;
-            result.lambda = Vec::Zero(m_m);
-            return result;
+            return m_loop.finish(result, result.status);
         }
     }
     Vec eigenvector;
@@ -507,9 +496,8 @@ SolverResult MprgpRun::run()
     if (warm) eigenvector = *m_ctx.eigenvector;
     const PowerRule rule = m_st.alpha == "authors" ? PowerRule::AUTHORS : PowerRule::POWER;
     const long power_max = rule == PowerRule::AUTHORS ? 1001 : m_st.power_max;
-    std::pair<Stopwatch*, double> deadline{&m_watch, common.time_limit_s};
-    const PowerResult power =
-        power_method(m_A, eigenvector, rule, power_max, common.tol, warm, common.seed, &stopwatch_over, &deadline);
+    const PowerResult power = power_method(m_A, eigenvector, rule, power_max, common.tol, warm, common.seed,
+                                           &SolveLoop::time_up_callback, &m_loop);
     m_cnt.power_products = power.products;
     m_cnt.a_products += power.products;
     if (m_ctx.eigenvector) *m_ctx.eigenvector = eigenvector;
@@ -525,14 +513,14 @@ SolverResult MprgpRun::run()
     result.info["alpha_bar"] = m_alpha_bar;
     m_scale = accuracy_scale(m_qp);
     m_cnt.a_products += m_scale.a_products;
-    m_watch.pause();
-    result.setup_s = m_watch.seconds();
-    result.info["power"]["seconds"] = result.setup_s;
+    const bool setup_in_time = m_loop.end_setup();
+    result.info["power"]["seconds"] = m_loop.setup_s();
+    if (!setup_in_time) {
+        result.counters = m_cnt;
+        return m_loop.finish(result, SolveStatus::TIME_LIMIT, "", m_loop.time_limit_message());
+    }
 
     // --- solve ---
-    Stopwatch total;
-    m_watch.reset();
-    m_watch.start();
     m_x = m_qp.x0;
     m_g.resize(m_n);
     m_z.resize(m_n);
@@ -584,18 +572,12 @@ SolverResult MprgpRun::run()
             why = "the monitor asked to stop";
             break;
         }
-        if (converged) {
-            status = SolveStatus::CONVERGED;
-            break;
-        }
-        if (m_cnt.iterations >= common.max_iterations) {
-            status = SolveStatus::MAX_ITERATIONS;
-            why = "iteration cap " + std::to_string(common.max_iterations) + " reached";
-            break;
-        }
-        if (over_time()) {
-            status = SolveStatus::TIME_LIMIT;
-            why = "time limit reached";
+        // Non-finite was tested above; converged, the cap and the time in the loop's order.
+        status = m_loop.exit_status(true, converged, m_cnt.iterations);
+        if (status != SolveStatus::NOT_RUN) {
+            if (status == SolveStatus::MAX_ITERATIONS)
+                why = "iteration cap " + std::to_string(common.max_iterations) + " reached";
+            if (status == SolveStatus::TIME_LIMIT) why = m_loop.time_limit_reason();
             break;
         }
         ++m_cnt.iterations;
@@ -750,13 +732,8 @@ SolverResult MprgpRun::run()
         restart();
     }
     evaluate_rows();
-    m_watch.pause();
-    result.solve_s = m_watch.seconds();
-    result.status = status;
-    result.iterations = m_cnt.iterations;
     result.native_residual = m_native;
     if (status == SolveStatus::CONVERGED) {
-        result.criterion = native ? "native" : "kkt";
         result.message = std::string("converged: ") + (native ? "||phi+beta||_2 = " : "accuracy error = ") +
                          fmt(native ? m_native : m_error) + " <= tol";
     } else {
@@ -784,10 +761,9 @@ SolverResult MprgpRun::run()
         info.native_residual = m_native;
         info.active_set_size = m_active_count;
         info.counters = &m_cnt;
-        notify_monitor(m_ctx, m_watch, info);
+        m_loop.notify(info);
     }
-    (void)total;
-    return result;
+    return m_loop.finish(result, status, status == SolveStatus::CONVERGED ? (native ? "native" : "kkt") : "");
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 //      eq. (15)-(16) free gradient, (17)-(18) chopped gradient, (19)-(20) projection, Alg. 3.
 // Not a hot path: written for clarity; every subproblem is on CHOLMOD.
 #include "solvers/mprgp_coupled.hpp"
+#include "solvers/solve_loop.hpp"
 
 #include "solvers/a_product.hpp"
 #include "solvers/accuracy.hpp"
@@ -208,8 +209,7 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
     const Eigen::Index n = qp.n(), m = qp.m();
     SolverResult result;
     Counters cnt;
-    Stopwatch watch;
-    watch.start();
+    SolveLoop loop("mprgp-coupled", qp, common, context);
     result.x = qp.x0;
     result.lambda = Vec::Zero(m);
     Vec dinv = Vec::Ones(n);
@@ -218,7 +218,7 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
         if (!(diag.minCoeff() > 0.0)) {
             result.status = SolveStatus::INVALID_INPUT;
             result.message = "mprgp-coupled: precond=jacobi needs a positive diagonal of A";
-            return result;
+            return loop.finish(result, result.status);
         }
         dinv = diag.cwiseInverse();
     }
@@ -229,7 +229,7 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
         if (!(gram.coeff(i, i) > 0.0) && qp.c[i] > active_tolerance(qp.c[i])) {
             result.status = SolveStatus::INFEASIBLE;
             result.message = "mprgp-coupled: row " + std::to_string(i) + " is zero but c > 0: empty feasible set";
-            return result;
+            return loop.finish(result, result.status);
         }
     Vec eigenvector;
     const bool warm = context.eigenvector && context.eigenvector->size() == n;
@@ -242,10 +242,7 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
     const double alpha_bar = power.estimate > 0.0 ? 2.0 / (1.01 * power.estimate) : 1.0;
     const AccuracyScale scale = accuracy_scale(qp);
     cnt.a_products += scale.a_products;
-    watch.pause();
-    result.setup_s = watch.seconds();
-    watch.reset();
-    watch.start();
+    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT, "", loop.time_limit_message());
 
     long pgs_fallbacks = 0, lcp_failures = 0, face_factorizations = 0;
     std::vector<char> proj_set;
@@ -340,7 +337,7 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
             f_now = F(x);
             ++cnt.safeguard_steps;
             ++repeats;
-            if (common.time_limit_s > 0.0 && watch.seconds() > common.time_limit_s) break;
+            if (loop.time_up()) break;
         }
     };
 
@@ -382,24 +379,16 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
         info.native_residual = native_residual;
         info.active_set_size = static_cast<long>(face.size());
         info.counters = &cnt;
-        if (!notify_monitor(context, watch, info)) {
+        if (!loop.notify(info)) {
             status = SolveStatus::STOPPED_BY_MONITOR;
             why = "the monitor asked to stop";
             break;
         }
-        if (converged) {
-            status = SolveStatus::CONVERGED;
-            break;
-        }
-        if (!std::isfinite(native_residual)) {
-            status = SolveStatus::DIVERGED;
-            why = "non-finite gradient";
-            break;
-        }
-        if (cnt.iterations >= common.max_iterations) break;
-        if (common.time_limit_s > 0.0 && watch.seconds() > common.time_limit_s) {
-            status = SolveStatus::TIME_LIMIT;
-            why = "time limit reached";
+        // The exit checks in the loop's order (a non-finite residual never counts as converged).
+        status = loop.exit_status(std::isfinite(native_residual), converged, cnt.iterations);
+        if (status != SolveStatus::NOT_RUN) {
+            if (status == SolveStatus::DIVERGED) why = "non-finite gradient";
+            if (status == SolveStatus::TIME_LIMIT) why = loop.time_limit_reason();
             break;
         }
         ++cnt.iterations;
@@ -488,12 +477,8 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
         status = SolveStatus::STALLED;
         why = "the criterion held on the updated gradient but not at the exact gradient (rounding drift)";
     }
-    watch.pause();
-    result.solve_s = watch.seconds();
-    result.status = status;
     result.x = x;
     result.lambda = lambda;
-    result.iterations = cnt.iterations;
     result.counters = cnt;
     result.native_residual = native_residual;
     result.info = {{"alpha_bar", alpha_bar},
@@ -505,7 +490,6 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
                    {"safeguard_firings", cnt.safeguard_steps},
                    {"dependent_rows", "handled by a shift 1e-12 of the unit-diagonal-scaled J_A J_A' and J J'"}};
     if (status == SolveStatus::CONVERGED) {
-        result.criterion = native ? "native" : "kkt";
         result.message =
             "converged: " +
             std::string(native ? "||phi+beta||_2 = " + fmt(native_residual) : "accuracy error = " + fmt(error)) +
@@ -514,7 +498,7 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
         result.message = "not converged: " + why + " (accuracy error " + fmt(error) + ")";
     }
     if (lcp_failures > 0) result.message += "; " + std::to_string(lcp_failures) + " LCP solves missed their tolerance";
-    return result;
+    return loop.finish(result, status, status == SolveStatus::CONVERGED ? (native ? "native" : "kkt") : "");
 }
 
 }  // namespace cb
