@@ -99,10 +99,10 @@ public:
 
 private:
     std::string m_solver;
-    const QpView& m_qp;
+    QpView m_qp;  ///< a view (references): copied, so a temporary view may be passed
     double m_time_limit_s;
     long m_max_iterations;
-    const SolveContext& m_context;
+    SolveContext m_context;  ///< three pointers, copied
     Stopwatch m_watch;
     bool m_setup_done = false;
     double m_setup_s = 0.0;

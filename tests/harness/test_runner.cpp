@@ -210,7 +210,7 @@ TEST(Runner, RecordHasEverySchemaKey)
         EXPECT_TRUE(run.record["decouple"].contains(key)) << key;
     const auto& columns = run.record["history"]["columns"];
     EXPECT_EQ(columns, nlohmann::json(HistoryMonitor::columns()));
-    EXPECT_EQ(columns.size(), 13u);
+    EXPECT_EQ(columns.size(), 14u);
     for (const auto& row : run.record["history"]["rows"]) EXPECT_EQ(row.size(), columns.size());
     EXPECT_DOUBLE_EQ(run.record["tol"].get<double>(), 1e-8);
 }
