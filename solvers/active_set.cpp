@@ -18,6 +18,24 @@
 
 namespace cb {
 
+namespace {
+
+/// Every setting of `active-set`, declared once (settings.hpp SettingsTable).
+const SettingsTable<ActiveSetSettings>& active_set_settings_table()
+{
+    static const SettingsTable<ActiveSetSettings> table =
+        SettingsTable<ActiveSetSettings>()
+            .integer("monitor_every", &ActiveSetSettings::monitor_every, 0, LONG_MAX,
+                     "monitor call every k-th pivot (each forms x with one untimed solve); 0 = start and end only")
+            .integer("polish_rounds", &ActiveSetSettings::polish_rounds, 0, 100,
+                     "iterative-refinement rounds of the equality QP on the final working set")
+            .number("dependency_tol", &ActiveSetSettings::dependency_tol, 0.0, 1e-2,
+                    "row p depends on the working set when K_pp - K_pW S_W^-1 K_Wp <= dependency_tol * K_pp");
+    return table;
+}
+
+}  // namespace
+
 ActiveSetSettings ActiveSetSettings::from_json(const nlohmann::json& settings)
 {
     SettingsReader reader(settings, "active-set");
@@ -25,9 +43,7 @@ ActiveSetSettings ActiveSetSettings::from_json(const nlohmann::json& settings)
     s.common = reader.common();
     // The reference solver aims at 1e-10 unless told otherwise (the common default is 1e-6).
     if (!(settings.is_object() && settings.contains("tol"))) s.common.tol = 1e-10;
-    s.monitor_every = reader.integer("monitor_every", s.monitor_every, 0);
-    s.polish_rounds = reader.integer("polish_rounds", s.polish_rounds, 0, 100);
-    s.dependency_tol = reader.number("dependency_tol", s.dependency_tol, 0.0, 1e-2);
+    active_set_settings_table().read(reader, s);
     reader.finish();
     return s;
 }
@@ -35,20 +51,16 @@ ActiveSetSettings ActiveSetSettings::from_json(const nlohmann::json& settings)
 nlohmann::json ActiveSetSettings::to_json() const
 {
     nlohmann::json j = common.to_json();
-    j["monitor_every"] = monitor_every;
-    j["polish_rounds"] = polish_rounds;
-    j["dependency_tol"] = dependency_tol;
+    active_set_settings_table().write(*this, j);
     return j;
 }
 
 std::vector<SettingDoc> active_set_setting_docs()
 {
-    return {{"tol", "1e-10", "(overrides the common default) accuracy error e required for 'converged'"},
-            {"monitor_every", "1",
-             "monitor call every k-th pivot (each forms x with one untimed solve); 0 = start and end only"},
-            {"polish_rounds", "4", "iterative-refinement rounds of the equality QP on the final working set"},
-            {"dependency_tol", "1e-10",
-             "row p depends on the working set when K_pp - K_pW S_W^-1 K_Wp <= dependency_tol * K_pp"}};
+    std::vector<SettingDoc> docs = active_set_settings_table().docs();
+    docs.insert(docs.begin(),
+                {"tol", "1e-10", "(overrides the common default) accuracy error e required for 'converged'"});
+    return docs;
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -11,13 +11,29 @@
 
 namespace cb {
 
+namespace {
+
+const SettingsTable<CgSettings>& cg_settings_table()
+{
+    static const SettingsTable<CgSettings> table =
+        SettingsTable<CgSettings>()
+            .choice("precond", &CgSettings::precond, {"none", "jacobi", "ichol"},
+                    "none | jacobi: preconditioner (diagonal of A) | ichol: incomplete Cholesky of A (Eigen, AMD, no "
+                    "fill; docs/preconditioners.md)")
+            .choice("start", &CgSettings::start, {"x0", "zero"},
+                    "x0 | zero: start point (zero: a 1e-8 reduction of |b|, free of the rounding floor eps |A||x0| "
+                    "that a start near the solution meets; docs/preconditioners.md)");
+    return table;
+}
+
+}  // namespace
+
 CgSettings CgSettings::from_json(const nlohmann::json& settings)
 {
     SettingsReader reader(settings, "cg");
     CgSettings s;
     s.common = reader.common();
-    s.precond = reader.choice("precond", s.precond, {"none", "jacobi", "ichol"});
-    s.start = reader.choice("start", s.start, {"x0", "zero"});
+    cg_settings_table().read(reader, s);
     reader.finish();
     return s;
 }
@@ -25,20 +41,11 @@ CgSettings CgSettings::from_json(const nlohmann::json& settings)
 nlohmann::json CgSettings::to_json() const
 {
     nlohmann::json j = common.to_json();
-    j["precond"] = precond;
-    j["start"] = start;
+    cg_settings_table().write(*this, j);
     return j;
 }
 
-std::vector<SettingDoc> cg_setting_docs()
-{
-    return {{"precond", "jacobi",
-             "none | jacobi: preconditioner (diagonal of A) | ichol: incomplete Cholesky of A (Eigen, AMD, no fill; "
-             "docs/preconditioners.md)"},
-            {"start", "x0",
-             "x0 | zero: start point (zero: a 1e-8 reduction of |b|, free of the rounding floor eps |A||x0| that a "
-             "start near the solution meets; docs/preconditioners.md)"}};
-}
+std::vector<SettingDoc> cg_setting_docs() { return cg_settings_table().docs(); }
 
 namespace {
 
@@ -71,9 +78,8 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
     if (qp.A.cols() != n || qp.b.size() != n || qp.x0.size() != n) {
         result.x = qp.x0;
         return loop.finish(result, SolveStatus::INVALID_INPUT, "",
-                           "cg: sizes disagree (A " + std::to_string(qp.A.rows()) + "x" +
-                               std::to_string(qp.A.cols()) + ", b " + std::to_string(qp.b.size()) + ", x0 " +
-                               std::to_string(qp.x0.size()) + ")");
+                           "cg: sizes disagree (A " + std::to_string(qp.A.rows()) + "x" + std::to_string(qp.A.cols()) +
+                               ", b " + std::to_string(qp.b.size()) + ", x0 " + std::to_string(qp.x0.size()) + ")");
     }
     const bool jacobi = m_settings.precond == "jacobi";
     Vec inv_diag;

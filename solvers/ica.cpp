@@ -14,14 +14,29 @@
 
 namespace cb {
 
+namespace {
+
+/// Every setting of `ica`, declared once (settings.hpp SettingsTable).
+const SettingsTable<IcaSettings>& ica_settings_table()
+{
+    static const SettingsTable<IcaSettings> table =
+        SettingsTable<IcaSettings>()
+            .integer("pgs_sweeps", &IcaSettings::pgs_sweeps, 1, LONG_MAX,
+                     "max projected Gauss-Seidel sweeps per outer iteration")
+            .number("pgs_tol", &IcaSettings::pgs_tol, -1e-300, 1e300, "PGS stops when ||dlambda||_2 <= pgs_tol")
+            .choice("start", &IcaSettings::start, {"x0", "unconstrained"},
+                    "x0 | unconstrained (CHOLMOD solve of A x = b, timed in setup_s, reported in info)");
+    return table;
+}
+
+}  // namespace
+
 IcaSettings IcaSettings::from_json(const nlohmann::json& settings)
 {
     SettingsReader reader(settings, "ica");
     IcaSettings s;
     s.common = reader.common();
-    s.pgs_sweeps = reader.integer("pgs_sweeps", s.pgs_sweeps, 1);
-    s.pgs_tol = reader.number("pgs_tol", s.pgs_tol, -1e-300);
-    s.start = reader.choice("start", s.start, {"x0", "unconstrained"});
+    ica_settings_table().read(reader, s);
     reader.finish();
     return s;
 }
@@ -29,9 +44,7 @@ IcaSettings IcaSettings::from_json(const nlohmann::json& settings)
 nlohmann::json IcaSettings::to_json() const
 {
     nlohmann::json j = common.to_json();
-    j["pgs_sweeps"] = pgs_sweeps;
-    j["pgs_tol"] = pgs_tol;
-    j["start"] = start;
+    ica_settings_table().write(*this, j);
     return j;
 }
 
@@ -285,9 +298,7 @@ SolverEntry ica_entry()
     };
     e.description =
         "iterative constraint anticipation (Otaduy et al. 2009) with PGS on J D3^-1 J', as the authors ran it";
-    e.settings = {{"pgs_sweeps", "20", "max projected Gauss-Seidel sweeps per outer iteration"},
-                  {"pgs_tol", "1e-3", "PGS stops when ||dlambda||_2 <= pgs_tol"},
-                  {"start", "x0", "x0 | unconstrained (CHOLMOD solve of A x = b, timed in setup_s, reported in info)"}};
+    e.settings = ica_settings_table().docs();
     return e;
 }
 

@@ -20,21 +20,50 @@
 
 namespace cb {
 
+namespace {
+
+/// Every setting of `mprgp`, declared once (settings.hpp SettingsTable).
+const SettingsTable<MprgpSettings>& mprgp_settings_table()
+{
+    static const SettingsTable<MprgpSettings> table =
+        SettingsTable<MprgpSettings>()
+            .choice(
+                "precond", &MprgpSettings::precond, {"none", "jacobi", "ichol"},
+                "none | jacobi: D-weighted projection of D^-1 g onto the face (J_A z = 0) | ichol: Q M^-1 Q g with M "
+                "the incomplete Cholesky factor of the face matrix Q A Q + normal block, refactored when the face "
+                "changes (docs/preconditioners.md)")
+            .number("gamma", &MprgpSettings::gamma, 0.0, 1e300,
+                    "proportioning constant Gamma > 0 (Alg. 1); default 10 with precond = ichol",
+                    // With ichol the CG chains are short and cheap to restart; Gamma = 1 (the paper's)
+                    // then spends most iterations proportioning (docs/preconditioners.md).
+                    [](const MprgpSettings& s) { return s.precond == "ichol" ? 10.0 : s.gamma; })
+            .choice("alpha", &MprgpSettings::alpha, {"power", "authors"},
+                    "power (stop at rel. change 1e-3, warm start) | authors (||v_k+1 - v_k|| <= tol, <= 1001 products, "
+                    "cold)")
+            .integer("power_max", &MprgpSettings::power_max, 1, 1000000, "max power-method products (alpha = power)")
+            .choice("objective", &MprgpSettings::objective, {"cheap", "recompute"},
+                    "cheap: F(P(y)) without an extra A-product | recompute: the authors' 2 products per CG step")
+            .integer("safeguard_max", &MprgpSettings::safeguard_max, 1, 100000000,
+                     "max repeats of Alg. 3's safeguard after one step")
+            .choice(
+                "expansion", &MprgpSettings::expansion, {"paper", "precond"},
+                "paper: x = P(x - alpha_bar phi), alpha_bar = 2/||A|| (Alg. 1) | precond: x = P(x - a z) with z the "
+                "preconditioner's face direction and a = z'g / z'Az (one more A-product; Alg. 3's safeguard still "
+                "guarantees descent); docs/preconditioners.md")
+            .number("ichol_refactor", &MprgpSettings::ichol_refactor, -1e-300, 1.0,
+                    "precond = ichol: refactor the face matrix when more than this fraction of the rows changed face "
+                    "since the last factorization (0: at every face change; 1: factor once)");
+    return table;
+}
+
+}  // namespace
+
 MprgpSettings MprgpSettings::from_json(const nlohmann::json& settings)
 {
     SettingsReader reader(settings, "mprgp");
     MprgpSettings s;
     s.common = reader.common();
-    s.precond = reader.choice("precond", s.precond, {"none", "jacobi", "ichol"});
-    // With ichol the CG chains are short and cheap to restart; Gamma = 1 (the paper's) then
-    // spends most iterations proportioning (docs/preconditioners.md), so its default is 10.
-    s.gamma = reader.number("gamma", s.precond == "ichol" ? 10.0 : s.gamma, 0.0);
-    s.alpha = reader.choice("alpha", s.alpha, {"power", "authors"});
-    s.power_max = reader.integer("power_max", s.power_max, 1, 1000000);
-    s.objective = reader.choice("objective", s.objective, {"cheap", "recompute"});
-    s.safeguard_max = reader.integer("safeguard_max", s.safeguard_max, 1, 100000000);
-    s.expansion = reader.choice("expansion", s.expansion, {"paper", "precond"});
-    s.ichol_refactor = reader.number("ichol_refactor", s.ichol_refactor, -1e-300, 1.0);
+    mprgp_settings_table().read(reader, s);
     reader.finish();
     return s;
 }
@@ -42,38 +71,11 @@ MprgpSettings MprgpSettings::from_json(const nlohmann::json& settings)
 nlohmann::json MprgpSettings::to_json() const
 {
     nlohmann::json j = common.to_json();
-    j["gamma"] = gamma;
-    j["precond"] = precond;
-    j["alpha"] = alpha;
-    j["power_max"] = power_max;
-    j["objective"] = objective;
-    j["safeguard_max"] = safeguard_max;
-    j["ichol_refactor"] = ichol_refactor;
-    j["expansion"] = expansion;
+    mprgp_settings_table().write(*this, j);
     return j;
 }
 
-std::vector<SettingDoc> mprgp_setting_docs()
-{
-    return {{"gamma", "1", "proportioning constant Gamma > 0 (Alg. 1); default 10 with precond = ichol"},
-            {"precond", "jacobi",
-             "none | jacobi: D-weighted projection of D^-1 g onto the face (J_A z = 0) | ichol: Q M^-1 Q g with M the "
-             "incomplete Cholesky factor of the face matrix Q A Q + normal block, refactored when the face changes "
-             "(docs/preconditioners.md)"},
-            {"alpha", "power",
-             "power (stop at rel. change 1e-3, warm start) | authors (||v_k+1 - v_k|| <= tol, <= 1001 products, cold)"},
-            {"power_max", "100", "max power-method products (alpha = power)"},
-            {"objective", "cheap",
-             "cheap: F(P(y)) without an extra A-product | recompute: the authors' 2 products per CG step"},
-            {"safeguard_max", "100", "max repeats of Alg. 3's safeguard after one step"},
-            {"expansion", "paper",
-             "paper: x = P(x - alpha_bar phi), alpha_bar = 2/||A|| (Alg. 1) | precond: x = P(x - a z) with z the "
-             "preconditioner's face direction and a = z'g / z'Az (one more A-product; Alg. 3's safeguard still "
-             "guarantees descent); docs/preconditioners.md"},
-            {"ichol_refactor", "0.1",
-             "precond = ichol: refactor the face matrix when more than this fraction of the rows changed face since "
-             "the last factorization (0: at every face change; 1: factor once)"}};
-}
+std::vector<SettingDoc> mprgp_setting_docs() { return mprgp_settings_table().docs(); }
 
 SolverEntry mprgp_entry()
 {

@@ -25,14 +25,29 @@ bool is_bound_rows(const SpMat& J)
     return true;
 }
 
+namespace {
+
+/// Every setting of `mprgp-box`, declared once (settings.hpp SettingsTable).
+const SettingsTable<MprgpBoxSettings>& mprgp_box_settings_table()
+{
+    static const SettingsTable<MprgpBoxSettings> table =
+        SettingsTable<MprgpBoxSettings>()
+            .number("gamma", &MprgpBoxSettings::gamma, 0.0, 1e300, "proportioning constant Gamma > 0")
+            .choice("precond", &MprgpBoxSettings::precond, {"none", "jacobi"},
+                    "none | jacobi (diagonal of A on the free set)")
+            .integer("power_max", &MprgpBoxSettings::power_max, 1, 1000000,
+                     "max power-method products (alpha_bar = 2 / (1.01 ||A||))");
+    return table;
+}
+
+}  // namespace
+
 MprgpBoxSettings MprgpBoxSettings::from_json(const nlohmann::json& settings)
 {
     SettingsReader reader(settings, "mprgp-box");
     MprgpBoxSettings s;
     s.common = reader.common();
-    s.gamma = reader.number("gamma", s.gamma, 0.0);
-    s.precond = reader.choice("precond", s.precond, {"none", "jacobi"});
-    s.power_max = reader.integer("power_max", s.power_max, 1, 1000000);
+    mprgp_box_settings_table().read(reader, s);
     reader.finish();
     return s;
 }
@@ -40,18 +55,11 @@ MprgpBoxSettings MprgpBoxSettings::from_json(const nlohmann::json& settings)
 nlohmann::json MprgpBoxSettings::to_json() const
 {
     nlohmann::json j = common.to_json();
-    j["gamma"] = gamma;
-    j["precond"] = precond;
-    j["power_max"] = power_max;
+    mprgp_box_settings_table().write(*this, j);
     return j;
 }
 
-std::vector<SettingDoc> mprgp_box_setting_docs()
-{
-    return {{"gamma", "1", "proportioning constant Gamma > 0"},
-            {"precond", "jacobi", "none | jacobi (diagonal of A on the free set)"},
-            {"power_max", "100", "max power-method products (alpha_bar = 2 / (1.01 ||A||))"}};
-}
+std::vector<SettingDoc> mprgp_box_setting_docs() { return mprgp_box_settings_table().docs(); }
 
 SolverEntry mprgp_box_entry()
 {

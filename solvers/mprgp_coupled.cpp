@@ -18,17 +18,34 @@
 
 namespace cb {
 
+namespace {
+
+/// Every setting of `mprgp-coupled`, declared once (settings.hpp SettingsTable).
+const SettingsTable<MprgpCoupledSettings>& mprgp_coupled_settings_table()
+{
+    static const SettingsTable<MprgpCoupledSettings> table =
+        SettingsTable<MprgpCoupledSettings>()
+            .number("gamma", &MprgpCoupledSettings::gamma, 0.0, 1e300, "proportioning constant Gamma > 0")
+            .choice("precond", &MprgpCoupledSettings::precond, {"none", "jacobi"},
+                    "none (the authors' Fig. 6 setting) | jacobi (D-weighted face projection, J_A D^-1 J_A' solve)")
+            .integer("power_max", &MprgpCoupledSettings::power_max, 1, 1000000, "max power-method products")
+            .integer("lcp_max_pivots", &MprgpCoupledSettings::lcp_max_pivots, 1, 100000000,
+                     "block principal pivoting iterations per LCP before the PGS fallback")
+            .integer("pgs_max_sweeps", &MprgpCoupledSettings::pgs_max_sweeps, 1, 100000000,
+                     "PGS fallback sweeps per LCP")
+            .integer("safeguard_max", &MprgpCoupledSettings::safeguard_max, 1, 100000000,
+                     "max repeats of Alg. 3's safeguard after one step");
+    return table;
+}
+
+}  // namespace
+
 MprgpCoupledSettings MprgpCoupledSettings::from_json(const nlohmann::json& settings)
 {
     SettingsReader reader(settings, "mprgp-coupled");
     MprgpCoupledSettings s;
     s.common = reader.common();
-    s.gamma = reader.number("gamma", s.gamma, 0.0);
-    s.precond = reader.choice("precond", s.precond, {"none", "jacobi"});
-    s.power_max = reader.integer("power_max", s.power_max, 1, 1000000);
-    s.lcp_max_pivots = reader.integer("lcp_max_pivots", s.lcp_max_pivots, 1, 100000000);
-    s.pgs_max_sweeps = reader.integer("pgs_max_sweeps", s.pgs_max_sweeps, 1, 100000000);
-    s.safeguard_max = reader.integer("safeguard_max", s.safeguard_max, 1, 100000000);
+    mprgp_coupled_settings_table().read(reader, s);
     reader.finish();
     return s;
 }
@@ -36,25 +53,11 @@ MprgpCoupledSettings MprgpCoupledSettings::from_json(const nlohmann::json& setti
 nlohmann::json MprgpCoupledSettings::to_json() const
 {
     nlohmann::json j = common.to_json();
-    j["gamma"] = gamma;
-    j["precond"] = precond;
-    j["power_max"] = power_max;
-    j["lcp_max_pivots"] = lcp_max_pivots;
-    j["pgs_max_sweeps"] = pgs_max_sweeps;
-    j["safeguard_max"] = safeguard_max;
+    mprgp_coupled_settings_table().write(*this, j);
     return j;
 }
 
-std::vector<SettingDoc> mprgp_coupled_setting_docs()
-{
-    return {{"gamma", "1", "proportioning constant Gamma > 0"},
-            {"precond", "jacobi",
-             "none (the authors' Fig. 6 setting) | jacobi (D-weighted face projection, J_A D^-1 J_A' solve)"},
-            {"power_max", "100", "max power-method products"},
-            {"lcp_max_pivots", "200", "block principal pivoting iterations per LCP before the PGS fallback"},
-            {"pgs_max_sweeps", "10000", "PGS fallback sweeps per LCP"},
-            {"safeguard_max", "100", "max repeats of Alg. 3's safeguard after one step"}};
-}
+std::vector<SettingDoc> mprgp_coupled_setting_docs() { return mprgp_coupled_settings_table().docs(); }
 
 SolverEntry mprgp_coupled_entry()
 {

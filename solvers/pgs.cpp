@@ -11,13 +11,27 @@
 
 namespace cb {
 
+namespace {
+
+/// Every setting of `pgs`, declared once (settings.hpp SettingsTable).
+const SettingsTable<PgsSettings>& pgs_settings_table()
+{
+    static const SettingsTable<PgsSettings> table =
+        SettingsTable<PgsSettings>()
+            .integer("max_rows", &PgsSettings::max_rows, 0, LONG_MAX,
+                     "refuse (invalid_input) problems with more rows of J (S is dense m x m)")
+            .integer("block", &PgsSettings::block, 1, 4096, "right-hand sides per CHOLMOD solve when forming S");
+    return table;
+}
+
+}  // namespace
+
 PgsSettings PgsSettings::from_json(const nlohmann::json& settings)
 {
     SettingsReader reader(settings, "pgs");
     PgsSettings s;
     s.common = reader.common();
-    s.max_rows = reader.integer("max_rows", s.max_rows, 0);
-    s.block = reader.integer("block", s.block, 1, 4096);
+    pgs_settings_table().read(reader, s);
     reader.finish();
     return s;
 }
@@ -25,8 +39,7 @@ PgsSettings PgsSettings::from_json(const nlohmann::json& settings)
 nlohmann::json PgsSettings::to_json() const
 {
     nlohmann::json j = common.to_json();
-    j["max_rows"] = max_rows;
-    j["block"] = block;
+    pgs_settings_table().write(*this, j);
     return j;
 }
 
@@ -51,7 +64,7 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
     if (m > s.max_rows) {
         return loop.finish(result, SolveStatus::INVALID_INPUT, "",
                            "pgs: m = " + std::to_string(m) + " rows exceeds max_rows = " + std::to_string(s.max_rows) +
-                         " (S = J A^-1 J' is a dense m x m matrix formed with m CHOLMOD solves); "
+                               " (S = J A^-1 J' is a dense m x m matrix formed with m CHOLMOD solves); "
                                "raise the max_rows setting to allow it");
     }
 
@@ -224,8 +237,7 @@ SolverEntry pgs_entry()
         return std::make_unique<PgsSolver>(PgsSettings::from_json(settings));
     };
     e.description = "projected Gauss-Seidel on the exact dual S = J A^-1 J' (CHOLMOD; small m only)";
-    e.settings = {{"max_rows", "2000", "refuse (invalid_input) problems with more rows of J (S is dense m x m)"},
-                  {"block", "64", "right-hand sides per CHOLMOD solve when forming S"}};
+    e.settings = pgs_settings_table().docs();
     return e;
 }
 

@@ -12,27 +12,36 @@
 
 namespace cb {
 
+namespace {
+
+/// Every setting of `template`, declared once (settings.hpp SettingsTable).
+const SettingsTable<TemplateSettings>& template_settings_table()
+{
+    static const SettingsTable<TemplateSettings> table = SettingsTable<TemplateSettings>().number(
+        "step_scale", &TemplateSettings::step_scale, 0.0, 1.999, "step t = step_scale / |A|_inf, in (0, 2)");
+    return table;
+}
+
+}  // namespace
+
 TemplateSettings TemplateSettings::from_json(const nlohmann::json& settings)
 {
     SettingsReader reader(settings, "template");
     TemplateSettings s;
-    s.common = reader.common();  // the block every solver accepts
-    s.step_scale = reader.number("step_scale", s.step_scale, 0.0, 1.999);
-    reader.finish();  // rejects unknown keys, naming them
+    s.common = reader.common();
+    template_settings_table().read(reader, s);
+    reader.finish();
     return s;
 }
 
 nlohmann::json TemplateSettings::to_json() const
 {
     nlohmann::json j = common.to_json();
-    j["step_scale"] = step_scale;
+    template_settings_table().write(*this, j);
     return j;
 }
 
-std::vector<SettingDoc> template_setting_docs()
-{
-    return {{"step_scale", "1", "step t = step_scale / |A|_inf, in (0, 2)"}};
-}
+std::vector<SettingDoc> template_setting_docs() { return template_settings_table().docs(); }
 
 namespace {
 
