@@ -123,7 +123,12 @@ nlohmann::json HistoryMonitor::to_json() const
                         number_or_null(r.accuracy.gap), number_or_null(r.accuracy.max()), number_or_null(r.objective),
                         number_or_null(r.native_residual), r.active_set, number_or_null(r.solve_time_s)});
     }
-    return {{"columns", columns()}, {"rows", rows}, {"stride", m_stride}, {"monitor_calls", m_calls}};
+    // time_origin: time_s counts from the start of the solver's setup (older files: solve only).
+    return {{"columns", columns()},
+            {"rows", rows},
+            {"stride", m_stride},
+            {"monitor_calls", m_calls},
+            {"time_origin", "setup_start"}};
 }
 
 }  // namespace cb
