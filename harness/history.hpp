@@ -13,6 +13,9 @@
 /// so its rounding and a slack relative to |F| hid or invented changes of the size of a
 /// solver's last steps. The slack per comparison is 1e-12 of the larger |change| plus 1e-13 of
 /// the sum of the absolute terms of the two dot products (their rounding bound).
+/// Time: time_s is the solver's time since the start of its setup (monitor excluded), so the
+/// first row of every history sits at the solver's setup time; solve_time_s is the same stamp
+/// without the setup (the iterations only).
 #include "solvers/accuracy.hpp"
 #include "solvers/solver.hpp"
 
@@ -25,7 +28,8 @@ namespace cb {
 struct HistoryRow {
     long call = 0;  ///< index of the monitor call (0-based); drives the stride
     long iteration = 0;
-    double time_s = 0.0;
+    double time_s = 0.0;        ///< since the start of the solver's setup (setup included)
+    double solve_time_s = 0.0;  ///< time_s - setup_s: the iterations only
     long a_products = 0;
     StepKind step = StepKind::START;
     AccuracyParts accuracy;  ///< the measure's parts; accuracy.max() is the error e (column kkt_rel)
@@ -46,8 +50,9 @@ public:
                    std::vector<int> kept_rows = {});
 
     bool on_iteration(const IterationInfo& info) override;
-    /// Appends the returned point (x, lambda) as the final row unless the last call was recorded.
-    void finish(const Vec& x, const Vec& lambda, long iterations, double time_s, long a_products,
+    /// Appends the returned point (x, lambda) as the final row unless the last call was recorded;
+    /// its time_s is setup_s + solve_s, its solve_time_s solve_s.
+    void finish(const Vec& x, const Vec& lambda, long iterations, double setup_s, double solve_s, long a_products,
                 double native_residual, double work_flops = 0.0);
 
     bool nonfinite() const { return m_nonfinite; }
@@ -62,7 +67,7 @@ public:
 
 private:
     HistoryRow measure(long call, long iteration, StepKind step, const Vec& x, const Vec* lambda, double time_s,
-                       long a_products, double native, long active);
+                       double solve_time_s, long a_products, double native, long active);
     void push(HistoryRow row);
 
     QpView m_qp;

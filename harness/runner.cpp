@@ -202,7 +202,7 @@ RunOutcome run_solver(const SolverRegistry& registry, const Qp& original, const 
         out.accuracy_solved = measure_point(view, solved_scale, x, g, own_valid ? &result.lambda : nullptr,
                                             accuracy_tol, lambda_solved, fitted_solved);
     }
-    history.finish(x, lambda, result.iterations, result.setup_s + result.solve_s, result.counters.a_products,
+    history.finish(x, lambda, result.iterations, result.setup_s, result.solve_s, result.counters.a_products,
                    result.native_residual, result.counters.work_flops);
     out.nonfinite = history.nonfinite() || !std::isfinite(out.objective) || !std::isfinite(out.accuracy.max());
     out.monotone = history.monotone();

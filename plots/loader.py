@@ -47,26 +47,27 @@ NOT_APPLICABLE_STATUS = "not_applicable"
 #: History times are solve-only until the shared solve loop (issue 14) stamps them from the start
 #: of setup; history_time() then adds the run's setup_s. Set to False (and simplify
 #: history_time) once every history is stamped from the start of setup.
-HISTORY_TIME_IS_SOLVE_ONLY = True
-
-
 def history_time(history: pd.DataFrame, run, include_setup: bool = True) -> np.ndarray:
     """The time axis of a history, from the start of setup (include_setup) or solve-only.
 
-    While histories are solve-only (HISTORY_TIME_IS_SOLVE_ONLY), setup_s is added to every row,
-    capped at the run's total time: the row the harness appends for the returned point is already
-    stamped with setup + solve. With include_setup=False the solve-only times are returned."""
-    t = pd.to_numeric(history["time_s"], errors="coerce").to_numpy(dtype=float) if "time_s" in history \
-        else np.full(len(history), np.nan)
+    Histories with a `solve_time_s` column are stamped from the start of setup (time_origin
+    "setup_start"): time_s is used as it is and solve_time_s gives the solve-only axis. Older
+    files stamped solve-only times: setup_s is added to every row, capped at the run's total time
+    (their last row, the returned point, was already stamped with setup + solve)."""
+    def column(name):
+        return pd.to_numeric(history[name], errors="coerce").to_numpy(dtype=float) if name in history \
+            else np.full(len(history), np.nan)
+    t = column("time_s")
+    if "solve_time_s" in history:
+        return t if include_setup else column("solve_time_s")
     setup = _number(run.get("setup_s")) if run is not None else float("nan")
     total = _number(run.get("time_s")) if run is not None else float("nan")
     setup = setup if math.isfinite(setup) else 0.0
-    if HISTORY_TIME_IS_SOLVE_ONLY:
-        if not include_setup:
-            return np.minimum(t, total - setup) if math.isfinite(total) else t
-        out = t + setup
-        return np.minimum(out, total) if math.isfinite(total) else out
-    return t if include_setup else np.maximum(t - setup, 0.0)
+    if not include_setup:
+        return np.minimum(t, total - setup) if math.isfinite(total) else t
+    out = t + setup
+    return np.minimum(out, total) if math.isfinite(total) else out
+
 
 _BOOL_COLUMNS = ("status_confirmed", "nonfinite", "monotone")
 

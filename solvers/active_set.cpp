@@ -6,6 +6,7 @@
 // the slacks s = J x - c = s_unc + K lambda are tracked in the m-dimensional dual space; x is
 // only formed (one solve) when it is needed: monitor calls and the final polish.
 #include "solvers/active_set.hpp"
+#include "solvers/solve_loop.hpp"
 
 #include "solvers/a_product.hpp"
 #include "solvers/work_units.hpp"
@@ -18,6 +19,24 @@
 
 namespace cb {
 
+namespace {
+
+/// Every setting of `active-set`, declared once (settings.hpp SettingsTable).
+const SettingsTable<ActiveSetSettings>& active_set_settings_table()
+{
+    static const SettingsTable<ActiveSetSettings> table =
+        SettingsTable<ActiveSetSettings>()
+            .integer("monitor_every", &ActiveSetSettings::monitor_every, 0, LONG_MAX,
+                     "monitor call every k-th pivot (each forms x with one untimed solve); 0 = start and end only")
+            .integer("polish_rounds", &ActiveSetSettings::polish_rounds, 0, 100,
+                     "iterative-refinement rounds of the equality QP on the final working set")
+            .number("dependency_tol", &ActiveSetSettings::dependency_tol, 0.0, 1e-2,
+                    "row p depends on the working set when K_pp - K_pW S_W^-1 K_Wp <= dependency_tol * K_pp");
+    return table;
+}
+
+}  // namespace
+
 ActiveSetSettings ActiveSetSettings::from_json(const nlohmann::json& settings)
 {
     SettingsReader reader(settings, "active-set");
@@ -25,9 +44,7 @@ ActiveSetSettings ActiveSetSettings::from_json(const nlohmann::json& settings)
     s.common = reader.common();
     // The reference solver aims at 1e-10 unless told otherwise (the common default is 1e-6).
     if (!(settings.is_object() && settings.contains("tol"))) s.common.tol = 1e-10;
-    s.monitor_every = reader.integer("monitor_every", s.monitor_every, 0);
-    s.polish_rounds = reader.integer("polish_rounds", s.polish_rounds, 0, 100);
-    s.dependency_tol = reader.number("dependency_tol", s.dependency_tol, 0.0, 1e-2);
+    active_set_settings_table().read(reader, s);
     reader.finish();
     return s;
 }
@@ -35,20 +52,16 @@ ActiveSetSettings ActiveSetSettings::from_json(const nlohmann::json& settings)
 nlohmann::json ActiveSetSettings::to_json() const
 {
     nlohmann::json j = common.to_json();
-    j["monitor_every"] = monitor_every;
-    j["polish_rounds"] = polish_rounds;
-    j["dependency_tol"] = dependency_tol;
+    active_set_settings_table().write(*this, j);
     return j;
 }
 
 std::vector<SettingDoc> active_set_setting_docs()
 {
-    return {{"tol", "1e-10", "(overrides the common default) accuracy error e required for 'converged'"},
-            {"monitor_every", "1",
-             "monitor call every k-th pivot (each forms x with one untimed solve); 0 = start and end only"},
-            {"polish_rounds", "4", "iterative-refinement rounds of the equality QP on the final working set"},
-            {"dependency_tol", "1e-10",
-             "row p depends on the working set when K_pp - K_pW S_W^-1 K_Wp <= dependency_tol * K_pp"}};
+    std::vector<SettingDoc> docs = active_set_settings_table().docs();
+    docs.insert(docs.begin(),
+                {"tol", "1e-10", "(overrides the common default) accuracy error e required for 'converged'"});
+    return docs;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -132,15 +145,11 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
     const Eigen::Index m = qp.m();
     result.info["method"] = "goldfarb-idnani";
 
-    Stopwatch watch;
-    watch.start();
+    SolveLoop loop("active-set", qp, common, context);
     auto invalid = [&](const std::string& message) {
-        result.status = SolveStatus::INVALID_INPUT;
-        result.message = "active-set: " + message;
         result.x = qp.x0.size() == n ? qp.x0 : Vec::Zero(n);
         result.lambda = Vec::Zero(m);
-        result.setup_s = watch.seconds();
-        return result;
+        return loop.finish(result, SolveStatus::INVALID_INPUT, "", "active-set: " + message);
     };
     if (qp.A.cols() != n || qp.b.size() != n || qp.x0.size() != n || qp.c.size() != m || (m > 0 && qp.J.cols() != n)) {
         std::ostringstream msg;
@@ -185,9 +194,11 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
         counters.work_flops += cholmod_solve_flops(chol.cholmod());
         return chol.solve(rhs);
     };
-    result.setup_s = watch.seconds();
-    watch.reset();
-    watch.start();
+    if (!loop.end_setup()) {
+        result.x = qp.x0;
+        result.lambda = Vec::Zero(m);
+        return loop.finish(result, SolveStatus::TIME_LIMIT, "", loop.time_limit_message());
+    }
 
     const AccuracyScale scale = accuracy_scale(qp);
     counters.a_products += scale.a_products;
@@ -275,10 +286,6 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
         if (!context.monitor) return true;
         const bool every = m_settings.monitor_every > 0 && counters.iterations % m_settings.monitor_every == 0;
         if (step == StepKind::PIVOT && !every) return true;
-        if (!returned) {
-            PausedScope paused(watch);  // forming x is monitor work, not solver work
-            x_monitor = chol.solve(Vec(qp.b + Jt(lambda)));
-        }
         IterationInfo info;
         info.iteration = counters.iterations;
         info.step = step;
@@ -287,7 +294,10 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
         info.native_residual = returned ? returned_native : (m > 0 ? max_violation_of(s) : 0.0);
         info.active_set_size = static_cast<long>(W.size());
         info.counters = &counters;
-        return notify_monitor(context, watch, info);
+        // Forming x is monitor work, not solver work: done inside the pause.
+        return loop.notify(info, [&] {
+            if (!returned) x_monitor = chol.solve(Vec(qp.b + Jt(lambda)));
+        });
     };
 
     recompute_slack(-1);
@@ -322,14 +332,8 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
             // Step 2: move until p is satisfied (full step) or a working row must leave.
             bool p_added = false;
             while (!p_added) {
-                if (counters.iterations >= common.max_iterations) {
-                    result.status = SolveStatus::MAX_ITERATIONS;
-                    break;
-                }
-                if (common.time_limit_s > 0.0 && watch.seconds() >= common.time_limit_s) {
-                    result.status = SolveStatus::TIME_LIMIT;
-                    break;
-                }
+                result.status = loop.limit_status(counters.iterations);
+                if (result.status != SolveStatus::NOT_RUN) break;
                 ++counters.iterations;
                 const Vec& kp = kcol[slot[p]];
                 const int q = static_cast<int>(W.size());
@@ -466,6 +470,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
         std::ostringstream msg;
         msg << "active-set: " << to_string(result.status) << " after " << counters.iterations << " steps; working set "
             << W.size() << " rows; accuracy error " << rel;
+        if (result.status == SolveStatus::TIME_LIMIT) msg << "; " << loop.time_limit_message();
         result.message = msg.str();
     }
     result.x = x;
@@ -482,8 +487,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
     result.info["clipped_negative_lambda"] = clipped;
     result.info["accuracy_error"] = rel;
     monitor(StepKind::FINAL, &x, result.native_residual);
-    result.solve_s = watch.seconds();
-    return result;
+    return loop.finish(result, result.status, result.criterion);
 }
 
 SolverEntry active_set_entry()

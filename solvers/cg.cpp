@@ -4,6 +4,7 @@
 
 #include "solvers/a_product.hpp"
 #include "solvers/ichol.hpp"
+#include "solvers/solve_loop.hpp"
 #include "solvers/work_units.hpp"
 
 #include <cmath>
@@ -11,13 +12,29 @@
 
 namespace cb {
 
+namespace {
+
+const SettingsTable<CgSettings>& cg_settings_table()
+{
+    static const SettingsTable<CgSettings> table =
+        SettingsTable<CgSettings>()
+            .choice("precond", &CgSettings::precond, {"none", "jacobi", "ichol"},
+                    "none | jacobi: preconditioner (diagonal of A) | ichol: incomplete Cholesky of A (Eigen, AMD, no "
+                    "fill; docs/preconditioners.md)")
+            .choice("start", &CgSettings::start, {"x0", "zero"},
+                    "x0 | zero: start point (zero: a 1e-8 reduction of |b|, free of the rounding floor eps |A||x0| "
+                    "that a start near the solution meets; docs/preconditioners.md)");
+    return table;
+}
+
+}  // namespace
+
 CgSettings CgSettings::from_json(const nlohmann::json& settings)
 {
     SettingsReader reader(settings, "cg");
     CgSettings s;
     s.common = reader.common();
-    s.precond = reader.choice("precond", s.precond, {"none", "jacobi", "ichol"});
-    s.start = reader.choice("start", s.start, {"x0", "zero"});
+    cg_settings_table().read(reader, s);
     reader.finish();
     return s;
 }
@@ -25,20 +42,11 @@ CgSettings CgSettings::from_json(const nlohmann::json& settings)
 nlohmann::json CgSettings::to_json() const
 {
     nlohmann::json j = common.to_json();
-    j["precond"] = precond;
-    j["start"] = start;
+    cg_settings_table().write(*this, j);
     return j;
 }
 
-std::vector<SettingDoc> cg_setting_docs()
-{
-    return {{"precond", "jacobi",
-             "none | jacobi: preconditioner (diagonal of A) | ichol: incomplete Cholesky of A (Eigen, AMD, no fill; "
-             "docs/preconditioners.md)"},
-            {"start", "x0",
-             "x0 | zero: start point (zero: a 1e-8 reduction of |b|, free of the rounding floor eps |A||x0| that a "
-             "start near the solution meets; docs/preconditioners.md)"}};
-}
+std::vector<SettingDoc> cg_setting_docs() { return cg_settings_table().docs(); }
 
 namespace {
 
@@ -66,15 +74,13 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
     const Eigen::Index n = qp.n();
     const CommonSettings& common = m_settings.common;
 
-    Stopwatch watch;
-    watch.start();
+    SolveLoop loop("cg", qp, common, context);
     result.lambda = Vec::Zero(qp.m());
     if (qp.A.cols() != n || qp.b.size() != n || qp.x0.size() != n) {
-        result.status = SolveStatus::INVALID_INPUT;
-        result.message = "cg: sizes disagree (A " + std::to_string(qp.A.rows()) + "x" + std::to_string(qp.A.cols()) +
-                         ", b " + std::to_string(qp.b.size()) + ", x0 " + std::to_string(qp.x0.size()) + ")";
         result.x = qp.x0;
-        return result;
+        return loop.finish(result, SolveStatus::INVALID_INPUT, "",
+                           "cg: sizes disagree (A " + std::to_string(qp.A.rows()) + "x" + std::to_string(qp.A.cols()) +
+                               ", b " + std::to_string(qp.b.size()) + ", x0 " + std::to_string(qp.x0.size()) + ")");
     }
     const bool jacobi = m_settings.precond == "jacobi";
     Vec inv_diag;
@@ -85,10 +91,8 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
                 std::ostringstream msg;
                 msg << "cg: jacobi preconditioner needs a positive diagonal; A(" << i << "," << i
                     << ") = " << inv_diag[i];
-                result.status = SolveStatus::INVALID_INPUT;
-                result.message = msg.str();
                 result.x = qp.x0;
-                return result;
+                return loop.finish(result, SolveStatus::INVALID_INPUT, "", msg.str());
             }
             inv_diag[i] = 1.0 / inv_diag[i];
         }
@@ -98,10 +102,8 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
     if (ichol) {
         std::string error;
         if (!ic.factor(qp.A, error)) {
-            result.status = SolveStatus::INVALID_INPUT;
-            result.message = "cg: precond=ichol: " + error;
             result.x = qp.x0;
-            return result;
+            return loop.finish(result, SolveStatus::INVALID_INPUT, "", "cg: precond=ichol: " + error);
         }
         ++counters.precond_factorizations;
         counters.work_flops += ic.factor_flops();
@@ -120,9 +122,10 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
         ++counters.precond_applications;
         return inv_diag.cwiseProduct(r);
     };
-    result.setup_s = watch.seconds();
-    watch.reset();
-    watch.start();
+    if (!loop.end_setup()) {
+        result.x = qp.x0;
+        return loop.finish(result, SolveStatus::TIME_LIMIT, "", loop.time_limit_message());
+    }
 
     Vec x = m_settings.start == "zero" ? Vec(Vec::Zero(n)) : qp.x0;
     Vec r = qp.b - a_product(qp.A, x);  // r = -g
@@ -147,7 +150,7 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
         info.lambda = &result.lambda;
         info.native_residual = r.norm();
         info.counters = &counters;
-        return notify_monitor(context, watch, info);
+        return loop.notify(info);
     };
     bool stopped = !monitor(StepKind::START);
     if (stopped) result.status = SolveStatus::STOPPED_BY_MONITOR;
@@ -176,14 +179,8 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
             rz = r.dot(z);
             continue;
         }
-        if (counters.iterations >= common.max_iterations) {
-            result.status = SolveStatus::MAX_ITERATIONS;
-            break;
-        }
-        if (common.time_limit_s > 0.0 && watch.seconds() >= common.time_limit_s) {
-            result.status = SolveStatus::TIME_LIMIT;
-            break;
-        }
+        result.status = loop.limit_status(counters.iterations);
+        if (result.status != SolveStatus::NOT_RUN) break;
         a_product(qp.A, p, Ap);
         ++counters.a_products;
         const double pAp = p.dot(Ap);
@@ -224,10 +221,10 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
         std::ostringstream msg;
         msg << "cg (" << m_settings.precond << "): " << to_string(result.status) << " after " << counters.iterations
             << " iterations, |b - Ax|_2 = " << result.native_residual << " (constraints ignored)";
+        if (result.status == SolveStatus::TIME_LIMIT) msg << "; " << loop.time_limit_message();
         result.message = msg.str();
     }
-    result.solve_s = watch.seconds();
-    return result;
+    return loop.finish(result, result.status, result.criterion);
 }
 
 SolverEntry cg_entry()

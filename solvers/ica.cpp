@@ -1,6 +1,7 @@
 // Ref: Li et al., CGF 2015, Sec. 6.2 (ICA as the comparison method); Otaduy et al. 2009, the
 // anticipation LCP; ALGORITHMS.md §6 (the exact iteration implemented here).
 #include "solvers/ica.hpp"
+#include "solvers/solve_loop.hpp"
 
 #include "solvers/a_product.hpp"
 #include "solvers/work_units.hpp"
@@ -14,14 +15,29 @@
 
 namespace cb {
 
+namespace {
+
+/// Every setting of `ica`, declared once (settings.hpp SettingsTable).
+const SettingsTable<IcaSettings>& ica_settings_table()
+{
+    static const SettingsTable<IcaSettings> table =
+        SettingsTable<IcaSettings>()
+            .integer("pgs_sweeps", &IcaSettings::pgs_sweeps, 1, LONG_MAX,
+                     "max projected Gauss-Seidel sweeps per outer iteration")
+            .number("pgs_tol", &IcaSettings::pgs_tol, -1e-300, 1e300, "PGS stops when ||dlambda||_2 <= pgs_tol")
+            .choice("start", &IcaSettings::start, {"x0", "unconstrained"},
+                    "x0 | unconstrained (CHOLMOD solve of A x = b, timed in setup_s, reported in info)");
+    return table;
+}
+
+}  // namespace
+
 IcaSettings IcaSettings::from_json(const nlohmann::json& settings)
 {
     SettingsReader reader(settings, "ica");
     IcaSettings s;
     s.common = reader.common();
-    s.pgs_sweeps = reader.integer("pgs_sweeps", s.pgs_sweeps, 1);
-    s.pgs_tol = reader.number("pgs_tol", s.pgs_tol, -1e-300);
-    s.start = reader.choice("start", s.start, {"x0", "unconstrained"});
+    ica_settings_table().read(reader, s);
     reader.finish();
     return s;
 }
@@ -29,9 +45,7 @@ IcaSettings IcaSettings::from_json(const nlohmann::json& settings)
 nlohmann::json IcaSettings::to_json() const
 {
     nlohmann::json j = common.to_json();
-    j["pgs_sweeps"] = pgs_sweeps;
-    j["pgs_tol"] = pgs_tol;
-    j["start"] = start;
+    ica_settings_table().write(*this, j);
     return j;
 }
 
@@ -133,20 +147,14 @@ Vec block_times(const BlockDiagonal& d, const Vec& x)
     return out;
 }
 
-bool time_up(const Stopwatch& watch, double limit) { return limit > 0.0 && watch.seconds() >= limit; }
-
 }  // namespace
 
 SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
 {
     const IcaSettings& s = m_settings;
-    const double limit = s.common.time_limit_s;
     SolverResult result;
     Counters& counters = result.counters;
-    Stopwatch watch;  // all solver time (setup + iterations), for the time limit
-    watch.start();
-    Stopwatch setup;
-    setup.start();
+    SolveLoop loop("ica", qp, s.common, context);
 
     const Eigen::Index m = qp.m();
     result.info["start"] = s.start;
@@ -155,12 +163,8 @@ SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
 
     BlockDiagonal d;
     std::string error;
-    if (!build_block_diagonal(qp.A, d, error)) {
-        result.status = SolveStatus::INVALID_INPUT;
-        result.message = "ica: A must be SPD: " + error;
-        result.setup_s = setup.seconds();
-        return result;
-    }
+    if (!build_block_diagonal(qp.A, d, error))
+        return loop.finish(result, SolveStatus::INVALID_INPUT, "", "ica: A must be SPD: " + error);
     const SpMat Dinv = block_inverse_matrix(d);
     const SpMat JD = qp.J * Dinv;                           // J D3^-1, m x n
     const SpMat B = SpMat(JD * qp.J.transpose()).pruned();  // J D3^-1 J', m x m
@@ -175,32 +179,25 @@ SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
 
     Vec x = qp.x0;
     if (s.start == "unconstrained") {
-        Stopwatch start_watch;
-        start_watch.start();
+        const double start_begin_s = loop.elapsed_s();
         Eigen::CholmodSupernodalLLT<SpMatCol, Eigen::Lower> llt;
         const SpMatCol A_col = qp.A;
         llt.compute(A_col);
         ++counters.cholmod_analyses;
         ++counters.cholmod_factorizations;
         counters.work_flops += cholmod_factor_flops(llt.cholmod());
-        if (llt.info() != Eigen::Success) {
-            result.status = SolveStatus::INVALID_INPUT;
-            result.message = "ica: start=unconstrained: CHOLMOD could not factor A (not SPD?)";
-            result.setup_s = setup.seconds();
-            return result;
-        }
+        if (llt.info() != Eigen::Success)
+            return loop.finish(result, SolveStatus::INVALID_INPUT, "",
+                               "ica: start=unconstrained: CHOLMOD could not factor A (not SPD?)");
         x = llt.solve(qp.b);
         ++counters.cholmod_solves;
         counters.work_flops += cholmod_solve_flops(llt.cholmod());
-        result.info["start_solve_s"] = start_watch.seconds();
+        result.info["start_solve_s"] = loop.elapsed_s() - start_begin_s;
         result.info["start_solver"] = "cholmod";
     }
     Vec lambda = Vec::Zero(m);
     if (context.lambda0 && context.lambda0->size() == m) lambda = context.lambda0->cwiseMax(0.0);
-    result.setup_s = setup.seconds();
-
-    Stopwatch solve_watch;
-    solve_watch.start();
+    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT, "", loop.time_limit_message());
     const AccuracyScale scale = accuracy_scale(qp);
     counters.a_products += scale.a_products;
     Vec Ax = a_product(qp.A, x);
@@ -212,21 +209,16 @@ SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
     auto finish = [&](SolveStatus status, const std::string& criterion, const std::string& message) {
         result.x = x;
         result.lambda = lambda;
-        result.status = status;
-        result.criterion = criterion;
-        result.message = message;
         result.native_residual = native;
-        result.iterations = counters.iterations;
-        result.solve_s = solve_watch.seconds();
         result.info["native_residual_definition"] = "||A x - b - J' lambda||_2 (absolute)";
-        return result;
+        return loop.finish(result, status, criterion, message);
     };
     auto converged = [&]() -> std::string {
         if (s.common.stop == StopRule::NATIVE) return native <= s.common.tol ? "native" : "";
         return accuracy_converged(qp, scale, x, g, lambda, s.common.tol) ? "kkt" : "";
     };
 
-    if (!notify_monitor(context, solve_watch, {0, StepKind::START, &x, &lambda, native, -1, &counters, 0.0}))
+    if (!loop.notify({0, StepKind::START, &x, &lambda, native, -1, &counters, 0.0}))
         return finish(SolveStatus::STOPPED_BY_MONITOR, "", "ica: stopped by the monitor");
     if (!x.allFinite()) return finish(SolveStatus::DIVERGED, "", "ica: non-finite start point");
     {
@@ -238,10 +230,11 @@ SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
     double last_dlambda = 0.0;
     long last_sweeps = 0;
     for (;;) {
-        if (counters.iterations >= s.common.max_iterations)
-            return finish(SolveStatus::MAX_ITERATIONS, "",
-                          "ica: max_iterations reached (" + std::to_string(s.common.max_iterations) + ")");
-        if (time_up(watch, limit)) return finish(SolveStatus::TIME_LIMIT, "", "ica: time limit reached");
+        // Non-finite and converged were tested after the previous iteration (below): the limits.
+        const SolveStatus limit = loop.limit_status(counters.iterations);
+        if (limit == SolveStatus::MAX_ITERATIONS)
+            return finish(limit, "", "ica: max_iterations reached (" + std::to_string(s.common.max_iterations) + ")");
+        if (limit == SolveStatus::TIME_LIMIT) return finish(limit, "", loop.time_limit_message());
 
         // 1. anticipation: the LCP of the block-Jacobi prediction x~ = D3^-1 (b + J'l - (L+U) x).
         if (m > 0) {
@@ -270,7 +263,7 @@ SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
             ++counters.lcp_iterations;
             last_dlambda = std::sqrt(dl2);
             if (last_dlambda <= s.pgs_tol) break;
-            if (time_up(watch, limit)) break;  // the outer loop reports the limit after this iteration
+            if (loop.time_up()) break;  // the outer loop reports the limit after this iteration
         }
         // 3. one block Gauss-Seidel sweep on A x = b + J' lambda.
         f = qp.b + qp.J.transpose() * lambda;
@@ -283,8 +276,7 @@ SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
         native = (Ax - f).norm();
         ++counters.iterations;
 
-        if (!notify_monitor(context, solve_watch,
-                            {counters.iterations, StepKind::OUTER, &x, &lambda, native, -1, &counters, 0.0}))
+        if (!loop.notify({counters.iterations, StepKind::OUTER, &x, &lambda, native, -1, &counters, 0.0}))
             return finish(SolveStatus::STOPPED_BY_MONITOR, "", "ica: stopped by the monitor");
         if (!x.allFinite() || !lambda.allFinite() || !std::isfinite(native))
             return finish(SolveStatus::DIVERGED, "", "ica: non-finite iterate");
@@ -310,9 +302,7 @@ SolverEntry ica_entry()
     };
     e.description =
         "iterative constraint anticipation (Otaduy et al. 2009) with PGS on J D3^-1 J', as the authors ran it";
-    e.settings = {{"pgs_sweeps", "20", "max projected Gauss-Seidel sweeps per outer iteration"},
-                  {"pgs_tol", "1e-3", "PGS stops when ||dlambda||_2 <= pgs_tol"},
-                  {"start", "x0", "x0 | unconstrained (CHOLMOD solve of A x = b, timed in setup_s, reported in info)"}};
+    e.settings = ica_settings_table().docs();
     return e;
 }
 

@@ -5,6 +5,7 @@
 // F(P(y)) comes from scalar recurrences plus a sparse correction), O(nnz(J)) row work, and
 // fused vector updates, so that an iteration costs about one Jacobi-PCG iteration.
 #include "solvers/mprgp.hpp"
+#include "solvers/solve_loop.hpp"
 
 #include "solvers/a_product.hpp"
 #include "solvers/accuracy.hpp"
@@ -19,21 +20,50 @@
 
 namespace cb {
 
+namespace {
+
+/// Every setting of `mprgp`, declared once (settings.hpp SettingsTable).
+const SettingsTable<MprgpSettings>& mprgp_settings_table()
+{
+    static const SettingsTable<MprgpSettings> table =
+        SettingsTable<MprgpSettings>()
+            .choice(
+                "precond", &MprgpSettings::precond, {"none", "jacobi", "ichol"},
+                "none | jacobi: D-weighted projection of D^-1 g onto the face (J_A z = 0) | ichol: Q M^-1 Q g with M "
+                "the incomplete Cholesky factor of the face matrix Q A Q + normal block, refactored when the face "
+                "changes (docs/preconditioners.md)")
+            .number("gamma", &MprgpSettings::gamma, 0.0, 1e300,
+                    "proportioning constant Gamma > 0 (Alg. 1); default 10 with precond = ichol",
+                    // With ichol the CG chains are short and cheap to restart; Gamma = 1 (the paper's)
+                    // then spends most iterations proportioning (docs/preconditioners.md).
+                    [](const MprgpSettings& s) { return s.precond == "ichol" ? 10.0 : s.gamma; })
+            .choice("alpha", &MprgpSettings::alpha, {"power", "authors"},
+                    "power (stop at rel. change 1e-3, warm start) | authors (||v_k+1 - v_k|| <= tol, <= 1001 products, "
+                    "cold)")
+            .integer("power_max", &MprgpSettings::power_max, 1, 1000000, "max power-method products (alpha = power)")
+            .choice("objective", &MprgpSettings::objective, {"cheap", "recompute"},
+                    "cheap: F(P(y)) without an extra A-product | recompute: the authors' 2 products per CG step")
+            .integer("safeguard_max", &MprgpSettings::safeguard_max, 1, 100000000,
+                     "max repeats of Alg. 3's safeguard after one step")
+            .choice(
+                "expansion", &MprgpSettings::expansion, {"paper", "precond"},
+                "paper: x = P(x - alpha_bar phi), alpha_bar = 2/||A|| (Alg. 1) | precond: x = P(x - a z) with z the "
+                "preconditioner's face direction and a = z'g / z'Az (one more A-product; Alg. 3's safeguard still "
+                "guarantees descent); docs/preconditioners.md")
+            .number("ichol_refactor", &MprgpSettings::ichol_refactor, -1e-300, 1.0,
+                    "precond = ichol: refactor the face matrix when more than this fraction of the rows changed face "
+                    "since the last factorization (0: at every face change; 1: factor once)");
+    return table;
+}
+
+}  // namespace
+
 MprgpSettings MprgpSettings::from_json(const nlohmann::json& settings)
 {
     SettingsReader reader(settings, "mprgp");
     MprgpSettings s;
     s.common = reader.common();
-    s.precond = reader.choice("precond", s.precond, {"none", "jacobi", "ichol"});
-    // With ichol the CG chains are short and cheap to restart; Gamma = 1 (the paper's) then
-    // spends most iterations proportioning (docs/preconditioners.md), so its default is 10.
-    s.gamma = reader.number("gamma", s.precond == "ichol" ? 10.0 : s.gamma, 0.0);
-    s.alpha = reader.choice("alpha", s.alpha, {"power", "authors"});
-    s.power_max = reader.integer("power_max", s.power_max, 1, 1000000);
-    s.objective = reader.choice("objective", s.objective, {"cheap", "recompute"});
-    s.safeguard_max = reader.integer("safeguard_max", s.safeguard_max, 1, 100000000);
-    s.expansion = reader.choice("expansion", s.expansion, {"paper", "precond"});
-    s.ichol_refactor = reader.number("ichol_refactor", s.ichol_refactor, -1e-300, 1.0);
+    mprgp_settings_table().read(reader, s);
     reader.finish();
     return s;
 }
@@ -41,38 +71,11 @@ MprgpSettings MprgpSettings::from_json(const nlohmann::json& settings)
 nlohmann::json MprgpSettings::to_json() const
 {
     nlohmann::json j = common.to_json();
-    j["gamma"] = gamma;
-    j["precond"] = precond;
-    j["alpha"] = alpha;
-    j["power_max"] = power_max;
-    j["objective"] = objective;
-    j["safeguard_max"] = safeguard_max;
-    j["ichol_refactor"] = ichol_refactor;
-    j["expansion"] = expansion;
+    mprgp_settings_table().write(*this, j);
     return j;
 }
 
-std::vector<SettingDoc> mprgp_setting_docs()
-{
-    return {{"gamma", "1", "proportioning constant Gamma > 0 (Alg. 1); default 10 with precond = ichol"},
-            {"precond", "jacobi",
-             "none | jacobi: D-weighted projection of D^-1 g onto the face (J_A z = 0) | ichol: Q M^-1 Q g with M the "
-             "incomplete Cholesky factor of the face matrix Q A Q + normal block, refactored when the face changes "
-             "(docs/preconditioners.md)"},
-            {"alpha", "power",
-             "power (stop at rel. change 1e-3, warm start) | authors (||v_k+1 - v_k|| <= tol, <= 1001 products, cold)"},
-            {"power_max", "100", "max power-method products (alpha = power)"},
-            {"objective", "cheap",
-             "cheap: F(P(y)) without an extra A-product | recompute: the authors' 2 products per CG step"},
-            {"safeguard_max", "100", "max repeats of Alg. 3's safeguard after one step"},
-            {"expansion", "paper",
-             "paper: x = P(x - alpha_bar phi), alpha_bar = 2/||A|| (Alg. 1) | precond: x = P(x - a z) with z the "
-             "preconditioner's face direction and a = z'g / z'Az (one more A-product; Alg. 3's safeguard still "
-             "guarantees descent); docs/preconditioners.md"},
-            {"ichol_refactor", "0.1",
-             "precond = ichol: refactor the face matrix when more than this fraction of the rows changed face since "
-             "the last factorization (0: at every face change; 1: factor once)"}};
-}
+std::vector<SettingDoc> mprgp_setting_docs() { return mprgp_settings_table().docs(); }
 
 SolverEntry mprgp_entry()
 {
@@ -95,17 +98,12 @@ std::string fmt(double v)
     return s.str();
 }
 
-bool stopwatch_over(void* data)
-{
-    const auto* pair = static_cast<std::pair<Stopwatch*, double>*>(data);
-    return pair->second > 0.0 && pair->first->seconds() > pair->second;
-}
-
 /// One solve: the workspace is allocated once, before the loop.
 class MprgpRun {
 public:
     MprgpRun(const QpView& qp, const MprgpSettings& settings, const SolveContext& context)
-        : m_qp(qp), m_A(qp.A), m_J(qp.J), m_b(qp.b), m_c(qp.c), m_st(settings), m_ctx(context), m_n(qp.n()), m_m(qp.m())
+        : m_qp(qp), m_A(qp.A), m_J(qp.J), m_b(qp.b), m_c(qp.c), m_st(settings), m_ctx(context), m_n(qp.n()), m_m(qp.m()),
+          m_loop("mprgp", qp, settings.common, context)
     {
     }
 
@@ -151,7 +149,7 @@ private:
         ++m_cnt.projections;
         return project_decoupled(m_J, m_c, m_rows, m_x, m_x);
     }
-    bool over_time() const { return m_st.common.time_limit_s > 0.0 && m_watch.seconds() > m_st.common.time_limit_s; }
+    bool over_time() const { return m_loop.time_up(); }
 
     /// a'g computed as a'phi on active rows (a in null(J_A)): no cancellation against J_A' lambda.
     double face_dot(const Vec& a) const;
@@ -180,7 +178,7 @@ private:
     const SolveContext& m_ctx;
     const Eigen::Index m_n, m_m;
 
-    Stopwatch m_watch;
+    SolveLoop m_loop;  ///< the clock (started with the run: setup included), limits, monitor
     Counters m_cnt;
     DecoupledRows m_rows;
     Vec m_dinv;
@@ -484,23 +482,20 @@ bool MprgpRun::call_monitor(StepKind step)
     info.native_residual = m_native;
     info.active_set_size = m_active_count;
     info.counters = &m_cnt;
-    return notify_monitor(m_ctx, m_watch, info);
+    return m_loop.notify(info);
 }
 
 SolverResult MprgpRun::run()
 {
     SolverResult result;
     const CommonSettings& common = m_st.common;
-    m_watch.start();
     result.info["precond"] = m_st.precond;
     result.info["objective"] = m_st.objective;
     if (!is_decoupled(m_J)) {
         result.status = SolveStatus::INVALID_INPUT;
         result.message = "mprgp: J is not decoupled (two rows touch the same vertex, vertex = column / 3); "
                          "decouple the problem first (decouple = authors | random | depth) or use mprgp-coupled";
-        result.x = m_qp.x0;
-        result.lambda = Vec::Zero(m_m);
-        return result;
+        return m_loop.finish(result, result.status);
     }
     // --- setup: diagonal, row data, power method ---
     m_dinv = Vec::Ones(m_n);
@@ -511,9 +506,7 @@ SolverResult MprgpRun::run()
                 result.status = SolveStatus::INVALID_INPUT;
                 result.message = "mprgp: precond=jacobi needs a positive diagonal of A; A(" + std::to_string(j) + "," +
                                  std::to_string(j) + ") = " + std::to_string(diag[j]);
-                result.x = m_qp.x0;
-                result.lambda = Vec::Zero(m_m);
-                return result;
+                return m_loop.finish(result, result.status);
             }
             m_dinv[j] = 1.0 / diag[j];
         }
@@ -525,9 +518,7 @@ SolverResult MprgpRun::run()
             result.status = SolveStatus::INFEASIBLE;
             result.message = "mprgp: row " + std::to_string(i) + " of J is zero but c_i = " + std::to_string(m_c[i]) +
                              " > 0: the feasible set is empty";
-            result.x = m_qp.x0;
-            result.lambda = Vec::Zero(m_m);
-            return result;
+            return m_loop.finish(result, result.status);
         }
     }
     Vec eigenvector;
@@ -535,9 +526,8 @@ SolverResult MprgpRun::run()
     if (warm) eigenvector = *m_ctx.eigenvector;
     const PowerRule rule = m_st.alpha == "authors" ? PowerRule::AUTHORS : PowerRule::POWER;
     const long power_max = rule == PowerRule::AUTHORS ? 1001 : m_st.power_max;
-    std::pair<Stopwatch*, double> deadline{&m_watch, common.time_limit_s};
-    const PowerResult power =
-        power_method(m_A, eigenvector, rule, power_max, common.tol, warm, common.seed, &stopwatch_over, &deadline);
+    const PowerResult power = power_method(m_A, eigenvector, rule, power_max, common.tol, warm, common.seed,
+                                           &SolveLoop::time_up_callback, &m_loop);
     m_cnt.power_products = power.products;
     m_cnt.a_products += power.products;
     if (m_ctx.eigenvector) *m_ctx.eigenvector = eigenvector;
@@ -553,14 +543,14 @@ SolverResult MprgpRun::run()
     result.info["alpha_bar"] = m_alpha_bar;
     m_scale = accuracy_scale(m_qp);
     m_cnt.a_products += m_scale.a_products;
-    m_watch.pause();
-    result.setup_s = m_watch.seconds();
-    result.info["power"]["seconds"] = result.setup_s;
+    const bool setup_in_time = m_loop.end_setup();
+    result.info["power"]["seconds"] = m_loop.setup_s();
+    if (!setup_in_time) {
+        result.counters = m_cnt;
+        return m_loop.finish(result, SolveStatus::TIME_LIMIT, "", m_loop.time_limit_message());
+    }
 
     // --- solve ---
-    Stopwatch total;
-    m_watch.reset();
-    m_watch.start();
     m_x = m_qp.x0;
     m_g.resize(m_n);
     m_z.resize(m_n);
@@ -612,18 +602,12 @@ SolverResult MprgpRun::run()
             why = "the monitor asked to stop";
             break;
         }
-        if (converged) {
-            status = SolveStatus::CONVERGED;
-            break;
-        }
-        if (m_cnt.iterations >= common.max_iterations) {
-            status = SolveStatus::MAX_ITERATIONS;
-            why = "iteration cap " + std::to_string(common.max_iterations) + " reached";
-            break;
-        }
-        if (over_time()) {
-            status = SolveStatus::TIME_LIMIT;
-            why = "time limit reached";
+        // Non-finite was tested above; converged, the cap and the time in the loop's order.
+        status = m_loop.exit_status(true, converged, m_cnt.iterations);
+        if (status != SolveStatus::NOT_RUN) {
+            if (status == SolveStatus::MAX_ITERATIONS)
+                why = "iteration cap " + std::to_string(common.max_iterations) + " reached";
+            if (status == SolveStatus::TIME_LIMIT) why = m_loop.time_limit_reason();
             break;
         }
         ++m_cnt.iterations;
@@ -769,13 +753,8 @@ SolverResult MprgpRun::run()
         restart();
     }
     evaluate_rows();
-    m_watch.pause();
-    result.solve_s = m_watch.seconds();
-    result.status = status;
-    result.iterations = m_cnt.iterations;
     result.native_residual = m_native;
     if (status == SolveStatus::CONVERGED) {
-        result.criterion = native ? "native" : "kkt";
         result.message = std::string("converged: ") + (native ? "||phi+beta||_2 = " : "accuracy error = ") +
                          fmt(native ? m_native : m_error) + " <= tol";
     } else {
@@ -807,10 +786,9 @@ SolverResult MprgpRun::run()
         info.native_residual = m_native;
         info.active_set_size = m_active_count;
         info.counters = &m_cnt;
-        notify_monitor(m_ctx, m_watch, info);
+        m_loop.notify(info);
     }
-    (void)total;
-    return result;
+    return m_loop.finish(result, status, status == SolveStatus::CONVERGED ? (native ? "native" : "kkt") : "");
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 //      free gradient phitilde_i = min((x_i - l_i)/alpha_bar, phi_i) (and its upper-bound mirror),
 //      feasible step length before the expansion step, Alg. 1-2.
 #include "solvers/mprgp_box.hpp"
+#include "solvers/solve_loop.hpp"
 
 #include "solvers/a_product.hpp"
 #include "solvers/accuracy.hpp"
@@ -24,14 +25,29 @@ bool is_bound_rows(const SpMat& J)
     return true;
 }
 
+namespace {
+
+/// Every setting of `mprgp-box`, declared once (settings.hpp SettingsTable).
+const SettingsTable<MprgpBoxSettings>& mprgp_box_settings_table()
+{
+    static const SettingsTable<MprgpBoxSettings> table =
+        SettingsTable<MprgpBoxSettings>()
+            .number("gamma", &MprgpBoxSettings::gamma, 0.0, 1e300, "proportioning constant Gamma > 0")
+            .choice("precond", &MprgpBoxSettings::precond, {"none", "jacobi"},
+                    "none | jacobi (diagonal of A on the free set)")
+            .integer("power_max", &MprgpBoxSettings::power_max, 1, 1000000,
+                     "max power-method products (alpha_bar = 2 / (1.01 ||A||))");
+    return table;
+}
+
+}  // namespace
+
 MprgpBoxSettings MprgpBoxSettings::from_json(const nlohmann::json& settings)
 {
     SettingsReader reader(settings, "mprgp-box");
     MprgpBoxSettings s;
     s.common = reader.common();
-    s.gamma = reader.number("gamma", s.gamma, 0.0);
-    s.precond = reader.choice("precond", s.precond, {"none", "jacobi"});
-    s.power_max = reader.integer("power_max", s.power_max, 1, 1000000);
+    mprgp_box_settings_table().read(reader, s);
     reader.finish();
     return s;
 }
@@ -39,18 +55,11 @@ MprgpBoxSettings MprgpBoxSettings::from_json(const nlohmann::json& settings)
 nlohmann::json MprgpBoxSettings::to_json() const
 {
     nlohmann::json j = common.to_json();
-    j["gamma"] = gamma;
-    j["precond"] = precond;
-    j["power_max"] = power_max;
+    mprgp_box_settings_table().write(*this, j);
     return j;
 }
 
-std::vector<SettingDoc> mprgp_box_setting_docs()
-{
-    return {{"gamma", "1", "proportioning constant Gamma > 0"},
-            {"precond", "jacobi", "none | jacobi (diagonal of A on the free set)"},
-            {"power_max", "100", "max power-method products (alpha_bar = 2 / (1.01 ||A||))"}};
-}
+std::vector<SettingDoc> mprgp_box_setting_docs() { return mprgp_box_settings_table().docs(); }
 
 SolverEntry mprgp_box_entry()
 {
@@ -80,8 +89,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
     const CommonSettings& common = m_settings.common;
     const Eigen::Index n = qp.n(), m = qp.m();
     SolverResult result;
-    Stopwatch watch;
-    watch.start();
+    SolveLoop loop("mprgp-box", qp, common, context);
     Counters cnt;
     result.x = qp.x0;
     result.lambda = Vec::Zero(m);
@@ -104,13 +112,13 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
             result.message = "mprgp-box: row " + std::to_string(i) + " of J has " + std::to_string(nonzeros) +
                              " nonzeros; mprgp-box needs bound rows (one nonzero per row, a x_j >= c); use mprgp "
                              "(decoupled J) or mprgp-coupled";
-            return result;
+            return loop.finish(result, result.status);
         }
         if (nonzeros == 0) {
             if (qp.c[i] > active_tolerance(qp.c[i])) {
                 result.status = SolveStatus::INFEASIBLE;
                 result.message = "mprgp-box: row " + std::to_string(i) + " is zero but c > 0: empty feasible set";
-                return result;
+                return loop.finish(result, result.status);
             }
             continue;
         }
@@ -131,7 +139,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
             result.status = SolveStatus::INFEASIBLE;
             result.message = "mprgp-box: DOF " + std::to_string(j) + " has lower bound " + fmt(lower[j]) +
                              " > upper bound " + fmt(upper[j]);
-            return result;
+            return loop.finish(result, result.status);
         }
     Vec dinv = Vec::Ones(n);
     if (m_settings.precond == "jacobi") {
@@ -139,7 +147,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
         if (!(diag.minCoeff() > 0.0)) {
             result.status = SolveStatus::INVALID_INPUT;
             result.message = "mprgp-box: precond=jacobi needs a positive diagonal of A";
-            return result;
+            return loop.finish(result, result.status);
         }
         dinv = diag.cwiseInverse();
     }
@@ -163,10 +171,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
     result.info["power"] = {{"products", power.products}, {"estimate", power.estimate}, {"warm_start", power.warm}};
     const AccuracyScale scale = accuracy_scale(qp);
     cnt.a_products += scale.a_products;
-    watch.pause();
-    result.setup_s = watch.seconds();
-    watch.reset();
-    watch.start();
+    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT, "", loop.time_limit_message());
 
     // --- the MPRGP loop ---
     Vec x = qp.x0.cwiseMax(lower).cwiseMin(upper);
@@ -238,24 +243,16 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
         info.lambda = &lambda;
         info.native_residual = native_residual;
         info.counters = &cnt;
-        if (!notify_monitor(context, watch, info)) {
+        if (!loop.notify(info)) {
             status = SolveStatus::STOPPED_BY_MONITOR;
             why = "the monitor asked to stop";
             break;
         }
-        if (converged) {
-            status = SolveStatus::CONVERGED;
-            break;
-        }
-        if (!std::isfinite(native_residual)) {
-            status = SolveStatus::DIVERGED;
-            why = "non-finite gradient";
-            break;
-        }
-        if (cnt.iterations >= common.max_iterations) break;
-        if (common.time_limit_s > 0.0 && watch.seconds() > common.time_limit_s) {
-            status = SolveStatus::TIME_LIMIT;
-            why = "time limit reached";
+        // The exit checks in the loop's order (a non-finite residual never counts as converged).
+        status = loop.exit_status(std::isfinite(native_residual), converged, cnt.iterations);
+        if (status != SolveStatus::NOT_RUN) {
+            if (status == SolveStatus::DIVERGED) why = "non-finite gradient";
+            if (status == SolveStatus::TIME_LIMIT) why = loop.time_limit_reason();
             break;
         }
         ++cnt.iterations;
@@ -332,16 +329,11 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
     multipliers();
     native_residual = (phi + beta).norm();
     error = accuracy_from_gradient(qp, scale, x, g, lambda).max();
-    watch.pause();
-    result.solve_s = watch.seconds();
-    result.status = status;
     result.x = x;
     result.lambda = lambda;
-    result.iterations = cnt.iterations;
     result.counters = cnt;
     result.native_residual = native_residual;
     if (status == SolveStatus::CONVERGED) {
-        result.criterion = native ? "native" : "kkt";
         result.message =
             "converged: " +
             std::string(native ? "||phi+beta||_2 = " + fmt(native_residual) : "accuracy error = " + fmt(error)) +
@@ -349,7 +341,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
     } else {
         result.message = "not converged: " + why + " (accuracy error " + fmt(error) + ")";
     }
-    return result;
+    return loop.finish(result, status, status == SolveStatus::CONVERGED ? (native ? "native" : "kkt") : "");
 }
 
 }  // namespace cb

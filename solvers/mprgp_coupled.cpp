@@ -3,6 +3,7 @@
 //      eq. (15)-(16) free gradient, (17)-(18) chopped gradient, (19)-(20) projection, Alg. 3.
 // Not a hot path: written for clarity; every subproblem is on CHOLMOD.
 #include "solvers/mprgp_coupled.hpp"
+#include "solvers/solve_loop.hpp"
 
 #include "solvers/a_product.hpp"
 #include "solvers/accuracy.hpp"
@@ -18,17 +19,34 @@
 
 namespace cb {
 
+namespace {
+
+/// Every setting of `mprgp-coupled`, declared once (settings.hpp SettingsTable).
+const SettingsTable<MprgpCoupledSettings>& mprgp_coupled_settings_table()
+{
+    static const SettingsTable<MprgpCoupledSettings> table =
+        SettingsTable<MprgpCoupledSettings>()
+            .number("gamma", &MprgpCoupledSettings::gamma, 0.0, 1e300, "proportioning constant Gamma > 0")
+            .choice("precond", &MprgpCoupledSettings::precond, {"none", "jacobi"},
+                    "none (the authors' Fig. 6 setting) | jacobi (D-weighted face projection, J_A D^-1 J_A' solve)")
+            .integer("power_max", &MprgpCoupledSettings::power_max, 1, 1000000, "max power-method products")
+            .integer("lcp_max_pivots", &MprgpCoupledSettings::lcp_max_pivots, 1, 100000000,
+                     "block principal pivoting iterations per LCP before the PGS fallback")
+            .integer("pgs_max_sweeps", &MprgpCoupledSettings::pgs_max_sweeps, 1, 100000000,
+                     "PGS fallback sweeps per LCP")
+            .integer("safeguard_max", &MprgpCoupledSettings::safeguard_max, 1, 100000000,
+                     "max repeats of Alg. 3's safeguard after one step");
+    return table;
+}
+
+}  // namespace
+
 MprgpCoupledSettings MprgpCoupledSettings::from_json(const nlohmann::json& settings)
 {
     SettingsReader reader(settings, "mprgp-coupled");
     MprgpCoupledSettings s;
     s.common = reader.common();
-    s.gamma = reader.number("gamma", s.gamma, 0.0);
-    s.precond = reader.choice("precond", s.precond, {"none", "jacobi"});
-    s.power_max = reader.integer("power_max", s.power_max, 1, 1000000);
-    s.lcp_max_pivots = reader.integer("lcp_max_pivots", s.lcp_max_pivots, 1, 100000000);
-    s.pgs_max_sweeps = reader.integer("pgs_max_sweeps", s.pgs_max_sweeps, 1, 100000000);
-    s.safeguard_max = reader.integer("safeguard_max", s.safeguard_max, 1, 100000000);
+    mprgp_coupled_settings_table().read(reader, s);
     reader.finish();
     return s;
 }
@@ -36,25 +54,11 @@ MprgpCoupledSettings MprgpCoupledSettings::from_json(const nlohmann::json& setti
 nlohmann::json MprgpCoupledSettings::to_json() const
 {
     nlohmann::json j = common.to_json();
-    j["gamma"] = gamma;
-    j["precond"] = precond;
-    j["power_max"] = power_max;
-    j["lcp_max_pivots"] = lcp_max_pivots;
-    j["pgs_max_sweeps"] = pgs_max_sweeps;
-    j["safeguard_max"] = safeguard_max;
+    mprgp_coupled_settings_table().write(*this, j);
     return j;
 }
 
-std::vector<SettingDoc> mprgp_coupled_setting_docs()
-{
-    return {{"gamma", "1", "proportioning constant Gamma > 0"},
-            {"precond", "jacobi",
-             "none (the authors' Fig. 6 setting) | jacobi (D-weighted face projection, J_A D^-1 J_A' solve)"},
-            {"power_max", "100", "max power-method products"},
-            {"lcp_max_pivots", "200", "block principal pivoting iterations per LCP before the PGS fallback"},
-            {"pgs_max_sweeps", "10000", "PGS fallback sweeps per LCP"},
-            {"safeguard_max", "100", "max repeats of Alg. 3's safeguard after one step"}};
-}
+std::vector<SettingDoc> mprgp_coupled_setting_docs() { return mprgp_coupled_settings_table().docs(); }
 
 SolverEntry mprgp_coupled_entry()
 {
@@ -213,8 +217,7 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
     const Eigen::Index n = qp.n(), m = qp.m();
     SolverResult result;
     Counters cnt;
-    Stopwatch watch;
-    watch.start();
+    SolveLoop loop("mprgp-coupled", qp, common, context);
     result.x = qp.x0;
     result.lambda = Vec::Zero(m);
     Vec dinv = Vec::Ones(n);
@@ -223,7 +226,7 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
         if (!(diag.minCoeff() > 0.0)) {
             result.status = SolveStatus::INVALID_INPUT;
             result.message = "mprgp-coupled: precond=jacobi needs a positive diagonal of A";
-            return result;
+            return loop.finish(result, result.status);
         }
         dinv = diag.cwiseInverse();
     }
@@ -234,7 +237,7 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
         if (!(gram.coeff(i, i) > 0.0) && qp.c[i] > active_tolerance(qp.c[i])) {
             result.status = SolveStatus::INFEASIBLE;
             result.message = "mprgp-coupled: row " + std::to_string(i) + " is zero but c > 0: empty feasible set";
-            return result;
+            return loop.finish(result, result.status);
         }
     Vec eigenvector;
     const bool warm = context.eigenvector && context.eigenvector->size() == n;
@@ -247,10 +250,7 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
     const double alpha_bar = power.estimate > 0.0 ? 2.0 / (1.01 * power.estimate) : 1.0;
     const AccuracyScale scale = accuracy_scale(qp);
     cnt.a_products += scale.a_products;
-    watch.pause();
-    result.setup_s = watch.seconds();
-    watch.reset();
-    watch.start();
+    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT, "", loop.time_limit_message());
 
     long pgs_fallbacks = 0, lcp_failures = 0, face_factorizations = 0;
     std::vector<char> proj_set;
@@ -345,7 +345,7 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
             f_now = F(x);
             ++cnt.safeguard_steps;
             ++repeats;
-            if (common.time_limit_s > 0.0 && watch.seconds() > common.time_limit_s) break;
+            if (loop.time_up()) break;
         }
     };
 
@@ -387,24 +387,16 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
         info.native_residual = native_residual;
         info.active_set_size = static_cast<long>(face.size());
         info.counters = &cnt;
-        if (!notify_monitor(context, watch, info)) {
+        if (!loop.notify(info)) {
             status = SolveStatus::STOPPED_BY_MONITOR;
             why = "the monitor asked to stop";
             break;
         }
-        if (converged) {
-            status = SolveStatus::CONVERGED;
-            break;
-        }
-        if (!std::isfinite(native_residual)) {
-            status = SolveStatus::DIVERGED;
-            why = "non-finite gradient";
-            break;
-        }
-        if (cnt.iterations >= common.max_iterations) break;
-        if (common.time_limit_s > 0.0 && watch.seconds() > common.time_limit_s) {
-            status = SolveStatus::TIME_LIMIT;
-            why = "time limit reached";
+        // The exit checks in the loop's order (a non-finite residual never counts as converged).
+        status = loop.exit_status(std::isfinite(native_residual), converged, cnt.iterations);
+        if (status != SolveStatus::NOT_RUN) {
+            if (status == SolveStatus::DIVERGED) why = "non-finite gradient";
+            if (status == SolveStatus::TIME_LIMIT) why = loop.time_limit_reason();
             break;
         }
         ++cnt.iterations;
@@ -493,12 +485,8 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
         status = SolveStatus::STALLED;
         why = "the criterion held on the updated gradient but not at the exact gradient (rounding drift)";
     }
-    watch.pause();
-    result.solve_s = watch.seconds();
-    result.status = status;
     result.x = x;
     result.lambda = lambda;
-    result.iterations = cnt.iterations;
     result.counters = cnt;
     result.native_residual = native_residual;
     result.info = {{"alpha_bar", alpha_bar},
@@ -510,7 +498,6 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
                    {"safeguard_firings", cnt.safeguard_steps},
                    {"dependent_rows", "handled by a shift 1e-12 of the unit-diagonal-scaled J_A J_A' and J J'"}};
     if (status == SolveStatus::CONVERGED) {
-        result.criterion = native ? "native" : "kkt";
         result.message =
             "converged: " +
             std::string(native ? "||phi+beta||_2 = " + fmt(native_residual) : "accuracy error = " + fmt(error)) +
@@ -519,7 +506,7 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
         result.message = "not converged: " + why + " (accuracy error " + fmt(error) + ")";
     }
     if (lcp_failures > 0) result.message += "; " + std::to_string(lcp_failures) + " LCP solves missed their tolerance";
-    return result;
+    return loop.finish(result, status, status == SolveStatus::CONVERGED ? (native ? "native" : "kkt") : "");
 }
 
 }  // namespace cb

@@ -1,6 +1,7 @@
 // Ref: Li et al., CGF 2015, eq. (2) (the dual LCP of the contact QP); ALGORITHMS.md §7.
 #include "solvers/pgs.hpp"
 #include "solvers/a_product.hpp"
+#include "solvers/solve_loop.hpp"
 #include "solvers/work_units.hpp"
 
 #include <Eigen/CholmodSupport>
@@ -11,13 +12,27 @@
 
 namespace cb {
 
+namespace {
+
+/// Every setting of `pgs`, declared once (settings.hpp SettingsTable).
+const SettingsTable<PgsSettings>& pgs_settings_table()
+{
+    static const SettingsTable<PgsSettings> table =
+        SettingsTable<PgsSettings>()
+            .integer("max_rows", &PgsSettings::max_rows, 0, LONG_MAX,
+                     "refuse (not_applicable) problems with more rows of J (S is dense m x m)")
+            .integer("block", &PgsSettings::block, 1, 4096, "right-hand sides per CHOLMOD solve when forming S");
+    return table;
+}
+
+}  // namespace
+
 PgsSettings PgsSettings::from_json(const nlohmann::json& settings)
 {
     SettingsReader reader(settings, "pgs");
     PgsSettings s;
     s.common = reader.common();
-    s.max_rows = reader.integer("max_rows", s.max_rows, 0);
-    s.block = reader.integer("block", s.block, 1, 4096);
+    pgs_settings_table().read(reader, s);
     reader.finish();
     return s;
 }
@@ -25,8 +40,7 @@ PgsSettings PgsSettings::from_json(const nlohmann::json& settings)
 nlohmann::json PgsSettings::to_json() const
 {
     nlohmann::json j = common.to_json();
-    j["max_rows"] = max_rows;
-    j["block"] = block;
+    pgs_settings_table().write(*this, j);
     return j;
 }
 
@@ -35,14 +49,11 @@ namespace {
 /// Y = A^-1 J' is kept (x = x_u + Y lambda without a solve) when it fits in this many doubles.
 constexpr double kMaxStoredEntries = 16e6;
 
-bool time_up(const Stopwatch& watch, double limit) { return limit > 0.0 && watch.seconds() >= limit; }
-
 }  // namespace
 
 SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
 {
     const PgsSettings& s = m_settings;
-    const double limit = s.common.time_limit_s;
     const Eigen::Index n = qp.n(), m = qp.m();
     SolverResult result;
     Counters& counters = result.counters;
@@ -50,17 +61,13 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
     result.lambda = Vec::Zero(m);
     result.info["native_residual_definition"] = "||min(lambda, S lambda - q)||_inf (LCP natural residual, absolute)";
 
+    SolveLoop loop("pgs", qp, s.common, context);
     if (m > s.max_rows) {
-        result.status = SolveStatus::NOT_APPLICABLE;
-        result.message = "pgs: m = " + std::to_string(m) + " rows exceeds max_rows = " + std::to_string(s.max_rows) +
-                         " (S = J A^-1 J' is a dense m x m matrix formed with m CHOLMOD solves); "
-                         "raise the max_rows setting to allow it";
-        return result;
+        return loop.finish(result, SolveStatus::NOT_APPLICABLE, "",
+                           "pgs: m = " + std::to_string(m) + " rows exceeds max_rows = " + std::to_string(s.max_rows) +
+                               " (S = J A^-1 J' is a dense m x m matrix formed with m CHOLMOD solves); "
+                               "raise the max_rows setting to allow it");
     }
-    Stopwatch watch;
-    watch.start();
-    Stopwatch setup;
-    setup.start();
 
     // Zero rows of J: S_ii = 0. Row i reads 0 >= c_i, so c_i > 0 means an empty feasible set.
     std::vector<char> zero_row(static_cast<size_t>(m), 1);
@@ -72,13 +79,10 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
         if (!zero_row[static_cast<size_t>(i)]) continue;
         ++zero_rows;
         if (qp.c[i] > 0.0) {
-            result.status = SolveStatus::INFEASIBLE;
             std::ostringstream msg;
             msg << "pgs: row " << i << " of J is zero but c_" << i << " = " << qp.c[i]
                 << " > 0: the constraint 0 >= c_i cannot hold";
-            result.message = msg.str();
-            result.setup_s = setup.seconds();
-            return result;
+            return loop.finish(result, SolveStatus::INFEASIBLE, "", msg.str());
         }
     }
     result.info["zero_rows"] = zero_rows;
@@ -91,12 +95,9 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
     ++counters.cholmod_analyses;
     ++counters.cholmod_factorizations;
     counters.work_flops += cholmod_factor_flops(llt.cholmod());
-    if (llt.info() != Eigen::Success) {
-        result.status = SolveStatus::INVALID_INPUT;
-        result.message = "pgs: CHOLMOD could not factor A (not positive definite to working precision)";
-        result.setup_s = setup.seconds();
-        return result;
-    }
+    if (llt.info() != Eigen::Success)
+        return loop.finish(result, SolveStatus::INVALID_INPUT, "",
+                           "pgs: CHOLMOD could not factor A (not positive definite to working precision)");
     const Vec x_u = llt.solve(qp.b);
     ++counters.cholmod_solves;
     counters.work_flops += cholmod_solve_flops(llt.cholmod());
@@ -117,20 +118,14 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
                                sparse_product_flops(static_cast<double>(qp.J.nonZeros()), static_cast<double>(k));
         S.middleCols(j0, k) = qp.J * Yc;
         if (keep_y) Y.middleCols(j0, k) = Yc;
-        if (time_up(watch, limit)) {
-            result.status = SolveStatus::TIME_LIMIT;
-            result.message = "pgs: time limit reached while forming S = J A^-1 J'";
-            result.setup_s = setup.seconds();
-            return result;
-        }
+        if (loop.time_up())
+            return loop.finish(result, SolveStatus::TIME_LIMIT, "",
+                               loop.time_limit_message() + " while forming S = J A^-1 J'");
     }
     S = 0.5 * (S + S.transpose()).eval();  // exact symmetry (the solves leave O(eps) asymmetry)
     const Vec S_diag = S.diagonal();
     result.info["y_stored"] = keep_y;
-    result.setup_s = setup.seconds();
-
-    Stopwatch solve_watch;
-    solve_watch.start();
+    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT, "", loop.time_limit_message());
     const AccuracyScale scale = accuracy_scale(qp);
     counters.a_products += scale.a_products;
 
@@ -178,13 +173,12 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
         primal_point(true);
         result.x = x;
         result.lambda = lambda;
-        result.status = status;
-        result.criterion = criterion;
-        result.message = message;
         result.native_residual = native;
-        result.iterations = counters.iterations;
-        result.solve_s = solve_watch.seconds();
-        return result;
+        return loop.finish(result, status, criterion, message);
+    };
+    // x(lambda) for the monitor only: formed inside the monitor's pause (loop.notify's prepare).
+    auto monitor = [&](long iteration, StepKind step) {
+        return loop.notify({iteration, step, &x, &lambda, native, -1, &counters, 0.0}, [&] { primal_point(false); });
     };
     // Returns the criterion met, or "" (a kkt candidate is confirmed at the exact primal point).
     auto converged = [&]() -> std::string {
@@ -198,8 +192,7 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
         return "";
     };
 
-    if (context.monitor) primal_point(false);
-    if (!notify_monitor(context, solve_watch, {0, StepKind::START, &x, &lambda, native, -1, &counters, 0.0}))
+    if (!monitor(0, StepKind::START))
         return finish(SolveStatus::STOPPED_BY_MONITOR, "", "pgs: stopped by the monitor");
     {
         const std::string c = converged();
@@ -207,10 +200,12 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
     }
 
     for (;;) {
-        if (counters.iterations >= s.common.max_iterations)
-            return finish(SolveStatus::MAX_ITERATIONS, "",
+        // Non-finite and converged were tested after the previous sweep (below): the limits.
+        const SolveStatus limit = loop.limit_status(counters.iterations);
+        if (limit == SolveStatus::MAX_ITERATIONS)
+            return finish(limit, "",
                           "pgs: max_iterations reached (" + std::to_string(s.common.max_iterations) + " sweeps)");
-        if (time_up(watch, limit)) return finish(SolveStatus::TIME_LIMIT, "", "pgs: time limit reached");
+        if (limit == SolveStatus::TIME_LIMIT) return finish(limit, "", loop.time_limit_message());
 
         // One ascending sweep; w = S lambda - q is kept current by rank-one updates.
         long updates = 0;  // columns of S added to w (2m flops each; docs/work.md)
@@ -234,9 +229,7 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
         }
         native = natural_residual();
 
-        if (context.monitor) primal_point(false);
-        if (!notify_monitor(context, solve_watch,
-                            {counters.iterations, StepKind::PGS_SWEEP, &x, &lambda, native, -1, &counters, 0.0}))
+        if (!monitor(counters.iterations, StepKind::PGS_SWEEP))
             return finish(SolveStatus::STOPPED_BY_MONITOR, "", "pgs: stopped by the monitor");
         if (!lambda.allFinite() || !std::isfinite(native))
             return finish(SolveStatus::DIVERGED, "", "pgs: non-finite multipliers");
@@ -257,8 +250,7 @@ SolverEntry pgs_entry()
         return std::make_unique<PgsSolver>(PgsSettings::from_json(settings));
     };
     e.description = "projected Gauss-Seidel on the exact dual S = J A^-1 J' (CHOLMOD; small m only)";
-    e.settings = {{"max_rows", "2000", "refuse (not_applicable) problems with more rows of J (S is dense m x m)"},
-                  {"block", "64", "right-hand sides per CHOLMOD solve when forming S"}};
+    e.settings = pgs_settings_table().docs();
     return e;
 }
 

@@ -3,6 +3,7 @@
 #include <climits>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <sstream>
 
 namespace cb {
@@ -135,6 +136,28 @@ std::vector<SettingDoc> common_setting_docs()
             {"max_iterations", "10000", "cap on outer iterations (at most 10^12; bound long runs with time_limit_s)"},
             {"time_limit_s", "0", "wall-time limit of the solve in seconds; 0 = none"},
             {"seed", "0", "seed of every random choice"}};
+}
+
+std::string setting_default_text(double value)
+{
+    char buffer[40];
+    std::snprintf(buffer, sizeof(buffer), "%g", value);
+    if (value != 0.0 && std::abs(value) < 1e-2) {  // 1e-3, not 0.001: the shortest exact e-form
+        for (int digits = 0; digits <= 16; ++digits) {
+            std::snprintf(buffer, sizeof(buffer), "%.*e", digits, value);
+            if (std::strtod(buffer, nullptr) == value) break;
+        }
+    }
+    std::string text = buffer;  // "1e-06" -> "1e-6", "1e+06" -> "1e6"
+    const auto e = text.find('e');
+    if (e != std::string::npos) {
+        std::string mantissa = text.substr(0, e), exponent = text.substr(e + 1);
+        const bool negative = !exponent.empty() && exponent[0] == '-';
+        if (!exponent.empty() && (exponent[0] == '-' || exponent[0] == '+')) exponent.erase(0, 1);
+        while (exponent.size() > 1 && exponent[0] == '0') exponent.erase(0, 1);
+        text = mantissa + "e" + (negative ? "-" : "") + exponent;
+    }
+    return text;
 }
 
 nlohmann::json parse_set_arguments(const std::vector<std::string>& assignments)

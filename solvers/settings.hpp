@@ -4,6 +4,7 @@
 #include "solvers/types.hpp"
 
 #include <nlohmann/json.hpp>
+#include <climits>
 #include <functional>
 #include <set>
 #include <string>
@@ -67,6 +68,100 @@ private:
 
 /// Common settings' help lines (each solver appends its own).
 std::vector<SettingDoc> common_setting_docs();
+
+/// A default value as `--help` prints it ("1e-6", "10000", "jacobi", "true").
+std::string setting_default_text(double value);
+inline std::string setting_default_text(long value) { return std::to_string(value); }
+inline std::string setting_default_text(bool value) { return value ? "true" : "false"; }
+inline std::string setting_default_text(const std::string& value) { return value; }
+
+/// A solver's own settings, each declared once: key, field, bounds or choices, doc. The default
+/// is the field's initial value in the settings struct S. The reader (read), the record (write)
+/// and `--help` (docs) all come from the table, so they cannot drift apart.
+///
+///   static const SettingsTable<MySettings> table = SettingsTable<MySettings>()
+///       .number("gamma", &MySettings::gamma, 0.0, 1e300, "proportioning constant")
+///       .choice("precond", &MySettings::precond, {"none", "jacobi"}, "none | jacobi: ...");
+///
+/// Rows are read in order, so a row's default may depend on rows above it (`default_of`).
+template <class S>
+class SettingsTable {
+public:
+    SettingsTable& number(const std::string& key, double S::*field, double min_exclusive, double max_inclusive,
+                          const std::string& doc, std::function<double(const S&)> default_of = nullptr)
+    {
+        Row row{{key, setting_default_text(S{}.*field), doc}, {}, nullptr, nullptr};
+        row.read = [=](SettingsReader& reader, S& s) {
+            s.*field = reader.number(key, default_of ? default_of(s) : s.*field, min_exclusive, max_inclusive);
+        };
+        row.write = [=](const S& s, nlohmann::json& j) { j[key] = s.*field; };
+        m_rows.push_back(std::move(row));
+        return *this;
+    }
+    SettingsTable& integer(const std::string& key, long S::*field, long min_inclusive, long max_inclusive,
+                           const std::string& doc)
+    {
+        Row row{{key, setting_default_text(S{}.*field), doc}, {}, nullptr, nullptr};
+        row.read = [=](SettingsReader& reader, S& s) {
+            s.*field = reader.integer(key, s.*field, min_inclusive, max_inclusive);
+        };
+        row.write = [=](const S& s, nlohmann::json& j) { j[key] = s.*field; };
+        m_rows.push_back(std::move(row));
+        return *this;
+    }
+    SettingsTable& boolean(const std::string& key, bool S::*field, const std::string& doc)
+    {
+        Row row{{key, setting_default_text(S{}.*field), doc}, {}, nullptr, nullptr};
+        row.read = [=](SettingsReader& reader, S& s) { s.*field = reader.boolean(key, s.*field); };
+        row.write = [=](const S& s, nlohmann::json& j) { j[key] = s.*field; };
+        m_rows.push_back(std::move(row));
+        return *this;
+    }
+    /// A string that must be one of `choices` (the reader's error lists them).
+    SettingsTable& choice(const std::string& key, std::string S::*field, const std::vector<std::string>& choices,
+                          const std::string& doc)
+    {
+        Row row{{key, setting_default_text(S{}.*field), doc}, choices, nullptr, nullptr};
+        row.read = [=](SettingsReader& reader, S& s) { s.*field = reader.choice(key, s.*field, choices); };
+        row.write = [=](const S& s, nlohmann::json& j) { j[key] = s.*field; };
+        m_rows.push_back(std::move(row));
+        return *this;
+    }
+
+    /// Reads every row (after reader.common(); the caller calls reader.finish()).
+    void read(SettingsReader& reader, S& s) const
+    {
+        for (const Row& row : m_rows) row.read(reader, s);
+    }
+    /// Writes every row's effective value into `j` (beside common.to_json()).
+    void write(const S& s, nlohmann::json& j) const
+    {
+        for (const Row& row : m_rows) row.write(s, j);
+    }
+    /// The `--help` lines, defaults from S{}.
+    std::vector<SettingDoc> docs() const
+    {
+        std::vector<SettingDoc> out;
+        for (const Row& row : m_rows) out.push_back(row.doc);
+        return out;
+    }
+    /// The allowed values of a choice row (empty for other rows or unknown keys).
+    std::vector<std::string> choices(const std::string& key) const
+    {
+        for (const Row& row : m_rows)
+            if (row.doc.key == key) return row.choices;
+        return {};
+    }
+
+private:
+    struct Row {
+        SettingDoc doc;
+        std::vector<std::string> choices;
+        std::function<void(SettingsReader&, S&)> read;
+        std::function<void(const S&, nlohmann::json&)> write;
+    };
+    std::vector<Row> m_rows;
+};
 
 /// Converts "key=value" strings (command line --set) to JSON: numbers, true/false, else string.
 nlohmann::json parse_set_arguments(const std::vector<std::string>& assignments);

@@ -62,10 +62,11 @@ struct IterationInfo {
     double native_residual = 0.0;  ///< the solver's own residual (MPRGP ||phi+beta||, ICA ||Ax-b-J'l||)
     long active_set_size = -1;     ///< -1 when the solver has no notion of it
     const Counters* counters = nullptr;
-    double elapsed_s = 0.0;  ///< solver time so far (monitor time excluded)
+    double elapsed_s = 0.0;  ///< solver time since the start of its setup (monitor time excluded)
+    double setup_s = 0.0;    ///< the setup's share of elapsed_s (elapsed_s - setup_s: the iterations)
 };
 
-/// Called at every outer iteration; its time is excluded from the solver's time.
+/// Called at every outer iteration; its time is excluded from the solver's time (SolveLoop::notify).
 class Monitor {
 public:
     virtual ~Monitor() = default;
@@ -87,8 +88,8 @@ struct SolverResult {
     std::string message;    ///< human-readable detail (why it stopped, what was dropped)
     long iterations = 0;
     Counters counters;
-    double setup_s = 0.0;                            ///< factorisations, power method ...
-    double solve_s = 0.0;                            ///< the iterations
+    double setup_s = 0.0;  ///< start of solve() to the end of setup (factorisations, power method ...)
+    double solve_s = 0.0;  ///< the iterations (setup_s + solve_s: the solver's time, monitor excluded)
     double native_residual = 0.0;                    ///< at the returned x
     bool lambda_fitted = false;                      ///< true when lambda came from fit_multipliers, not the solver
     nlohmann::json info = nlohmann::json::object();  ///< solver-specific facts (power method, rows dropped ...)
@@ -106,7 +107,8 @@ public:
     virtual SolverResult solve(const QpView& qp, const SolveContext& context) = 0;
 };
 
-/// Helper for solvers: calls the monitor with the stopwatch paused.
+/// Calls the monitor with `watch` paused (elapsed_s = watch.seconds()). Solvers use
+/// SolveLoop::notify (solvers/solve_loop.hpp), which stamps the time from the start of setup.
 /// @return false when the monitor asked to stop.
 bool notify_monitor(const SolveContext& context, Stopwatch& watch, IterationInfo info);
 

@@ -4,6 +4,7 @@
 #include "solvers/a_product.hpp"
 
 #include "solvers/accuracy.hpp"
+#include "solvers/solve_loop.hpp"
 
 #include <cmath>
 #include <limits>
@@ -11,27 +12,36 @@
 
 namespace cb {
 
+namespace {
+
+/// Every setting of `template`, declared once (settings.hpp SettingsTable).
+const SettingsTable<TemplateSettings>& template_settings_table()
+{
+    static const SettingsTable<TemplateSettings> table = SettingsTable<TemplateSettings>().number(
+        "step_scale", &TemplateSettings::step_scale, 0.0, 1.999, "step t = step_scale / |A|_inf, in (0, 2)");
+    return table;
+}
+
+}  // namespace
+
 TemplateSettings TemplateSettings::from_json(const nlohmann::json& settings)
 {
     SettingsReader reader(settings, "template");
     TemplateSettings s;
-    s.common = reader.common();  // the block every solver accepts
-    s.step_scale = reader.number("step_scale", s.step_scale, 0.0, 1.999);
-    reader.finish();  // rejects unknown keys, naming them
+    s.common = reader.common();
+    template_settings_table().read(reader, s);
+    reader.finish();
     return s;
 }
 
 nlohmann::json TemplateSettings::to_json() const
 {
     nlohmann::json j = common.to_json();
-    j["step_scale"] = step_scale;
+    template_settings_table().write(*this, j);
     return j;
 }
 
-std::vector<SettingDoc> template_setting_docs()
-{
-    return {{"step_scale", "1", "step t = step_scale / |A|_inf, in (0, 2)"}};
-}
+std::vector<SettingDoc> template_setting_docs() { return template_settings_table().docs(); }
 
 namespace {
 
@@ -102,20 +112,16 @@ SolverResult TemplateSolver::solve(const QpView& qp, const SolveContext& context
     SolverResult result;
     Counters& counters = result.counters;
     const CommonSettings& common = m_settings.common;
-    Stopwatch watch;  // the harness pauses it during monitor calls (notify_monitor)
-    watch.start();
+    // The solve-loop protocol (solvers/solve_loop.hpp): the clock starts here, with setup.
+    SolveLoop loop("template", qp, common, context);
 
-    // --- setup: bounds and step length (timed apart, as setup_s) ---
+    // --- setup: bounds and step length (setup_s = the time until end_setup) ---
     Bounds bounds;
     std::string why;
     if (!bounds_from_rows(qp, bounds, why)) {
-        result.status = why.find("feasible") != std::string::npos || why.find("above") != std::string::npos
-                            ? SolveStatus::INFEASIBLE
-                            : SolveStatus::INVALID_INPUT;
-        result.message = "template: " + why;
-        result.x = qp.x0;
-        result.lambda = Vec::Zero(qp.m());
-        return result;
+        const bool infeasible = why.find("feasible") != std::string::npos || why.find("above") != std::string::npos;
+        return loop.finish(result, infeasible ? SolveStatus::INFEASIBLE : SolveStatus::INVALID_INPUT, "",
+                           "template: " + why);
     }
     double norm_inf = 0.0;  // max row sum of |A|, an upper bound of |A|_2
     for (Eigen::Index k = 0; k < qp.A.outerSize(); ++k) {
@@ -126,9 +132,8 @@ SolverResult TemplateSolver::solve(const QpView& qp, const SolveContext& context
     const double step = norm_inf > 0 ? m_settings.step_scale / norm_inf : 1.0;
     const AccuracyScale scale = accuracy_scale(qp);
     counters.a_products += scale.a_products;
-    result.setup_s = watch.seconds();
-    watch.reset();
-    watch.start();
+    // time_limit_s counts setup: a limit reached here ends the solve before any iteration.
+    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT, "", loop.time_limit_message());
 
     // --- solve ---
     Vec x = qp.x0.cwiseMax(bounds.lo).cwiseMin(bounds.hi);
@@ -139,7 +144,7 @@ SolverResult TemplateSolver::solve(const QpView& qp, const SolveContext& context
     auto native = [&]() {  // |x - P(x - g)|_inf: zero exactly at a solution
         return (x - (x - g).cwiseMax(bounds.lo).cwiseMin(bounds.hi)).lpNorm<Eigen::Infinity>();
     };
-    auto monitor = [&](StepKind kind) {
+    auto monitor = [&](StepKind kind) {  // the clock is paused inside loop.notify
         IterationInfo info;
         info.iteration = counters.iterations;
         info.step = kind;
@@ -147,51 +152,41 @@ SolverResult TemplateSolver::solve(const QpView& qp, const SolveContext& context
         info.lambda = &lambda;
         info.native_residual = native();
         info.counters = &counters;
-        return notify_monitor(context, watch, info);
+        return loop.notify(info);
     };
-    if (!monitor(StepKind::START)) result.status = SolveStatus::STOPPED_BY_MONITOR;
-    while (result.status == SolveStatus::NOT_RUN) {
-        // Exit order: non-finite, converged, iteration cap, time limit.
-        if (!x.allFinite() || !g.allFinite()) {
-            result.status = SolveStatus::DIVERGED;
-            result.message = "template: non-finite iterate";
-            break;
-        }
-        const bool met = common.stop == StopRule::NATIVE ? native() <= common.tol
-                                                         : accuracy_converged(qp, scale, x, g, lambda, common.tol);
-        if (met) {
-            result.status = SolveStatus::CONVERGED;
-            result.criterion = common.stop == StopRule::NATIVE ? "native" : "kkt";
-            break;
-        }
-        if (counters.iterations >= common.max_iterations) {
-            result.status = SolveStatus::MAX_ITERATIONS;
-            break;
-        }
-        if (common.time_limit_s > 0 && watch.seconds() >= common.time_limit_s) {
-            result.status = SolveStatus::TIME_LIMIT;
-            break;
-        }
+    SolveStatus status = monitor(StepKind::START) ? SolveStatus::NOT_RUN : SolveStatus::STOPPED_BY_MONITOR;
+    while (status == SolveStatus::NOT_RUN) {
+        // The exit checks in the protocol's order: non-finite, converged, iteration cap, time.
+        status = loop.exit_status(
+            x.allFinite() && g.allFinite(),
+            [&] {
+                return common.stop == StopRule::NATIVE ? native() <= common.tol
+                                                       : accuracy_converged(qp, scale, x, g, lambda, common.tol);
+            },
+            counters.iterations);
+        if (status != SolveStatus::NOT_RUN) break;
         x = (x - step * g).cwiseMax(bounds.lo).cwiseMin(bounds.hi);
         ++counters.projections;
         g.noalias() = a_product(qp.A, x) - qp.b;
         ++counters.a_products;
         lambda = bound_multipliers(qp, bounds, x, g);
         ++counters.iterations;
-        if (!monitor(StepKind::OUTER)) result.status = SolveStatus::STOPPED_BY_MONITOR;
+        if (!monitor(StepKind::OUTER)) status = SolveStatus::STOPPED_BY_MONITOR;
     }
     result.x = x;
     result.lambda = lambda;
-    result.iterations = counters.iterations;
     result.native_residual = native();
-    result.solve_s = watch.seconds();
-    if (result.message.empty()) {
-        std::ostringstream msg;
-        msg << "template: " << to_string(result.status) << " after " << counters.iterations
+    std::ostringstream msg;
+    if (status == SolveStatus::DIVERGED)
+        msg << "template: non-finite iterate";
+    else if (status == SolveStatus::TIME_LIMIT)
+        msg << loop.time_limit_message();
+    else
+        msg << "template: " << to_string(status) << " after " << counters.iterations
             << " projected-gradient steps of length " << step;
-        result.message = msg.str();
-    }
-    return result;
+    const std::string criterion =
+        status != SolveStatus::CONVERGED ? "" : (common.stop == StopRule::NATIVE ? "native" : "kkt");
+    return loop.finish(result, status, criterion, msg.str());
 }
 
 SolverEntry template_entry()

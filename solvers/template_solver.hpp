@@ -1,7 +1,9 @@
 #pragma once
 /// `template`: a model solver to copy when adding one (README "Adding a solver"). It is small on
-/// purpose — projected gradient descent for bound rows — but complete: strict settings, the
-/// common stop rules, a paused-stopwatch monitor, counters, an honest status and multipliers.
+/// purpose — projected gradient descent for bound rows — but complete: strict settings declared
+/// once in a SettingsTable, the common stop rules, the solve-loop protocol (solvers/solve_loop.hpp:
+/// one clock from the start of setup, the time limit on setup + solve, the exit checks in one
+/// order, the monitor on a paused clock, one finisher), counters, an honest status and multipliers.
 /// It is compiled and tested (tests/solvers/test_template_solver.cpp) but not registered in
 /// builtin_solvers.cpp, so that suites, the stress table and `contactbench solvers` list only
 /// real contenders; the test registers it in a registry of its own, exactly as step 2 of the
@@ -20,7 +22,8 @@
 
 namespace cb {
 
-/// Every setting with its default; `from_json` checks them, `to_json` records the effective values.
+/// Every setting with its default (the table in template_solver.cpp adds key, bounds and doc);
+/// `from_json` checks them, `to_json` records the effective values.
 struct TemplateSettings {
     CommonSettings common;    ///< tol, stop, max_iterations, time_limit_s, seed
     double step_scale = 1.0;  ///< step t = step_scale / |A|_inf, in (0, 2)

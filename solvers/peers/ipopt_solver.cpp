@@ -1,5 +1,6 @@
 // Ipopt as an external peer (see ipopt_solver.hpp for the mapping of settings onto Ipopt's options).
 #include "solvers/peers/ipopt_solver.hpp"
+#include "solvers/solve_loop.hpp"
 
 #include <IpIpoptApplication.hpp>
 #include <IpIpoptCalculatedQuantities.hpp>
@@ -44,9 +45,9 @@ using Ipopt::Number;
 /// <= 0 and ours are lambda = -y.
 class QpTnlp : public Ipopt::TNLP {
 public:
-    QpTnlp(const QpView& qp, const SolveContext& context, const IpoptSettings& settings, Stopwatch& watch,
+    QpTnlp(const QpView& qp, const SolveContext& context, const IpoptSettings& settings, SolveLoop& loop,
            SolverResult& result)
-        : m_qp(qp), m_context(context), m_settings(settings), m_watch(watch), m_result(result),
+        : m_qp(qp), m_context(context), m_settings(settings), m_loop(loop), m_result(result),
           m_scale(accuracy_scale(qp)), m_x(qp.x0), m_lambda(Vec::Zero(qp.m())),
           m_base_iterations(result.counters.iterations)
     {
@@ -144,7 +145,7 @@ public:
                             accuracy_converged(m_qp, m_scale, m_x, g, m_lambda, m_settings.common.tol);
         m_native = inf_du;
         const StepKind step = iter == 0 ? StepKind::START : StepKind::OUTER;
-        if (!notify_monitor(m_context, m_watch, {iter, step, &m_x, &m_lambda, inf_du, -1, &m_result.counters, 0.0})) {
+        if (!m_loop.notify({iter, step, &m_x, &m_lambda, inf_du, -1, &m_result.counters, 0.0})) {
             m_stopped_by_monitor = true;
             return false;
         }
@@ -152,8 +153,7 @@ public:
             m_stopped_at_kkt = true;
             return false;
         }
-        const double limit = m_settings.common.time_limit_s;
-        if (limit > 0.0 && m_watch.seconds() >= limit) {
+        if (m_loop.time_up()) {  // setup + solve, as every solver
             m_time_up = true;
             return false;
         }
@@ -187,7 +187,7 @@ private:
     const QpView& m_qp;
     const SolveContext& m_context;
     const IpoptSettings& m_settings;
-    Stopwatch& m_watch;
+    SolveLoop& m_loop;
     SolverResult& m_result;
     AccuracyScale m_scale;
     Vec m_x, m_lambda;
@@ -263,8 +263,7 @@ SolverResult IpoptSolver::solve(const QpView& qp, const SolveContext& context)
                                     {"print_level", s.print_level}};
     result.info["history"] = "from Ipopt's intermediate callback (one entry per Ipopt iteration)";
 
-    Stopwatch setup;
-    setup.start();
+    SolveLoop loop("ipopt", qp, s.common, context);
     Ipopt::SmartPtr<Ipopt::IpoptApplication> app = IpoptApplicationFactory();
     app->Options()->SetNumericValue("tol", ipopt_tol);
     app->Options()->SetIntegerValue("max_iter", static_cast<Index>(std::min<long>(s.common.max_iterations, 1L << 30)));
@@ -276,15 +275,11 @@ SolverResult IpoptSolver::solve(const QpView& qp, const SolveContext& context)
     app->Options()->SetIntegerValue("print_level", static_cast<Index>(s.print_level));
     app->Options()->SetStringValue("sb", "yes");  // no banner
     if (app->Initialize() != Ipopt::Solve_Succeeded) {
-        result.status = SolveStatus::INVALID_INPUT;
-        result.message = "ipopt: Ipopt rejected its options";
-        return result;
+        return loop.finish(result, SolveStatus::INVALID_INPUT, "", "ipopt: Ipopt rejected its options");
     }
-    result.setup_s = setup.seconds();
+    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT, "", loop.time_limit_message());
 
-    Stopwatch watch;
-    watch.start();
-    Ipopt::SmartPtr<QpTnlp> tnlp = new QpTnlp(qp, context, s, watch, result);
+    Ipopt::SmartPtr<QpTnlp> tnlp = new QpTnlp(qp, context, s, loop, result);
     Ipopt::ApplicationReturnStatus rc = app->OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(Ipopt::GetRawPtr(tnlp)));
     // Ipopt's tolerance is on its own scaled error: it can declare success at a point the common
     // KKT test rejects. Then ask it for more (Ipopt tol / 1e3, down to 1e-14), at most twice.
@@ -301,12 +296,11 @@ SolverResult IpoptSolver::solve(const QpView& qp, const SolveContext& context)
         ++retries;
         tol_used = std::max(1e-14, tol_used * 1e-3);
         app->Options()->SetNumericValue("tol", tol_used);
-        tnlp = new QpTnlp(qp, context, s, watch, result);
+        tnlp = new QpTnlp(qp, context, s, loop, result);
         rc = app->OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(Ipopt::GetRawPtr(tnlp)));
     }
     result.info["ipopt_retries"] = retries;
     result.info["ipopt_tol_last"] = tol_used;
-    result.solve_s = watch.seconds();
 
     result.x = tnlp->x();
     result.lambda = tnlp->lambda();
@@ -348,8 +342,7 @@ SolverResult IpoptSolver::solve(const QpView& qp, const SolveContext& context)
         result.status = SolveStatus::STALLED;  // Ipopt finished, the common KKT test does not hold
         msg << " but the relative KKT error at its point is above tol";
     }
-    result.message = msg.str();
-    return result;
+    return loop.finish(result, result.status, result.criterion, msg.str());
 }
 
 SolverEntry ipopt_entry()

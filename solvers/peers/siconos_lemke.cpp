@@ -1,5 +1,6 @@
 // Siconos numerics' Lemke on the dual LCP, in a child process (see siconos_lemke.hpp).
 #include "solvers/peers/siconos_lemke.hpp"
+#include "solvers/solve_loop.hpp"
 #include "solvers/peers/child_process.hpp"
 #include "solvers/peers/siconos_report.hpp"
 
@@ -84,10 +85,7 @@ SolverResult SiconosLemkeSolver::solve(const QpView& qp, const SolveContext& con
                          " (W = J A^-1 J' is dense m x m); raise max_rows to allow it";
         return result;
     }
-    Stopwatch watch;
-    watch.start();
-    Stopwatch setup;
-    setup.start();
+    SolveLoop loop("siconos-lemke", qp, s.common, context);
     Eigen::CholmodSupernodalLLT<SpMatCol, Eigen::Lower> llt;
     {
         const SpMatCol A_col = qp.A;
@@ -95,11 +93,9 @@ SolverResult SiconosLemkeSolver::solve(const QpView& qp, const SolveContext& con
     }
     ++counters.cholmod_analyses;
     ++counters.cholmod_factorizations;
-    if (llt.info() != Eigen::Success) {
-        result.status = SolveStatus::INVALID_INPUT;
-        result.message = "siconos-lemke: CHOLMOD could not factor A (not positive definite to working precision)";
-        return result;
-    }
+    if (llt.info() != Eigen::Success)
+        return loop.finish(result, SolveStatus::INVALID_INPUT, "",
+                           "siconos-lemke: CHOLMOD could not factor A (not positive definite to working precision)");
     const Vec x_u = llt.solve(qp.b);
     ++counters.cholmod_solves;
     Vec q = qp.J * x_u - qp.c;
@@ -112,45 +108,34 @@ SolverResult SiconosLemkeSolver::solve(const QpView& qp, const SolveContext& con
         counters.cholmod_solves += k;
     }
     W = 0.5 * (W + W.transpose()).eval();
-    result.setup_s = setup.seconds();
-
-    Stopwatch solve_watch;
-    solve_watch.start();
+    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT, "", loop.time_limit_message());
     if (m == 0) {  // Siconos asserts on an empty LCP (it aborts the process: seen in the child)
         result.x = x_u;
         const Vec g = qp.A * result.x - qp.b;
         ++counters.a_products;
         const bool ok = accuracy_converged(qp, accuracy_scale(qp), result.x, g, result.lambda, s.common.tol);
-        result.status = ok ? SolveStatus::CONVERGED : SolveStatus::STALLED;
-        result.criterion = ok ? "kkt" : "";
-        result.message = "siconos-lemke: no constraints: x = A^-1 b (Siconos not called)";
-        result.solve_s = solve_watch.seconds();
-        return result;
+        return loop.finish(result, ok ? SolveStatus::CONVERGED : SolveStatus::STALLED, ok ? "kkt" : "",
+                           "siconos-lemke: no constraints: x = A^-1 b (Siconos not called)");
     }
     const size_t expected = static_cast<size_t>(m) * sizeof(double) + sizeof(SiconosReport);
     const ChildOutcome child = run_in_child([&]() { return run_lemke(W, q, s.common.max_iterations, s.common.tol); },
-                                            watch, s.common.time_limit_s);
+                                            loop.stopwatch(), s.common.time_limit_s);
     const std::vector<char>& bytes = child.bytes;
-    result.solve_s = solve_watch.seconds();
-    result.iterations = 0;
 
     auto primal = [&]() {
         result.x = llt.solve(Vec(qp.b + qp.J.transpose() * result.lambda));
         ++counters.cholmod_solves;
     };
     if (child.timed_out) {
-        result.status = SolveStatus::TIME_LIMIT;
-        result.message = "siconos-lemke: time limit reached; the child process was killed";
-        return result;
+        return loop.finish(result, SolveStatus::TIME_LIMIT, "",
+                           loop.time_limit_message() + "; the child process was killed");
     }
     if (child.failed || bytes.size() != expected) {
-        result.status = SolveStatus::DIVERGED;
         result.info["crashed"] = true;
         std::ostringstream msg;
         msg << "siconos-lemke: the Siconos child process " << (child.failed ? child.failure : "sent") << " ("
             << bytes.size() << " of " << expected << " bytes received)";
-        result.message = msg.str();
-        return result;
+        return loop.finish(result, SolveStatus::DIVERGED, "", msg.str());
     }
     result.info["crashed"] = false;
     std::memcpy(result.lambda.data(), bytes.data(), static_cast<size_t>(m) * sizeof(double));
@@ -160,8 +145,10 @@ SolverResult SiconosLemkeSolver::solve(const QpView& qp, const SolveContext& con
     counters.pivots = report.iterations;
     counters.lcp_iterations = report.iterations;
     primal();  // x from lambda, before the final measure
+    result.setup_s = loop.setup_s();  // the final monitor call's stamp
+    result.solve_s = loop.solve_s();
     finish_siconos_result(qp, s.common, context, report, "siconos-lemke: Siconos Lemke", "pivots", counters, result);
-    return result;
+    return loop.finish(result, result.status, result.criterion);
 }
 
 SolverEntry siconos_lemke_entry()

@@ -1,5 +1,6 @@
 // Siconos numerics' global nonsmooth Newton (mu = 0) in a child process (see siconos_nsn.hpp).
 #include "solvers/peers/siconos_nsn.hpp"
+#include "solvers/solve_loop.hpp"
 #include "solvers/peers/child_process.hpp"
 #include "solvers/peers/siconos_report.hpp"
 
@@ -93,25 +94,21 @@ SolverResult SiconosNsnSolver::solve(const QpView& qp, const SolveContext& conte
     result.info["history"] = "final point only (Siconos's global Newton has no iteration callback)";
     result.info["child_process"] = true;
     result.info["native_residual_definition"] = "Siconos's global friction-contact error (SICONOS_DPARAM_RESIDU)";
-    Stopwatch watch;
-    watch.start();
+    SolveLoop loop("siconos-nsn", qp, s.common, context);  // no setup: the child does all the work
+    loop.end_setup();
     const size_t expected = static_cast<size_t>(n + 3 * m) * sizeof(double) + sizeof(SiconosReport);
-    const ChildOutcome child = run_in_child([&]() { return run_nsn(qp, s.common.max_iterations, s.common.tol); }, watch,
+    const ChildOutcome child = run_in_child([&]() { return run_nsn(qp, s.common.max_iterations, s.common.tol); },
+                                            loop.stopwatch(),
                                             s.common.time_limit_s);
-    result.solve_s = watch.seconds();
-    if (child.timed_out) {
-        result.status = SolveStatus::TIME_LIMIT;
-        result.message = "siconos-nsn: time limit reached; the child process was killed";
-        return result;
-    }
+    if (child.timed_out)
+        return loop.finish(result, SolveStatus::TIME_LIMIT, "",
+                           loop.time_limit_message() + "; the child process was killed");
     if (child.failed || child.bytes.size() != expected) {
-        result.status = SolveStatus::DIVERGED;
         result.info["crashed"] = true;
         std::ostringstream msg;
         msg << "siconos-nsn: the Siconos child process " << (child.failed ? child.failure : "sent") << " ("
             << child.bytes.size() << " of " << expected << " bytes received)";
-        result.message = msg.str();
-        return result;
+        return loop.finish(result, SolveStatus::DIVERGED, "", msg.str());
     }
     result.info["crashed"] = false;
     const char* p = child.bytes.data();
@@ -122,9 +119,11 @@ SolverResult SiconosNsnSolver::solve(const QpView& qp, const SolveContext& conte
     SiconosReport report;
     std::memcpy(&report, p + (n + 3 * m) * sizeof(double), sizeof report);
     counters.iterations = report.iterations;
+    result.setup_s = loop.setup_s();  // the final monitor call's stamp
+    result.solve_s = loop.solve_s();
     finish_siconos_result(qp, s.common, context, report, "siconos-nsn: Siconos NSN_AC", "Newton iterations", counters,
                           result);
-    return result;
+    return loop.finish(result, result.status, result.criterion);
 }
 
 SolverEntry siconos_nsn_entry()

@@ -1,0 +1,207 @@
+// The solve-loop protocol (solvers/solve_loop.hpp): exit order, `>=` on both limits, setup
+// counted in the time limit, the monitor on a paused clock, the finisher.
+#include "solvers/solve_loop.hpp"
+
+#include <gtest/gtest.h>
+
+#include <functional>
+
+namespace cb {
+namespace {
+
+struct Fixture {
+    SpMat A, J;
+    Vec b, c, x0;
+    Fixture() : A(2, 2), J(1, 2), b(Vec::Ones(2)), c(Vec::Zero(1)), x0(Vec::Constant(2, 3.0))
+    {
+        A.insert(0, 0) = 1.0;
+        A.insert(1, 1) = 1.0;
+        J.insert(0, 0) = 1.0;
+    }
+    QpView view() const { return QpView{A, b, J, c, x0}; }
+};
+
+CommonSettings limits(long max_iterations, double time_limit_s)
+{
+    CommonSettings s;
+    s.max_iterations = max_iterations;
+    s.time_limit_s = time_limit_s;
+    return s;
+}
+
+/// Busy-waits until the loop's clock (from the start of setup) has passed `seconds`.
+void spend(const SolveLoop& loop, double seconds)
+{
+    volatile double sink = 0.0;
+    while (loop.elapsed_s() <= seconds) sink = sink + 1.0;
+}
+
+/// Records what the clock said during its call, and spends time there.
+class ClockMonitor : public Monitor {
+public:
+    std::function<void(const IterationInfo&)> body;
+    bool answer = true;
+    bool on_iteration(const IterationInfo& info) override
+    {
+        if (body) body(info);
+        return answer;
+    }
+};
+
+TEST(SolveLoop, ExitChecksInOneOrder)
+{
+    const Fixture f;
+    const SolveContext context;
+    SolveLoop loop("t", f.view(), limits(5, 1e-9), context);
+    spend(loop, 1e-8);  // the time limit is reached as well
+    ASSERT_TRUE(loop.time_up());
+    // non-finite first, even when every other exit holds
+    EXPECT_EQ(loop.exit_status(false, true, 5), SolveStatus::DIVERGED);
+    // then converged, before the cap and the time
+    EXPECT_EQ(loop.exit_status(true, true, 5), SolveStatus::CONVERGED);
+    // then the iteration cap, before the time
+    EXPECT_EQ(loop.exit_status(true, false, 5), SolveStatus::MAX_ITERATIONS);
+    // then the time
+    EXPECT_EQ(loop.exit_status(true, false, 4), SolveStatus::TIME_LIMIT);
+    EXPECT_EQ(loop.limit_status(4), SolveStatus::TIME_LIMIT);
+}
+
+TEST(SolveLoop, ConvergenceTestIsNotEvaluatedOnANonFiniteIterate)
+{
+    const Fixture f;
+    const SolveContext context;
+    SolveLoop loop("t", f.view(), limits(10, 0.0), context);
+    int calls = 0;
+    auto converged = [&] {
+        ++calls;
+        return false;
+    };
+    EXPECT_EQ(loop.exit_status(false, converged, 0), SolveStatus::DIVERGED);
+    EXPECT_EQ(calls, 0);
+    EXPECT_EQ(loop.exit_status(true, converged, 0), SolveStatus::NOT_RUN);
+    EXPECT_EQ(calls, 1);
+}
+
+TEST(SolveLoop, IterationCapIsGreaterOrEqual)
+{
+    const Fixture f;
+    const SolveContext context;
+    const SolveLoop loop("t", f.view(), limits(3, 0.0), context);
+    EXPECT_EQ(loop.limit_status(2), SolveStatus::NOT_RUN);
+    EXPECT_EQ(loop.limit_status(3), SolveStatus::MAX_ITERATIONS);
+    EXPECT_EQ(loop.limit_status(4), SolveStatus::MAX_ITERATIONS);
+    const SolveLoop none("t", f.view(), limits(0, 0.0), context);  // max_iterations = 0: no iteration
+    EXPECT_EQ(none.limit_status(0), SolveStatus::MAX_ITERATIONS);
+}
+
+TEST(SolveLoop, NoTimeLimitWhenZero)
+{
+    const Fixture f;
+    const SolveContext context;
+    SolveLoop loop("t", f.view(), limits(10, 0.0), context);
+    spend(loop, 1e-6);
+    EXPECT_FALSE(loop.time_up());
+    EXPECT_TRUE(loop.end_setup());
+    EXPECT_EQ(loop.limit_status(0), SolveStatus::NOT_RUN);
+}
+
+TEST(SolveLoop, TimeLimitCountsSetup)
+{
+    const Fixture f;
+    const SolveContext context;
+    SolveLoop loop("my-solver", f.view(), limits(10, 1e-6), context);
+    spend(loop, 2e-6);  // setup longer than the limit
+    EXPECT_FALSE(loop.end_setup());
+    EXPECT_GE(loop.setup_s(), 2e-6);
+    const std::string message = loop.time_limit_message();
+    EXPECT_EQ(message.rfind("my-solver: time limit of 1e-06 s reached during setup (after ", 0), 0u) << message;
+    SolverResult result;
+    const SolverResult out = loop.finish(result, SolveStatus::TIME_LIMIT, "", message);
+    EXPECT_EQ(out.status, SolveStatus::TIME_LIMIT);
+    EXPECT_EQ(out.message, message);
+    EXPECT_DOUBLE_EQ(out.setup_s, loop.setup_s());
+    EXPECT_GE(out.solve_s, 0.0);
+    // x and lambda default to x0 and zeros
+    EXPECT_EQ(out.x, f.x0);
+    EXPECT_EQ(out.lambda, Vec::Zero(1));
+}
+
+TEST(SolveLoop, TimeLimitAfterSetupNamesBothParts)
+{
+    const Fixture f;
+    const SolveContext context;
+    SolveLoop loop("s", f.view(), limits(10, 1e-3), context);
+    EXPECT_TRUE(loop.end_setup());  // at once: far below 1 ms
+    spend(loop, 1.1e-3);
+    EXPECT_TRUE(loop.time_up());
+    EXPECT_EQ(loop.time_limit_message().rfind("s: time limit of 0.001 s reached (setup ", 0), 0u)
+        << loop.time_limit_message();
+}
+
+TEST(SolveLoop, MonitorAndItsPreparationRunOnAPausedClock)
+{
+    const Fixture f;
+    ClockMonitor monitor;
+    SolveContext context;
+    context.monitor = &monitor;
+    SolveLoop loop("t", f.view(), limits(10, 0.0), context);
+    spend(loop, 1e-5);
+    ASSERT_TRUE(loop.end_setup());
+    const double setup = loop.setup_s();
+    spend(loop, setup + 2e-5);
+    double seen_in_prepare = -1.0, seen_in_monitor = -1.0, stamped = -1.0, stamped_setup = -1.0;
+    monitor.body = [&](const IterationInfo& info) {
+        seen_in_monitor = loop.elapsed_s();
+        stamped = info.elapsed_s;
+        stamped_setup = info.setup_s;
+    };
+    IterationInfo info;
+    const bool go_on = loop.notify(info, [&] {
+        const double before = loop.elapsed_s();
+        volatile double sink = 0.0;
+        for (int k = 0; k < 200000; ++k) sink = sink + 1.0;  // monitor-only work
+        EXPECT_EQ(loop.elapsed_s(), before);                  // the clock did not move
+        seen_in_prepare = before;
+    });
+    EXPECT_TRUE(go_on);
+    EXPECT_EQ(seen_in_monitor, seen_in_prepare);  // paused through prepare and the monitor
+    EXPECT_EQ(stamped, seen_in_monitor);
+    EXPECT_DOUBLE_EQ(stamped_setup, setup);
+    EXPECT_GE(stamped, setup + 2e-5);  // stamped from the start of setup
+    EXPECT_GT(loop.elapsed_s(), stamped);  // and running again afterwards
+    monitor.answer = false;
+    EXPECT_FALSE(loop.notify(info));
+}
+
+TEST(SolveLoop, NoMonitorNoPreparation)
+{
+    const Fixture f;
+    const SolveContext context;
+    SolveLoop loop("t", f.view(), limits(10, 0.0), context);
+    bool prepared = false;
+    EXPECT_TRUE(loop.notify(IterationInfo{}, [&] { prepared = true; }));
+    EXPECT_FALSE(prepared);
+}
+
+TEST(SolveLoop, FinishFillsCountersAndTimes)
+{
+    const Fixture f;
+    const SolveContext context;
+    SolveLoop loop("t", f.view(), limits(10, 0.0), context);
+    ASSERT_TRUE(loop.end_setup());
+    spend(loop, loop.setup_s() + 1e-6);
+    SolverResult result;
+    result.counters.iterations = 7;
+    result.x = Vec::Constant(2, 1.0);
+    result.message = "kept";
+    const SolverResult out = loop.finish(result, SolveStatus::CONVERGED, "kkt");
+    EXPECT_EQ(out.iterations, 7);
+    EXPECT_EQ(out.criterion, "kkt");
+    EXPECT_EQ(out.message, "kept");
+    EXPECT_EQ(out.x, Vec::Constant(2, 1.0));
+    EXPECT_GE(out.solve_s, 1e-6);
+    EXPECT_DOUBLE_EQ(out.setup_s, loop.setup_s());
+}
+
+}  // namespace
+}  // namespace cb
