@@ -1,10 +1,8 @@
 // Siconos numerics' Lemke on the dual LCP, in a child process (see siconos_lemke.hpp).
 #include "solvers/peers/siconos_lemke.hpp"
 #include "solvers/peers/child_process.hpp"
+#include "solvers/dual_lcp.hpp"
 #include "solvers/peers/siconos_report.hpp"
-
-#include <Eigen/CholmodSupport>
-#include <Eigen/Dense>
 
 #include <LCP_Solvers.h>
 #include <LinearComplementarityProblem.h>
@@ -57,6 +55,9 @@ std::vector<char> run_lemke(Eigen::MatrixXd& W, Vec& q, long max_iterations, dou
     report.info = linearComplementarity_driver(&problem, z.data(), w.data(), options);
     report.iterations = options->iparam[SICONOS_IPARAM_ITER_DONE];
     report.residual = options->dparam[SICONOS_DPARAM_RESIDU];
+    // Lemke's info is 1 both at the cap and on a ray (a nonpositive pivot column); the count tells them apart.
+    report.max_iterations_reached = report.info != 0 && report.iterations >= options->iparam[SICONOS_IPARAM_MAX_ITER];
+    report.ray_termination = report.info != 0 && !report.max_iterations_reached;
     std::vector<char> out(z.size() * sizeof(double) + sizeof report);
     std::memcpy(out.data(), z.data(), z.size() * sizeof(double));
     std::memcpy(out.data() + z.size() * sizeof(double), &report, sizeof report);
@@ -88,36 +89,21 @@ SolverResult SiconosLemkeSolver::solve(const QpView& qp, const SolveContext& con
     watch.start();
     Stopwatch setup;
     setup.start();
-    Eigen::CholmodSupernodalLLT<SpMatCol, Eigen::Lower> llt;
-    {
-        const SpMatCol A_col = qp.A;
-        llt.compute(A_col);
-    }
-    ++counters.cholmod_analyses;
-    ++counters.cholmod_factorizations;
-    if (llt.info() != Eigen::Success) {
+    DualLcp dual;
+    std::string error;
+    if (!dual.form(qp, counters, error)) {
         result.status = SolveStatus::INVALID_INPUT;
-        result.message = "siconos-lemke: CHOLMOD could not factor A (not positive definite to working precision)";
+        result.message = "siconos-lemke: " + error;
         return result;
     }
-    const Vec x_u = llt.solve(qp.b);
-    ++counters.cholmod_solves;
-    Vec q = qp.J * x_u - qp.c;
-    Eigen::MatrixXd W(m, m);
-    const SpMatCol Jt = SpMatCol(qp.J.transpose());
-    constexpr Eigen::Index kBlock = 64;
-    for (Eigen::Index j0 = 0; j0 < m; j0 += kBlock) {
-        const Eigen::Index k = std::min(kBlock, m - j0);
-        W.middleCols(j0, k) = qp.J * Eigen::MatrixXd(llt.solve(Eigen::MatrixXd(Jt.middleCols(j0, k))));
-        counters.cholmod_solves += k;
-    }
-    W = 0.5 * (W + W.transpose()).eval();
+    Eigen::MatrixXd& W = dual.W();
+    Vec& q = dual.q();
     result.setup_s = setup.seconds();
 
     Stopwatch solve_watch;
     solve_watch.start();
     if (m == 0) {  // Siconos asserts on an empty LCP (it aborts the process: seen in the child)
-        result.x = x_u;
+        result.x = dual.unconstrained();
         const Vec g = qp.A * result.x - qp.b;
         ++counters.a_products;
         const bool ok = accuracy_converged(qp, accuracy_scale(qp), result.x, g, result.lambda, s.common.tol);
@@ -135,8 +121,7 @@ SolverResult SiconosLemkeSolver::solve(const QpView& qp, const SolveContext& con
     result.iterations = 0;
 
     auto primal = [&]() {
-        result.x = llt.solve(Vec(qp.b + qp.J.transpose() * result.lambda));
-        ++counters.cholmod_solves;
+        result.x = dual.primal(qp, result.lambda, counters);
     };
     if (child.timed_out) {
         result.status = SolveStatus::TIME_LIMIT;

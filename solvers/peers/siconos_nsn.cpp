@@ -72,6 +72,7 @@ std::vector<char> run_nsn(const QpView& qp, long max_iterations, double tol)
     report.info = gfc3d_driver(&problem, r.data(), u.data(), v.data(), options);
     report.iterations = options->iparam[SICONOS_IPARAM_ITER_DONE];
     report.residual = options->dparam[SICONOS_DPARAM_RESIDU];
+    report.max_iterations_reached = report.info != 0 && report.iterations >= options->iparam[SICONOS_IPARAM_MAX_ITER];
     std::vector<char> out((v.size() + r.size()) * sizeof(double) + sizeof report);
     std::memcpy(out.data(), v.data(), v.size() * sizeof(double));
     std::memcpy(out.data() + v.size() * sizeof(double), r.data(), r.size() * sizeof(double));
