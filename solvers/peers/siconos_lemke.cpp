@@ -1,7 +1,7 @@
 // Siconos numerics' Lemke on the dual LCP, in a child process (see siconos_lemke.hpp).
 #include "solvers/peers/siconos_lemke.hpp"
-#include "solvers/peers/child_process.hpp"
 #include "solvers/dual_lcp.hpp"
+#include "solvers/peers/child_process.hpp"
 #include "solvers/peers/siconos_report.hpp"
 
 #include <LCP_Solvers.h>
@@ -120,9 +120,7 @@ SolverResult SiconosLemkeSolver::solve(const QpView& qp, const SolveContext& con
     result.solve_s = solve_watch.seconds();
     result.iterations = 0;
 
-    auto primal = [&]() {
-        result.x = dual.primal(qp, result.lambda, counters);
-    };
+    auto primal = [&]() { result.x = dual.primal(qp, result.lambda, counters); };
     if (child.timed_out) {
         result.status = SolveStatus::TIME_LIMIT;
         result.message = "siconos-lemke: time limit reached; the child process was killed";
