@@ -142,6 +142,7 @@ SolverResult BulletDantzigSolver::solve(const QpView& qp, const SolveContext& co
 SolverEntry bullet_dantzig_entry()
 {
     SolverEntry e;
+    e.library = std::string("Bullet ") + CB_BULLET_VERSION;
     e.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
         return std::make_unique<BulletDantzigSolver>(BulletDantzigSettings::from_json(settings));
     };

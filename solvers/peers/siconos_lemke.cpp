@@ -150,6 +150,7 @@ SolverResult SiconosLemkeSolver::solve(const QpView& qp, const SolveContext& con
 SolverEntry siconos_lemke_entry()
 {
     SolverEntry e;
+    e.library = std::string("Siconos numerics ") + CB_SICONOS_VERSION;
     e.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
         return std::make_unique<SiconosLemkeSolver>(SiconosLemkeSettings::from_json(settings));
     };

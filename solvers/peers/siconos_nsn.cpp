@@ -135,6 +135,7 @@ SolverResult SiconosNsnSolver::solve(const QpView& qp, const SolveContext& conte
 SolverEntry siconos_nsn_entry()
 {
     SolverEntry e;
+    e.library = std::string("Siconos numerics ") + CB_SICONOS_VERSION;
     e.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
         return std::make_unique<SiconosNsnSolver>(SiconosNsnSettings::from_json(settings));
     };
