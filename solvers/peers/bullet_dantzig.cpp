@@ -134,8 +134,9 @@ SolverResult BulletDantzigSolver::solve(const QpView& qp, const SolveContext& co
     // Bullet reports no error of its own: the LCP's natural residual, on the W the parent kept.
     report.residual = result.lambda.cwiseMin(dual.W() * result.lambda + dual.q()).norm() / (1.0 + dual.q().norm());
     result.x = dual.primal(qp, result.lambda, counters);  // x from lambda, before the final measure
-    finish_siconos_result(qp, s.common, context, report, "bullet-dantzig: Bullet btSolveDantzigLCP", "driving indexes",
-                          counters, result);
+    finish_siconos_result(qp, s.common, context, report, "bullet-dantzig: Bullet btSolveDantzigLCP",
+                          "driving indexes (m: Bullet counts neither its pivots nor where it stopped)", counters,
+                          result);
     return result;
 }
 
