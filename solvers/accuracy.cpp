@@ -179,10 +179,10 @@ AccuracyParts accuracy_from_gradient(const QpView& qp, const AccuracyScale& scal
             if (!(qp.c[i] <= 0.0)) primal = INF;
             continue;
         }
-        primal = std::max(primal, sanitize(std::max(0.0, -slack) * inv_norm));
+        primal = std::max(primal, sanitize(slack >= 0.0 ? 0.0 : -slack * inv_norm));  // NaN slack: INF
         if (!has_lambda) continue;
         const double push = lambda[i] * scale.length_per_multiplier[i];
-        dual = std::max(dual, sanitize(std::max(0.0, -push)));
+        dual = std::max(dual, sanitize(push >= 0.0 ? 0.0 : -push));
         comp = std::max(comp, sanitize(std::min(std::abs(push), std::abs(slack) * inv_norm)));
         gap += std::abs(lambda[i] * slack);
     }
