@@ -20,7 +20,11 @@ export MPLBACKEND ?= Agg
 DEB_PACKAGES := build-essential cmake git zlib1g-dev libeigen3-dev libsuitesparse-dev nlohmann-json3-dev \
   libgtest-dev libbenchmark-dev libopenblas0-pthread \
   python3-numpy python3-pandas python3-matplotlib python3-scipy libcgal-demo ccache valgrind \
-  pkg-config coinor-libipopt-dev libsiconos-numerics-dev libfclib-dev
+  pkg-config coinor-libipopt-dev libsiconos-numerics-dev libfclib-dev libbullet-dev
+# PEERS=all: also PETSc (about 180 MB) for the TAO peers (docs/peers.md); not in the default set.
+ifeq ($(PEERS),all)
+DEB_PACKAGES += petsc-dev
+endif
 
 .PHONY: help deps build test demo bench baseline reproduce stress fuzz clean meshes paper-data docs-check tidy \
   ci-perf perf-gate perf-gate-selftest contactbench-binary
@@ -30,6 +34,7 @@ help:
 	@echo "make test       install, build from scratch (Release), run every C++ and Python test + CI perf gate"
 	@echo "make perf-gate  same-machine A/B of the CI suite against BASE (default: the commit of the baseline)"
 	@echo "make deps       install the Debian packages (apt-get, as root); quick when present"
+	@echo "                (PEERS=all: PETSc too, about 180 MB, for the TAO peers)"
 	@echo "make build      configure and build into $(BUILD)/"
 	@echo "make bench      Google Benchmark suite (JSON in results/bench/)"
 	@echo "make baseline   re-record results/baselines/ci.csv from a clean tree (commit it alone, after the change)"

@@ -187,7 +187,9 @@ int cmd_run(const Args& args)
         return 0;
     }
     cl.expect_positional(1, 1, kUsage);
-    const Suite suite = load_suite(cl.positional()[0]);
+    Suite suite = load_suite(cl.positional()[0]);
+    for (const std::string& notice : drop_unbuilt_optional_solvers(suite, builtin_registry().names()))
+        std::cerr << "run: " << notice << "\n";
     std::string out = cl.value("--out", "results/" + suite.name);
     Shard shard = cl.has("--shard") ? parse_shard(cl.value("--shard")) : Shard{};
     if (!cl.has("--shard")) {
@@ -218,7 +220,8 @@ int cmd_run(const Args& args)
     const size_t labels = suite.solvers.size();
     auto in_shard = [&](size_t s, size_t v) {
         const size_t key = suite.chain ? v : s * labels + v;
-        return static_cast<long>(key % static_cast<size_t>(shard.count)) == shard.index - 1;
+        return static_cast<long>(key % static_cast<size_t>(shard.count)) == shard.index - 1 &&
+               solver_applies(suite.solvers[v], snapshots[s].id);  // a job that does not apply is none
     };
     auto run_path = [&](size_t s, size_t v) {
         return (fs::path(out) / "runs" / run_file_name(snapshots[s].id, suite.solvers[v].label)).string();
@@ -436,7 +439,9 @@ int cmd_run(const Args& args)
                                  " parallel job(s) failed; rerun to redo them (finished runs are kept)");
     const size_t runs = write_summary(out, suite.name);
     // Which jobs this folder holds, for `merge` to check that the shards are complete and of one suite.
-    size_t all_jobs = snapshots.size() * labels, done_jobs = 0, final_jobs = 0;
+    size_t all_jobs = 0, done_jobs = 0, final_jobs = 0;
+    for (size_t s = 0; s < snapshots.size(); ++s)
+        for (size_t v = 0; v < labels; ++v) all_jobs += solver_applies(suite.solvers[v], snapshots[s].id) ? 1 : 0;
     nlohmann::json shard_jobs = nlohmann::json::array();
     for (size_t s = 0; s < snapshots.size(); ++s)
         for (size_t v = 0; v < labels; ++v)

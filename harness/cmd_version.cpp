@@ -30,6 +30,7 @@ int cmd_version(const Args& args)
                               {"build_type", text("build_type")}, {"compiler", text("compiler")},
                               {"eigen", text("eigen")},           {"suitesparse", text("suitesparse")},
                               {"nlohmann_json", json_version},    {"blas", text("blas")}};
+        out["peers"] = p.value("peers", nlohmann::json::object());
         std::cout << out.dump(1) << "\n";
         return 0;
     }
@@ -43,6 +44,11 @@ int cmd_version(const Args& args)
               << "SuiteSparse   " << text("suitesparse") << "\n"
               << "nlohmann-json " << json_version << "\n"
               << "BLAS          " << text("blas") << "\n";
+    std::string peers;
+    const nlohmann::json built = p.value("peers", nlohmann::json::object());
+    for (const auto& peer : built.items())
+        peers += (peers.empty() ? "" : ", ") + peer.key() + " (" + peer.value().get<std::string>() + ")";
+    std::cout << "peers         " << (peers.empty() ? "none built (docs/peers.md)" : peers) << "\n";
     return 0;
 }
 

@@ -1,6 +1,7 @@
 #include "harness/provenance.hpp"
 
 #include "harness/slurm.hpp"
+#include "solvers/registry.hpp"
 
 #include <Eigen/Core>
 #include <SuiteSparse_config.h>
@@ -112,6 +113,12 @@ nlohmann::json compute()
     p["suitesparse"] = std::to_string(SUITESPARSE_MAIN_VERSION) + "." + std::to_string(SUITESPARSE_SUB_VERSION) + "." +
                        std::to_string(SUITESPARSE_SUBSUB_VERSION) + " (CHOLMOD " + CB_CHOLMOD_VERSION + ")";
     p["blas"] = blas_in_use();
+    // The external peers compiled in, with their libraries' versions (docs/peers.md).
+    nlohmann::json peers = nlohmann::json::object();
+    const SolverRegistry& registry = builtin_registry();
+    for (const std::string& name : registry.names())
+        if (!registry.entry(name).library.empty()) peers[name] = registry.entry(name).library;
+    p["peers"] = peers;
     char host[256] = {0};
     p["hostname"] = ::gethostname(host, sizeof(host) - 1) == 0 ? std::string(host) : std::string("unknown");
     const nlohmann::json job = slurm_job_provenance(slurm_environment());

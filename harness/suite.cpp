@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fnmatch.h>
 #include <glob.h>
 #include <map>
 #include <set>
@@ -83,7 +84,54 @@ std::string get_string(const nlohmann::json& j, const std::string& key, const st
     return j[key].get<std::string>();
 }
 
+/// An optional array of non-empty strings (snapshot id globs).
+std::vector<std::string> get_patterns(const nlohmann::json& j, const std::string& key, const std::string& where)
+{
+    std::vector<std::string> out;
+    if (!j.contains(key)) return out;
+    const auto& v = j[key];
+    if (!v.is_array() || v.empty())
+        throw_input_error(where, "/" + key, "expected a non-empty array of snapshot id globs, got " + v.dump());
+    for (size_t i = 0; i < v.size(); ++i) {
+        if (!v[i].is_string() || v[i].get<std::string>().empty())
+            throw_input_error(where, "/" + key + "/" + std::to_string(i),
+                              "expected a non-empty string (a snapshot id glob), got " + v[i].dump());
+        out.push_back(v[i].get<std::string>());
+    }
+    return out;
+}
+
+bool matches_any(const std::vector<std::string>& patterns, const std::string& id)
+{
+    for (const std::string& p : patterns)
+        if (fnmatch(p.c_str(), id.c_str(), 0) == 0) return true;
+    return false;
+}
+
 }  // namespace
+
+std::vector<std::string> drop_unbuilt_optional_solvers(Suite& suite, const std::vector<std::string>& registered)
+{
+    const std::set<std::string> built(registered.begin(), registered.end());
+    std::vector<std::string> notices;
+    std::vector<SuiteSolver> kept;
+    for (SuiteSolver& sv : suite.solvers) {
+        if (sv.optional && !built.count(sv.solver)) {
+            notices.push_back("optional solver '" + sv.label + "' (" + sv.solver +
+                              ") is not built into this contactbench; its runs are skipped");
+            continue;
+        }
+        kept.push_back(std::move(sv));
+    }
+    suite.solvers = std::move(kept);
+    return notices;
+}
+
+bool solver_applies(const SuiteSolver& solver, const std::string& id)
+{
+    if (!solver.problems.empty() && !matches_any(solver.problems, id)) return false;
+    return !matches_any(solver.skip_problems, id);
+}
 
 std::string fnv1a_hex(const std::string& bytes)
 {
@@ -178,9 +226,12 @@ Suite parse_suite(const nlohmann::json& j, const std::string& where)
         if (e.is_string()) {
             sv.solver = sv.label = e.get<std::string>();
         } else if (e.is_object()) {
+            static const std::set<std::string> solver_keys = {"label",    "solver",   "settings",
+                                                              "optional", "problems", "skip_problems"};
             for (const auto& item : e.items())
-                if (item.key() != "label" && item.key() != "solver" && item.key() != "settings")
-                    throw_input_error(at, "/" + item.key(), "unknown key; known: label, settings, solver");
+                if (!solver_keys.count(item.key()))
+                    throw_input_error(at, "/" + item.key(),
+                                      "unknown key; known: label, optional, problems, settings, skip_problems, solver");
             if (!e.contains("solver")) throw_input_error(at, "/solver", "missing (a registered solver name)");
             sv.solver = get_string(e, "solver", at, "");
             sv.label = get_string(e, "label", at, sv.solver);
@@ -189,6 +240,9 @@ Suite parse_suite(const nlohmann::json& j, const std::string& where)
                     throw_input_error(at, "/settings", "expected an object, got " + type_name(e["settings"]));
                 sv.settings = e["settings"];
             }
+            sv.optional = get_bool(e, "optional", at, false);
+            sv.problems = get_patterns(e, "problems", at);
+            sv.skip_problems = get_patterns(e, "skip_problems", at);
         } else {
             throw_input_error(at, "", "expected an object {label, solver, settings} or a name, got " + e.dump());
         }

@@ -12,6 +12,9 @@ struct SuiteSolver {
     std::string label;   ///< unique in the suite, file-name safe; defaults to `solver`
     std::string solver;  ///< registry name (an unknown one is reported per run, not here)
     nlohmann::json settings = nlohmann::json::object();
+    bool optional = false;  ///< a solver this build may lack (a peer): skipped with a notice when not registered
+    std::vector<std::string> problems;       ///< glob patterns over snapshot ids it runs on (empty: all)
+    std::vector<std::string> skip_problems;  ///< glob patterns over snapshot ids it leaves out
 };
 
 struct SuiteGenerate {
@@ -61,6 +64,14 @@ Suite load_suite(const std::string& path);
 /// Same from JSON already in memory (`where` names it in messages; relative paths resolve
 /// against `base_dir`).
 Suite parse_suite(const nlohmann::json& j, const std::string& where);
+
+/// Removes the `optional` solver entries whose solver is not in `registered` (this build's
+/// registry) and returns one notice per removed entry, naming its label and solver.
+std::vector<std::string> drop_unbuilt_optional_solvers(Suite& suite, const std::vector<std::string>& registered);
+
+/// Whether the entry runs on the snapshot `id`: it matches one of `problems` (when given) and
+/// none of `skip_problems` (fnmatch globs). A job that does not apply is not a job of the suite.
+bool solver_applies(const SuiteSolver& solver, const std::string& id);
 
 /// One snapshot of a suite, resolved to a file.
 struct SuiteSnapshot {

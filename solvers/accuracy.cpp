@@ -179,10 +179,12 @@ AccuracyParts accuracy_from_gradient(const QpView& qp, const AccuracyScale& scal
             if (!(qp.c[i] <= 0.0)) primal = INF;
             continue;
         }
-        primal = std::max(primal, sanitize(std::max(0.0, -slack) * inv_norm));
+        // std::max(-slack, 0.0), not (0.0, -slack): the first argument is returned when the comparison
+        // fails, so a NaN slack stays NaN and sanitize makes it INF (a NaN point is not feasible).
+        primal = std::max(primal, sanitize(std::max(-slack, 0.0) * inv_norm));
         if (!has_lambda) continue;
         const double push = lambda[i] * scale.length_per_multiplier[i];
-        dual = std::max(dual, sanitize(std::max(0.0, -push)));
+        dual = std::max(dual, sanitize(std::max(-push, 0.0)));
         comp = std::max(comp, sanitize(std::min(std::abs(push), std::abs(slack) * inv_norm)));
         gap += std::abs(lambda[i] * slack);
     }

@@ -10,6 +10,9 @@
 #ifdef CB_HAVE_IPOPT
 #include "solvers/peers/ipopt_solver.hpp"
 #endif
+#ifdef CB_HAVE_BULLET
+#include "solvers/peers/bullet_dantzig.hpp"
+#endif
 #ifdef CB_HAVE_SICONOS
 #include "solvers/peers/siconos_lemke.hpp"
 #include "solvers/peers/siconos_nsn.hpp"
@@ -46,6 +49,10 @@ void register_builtin_solvers(SolverRegistry& registry)
     registry.add("siconos-lemke",
                  applies_to(siconos_lemke_entry(), "any J with at most max_rows rows (dense dual LCP)"));
     registry.add("siconos-nsn", applies_to(siconos_nsn_entry(), "any J (global problem, mu = 0)"));
+#endif
+#ifdef CB_HAVE_BULLET
+    registry.add("bullet-dantzig",
+                 applies_to(bullet_dantzig_entry(), "any J with at most max_rows rows (dense dual LCP)"));
 #endif
 }
 

@@ -19,6 +19,7 @@ struct SolverEntry {
     std::string description;           ///< one line for `--help`
     std::vector<SettingDoc> settings;  ///< solver-specific keys (the common ones are implied)
     std::string applies_to = "any J";  ///< which problems it accepts, for `contactbench solvers`
+    std::string library;               ///< external peers: the library and its version ("Bullet 3.24"); else empty
 };
 
 class SolverRegistry {

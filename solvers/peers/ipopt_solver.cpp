@@ -348,6 +348,7 @@ SolverResult IpoptSolver::solve(const QpView& qp, const SolveContext& context)
 SolverEntry ipopt_entry()
 {
     SolverEntry e;
+    e.library = std::string("Ipopt ") + IPOPT_VERSION;
     e.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
         return std::make_unique<IpoptSolver>(IpoptSettings::from_json(settings));
     };

@@ -1,11 +1,9 @@
 // Siconos numerics' Lemke on the dual LCP, in a child process (see siconos_lemke.hpp).
 #include "solvers/peers/siconos_lemke.hpp"
-#include "solvers/solve_loop.hpp"
+#include "solvers/dual_lcp.hpp"
 #include "solvers/peers/child_process.hpp"
 #include "solvers/peers/siconos_report.hpp"
-
-#include <Eigen/CholmodSupport>
-#include <Eigen/Dense>
+#include "solvers/solve_loop.hpp"
 
 #include <LCP_Solvers.h>
 #include <LinearComplementarityProblem.h>
@@ -58,6 +56,9 @@ std::vector<char> run_lemke(Eigen::MatrixXd& W, Vec& q, long max_iterations, dou
     report.info = linearComplementarity_driver(&problem, z.data(), w.data(), options);
     report.iterations = options->iparam[SICONOS_IPARAM_ITER_DONE];
     report.residual = options->dparam[SICONOS_DPARAM_RESIDU];
+    // Lemke's info is 1 both at the cap and on a ray (a nonpositive pivot column); the count tells them apart.
+    report.max_iterations_reached = report.info != 0 && report.iterations >= options->iparam[SICONOS_IPARAM_MAX_ITER];
+    report.ray_termination = report.info != 0 && !report.max_iterations_reached;
     std::vector<char> out(z.size() * sizeof(double) + sizeof report);
     std::memcpy(out.data(), z.data(), z.size() * sizeof(double));
     std::memcpy(out.data() + z.size() * sizeof(double), &report, sizeof report);
@@ -79,38 +80,22 @@ SolverResult SiconosLemkeSolver::solve(const QpView& qp, const SolveContext& con
     result.info["child_process"] = true;
     result.info["native_residual_definition"] = "Siconos's LCP error (SICONOS_DPARAM_RESIDU)";
     if (m > s.max_rows) {
-        result.status = SolveStatus::INVALID_INPUT;
+        result.status = SolveStatus::NOT_APPLICABLE;
         result.message = "siconos-lemke: m = " + std::to_string(m) +
                          " rows exceeds max_rows = " + std::to_string(s.max_rows) +
                          " (W = J A^-1 J' is dense m x m); raise max_rows to allow it";
         return result;
     }
     SolveLoop loop("siconos-lemke", qp, s.common, context);
-    Eigen::CholmodSupernodalLLT<SpMatCol, Eigen::Lower> llt;
-    {
-        const SpMatCol A_col = qp.A;
-        llt.compute(A_col);
-    }
-    ++counters.cholmod_analyses;
-    ++counters.cholmod_factorizations;
-    if (llt.info() != Eigen::Success)
-        return loop.finish(result, SolveStatus::INVALID_INPUT, "",
-                           "siconos-lemke: CHOLMOD could not factor A (not positive definite to working precision)");
-    const Vec x_u = llt.solve(qp.b);
-    ++counters.cholmod_solves;
-    Vec q = qp.J * x_u - qp.c;
-    Eigen::MatrixXd W(m, m);
-    const SpMatCol Jt = SpMatCol(qp.J.transpose());
-    constexpr Eigen::Index kBlock = 64;
-    for (Eigen::Index j0 = 0; j0 < m; j0 += kBlock) {
-        const Eigen::Index k = std::min(kBlock, m - j0);
-        W.middleCols(j0, k) = qp.J * Eigen::MatrixXd(llt.solve(Eigen::MatrixXd(Jt.middleCols(j0, k))));
-        counters.cholmod_solves += k;
-    }
-    W = 0.5 * (W + W.transpose()).eval();
+    DualLcp dual;
+    std::string error;
+    if (!dual.form(qp, counters, error))
+        return loop.finish(result, SolveStatus::INVALID_INPUT, "", "siconos-lemke: " + error);
+    Eigen::MatrixXd& W = dual.W();
+    Vec& q = dual.q();
     if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT, "", loop.time_limit_message());
     if (m == 0) {  // Siconos asserts on an empty LCP (it aborts the process: seen in the child)
-        result.x = x_u;
+        result.x = dual.unconstrained();
         const Vec g = qp.A * result.x - qp.b;
         ++counters.a_products;
         const bool ok = accuracy_converged(qp, accuracy_scale(qp), result.x, g, result.lambda, s.common.tol);
@@ -122,10 +107,7 @@ SolverResult SiconosLemkeSolver::solve(const QpView& qp, const SolveContext& con
                                             loop.stopwatch(), s.common.time_limit_s);
     const std::vector<char>& bytes = child.bytes;
 
-    auto primal = [&]() {
-        result.x = llt.solve(Vec(qp.b + qp.J.transpose() * result.lambda));
-        ++counters.cholmod_solves;
-    };
+    auto primal = [&]() { result.x = dual.primal(qp, result.lambda, counters); };
     if (child.timed_out) {
         return loop.finish(result, SolveStatus::TIME_LIMIT, "",
                            loop.time_limit_message() + "; the child process was killed");
@@ -144,7 +126,7 @@ SolverResult SiconosLemkeSolver::solve(const QpView& qp, const SolveContext& con
     counters.iterations = report.iterations;
     counters.pivots = report.iterations;
     counters.lcp_iterations = report.iterations;
-    primal();  // x from lambda, before the final measure
+    primal();                         // x from lambda, before the final measure
     result.setup_s = loop.setup_s();  // the final monitor call's stamp
     result.solve_s = loop.solve_s();
     finish_siconos_result(qp, s.common, context, report, "siconos-lemke: Siconos Lemke", "pivots", counters, result);
@@ -154,12 +136,13 @@ SolverResult SiconosLemkeSolver::solve(const QpView& qp, const SolveContext& con
 SolverEntry siconos_lemke_entry()
 {
     SolverEntry e;
+    e.library = std::string("Siconos numerics ") + CB_SICONOS_VERSION;
     e.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
         return std::make_unique<SiconosLemkeSolver>(SiconosLemkeSettings::from_json(settings));
     };
     e.description = std::string("peer: Siconos numerics ") + CB_SICONOS_VERSION +
                     " Lemke on the dual LCP W = J A^-1 J' (CHOLMOD, dense; child process)";
-    e.settings = {{"max_rows", "4000", "refuse (invalid_input) problems with more rows of J (W is dense m x m)"}};
+    e.settings = {{"max_rows", "4000", "refuse (not_applicable) problems with more rows of J (W is dense m x m)"}};
     return e;
 }
 

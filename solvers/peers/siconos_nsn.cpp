@@ -11,6 +11,7 @@
 #include <NumericsSparseMatrix.h>
 #include <SolverOptions.h>
 
+#include <algorithm>
 #include <cstring>
 #include <sstream>
 #include <vector>
@@ -71,8 +72,12 @@ std::vector<char> run_nsn(const QpView& qp, long max_iterations, double tol)
     options->dparam[SICONOS_DPARAM_TOL] = tol;
     SiconosReport report;
     report.info = gfc3d_driver(&problem, r.data(), u.data(), v.data(), options);
-    report.iterations = options->iparam[SICONOS_IPARAM_ITER_DONE];
+    // NSN_AC's loop test post-increments (`while (iter++ < itermax)`), so at the cap ITER_DONE is
+    // one more than the Newton steps it took.
+    const int cap = options->iparam[SICONOS_IPARAM_MAX_ITER];
+    report.iterations = std::min(options->iparam[SICONOS_IPARAM_ITER_DONE], cap);
     report.residual = options->dparam[SICONOS_DPARAM_RESIDU];
+    report.max_iterations_reached = report.info != 0 && report.iterations >= cap;
     std::vector<char> out((v.size() + r.size()) * sizeof(double) + sizeof report);
     std::memcpy(out.data(), v.data(), v.size() * sizeof(double));
     std::memcpy(out.data() + v.size() * sizeof(double), r.data(), r.size() * sizeof(double));
@@ -129,6 +134,7 @@ SolverResult SiconosNsnSolver::solve(const QpView& qp, const SolveContext& conte
 SolverEntry siconos_nsn_entry()
 {
     SolverEntry e;
+    e.library = std::string("Siconos numerics ") + CB_SICONOS_VERSION;
     e.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
         return std::make_unique<SiconosNsnSolver>(SiconosNsnSettings::from_json(settings));
     };

@@ -33,12 +33,16 @@ void finish_siconos_result(const QpView& qp, const CommonSettings& common, const
                    : accuracy_converged(qp, accuracy_scale(qp), result.x, g, result.lambda, common.tol)) {
         result.status = SolveStatus::CONVERGED;
         result.criterion = common.stop == StopRule::NATIVE ? "native" : "kkt";
-    } else if (report.info != 0 && report.iterations >= common.max_iterations) {
+    } else if (report.max_iterations_reached) {
         result.status = SolveStatus::MAX_ITERATIONS;
     } else {
         result.status = SolveStatus::STALLED;
+        if (report.ray_termination)
+            msg << "; ray termination: Jx >= c may have no solution, or the pivoting lost accuracy (no "
+                   "certificate, so not reported as infeasible)";
         msg << "; the accuracy error at its point is above tol";
     }
+    if (report.ray_termination) result.info["ray_termination"] = true;
     result.message = msg.str();
 }
 

@@ -1,7 +1,7 @@
 #pragma once
-/// What a Siconos child process reports, and the one rule that turns it into a result: the status
-/// is the accuracy measure's verdict at the returned point (docs/accuracy.md), the library's own
-/// word goes into the message.
+/// What a peer's child process reports (Siconos's, and Bullet's in the same shape), and the one
+/// rule that turns it into a result: the status is the accuracy measure's verdict at the returned
+/// point (docs/accuracy.md), the library's own word goes into the message.
 #include "solvers/solver.hpp"
 
 #include <string>
@@ -10,9 +10,13 @@ namespace cb {
 
 /// Written by the child after its numbers (plain data: copied through the pipe).
 struct SiconosReport {
-    int info = -1;       ///< Siconos's return code (0: solved)
+    int info = -1;       ///< the library's return code (0: solved)
     int iterations = 0;  ///< pivots or Newton iterations
     double residual = 0.0;
+    bool max_iterations_reached = false;  ///< the library stopped at the iteration cap it was given
+    /// Lemke ended on a ray (its pivot column is nonpositive): Jx >= c may have no solution, or the
+    /// pivoting lost accuracy on a singular W (seen on a feasible problem with duplicate rows).
+    bool ray_termination = false;
 };
 
 /// Fills result.iterations, native_residual, info, status, criterion and message from the report at

@@ -281,3 +281,27 @@ TEST(Cli, CorruptSnapshotFailsItsRunsOnly)
     EXPECT_EQ(good["status"], "converged");
     EXPECT_DOUBLE_EQ(good["settings"]["time_limit_s"].get<double>(), 5.0);  // the suite's default reached the solver
 }
+
+// An optional solver this build lacks is skipped with a notice (no run file, no failed run), and
+// a solver limited to some snapshots has jobs on those only: the job count and jobs.json say so.
+TEST(Cli, RunSkipsUnbuiltOptionalSolversAndAppliesProblemFilters)
+{
+    const std::string suite =
+        write_suite("filters", {{{"label", "mprgp"}, {"solver", "mprgp"}, {"problems", {"p1"}}},
+                                {{"label", "exact"}, {"solver", "active-set"}, {"skip_problems", {"p1"}}},
+                                {{"label", "absent"}, {"solver", "no-such-peer"}, {"optional", true}}});
+    const fs::path out = work_dir() / "filters";
+    const Output o = run("run '" + suite + "' --out '" + out.string() + "'");
+    ASSERT_EQ(o.status, 0) << o.err;
+    EXPECT_NE(o.err.find("run: optional solver 'absent' (no-such-peer) is not built into this contactbench; its runs "
+                         "are skipped\n"),
+              std::string::npos)
+        << o.err;
+    EXPECT_NE(o.err.find("ran 2 of 2 jobs"), std::string::npos) << o.err;
+    EXPECT_TRUE(fs::exists(out / "runs" / "p1__mprgp.json"));
+    EXPECT_TRUE(fs::exists(out / "runs" / "p2__exact.json"));
+    EXPECT_EQ(count_files(out / "runs", ".json"), 2u);
+    const nlohmann::json jobs = read_json_file((out / "jobs.json").string());
+    EXPECT_EQ(jobs["all_jobs"], 2);
+    EXPECT_TRUE(jobs["complete"].get<bool>());
+}

@@ -210,11 +210,12 @@ TEST(Runner, RecordHasEverySchemaKey)
         EXPECT_TRUE(run.record["decouple"].contains(key)) << key;
     const auto& columns = run.record["history"]["columns"];
     EXPECT_EQ(columns, nlohmann::json(HistoryMonitor::columns()));
-    EXPECT_EQ(columns.size(), 14u);
+    EXPECT_EQ(columns.size(), 15u);
     for (const auto& row : run.record["history"]["rows"]) EXPECT_EQ(row.size(), columns.size());
     // The work unit (docs/work.md): the toy solver does nothing but A-products, so its work is
     // its A-product count, in the record and along the history.
     EXPECT_EQ(columns[13], "work");
+    EXPECT_EQ(columns[14], "solve_time_s");
     EXPECT_EQ(run.record["counters"]["work_flops"].get<double>(), 0.0);
     EXPECT_EQ(run.record["counters"]["work"].get<double>(), run.record["counters"]["a_products"].get<double>());
     for (const auto& row : run.record["history"]["rows"]) EXPECT_EQ(row[13].get<double>(), row[2].get<double>());

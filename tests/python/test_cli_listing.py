@@ -35,8 +35,15 @@ class Listing(unittest.TestCase):
         for key in ("build_type", "compiler", "eigen", "suitesparse", "nlohmann_json", "blas"):
             self.assertTrue(facts[key] and facts[key] != "unknown", key)
         self.assertIn("CHOLMOD", facts["suitesparse"])
-        for label in ("build type", "compiler", "Eigen", "SuiteSparse", "nlohmann-json", "BLAS"):
+        for label in ("build type", "compiler", "Eigen", "SuiteSparse", "nlohmann-json", "BLAS", "peers"):
             self.assertIn(label, text.stdout)
+        # Every peer `solvers` lists (description "peer: LIB VERSION ...") is named with its library.
+        listed = {e["name"]: e["description"] for e in json.loads(run("solvers", "--json").stdout)}
+        peers = {name: d for name, d in listed.items() if d.startswith("peer: ")}
+        self.assertEqual(set(facts["peers"]), set(peers))
+        for name, library in facts["peers"].items():
+            self.assertTrue(peers[name].startswith("peer: " + library + " "), (name, library))
+            self.assertIn(f"{name} ({library})", text.stdout)
 
     def test_unknown_option_is_bad_input(self):
         self.assertEqual(run("solvers", "--bogus").returncode, 2)

@@ -2,6 +2,7 @@
 // reference `active-set` on the CI suite's problems (suites/ci.json): same objective to 1e-6
 // relative, a feasible point, and the common KKT test met. A peer that is not built is skipped.
 #include "problems/fclib_io.hpp"
+#include "problems/stress.hpp"
 #include "problems/synthetic.hpp"
 #include "solvers/accuracy.hpp"
 #include "solvers/registry.hpp"
@@ -64,33 +65,104 @@ TEST_P(Peers, AgreeWithActiveSetOnTheCiSuite)
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(Installed, Peers, ::testing::Values("ipopt", "siconos-lemke", "siconos-nsn"),
+INSTANTIATE_TEST_SUITE_P(Installed, Peers, ::testing::Values("ipopt", "siconos-lemke", "siconos-nsn", "bullet-dantzig"),
                          [](const ::testing::TestParamInfo<std::string>& p) {
                              std::string s = p.param;
                              std::replace(s.begin(), s.end(), '-', '_');
                              return s;
                          });
 
-// The child process of siconos-lemke is ended at the time limit and that is a recorded status
-// (the limit is below the time CHOLMOD's setup alone takes, so it has passed before the child
-// is waited for).
-TEST(SiconosLemke, TimeLimitEndsTheChildProcess)
+// time_limit_s counts setup (docs/DESIGN.md "The solve loop"): on the dual peers forming W uses
+// it all up, so the limit is reported during setup; siconos-nsn has no setup: its child process
+// starts, and the limit kills it. Either way it is a recorded status.
+TEST(PeersTimeLimit, CountsSetupAndEndsTheChildProcess)
+{
+    const Qp qp = cb::make_synthetic("plane", {{"nx", 4}, {"ny", 4}, {"nz", 4}}, 11);
+    int ran = 0;
+    for (const std::string name : {"siconos-lemke", "bullet-dantzig"}) {
+        if (!cb::builtin_registry().contains(name)) continue;
+        ++ran;
+        const SolverResult r =
+            cb::builtin_registry().create(name, {{"time_limit_s", 1e-9}})->solve(qp.view(), cb::SolveContext{});
+        EXPECT_EQ(r.status, SolveStatus::TIME_LIMIT) << r.message;
+        EXPECT_EQ(r.message.rfind(name + ": time limit of 1e-09 s reached during setup (after ", 0), 0u) << r.message;
+    }
+    if (cb::builtin_registry().contains("siconos-nsn")) {
+        ++ran;
+        const SolverResult nsn = cb::builtin_registry()
+                                     .create("siconos-nsn", {{"time_limit_s", 1e-9}})
+                                     ->solve(qp.view(), cb::SolveContext{});
+        EXPECT_EQ(nsn.status, SolveStatus::TIME_LIMIT) << nsn.message;
+        const std::string killed = "; the child process was killed";
+        ASSERT_GE(nsn.message.size(), killed.size());
+        EXPECT_EQ(nsn.message.substr(nsn.message.size() - killed.size()), killed) << nsn.message;
+    }
+    if (ran == 0) GTEST_SKIP() << "no peer with a time limit is built";
+}
+
+// Lemke's info = 1 means either the iteration cap or a ray (a nonpositive pivot column). On an
+// empty feasible set (active-set proves it infeasible) it is a ray, before the cap: not converged,
+// flagged, and not claimed `infeasible`: a ray is no certificate, since Lemke also ends on a ray on
+// a feasible set whose rows all appear twice (W singular; active-set solves it).
+TEST(SiconosLemke, RayTerminationOnAnInfeasibleSetIsFlaggedNotConverged)
+{
+    if (!cb::builtin_registry().contains("siconos-lemke")) GTEST_SKIP() << "siconos-lemke is not built";
+    const Qp qp = cb::make_synthetic("infeasible", {{"nx", 2}, {"ny", 2}, {"nz", 2}}, 3);
+    const SolverResult ref =
+        cb::builtin_registry().create("active-set", {{"tol", 1e-9}})->solve(qp.view(), cb::SolveContext{});
+    ASSERT_EQ(ref.status, SolveStatus::INFEASIBLE) << ref.message;
+    const SolverResult r = cb::builtin_registry().create("siconos-lemke", {{"tol", 1e-8}})->solve(qp.view(), {});
+    EXPECT_EQ(r.status, SolveStatus::STALLED) << r.message;
+    EXPECT_EQ(r.info.value("siconos_info", -1), 1);
+    EXPECT_TRUE(r.info.value("ray_termination", false));
+    EXPECT_LT(r.iterations, 10000);  // the default cap: stopped before it
+    EXPECT_NE(r.message.find("; ray termination: Jx >= c may have no solution"), std::string::npos) << r.message;
+
+    const auto cases = cb::select_stress_cases(cb::stress_cases(false), {"rows-duplicate-all"});
+    ASSERT_EQ(cases.size(), 1u);
+    const Qp twice = cb::make_stress_qp(cases[0]);
+    const SolverResult solved =
+        cb::builtin_registry().create("active-set", {{"tol", 1e-9}})->solve(twice.view(), cb::SolveContext{});
+    ASSERT_EQ(solved.status, SolveStatus::CONVERGED) << solved.message;
+    const SolverResult ray = cb::builtin_registry().create("siconos-lemke", {{"tol", 1e-8}})->solve(twice.view(), {});
+    EXPECT_EQ(ray.status, SolveStatus::STALLED) << ray.message;
+    EXPECT_TRUE(ray.info.value("ray_termination", false)) << ray.message;
+}
+
+// At the cap Lemke's info is also 1; that is max_iterations, and no ray is claimed. The pivot
+// count is Siconos's (it stops at exactly the cap).
+TEST(SiconosLemke, IterationCapIsMaxIterationsNotARay)
 {
     if (!cb::builtin_registry().contains("siconos-lemke")) GTEST_SKIP() << "siconos-lemke is not built";
     const Qp qp = cb::make_synthetic("plane", {{"nx", 4}, {"ny", 4}, {"nz", 4}}, 11);
     const SolverResult r =
-        cb::builtin_registry().create("siconos-lemke", {{"time_limit_s", 1e-9}})->solve(qp.view(), cb::SolveContext{});
-    EXPECT_EQ(r.status, SolveStatus::TIME_LIMIT) << r.message;
-    // time_limit_s counts setup (docs/DESIGN.md "The solve loop"): forming W uses it all up.
-    EXPECT_EQ(r.message.rfind("siconos-lemke: time limit of 1e-09 s reached during setup (after ", 0), 0u) << r.message;
-    // siconos-nsn has no setup: its child process starts, and the limit kills it.
-    if (!cb::builtin_registry().contains("siconos-nsn")) return;
-    const SolverResult nsn =
-        cb::builtin_registry().create("siconos-nsn", {{"time_limit_s", 1e-9}})->solve(qp.view(), cb::SolveContext{});
-    EXPECT_EQ(nsn.status, SolveStatus::TIME_LIMIT) << nsn.message;
-    const std::string killed = "; the child process was killed";
-    ASSERT_GE(nsn.message.size(), killed.size());
-    EXPECT_EQ(nsn.message.substr(nsn.message.size() - killed.size()), killed) << nsn.message;
+        cb::builtin_registry().create("siconos-lemke", {{"max_iterations", 3}})->solve(qp.view(), {});
+    EXPECT_EQ(r.status, SolveStatus::MAX_ITERATIONS) << r.message;
+    EXPECT_EQ(r.iterations, 3);
+    EXPECT_FALSE(r.info.contains("ray_termination"));
+}
+
+// The Newton iteration count is Siconos's own (ITER_DONE): one step when the constraints violated
+// at x0 are the active set at the solution (the CI plane), several on the stress case whose rows
+// share one vertex, and exactly the cap when the cap is below that.
+TEST(SiconosNsn, NewtonIterationsAreSiconosOwnCount)
+{
+    if (!cb::builtin_registry().contains("siconos-nsn")) GTEST_SKIP() << "siconos-nsn is not built";
+    const Qp plane = cb::make_synthetic("plane", {{"nx", 4}, {"ny", 4}, {"nz", 4}}, 11);
+    const SolverResult one = cb::builtin_registry().create("siconos-nsn", {{"tol", 1e-8}})->solve(plane.view(), {});
+    ASSERT_EQ(one.status, SolveStatus::CONVERGED) << one.message;
+    EXPECT_EQ(one.iterations, 1);
+    const auto cases = cb::select_stress_cases(cb::stress_cases(false), {"rows-one-vertex"});
+    ASSERT_EQ(cases.size(), 1u);
+    const Qp qp = cb::make_stress_qp(cases[0]);
+    const SolverResult many = cb::builtin_registry().create("siconos-nsn", {{"tol", 1e-8}})->solve(qp.view(), {});
+    ASSERT_EQ(many.status, SolveStatus::CONVERGED) << many.message;
+    EXPECT_GT(many.iterations, 2);
+    EXPECT_NE(many.message.find("after " + std::to_string(many.iterations) + " Newton iterations"), std::string::npos);
+    const SolverResult capped =
+        cb::builtin_registry().create("siconos-nsn", {{"tol", 1e-8}, {"max_iterations", 2}})->solve(qp.view(), {});
+    EXPECT_EQ(capped.status, SolveStatus::MAX_ITERATIONS) << capped.message;
+    EXPECT_EQ(capped.iterations, 2);
 }
 
 // Siconos's global solver (and its Lemke) given the arrays that libfclib reads back from an FCLIB

@@ -1,0 +1,38 @@
+#pragma once
+/// The QP's dual LCP formed on the harness's side, for the solvers that pivot on a dense matrix
+/// (the peers `siconos-lemke` and `bullet-dantzig`; `pgs` and `ica` form the same W their own way):
+///   w = W lambda + q >= 0,  lambda >= 0,  lambda'w = 0,   W = J A^-1 J',  q = J A^-1 b - c,
+/// and the primal point x = A^-1 (b + J'lambda). A is factored once by CHOLMOD; W is formed
+/// densely with blocks of right-hand sides and symmetrised. All of it is the solvers' setup, and
+/// its work is counted (cholmod_analyses, cholmod_factorizations, cholmod_solves, work_flops).
+#include "solvers/solver.hpp"
+
+#include <Eigen/CholmodSupport>
+#include <Eigen/Dense>
+
+#include <string>
+
+namespace cb {
+
+class DualLcp {
+public:
+    /// Factors A and forms W and q. Returns false, with `error` saying why, when CHOLMOD cannot
+    /// factor A (not positive definite to working precision).
+    bool form(const QpView& qp, Counters& counters, std::string& error);
+
+    Eigen::MatrixXd& W() { return m_W; }  ///< m x m, column-major (= row-major: symmetric)
+    Vec& q() { return m_q; }
+    const Vec& unconstrained() const { return m_x_free; }  ///< A^-1 b, the answer when m = 0
+
+    /// x = A^-1 (b + J'lambda), one more CHOLMOD solve.
+    Vec primal(const QpView& qp, const Vec& lambda, Counters& counters) const;
+
+private:
+    Eigen::CholmodSupernodalLLT<SpMatCol, Eigen::Lower> m_llt;
+    Eigen::MatrixXd m_W;
+    Vec m_q;
+    Vec m_x_free;
+    double m_solve_flops = 0.0;  ///< one solve with L and L' (docs/work.md)
+};
+
+}  // namespace cb
