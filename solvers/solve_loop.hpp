@@ -24,8 +24,8 @@
 #include "solvers/solver.hpp"
 #include "solvers/stopwatch.hpp"
 
-#include <functional>
 #include <string>
+#include <type_traits>
 #include <utility>
 
 namespace cb {
@@ -71,7 +71,7 @@ public:
     /// @return false when the monitor asked to stop (always true without a monitor).
     bool notify(IterationInfo info)
     {
-        return m_context.monitor ? notify_monitor(m_context, m_watch, info, setup_s(), nullptr) : true;
+        return m_context.monitor ? notify_monitor(m_context, m_watch, info, setup_s()) : true;
     }
     /// As notify(info), with `prepare()` run first inside the pause and only when a monitor
     /// listens: work done only for the monitor (forming x from lambda) is not solver time.
@@ -79,7 +79,10 @@ public:
     bool notify(IterationInfo info, Prepare&& prepare)
     {
         if (!m_context.monitor) return true;  // no monitor: no preparation either
-        return notify_monitor(m_context, m_watch, info, setup_s(), std::function<void()>(prepare));
+        using Callable = std::remove_reference_t<Prepare>;
+        return notify_monitor(
+            m_context, m_watch, info, setup_s(), [](void* p) { (*static_cast<Callable*>(p))(); },
+            const_cast<void*>(static_cast<const void*>(&prepare)));
     }
 
     /// "time limit of L s reached during setup (after T s of setup)" or "time limit of L s

@@ -90,11 +90,11 @@ bool notify_monitor(const SolveContext& context, Stopwatch& watch, IterationInfo
 }
 
 bool notify_monitor(const SolveContext& context, Stopwatch& watch, IterationInfo info, double setup_s,
-                    const std::function<void()>& prepare)
+                    void (*prepare)(void*), void* prepare_data)
 {
     if (!context.monitor) return true;
     PausedScope paused(watch);
-    if (prepare) prepare();
+    if (prepare) prepare(prepare_data);
     info.elapsed_s = watch.seconds();
     info.setup_s = setup_s;
     return context.monitor->on_iteration(info);

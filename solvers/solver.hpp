@@ -6,7 +6,6 @@
 #include "solvers/stopwatch.hpp"
 
 #include <nlohmann/json.hpp>
-#include <functional>
 #include <memory>
 #include <string>
 
@@ -115,7 +114,7 @@ bool notify_monitor(const SolveContext& context, Stopwatch& watch, IterationInfo
 /// out-of-line function, so that a profiler can leave all monitor work out of a solver's count
 /// (tools/perf_gate.py toggles callgrind's collection on cb::notify_monitor).
 bool notify_monitor(const SolveContext& context, Stopwatch& watch, IterationInfo info, double setup_s,
-                    const std::function<void()>& prepare);
+                    void (*prepare)(void*) = nullptr, void* prepare_data = nullptr);
 
 /// Helper for solvers: the common stopping test (docs/accuracy.md). True when the accuracy error
 /// e of (x, lambda) on `qp` (gradient g = Ax - b given) is <= tol. Every solver's `stop=kkt`
