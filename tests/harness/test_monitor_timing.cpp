@@ -1,8 +1,8 @@
-// Timing benchmark (ctest -R MonitorTiming; label `timing`, run serially): a monitored run of every solver takes the same solver
-// time as an unmonitored one, within noise, on a stiff snapshot of a few thousand DOF where the
-// monitor's work once leaked into `pgs`'s clock (x21.9). A ratio measured in one process, min
-// of 7 (or more: at least 1 s of each kind) interleaved runs each after a warm-up; no absolute
-// wall-clock bound.
+// Timing benchmark (ctest -R MonitorTiming; label `timing`, run serially): a monitored run of every
+// solver takes the same solver time as an unmonitored one, within noise, on a stiff snapshot of a few
+// thousand DOF where the monitor's work once leaked into `pgs`'s clock (x21.9). A ratio measured in
+// one process, min of 7 (or more: at least 1 s of each kind) interleaved runs each after a warm-up; no
+// absolute wall-clock bound.
 #include "harness/history.hpp"
 #include "problems/synthetic.hpp"
 #include "solvers/registry.hpp"
