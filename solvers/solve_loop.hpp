@@ -25,6 +25,7 @@
 #include "solvers/stopwatch.hpp"
 
 #include <string>
+#include <type_traits>
 #include <utility>
 
 namespace cb {
@@ -68,18 +69,20 @@ public:
     bool monitored() const { return m_context.monitor != nullptr; }
     /// Calls the monitor with the clock paused and info.elapsed_s / info.setup_s filled in.
     /// @return false when the monitor asked to stop (always true without a monitor).
-    bool notify(IterationInfo info) { return notify(info, [] {}); }
+    bool notify(IterationInfo info)
+    {
+        return m_context.monitor ? notify_monitor(m_context, m_watch, info, setup_s()) : true;
+    }
     /// As notify(info), with `prepare()` run first inside the pause and only when a monitor
     /// listens: work done only for the monitor (forming x from lambda) is not solver time.
     template <class Prepare>
     bool notify(IterationInfo info, Prepare&& prepare)
     {
-        if (!m_context.monitor) return true;
-        PausedScope paused(m_watch);
-        prepare();
-        info.elapsed_s = elapsed_s();
-        info.setup_s = setup_s();
-        return m_context.monitor->on_iteration(info);
+        if (!m_context.monitor) return true;  // no monitor: no preparation either
+        using Callable = std::remove_reference_t<Prepare>;
+        return notify_monitor(
+            m_context, m_watch, info, setup_s(), [](void* p) { (*static_cast<Callable*>(p))(); },
+            const_cast<void*>(static_cast<const void*>(&prepare)));
     }
 
     /// "time limit of L s reached during setup (after T s of setup)" or "time limit of L s

@@ -92,6 +92,17 @@ bool notify_monitor(const SolveContext& context, Stopwatch& watch, IterationInfo
     return context.monitor->on_iteration(info);
 }
 
+bool notify_monitor(const SolveContext& context, Stopwatch& watch, IterationInfo info, double setup_s,
+                    void (*prepare)(void*), void* prepare_data)
+{
+    if (!context.monitor) return true;
+    PausedScope paused(watch);
+    if (prepare) prepare(prepare_data);
+    info.elapsed_s = watch.seconds();
+    info.setup_s = setup_s;
+    return context.monitor->on_iteration(info);
+}
+
 bool accuracy_converged(const QpView& qp, const AccuracyScale& scale, const Vec& x, const Vec& g, const Vec& lambda,
                         double tol)
 {

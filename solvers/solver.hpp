@@ -111,6 +111,12 @@ public:
 /// SolveLoop::notify (solvers/solve_loop.hpp), which stamps the time from the start of setup.
 /// @return false when the monitor asked to stop.
 bool notify_monitor(const SolveContext& context, Stopwatch& watch, IterationInfo info);
+/// SolveLoop::notify's body: pauses `watch`, runs `prepare` (work done only for the monitor),
+/// stamps info.elapsed_s = watch.seconds() and info.setup_s, calls the monitor. One named,
+/// out-of-line function, so that a profiler can leave all monitor work out of a solver's count
+/// (tools/perf_gate.py toggles callgrind's collection on cb::notify_monitor).
+bool notify_monitor(const SolveContext& context, Stopwatch& watch, IterationInfo info, double setup_s,
+                    void (*prepare)(void*) = nullptr, void* prepare_data = nullptr);
 
 /// Helper for solvers: the common stopping test (docs/accuracy.md). True when the accuracy error
 /// e of (x, lambda) on `qp` (gradient g = Ax - b given) is <= tol. Every solver's `stop=kkt`

@@ -47,14 +47,17 @@ class PlantedRegressions(unittest.TestCase):
         with open(report) as f:
             return c.returncode, c.stdout + c.stderr, json.load(f)
 
-    def test_unplanted_copy_passes_with_under_a_thousandth_more_instructions(self):
+    def test_unplanted_copy_passes_with_under_half_a_percent_more_instructions(self):
         status, out, report = self.judge("")
         self.assertEqual(status, 0, out)
         self.assertIn("verdict: PASS", out)
         self.assertEqual(report["equal"], 5, out)
         for row in report["rows"]:
+            # Two builds of the same solver differ a little: the copy's plant reads CB_PLANT inside
+            # the solve, and the compiler inlines the copy's translation unit differently (up to
+            # 0.2% seen with the solve loop's inline helpers). Far below the gate's +3%.
             change = row["new"]["instructions"] / row["base"]["instructions"] - 1.0
-            self.assertLess(abs(change), 1e-3, row)
+            self.assertLess(abs(change), 5e-3, row)
             for counter in ("iterations", "a_products", "a_products_harness"):
                 self.assertEqual(row["new"][counter], row["base"][counter], row)
 
