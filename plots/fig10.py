@@ -17,7 +17,7 @@ import numpy as np  # noqa: E402
 from plots import figutil  # noqa: E402
 from plots.claims import (DOES_NOT_HOLD, HOLDS, HOLDS_NATIVE_ONLY, NOT_MEASURED, Claim)  # noqa: E402
 from plots.figutil import fmt, plt  # noqa: E402
-from plots.loader import measured, unmeasured_notes  # noqa: E402
+from plots.loader import history_time, measured, unmeasured_notes  # noqa: E402
 from plots.paper_context import FigureOutcome, NotProduced, PaperContext, run_standalone  # noqa: E402
 
 SUITE = "fig10"
@@ -41,8 +41,13 @@ def speedup(res, snap, ica_label, column, with_setup=False):
     hm, hi = res.history(snap, MPRGP), res.history(snap, ica_label)
     run = lambda lab: res.runs[(res.runs["snapshot"] == snap) & (res.runs["label"] == lab)].iloc[0]  # noqa: E731
     setup = lambda lab: float(run(lab)["setup_s"]) if with_setup and np.isfinite(run(lab)["setup_s"]) else 0.0  # noqa: E731
-    tm = figutil.settle_time(hm, column, LEVEL) + setup(MPRGP)
-    ti = figutil.settle_time(hi, column, LEVEL) + setup(ica_label)
+
+    def timed(h, lab):  # the history on the chosen clock (with or without setup, any file age)
+        h = h.copy()
+        h["time_s"] = history_time(h, run(lab), include_setup=with_setup)
+        return h
+    tm = figutil.settle_time(timed(hm, MPRGP), column, LEVEL)
+    ti = figutil.settle_time(timed(hi, ica_label), column, LEVEL)
     if not np.isfinite(tm) or tm <= 0:
         return float("nan"), False, tm, ti
     if np.isfinite(ti):

@@ -132,7 +132,8 @@ def stiff_histories(stress_dir: str, df: pd.DataFrame) -> dict:
         if not rows or "time_s" not in cols or "kkt_rel" not in cols:
             continue
         h = pd.DataFrame(rows, columns=cols)
-        setup = float((run.get("time") or {}).get("setup_s") or 0.0)
+        # Histories with solve_time_s are stamped from the start of setup (older ones: solve only).
+        setup = 0.0 if "solve_time_s" in cols else float((run.get("time") or {}).get("setup_s") or 0.0)
         curve = pd.DataFrame({"time_s": pd.to_numeric(h["time_s"], errors="coerce") + setup,
                               "error": pd.to_numeric(h["kkt_rel"], errors="coerce")}).dropna()
         if len(curve):

@@ -57,7 +57,9 @@ def error_curve(run: dict) -> pd.DataFrame:
         return df
     # Time from the start of setup: ichol's factorization of A is setup for cg but happens in
     # the solve for mprgp (its face is known only then); both count.
-    df["time_s"] = pd.to_numeric(df["time_s"], errors="coerce") + float(run.get("time", {}).get("setup_s") or 0.0)
+    # Histories with solve_time_s are already stamped from the start of setup (older ones: solve only).
+    setup = 0.0 if "solve_time_s" in cols else float(run.get("time", {}).get("setup_s") or 0.0)
+    df["time_s"] = pd.to_numeric(df["time_s"], errors="coerce") + setup
     if run.get("solver") == "cg":
         stat = pd.to_numeric(df["stationarity"], errors="coerce")
         start = float(stat.iloc[0]) if len(stat) and stat.iloc[0] > 0 else float("nan")
