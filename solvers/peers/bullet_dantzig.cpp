@@ -1,14 +1,9 @@
 // Bullet's Dantzig LCP pivoting on the dual LCP, in a child process (see bullet_dantzig.hpp).
 #include "solvers/peers/bullet_dantzig.hpp"
-#include "solvers/dual_lcp.hpp"
-#include "solvers/peers/child_process.hpp"
-#include "solvers/peers/siconos_report.hpp"
-#include "solvers/solve_loop.hpp"
+#include "solvers/peers/dual_lcp_peer.hpp"
 
 #include <BulletDynamics/MLCPSolvers/btDantzigLCP.h>
 
-#include <cstring>
-#include <sstream>
 #include <vector>
 
 namespace cb {
@@ -52,77 +47,27 @@ std::vector<char> run_dantzig(Eigen::MatrixXd& W, const Vec& q)
     SiconosReport report;
     report.info = ok && Eigen::Map<const Vec>(x.data(), m).allFinite() ? 0 : 1;
     report.iterations = m;
-    std::vector<char> out(x.size() * sizeof(double) + sizeof report);
-    std::memcpy(out.data(), x.data(), x.size() * sizeof(double));
-    std::memcpy(out.data() + x.size() * sizeof(double), &report, sizeof report);
-    return out;
+    return encode_child_reply(x.data(), x.size(), report);
 }
 
 }  // namespace
 
 SolverResult BulletDantzigSolver::solve(const QpView& qp, const SolveContext& context)
 {
-    const BulletDantzigSettings& s = m_settings;
-    const Eigen::Index m = qp.m();
     SolverResult result;
-    Counters& counters = result.counters;
-    result.x = qp.x0;
-    result.lambda = Vec::Zero(m);
     result.info["library"] = std::string("Bullet ") + CB_BULLET_VERSION;
     result.info["history"] = "final point only (Bullet's Dantzig pivoting has no iteration callback)";
-    result.info["child_process"] = true;
     result.info["native_residual_definition"] = "||min(lambda, W lambda + q)||_2 / (1 + ||q||_2) on the dual LCP";
     result.info["not_passed"] = "tol and max_iterations (Dantzig's method takes neither; tol is the harness's verdict)";
-    if (m > s.max_rows) {
-        result.status = SolveStatus::NOT_APPLICABLE;
-        result.message = "bullet-dantzig: m = " + std::to_string(m) +
-                         " rows exceeds max_rows = " + std::to_string(s.max_rows) +
-                         " (W = J A^-1 J' is dense m x m); raise max_rows to allow it";
-        return result;
-    }
-    SolveLoop loop("bullet-dantzig", qp, s.common, context);
-    DualLcp dual;
-    std::string error;
-    if (!dual.form(qp, counters, error))
-        return loop.finish(result, SolveStatus::INVALID_INPUT, "", "bullet-dantzig: " + error);
-    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT, "", loop.time_limit_message());
-    if (m == 0) {  // btSolveDantzigLCP asserts n > 0
-        result.x = dual.unconstrained();
-        const Vec g = qp.A * result.x - qp.b;
-        ++counters.a_products;
-        const bool ok = accuracy_converged(qp, accuracy_scale(qp), result.x, g, result.lambda, s.common.tol);
-        return loop.finish(result, ok ? SolveStatus::CONVERGED : SolveStatus::STALLED, ok ? "kkt" : "",
-                           "bullet-dantzig: no constraints: x = A^-1 b (Bullet not called)");
-    }
-    const size_t expected = static_cast<size_t>(m) * sizeof(double) + sizeof(SiconosReport);
-    const ChildOutcome child =
-        run_in_child([&]() { return run_dantzig(dual.W(), dual.q()); }, loop.stopwatch(), s.common.time_limit_s);
-    const std::vector<char>& bytes = child.bytes;
-    if (child.timed_out)
-        return loop.finish(result, SolveStatus::TIME_LIMIT, "",
-                           loop.time_limit_message() + "; the child process was killed");
-    if (child.failed || bytes.size() != expected) {
-        result.info["crashed"] = true;
-        std::ostringstream msg;
-        msg << "bullet-dantzig: the Bullet child process " << (child.failed ? child.failure : "sent") << " ("
-            << bytes.size() << " of " << expected << " bytes received)";
-        return loop.finish(result, SolveStatus::DIVERGED, "", msg.str());
-    }
-    result.info["crashed"] = false;
-    std::memcpy(result.lambda.data(), bytes.data(), static_cast<size_t>(m) * sizeof(double));
-    SiconosReport report;
-    std::memcpy(&report, bytes.data() + static_cast<size_t>(m) * sizeof(double), sizeof report);
-    counters.iterations = report.iterations;
-    counters.lcp_iterations = report.iterations;
-    // Bullet reports no error of its own: the LCP's natural residual, on the W the parent kept.
-    report.residual = result.lambda.cwiseMin(dual.W() * result.lambda + dual.q()).norm() / (1.0 + dual.q().norm());
-    result.x = dual.primal(qp, result.lambda, counters);  // x from lambda, before the final measure
-    result.setup_s = loop.setup_s();                      // the final monitor call's stamp
-    result.solve_s = loop.solve_s();
-    finish_siconos_result(qp, s.common, context, report, "bullet-dantzig: Bullet btSolveDantzigLCP",
-                          "driving indexes (m: Bullet counts neither its pivots nor where it stopped)", counters,
-                          result);
-    return loop.finish(result, result.status, result.criterion);
+    DualLcpPeer peer;
+    peer.name = "bullet-dantzig";
+    peer.library = "Bullet";
+    peer.method = "bullet-dantzig: Bullet btSolveDantzigLCP";
+    peer.steps = "driving indexes (m: Bullet counts neither its pivots nor where it stopped)";
+    peer.max_rows = m_settings.max_rows;
+    peer.residual_from_lcp = true;  // Bullet reports no error of its own
+    peer.run = [](Eigen::MatrixXd& W, Vec& q) { return run_dantzig(W, q); };
+    return solve_dual_lcp_peer(qp, context, m_settings.common, peer, std::move(result));
 }
 
 SolverEntry bullet_dantzig_entry()

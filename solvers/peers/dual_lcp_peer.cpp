@@ -1,0 +1,79 @@
+// The shared solve of the dual-LCP peers (see dual_lcp_peer.hpp).
+#include "solvers/peers/dual_lcp_peer.hpp"
+#include "solvers/dual_lcp.hpp"
+#include "solvers/peers/child_process.hpp"
+#include "solvers/solve_loop.hpp"
+
+#include <cstring>
+#include <sstream>
+
+namespace cb {
+
+std::vector<char> encode_child_reply(const double* lambda, size_t m, const SiconosReport& report)
+{
+    std::vector<char> out(m * sizeof(double) + sizeof report);
+    std::memcpy(out.data(), lambda, m * sizeof(double));
+    std::memcpy(out.data() + m * sizeof(double), &report, sizeof report);
+    return out;
+}
+
+SolverResult solve_dual_lcp_peer(const QpView& qp, const SolveContext& context, const CommonSettings& common,
+                                 const DualLcpPeer& peer, SolverResult result)
+{
+    const Eigen::Index m = qp.m();
+    Counters& counters = result.counters;
+    result.x = qp.x0;
+    result.lambda = Vec::Zero(m);
+    result.info["child_process"] = true;
+    if (m > peer.max_rows) {
+        result.status = SolveStatus::NOT_APPLICABLE;
+        result.message = peer.name + ": m = " + std::to_string(m) +
+                         " rows exceeds max_rows = " + std::to_string(peer.max_rows) +
+                         " (W = J A^-1 J' is dense m x m); raise max_rows to allow it";
+        return result;
+    }
+    SolveLoop loop(peer.name, qp, common, context);
+    DualLcp dual;
+    std::string error;
+    if (!dual.form(qp, counters, error))
+        return loop.finish(result, SolveStatus::INVALID_INPUT, "", peer.name + ": " + error);
+    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT, "", loop.time_limit_message());
+    if (m == 0) {  // both libraries assert on an empty LCP (an abort of the process, seen in the child)
+        result.x = dual.unconstrained();
+        const Vec g = qp.A * result.x - qp.b;
+        ++counters.a_products;
+        const bool ok = accuracy_converged(qp, accuracy_scale(qp), result.x, g, result.lambda, common.tol);
+        return loop.finish(result, ok ? SolveStatus::CONVERGED : SolveStatus::STALLED, ok ? "kkt" : "",
+                           peer.name + ": no constraints: x = A^-1 b (" + peer.library + " not called)");
+    }
+    const size_t expected = static_cast<size_t>(m) * sizeof(double) + sizeof(SiconosReport);
+    const ChildOutcome child =
+        run_in_child([&]() { return peer.run(dual.W(), dual.q()); }, loop.stopwatch(), common.time_limit_s);
+    const std::vector<char>& bytes = child.bytes;
+    if (child.timed_out)
+        return loop.finish(result, SolveStatus::TIME_LIMIT, "",
+                           loop.time_limit_message() + "; the child process was killed");
+    if (child.failed || bytes.size() != expected) {
+        result.info["crashed"] = true;
+        std::ostringstream msg;
+        msg << peer.name << ": the " << peer.library << " child process " << (child.failed ? child.failure : "sent")
+            << " (" << bytes.size() << " of " << expected << " bytes received)";
+        return loop.finish(result, SolveStatus::DIVERGED, "", msg.str());
+    }
+    result.info["crashed"] = false;
+    std::memcpy(result.lambda.data(), bytes.data(), static_cast<size_t>(m) * sizeof(double));
+    SiconosReport report;
+    std::memcpy(&report, bytes.data() + static_cast<size_t>(m) * sizeof(double), sizeof report);
+    counters.iterations = report.iterations;
+    counters.lcp_iterations = report.iterations;
+    if (peer.steps_are_pivots) counters.pivots = report.iterations;
+    if (peer.residual_from_lcp)  // on the W the parent kept
+        report.residual = result.lambda.cwiseMin(dual.W() * result.lambda + dual.q()).norm() / (1.0 + dual.q().norm());
+    result.x = dual.primal(qp, result.lambda, counters);  // x from lambda, before the final measure
+    result.setup_s = loop.setup_s();                      // the final monitor call's stamp
+    result.solve_s = loop.solve_s();
+    finish_siconos_result(qp, common, context, report, peer.method, peer.steps, counters, result);
+    return loop.finish(result, result.status, result.criterion);
+}
+
+}  // namespace cb
