@@ -65,7 +65,7 @@ TEST_P(Peers, AgreeWithActiveSetOnTheCiSuite)
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(Installed, Peers, ::testing::Values("ipopt", "siconos-lemke", "siconos-nsn", "bullet-dantzig"),
+INSTANTIATE_TEST_SUITE_P(Installed, Peers, ::testing::Values("ipopt", "siconos-lemke", "siconos-nsn", "bullet-dantzig", "tao-pdipm"),
                          [](const ::testing::TestParamInfo<std::string>& p) {
                              std::string s = p.param;
                              std::replace(s.begin(), s.end(), '-', '_');
