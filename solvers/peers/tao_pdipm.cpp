@@ -177,7 +177,7 @@ std::vector<char> run_pdipm(const QpView& qp, const CommonSettings& common)
 #endif
         true) {
         const bool native = common.stop == StopRule::NATIVE;
-        run.gatol = native ? common.tol : 1e-4 * common.tol;
+        run.gatol = native ? common.tol : 1e-2 * common.tol;
         PetscErrorCode ierr = pdipm(qp, common.max_iterations, run.gatol, x, lambda, run);
         // TAO's tolerances are absolute on its own residuals: it can declare success at a point the
         // common KKT test rejects. Then ask for 1e3 times more, once.

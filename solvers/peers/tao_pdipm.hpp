@@ -7,7 +7,7 @@
 /// Fixed options: variable bounds -inf/+inf are set (TAOPDIPM dereferences them and segfaults
 /// without), and the KKT systems are solved directly (`-ksp_type preonly -pc_type lu`, MUMPS when
 /// PETSc has it): the default GMRES + ILU fails on stiff problems.
-/// Settings: tol -> TAO's gatol and catol = 1e-4 * tol (stop=native: = tol); if TAO says converged
+/// Settings: tol -> TAO's gatol and catol = 1e-2 * tol (stop=native: = tol); if TAO says converged
 /// at a point the harness's KKT test rejects, the child re-solves once with them / 1e3.
 /// max_iterations -> TaoSetMaximumIterations. TAO runs in a forked child process (PETSc and MPI
 /// are initialised there, once per solve), so time_limit_s ends the child (status `time_limit`)
