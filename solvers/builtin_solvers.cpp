@@ -13,6 +13,9 @@
 #ifdef CB_HAVE_BULLET
 #include "solvers/peers/bullet_dantzig.hpp"
 #endif
+#ifdef CB_HAVE_PETSC
+#include "solvers/peers/tao_pdipm.hpp"
+#endif
 #ifdef CB_HAVE_SICONOS
 #include "solvers/peers/siconos_lemke.hpp"
 #include "solvers/peers/siconos_nsn.hpp"
@@ -49,6 +52,9 @@ void register_builtin_solvers(SolverRegistry& registry)
     registry.add("siconos-lemke",
                  applies_to(siconos_lemke_entry(), "any J with at most max_rows rows (dense dual LCP)"));
     registry.add("siconos-nsn", applies_to(siconos_nsn_entry(), "any J (global problem, mu = 0)"));
+#endif
+#ifdef CB_HAVE_PETSC
+    registry.add("tao-pdipm", applies_to(tao_pdipm_entry(), "any J (interior point on the primal QP)"));
 #endif
 #ifdef CB_HAVE_BULLET
     registry.add("bullet-dantzig",

@@ -65,7 +65,7 @@ TEST_P(Peers, AgreeWithActiveSetOnTheCiSuite)
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(Installed, Peers, ::testing::Values("ipopt", "siconos-lemke", "siconos-nsn", "bullet-dantzig"),
+INSTANTIATE_TEST_SUITE_P(Installed, Peers, ::testing::Values("ipopt", "siconos-lemke", "siconos-nsn", "bullet-dantzig", "tao-pdipm"),
                          [](const ::testing::TestParamInfo<std::string>& p) {
                              std::string s = p.param;
                              std::replace(s.begin(), s.end(), '-', '_');
@@ -73,8 +73,8 @@ INSTANTIATE_TEST_SUITE_P(Installed, Peers, ::testing::Values("ipopt", "siconos-l
                          });
 
 // time_limit_s counts setup (docs/DESIGN.md "The solve loop"): on the dual peers forming W uses
-// it all up, so the limit is reported during setup; siconos-nsn has no setup: its child process
-// starts, and the limit kills it. Either way it is a recorded status.
+// it all up, so the limit is reported during setup; siconos-nsn and tao-pdipm have no setup: their
+// child process starts, and the limit kills it. Either way it is a recorded status.
 TEST(PeersTimeLimit, CountsSetupAndEndsTheChildProcess)
 {
     const Qp qp = cb::make_synthetic("plane", {{"nx", 4}, {"ny", 4}, {"nz", 4}}, 11);
@@ -87,15 +87,15 @@ TEST(PeersTimeLimit, CountsSetupAndEndsTheChildProcess)
         EXPECT_EQ(r.status, SolveStatus::TIME_LIMIT) << r.message;
         EXPECT_EQ(r.message.rfind(name + ": time limit of 1e-09 s reached during setup (after ", 0), 0u) << r.message;
     }
-    if (cb::builtin_registry().contains("siconos-nsn")) {
+    for (const std::string name : {"siconos-nsn", "tao-pdipm"}) {
+        if (!cb::builtin_registry().contains(name)) continue;
         ++ran;
-        const SolverResult nsn = cb::builtin_registry()
-                                     .create("siconos-nsn", {{"time_limit_s", 1e-9}})
-                                     ->solve(qp.view(), cb::SolveContext{});
-        EXPECT_EQ(nsn.status, SolveStatus::TIME_LIMIT) << nsn.message;
+        const SolverResult r =
+            cb::builtin_registry().create(name, {{"time_limit_s", 1e-9}})->solve(qp.view(), cb::SolveContext{});
+        EXPECT_EQ(r.status, SolveStatus::TIME_LIMIT) << r.message;
         const std::string killed = "; the child process was killed";
-        ASSERT_GE(nsn.message.size(), killed.size());
-        EXPECT_EQ(nsn.message.substr(nsn.message.size() - killed.size()), killed) << nsn.message;
+        ASSERT_GE(r.message.size(), killed.size());
+        EXPECT_EQ(r.message.substr(r.message.size() - killed.size()), killed) << r.message;
     }
     if (ran == 0) GTEST_SKIP() << "no peer with a time limit is built";
 }
@@ -205,5 +205,18 @@ TEST(Ipopt, MaxIterationsIsIpoptsMaxIter)
         cb::builtin_registry().create("ipopt", {{"max_iterations", 2}})->solve(qp.view(), cb::SolveContext{});
     EXPECT_EQ(r.status, SolveStatus::MAX_ITERATIONS) << r.message;
     EXPECT_EQ(r.info.value("ipopt_status", ""), "Maximum_Iterations_Exceeded");
+    EXPECT_EQ(r.iterations, 2);
+}
+
+// max_iterations maps onto TaoSetMaximumIterations: TAO stops with DIVERGED_MAXITS after exactly
+// that many iterations, and the status is max_iterations (not converged) with TAO's reason kept.
+TEST(TaoPdipm, MaxIterationsIsTaosMaximumIterations)
+{
+    if (!cb::builtin_registry().contains("tao-pdipm")) GTEST_SKIP() << "tao-pdipm is not built";
+    const Qp qp = cb::make_synthetic("plane", {{"nx", 4}, {"ny", 4}, {"nz", 4}}, 11);
+    const SolverResult r =
+        cb::builtin_registry().create("tao-pdipm", {{"max_iterations", 2}})->solve(qp.view(), cb::SolveContext{});
+    EXPECT_EQ(r.status, SolveStatus::MAX_ITERATIONS) << r.message;
+    EXPECT_EQ(r.info.value("tao_reason", ""), "DIVERGED_MAXITS");
     EXPECT_EQ(r.iterations, 2);
 }

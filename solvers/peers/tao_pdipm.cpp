@@ -1,0 +1,275 @@
+// PETSc TAO's TAOPDIPM as an external peer, run in a child process (see tao_pdipm.hpp).
+#include "solvers/peers/tao_pdipm.hpp"
+#include "solvers/a_product.hpp"
+#include "solvers/accuracy.hpp"
+#include "solvers/peers/child_process.hpp"
+#include "solvers/peers/siconos_report.hpp"
+#include "solvers/solve_loop.hpp"
+
+#include <petsctao.h>
+
+#include <algorithm>
+#include <cstring>
+#include <sstream>
+#include <vector>
+
+namespace cb {
+
+TaoPdipmSettings TaoPdipmSettings::from_json(const nlohmann::json& settings)
+{
+    SettingsReader reader(settings, "tao-pdipm");
+    TaoPdipmSettings s;
+    s.common = reader.common();
+    reader.finish();
+    return s;
+}
+
+nlohmann::json TaoPdipmSettings::to_json() const { return common.to_json(); }
+
+namespace {
+
+// PETSc's Vec and Mat are the global ::Vec and ::Mat here (cb::Vec is Eigen's).
+struct TaoQp {
+    const QpView* qp;
+    cb::Vec x;  // scratch
+};
+
+/// A sequential AIJ copy of S (any storage order).
+PetscErrorCode aij(const SpMat& S, Mat* out)
+{
+    const Eigen::SparseMatrix<double, Eigen::RowMajor> R = S;
+    std::vector<PetscInt> rows(static_cast<size_t>(R.rows()) + 1), cols(static_cast<size_t>(R.nonZeros()));
+    for (Eigen::Index i = 0; i <= R.rows(); ++i) rows[static_cast<size_t>(i)] = R.outerIndexPtr()[i];
+    for (Eigen::Index k = 0; k < R.nonZeros(); ++k) cols[static_cast<size_t>(k)] = R.innerIndexPtr()[k];
+    PetscFunctionBeginUser;
+    PetscCall(MatCreate(PETSC_COMM_SELF, out));
+    PetscCall(MatSetSizes(*out, static_cast<PetscInt>(R.rows()), static_cast<PetscInt>(R.cols()),
+                          static_cast<PetscInt>(R.rows()), static_cast<PetscInt>(R.cols())));
+    PetscCall(MatSetType(*out, MATSEQAIJ));
+    PetscCall(MatSeqAIJSetPreallocationCSR(*out, rows.data(), cols.data(), R.valuePtr()));
+    PetscFunctionReturn(0);
+}
+
+PetscErrorCode objective_and_gradient(Tao, ::Vec X, PetscReal* f, ::Vec G, void* ctx)
+{
+    const QpView& qp = *static_cast<TaoQp*>(ctx)->qp;
+    const PetscScalar* x;
+    PetscScalar* g;
+    PetscFunctionBeginUser;
+    PetscCall(VecGetArrayRead(X, &x));
+    PetscCall(VecGetArray(G, &g));
+    const Eigen::Map<const cb::Vec> xv(x, qp.n());
+    Eigen::Map<cb::Vec> gv(g, qp.n());
+    gv = qp.A * xv;
+    *f = 0.5 * xv.dot(gv) - qp.b.dot(xv);
+    gv -= qp.b;
+    PetscCall(VecRestoreArray(G, &g));
+    PetscCall(VecRestoreArrayRead(X, &x));
+    PetscFunctionReturn(0);
+}
+
+PetscErrorCode hessian(Tao, ::Vec, Mat, Mat, void*) { return 0; }  // constant: A, set once
+
+PetscErrorCode inequalities(Tao, ::Vec X, ::Vec C, void* ctx)
+{
+    const QpView& qp = *static_cast<TaoQp*>(ctx)->qp;
+    const PetscScalar* x;
+    PetscScalar* c;
+    PetscFunctionBeginUser;
+    PetscCall(VecGetArrayRead(X, &x));
+    PetscCall(VecGetArray(C, &c));
+    Eigen::Map<cb::Vec>(c, qp.m()) = qp.J * Eigen::Map<const cb::Vec>(x, qp.n()) - qp.c;
+    PetscCall(VecRestoreArray(C, &c));
+    PetscCall(VecRestoreArrayRead(X, &x));
+    PetscFunctionReturn(0);
+}
+
+PetscErrorCode inequality_jacobian(Tao, ::Vec, Mat, Mat, void*) { return 0; }  // constant: J
+
+struct TaoRun {
+    SiconosReport report;
+    int reason = 0;  // TaoConvergedReason
+    int resolves = 0;
+    double gatol = 0.0;
+};
+
+/// One TAOPDIPM solve from qp.x0 with gatol = catol = `tol_tao`; x and lambda (m) out.
+PetscErrorCode pdipm(const QpView& qp, long max_iterations, double tol_tao, cb::Vec& x_out, cb::Vec& lambda_out,
+                     TaoRun& run)
+{
+    const PetscInt n = static_cast<PetscInt>(qp.n()), m = static_cast<PetscInt>(qp.m());
+    TaoQp ctx{&qp, cb::Vec()};
+    Tao tao;
+    ::Vec X, XL, XU, C, DE = nullptr, DI = nullptr;
+    Mat H, JC;
+    PetscFunctionBeginUser;
+    PetscCall(aij(qp.A, &H));
+    PetscCall(aij(qp.J, &JC));
+    PetscCall(VecCreateSeq(PETSC_COMM_SELF, n, &X));
+    PetscCall(VecDuplicate(X, &XL));
+    PetscCall(VecDuplicate(X, &XU));
+    PetscCall(VecSet(XL, PETSC_NINFINITY));
+    PetscCall(VecSet(XU, PETSC_INFINITY));
+    PetscCall(VecCreateSeq(PETSC_COMM_SELF, m, &C));
+    PetscScalar* x;
+    PetscCall(VecGetArray(X, &x));
+    Eigen::Map<cb::Vec>(x, qp.n()) = qp.x0;
+    PetscCall(VecRestoreArray(X, &x));
+
+    PetscCall(TaoCreate(PETSC_COMM_SELF, &tao));
+    PetscCall(TaoSetType(tao, TAOPDIPM));
+    PetscCall(TaoSetSolution(tao, X));
+    PetscCall(TaoSetVariableBounds(tao, XL, XU));
+    PetscCall(TaoSetObjectiveAndGradient(tao, nullptr, objective_and_gradient, &ctx));
+    PetscCall(TaoSetHessian(tao, H, H, hessian, &ctx));
+    PetscCall(TaoSetInequalityConstraintsRoutine(tao, C, inequalities, &ctx));
+    PetscCall(TaoSetJacobianInequalityRoutine(tao, JC, JC, inequality_jacobian, &ctx));
+    PetscCall(TaoSetTolerances(tao, tol_tao, 0.0, 0.0));
+    PetscCall(TaoSetConstraintTolerances(tao, tol_tao, 0.0));
+    PetscCall(TaoSetMaximumIterations(tao, static_cast<PetscInt>(std::min<long>(max_iterations, 1L << 30))));
+    PetscCall(TaoSetFromOptions(tao));  // the -ksp/-pc options set by run_pdipm
+    PetscCall(TaoSolve(tao));
+
+    PetscInt its;
+    PetscReal f, gnorm, cnorm, xdiff;
+    TaoConvergedReason reason;
+    PetscCall(TaoGetSolutionStatus(tao, &its, &f, &gnorm, &cnorm, &xdiff, &reason));
+    run.reason = static_cast<int>(reason);
+    run.report.info = reason > 0 ? 0 : static_cast<int>(reason);
+    run.report.iterations += static_cast<int>(its);
+    run.report.residual = std::max(gnorm, cnorm);
+    run.report.max_iterations_reached = reason == TAO_DIVERGED_MAXITS;
+    const PetscScalar* xs;
+    PetscCall(VecGetArrayRead(X, &xs));
+    x_out = Eigen::Map<const cb::Vec>(xs, qp.n());
+    PetscCall(VecRestoreArrayRead(X, &xs));
+    PetscCall(TaoGetDualVariables(tao, &DE, &DI));
+    lambda_out = cb::Vec::Zero(qp.m());
+    if (DI) {  // PDIPM's inequality multipliers (no bounds are finite, so these are Jx - c >= 0's)
+        PetscInt size;
+        PetscCall(VecGetSize(DI, &size));
+        const PetscScalar* l;
+        PetscCall(VecGetArrayRead(DI, &l));
+        for (PetscInt i = 0; i < std::min(size, m); ++i) lambda_out[i] = l[i];
+        PetscCall(VecRestoreArrayRead(DI, &l));
+    }
+    PetscCall(TaoDestroy(&tao));
+    PetscCall(MatDestroy(&H));
+    PetscCall(MatDestroy(&JC));
+    PetscCall(VecDestroy(&X));
+    PetscCall(VecDestroy(&XL));
+    PetscCall(VecDestroy(&XU));
+    PetscCall(VecDestroy(&C));
+    PetscFunctionReturn(0);
+}
+
+/// In the child: returns x (n doubles), lambda (m doubles), then a TaoRun.
+std::vector<char> run_pdipm(const QpView& qp, const CommonSettings& common)
+{
+    const Eigen::Index n = qp.n(), m = qp.m();
+    cb::Vec x = qp.x0, lambda = cb::Vec::Zero(m);
+    TaoRun run;
+    // A direct inner solver: the default GMRES + ILU fails on stiff problems.
+    if (PetscInitializeNoArguments() == 0 && PetscOptionsSetValue(nullptr, "-ksp_type", "preonly") == 0 &&
+        PetscOptionsSetValue(nullptr, "-pc_type", "lu") == 0 &&
+#ifdef PETSC_HAVE_MUMPS
+        PetscOptionsSetValue(nullptr, "-pc_factor_mat_solver_type", "mumps") == 0 &&
+#endif
+        true) {
+        const bool native = common.stop == StopRule::NATIVE;
+        run.gatol = native ? common.tol : 1e-2 * common.tol;
+        PetscErrorCode ierr = pdipm(qp, common.max_iterations, run.gatol, x, lambda, run);
+        // TAO's tolerances are absolute on its own residuals: it can declare success at a point the
+        // common KKT test rejects. Then ask for 1e3 times more, once.
+        if (ierr == 0 && !native && run.reason > 0) {
+            const cb::Vec g = a_product(qp.A, x) - qp.b;
+            if (!accuracy_converged(qp, accuracy_scale(qp), x, g, lambda, common.tol) && run.gatol > 1e-15) {
+                run.gatol = std::max(1e-15, run.gatol * 1e-3);
+                ++run.resolves;
+                ierr = pdipm(qp, common.max_iterations, run.gatol, x, lambda, run);
+            }
+        }
+        if (ierr != 0) run.report.info = -1000 - static_cast<int>(ierr);
+        PetscFinalize();
+    } else {
+        run.report.info = -2000;
+    }
+    std::vector<char> out(static_cast<size_t>(n + m) * sizeof(double) + sizeof run);
+    std::memcpy(out.data(), x.data(), static_cast<size_t>(n) * sizeof(double));
+    std::memcpy(out.data() + n * sizeof(double), lambda.data(), static_cast<size_t>(m) * sizeof(double));
+    std::memcpy(out.data() + (n + m) * sizeof(double), &run, sizeof run);
+    return out;
+}
+
+}  // namespace
+
+SolverResult TaoPdipmSolver::solve(const QpView& qp, const SolveContext& context)
+{
+    const TaoPdipmSettings& s = m_settings;
+    const Eigen::Index n = qp.n(), m = qp.m();
+    SolverResult result;
+    Counters& counters = result.counters;
+    result.x = qp.x0;
+    result.lambda = cb::Vec::Zero(m);
+    result.info["library"] = "PETSc " PETSC_VERSION_STRING_CB;
+    result.info["history"] = "final point only (TAO's monitor is not forwarded from the child process)";
+    result.info["child_process"] = true;
+    result.info["native_residual_definition"] = "max of TAO's gradient norm and constraint norm";
+#ifdef PETSC_HAVE_MUMPS
+    const char* factor = "mumps";
+#else
+    const char* factor = "petsc";
+#endif
+    result.info["tao_options"] = {{"tao_type", "pdipm"},
+                                  {"ksp_type", "preonly"},
+                                  {"pc_type", "lu"},
+                                  {"pc_factor_mat_solver_type", factor},
+                                  {"variable_bounds", "-inf, +inf"}};
+    SolveLoop loop("tao-pdipm", qp, s.common, context);  // no setup: the child does all the work
+    loop.end_setup();
+    const size_t expected = static_cast<size_t>(n + m) * sizeof(double) + sizeof(TaoRun);
+    const ChildOutcome child =
+        run_in_child([&]() { return run_pdipm(qp, s.common); }, loop.stopwatch(), s.common.time_limit_s);
+    if (child.timed_out)
+        return loop.finish(result, SolveStatus::TIME_LIMIT, "",
+                           loop.time_limit_message() + "; the child process was killed");
+    if (child.failed || child.bytes.size() != expected) {
+        result.info["crashed"] = true;
+        std::ostringstream msg;
+        msg << "tao-pdipm: the PETSc child process " << (child.failed ? child.failure : "sent") << " ("
+            << child.bytes.size() << " of " << expected << " bytes received)";
+        return loop.finish(result, SolveStatus::DIVERGED, "", msg.str());
+    }
+    result.info["crashed"] = false;
+    const char* p = child.bytes.data();
+    std::memcpy(result.x.data(), p, static_cast<size_t>(n) * sizeof(double));
+    std::memcpy(result.lambda.data(), p + n * sizeof(double), static_cast<size_t>(m) * sizeof(double));
+    TaoRun run;
+    std::memcpy(&run, p + (n + m) * sizeof(double), sizeof run);
+    counters.iterations = run.report.iterations;
+    result.info["tao_reason"] = TaoConvergedReasons[run.reason];
+    result.info["tao_gatol_last"] = run.gatol;
+    result.setup_s = loop.setup_s();
+    result.solve_s = loop.solve_s();
+    finish_siconos_result(qp, s.common, context, run.report, "tao-pdipm: TAOPDIPM", "iterations", counters, result);
+    std::ostringstream msg;
+    msg << result.message << "; TAO reason " << TaoConvergedReasons[run.reason];
+    if (run.resolves > 0) msg << " (re-solved once with gatol = catol = " << run.gatol << ")";
+    result.message = msg.str();
+    return loop.finish(result, result.status, result.criterion);
+}
+
+SolverEntry tao_pdipm_entry()
+{
+    SolverEntry e;
+    e.library = "PETSc " PETSC_VERSION_STRING_CB;
+    e.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
+        return std::make_unique<TaoPdipmSolver>(TaoPdipmSettings::from_json(settings));
+    };
+    e.description =
+        "peer: PETSc " PETSC_VERSION_STRING_CB
+        " TAO primal-dual interior point (TAOPDIPM, direct LU inner solves) on the primal QP (child process)";
+    return e;
+}
+
+}  // namespace cb
