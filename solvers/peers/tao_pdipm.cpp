@@ -86,6 +86,8 @@ PetscErrorCode inequalities(Tao, ::Vec X, ::Vec C, void* ctx)
 
 PetscErrorCode inequality_jacobian(Tao, ::Vec, Mat, Mat, void*) { return 0; }  // constant: J
 
+constexpr long kIterationCap = 200;
+
 struct TaoRun {
     SiconosReport report;
     int reason = 0;  // TaoConvergedReason
@@ -126,7 +128,10 @@ PetscErrorCode pdipm(const QpView& qp, long max_iterations, double tol_tao, cb::
     PetscCall(TaoSetJacobianInequalityRoutine(tao, JC, JC, inequality_jacobian, &ctx));
     PetscCall(TaoSetTolerances(tao, tol_tao, 0.0, 0.0));
     PetscCall(TaoSetConstraintTolerances(tao, tol_tao, 0.0));
-    PetscCall(TaoSetMaximumIterations(tao, static_cast<PetscInt>(std::min<long>(max_iterations, 1L << 30))));
+    // An interior point converges in tens of iterations; at an absolute tolerance beyond its
+    // reach TAOPDIPM iterates without end, so it is capped (the cap is `stalled`, not max_iterations).
+    const long cap = std::min<long>(max_iterations, kIterationCap);
+    PetscCall(TaoSetMaximumIterations(tao, static_cast<PetscInt>(cap)));
     PetscCall(TaoSetFromOptions(tao));  // the -ksp/-pc options set by run_pdipm
     PetscCall(TaoSolve(tao));
 
@@ -138,7 +143,7 @@ PetscErrorCode pdipm(const QpView& qp, long max_iterations, double tol_tao, cb::
     run.report.info = reason > 0 ? 0 : static_cast<int>(reason);
     run.report.iterations += static_cast<int>(its);
     run.report.residual = std::max(gnorm, cnorm);
-    run.report.max_iterations_reached = reason == TAO_DIVERGED_MAXITS;
+    run.report.max_iterations_reached = reason == TAO_DIVERGED_MAXITS && cap == max_iterations;
     const PetscScalar* xs;
     PetscCall(VecGetArrayRead(X, &xs));
     x_out = Eigen::Map<const cb::Vec>(xs, qp.n());
