@@ -315,7 +315,12 @@ def build_base(sha, jobs):
     clone_key = re.sub(r"[^A-Za-z0-9]+", "-", os.path.realpath(git("rev-parse", "--git-common-dir")).strip("/"))
     tree = os.path.join(root, "worktree-" + clone_key[-80:])
     git("worktree", "prune")
-    if not os.path.isdir(os.path.join(tree, ".git")) and not os.path.isfile(os.path.join(tree, ".git")):
+    # A folder left by an earlier clone at the same path (deleted and cloned again) is not a
+    # worktree of this repository: its checkout would fail, so it is made anew.
+    registered = os.path.realpath(tree) in [os.path.realpath(line[len("worktree "):])
+                                            for line in git("worktree", "list", "--porcelain").splitlines()
+                                            if line.startswith("worktree ")]
+    if not registered:
         shutil.rmtree(tree, ignore_errors=True)
         os.makedirs(root, exist_ok=True)
         git("worktree", "add", "--detach", tree, sha)
