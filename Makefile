@@ -37,7 +37,7 @@ help:
 	@echo "                (PEERS=all: PETSc too, about 180 MB, for the TAO peers)"
 	@echo "make build      configure and build into $(BUILD)/"
 	@echo "make bench      Google Benchmark suite (JSON in results/bench/)"
-	@echo "make timing     monitored vs unmonitored time of every solver (ratio <= 1.2; run on a quiet machine)"
+	@echo "make timing     monitored vs unmonitored time of every solver (ratio <= 1.2; also in make test, serially)"
 	@echo "make baseline   re-record results/baselines/ci.csv from a clean tree (commit it alone, after the change)"
 	@echo "make paper-data fetch the authors' repository (simba518/MPRGP at 57fdd2c), verify it, extract"
 	@echo "                meshes, scenes and figure tables into DATA=$(DATA) (PAPER_DATA_SOURCE=URL|DIR|.tar.gz)"
@@ -122,7 +122,8 @@ docs-check:
 tidy: $(BUILD)/CMakeCache.txt
 	tools/tidy-changed.sh $(BUILD) $(or $(TIDY_BASE),main)
 
-# Same-run timing ratios (monitored vs unmonitored runs of every solver): a benchmark, not in `make test`.
+# Same-run timing ratios (monitored vs unmonitored runs of every solver), by themselves; `make test`
+# runs them too, serially (ctest label `timing`).
 timing: $(BUILD)/CMakeCache.txt
 	cmake --build $(BUILD) -j $(JOBS) --target test_monitor_timing
 	OPENBLAS_NUM_THREADS=1 $(BUILD)/tests/test_monitor_timing

@@ -29,8 +29,12 @@ int cmd_solvers(const Args& args)
             nlohmann::json settings = nlohmann::json::array();
             for (const auto& s : e.settings)
                 settings.push_back({{"key", s.key}, {"default", s.default_value}, {"doc", s.doc}});
-            out.push_back(
-                {{"name", name}, {"applies_to", e.applies_to}, {"description", e.description}, {"settings", settings}});
+            // library: the external library and version of a peer ("" for the project's own solvers)
+            out.push_back({{"name", name},
+                           {"applies_to", e.applies_to},
+                           {"description", e.description},
+                           {"library", e.library},
+                           {"settings", settings}});
         }
         std::cout << out.dump(1) << "\n";
         return 0;

@@ -50,6 +50,8 @@ public:
                    std::vector<int> kept_rows = {});
 
     bool on_iteration(const IterationInfo& info) override;
+    /// True when the next call is on the stride (and recording is on): the only calls it measures.
+    bool wants_iterate() const override { return m_record && m_calls % m_stride == 0; }
     /// Appends the returned point (x, lambda) as the final row unless the last call was recorded;
     /// its time_s is setup_s + solve_s, its solve_time_s solve_s.
     void finish(const Vec& x, const Vec& lambda, long iterations, double setup_s, double solve_s, long a_products,

@@ -27,6 +27,7 @@ const std::map<std::string, Kind>& column_kinds()
                                                       {"a_products_harness", Kind::INTEGER},
                                                       {"cholmod_factorizations", Kind::INTEGER},
                                                       {"precond_applications", Kind::INTEGER},
+                                                      {"work", Kind::REAL},
                                                       {"kkt_rel", Kind::REAL},
                                                       {"tol", Kind::REAL},
                                                       {"instructions", Kind::INTEGER},
@@ -76,6 +77,7 @@ const std::vector<std::string>& perf_record_columns()
                                                      "a_products_harness",
                                                      "cholmod_factorizations",
                                                      "precond_applications",
+                                                     "work",
                                                      "kkt_rel",
                                                      "tol",
                                                      "instructions",
@@ -125,7 +127,8 @@ std::vector<nlohmann::json> read_perf_record(const std::string& csv_path)
 
         nlohmann::json run = {{"snapshot", {{"id", snapshot}}}, {"label", label}, {"status", row["status"]}};
         nlohmann::json counters = nlohmann::json::object();
-        for (const char* c : {"a_products", "a_products_harness", "cholmod_factorizations", "precond_applications"})
+        for (const char* c :
+             {"a_products", "a_products_harness", "cholmod_factorizations", "precond_applications", "work"})
             if (row.count(c) && !row[c].is_null()) counters[c] = row[c];
         run["counters"] = counters;
         if (row.count("iterations") && !row["iterations"].is_null()) run["iterations"] = row["iterations"];

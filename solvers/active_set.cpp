@@ -291,12 +291,14 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
         info.step = step;
         info.x = returned ? returned : &x_monitor;
         info.lambda = &lambda;
-        info.native_residual = returned ? returned_native : (m > 0 ? max_violation_of(s) : 0.0);
+        info.native_residual = returned ? returned_native : 0.0;
         info.active_set_size = static_cast<long>(W.size());
         info.counters = &counters;
-        // Forming x is monitor work, not solver work: done inside the pause.
-        return loop.notify(info, [&] {
-            if (!returned) x_monitor = chol.solve(Vec(qp.b + Jt(lambda)));
+        // Forming x and the violation it shows are monitor work, not solver work: done inside the pause.
+        return loop.notify(info, [&](IterationInfo& shown) {
+            if (returned) return;
+            x_monitor = chol.solve(Vec(qp.b + Jt(lambda)));
+            shown.native_residual = m > 0 ? max_violation_of(s) : 0.0;
         });
     };
 

@@ -73,16 +73,28 @@ public:
     {
         return m_context.monitor ? notify_monitor(m_context, m_watch, info, setup_s()) : true;
     }
-    /// As notify(info), with `prepare()` run first inside the pause and only when a monitor
-    /// listens: work done only for the monitor (forming x from lambda) is not solver time.
+    /// As notify(info), with `prepare()` or `prepare(info)` run first inside the pause, only when
+    /// a monitor listens and wants this iterate (Monitor::wants_iterate): work done only for the
+    /// monitor (forming x from lambda, a residual only the history shows) is not solver time.
     template <class Prepare>
     bool notify(IterationInfo info, Prepare&& prepare)
     {
         if (!m_context.monitor) return true;  // no monitor: no preparation either
         using Callable = std::remove_reference_t<Prepare>;
+        struct Bound {
+            Callable* prepare;
+            IterationInfo* info;
+        } bound{&prepare, &info};
         return notify_monitor(
-            m_context, m_watch, info, setup_s(), [](void* p) { (*static_cast<Callable*>(p))(); },
-            const_cast<void*>(static_cast<const void*>(&prepare)));
+            m_context, m_watch, info, setup_s(),
+            [](void* p) {
+                Bound& b = *static_cast<Bound*>(p);
+                if constexpr (std::is_invocable_v<Callable&, IterationInfo&>)
+                    (*b.prepare)(*b.info);
+                else
+                    (*b.prepare)();
+            },
+            &bound);
     }
 
     /// "time limit of L s reached during setup (after T s of setup)" or "time limit of L s

@@ -92,12 +92,17 @@ bool notify_monitor(const SolveContext& context, Stopwatch& watch, IterationInfo
     return context.monitor->on_iteration(info);
 }
 
-bool notify_monitor(const SolveContext& context, Stopwatch& watch, IterationInfo info, double setup_s,
+bool notify_monitor(const SolveContext& context, Stopwatch& watch, IterationInfo& info, double setup_s,
                     void (*prepare)(void*), void* prepare_data)
 {
     if (!context.monitor) return true;
     PausedScope paused(watch);
-    if (prepare) prepare(prepare_data);
+    if (prepare) {
+        if (context.monitor->wants_iterate())
+            prepare(prepare_data);
+        else
+            info.x = nullptr;  // not formed: the pointer would show a stale iterate
+    }
     info.elapsed_s = watch.seconds();
     info.setup_s = setup_s;
     return context.monitor->on_iteration(info);

@@ -72,6 +72,10 @@ public:
     virtual ~Monitor() = default;
     /// @return false to stop the solve (status STOPPED_BY_MONITOR).
     virtual bool on_iteration(const IterationInfo& info) = 0;
+    /// Whether the next on_iteration call will read the iterate. When false, work done only to
+    /// form it (SolveLoop::notify's `prepare`, e.g. pgs's x from lambda) is skipped and the call
+    /// gets info.x = nullptr: a recorder on a stride should not pay for rows it drops.
+    virtual bool wants_iterate() const { return true; }
 };
 
 /// Options the harness passes along with the problem (warm starts across a chain).
@@ -111,11 +115,12 @@ public:
 /// SolveLoop::notify (solvers/solve_loop.hpp), which stamps the time from the start of setup.
 /// @return false when the monitor asked to stop.
 bool notify_monitor(const SolveContext& context, Stopwatch& watch, IterationInfo info);
-/// SolveLoop::notify's body: pauses `watch`, runs `prepare` (work done only for the monitor),
-/// stamps info.elapsed_s = watch.seconds() and info.setup_s, calls the monitor. One named,
+/// SolveLoop::notify's body: pauses `watch`, runs `prepare` (work done only for the monitor, which
+/// may fill in `info`; skipped, and info.x set to nullptr, when the monitor does not want this
+/// iterate), stamps info.elapsed_s = watch.seconds() and info.setup_s, calls the monitor. One named,
 /// out-of-line function, so that a profiler can leave all monitor work out of a solver's count
 /// (tools/perf_gate.py toggles callgrind's collection on cb::notify_monitor).
-bool notify_monitor(const SolveContext& context, Stopwatch& watch, IterationInfo info, double setup_s,
+bool notify_monitor(const SolveContext& context, Stopwatch& watch, IterationInfo& info, double setup_s,
                     void (*prepare)(void*) = nullptr, void* prepare_data = nullptr);
 
 /// Helper for solvers: the common stopping test (docs/accuracy.md). True when the accuracy error

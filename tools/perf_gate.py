@@ -39,9 +39,11 @@ SOURCE_PATHS = ["solvers", "problems", "harness", "cmake", "CMakeLists.txt"]
 # match whole demangled names: not the lambdas inside solve ("...) const") nor "[clone .cold]".
 TOGGLES = ["cb::*Solver::solve(cb::QpView const&, cb::SolveContext const&)", "cb::notify_monitor(*)"]
 COLUMNS = ["snapshot", "label", "status", "iterations", "a_products", "a_products_harness",
-           "cholmod_factorizations", "precond_applications", "kkt_rel", "tol", "instructions",
+           "cholmod_factorizations", "precond_applications", "work", "kkt_rel", "tol", "instructions",
            "time_min_s", "time_noise", "time_samples"]
-COUNTERS = ["a_products", "a_products_harness", "cholmod_factorizations", "precond_applications"]
+# work: A-product equivalents counting factorisations and triangular solves (docs/work.md), the
+# one counter in which pgs's and active-set's CHOLMOD work shows.
+COUNTERS = ["a_products", "a_products_harness", "cholmod_factorizations", "precond_applications", "work"]
 CALLGRIND_TIME_LIMIT_FACTOR = 100  # valgrind runs ~50x slower: keep time limits from firing
 
 

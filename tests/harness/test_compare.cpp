@@ -84,6 +84,24 @@ TEST(Compare, CountersKktStatusAndMissing)
     EXPECT_FALSE(compare_runs(b2, {record("a", "ica", 10, 20, 1.2e-5)}, loose).failed());
 }
 
+TEST(Compare, WorkUnitsAreACounter)
+{
+    // Same A-products, one more factorisation's worth of work (pgs, active-set, ichol): regressed
+    // on "work" alone; less work: improved; a BASE without the counter: shown, not judged.
+    std::vector<nlohmann::json> base = {record("a", "pgs", 10, 1, 5e-7), record("b", "pgs", 10, 1, 5e-7)};
+    base[0]["counters"]["work"] = 224.5;
+    base[1]["counters"]["work"] = 224.5;
+    std::vector<nlohmann::json> next = base;
+    next[0]["counters"]["work"] = 230.25;
+    next[1]["counters"]["work"] = 200.0;
+    const CompareReport r = compare_runs(base, next);
+    ASSERT_EQ(r.rows.size(), 2u);
+    EXPECT_EQ(r.rows[0].regressed, std::vector<std::string>{"work"});
+    EXPECT_EQ(r.rows[1].improved, std::vector<std::string>{"work"});
+    for (auto& run : base) run["counters"].erase("work");
+    EXPECT_FALSE(compare_runs(base, next).failed());
+}
+
 TEST(Compare, BinaryExitCodesOnFolders)
 {
     const char* b = std::getenv("CB_CONTACTBENCH");

@@ -120,7 +120,7 @@ const SolverRegistry& toy_registry()
 {
     static const SolverRegistry registry = [] {
         SolverRegistry r;
-        r.add("toy", {[](const nlohmann::json& s) { return std::make_unique<ToySolver>(s); }, "test solver", {}});
+        r.add("toy", {[](const nlohmann::json& s) { return std::make_unique<ToySolver>(s); }, "test solver", {}, "any J", ""});
         return r;
     }();
     return registry;
@@ -416,4 +416,29 @@ TEST(HistoryMonitor, MonotonicityIsJudgedOnChangesFromTheStartNotAbsoluteObjecti
     h0[0] += 0.05;
     EXPECT_FALSE(monotone_over(plain, {s0, u0}));
     EXPECT_TRUE(monotone_over(plain, {u0, h0, s0}));
+}
+
+TEST(HistoryMonitor, WantsOnlyTheIteratesOnItsStride)
+{
+    // history_max 4: the stride doubles once the rows would exceed it, and the monitor then asks
+    // for the iterate (pgs forms x for it) only on calls it records.
+    const Qp qp = diagonal_qp();
+    const QpView view = qp.view();
+    HistoryMonitor monitor(view, accuracy_scale(view), 4);
+    const Vec x = qp.x0;
+    std::vector<long> wanted;
+    for (long call = 0; call < 16; ++call) {
+        if (monitor.wants_iterate()) wanted.push_back(call);
+        IterationInfo info;
+        info.iteration = call;
+        info.step = StepKind::OUTER;
+        info.x = monitor.wants_iterate() ? &x : nullptr;
+        monitor.on_iteration(info);
+    }
+    EXPECT_EQ(wanted, (std::vector<long>{0, 1, 2, 3, 4, 6, 8, 12}));
+    EXPECT_EQ(monitor.stride(), 8);
+    EXPECT_EQ(monitor.calls(), 16);
+    // Recording off: no iterate is wanted (only the finiteness checks on what is passed).
+    HistoryMonitor silent(view, accuracy_scale(view), 4, false);
+    EXPECT_FALSE(silent.wants_iterate());
 }

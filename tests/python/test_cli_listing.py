@@ -26,6 +26,9 @@ class Listing(unittest.TestCase):
         self.assertTrue(by_name["mprgp"].startswith("decoupled rows only"))
         self.assertTrue(by_name["mprgp-box"].startswith("bounds only"))
         self.assertNotIn("template", by_name)  # the model solver is not registered
+        for e in listed:  # a peer names its library; the project's own solvers leave it empty
+            self.assertEqual(bool(e["library"]), e["description"].startswith("peer: "), e["name"])
+        self.assertEqual({e["name"]: e["library"] for e in listed}["mprgp"], "")
 
     def test_version_names_commit_build_and_libraries(self):
         text = run("--version")

@@ -66,11 +66,11 @@ class PlantedRegressions(unittest.TestCase):
         self.assertEqual(status, 3, out)
         self.assertEqual(report["regressed"], 5, out)
         for row in report["rows"]:
-            self.assertEqual(row["regressed"], ["a_products", "a_products_harness", "instructions"], row)
+            self.assertEqual(row["regressed"], ["a_products", "a_products_harness", "work", "instructions"], row)
             # One more product per CG step: the solver's count and the harness's grow alike.
             self.assertEqual(row["new"]["a_products"] - row["base"]["a_products"],
                              row["new"]["a_products_harness"] - row["base"]["a_products_harness"], row)
-        self.assertIn("FAIL regressed: a_products a_products_harness instructions", out)
+        self.assertIn("FAIL regressed: a_products a_products_harness work instructions", out)
 
     def test_product_missing_from_the_solvers_count_is_caught_by_the_harness(self):
         status, out, report = self.judge("extra-uncounted")

@@ -183,6 +183,46 @@ TEST(SolveLoop, NoMonitorNoPreparation)
     EXPECT_FALSE(prepared);
 }
 
+/// A monitor that reads only some iterates (a recorder on a stride).
+class PickyMonitor : public ClockMonitor {
+public:
+    bool wants = true;
+    bool wants_iterate() const override { return wants; }
+};
+
+TEST(SolveLoop, PreparationOnlyForIteratesTheMonitorReads)
+{
+    const Fixture f;
+    PickyMonitor monitor;
+    const Vec x = Vec::Zero(3);
+    const Vec* seen = &x;
+    monitor.body = [&](const IterationInfo& info) { seen = info.x; };
+    SolveContext context;
+    context.monitor = &monitor;
+    SolveLoop loop("t", f.view(), limits(10, 0.0), context);
+    IterationInfo info;
+    info.x = &x;
+    int prepared = 0;
+    monitor.wants = false;
+    EXPECT_TRUE(loop.notify(info, [&] { ++prepared; }));
+    EXPECT_EQ(prepared, 0);
+    EXPECT_EQ(seen, nullptr);  // not formed: no stale iterate reaches the monitor
+    monitor.wants = true;
+    EXPECT_TRUE(loop.notify(info, [&] { ++prepared; }));
+    EXPECT_EQ(prepared, 1);
+    EXPECT_EQ(seen, &x);
+    // without a preparation step the iterate is passed as it is
+    monitor.wants = false;
+    EXPECT_TRUE(loop.notify(info));
+    EXPECT_EQ(seen, &x);
+    // a preparation step may fill in what only the monitor shows (active-set's violation)
+    double shown = -1.0;
+    monitor.body = [&](const IterationInfo& i) { shown = i.native_residual; };
+    monitor.wants = true;
+    EXPECT_TRUE(loop.notify(info, [](IterationInfo& i) { i.native_residual = 7.0; }));
+    EXPECT_EQ(shown, 7.0);
+}
+
 TEST(SolveLoop, FinishFillsCountersAndTimes)
 {
     const Fixture f;
