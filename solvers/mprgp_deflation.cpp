@@ -1,0 +1,135 @@
+#include "solvers/mprgp_deflation.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <numeric>
+
+namespace cb {
+
+namespace {
+
+int find_root(std::vector<int>& parent, int v)
+{
+    while (parent[static_cast<size_t>(v)] != v) {
+        parent[static_cast<size_t>(v)] = parent[static_cast<size_t>(parent[static_cast<size_t>(v)])];
+        v = parent[static_cast<size_t>(v)];
+    }
+    return v;
+}
+
+}  // namespace
+
+bool RigidDeflation::build(const SpMat& A, const Vec& x0)
+{
+    m_ready = false;
+    const Eigen::Index n = A.rows();
+    if (n == 0 || n % 3 != 0 || x0.size() != n) return false;
+    const int nv = static_cast<int>(n / 3);
+    // Bodies = connected components of A's vertex graph (A couples no two bodies).
+    std::vector<int> parent(static_cast<size_t>(nv));
+    std::iota(parent.begin(), parent.end(), 0);
+    const int* outer = A.outerIndexPtr();
+    const int* inner = A.innerIndexPtr();
+    for (Eigen::Index i = 0; i < n; ++i)
+        for (int k = outer[i]; k < outer[i + 1]; ++k) {
+            const int a = find_root(parent, static_cast<int>(i / 3));
+            const int b = find_root(parent, inner[k] / 3);
+            if (a != b) parent[static_cast<size_t>(a)] = b;
+        }
+    std::vector<int> id(static_cast<size_t>(nv), -1);
+    m_components = 0;
+    m_comp.assign(static_cast<size_t>(n), 0);
+    for (int v = 0; v < nv; ++v) {
+        const int r = find_root(parent, v);
+        if (id[static_cast<size_t>(r)] < 0) id[static_cast<size_t>(r)] = m_components++;
+        for (int d = 0; d < 3; ++d) m_comp[static_cast<size_t>(3 * v + d)] = id[static_cast<size_t>(r)];
+    }
+    // Centroids, then translations e_d and rotations e_d x (p - centroid).
+    Eigen::MatrixXd centroid = Eigen::MatrixXd::Zero(m_components, 3);
+    Eigen::VectorXd count = Eigen::VectorXd::Zero(m_components);
+    for (int v = 0; v < nv; ++v) {
+        const int c = m_comp[static_cast<size_t>(3 * v)];
+        centroid.row(c) += x0.segment<3>(3 * v).transpose();
+        count[c] += 1.0;
+    }
+    for (int c = 0; c < m_components; ++c) centroid.row(c) /= count[c];
+    m_W = Modes::Zero(n, kModes);
+    for (int v = 0; v < nv; ++v) {
+        const Eigen::Vector3d r = x0.segment<3>(3 * v) - centroid.row(m_comp[static_cast<size_t>(3 * v)]).transpose();
+        for (int d = 0; d < 3; ++d) {
+            m_W(3 * v + d, d) = 1.0;
+            const Eigen::Vector3d rot = Eigen::Vector3d::Unit(d).cross(r);
+            m_W.block<3, 1>(3 * v, 3 + d) = rot;
+        }
+    }
+    m_Einv.assign(static_cast<size_t>(m_components), Eigen::Matrix<double, kModes, kModes>::Zero());
+    m_ready = true;
+    return true;
+}
+
+void RigidDeflation::reduce(const Modes& M, const Vec& v, Eigen::MatrixXd& R) const
+{
+    R.setZero(m_components, kModes);
+    for (Eigen::Index j = 0; j < M.rows(); ++j) R.row(m_comp[static_cast<size_t>(j)]) += v[j] * M.row(j);
+}
+
+void RigidDeflation::expand(const Modes& M, const Eigen::MatrixXd& Y, Vec& out) const
+{
+    for (Eigen::Index j = 0; j < M.rows(); ++j) out[j] = M.row(j).dot(Y.row(m_comp[static_cast<size_t>(j)]));
+}
+
+void RigidDeflation::set_face(const SpMat& A, const SpMat& J, const DecoupledRows& rows,
+                              const std::vector<char>& active)
+{
+    m_V = m_W;
+    // Q W: remove each active row's normal component (rows share no DOF).
+    const int* outer = J.outerIndexPtr();
+    const int* inner = J.innerIndexPtr();
+    const double* val = J.valuePtr();
+    for (Eigen::Index i = 0; i < J.rows(); ++i) {
+        if (!active[static_cast<size_t>(i)]) continue;
+        Eigen::Matrix<double, 1, kModes> t = Eigen::Matrix<double, 1, kModes>::Zero();
+        for (int k = outer[i]; k < outer[i + 1]; ++k) t += val[k] * m_V.row(inner[k]);
+        t *= rows.inv_s[i];
+        for (int k = outer[i]; k < outer[i + 1]; ++k) m_V.row(inner[k]) -= val[k] * t;
+    }
+    m_AV = A * m_V;
+    std::vector<Eigen::Matrix<double, kModes, kModes>> E(static_cast<size_t>(m_components),
+                                                         Eigen::Matrix<double, kModes, kModes>::Zero());
+    for (Eigen::Index j = 0; j < m_V.rows(); ++j)
+        E[static_cast<size_t>(m_comp[static_cast<size_t>(j)])] += m_V.row(j).transpose() * m_AV.row(j);
+    for (int c = 0; c < m_components; ++c) {
+        Eigen::Matrix<double, kModes, kModes> e = E[static_cast<size_t>(c)];
+        e = 0.5 * (e + e.transpose()).eval();
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, kModes, kModes>> eig(e);
+        const auto& ev = eig.eigenvalues();
+        const double cut = 1e-10 * ev.cwiseAbs().maxCoeff();
+        Eigen::Matrix<double, kModes, 1> inv = Eigen::Matrix<double, kModes, 1>::Zero();
+        // Modes the face removes (or a single vertex's rotations) have V'AV ~ 0: dropped.
+        for (int k = 0; k < kModes; ++k)
+            if (ev[k] > cut && ev[k] > 0.0) inv[k] = 1.0 / ev[k];
+        m_Einv[static_cast<size_t>(c)] = eig.eigenvectors() * inv.asDiagonal() * eig.eigenvectors().transpose();
+    }
+}
+
+void RigidDeflation::coarse(const Vec& g, Vec& d, Vec& ad) const
+{
+    Eigen::MatrixXd R;
+    reduce(m_V, g, R);
+    for (int c = 0; c < m_components; ++c)
+        R.row(c) = (m_Einv[static_cast<size_t>(c)] * R.row(c).transpose()).transpose();
+    d.resize(m_V.rows());
+    ad.resize(m_V.rows());
+    expand(m_V, R, d);
+    expand(m_AV, R, ad);
+}
+
+void RigidDeflation::deflate(Vec& z) const
+{
+    Eigen::MatrixXd R;
+    reduce(m_AV, z, R);
+    for (int c = 0; c < m_components; ++c)
+        R.row(c) = (m_Einv[static_cast<size_t>(c)] * R.row(c).transpose()).transpose();
+    for (Eigen::Index j = 0; j < m_V.rows(); ++j) z[j] -= m_V.row(j).dot(R.row(m_comp[static_cast<size_t>(j)]));
+}
+
+}  // namespace cb

@@ -1,0 +1,57 @@
+#pragma once
+/// Rigid-mode deflation of MPRGP's CG chains (`mprgp` setting `deflation = rigid`,
+/// docs/preconditioners.md). A nearly rigid body on a few contact points has its slowest modes
+/// in the 6 rigid motions of each body: every new face restarts CG and pays again for them.
+/// Here each face gets V = Q W (W: the rigid modes of each connected component of A, from the
+/// positions x0; Q the face projector), a Galerkin step that minimises F over x + V y, and CG
+/// the balancing preconditioner z = P' M^-1 P g + V E^+ V'g (E = V'AV, P = I - A V E^+ V'), so
+/// that no chain has to find those modes. After the Galerkin step (V'g = 0) its CG is deflated
+/// PCG; unlike plain deflation it stays a PCG with an SPD preconditioner from any start.
+/// Ref: Saad, Yeung, Erhel, Guyomarc'h, "A deflated version of the conjugate gradient
+///      algorithm", SIAM J. Sci. Comput. 21(5), 2000 (deflated PCG, Galerkin start);
+///      Tang, Nabben, Vuik, Erlangga, "Comparison of two-level preconditioners derived from
+///      deflation, domain decomposition and multigrid methods", J. Sci. Comput. 39, 2009 (BNN).
+#include "solvers/mprgp_kernels.hpp"
+#include "solvers/types.hpp"
+
+#include <Eigen/Dense>
+#include <vector>
+
+namespace cb {
+
+class RigidDeflation {
+public:
+    static constexpr int kModes = 6;
+    using Modes = Eigen::Matrix<double, Eigen::Dynamic, kModes>;
+
+    /// Builds W from the connected components of A's vertex graph (vertex = DOF / 3) and the
+    /// positions x0: 3 translations and 3 rotations about each component's centroid. Returns
+    /// false (deflation off) when n is not a multiple of 3.
+    bool build(const SpMat& A, const Vec& x0);
+    /// V = Q W on the face `active`, AV = A V (kModes A-products) and the pseudo-inverse of each
+    /// component's V'AV (modes that the face removes are dropped).
+    void set_face(const SpMat& A, const SpMat& J, const DecoupledRows& rows, const std::vector<char>& active);
+    /// Coarse correction d = V y, y = (V'AV)^+ V'g, and Ad = AV y: F(x - d) = min over x + V y
+    /// (the Galerkin step). `g` should be in face form (the free gradient).
+    void coarse(const Vec& g, Vec& d, Vec& ad) const;
+    /// z -= V (V'AV)^+ (AV)'z: z becomes A-conjugate to V (stays in the face).
+    void deflate(Vec& z) const;
+    bool ready() const { return m_ready; }
+    int components() const { return m_components; }
+    /// Flops of one deflate() or coarse(): two passes over the n x 6 modes.
+    double apply_flops() const { return 4.0 * kModes * static_cast<double>(m_W.rows()); }
+
+private:
+    /// Per component: R(c, :) = sum over its DOFs of M(j, :) v_j.
+    void reduce(const Modes& M, const Vec& v, Eigen::MatrixXd& R) const;
+    /// out_j = M(j, :) Y(comp(j), :)'.
+    void expand(const Modes& M, const Eigen::MatrixXd& Y, Vec& out) const;
+
+    Modes m_W, m_V, m_AV;
+    std::vector<int> m_comp;  // #DOF: component of the DOF's vertex
+    std::vector<Eigen::Matrix<double, kModes, kModes>> m_Einv;
+    int m_components = 0;
+    bool m_ready = false;
+};
+
+}  // namespace cb
