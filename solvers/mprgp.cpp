@@ -102,6 +102,10 @@ std::string fmt(double v)
     return s.str();
 }
 
+/// deflation = rigid keeps a rigid mode w when w'Aw <= this w'diag(A)w: only then is it a slow
+/// mode worth a coarse space (a stiff body's rigid modes see its mass only).
+constexpr double kRigidMaxRayleigh = 0.1;
+
 /// One solve: the workspace is allocated once, before the loop.
 class MprgpRun {
 public:
@@ -607,7 +611,10 @@ SolverResult MprgpRun::run()
         }
     }
     m_ichol = m_st.precond == "ichol";
-    m_deflate = m_st.deflation == "rigid" && m_defl.build(m_A, m_qp.x0);
+    if (m_st.deflation == "rigid") {
+        m_deflate = m_defl.build(m_A, m_J, m_qp.x0, kRigidMaxRayleigh);
+        m_cnt.a_products += RigidDeflation::kModes;
+    }
     m_rows = make_decoupled_rows(m_J, m_dinv);
     for (Eigen::Index i = 0; i < m_m; ++i) {
         if (m_rows.s[i] <= 0.0 && m_c[i] > active_tolerance(m_c[i])) {
@@ -874,6 +881,9 @@ SolverResult MprgpRun::run()
     if (m_st.deflation != "none")
         result.info["deflation"] = {{"active", m_deflate},
                                     {"bodies", m_defl.components()},
+                                    {"modes", m_defl.kept_modes()},
+                                    {"rayleigh_min", m_defl.min_rayleigh_seen()},
+                                    {"rayleigh_max", m_defl.max_rayleigh_seen()},
                                     {"galerkin_steps", m_galerkin_steps},
                                     {"faces", m_deflation_faces}};
     if (m_ichol)

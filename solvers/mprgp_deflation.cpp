@@ -1,6 +1,8 @@
 #include "solvers/mprgp_deflation.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <limits>
 #include <numeric>
 
 namespace cb {
@@ -18,13 +20,13 @@ int find_root(std::vector<int>& parent, int v)
 
 }  // namespace
 
-bool RigidDeflation::build(const SpMat& A, const Vec& x0)
+bool RigidDeflation::build(const SpMat& A, const SpMat& J, const Vec& x0, double max_rayleigh)
 {
     m_ready = false;
     const Eigen::Index n = A.rows();
     if (n == 0 || n % 3 != 0 || x0.size() != n) return false;
     const int nv = static_cast<int>(n / 3);
-    // Bodies = connected components of A's vertex graph (A couples no two bodies).
+    // Bodies = connected components of A's vertex graph (A couples no two bodies), joined by rows.
     std::vector<int> parent(static_cast<size_t>(nv));
     std::iota(parent.begin(), parent.end(), 0);
     const int* outer = A.outerIndexPtr();
@@ -33,6 +35,14 @@ bool RigidDeflation::build(const SpMat& A, const Vec& x0)
         for (int k = outer[i]; k < outer[i + 1]; ++k) {
             const int a = find_root(parent, static_cast<int>(i / 3));
             const int b = find_root(parent, inner[k] / 3);
+            if (a != b) parent[static_cast<size_t>(a)] = b;
+        }
+    const int* j_outer = J.outerIndexPtr();
+    const int* j_inner = J.innerIndexPtr();
+    for (Eigen::Index i = 0; i < J.rows(); ++i)
+        for (int k = j_outer[i] + 1; k < j_outer[i + 1]; ++k) {
+            const int a = find_root(parent, j_inner[j_outer[i]] / 3);
+            const int b = find_root(parent, j_inner[k] / 3);
             if (a != b) parent[static_cast<size_t>(a)] = b;
         }
     std::vector<int> id(static_cast<size_t>(nv), -1);
@@ -61,9 +71,36 @@ bool RigidDeflation::build(const SpMat& A, const Vec& x0)
             m_W.block<3, 1>(3 * v, 3 + d) = rot;
         }
     }
+    // Keep the slow modes only: w'Aw against w'Dw per component and mode.
+    const Modes AW = A * m_W;
+    const Vec diag = A.diagonal();
+    Eigen::MatrixXd wAw = Eigen::MatrixXd::Zero(m_components, kModes), wDw = wAw;
+    for (Eigen::Index j = 0; j < n; ++j) {
+        const int c = m_comp[static_cast<size_t>(j)];
+        for (int k = 0; k < kModes; ++k) {
+            wAw(c, k) += m_W(j, k) * AW(j, k);
+            wDw(c, k) += m_W(j, k) * m_W(j, k) * diag[j];
+        }
+    }
+    Eigen::MatrixXd keep = Eigen::MatrixXd::Zero(m_components, kModes);
+    m_kept = 0;
+    m_max_rayleigh_seen = 0.0;
+    m_min_rayleigh_seen = std::numeric_limits<double>::infinity();
+    for (int c = 0; c < m_components; ++c)
+        for (int k = 0; k < kModes; ++k) {
+            if (!(wDw(c, k) > 0.0)) continue;
+            const double q = wAw(c, k) / wDw(c, k);
+            m_max_rayleigh_seen = std::max(m_max_rayleigh_seen, q);
+            m_min_rayleigh_seen = std::min(m_min_rayleigh_seen, q);
+            if (q <= max_rayleigh) {
+                keep(c, k) = 1.0;
+                ++m_kept;
+            }
+        }
+    for (Eigen::Index j = 0; j < n; ++j) m_W.row(j) = m_W.row(j).cwiseProduct(keep.row(m_comp[static_cast<size_t>(j)]));
     m_Einv.assign(static_cast<size_t>(m_components), Eigen::Matrix<double, kModes, kModes>::Zero());
-    m_ready = true;
-    return true;
+    m_ready = m_kept > 0;
+    return m_ready;
 }
 
 void RigidDeflation::reduce(const Modes& M, const Vec& v, Eigen::MatrixXd& R) const

@@ -24,10 +24,18 @@ public:
     static constexpr int kModes = 6;
     using Modes = Eigen::Matrix<double, Eigen::Dynamic, kModes>;
 
-    /// Builds W from the connected components of A's vertex graph (vertex = DOF / 3) and the
-    /// positions x0: 3 translations and 3 rotations about each component's centroid. Returns
-    /// false (deflation off) when n is not a multiple of 3.
-    bool build(const SpMat& A, const Vec& x0);
+    /// Builds W from the connected components of the vertex graph (vertex = DOF / 3) of A and J
+    /// (a row joins the bodies it touches, so that the face projector Q never mixes components)
+    /// and the positions x0: 3 translations and 3 rotations about each component's centroid.
+    /// A mode is kept only when it is a slow one: w'Aw <= max_rayleigh w'diag(A)w (a stiff
+    /// body's rigid modes see only its mass; a random SPD matrix or a soft body has none).
+    /// Returns false (deflation off) when n is not a multiple of 3 or no mode is kept.
+    /// Costs kModes A-products.
+    bool build(const SpMat& A, const SpMat& J, const Vec& x0, double max_rayleigh);
+    /// Largest w'Aw / w'diag(A)w over the modes of build() (kept or not).
+    double max_rayleigh_seen() const { return m_max_rayleigh_seen; }
+    double min_rayleigh_seen() const { return m_min_rayleigh_seen; }
+    int kept_modes() const { return m_kept; }
     /// V = Q W on the face `active`, AV = A V (kModes A-products) and the pseudo-inverse of each
     /// component's V'AV (modes that the face removes are dropped).
     void set_face(const SpMat& A, const SpMat& J, const DecoupledRows& rows, const std::vector<char>& active);
@@ -51,6 +59,8 @@ private:
     std::vector<int> m_comp;  // #DOF: component of the DOF's vertex
     std::vector<Eigen::Matrix<double, kModes, kModes>> m_Einv;
     int m_components = 0;
+    int m_kept = 0;
+    double m_max_rayleigh_seen = 0.0, m_min_rayleigh_seen = 0.0;
     bool m_ready = false;
 };
 
