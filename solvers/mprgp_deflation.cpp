@@ -98,7 +98,10 @@ bool RigidDeflation::build(const SpMat& A, const SpMat& J, const Vec& x0, double
             }
         }
     for (Eigen::Index j = 0; j < n; ++j) m_W.row(j) = m_W.row(j).cwiseProduct(keep.row(m_comp[static_cast<size_t>(j)]));
-    m_Einv.assign(static_cast<size_t>(m_components), Eigen::Matrix<double, kModes, kModes>::Zero());
+    m_Einv.assign(static_cast<size_t>(m_components), Mat6::Zero());
+    m_E = m_Einv;
+    m_have_face = false;
+    m_updates = 0;
     m_ready = m_kept > 0;
     return m_ready;
 }
@@ -114,38 +117,95 @@ void RigidDeflation::expand(const Modes& M, const Eigen::MatrixXd& Y, Vec& out) 
     for (Eigen::Index j = 0; j < M.rows(); ++j) out[j] = M.row(j).dot(Y.row(m_comp[static_cast<size_t>(j)]));
 }
 
-void RigidDeflation::set_face(const SpMat& A, const SpMat& J, const DecoupledRows& rows,
-                              const std::vector<char>& active)
+RigidDeflation::ModeRow RigidDeflation::face_row(const SpMat& J, const DecoupledRows& rows, Eigen::Index i, int k,
+                                                 bool is_active) const
 {
-    m_V = m_W;
-    // Q W: remove each active row's normal component (rows share no DOF).
+    ModeRow v = m_W.row(J.innerIndexPtr()[k]);
+    if (!is_active) return v;
+    // Q W on row i: remove the normal component (rows share no DOF).
     const int* outer = J.outerIndexPtr();
     const int* inner = J.innerIndexPtr();
     const double* val = J.valuePtr();
-    for (Eigen::Index i = 0; i < J.rows(); ++i) {
-        if (!active[static_cast<size_t>(i)]) continue;
-        Eigen::Matrix<double, 1, kModes> t = Eigen::Matrix<double, 1, kModes>::Zero();
-        for (int k = outer[i]; k < outer[i + 1]; ++k) t += val[k] * m_V.row(inner[k]);
-        t *= rows.inv_s[i];
-        for (int k = outer[i]; k < outer[i + 1]; ++k) m_V.row(inner[k]) -= val[k] * t;
+    ModeRow t = ModeRow::Zero();
+    for (int q = outer[i]; q < outer[i + 1]; ++q) t += val[q] * m_W.row(inner[q]);
+    return v - val[k] * rows.inv_s[i] * t;
+}
+
+void RigidDeflation::invert(int c)
+{
+    Mat6 e = m_E[static_cast<size_t>(c)];
+    e = 0.5 * (e + e.transpose()).eval();
+    Eigen::SelfAdjointEigenSolver<Mat6> eig(e);
+    const auto& ev = eig.eigenvalues();
+    const double cut = 1e-10 * ev.cwiseAbs().maxCoeff();
+    Eigen::Matrix<double, kModes, 1> inv = Eigen::Matrix<double, kModes, 1>::Zero();
+    // Modes the face removes (or the dropped fast modes) have V'AV ~ 0: left out.
+    for (int k = 0; k < kModes; ++k)
+        if (ev[k] > cut && ev[k] > 0.0) inv[k] = 1.0 / ev[k];
+    m_Einv[static_cast<size_t>(c)] = eig.eigenvectors() * inv.asDiagonal() * eig.eigenvectors().transpose();
+}
+
+bool RigidDeflation::set_face(const SpMat& A, const SpMat& J, const DecoupledRows& rows,
+                              const std::vector<char>& active, double* work_flops)
+{
+    const int* outer = J.outerIndexPtr();
+    const int* inner = J.innerIndexPtr();
+    // Rows whose state changed since the last face, and their DOFs.
+    long changed_dofs = 0;
+    if (m_have_face)
+        for (Eigen::Index i = 0; i < J.rows(); ++i)
+            if (active[static_cast<size_t>(i)] != m_face[static_cast<size_t>(i)]) changed_dofs += outer[i + 1] - outer[i];
+    const bool full = !m_have_face || m_updates >= kMaxUpdates || 20 * changed_dofs > m_W.rows();
+    if (full) {
+        m_V = m_W;
+        for (Eigen::Index i = 0; i < J.rows(); ++i) {
+            if (!active[static_cast<size_t>(i)]) continue;
+            for (int k = outer[i]; k < outer[i + 1]; ++k) m_V.row(inner[k]) = face_row(J, rows, i, k, true);
+        }
+        m_AV = A * m_V;
+        m_E.assign(static_cast<size_t>(m_components), Mat6::Zero());
+        for (Eigen::Index j = 0; j < m_V.rows(); ++j)
+            m_E[static_cast<size_t>(m_comp[static_cast<size_t>(j)])] += m_V.row(j).transpose() * m_AV.row(j);
+        for (int c = 0; c < m_components; ++c) invert(c);
+        m_updates = 0;
+    } else {
+        // A few rows changed: V changes on their DOFs only (Delta), so
+        // V_new'A V_new = E + Delta'(A V) + V_new'(A Delta), and A V += A Delta, both local.
+        const int* a_outer = A.outerIndexPtr();
+        const int* a_inner = A.innerIndexPtr();
+        const double* a_val = A.valuePtr();
+        std::vector<int> touched_components;
+        double flops = 0.0;
+        for (Eigen::Index i = 0; i < J.rows(); ++i) {
+            const bool now = active[static_cast<size_t>(i)] != 0;
+            if (now == (m_face[static_cast<size_t>(i)] != 0)) continue;
+            for (int k = outer[i]; k < outer[i + 1]; ++k) {
+                const int j = inner[k];
+                const ModeRow delta = face_row(J, rows, i, k, now) - m_V.row(j);
+                const int c = m_comp[static_cast<size_t>(j)];
+                Mat6& e = m_E[static_cast<size_t>(c)];
+                e += delta.transpose() * m_AV.row(j);
+                m_V.row(j) += delta;
+                // Column j of A = row j (A symmetric).
+                for (int q = a_outer[j]; q < a_outer[j + 1]; ++q) {
+                    const ModeRow a_delta = a_val[q] * delta;
+                    m_AV.row(a_inner[q]) += a_delta;
+                    e += m_V.row(a_inner[q]).transpose() * a_delta;
+                }
+                flops += 2.0 * kModes * (kModes + 2) * static_cast<double>(a_outer[j + 1] - a_outer[j] + 1);
+                touched_components.push_back(c);
+            }
+        }
+        std::sort(touched_components.begin(), touched_components.end());
+        touched_components.erase(std::unique(touched_components.begin(), touched_components.end()),
+                                 touched_components.end());
+        for (int c : touched_components) invert(c);
+        if (work_flops) *work_flops += flops;
+        ++m_updates;
     }
-    m_AV = A * m_V;
-    std::vector<Eigen::Matrix<double, kModes, kModes>> E(static_cast<size_t>(m_components),
-                                                         Eigen::Matrix<double, kModes, kModes>::Zero());
-    for (Eigen::Index j = 0; j < m_V.rows(); ++j)
-        E[static_cast<size_t>(m_comp[static_cast<size_t>(j)])] += m_V.row(j).transpose() * m_AV.row(j);
-    for (int c = 0; c < m_components; ++c) {
-        Eigen::Matrix<double, kModes, kModes> e = E[static_cast<size_t>(c)];
-        e = 0.5 * (e + e.transpose()).eval();
-        Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, kModes, kModes>> eig(e);
-        const auto& ev = eig.eigenvalues();
-        const double cut = 1e-10 * ev.cwiseAbs().maxCoeff();
-        Eigen::Matrix<double, kModes, 1> inv = Eigen::Matrix<double, kModes, 1>::Zero();
-        // Modes the face removes (or a single vertex's rotations) have V'AV ~ 0: dropped.
-        for (int k = 0; k < kModes; ++k)
-            if (ev[k] > cut && ev[k] > 0.0) inv[k] = 1.0 / ev[k];
-        m_Einv[static_cast<size_t>(c)] = eig.eigenvectors() * inv.asDiagonal() * eig.eigenvectors().transpose();
-    }
+    m_face = active;
+    m_have_face = true;
+    return full;
 }
 
 void RigidDeflation::coarse(const Vec& g, Vec& d, Vec& ad) const

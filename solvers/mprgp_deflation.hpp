@@ -36,9 +36,12 @@ public:
     double max_rayleigh_seen() const { return m_max_rayleigh_seen; }
     double min_rayleigh_seen() const { return m_min_rayleigh_seen; }
     int kept_modes() const { return m_kept; }
-    /// V = Q W on the face `active`, AV = A V (kModes A-products) and the pseudo-inverse of each
-    /// component's V'AV (modes that the face removes are dropped).
-    void set_face(const SpMat& A, const SpMat& J, const DecoupledRows& rows, const std::vector<char>& active);
+    /// V = Q W on the face `active`, AV = A V and the pseudo-inverse of each component's V'AV
+    /// (modes that the face removes are dropped). When few rows changed since the last face, V, AV
+    /// and V'AV are updated on those rows' DOFs only (flops added to *work_flops); otherwise they
+    /// are formed anew with kModes A-products, and the call returns true.
+    bool set_face(const SpMat& A, const SpMat& J, const DecoupledRows& rows, const std::vector<char>& active,
+                  double* work_flops = nullptr);
     /// Coarse correction d = V y, y = (V'AV)^+ V'g, and Ad = AV y: F(x - d) = min over x + V y
     /// (the Galerkin step). `g` should be in face form (the free gradient).
     void coarse(const Vec& g, Vec& d, Vec& ad) const;
@@ -50,6 +53,14 @@ public:
     double apply_flops() const { return 4.0 * kModes * static_cast<double>(m_W.rows()); }
 
 private:
+    using ModeRow = Eigen::Matrix<double, 1, kModes>;
+    using Mat6 = Eigen::Matrix<double, kModes, kModes>;
+    /// Incremental face updates between two full ones (bounds the drift of V'AV).
+    static constexpr int kMaxUpdates = 50;
+    /// Row of V at DOF inner[k] of row i: W's row, projected when the row is active.
+    ModeRow face_row(const SpMat& J, const DecoupledRows& rows, Eigen::Index i, int k, bool is_active) const;
+    /// m_Einv[c] = pseudo-inverse of m_E[c].
+    void invert(int c);
     /// Per component: R(c, :) = sum over its DOFs of M(j, :) v_j.
     void reduce(const Modes& M, const Vec& v, Eigen::MatrixXd& R) const;
     /// out_j = M(j, :) Y(comp(j), :)'.
@@ -57,7 +68,10 @@ private:
 
     Modes m_W, m_V, m_AV;
     std::vector<int> m_comp;  // #DOF: component of the DOF's vertex
-    std::vector<Eigen::Matrix<double, kModes, kModes>> m_Einv;
+    std::vector<Mat6> m_E, m_Einv;
+    std::vector<char> m_face;  // the face V was built for
+    bool m_have_face = false;
+    int m_updates = 0;
     int m_components = 0;
     int m_kept = 0;
     double m_max_rayleigh_seen = 0.0, m_min_rayleigh_seen = 0.0;
