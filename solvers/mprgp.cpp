@@ -616,7 +616,7 @@ SolverResult MprgpRun::run()
     m_ichol = m_st.precond == "ichol";
     if (m_st.deflation == "rigid") {
         m_deflate = m_defl.build(m_A, m_J, m_qp.x0, kRigidMaxRayleigh);
-        m_cnt.a_products += RigidDeflation::kModes;
+        m_cnt.a_products += m_defl.build_products();
     }
     m_rows = make_decoupled_rows(m_J, m_dinv);
     for (Eigen::Index i = 0; i < m_m; ++i) {

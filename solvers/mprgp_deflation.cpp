@@ -23,6 +23,7 @@ int find_root(std::vector<int>& parent, int v)
 bool RigidDeflation::build(const SpMat& A, const SpMat& J, const Vec& x0, double max_rayleigh)
 {
     m_ready = false;
+    m_build_products = 0;
     const Eigen::Index n = A.rows();
     if (n == 0 || n % 3 != 0 || x0.size() != n) return false;
     const int nv = static_cast<int>(n / 3);
@@ -73,6 +74,7 @@ bool RigidDeflation::build(const SpMat& A, const SpMat& J, const Vec& x0, double
     }
     // Keep the slow modes only: w'Aw against w'Dw per component and mode.
     const Modes AW = A * m_W;
+    m_build_products = kModes;
     const Vec diag = A.diagonal();
     Eigen::MatrixXd wAw = Eigen::MatrixXd::Zero(m_components, kModes), wDw = wAw;
     for (Eigen::Index j = 0; j < n; ++j) {
@@ -154,7 +156,8 @@ bool RigidDeflation::set_face(const SpMat& A, const SpMat& J, const DecoupledRow
     long changed_dofs = 0;
     if (m_have_face)
         for (Eigen::Index i = 0; i < J.rows(); ++i)
-            if (active[static_cast<size_t>(i)] != m_face[static_cast<size_t>(i)]) changed_dofs += outer[i + 1] - outer[i];
+            if (active[static_cast<size_t>(i)] != m_face[static_cast<size_t>(i)])
+                changed_dofs += outer[i + 1] - outer[i];
     const bool full = !m_have_face || m_updates >= kMaxUpdates || 20 * changed_dofs > m_W.rows();
     if (full) {
         m_V = m_W;

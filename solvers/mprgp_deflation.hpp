@@ -36,6 +36,8 @@ public:
     double max_rayleigh_seen() const { return m_max_rayleigh_seen; }
     double min_rayleigh_seen() const { return m_min_rayleigh_seen; }
     int kept_modes() const { return m_kept; }
+    /// A-products the last build() spent (kModes, or 0 when it returned before the slow-mode test).
+    long build_products() const { return m_build_products; }
     /// V = Q W on the face `active`, AV = A V and the pseudo-inverse of each component's V'AV
     /// (modes that the face removes are dropped). When few rows changed since the last face, V, AV
     /// and V'AV are updated on those rows' DOFs only (flops added to *work_flops); otherwise they
@@ -74,6 +76,7 @@ private:
     int m_updates = 0;
     int m_components = 0;
     int m_kept = 0;
+    long m_build_products = 0;
     double m_max_rayleigh_seen = 0.0, m_min_rayleigh_seen = 0.0;
     bool m_ready = false;
 };
