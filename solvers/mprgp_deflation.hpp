@@ -3,7 +3,7 @@
 /// docs/preconditioners.md). A nearly rigid body on a few contact points has its slowest modes
 /// in the 6 rigid motions of each body: every new face restarts CG and pays again for them.
 /// Here each face gets V = Q W (W: the rigid modes of each connected component of A, from the
-/// positions x0; Q the face projector), a Galerkin step that minimises F over x + V y, and CG
+/// positions x0; Q the face projector), a Galerkin step that minimises F over x + V y, and CG with
 /// the balancing preconditioner z = P' M^-1 P g + V E^+ V'g (E = V'AV, P = I - A V E^+ V'), so
 /// that no chain has to find those modes. After the Galerkin step (V'g = 0) its CG is deflated
 /// PCG; unlike plain deflation it stays a PCG with an SPD preconditioner from any start.
