@@ -11,6 +11,7 @@
 #include "solvers/accuracy.hpp"
 #include "solvers/decouple.hpp"
 #include "solvers/ichol.hpp"
+#include "solvers/mprgp_deflation.hpp"
 #include "solvers/mprgp_kernels.hpp"
 
 #include <algorithm>
@@ -52,7 +53,14 @@ const SettingsTable<MprgpSettings>& mprgp_settings_table()
                 "guarantees descent); docs/preconditioners.md")
             .number("ichol_refactor", &MprgpSettings::ichol_refactor, -1e-300, 1.0,
                     "precond = ichol: refactor the face matrix when more than this fraction of the rows changed face "
-                    "since the last factorization (0: at every face change; 1: factor once)");
+                    "since the last factorization (0: at every face change; 1: factor once)")
+            .choice("deflation", &MprgpSettings::deflation, {"none", "rigid"},
+                    "none | rigid: each new face gets a Galerkin step over the slow rigid modes of each body (from "
+                    "x0, projected on the face) and the preconditioner is balanced with them; default rigid with "
+                    "precond = ichol (docs/preconditioners.md)",
+                    // Measured on the whole stress suite: with ichol it never costs iterations and cuts the
+                    // stiff dino's 3.4x cg to 1.3x; with jacobi the default stays the paper's (CI counters).
+                    [](const MprgpSettings& s) { return s.precond == "ichol" ? std::string("rigid") : s.deflation; });
     return table;
 }
 
@@ -97,6 +105,10 @@ std::string fmt(double v)
     s << std::scientific << v;
     return s.str();
 }
+
+/// deflation = rigid keeps a rigid mode w when w'Aw <= this w'diag(A)w: only then is it a slow
+/// mode worth a coarse space (a stiff body's rigid modes see its mass only).
+constexpr double kRigidMaxRayleigh = 0.1;
 
 /// One solve: the workspace is allocated once, before the loop.
 class MprgpRun {
@@ -153,8 +165,17 @@ private:
 
     /// a'g computed as a'phi on active rows (a in null(J_A)): no cancellation against J_A' lambda.
     double face_dot(const Vec& a) const;
-    /// Chain start at a feasible x with an exact g: face, z, p, F.
-    void restart();
+    /// Chain start at a feasible x with an exact g: face, z, p, F. With `galerkin` (after a start,
+    /// expansion or proportioning) and deflation = rigid, first the Galerkin steps on the face.
+    void restart(bool galerkin = false);
+    /// deflation = rigid: minimise F over x + V y (V the face's rigid modes), clipped to stay
+    /// feasible; a blocking row joins the face and the step repeats on the new face.
+    void galerkin_steps();
+    /// deflation = rigid: V for the current face when it changed.
+    void update_deflation_face();
+    /// z = the face preconditioner applied to g (ichol or jacobi), balanced with V when
+    /// deflation = rigid: z = P' M^-1 P g + V E^+ V'g. J_A z = 0.
+    void face_precondition(Vec& z);
     /// Row pass at the current x: Jx, Jg, Jp, lambda, ||beta||^2, phitilde'phi, KKT pieces.
     void evaluate_rows();
     /// Correction F(P(x - a p)) - F(x - a p) with the sparse d = J' lambda (Ap known).
@@ -187,6 +208,11 @@ private:
     std::vector<char> m_face_factored;  // active set the ichol factor was built for
     bool m_face_factor_failed = false;
     std::string m_face_factor_error;
+    bool m_deflate = false;
+    RigidDeflation m_defl;
+    std::vector<char> m_defl_face;  // active set V was built for
+    long m_galerkin_steps = 0, m_deflation_faces = 0;
+    Vec m_gd, m_gad;  // Galerkin direction and its A-product
     Vec m_work;
     double m_alpha_bar = 0.0;
     AccuracyScale m_scale;
@@ -232,9 +258,90 @@ double MprgpRun::face_dot(const Vec& a) const
     return sum;
 }
 
-void MprgpRun::restart()
+void MprgpRun::update_deflation_face()
+{
+    if (!m_defl_face.empty() && m_defl_face == m_active) return;
+    if (m_defl.set_face(m_A, m_J, m_rows, m_active, &m_cnt.work_flops)) m_cnt.a_products += RigidDeflation::kModes;
+    ++m_deflation_faces;
+    m_defl_face = m_active;
+}
+
+void MprgpRun::galerkin_steps()
+{
+    const int* outer = m_J.outerIndexPtr();
+    const int* inner = m_J.innerIndexPtr();
+    const double* val = m_J.valuePtr();
+    // Each clipped step adds a row to the face: at most m repeats; a few suffice in practice.
+    for (long repeat = 0; repeat <= m_m; ++repeat) {
+        update_deflation_face();
+        free_gradient(m_J, m_rows, m_active, m_g, m_tmp);  // phi: V'g in face form
+        m_defl.coarse(m_tmp, m_gd, m_gad);
+        m_cnt.work_flops += m_defl.apply_flops();
+        const double dg = m_gd.dot(m_tmp);
+        if (!(dg > 0.0) || !std::isfinite(dg)) return;
+        // F(x - a d) decreases for a in (0, 2) (d'Ad = d'g): clip a <= 1 to the feasible set.
+        double step = 1.0;
+        long blocking = -1;
+        for (Eigen::Index i = 0; i < m_m; ++i) {
+            if (m_active[static_cast<size_t>(i)] || m_rows.s[i] <= 0.0) continue;
+            double jd = 0.0, jx = 0.0;
+            for (int k = outer[i]; k < outer[i + 1]; ++k) {
+                jd += val[k] * m_gd[inner[k]];
+                jx += val[k] * m_x[inner[k]];
+            }
+            if (jd > 0.0 && (jx - m_c[i]) < step * jd) {
+                step = std::max(0.0, (jx - m_c[i]) / jd);
+                blocking = i;
+            }
+        }
+        if (step > 0.0) {
+            m_x -= step * m_gd;
+            m_g -= step * m_gad;
+            ++m_galerkin_steps;
+        }
+        if (blocking < 0) return;
+        active_rows(m_J, m_c, m_rows, m_x, m_active);
+        m_active[static_cast<size_t>(blocking)] = 1;  // the row the step stopped at
+        if (over_time()) return;
+    }
+}
+
+void MprgpRun::face_precondition(Vec& z)
+{
+    const Vec* g = &m_g;
+    if (m_deflate) {
+        // P g = g - A V y1 with y1 = E^+ V'g (V'g in face form); the coarse part V y1 is added back.
+        free_gradient(m_J, m_rows, m_active, m_g, m_tmp);
+        m_defl.coarse(m_tmp, m_gd, m_gad);
+        m_tmp = m_g - m_gad;
+        g = &m_tmp;
+        m_cnt.work_flops += m_defl.apply_flops();
+    }
+    if (m_ichol) {
+        if (m_ic.ready())
+            ichol_face_precondition(m_ic, m_J, m_rows, m_active, *g, m_work, z, &m_cnt.work_flops);
+        else
+            z.setZero(m_n);
+    } else {
+        jacobi_face_precondition(m_J, m_rows, m_active, m_dinv, *g, z);
+    }
+    if (m_deflate) {
+        m_defl.deflate(z);  // P' M^-1 P g
+        z += m_gd;
+        m_cnt.work_flops += m_defl.apply_flops();
+    }
+}
+
+void MprgpRun::restart(bool galerkin)
 {
     active_rows(m_J, m_c, m_rows, m_x, m_active);
+    if (m_deflate) {
+        if (galerkin) {
+            galerkin_steps();
+            active_rows(m_J, m_c, m_rows, m_x, m_active);
+        }
+        update_deflation_face();
+    }
     if (m_ichol) {
         // The factor belongs to one face: rebuild it only when the face changed.
         // Q M^-1 Q is a valid (SPD on the face) preconditioner for any SPD M, so a factor of an
@@ -250,13 +357,8 @@ void MprgpRun::restart()
             m_face_factored = m_active;
             ++m_cnt.precond_factorizations;
         }
-        if (m_ic.ready())
-            ichol_face_precondition(m_ic, m_J, m_rows, m_active, m_g, m_work, m_z, &m_cnt.work_flops);
-        else
-            m_z.setZero(m_n);
-    } else {
-        jacobi_face_precondition(m_J, m_rows, m_active, m_dinv, m_g, m_z);
     }
+    face_precondition(m_z);
     ++m_cnt.precond_applications;
     m_p = m_z;
     m_rz = face_dot(m_z);
@@ -445,7 +547,7 @@ bool MprgpRun::expansion()
     double f_now = objective_from_gradient();
     ++m_cnt.expansion_steps;
     const bool ok = safeguard(f_before, f_now);
-    restart();
+    restart(true);
     return ok;
 }
 
@@ -468,7 +570,7 @@ bool MprgpRun::proportioning()
     double f_now = objective_from_gradient();
     ++m_cnt.proportioning_steps;
     const bool ok = safeguard(f_before, f_now);
-    restart();
+    restart(true);
     return ok;
 }
 
@@ -512,6 +614,10 @@ SolverResult MprgpRun::run()
         }
     }
     m_ichol = m_st.precond == "ichol";
+    if (m_st.deflation == "rigid") {
+        m_deflate = m_defl.build(m_A, m_J, m_qp.x0, kRigidMaxRayleigh);
+        m_cnt.a_products += m_defl.build_products();
+    }
     m_rows = make_decoupled_rows(m_J, m_dinv);
     for (Eigen::Index i = 0; i < m_m; ++i) {
         if (m_rows.s[i] <= 0.0 && m_c[i] > active_tolerance(m_c[i])) {
@@ -566,7 +672,7 @@ SolverResult MprgpRun::run()
     m_touched.reserve(static_cast<size_t>(m_J.nonZeros()));
     project_x();  // x = P(x0)
     refresh_gradient();
-    restart();
+    restart(true);
 
     const bool native = common.stop == StopRule::NATIVE;
     const bool recompute = m_st.objective == "recompute";
@@ -629,7 +735,8 @@ SolverResult MprgpRun::run()
                 }
                 break;
             }
-            const double alpha = m_rz / pap;
+            // Deflated directions: p'g = z'g only when V'g = 0 exactly; take the exact line minimiser.
+            const double alpha = (m_deflate ? pg : m_rz) / pap;
             const double df = -alpha * pg + 0.5 * alpha * alpha * pap;  // F(x - alpha p) - F(x)
             // Both objectives decide on F(P(y)) - F(P(x)) formed from differences: its rounding
             // is relative to the decrease itself, not to |F| (docs/ALGORITHMS.md §3, setting `objective`).
@@ -667,9 +774,9 @@ SolverResult MprgpRun::run()
                         }
                     }
                 }
-                if (m_ichol) {
-                    // The fused pass computed z = g (dinv = 1); replace it by the face IC direction.
-                    ichol_face_precondition(m_ic, m_J, m_rows, m_active, m_g, m_work, m_z, &m_cnt.work_flops);
+                if (m_ichol || m_deflate) {
+                    // The fused pass computed z = D^-1 g; replace it by the face direction (IC and/or balanced).
+                    face_precondition(m_z);
                     zg = face_dot(m_z);
                     zap = m_z.dot(m_Ap);
                 } else {
@@ -774,6 +881,14 @@ SolverResult MprgpRun::run()
         result.info["recompute"] = {{"trial_steps", m_trial_steps},
                                     {"direct_disagreements", m_direct_disagreements},
                                     {"direct_gap_max", m_direct_gap}};
+    if (m_st.deflation != "none")
+        result.info["deflation"] = {{"active", m_deflate},
+                                    {"bodies", m_defl.components()},
+                                    {"modes", m_defl.kept_modes()},
+                                    {"rayleigh_min", m_defl.min_rayleigh_seen()},
+                                    {"rayleigh_max", m_defl.max_rayleigh_seen()},
+                                    {"galerkin_steps", m_galerkin_steps},
+                                    {"faces", m_deflation_faces}};
     if (m_ichol)
         result.info["ichol"] = {{"factor_nonzeros", m_ic.factor_nonzeros()},
                                 {"a_nonzeros", static_cast<long>(m_A.nonZeros())}};

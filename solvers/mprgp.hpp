@@ -25,6 +25,8 @@ struct MprgpSettings {
     double ichol_refactor = 0.1;  ///< precond = ichol: refactor when more than this fraction of the rows changed face
     std::string expansion = "paper";  ///< paper: P(x - alpha_bar phi) | precond: P(x - a z), z the preconditioned free
                                       ///< gradient, a its exact step
+    std::string deflation = "none";   ///< none | rigid: Galerkin step and balanced preconditioner with the face's
+                                      ///< rigid modes (solvers/mprgp_deflation.hpp)
 
     static MprgpSettings from_json(const nlohmann::json& settings);
     nlohmann::json to_json() const;

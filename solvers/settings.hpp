@@ -119,10 +119,12 @@ public:
     }
     /// A string that must be one of `choices` (the reader's error lists them).
     SettingsTable& choice(const std::string& key, std::string S::*field, const std::vector<std::string>& choices,
-                          const std::string& doc)
+                          const std::string& doc, std::function<std::string(const S&)> default_of = nullptr)
     {
         Row row{{key, setting_default_text(S{}.*field), doc}, choices, nullptr, nullptr};
-        row.read = [=](SettingsReader& reader, S& s) { s.*field = reader.choice(key, s.*field, choices); };
+        row.read = [=](SettingsReader& reader, S& s) {
+            s.*field = reader.choice(key, default_of ? default_of(s) : s.*field, choices);
+        };
         row.write = [=](const S& s, nlohmann::json& j) { j[key] = s.*field; };
         m_rows.push_back(std::move(row));
         return *this;
