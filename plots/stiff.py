@@ -40,10 +40,13 @@ SCENE = os.path.join(HERE, "..", "scenes", "stiff_slab.json")
 CONFIGS: Dict[str, tuple] = {
     "cg-jacobi": ("cg", {"precond": "jacobi", "start": "zero"}),
     "cg-ichol": ("cg", {"precond": "ichol", "start": "zero"}),
+    # The fair baseline of mprgp-ichol (whose default deflation is rigid): PCG with the same coarse space.
+    "cg-ichol-rigid": ("cg", {"precond": "ichol", "start": "zero", "deflation": "rigid"}),
     "mprgp-jacobi": ("mprgp", {"precond": "jacobi"}),
     "mprgp-ichol": ("mprgp", {"precond": "ichol"}),
 }
 STYLE = {"cg-jacobi": (figutil.solver_colour("cg"), "--"), "cg-ichol": (figutil.solver_colour("cg"), "-"),
+         "cg-ichol-rigid": (figutil.solver_colour("cg"), ":"),
          "mprgp-jacobi": (figutil.solver_colour("mprgp"), "--"), "mprgp-ichol": (figutil.solver_colour("mprgp"), "-")}
 
 
@@ -88,6 +91,7 @@ def summary_row(youngs: float, label: str, run: dict, tol: float) -> dict:
         "factorizations": counters.get("precond_factorizations"),
         "factor_nonzeros": (info.get("ichol") or {}).get("factor_nonzeros"),
         "a_nonzeros": (info.get("ichol") or {}).get("a_nonzeros"),
+        "deflation_modes": (info.get("deflation") or {}).get("modes"),
     }
 
 

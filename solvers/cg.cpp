@@ -4,6 +4,7 @@
 
 #include "solvers/a_product.hpp"
 #include "solvers/ichol.hpp"
+#include "solvers/mprgp_deflation.hpp"
 #include "solvers/solve_loop.hpp"
 #include "solvers/work_units.hpp"
 
@@ -23,7 +24,11 @@ const SettingsTable<CgSettings>& cg_settings_table()
                     "fill; docs/preconditioners.md)")
             .choice("start", &CgSettings::start, {"x0", "zero"},
                     "x0 | zero: start point (zero: a 1e-8 reduction of |b|, free of the rounding floor eps |A||x0| "
-                    "that a start near the solution meets; docs/preconditioners.md)");
+                    "that a start near the solution meets; docs/preconditioners.md)")
+            .choice("deflation", &CgSettings::deflation, {"none", "rigid"},
+                    "none | rigid: deflated PCG over the slow rigid modes of each body (from x0; mprgp's coarse "
+                    "space without the face): a Galerkin start, then every preconditioned residual made "
+                    "A-conjugate to them (docs/preconditioners.md)");
     return table;
 }
 
@@ -122,6 +127,26 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
         ++counters.precond_applications;
         return inv_diag.cwiseProduct(r);
     };
+    // deflation = rigid: V = the slow rigid modes of each body of A. cg has no face (it ignores
+    // J), so V is built over all DOFs with no rows: the face with no active row.
+    const SpMat no_rows(0, n);
+    RigidDeflation defl;
+    bool deflate = false;
+    if (m_settings.deflation == "rigid") {
+        deflate = defl.build(qp.A, no_rows, qp.x0, RigidDeflation::kSlowRayleigh);
+        counters.a_products += defl.build_products();
+        if (deflate && defl.set_face(qp.A, no_rows, DecoupledRows{}, std::vector<char>(), &counters.work_flops))
+            counters.a_products += RigidDeflation::kModes;  // A V
+    }
+    // The search direction: M^-1 r, made A-conjugate to V when deflating (deflated PCG).
+    auto direction = [&](const Vec& r) -> Vec {
+        Vec z = precondition(r);
+        if (deflate) {
+            defl.deflate(z);
+            counters.work_flops += defl.apply_flops();
+        }
+        return z;
+    };
     if (!loop.end_setup()) {
         result.x = qp.x0;
         return loop.finish(result, SolveStatus::TIME_LIMIT, "", loop.time_limit_message());
@@ -131,16 +156,10 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
     Vec r = qp.b - a_product(qp.A, x);  // r = -g
     ++counters.a_products;
     // cg solves the unconstrained relaxation: its stop test measures that QP (J without rows).
-    const SpMat no_rows(0, n);
     const Vec no_c(0);
     const AccuracyScale scale = accuracy_scale(QpView{qp.A, qp.b, no_rows, no_c, qp.x0});
     counters.a_products += scale.a_products;
     const CgStopTest stop{common.stop, common.tol, scale};
-
-    Vec z = precondition(r);
-    Vec p = z;
-    double rz = r.dot(z);
-    Vec Ap(n);
 
     auto monitor = [&](StepKind step) {
         IterationInfo info;
@@ -154,6 +173,24 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
     };
     bool stopped = !monitor(StepKind::START);
     if (stopped) result.status = SolveStatus::STOPPED_BY_MONITOR;
+
+    // deflation: the Galerkin correction x += V E^+ V'r (E = V'AV) minimises F over x + V y and
+    // leaves V'r = 0; the A-conjugate directions then keep it so. Not an iteration.
+    long galerkin_steps = 0;
+    Vec d(n), ad(n);
+    auto galerkin = [&]() {
+        if (!deflate) return;
+        defl.coarse(r, d, ad);
+        x += d;
+        r -= ad;
+        counters.work_flops += defl.apply_flops();
+        ++galerkin_steps;
+    };
+    if (!stopped) galerkin();
+    Vec z = direction(r);
+    Vec p = z;
+    double rz = r.dot(z);
+    Vec Ap(n);
 
     long replacements = 0;  // residual replacements after a false (recurrence-only) convergence
     while (result.status == SolveStatus::NOT_RUN) {
@@ -174,7 +211,8 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
             }
             ++replacements;
             r = r_true;
-            z = precondition(r);
+            galerkin();
+            z = direction(r);
             p = z;
             rz = r.dot(z);
             continue;
@@ -195,7 +233,7 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
         const double alpha = rz / pAp;
         x.noalias() += alpha * p;
         r.noalias() -= alpha * Ap;
-        z = precondition(r);
+        z = direction(r);
         const double rz_new = r.dot(z);
         const double beta = rz_new / rz;
         rz = rz_new;
@@ -217,10 +255,18 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
     result.info["residual_replacements"] = replacements;
     result.info["unconstrained_error"] =
         n ? r.cwiseProduct(scale.inv_diag).lpNorm<Eigen::Infinity>() * scale.inv_length : 0.0;
+    if (m_settings.deflation != "none")
+        result.info["deflation"] = {{"active", deflate},
+                                    {"bodies", defl.components()},
+                                    {"modes", defl.kept_modes()},
+                                    {"rayleigh_min", defl.min_rayleigh_seen()},
+                                    {"rayleigh_max", defl.max_rayleigh_seen()},
+                                    {"galerkin_steps", galerkin_steps}};
     if (result.message.empty()) {
         std::ostringstream msg;
-        msg << "cg (" << m_settings.precond << "): " << to_string(result.status) << " after " << counters.iterations
-            << " iterations, |b - Ax|_2 = " << result.native_residual << " (constraints ignored)";
+        msg << "cg (" << m_settings.precond << (deflate ? ", rigid deflation" : "") << "): " << to_string(result.status)
+            << " after " << counters.iterations << " iterations, |b - Ax|_2 = " << result.native_residual
+            << " (constraints ignored)";
         if (result.status == SolveStatus::TIME_LIMIT) msg << "; " << loop.time_limit_message();
         result.message = msg.str();
     }

@@ -18,6 +18,7 @@ struct CgSettings {
     CommonSettings common;
     std::string precond = "jacobi";  ///< none | jacobi (diagonal of A) | ichol (incomplete Cholesky of A)
     std::string start = "x0";        ///< x0 | zero (start point of the iteration)
+    std::string deflation = "none";  ///< none | rigid (deflated PCG over the slow rigid modes of each body)
 
     /// Reads and checks the JSON settings (unknown keys are errors).
     static CgSettings from_json(const nlohmann::json& settings);

@@ -22,6 +22,9 @@ namespace cb {
 class RigidDeflation {
 public:
     static constexpr int kModes = 6;
+    /// The slow-mode filter of build() used by cg (mprgp's kRigidMaxRayleigh has the same value):
+    /// a rigid mode is kept when w'Aw <= 0.1 w'diag(A)w.
+    static constexpr double kSlowRayleigh = 0.1;
     using Modes = Eigen::Matrix<double, Eigen::Dynamic, kModes>;
 
     /// Builds W from the connected components of the vertex graph (vertex = DOF / 3) of A and J
