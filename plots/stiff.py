@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Stiff figure (issue 17): error against time for cg and mprgp with the jacobi and ichol
-preconditioners on the stiff-slab scene at Young's moduli 1e4..1e12 Pa.
+preconditioners (and cg ichol with deflation=rigid, mprgp ichol's coarse space) on the stiff-slab
+scene at Young's moduli 1e4..1e12 Pa.
 
     python3 plots/stiff.py run  --bin build/bin/contactbench --out results/stiff [--youngs 1e4,1e8,...]
     python3 plots/stiff.py plot --out results/stiff          (redraw from results/stiff/runs/*.json)
