@@ -2,8 +2,9 @@
 // timing`): a monitored run of every solver takes the same solver time as an unmonitored one, within
 // noise, on a stiff snapshot of a few thousand DOF where the monitor's work once leaked into `pgs`'s
 // clock (x21.9). A ratio measured in one process: min of 7 (or more: at least 1 s of each kind)
-// interleaved runs each after a warm-up, setup and solve minimised apart; no absolute wall-clock
-// bound. Its deterministic twin: tests/python/test_monitor_instructions.py.
+// interleaved runs each after a warm-up, setup and solve minimised apart; a solver over the bound
+// is measured again (up to 3 times: a leak fails every time, a busy neighbour rarely does); no
+// absolute wall-clock bound. Its deterministic twin: tests/python/test_monitor_instructions.py.
 #include "harness/history.hpp"
 #include "problems/synthetic.hpp"
 #include "solvers/registry.hpp"
@@ -20,6 +21,7 @@ namespace {
 constexpr int kSamples = 7;             ///< at least, each kind
 constexpr double kMinSampledTime = 1.0;  ///< seconds of each kind: millisecond solves take more samples
 constexpr double kMaxRatio = 1.2;
+constexpr int kAttempts = 3;  ///< independent measurements of a solver over the bound
 
 /// A stiff body (E = 1e9 Pa) of 13 x 7 x 13 vertices (n = 3549) on a plane (338 decoupled rows)
 /// or, for solvers that take bounds only (mprgp-box, tao-tron: NOT_APPLICABLE on the plane), under
@@ -64,6 +66,23 @@ struct MinTime {
     double total() const { return setup_s + solve_s; }
 };
 
+/// Monitored / unmonitored time of one solver: min of `samples` interleaved runs of each kind.
+double timing_ratio(const std::string& name, const Qp& qp, int samples, SolveStatus& status_monitored,
+                    SolveStatus& status_plain)
+{
+    MinTime monitored, plain;
+    for (int k = 0; k < samples; ++k) {
+        monitored.add(solver_time(name, qp, true, status_monitored));
+        plain.add(solver_time(name, qp, false, status_plain));
+    }
+    const double ratio = monitored.total() / plain.total();
+    std::cout << "monitor timing: " << name << " monitored " << monitored.setup_s << " + " << monitored.solve_s
+              << " s, unmonitored " << plain.setup_s << " + " << plain.solve_s << " s (setup + solve), ratio " << ratio
+              << ", solve alone " << monitored.solve_s / plain.solve_s << " (min of " << samples << " each)"
+              << std::endl;
+    return ratio;
+}
+
 TEST(MonitorTiming, MonitoredAndUnmonitoredRunsTakeTheSameTime)
 {
     for (const std::string& name : builtin_registry().names()) {
@@ -78,20 +97,15 @@ TEST(MonitorTiming, MonitoredAndUnmonitoredRunsTakeTheSameTime)
         }
         const double once_s = std::max(1e-6, once.setup_s + once.solve_s);
         const int samples = std::max(kSamples, static_cast<int>(std::min(200.0, kMinSampledTime / once_s)));
-        MinTime monitored, plain;
-        for (int k = 0; k < samples; ++k) {
-            monitored.add(solver_time(name, qp, true, status_monitored));
-            plain.add(solver_time(name, qp, false, status_plain));
-        }
+        // A busy neighbour (another process on a 2-core machine) can slow one kind's every sample
+        // for a while; a leak slows the monitored kind in every measurement. So a solver passes
+        // when one of kAttempts independent measurements is within the bound.
+        double best = std::numeric_limits<double>::infinity();
+        for (int attempt = 0; attempt < kAttempts && best > kMaxRatio; ++attempt)
+            best = std::min(best, timing_ratio(name, qp, samples, status_monitored, status_plain));
         EXPECT_EQ(status_monitored, SolveStatus::CONVERGED);
         EXPECT_EQ(status_plain, status_monitored);
-        const double ratio = monitored.total() / plain.total();
-        std::cout << "monitor timing: " << name << " monitored " << monitored.setup_s << " + " << monitored.solve_s
-                  << " s, unmonitored " << plain.setup_s << " + " << plain.solve_s << " s (setup + solve), ratio "
-                  << ratio << ", solve alone " << monitored.solve_s / plain.solve_s << " (min of " << samples
-                  << " each)\n";
-        EXPECT_LE(ratio, kMaxRatio) << "monitored " << monitored.total() << " s, unmonitored " << plain.total()
-                                    << " s";
+        EXPECT_LE(best, kMaxRatio) << "in each of " << kAttempts << " measurements";
     }
 }
 
