@@ -18,7 +18,7 @@
 namespace cb {
 namespace {
 
-constexpr int kSamples = 7;             ///< at least, each kind
+constexpr int kSamples = 7;              ///< at least, each kind
 constexpr double kMinSampledTime = 1.0;  ///< seconds of each kind: millisecond solves take more samples
 constexpr double kMaxRatio = 1.2;
 constexpr int kAttempts = 3;  ///< independent measurements of a solver over the bound
