@@ -1,0 +1,45 @@
+#pragma once
+/// What the PETSc TAO peers (`tao-pdipm`, `tao-tron`) share, inside their child process: PETSc's
+/// start, the QP's objective, gradient and constant Hessian as TAO callbacks, sequential AIJ copies
+/// of Eigen matrices, and a guard that ends a TAO solve whose iterations no longer advance.
+/// Only the TAO peers' sources include this header (they are compiled with PETSc's flags).
+#include "solvers/qp.hpp"
+
+#include <petsctao.h>
+
+namespace cb::tao {
+
+/// In the child process: sends stdout to /dev/null (TAOPDIPM prints each failed inner SNES solve
+/// there, which would interleave with the harness's output) and initialises PETSc (and an Open MPI
+/// singleton). False when PETSc did not start.
+bool start_petsc();
+
+/// A sequential AIJ copy of S (any storage order).
+PetscErrorCode aij(const SpMat& S, Mat* out);
+
+/// v's entries (size v.size()) into the PETSc vector V, and back.
+PetscErrorCode to_petsc(const cb::Vec& v, ::Vec V);
+PetscErrorCode from_petsc(::Vec V, cb::Vec& v);
+
+/// The context of objective_and_gradient. TAOPDIPM calls its inner SNES again and again from the
+/// same point when the Newton step's linear solve fails, without counting an iteration or testing
+/// its caps; every SNES call evaluates the objective, so the callback sees it: after `stuck_limit`
+/// evaluations at the same TAO iteration number it sets TAO's reason to TAO_DIVERGED_USER, which
+/// ends TaoSolve's loop.
+struct Objective {
+    const QpView* qp = nullptr;
+    long stuck_limit = 50;
+    long evaluations = 0;               ///< in all
+    long evaluations_at_iteration = 0;  ///< since TAO's iteration number last changed
+    long max_evaluations_at_iteration = 0;
+    PetscInt iteration = -1;
+    bool stuck = false;  ///< the guard ended the solve
+};
+
+/// f = 1/2 x'Ax - b'x, g = Ax - b; `ctx` is an Objective.
+PetscErrorCode objective_and_gradient(Tao tao, ::Vec X, PetscReal* f, ::Vec G, void* ctx);
+
+/// The Hessian is A, copied once: nothing to do.
+PetscErrorCode constant_hessian(Tao, ::Vec, Mat, Mat, void*);
+
+}  // namespace cb::tao
