@@ -1,5 +1,8 @@
 // Shared pieces of the PETSc TAO peers (see tao_common.hpp).
 #include "solvers/peers/tao_common.hpp"
+#include "solvers/a_product.hpp"
+#include "solvers/accuracy.hpp"
+#include "solvers/solver.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -88,6 +91,20 @@ PetscErrorCode objective_and_gradient(Tao tao, ::Vec X, PetscReal* f, ::Vec G, v
     PetscCall(VecRestoreArray(G, &g));
     PetscCall(VecRestoreArrayRead(X, &x));
     PetscFunctionReturn(0);
+}
+
+bool kkt_holds(const QpView& qp, const cb::Vec& x, cb::Vec& lambda, double tol, bool* fitted)
+{
+    if (fitted) *fitted = false;
+    if (!x.allFinite()) return false;
+    const AccuracyScale scale = accuracy_scale(qp);
+    const cb::Vec g = a_product(qp.A, x) - qp.b;
+    if (lambda.allFinite() && accuracy_converged(qp, scale, x, g, lambda, tol)) return true;
+    cb::Vec fit = fit_multipliers(qp, scale, x, g);
+    if (!accuracy_converged(qp, scale, x, g, fit, tol)) return false;
+    lambda = std::move(fit);
+    if (fitted) *fitted = true;
+    return true;
 }
 
 PetscErrorCode constant_hessian(Tao, ::Vec, Mat, Mat, void*) { return 0; }

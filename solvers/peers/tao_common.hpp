@@ -39,6 +39,11 @@ struct Objective {
 /// f = 1/2 x'Ax - b'x, g = Ax - b; `ctx` is an Objective.
 PetscErrorCode objective_and_gradient(Tao tao, ::Vec X, PetscReal* f, ::Vec G, void* ctx);
 
+/// The harness's verdict on the point x (docs/accuracy.md: e judges x): true when the accuracy
+/// error with `lambda` is <= tol, or else with multipliers fitted at x (fit_multipliers), which
+/// then replace `lambda` (`*fitted` set). TAO's duals can miss tol at a point that meets it.
+bool kkt_holds(const QpView& qp, const cb::Vec& x, cb::Vec& lambda, double tol, bool* fitted);
+
 /// The Hessian is A, copied once: nothing to do.
 PetscErrorCode constant_hessian(Tao, ::Vec, Mat, Mat, void*);
 
