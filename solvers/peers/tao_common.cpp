@@ -107,6 +107,27 @@ bool kkt_holds(const QpView& qp, const cb::Vec& x, cb::Vec& lambda, double tol, 
     return true;
 }
 
+PetscErrorCode kkt_convergence_test(Tao tao, void* ctx)
+{
+    KktTest& t = *static_cast<KktTest*>(ctx);
+    const QpView& qp = *t.qp;
+    ::Vec X;
+    cb::Vec x, lambda = cb::Vec::Zero(qp.m());
+    PetscFunctionBeginUser;
+    PetscCall(TaoGetSolution(tao, &X));
+    PetscCall(from_petsc(X, x));
+    PetscCall(t.multipliers(tao, x, lambda));
+    ++t.checks;
+    const cb::Vec g = a_product(qp.A, x) - qp.b;
+    if (x.allFinite() && lambda.allFinite() && accuracy_converged(qp, t.scale, x, g, lambda, t.tol)) {
+        t.met = true;
+        PetscCall(TaoSetConvergedReason(tao, TAO_CONVERGED_USER));
+        PetscFunctionReturn(0);
+    }
+    PetscCall(TaoDefaultConvergenceTest(tao, nullptr));
+    PetscFunctionReturn(0);
+}
+
 PetscErrorCode constant_hessian(Tao, ::Vec, Mat, Mat, void*) { return 0; }
 
 }  // namespace cb::tao

@@ -5,7 +5,11 @@
 /// Only the TAO peers' sources include this header (they are compiled with PETSc's flags).
 #include "solvers/qp.hpp"
 
+#include "solvers/accuracy.hpp"
+
 #include <petsctao.h>
+
+#include <functional>
 
 namespace cb::tao {
 
@@ -43,6 +47,22 @@ PetscErrorCode objective_and_gradient(Tao tao, ::Vec X, PetscReal* f, ::Vec G, v
 /// error with `lambda` is <= tol, or else with multipliers fitted at x (fit_multipliers), which
 /// then replace `lambda` (`*fitted` set). TAO's duals can miss tol at a point that meets it.
 bool kkt_holds(const QpView& qp, const cb::Vec& x, cb::Vec& lambda, double tol, bool* fitted);
+
+/// TAO's convergence test under stop=kkt (TaoSetConvergenceTest): the harness's accuracy verdict
+/// at TAO's current iterate, with the multipliers `multipliers` gives for it; when it holds, TAO's
+/// reason is set to TAO_CONVERGED_USER and `met` is set. Otherwise TAO's default test runs (its
+/// iteration and evaluation caps; the peers set its absolute tolerances to 0 under stop=kkt). TAO's own tolerances
+/// are absolute, on its own residual norms: they neither scale with the problem (an objective
+/// times 2^-26 is "converged" at x0) nor stop where the common measure is met.
+struct KktTest {
+    const QpView* qp = nullptr;
+    AccuracyScale scale;
+    double tol = 1e-6;
+    std::function<PetscErrorCode(Tao, const cb::Vec& x, cb::Vec& lambda)> multipliers;
+    long checks = 0;  ///< calls (each one A x and one J x)
+    bool met = false;
+};
+PetscErrorCode kkt_convergence_test(Tao tao, void* ctx);
 
 /// The Hessian is A, copied once: nothing to do.
 PetscErrorCode constant_hessian(Tao, ::Vec, Mat, Mat, void*);

@@ -58,25 +58,47 @@ constexpr long kStuckEvaluations = 50;
 struct TaoRun {
     SiconosReport report;
     int reason = 0;  // TaoConvergedReason
-    int resolves = 0;
     double gatol = 0.0;
+    bool kkt_met = false;  // the harness's test ended the solve (stop=kkt)
+    long kkt_checks = 0;
     bool stuck = false;  // ended by the guard (tao::Objective): the Newton steps' linear solves failed
     long stuck_iteration = 0;
     long evaluations = 0;
     long max_evaluations_at_iteration = 0;
 };
 
-/// One TAOPDIPM solve from qp.x0 with gatol = catol = `tol_tao`; x and lambda (m) out.
-PetscErrorCode pdipm(const QpView& qp, long max_iterations, double tol_tao, cb::Vec& x_out, cb::Vec& lambda_out,
-                     TaoRun& run)
+/// PDIPM's inequality multipliers (no variable bound is finite, so these are Jx - c >= 0's).
+PetscErrorCode duals(Tao tao, Eigen::Index m, cb::Vec& lambda)
 {
+    ::Vec DE = nullptr, DI = nullptr;
+    PetscFunctionBeginUser;
+    PetscCall(TaoGetDualVariables(tao, &DE, &DI));
+    lambda = cb::Vec::Zero(m);
+    if (DI) {
+        PetscInt size;
+        const PetscScalar* l;
+        PetscCall(VecGetSize(DI, &size));
+        PetscCall(VecGetArrayRead(DI, &l));
+        for (PetscInt i = 0; i < std::min<PetscInt>(size, static_cast<PetscInt>(m)); ++i) lambda[i] = l[i];
+        PetscCall(VecRestoreArrayRead(DI, &l));
+    }
+    PetscFunctionReturn(0);
+}
+
+/// One TAOPDIPM solve from qp.x0 with gatol = catol = `tol_tao`, under stop=kkt (`common`) ended
+/// by the harness's accuracy test at the first iterate that meets tol; x and lambda (m) out.
+PetscErrorCode pdipm(const QpView& qp, const CommonSettings& common, double tol_tao, cb::Vec& x_out,
+                     cb::Vec& lambda_out, TaoRun& run)
+{
+    const long max_iterations = common.max_iterations;
     const PetscInt n = static_cast<PetscInt>(qp.n()), m = static_cast<PetscInt>(qp.m());
     TaoQp ctx{&qp};
     tao::Objective objective;
     objective.qp = &qp;
     objective.stuck_limit = kStuckEvaluations;
     Tao tao;
-    ::Vec X, XL, XU, C, DE = nullptr, DI = nullptr;
+    ::Vec X, XL, XU, C;
+    tao::KktTest kkt;
     Mat H, JC;
     PetscFunctionBeginUser;
     PetscCall(tao::aij(qp.A, &H));
@@ -103,6 +125,13 @@ PetscErrorCode pdipm(const QpView& qp, long max_iterations, double tol_tao, cb::
     // reach TAOPDIPM iterates without end, so it is capped (the cap is `stalled`, not max_iterations).
     const long cap = std::min<long>(max_iterations, kIterationCap);
     PetscCall(TaoSetMaximumIterations(tao, static_cast<PetscInt>(cap)));
+    if (common.stop != StopRule::NATIVE) {
+        kkt.qp = &qp;
+        kkt.scale = accuracy_scale(qp);
+        kkt.tol = common.tol;
+        kkt.multipliers = [&qp](Tao t, const cb::Vec&, cb::Vec& lambda) { return duals(t, qp.m(), lambda); };
+        PetscCall(TaoSetConvergenceTest(tao, tao::kkt_convergence_test, &kkt));
+    }
     PetscCall(TaoSetFromOptions(tao));  // the -ksp/-pc options set by run_pdipm
     PetscCall(TaoSolve(tao));
 
@@ -118,18 +147,12 @@ PetscErrorCode pdipm(const QpView& qp, long max_iterations, double tol_tao, cb::
     run.stuck = objective.stuck;
     run.stuck_iteration = static_cast<long>(its);
     run.evaluations += objective.evaluations;
-    run.max_evaluations_at_iteration = std::max(run.max_evaluations_at_iteration, objective.max_evaluations_at_iteration);
+    run.max_evaluations_at_iteration =
+        std::max(run.max_evaluations_at_iteration, objective.max_evaluations_at_iteration);
     PetscCall(tao::from_petsc(X, x_out));
-    PetscCall(TaoGetDualVariables(tao, &DE, &DI));
-    lambda_out = cb::Vec::Zero(qp.m());
-    if (DI) {  // PDIPM's inequality multipliers (no bounds are finite, so these are Jx - c >= 0's)
-        PetscInt size;
-        PetscCall(VecGetSize(DI, &size));
-        const PetscScalar* l;
-        PetscCall(VecGetArrayRead(DI, &l));
-        for (PetscInt i = 0; i < std::min(size, m); ++i) lambda_out[i] = l[i];
-        PetscCall(VecRestoreArrayRead(DI, &l));
-    }
+    PetscCall(duals(tao, qp.m(), lambda_out));
+    run.kkt_met = kkt.met;
+    run.kkt_checks = kkt.checks;
     PetscCall(TaoDestroy(&tao));
     PetscCall(MatDestroy(&H));
     PetscCall(MatDestroy(&JC));
@@ -153,19 +176,10 @@ std::vector<char> run_pdipm(const QpView& qp, const CommonSettings& common)
         PetscOptionsSetValue(nullptr, "-pc_factor_mat_solver_type", "mumps") == 0 &&
 #endif
         true) {
-        const bool native = common.stop == StopRule::NATIVE;
-        run.gatol = native ? common.tol : 1e-2 * common.tol;
-        PetscErrorCode ierr = pdipm(qp, common.max_iterations, run.gatol, x, lambda, run);
-        // TAO's tolerances are absolute on its own residuals: it can declare success at a point the
-        // common KKT test rejects. Then ask for 1e3 times more, once.
-        if (ierr == 0 && !native && run.reason > 0) {
-            cb::Vec lambda_checked = lambda;
-            if (!tao::kkt_holds(qp, x, lambda_checked, common.tol, nullptr) && run.gatol > 1e-15) {
-                run.gatol = std::max(1e-15, run.gatol * 1e-3);
-                ++run.resolves;
-                ierr = pdipm(qp, common.max_iterations, run.gatol, x, lambda, run);
-            }
-        }
+        // stop=kkt: the harness's test ends the solve, not TAO's absolute tolerances (0: off), which
+        // do not scale with the problem; the iteration cap and time limit bound a run that never meets it.
+        run.gatol = common.stop == StopRule::NATIVE ? common.tol : 0.0;
+        const PetscErrorCode ierr = pdipm(qp, common, run.gatol, x, lambda, run);
         if (ierr != 0) run.report.info = -1000 - static_cast<int>(ierr);
         PetscFinalize();
     } else {
@@ -224,9 +238,11 @@ SolverResult TaoPdipmSolver::solve(const QpView& qp, const SolveContext& context
     TaoRun run;
     std::memcpy(&run, p + (n + m) * sizeof(double), sizeof run);
     counters.iterations = run.report.iterations;
-    counters.a_products += run.evaluations;  // one A x per objective and gradient evaluation
+    // one A x per objective and gradient evaluation and per harness test in TAO's convergence test
+    counters.a_products += run.evaluations + run.kkt_checks;
     result.info["tao_reason"] = TaoConvergedReasons[run.reason];
-    result.info["tao_gatol_last"] = run.gatol;
+    result.info["tao_gatol"] = run.gatol;
+    result.info["kkt_test_in_tao"] = s.common.stop != StopRule::NATIVE;
     result.info["tao_stuck"] = run.stuck;
     result.info["objective_evaluations"] = run.evaluations;
     result.setup_s = loop.setup_s();
@@ -238,11 +254,15 @@ SolverResult TaoPdipmSolver::solve(const QpView& qp, const SolveContext& context
     finish_siconos_result(qp, s.common, context, run.report, "tao-pdipm: TAOPDIPM", "iterations", counters, result);
     std::ostringstream msg;
     msg << result.message << "; TAO reason " << TaoConvergedReasons[run.reason];
+    if (run.report.info <= -2000)
+        msg << " (PETSc did not start)";
+    else if (run.report.info <= -1000)
+        msg << " (TaoSolve stopped on PETSc error code " << -1000 - run.report.info << ")";
+    if (run.kkt_met) msg << " (set by the harness: its accuracy test met tol at TAO's iterate)";
     if (run.stuck)
         msg << " (set by the harness: TAOPDIPM's Newton step failed " << kStuckEvaluations
             << " times in a row at iteration " << run.stuck_iteration
             << ", its inner SNES reporting DIVERGED_LINEAR_SOLVE, and TAOPDIPM retries without end)";
-    if (run.resolves > 0) msg << " (re-solved once with gatol = catol = " << run.gatol << ")";
     result.message = msg.str();
     return loop.finish(result, result.status, result.criterion);
 }

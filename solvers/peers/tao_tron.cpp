@@ -114,16 +114,20 @@ constexpr long kStuckEvaluations = 200;
 struct TronRun {
     SiconosReport report;
     int reason = 0;  // TaoConvergedReason
-    int resolves = 0;
     double gatol = 0.0;
+    bool kkt_met = false;  // the harness's test ended the solve (stop=kkt)
+    long kkt_checks = 0;
     bool stuck = false;
     long evaluations = 0;
 };
 
-/// One TAOTRON solve from qp.x0 (projected onto the bounds by TRON) with gatol = `tol_tao`.
-PetscErrorCode tron(const QpView& qp, const Bounds& bounds, long max_iterations, double tol_tao, cb::Vec& x_out,
-                    TronRun& run)
+/// One TAOTRON solve from qp.x0 (projected onto the bounds by TRON) with gatol = `tol_tao`, under
+/// stop=kkt ended by the harness's accuracy test at the first iterate that meets tol.
+PetscErrorCode tron(const QpView& qp, const Bounds& bounds, const CommonSettings& common, double tol_tao,
+                    cb::Vec& x_out, TronRun& run)
 {
+    const long max_iterations = common.max_iterations;
+    tao::KktTest kkt;
     const PetscInt n = static_cast<PetscInt>(qp.n());
     tao::Objective objective;
     objective.qp = &qp;
@@ -150,6 +154,16 @@ PetscErrorCode tron(const QpView& qp, const Bounds& bounds, long max_iterations,
     // TAO's default cap of 4000 evaluations would end long runs before max_iterations does.
     PetscCall(TaoSetMaximumFunctionEvaluations(
         tao, static_cast<PetscInt>(std::min<long>(20 * max_iterations + 100, 1L << 30))));
+    if (common.stop != StopRule::NATIVE) {
+        kkt.qp = &qp;
+        kkt.scale = accuracy_scale(qp);
+        kkt.tol = common.tol;
+        kkt.multipliers = [&qp, &bounds](Tao, const cb::Vec& x, cb::Vec& lambda) -> PetscErrorCode {
+            lambda = multipliers(qp, bounds, x);
+            return 0;
+        };
+        PetscCall(TaoSetConvergenceTest(tao, tao::kkt_convergence_test, &kkt));
+    }
     PetscCall(TaoSetFromOptions(tao));
     PetscCall(TaoSolve(tao));
 
@@ -164,6 +178,8 @@ PetscErrorCode tron(const QpView& qp, const Bounds& bounds, long max_iterations,
     run.report.max_iterations_reached = reason == TAO_DIVERGED_MAXITS;
     run.stuck = objective.stuck;
     run.evaluations += objective.evaluations;
+    run.kkt_met = kkt.met;
+    run.kkt_checks = kkt.checks;
     PetscCall(tao::from_petsc(X, x_out));
     PetscCall(TaoDestroy(&tao));
     PetscCall(MatDestroy(&H));
@@ -180,19 +196,10 @@ std::vector<char> run_tron(const QpView& qp, const Bounds& bounds, const CommonS
     cb::Vec x = qp.x0;
     TronRun run;
     if (tao::start_petsc()) {
-        const bool native = common.stop == StopRule::NATIVE;
-        run.gatol = native ? common.tol : 1e-2 * common.tol;
-        PetscErrorCode ierr = tron(qp, bounds, common.max_iterations, run.gatol, x, run);
-        // gatol is absolute on TAO's projected gradient: TRON can stop at a point the common KKT
-        // test rejects. Then ask for 1e3 times more, once.
-        if (ierr == 0 && !native && run.reason > 0) {
-            cb::Vec lambda = multipliers(qp, bounds, x);
-            if (!tao::kkt_holds(qp, x, lambda, common.tol, nullptr) && run.gatol > 1e-15) {
-                run.gatol = std::max(1e-15, run.gatol * 1e-3);
-                ++run.resolves;
-                ierr = tron(qp, bounds, common.max_iterations, run.gatol, x, run);
-            }
-        }
+        // stop=kkt: the harness's test ends the solve, not TAO's absolute tolerances (0: off), which
+        // do not scale with the problem; the iteration cap and time limit bound a run that never meets it.
+        run.gatol = common.stop == StopRule::NATIVE ? common.tol : 0.0;
+        const PetscErrorCode ierr = tron(qp, bounds, common, run.gatol, x, run);
         if (ierr != 0) run.report.info = -1000 - static_cast<int>(ierr);
         PetscFinalize();
     } else {
@@ -245,10 +252,12 @@ SolverResult TaoTronSolver::solve(const QpView& qp, const SolveContext& context)
     TronRun run;
     std::memcpy(&run, child.bytes.data() + n * sizeof(double), sizeof run);
     result.lambda = multipliers(qp, bounds, result.x);
-    counters.a_products += 1 + run.evaluations;  // the multipliers' gradient; one A x per evaluation
+    // the multipliers' gradient; one A x per evaluation and per harness test in TAO's convergence test
+    counters.a_products += 1 + run.evaluations + 2 * run.kkt_checks;
     counters.iterations = run.report.iterations;
     result.info["tao_reason"] = TaoConvergedReasons[run.reason];
-    result.info["tao_gatol_last"] = run.gatol;
+    result.info["tao_gatol"] = run.gatol;
+    result.info["kkt_test_in_tao"] = s.common.stop != StopRule::NATIVE;
     result.info["tao_stuck"] = run.stuck;
     result.info["objective_evaluations"] = run.evaluations;
     result.setup_s = loop.setup_s();
@@ -260,10 +269,14 @@ SolverResult TaoTronSolver::solve(const QpView& qp, const SolveContext& context)
     finish_siconos_result(qp, s.common, context, run.report, "tao-tron: TAOTRON", "iterations", counters, result);
     std::ostringstream msg;
     msg << result.message << "; TAO reason " << TaoConvergedReasons[run.reason];
+    if (run.report.info <= -2000)
+        msg << " (PETSc did not start)";
+    else if (run.report.info <= -1000)
+        msg << " (TaoSolve stopped on PETSc error code " << -1000 - run.report.info << ")";
     if (run.stuck)
         msg << " (set by the harness: " << kStuckEvaluations << " objective evaluations at iteration "
             << run.report.iterations << ")";
-    if (run.resolves > 0) msg << " (re-solved once with gatol = " << run.gatol << ")";
+    if (run.kkt_met) msg << " (set by the harness: its accuracy test met tol at TAO's iterate)";
     result.message = msg.str();
     return loop.finish(result, result.status, result.criterion);
 }

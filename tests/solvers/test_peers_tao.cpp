@@ -77,7 +77,9 @@ TEST(TaoTron, AgreesWithActiveSetOnBoundRowsAndRefusesOtherRows)
         EXPECT_GE(r.lambda.minCoeff(), 0.0);
         const Vec g = qp.A * r.x - qp.b;
         EXPECT_TRUE(cb::accuracy_converged(view, cb::accuracy_scale(view), r.x, g, r.lambda, 1e-8));
-        EXPECT_EQ(r.info.value("tao_reason", ""), "CONVERGED_GATOL");
+        // stop=kkt: the harness's test, run as TAO's convergence test, ended the solve.
+        EXPECT_EQ(r.info.value("tao_reason", ""), "CONVERGED_USER");
+        EXPECT_TRUE(r.info.value("kkt_test_in_tao", false));
     }
     EXPECT_EQ(solved, 3);
     EXPECT_EQ(refused, 2);
@@ -146,4 +148,26 @@ TEST(TaoPdipm, EndlessNewtonRetriesAreEndedAndStalled)
         solve("tao-pdipm", cb::make_synthetic("coupled", {{"nx", 3}, {"ny", 2}, {"nz", 3}}, 5), {{"tol", 1e-6}});
     EXPECT_EQ(plain.status, SolveStatus::CONVERGED) << plain.message;
     EXPECT_FALSE(plain.info.value("tao_stuck", true));
+}
+
+// TAO's own tolerances are absolute: with the objective times 2^-26 TAO's residuals are below
+// any gatol early. Under stop=kkt the harness's scale-free test decides when the solve ends, so
+// the scaled problem is solved to tol, to the same point (x is unchanged by the scaling).
+TEST(TaoPdipm, StopsOnTheHarnessTestWhateverTheObjectiveScale)
+{
+    if (!built("tao-pdipm")) GTEST_SKIP() << "tao-pdipm is not built";
+    const Qp qp = cb::make_synthetic("plane", {{"nx", 3}, {"ny", 2}, {"nz", 3}}, 3);
+    Qp scaled = qp;
+    const double a = std::ldexp(1.0, -26);
+    scaled.A *= a;
+    scaled.b *= a;
+    const SolverResult r = solve("tao-pdipm", qp, {{"tol", 1e-6}});
+    const SolverResult rs = solve("tao-pdipm", scaled, {{"tol", 1e-6}});
+    for (const SolverResult* p : {&r, &rs}) {
+        EXPECT_EQ(p->status, SolveStatus::CONVERGED) << p->message;
+        EXPECT_EQ(p->info.value("tao_reason", ""), "CONVERGED_USER") << p->message;
+    }
+    const SolverResult ref = solve("active-set", qp, {{"tol", 1e-10}});
+    const double scale = (ref.x - qp.x0).lpNorm<Eigen::Infinity>();
+    EXPECT_LE((rs.x - ref.x).lpNorm<Eigen::Infinity>(), 1e-4 * scale);
 }
