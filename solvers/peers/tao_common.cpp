@@ -20,7 +20,10 @@ bool start_petsc()
         ::dup2(devnull, STDOUT_FILENO);
         ::close(devnull);
     }
-    return PetscInitializeNoArguments() == 0;
+    if (PetscInitializeNoArguments() != 0) return false;
+    // Errors come back as codes (the message gives the code) instead of PETSc's page of
+    // traceback and configure options on stderr for every failed MUMPS solve.
+    return PetscPushErrorHandler(PetscReturnErrorHandler, nullptr) == 0;
 }
 
 PetscErrorCode aij(const SpMat& S, Mat* out)

@@ -14,8 +14,9 @@
 namespace cb::tao {
 
 /// In the child process: sends stdout to /dev/null (TAOPDIPM prints each failed inner SNES solve
-/// there, which would interleave with the harness's output) and initialises PETSc (and an Open MPI
-/// singleton). False when PETSc did not start.
+/// there, which would interleave with the harness's output), initialises PETSc (and an Open MPI
+/// singleton) and makes PETSc errors return their code without printing. False when PETSc did
+/// not start.
 bool start_petsc();
 
 /// A sequential AIJ copy of S (any storage order).

@@ -256,8 +256,12 @@ SolverResult TaoPdipmSolver::solve(const QpView& qp, const SolveContext& context
     msg << result.message << "; TAO reason " << TaoConvergedReasons[run.reason];
     if (run.report.info <= -2000)
         msg << " (PETSc did not start)";
-    else if (run.report.info <= -1000)
-        msg << " (TaoSolve stopped on PETSc error code " << -1000 - run.report.info << ")";
+    else if (run.report.info <= -1000) {
+        const int code = -1000 - run.report.info;
+        const char* text = nullptr;  // PETSc's static table: no PetscInitialize needed
+        PetscErrorMessage(static_cast<PetscErrorCode>(code), &text, nullptr);
+        msg << " (TaoSolve stopped on PETSc error " << code << ": " << (text ? text : "unknown") << ")";
+    }
     if (run.kkt_met) msg << " (set by the harness: its accuracy test met tol at TAO's iterate)";
     if (run.stuck)
         msg << " (set by the harness: TAOPDIPM's Newton step failed " << kStuckEvaluations
