@@ -28,7 +28,13 @@ bool start_petsc()
 
 PetscErrorCode aij(const SpMat& S, Mat* out)
 {
-    const Eigen::SparseMatrix<double, Eigen::RowMajor> R = S;
+    // SpMat is row-major: its compressed arrays are CSR already (a copy only when uncompressed).
+    SpMat copy;
+    if (!S.isCompressed()) {
+        copy = S;
+        copy.makeCompressed();
+    }
+    const SpMat& R = S.isCompressed() ? S : copy;
     std::vector<PetscInt> rows(static_cast<size_t>(R.rows()) + 1), cols(static_cast<size_t>(R.nonZeros()));
     for (Eigen::Index i = 0; i <= R.rows(); ++i) rows[static_cast<size_t>(i)] = R.outerIndexPtr()[i];
     for (Eigen::Index k = 0; k < R.nonZeros(); ++k) cols[static_cast<size_t>(k)] = R.innerIndexPtr()[k];

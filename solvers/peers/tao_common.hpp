@@ -19,7 +19,7 @@ namespace cb::tao {
 /// not start.
 bool start_petsc();
 
-/// A sequential AIJ copy of S (any storage order).
+/// A sequential AIJ copy of S.
 PetscErrorCode aij(const SpMat& S, Mat* out);
 
 /// v's entries (size v.size()) into the PETSc vector V, and back.
