@@ -15,6 +15,7 @@
 #endif
 #ifdef CB_HAVE_PETSC
 #include "solvers/peers/tao_pdipm.hpp"
+#include "solvers/peers/tao_tron.hpp"
 #endif
 #ifdef CB_HAVE_SICONOS
 #include "solvers/peers/siconos_lemke.hpp"
@@ -55,6 +56,7 @@ void register_builtin_solvers(SolverRegistry& registry)
 #endif
 #ifdef CB_HAVE_PETSC
     registry.add("tao-pdipm", applies_to(tao_pdipm_entry(), "any J (interior point on the primal QP)"));
+    registry.add("tao-tron", applies_to(tao_tron_entry(), "bounds only (every row of J has at most one nonzero)"));
 #endif
 #ifdef CB_HAVE_BULLET
     registry.add("bullet-dantzig",

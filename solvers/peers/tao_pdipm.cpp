@@ -4,9 +4,8 @@
 #include "solvers/accuracy.hpp"
 #include "solvers/peers/child_process.hpp"
 #include "solvers/peers/siconos_report.hpp"
+#include "solvers/peers/tao_common.hpp"
 #include "solvers/solve_loop.hpp"
-
-#include <petsctao.h>
 
 #include <algorithm>
 #include <cstring>
@@ -31,44 +30,7 @@ namespace {
 // PETSc's Vec and Mat are the global ::Vec and ::Mat here (cb::Vec is Eigen's).
 struct TaoQp {
     const QpView* qp;
-    cb::Vec x;  // scratch
 };
-
-/// A sequential AIJ copy of S (any storage order).
-PetscErrorCode aij(const SpMat& S, Mat* out)
-{
-    const Eigen::SparseMatrix<double, Eigen::RowMajor> R = S;
-    std::vector<PetscInt> rows(static_cast<size_t>(R.rows()) + 1), cols(static_cast<size_t>(R.nonZeros()));
-    for (Eigen::Index i = 0; i <= R.rows(); ++i) rows[static_cast<size_t>(i)] = R.outerIndexPtr()[i];
-    for (Eigen::Index k = 0; k < R.nonZeros(); ++k) cols[static_cast<size_t>(k)] = R.innerIndexPtr()[k];
-    PetscFunctionBeginUser;
-    PetscCall(MatCreate(PETSC_COMM_SELF, out));
-    PetscCall(MatSetSizes(*out, static_cast<PetscInt>(R.rows()), static_cast<PetscInt>(R.cols()),
-                          static_cast<PetscInt>(R.rows()), static_cast<PetscInt>(R.cols())));
-    PetscCall(MatSetType(*out, MATSEQAIJ));
-    PetscCall(MatSeqAIJSetPreallocationCSR(*out, rows.data(), cols.data(), R.valuePtr()));
-    PetscFunctionReturn(0);
-}
-
-PetscErrorCode objective_and_gradient(Tao, ::Vec X, PetscReal* f, ::Vec G, void* ctx)
-{
-    const QpView& qp = *static_cast<TaoQp*>(ctx)->qp;
-    const PetscScalar* x;
-    PetscScalar* g;
-    PetscFunctionBeginUser;
-    PetscCall(VecGetArrayRead(X, &x));
-    PetscCall(VecGetArray(G, &g));
-    const Eigen::Map<const cb::Vec> xv(x, qp.n());
-    Eigen::Map<cb::Vec> gv(g, qp.n());
-    gv = qp.A * xv;
-    *f = 0.5 * xv.dot(gv) - qp.b.dot(xv);
-    gv -= qp.b;
-    PetscCall(VecRestoreArray(G, &g));
-    PetscCall(VecRestoreArrayRead(X, &x));
-    PetscFunctionReturn(0);
-}
-
-PetscErrorCode hessian(Tao, ::Vec, Mat, Mat, void*) { return 0; }  // constant: A, set once
 
 PetscErrorCode inequalities(Tao, ::Vec X, ::Vec C, void* ctx)
 {
@@ -88,42 +50,73 @@ PetscErrorCode inequality_jacobian(Tao, ::Vec, Mat, Mat, void*) { return 0; }  /
 
 constexpr long kIterationCap = 200;
 
+/// Objective evaluations at one TAO iteration number before the solve is ended as stuck: a PDIPM
+/// iteration takes 2 or 3 (SNES's function, the line search's residual); a failing inner SNES
+/// takes 1 per retry and retries forever.
+constexpr long kStuckEvaluations = 50;
+
 struct TaoRun {
     SiconosReport report;
     int reason = 0;  // TaoConvergedReason
-    int resolves = 0;
     double gatol = 0.0;
+    bool kkt_met = false;  // the harness's test ended the solve (stop=kkt)
+    long kkt_checks = 0;
+    bool stuck = false;  // ended by the guard (tao::Objective): the Newton steps' linear solves failed
+    long stuck_iteration = 0;
+    long evaluations = 0;
+    long max_evaluations_at_iteration = 0;
 };
 
-/// One TAOPDIPM solve from qp.x0 with gatol = catol = `tol_tao`; x and lambda (m) out.
-PetscErrorCode pdipm(const QpView& qp, long max_iterations, double tol_tao, cb::Vec& x_out, cb::Vec& lambda_out,
-                     TaoRun& run)
+/// PDIPM's inequality multipliers (no variable bound is finite, so these are Jx - c >= 0's).
+PetscErrorCode duals(Tao tao, Eigen::Index m, cb::Vec& lambda)
 {
+    ::Vec DE = nullptr, DI = nullptr;
+    PetscFunctionBeginUser;
+    PetscCall(TaoGetDualVariables(tao, &DE, &DI));
+    lambda = cb::Vec::Zero(m);
+    if (DI) {
+        PetscInt size;
+        const PetscScalar* l;
+        PetscCall(VecGetSize(DI, &size));
+        PetscCall(VecGetArrayRead(DI, &l));
+        for (PetscInt i = 0; i < std::min<PetscInt>(size, static_cast<PetscInt>(m)); ++i) lambda[i] = l[i];
+        PetscCall(VecRestoreArrayRead(DI, &l));
+    }
+    PetscFunctionReturn(0);
+}
+
+/// One TAOPDIPM solve from qp.x0 with gatol = catol = `tol_tao`, under stop=kkt (`common`) ended
+/// by the harness's accuracy test at the first iterate that meets tol; x and lambda (m) out.
+PetscErrorCode pdipm(const QpView& qp, const CommonSettings& common, double tol_tao, cb::Vec& x_out,
+                     cb::Vec& lambda_out, TaoRun& run)
+{
+    const long max_iterations = common.max_iterations;
     const PetscInt n = static_cast<PetscInt>(qp.n()), m = static_cast<PetscInt>(qp.m());
-    TaoQp ctx{&qp, cb::Vec()};
+    TaoQp ctx{&qp};
+    tao::Objective objective;
+    objective.qp = &qp;
+    objective.stuck_limit = kStuckEvaluations;
     Tao tao;
-    ::Vec X, XL, XU, C, DE = nullptr, DI = nullptr;
+    ::Vec X, XL, XU, C;
+    tao::KktTest kkt;
     Mat H, JC;
     PetscFunctionBeginUser;
-    PetscCall(aij(qp.A, &H));
-    PetscCall(aij(qp.J, &JC));
+    PetscCall(tao::aij(qp.A, &H));
+    PetscCall(tao::aij(qp.J, &JC));
     PetscCall(VecCreateSeq(PETSC_COMM_SELF, n, &X));
     PetscCall(VecDuplicate(X, &XL));
     PetscCall(VecDuplicate(X, &XU));
     PetscCall(VecSet(XL, PETSC_NINFINITY));
     PetscCall(VecSet(XU, PETSC_INFINITY));
     PetscCall(VecCreateSeq(PETSC_COMM_SELF, m, &C));
-    PetscScalar* x;
-    PetscCall(VecGetArray(X, &x));
-    Eigen::Map<cb::Vec>(x, qp.n()) = qp.x0;
-    PetscCall(VecRestoreArray(X, &x));
+    PetscCall(tao::to_petsc(qp.x0, X));
 
     PetscCall(TaoCreate(PETSC_COMM_SELF, &tao));
     PetscCall(TaoSetType(tao, TAOPDIPM));
     PetscCall(TaoSetSolution(tao, X));
     PetscCall(TaoSetVariableBounds(tao, XL, XU));
-    PetscCall(TaoSetObjectiveAndGradient(tao, nullptr, objective_and_gradient, &ctx));
-    PetscCall(TaoSetHessian(tao, H, H, hessian, &ctx));
+    PetscCall(TaoSetObjectiveAndGradient(tao, nullptr, tao::objective_and_gradient, &objective));
+    PetscCall(TaoSetHessian(tao, H, H, tao::constant_hessian, nullptr));
     PetscCall(TaoSetInequalityConstraintsRoutine(tao, C, inequalities, &ctx));
     PetscCall(TaoSetJacobianInequalityRoutine(tao, JC, JC, inequality_jacobian, &ctx));
     PetscCall(TaoSetTolerances(tao, tol_tao, 0.0, 0.0));
@@ -132,6 +125,13 @@ PetscErrorCode pdipm(const QpView& qp, long max_iterations, double tol_tao, cb::
     // reach TAOPDIPM iterates without end, so it is capped (the cap is `stalled`, not max_iterations).
     const long cap = std::min<long>(max_iterations, kIterationCap);
     PetscCall(TaoSetMaximumIterations(tao, static_cast<PetscInt>(cap)));
+    if (common.stop != StopRule::NATIVE) {
+        kkt.qp = &qp;
+        kkt.scale = accuracy_scale(qp);
+        kkt.tol = common.tol;
+        kkt.multipliers = [&qp](Tao t, const cb::Vec&, cb::Vec& lambda) { return duals(t, qp.m(), lambda); };
+        PetscCall(TaoSetConvergenceTest(tao, tao::kkt_convergence_test, &kkt));
+    }
     PetscCall(TaoSetFromOptions(tao));  // the -ksp/-pc options set by run_pdipm
     PetscCall(TaoSolve(tao));
 
@@ -144,20 +144,15 @@ PetscErrorCode pdipm(const QpView& qp, long max_iterations, double tol_tao, cb::
     run.report.iterations += static_cast<int>(its);
     run.report.residual = std::max(gnorm, cnorm);
     run.report.max_iterations_reached = reason == TAO_DIVERGED_MAXITS && cap == max_iterations;
-    const PetscScalar* xs;
-    PetscCall(VecGetArrayRead(X, &xs));
-    x_out = Eigen::Map<const cb::Vec>(xs, qp.n());
-    PetscCall(VecRestoreArrayRead(X, &xs));
-    PetscCall(TaoGetDualVariables(tao, &DE, &DI));
-    lambda_out = cb::Vec::Zero(qp.m());
-    if (DI) {  // PDIPM's inequality multipliers (no bounds are finite, so these are Jx - c >= 0's)
-        PetscInt size;
-        PetscCall(VecGetSize(DI, &size));
-        const PetscScalar* l;
-        PetscCall(VecGetArrayRead(DI, &l));
-        for (PetscInt i = 0; i < std::min(size, m); ++i) lambda_out[i] = l[i];
-        PetscCall(VecRestoreArrayRead(DI, &l));
-    }
+    run.stuck = objective.stuck;
+    run.stuck_iteration = static_cast<long>(its);
+    run.evaluations += objective.evaluations;
+    run.max_evaluations_at_iteration =
+        std::max(run.max_evaluations_at_iteration, objective.max_evaluations_at_iteration);
+    PetscCall(tao::from_petsc(X, x_out));
+    PetscCall(duals(tao, qp.m(), lambda_out));
+    run.kkt_met = kkt.met;
+    run.kkt_checks = kkt.checks;
     PetscCall(TaoDestroy(&tao));
     PetscCall(MatDestroy(&H));
     PetscCall(MatDestroy(&JC));
@@ -175,25 +170,16 @@ std::vector<char> run_pdipm(const QpView& qp, const CommonSettings& common)
     cb::Vec x = qp.x0, lambda = cb::Vec::Zero(m);
     TaoRun run;
     // A direct inner solver: the default GMRES + ILU fails on stiff problems.
-    if (PetscInitializeNoArguments() == 0 && PetscOptionsSetValue(nullptr, "-ksp_type", "preonly") == 0 &&
+    if (tao::start_petsc() && PetscOptionsSetValue(nullptr, "-ksp_type", "preonly") == 0 &&
         PetscOptionsSetValue(nullptr, "-pc_type", "lu") == 0 &&
 #ifdef PETSC_HAVE_MUMPS
         PetscOptionsSetValue(nullptr, "-pc_factor_mat_solver_type", "mumps") == 0 &&
 #endif
         true) {
-        const bool native = common.stop == StopRule::NATIVE;
-        run.gatol = native ? common.tol : 1e-2 * common.tol;
-        PetscErrorCode ierr = pdipm(qp, common.max_iterations, run.gatol, x, lambda, run);
-        // TAO's tolerances are absolute on its own residuals: it can declare success at a point the
-        // common KKT test rejects. Then ask for 1e3 times more, once.
-        if (ierr == 0 && !native && run.reason > 0) {
-            const cb::Vec g = a_product(qp.A, x) - qp.b;
-            if (!accuracy_converged(qp, accuracy_scale(qp), x, g, lambda, common.tol) && run.gatol > 1e-15) {
-                run.gatol = std::max(1e-15, run.gatol * 1e-3);
-                ++run.resolves;
-                ierr = pdipm(qp, common.max_iterations, run.gatol, x, lambda, run);
-            }
-        }
+        // stop=kkt: the harness's test ends the solve, not TAO's absolute tolerances (0: off), which
+        // do not scale with the problem; the iteration cap and time limit bound a run that never meets it.
+        run.gatol = common.stop == StopRule::NATIVE ? common.tol : 0.0;
+        const PetscErrorCode ierr = pdipm(qp, common, run.gatol, x, lambda, run);
         if (ierr != 0) run.report.info = -1000 - static_cast<int>(ierr);
         PetscFinalize();
     } else {
@@ -252,14 +238,35 @@ SolverResult TaoPdipmSolver::solve(const QpView& qp, const SolveContext& context
     TaoRun run;
     std::memcpy(&run, p + (n + m) * sizeof(double), sizeof run);
     counters.iterations = run.report.iterations;
+    // one A x per objective and gradient evaluation and per harness test in TAO's convergence test
+    counters.a_products += run.evaluations + run.kkt_checks;
     result.info["tao_reason"] = TaoConvergedReasons[run.reason];
-    result.info["tao_gatol_last"] = run.gatol;
+    result.info["tao_gatol"] = run.gatol;
+    result.info["kkt_test_in_tao"] = s.common.stop != StopRule::NATIVE;
+    result.info["tao_stuck"] = run.stuck;
+    result.info["objective_evaluations"] = run.evaluations;
     result.setup_s = loop.setup_s();
     result.solve_s = loop.solve_s();
+    // The verdict judges the point: where TAO's multipliers miss tol, fitted ones are tried.
+    bool fitted = false;
+    if (s.common.stop != StopRule::NATIVE) tao::kkt_holds(qp, result.x, result.lambda, s.common.tol, &fitted);
+    result.info["lambda_fitted"] = fitted;
     finish_siconos_result(qp, s.common, context, run.report, "tao-pdipm: TAOPDIPM", "iterations", counters, result);
     std::ostringstream msg;
     msg << result.message << "; TAO reason " << TaoConvergedReasons[run.reason];
-    if (run.resolves > 0) msg << " (re-solved once with gatol = catol = " << run.gatol << ")";
+    if (run.report.info <= -2000)
+        msg << " (PETSc did not start)";
+    else if (run.report.info <= -1000) {
+        const int code = -1000 - run.report.info;
+        const char* text = nullptr;  // PETSc's static table: no PetscInitialize needed
+        PetscErrorMessage(static_cast<PetscErrorCode>(code), &text, nullptr);
+        msg << " (TaoSolve stopped on PETSc error " << code << ": " << (text ? text : "unknown") << ")";
+    }
+    if (run.kkt_met) msg << " (set by the harness: its accuracy test met tol at TAO's iterate)";
+    if (run.stuck)
+        msg << " (set by the harness: TAOPDIPM's Newton step failed " << kStuckEvaluations
+            << " times in a row at iteration " << run.stuck_iteration
+            << ", its inner SNES reporting DIVERGED_LINEAR_SOLVE, and TAOPDIPM retries without end)";
     result.message = msg.str();
     return loop.finish(result, result.status, result.criterion);
 }

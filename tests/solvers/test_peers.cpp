@@ -73,7 +73,7 @@ INSTANTIATE_TEST_SUITE_P(Installed, Peers, ::testing::Values("ipopt", "siconos-l
                          });
 
 // time_limit_s counts setup (docs/DESIGN.md "The solve loop"): on the dual peers forming W uses
-// it all up, so the limit is reported during setup; siconos-nsn and tao-pdipm have no setup: their
+// it all up, so the limit is reported during setup; siconos-nsn and the TAO peers have no setup: their
 // child process starts, and the limit kills it. Either way it is a recorded status.
 TEST(PeersTimeLimit, CountsSetupAndEndsTheChildProcess)
 {
@@ -87,7 +87,7 @@ TEST(PeersTimeLimit, CountsSetupAndEndsTheChildProcess)
         EXPECT_EQ(r.status, SolveStatus::TIME_LIMIT) << r.message;
         EXPECT_EQ(r.message.rfind(name + ": time limit of 1e-09 s reached during setup (after ", 0), 0u) << r.message;
     }
-    for (const std::string name : {"siconos-nsn", "tao-pdipm"}) {
+    for (const std::string name : {"siconos-nsn", "tao-pdipm", "tao-tron"}) {
         if (!cb::builtin_registry().contains(name)) continue;
         ++ran;
         const SolverResult r =

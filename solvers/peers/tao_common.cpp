@@ -1,0 +1,142 @@
+// Shared pieces of the PETSc TAO peers (see tao_common.hpp).
+#include "solvers/peers/tao_common.hpp"
+#include "solvers/a_product.hpp"
+#include "solvers/accuracy.hpp"
+#include "solvers/solver.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <vector>
+
+namespace cb::tao {
+
+bool start_petsc()
+{
+    // dup2 on the descriptor, not freopen: freopen would flush the stdio buffer inherited from the
+    // parent and print the parent's pending output twice.
+    const int devnull = ::open("/dev/null", O_WRONLY);
+    if (devnull >= 0) {
+        ::dup2(devnull, STDOUT_FILENO);
+        ::close(devnull);
+    }
+    if (PetscInitializeNoArguments() != 0) return false;
+    // Errors come back as codes (the message gives the code) instead of PETSc's page of
+    // traceback and configure options on stderr for every failed MUMPS solve.
+    return PetscPushErrorHandler(PetscReturnErrorHandler, nullptr) == 0;
+}
+
+PetscErrorCode aij(const SpMat& S, Mat* out)
+{
+    // SpMat is row-major: its compressed arrays are CSR already (a copy only when uncompressed).
+    SpMat copy;
+    if (!S.isCompressed()) {
+        copy = S;
+        copy.makeCompressed();
+    }
+    const SpMat& R = S.isCompressed() ? S : copy;
+    std::vector<PetscInt> rows(static_cast<size_t>(R.rows()) + 1), cols(static_cast<size_t>(R.nonZeros()));
+    for (Eigen::Index i = 0; i <= R.rows(); ++i) rows[static_cast<size_t>(i)] = R.outerIndexPtr()[i];
+    for (Eigen::Index k = 0; k < R.nonZeros(); ++k) cols[static_cast<size_t>(k)] = R.innerIndexPtr()[k];
+    PetscFunctionBeginUser;
+    PetscCall(MatCreate(PETSC_COMM_SELF, out));
+    PetscCall(MatSetSizes(*out, static_cast<PetscInt>(R.rows()), static_cast<PetscInt>(R.cols()),
+                          static_cast<PetscInt>(R.rows()), static_cast<PetscInt>(R.cols())));
+    PetscCall(MatSetType(*out, MATSEQAIJ));
+    PetscCall(MatSeqAIJSetPreallocationCSR(*out, rows.data(), cols.data(), R.valuePtr()));
+    PetscFunctionReturn(0);
+}
+
+PetscErrorCode to_petsc(const cb::Vec& v, ::Vec V)
+{
+    PetscScalar* p;
+    PetscFunctionBeginUser;
+    PetscCall(VecGetArray(V, &p));
+    Eigen::Map<cb::Vec>(p, v.size()) = v;
+    PetscCall(VecRestoreArray(V, &p));
+    PetscFunctionReturn(0);
+}
+
+PetscErrorCode from_petsc(::Vec V, cb::Vec& v)
+{
+    PetscInt size;
+    const PetscScalar* p;
+    PetscFunctionBeginUser;
+    PetscCall(VecGetSize(V, &size));
+    PetscCall(VecGetArrayRead(V, &p));
+    v = Eigen::Map<const cb::Vec>(p, size);
+    PetscCall(VecRestoreArrayRead(V, &p));
+    PetscFunctionReturn(0);
+}
+
+PetscErrorCode objective_and_gradient(Tao tao, ::Vec X, PetscReal* f, ::Vec G, void* ctx)
+{
+    Objective& o = *static_cast<Objective*>(ctx);
+    const QpView& qp = *o.qp;
+    const PetscScalar* x;
+    PetscScalar* g;
+    PetscInt iteration;
+    PetscFunctionBeginUser;
+    PetscCall(TaoGetIterationNumber(tao, &iteration));
+    ++o.evaluations;
+    if (iteration != o.iteration) {
+        o.iteration = iteration;
+        o.evaluations_at_iteration = 0;
+    }
+    ++o.evaluations_at_iteration;
+    if (o.evaluations_at_iteration > o.max_evaluations_at_iteration)
+        o.max_evaluations_at_iteration = o.evaluations_at_iteration;
+    if (o.evaluations_at_iteration > o.stuck_limit && !o.stuck) {
+        o.stuck = true;
+        PetscCall(TaoSetConvergedReason(tao, TAO_DIVERGED_USER));
+    }
+    PetscCall(VecGetArrayRead(X, &x));
+    PetscCall(VecGetArray(G, &g));
+    const Eigen::Map<const cb::Vec> xv(x, qp.n());
+    Eigen::Map<cb::Vec> gv(g, qp.n());
+    gv = qp.A * xv;
+    *f = 0.5 * xv.dot(gv) - qp.b.dot(xv);
+    gv -= qp.b;
+    PetscCall(VecRestoreArray(G, &g));
+    PetscCall(VecRestoreArrayRead(X, &x));
+    PetscFunctionReturn(0);
+}
+
+bool kkt_holds(const QpView& qp, const cb::Vec& x, cb::Vec& lambda, double tol, bool* fitted)
+{
+    if (fitted) *fitted = false;
+    if (!x.allFinite()) return false;
+    const AccuracyScale scale = accuracy_scale(qp);
+    const cb::Vec g = a_product(qp.A, x) - qp.b;
+    if (lambda.allFinite() && accuracy_converged(qp, scale, x, g, lambda, tol)) return true;
+    cb::Vec fit = fit_multipliers(qp, scale, x, g);
+    if (!accuracy_converged(qp, scale, x, g, fit, tol)) return false;
+    lambda = std::move(fit);
+    if (fitted) *fitted = true;
+    return true;
+}
+
+PetscErrorCode kkt_convergence_test(Tao tao, void* ctx)
+{
+    KktTest& t = *static_cast<KktTest*>(ctx);
+    const QpView& qp = *t.qp;
+    ::Vec X;
+    cb::Vec x, lambda = cb::Vec::Zero(qp.m());
+    PetscFunctionBeginUser;
+    PetscCall(TaoGetSolution(tao, &X));
+    PetscCall(from_petsc(X, x));
+    PetscCall(t.multipliers(tao, x, lambda));
+    ++t.checks;
+    const cb::Vec g = a_product(qp.A, x) - qp.b;
+    if (x.allFinite() && lambda.allFinite() && accuracy_converged(qp, t.scale, x, g, lambda, t.tol)) {
+        t.met = true;
+        PetscCall(TaoSetConvergedReason(tao, TAO_CONVERGED_USER));
+        PetscFunctionReturn(0);
+    }
+    PetscCall(TaoDefaultConvergenceTest(tao, nullptr));
+    PetscFunctionReturn(0);
+}
+
+PetscErrorCode constant_hessian(Tao, ::Vec, Mat, Mat, void*) { return 0; }
+
+}  // namespace cb::tao

@@ -1,0 +1,71 @@
+#pragma once
+/// What the PETSc TAO peers (`tao-pdipm`, `tao-tron`) share, inside their child process: PETSc's
+/// start, the QP's objective, gradient and constant Hessian as TAO callbacks, sequential AIJ copies
+/// of Eigen matrices, and a guard that ends a TAO solve whose iterations no longer advance.
+/// Only the TAO peers' sources include this header (they are compiled with PETSc's flags).
+#include "solvers/qp.hpp"
+
+#include "solvers/accuracy.hpp"
+
+#include <petsctao.h>
+
+#include <functional>
+
+namespace cb::tao {
+
+/// In the child process: sends stdout to /dev/null (TAOPDIPM prints each failed inner SNES solve
+/// there, which would interleave with the harness's output), initialises PETSc (and an Open MPI
+/// singleton) and makes PETSc errors return their code without printing. False when PETSc did
+/// not start.
+bool start_petsc();
+
+/// A sequential AIJ copy of S.
+PetscErrorCode aij(const SpMat& S, Mat* out);
+
+/// v's entries (size v.size()) into the PETSc vector V, and back.
+PetscErrorCode to_petsc(const cb::Vec& v, ::Vec V);
+PetscErrorCode from_petsc(::Vec V, cb::Vec& v);
+
+/// The context of objective_and_gradient. TAOPDIPM calls its inner SNES again and again from the
+/// same point when the Newton step's linear solve fails, without counting an iteration or testing
+/// its caps; every SNES call evaluates the objective, so the callback sees it: after `stuck_limit`
+/// evaluations at the same TAO iteration number it sets TAO's reason to TAO_DIVERGED_USER, which
+/// ends TaoSolve's loop.
+struct Objective {
+    const QpView* qp = nullptr;
+    long stuck_limit = 50;
+    long evaluations = 0;               ///< in all
+    long evaluations_at_iteration = 0;  ///< since TAO's iteration number last changed
+    long max_evaluations_at_iteration = 0;
+    PetscInt iteration = -1;
+    bool stuck = false;  ///< the guard ended the solve
+};
+
+/// f = 1/2 x'Ax - b'x, g = Ax - b; `ctx` is an Objective.
+PetscErrorCode objective_and_gradient(Tao tao, ::Vec X, PetscReal* f, ::Vec G, void* ctx);
+
+/// The harness's verdict on the point x (docs/accuracy.md: e judges x): true when the accuracy
+/// error with `lambda` is <= tol, or else with multipliers fitted at x (fit_multipliers), which
+/// then replace `lambda` (`*fitted` set). TAO's duals can miss tol at a point that meets it.
+bool kkt_holds(const QpView& qp, const cb::Vec& x, cb::Vec& lambda, double tol, bool* fitted);
+
+/// TAO's convergence test under stop=kkt (TaoSetConvergenceTest): the harness's accuracy verdict
+/// at TAO's current iterate, with the multipliers `multipliers` gives for it; when it holds, TAO's
+/// reason is set to TAO_CONVERGED_USER and `met` is set. Otherwise TAO's default test runs (its
+/// iteration and evaluation caps; the peers set its absolute tolerances to 0 under stop=kkt). TAO's own tolerances
+/// are absolute, on its own residual norms: they neither scale with the problem (an objective
+/// times 2^-26 is "converged" at x0) nor stop where the common measure is met.
+struct KktTest {
+    const QpView* qp = nullptr;
+    AccuracyScale scale;
+    double tol = 1e-6;
+    std::function<PetscErrorCode(Tao, const cb::Vec& x, cb::Vec& lambda)> multipliers;
+    long checks = 0;  ///< calls (each one A x and one J x)
+    bool met = false;
+};
+PetscErrorCode kkt_convergence_test(Tao tao, void* ctx);
+
+/// The Hessian is A, copied once: nothing to do.
+PetscErrorCode constant_hessian(Tao, ::Vec, Mat, Mat, void*);
+
+}  // namespace cb::tao

@@ -1,0 +1,308 @@
+// PETSc TAO's TAOTRON as an external peer on bound rows, run in a child process (see tao_tron.hpp).
+#include "solvers/peers/tao_tron.hpp"
+#include "solvers/a_product.hpp"
+#include "solvers/accuracy.hpp"
+#include "solvers/peers/child_process.hpp"
+#include "solvers/peers/siconos_report.hpp"
+#include "solvers/peers/tao_common.hpp"
+#include "solvers/solve_loop.hpp"
+
+#include <algorithm>
+#include <cstring>
+#include <limits>
+#include <sstream>
+#include <vector>
+
+namespace cb {
+
+TaoTronSettings TaoTronSettings::from_json(const nlohmann::json& settings)
+{
+    SettingsReader reader(settings, "tao-tron");
+    TaoTronSettings s;
+    s.common = reader.common();
+    reader.finish();
+    return s;
+}
+
+nlohmann::json TaoTronSettings::to_json() const { return common.to_json(); }
+
+namespace {
+
+/// The rows of J read as bounds l <= x <= u; `row` names, per DOF, the row that sets each bound
+/// (-1: none). `refusal` is set (with `status`) when the rows are not bounds or contradict.
+struct Bounds {
+    cb::Vec lower, upper, coef;  // coef: the row's nonzero (per row)
+    std::vector<Eigen::Index> lower_row, upper_row;
+    SolveStatus status = SolveStatus::CONVERGED;  // CONVERGED: usable
+    std::string refusal;
+};
+
+Bounds bounds_of(const QpView& qp)
+{
+    const Eigen::Index n = qp.n(), m = qp.m();
+    const double inf = std::numeric_limits<double>::infinity();
+    Bounds b;
+    b.lower = cb::Vec::Constant(n, -inf);
+    b.upper = cb::Vec::Constant(n, inf);
+    b.coef = cb::Vec::Zero(m);
+    b.lower_row.assign(static_cast<size_t>(n), -1);
+    b.upper_row.assign(static_cast<size_t>(n), -1);
+    for (Eigen::Index i = 0; i < m; ++i) {
+        int nonzeros = 0;
+        Eigen::Index j = -1;
+        for (SpMat::InnerIterator it(qp.J, i); it; ++it) {
+            if (it.value() == 0.0) continue;
+            ++nonzeros;
+            j = it.col();
+            b.coef[i] = it.value();
+        }
+        if (nonzeros > 1) {
+            b.status = SolveStatus::NOT_APPLICABLE;
+            b.refusal =
+                "tao-tron: row " + std::to_string(i) + " of J has " + std::to_string(nonzeros) +
+                " nonzeros; TRON takes bound rows only (one nonzero per row, a x_j >= c); use tao-pdipm (any J)";
+            return b;
+        }
+        if (nonzeros == 0) {
+            if (qp.c[i] > active_tolerance(qp.c[i])) {
+                b.status = SolveStatus::INFEASIBLE;
+                b.refusal = "tao-tron: row " + std::to_string(i) + " is zero but c > 0: empty feasible set";
+                return b;
+            }
+            continue;
+        }
+        const double bound = qp.c[i] / b.coef[i] + 0.0;  // + 0.0: no "-0" in messages
+        const size_t js = static_cast<size_t>(j);
+        if (b.coef[i] > 0.0 && bound > b.lower[j]) {
+            b.lower[j] = bound;
+            b.lower_row[js] = i;
+        } else if (b.coef[i] < 0.0 && bound < b.upper[j]) {
+            b.upper[j] = bound;
+            b.upper_row[js] = i;
+        }
+    }
+    for (Eigen::Index j = 0; j < n; ++j)
+        if (b.lower[j] > b.upper[j]) {
+            std::ostringstream msg;
+            msg << "tao-tron: DOF " << j << " has lower bound " << b.lower[j] << " > upper bound " << b.upper[j];
+            b.status = SolveStatus::INFEASIBLE;
+            b.refusal = msg.str();
+            return b;
+        }
+    return b;
+}
+
+/// TRON's multipliers are not returned: at its point, the gradient g_j of a DOF at a bound is the
+/// binding row's force, lambda = g_j / a (g_j > 0 on a lower bound, < 0 on an upper one).
+cb::Vec multipliers(const QpView& qp, const Bounds& b, const cb::Vec& x)
+{
+    const cb::Vec g = a_product(qp.A, x) - qp.b;
+    cb::Vec lambda = cb::Vec::Zero(qp.m());
+    for (Eigen::Index j = 0; j < qp.n(); ++j) {
+        const Eigen::Index row =
+            g[j] > 0.0 ? b.lower_row[static_cast<size_t>(j)] : (g[j] < 0.0 ? b.upper_row[static_cast<size_t>(j)] : -1);
+        if (row >= 0) lambda[row] = g[j] / b.coef[row];
+    }
+    return lambda;
+}
+
+/// Objective evaluations at one TRON iteration before the solve is ended as stuck: TRON shrinks
+/// its trust region and re-evaluates while a step is rejected; that ends by itself once the
+/// radius is below its step tolerance, and this guard only bounds a loop that would not.
+constexpr long kStuckEvaluations = 200;
+
+struct TronRun {
+    SiconosReport report;
+    int reason = 0;  // TaoConvergedReason
+    double gatol = 0.0;
+    bool kkt_met = false;  // the harness's test ended the solve (stop=kkt)
+    long kkt_checks = 0;
+    bool stuck = false;
+    long evaluations = 0;
+};
+
+/// One TAOTRON solve from qp.x0 (projected onto the bounds by TRON) with gatol = `tol_tao`, under
+/// stop=kkt ended by the harness's accuracy test at the first iterate that meets tol.
+PetscErrorCode tron(const QpView& qp, const Bounds& bounds, const CommonSettings& common, double tol_tao,
+                    cb::Vec& x_out, TronRun& run)
+{
+    const long max_iterations = common.max_iterations;
+    tao::KktTest kkt;
+    const PetscInt n = static_cast<PetscInt>(qp.n());
+    tao::Objective objective;
+    objective.qp = &qp;
+    objective.stuck_limit = kStuckEvaluations;
+    Tao tao;
+    ::Vec X, XL, XU;
+    Mat H;
+    PetscFunctionBeginUser;
+    PetscCall(tao::aij(qp.A, &H));
+    PetscCall(VecCreateSeq(PETSC_COMM_SELF, n, &X));
+    PetscCall(VecDuplicate(X, &XL));
+    PetscCall(VecDuplicate(X, &XU));
+    PetscCall(tao::to_petsc(qp.x0, X));
+    PetscCall(tao::to_petsc(bounds.lower, XL));
+    PetscCall(tao::to_petsc(bounds.upper, XU));
+    PetscCall(TaoCreate(PETSC_COMM_SELF, &tao));
+    PetscCall(TaoSetType(tao, TAOTRON));
+    PetscCall(TaoSetSolution(tao, X));
+    PetscCall(TaoSetVariableBounds(tao, XL, XU));
+    PetscCall(TaoSetObjectiveAndGradient(tao, nullptr, tao::objective_and_gradient, &objective));
+    PetscCall(TaoSetHessian(tao, H, H, tao::constant_hessian, nullptr));
+    PetscCall(TaoSetTolerances(tao, tol_tao, 0.0, 0.0));
+    PetscCall(TaoSetMaximumIterations(tao, static_cast<PetscInt>(std::min<long>(max_iterations, 1L << 30))));
+    // TAO's default cap of 4000 evaluations would end long runs before max_iterations does.
+    PetscCall(TaoSetMaximumFunctionEvaluations(
+        tao, static_cast<PetscInt>(std::min<long>(20 * max_iterations + 100, 1L << 30))));
+    // Jacobi on TRON's trust-region CG (as mprgp-box's default): with PETSc's default ILU(0) TRON
+    // did not finish its first iteration in 120 s on the stress case dino-stiff-1e10 (E = 1e10,
+    // n = 3909); with Jacobi it converges in 1.5 s.
+    KSP ksp;
+    PC pc;
+    PetscCall(TaoGetKSP(tao, &ksp));
+    PetscCall(KSPGetPC(ksp, &pc));
+    PetscCall(PCSetType(pc, PCJACOBI));
+    if (common.stop != StopRule::NATIVE) {
+        kkt.qp = &qp;
+        kkt.scale = accuracy_scale(qp);
+        kkt.tol = common.tol;
+        kkt.multipliers = [&qp, &bounds](Tao, const cb::Vec& x, cb::Vec& lambda) -> PetscErrorCode {
+            lambda = multipliers(qp, bounds, x);
+            return 0;
+        };
+        PetscCall(TaoSetConvergenceTest(tao, tao::kkt_convergence_test, &kkt));
+    }
+    PetscCall(TaoSetFromOptions(tao));
+    PetscCall(TaoSolve(tao));
+
+    PetscInt its;
+    PetscReal f, gnorm, cnorm, xdiff;
+    TaoConvergedReason reason;
+    PetscCall(TaoGetSolutionStatus(tao, &its, &f, &gnorm, &cnorm, &xdiff, &reason));
+    run.reason = static_cast<int>(reason);
+    run.report.info = reason > 0 ? 0 : static_cast<int>(reason);
+    run.report.iterations += static_cast<int>(its);
+    run.report.residual = gnorm;
+    run.report.max_iterations_reached = reason == TAO_DIVERGED_MAXITS;
+    run.stuck = objective.stuck;
+    run.evaluations += objective.evaluations;
+    run.kkt_met = kkt.met;
+    run.kkt_checks = kkt.checks;
+    PetscCall(tao::from_petsc(X, x_out));
+    PetscCall(TaoDestroy(&tao));
+    PetscCall(MatDestroy(&H));
+    PetscCall(VecDestroy(&X));
+    PetscCall(VecDestroy(&XL));
+    PetscCall(VecDestroy(&XU));
+    PetscFunctionReturn(0);
+}
+
+/// In the child: returns x (n doubles), then a TronRun.
+std::vector<char> run_tron(const QpView& qp, const Bounds& bounds, const CommonSettings& common)
+{
+    const Eigen::Index n = qp.n();
+    cb::Vec x = qp.x0;
+    TronRun run;
+    if (tao::start_petsc()) {
+        // stop=kkt: the harness's test ends the solve, not TAO's absolute tolerances (0: off), which
+        // do not scale with the problem; the iteration cap and time limit bound a run that never meets it.
+        run.gatol = common.stop == StopRule::NATIVE ? common.tol : 0.0;
+        const PetscErrorCode ierr = tron(qp, bounds, common, run.gatol, x, run);
+        if (ierr != 0) run.report.info = -1000 - static_cast<int>(ierr);
+        PetscFinalize();
+    } else {
+        run.report.info = -2000;
+    }
+    std::vector<char> out(static_cast<size_t>(n) * sizeof(double) + sizeof run);
+    std::memcpy(out.data(), x.data(), static_cast<size_t>(n) * sizeof(double));
+    std::memcpy(out.data() + n * sizeof(double), &run, sizeof run);
+    return out;
+}
+
+}  // namespace
+
+SolverResult TaoTronSolver::solve(const QpView& qp, const SolveContext& context)
+{
+    const TaoTronSettings& s = m_settings;
+    const Eigen::Index n = qp.n(), m = qp.m();
+    SolverResult result;
+    Counters& counters = result.counters;
+    result.x = qp.x0;
+    result.lambda = cb::Vec::Zero(m);
+    result.info["library"] = "PETSc " PETSC_VERSION_STRING_CB;
+    result.info["history"] = "final point only (TAO's monitor is not forwarded from the child process)";
+    result.info["child_process"] = true;
+    result.info["native_residual_definition"] = "TAO's projected gradient norm";
+    result.info["lambda"] = "from the gradient at TRON's point (g_j / a on the binding bound row)";
+    result.info["tao_options"] = {{"tao_type", "tron"}, {"pc_type", "jacobi"}};
+    SolveLoop loop("tao-tron", qp, s.common, context);
+    const Bounds bounds = bounds_of(qp);
+    if (bounds.status != SolveStatus::CONVERGED) {
+        result.message = bounds.refusal;
+        return loop.finish(result, bounds.status);
+    }
+    loop.end_setup();
+    const size_t expected = static_cast<size_t>(n) * sizeof(double) + sizeof(TronRun);
+    const ChildOutcome child =
+        run_in_child([&]() { return run_tron(qp, bounds, s.common); }, loop.stopwatch(), s.common.time_limit_s);
+    if (child.timed_out)
+        return loop.finish(result, SolveStatus::TIME_LIMIT, "",
+                           loop.time_limit_message() + "; the child process was killed");
+    if (child.failed || child.bytes.size() != expected) {
+        result.info["crashed"] = true;
+        std::ostringstream msg;
+        msg << "tao-tron: the PETSc child process " << (child.failed ? child.failure : "sent") << " ("
+            << child.bytes.size() << " of " << expected << " bytes received)";
+        return loop.finish(result, SolveStatus::DIVERGED, "", msg.str());
+    }
+    result.info["crashed"] = false;
+    std::memcpy(result.x.data(), child.bytes.data(), static_cast<size_t>(n) * sizeof(double));
+    TronRun run;
+    std::memcpy(&run, child.bytes.data() + n * sizeof(double), sizeof run);
+    result.lambda = multipliers(qp, bounds, result.x);
+    // the multipliers' gradient; one A x per evaluation and per harness test in TAO's convergence test
+    counters.a_products += 1 + run.evaluations + 2 * run.kkt_checks;
+    counters.iterations = run.report.iterations;
+    result.info["tao_reason"] = TaoConvergedReasons[run.reason];
+    result.info["tao_gatol"] = run.gatol;
+    result.info["kkt_test_in_tao"] = s.common.stop != StopRule::NATIVE;
+    result.info["tao_stuck"] = run.stuck;
+    result.info["objective_evaluations"] = run.evaluations;
+    result.setup_s = loop.setup_s();
+    result.solve_s = loop.solve_s();
+    // The verdict judges the point: where TAO's multipliers miss tol, fitted ones are tried.
+    bool fitted = false;
+    if (s.common.stop != StopRule::NATIVE) tao::kkt_holds(qp, result.x, result.lambda, s.common.tol, &fitted);
+    result.info["lambda_fitted"] = fitted;
+    finish_siconos_result(qp, s.common, context, run.report, "tao-tron: TAOTRON", "iterations", counters, result);
+    std::ostringstream msg;
+    msg << result.message << "; TAO reason " << TaoConvergedReasons[run.reason];
+    if (run.report.info <= -2000)
+        msg << " (PETSc did not start)";
+    else if (run.report.info <= -1000) {
+        const int code = -1000 - run.report.info;
+        const char* text = nullptr;  // PETSc's static table: no PetscInitialize needed
+        PetscErrorMessage(static_cast<PetscErrorCode>(code), &text, nullptr);
+        msg << " (TaoSolve stopped on PETSc error " << code << ": " << (text ? text : "unknown") << ")";
+    }
+    if (run.stuck)
+        msg << " (set by the harness: " << kStuckEvaluations << " objective evaluations at iteration "
+            << run.report.iterations << ")";
+    if (run.kkt_met) msg << " (set by the harness: its accuracy test met tol at TAO's iterate)";
+    result.message = msg.str();
+    return loop.finish(result, result.status, result.criterion);
+}
+
+SolverEntry tao_tron_entry()
+{
+    SolverEntry e;
+    e.library = "PETSc " PETSC_VERSION_STRING_CB;
+    e.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
+        return std::make_unique<TaoTronSolver>(TaoTronSettings::from_json(settings));
+    };
+    e.description = "peer: PETSc " PETSC_VERSION_STRING_CB
+                    " TAO TRON (Newton trust region for bound constraints) on bound rows (child process)";
+    return e;
+}
+
+}  // namespace cb
