@@ -123,7 +123,8 @@ std::vector<nlohmann::json> read_perf_record(const std::string& csv_path)
             if (row[required].is_null()) throw_input_error(where, std::string("column ") + required, "empty");
         const std::string snapshot = row["snapshot"], label = row["label"];
         if (!keys.insert({snapshot, label}).second)
-            throw_input_error(where, "", "run " + snapshot + "/" + label + " appears twice");
+            throw_input_error(where, "",
+                              std::string("run ").append(snapshot).append("/").append(label).append(" appears twice"));
 
         nlohmann::json run = {{"snapshot", {{"id", snapshot}}}, {"label", label}, {"status", row["status"]}};
         nlohmann::json counters = nlohmann::json::object();

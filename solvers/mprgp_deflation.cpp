@@ -57,14 +57,14 @@ bool RigidDeflation::build(const SpMat& A, const SpMat& J, const Vec& x0, double
     // Centroids, then translations e_d and rotations e_d x (p - centroid).
     Eigen::MatrixXd centroid = Eigen::MatrixXd::Zero(m_components, 3);
     Eigen::VectorXd count = Eigen::VectorXd::Zero(m_components);
-    for (int v = 0; v < nv; ++v) {
+    for (Eigen::Index v = 0; v < nv; ++v) {
         const int c = m_comp[static_cast<size_t>(3 * v)];
         centroid.row(c) += x0.segment<3>(3 * v).transpose();
         count[c] += 1.0;
     }
     for (int c = 0; c < m_components; ++c) centroid.row(c) /= count[c];
     m_W = Modes::Zero(n, kModes);
-    for (int v = 0; v < nv; ++v) {
+    for (Eigen::Index v = 0; v < nv; ++v) {
         const Eigen::Vector3d r = x0.segment<3>(3 * v) - centroid.row(m_comp[static_cast<size_t>(3 * v)]).transpose();
         for (int d = 0; d < 3; ++d) {
             m_W(3 * v + d, d) = 1.0;

@@ -120,13 +120,14 @@ const SolverRegistry& toy_registry()
 {
     static const SolverRegistry registry = [] {
         SolverRegistry r;
-        r.add("toy", {[](const nlohmann::json& s) { return std::make_unique<ToySolver>(s); }, "test solver", {}, "any J", ""});
+        r.add("toy",
+              {[](const nlohmann::json& s) { return std::make_unique<ToySolver>(s); }, "test solver", {}, "any J", ""});
         return r;
     }();
     return registry;
 }
 
-RunOutcome run_toy(const nlohmann::json& settings, RunOptions options = {})
+RunOutcome run_toy(const nlohmann::json& settings, const RunOptions& options = {})
 {
     return run_solver(toy_registry(), diagonal_qp(), "toy", settings, options, {{"id", "diag"}}, SolveContext{});
 }

@@ -93,7 +93,7 @@ TEST(CgDeflation, StiffBodySameSolutionFewerIcholIterations)
             EXPECT_LT(energy_error(rigid.x), energy_error(plain.x));
         // Honest work: build (6) + A V (6) A-products over plain's, one precond application per
         // direction, and the coarse passes in work_flops.
-        const long extra_products = 2 * cb::RigidDeflation::kModes;
+        const long extra_products = 2L * cb::RigidDeflation::kModes;
         EXPECT_EQ(rigid.counters.a_products - rigid.iterations,
                   plain.counters.a_products - plain.iterations + extra_products)
             << precond;
