@@ -7,6 +7,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <sstream>
 #include <vector>
 
 namespace cb::tao {
@@ -138,5 +139,33 @@ PetscErrorCode kkt_convergence_test(Tao tao, void* ctx)
 }
 
 PetscErrorCode constant_hessian(Tao, ::Vec, Mat, Mat, void*) { return 0; }
+
+void finish_result(const QpView& qp, const CommonSettings& common, const SolveContext& context, const Outcome& run,
+                   const std::string& what, const std::string& stuck_text, Counters& counters, SolverResult& result)
+{
+    result.info["tao_reason"] = TaoConvergedReasons[run.reason];
+    result.info["tao_gatol"] = run.gatol;
+    result.info["kkt_test_in_tao"] = common.stop != StopRule::NATIVE;
+    result.info["tao_stuck"] = run.stuck;
+    result.info["objective_evaluations"] = run.evaluations;
+    // The verdict judges the point: where TAO's multipliers miss tol, fitted ones are tried.
+    bool fitted = false;
+    if (common.stop != StopRule::NATIVE) kkt_holds(qp, result.x, result.lambda, common.tol, &fitted);
+    result.info["lambda_fitted"] = fitted;
+    finish_siconos_result(qp, common, context, run.report, what, "iterations", counters, result);
+    std::ostringstream msg;
+    msg << result.message << "; TAO reason " << TaoConvergedReasons[run.reason];
+    if (run.report.info <= -2000)
+        msg << " (PETSc did not start)";
+    else if (run.report.info <= -1000) {
+        const int code = -1000 - run.report.info;
+        const char* text = nullptr;  // PETSc's static table: no PetscInitialize needed
+        PetscErrorMessage(static_cast<PetscErrorCode>(code), &text, nullptr);
+        msg << " (TaoSolve stopped on PETSc error " << code << ": " << (text ? text : "unknown") << ")";
+    }
+    if (run.kkt_met) msg << " (set by the harness: its accuracy test met tol at TAO's iterate)";
+    if (run.stuck) msg << " (set by the harness: " << stuck_text << ")";
+    result.message = msg.str();
+}
 
 }  // namespace cb::tao

@@ -6,10 +6,12 @@
 #include "solvers/qp.hpp"
 
 #include "solvers/accuracy.hpp"
+#include "solvers/peers/siconos_report.hpp"
 
 #include <petsctao.h>
 
 #include <functional>
+#include <string>
 
 namespace cb::tao {
 
@@ -64,6 +66,24 @@ struct KktTest {
     bool met = false;
 };
 PetscErrorCode kkt_convergence_test(Tao tao, void* ctx);
+
+/// What a TAO child sends back after its iterate (plain data: copied through the pipe).
+struct Outcome {
+    SiconosReport report;
+    int reason = 0;  ///< TaoConvergedReason
+    double gatol = 0.0;
+    bool kkt_met = false;  ///< the harness's test ended the solve (stop=kkt)
+    long kkt_checks = 0;
+    bool stuck = false;  ///< ended by the guard (Objective)
+    long evaluations = 0;
+};
+
+/// In the parent, once x and lambda are in `result`: TAO's facts into result.info, the verdict on
+/// the point (kkt_holds: fitted multipliers where TAO's miss tol), finish_siconos_result, and the
+/// message: TAO's reason, a PETSc error by its code, and what the harness set (`stuck_text` says
+/// why the guard fired). `what` names the peer and method ("tao-tron: TAOTRON").
+void finish_result(const QpView& qp, const CommonSettings& common, const SolveContext& context, const Outcome& run,
+                   const std::string& what, const std::string& stuck_text, Counters& counters, SolverResult& result);
 
 /// The Hessian is A, copied once: nothing to do.
 PetscErrorCode constant_hessian(Tao, ::Vec, Mat, Mat, void*);

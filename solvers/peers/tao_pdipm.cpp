@@ -55,15 +55,8 @@ constexpr long kIterationCap = 200;
 /// takes 1 per retry and retries forever.
 constexpr long kStuckEvaluations = 50;
 
-struct TaoRun {
-    SiconosReport report;
-    int reason = 0;  // TaoConvergedReason
-    double gatol = 0.0;
-    bool kkt_met = false;  // the harness's test ended the solve (stop=kkt)
-    long kkt_checks = 0;
-    bool stuck = false;  // ended by the guard (tao::Objective): the Newton steps' linear solves failed
+struct TaoRun : tao::Outcome {
     long stuck_iteration = 0;
-    long evaluations = 0;
     long max_evaluations_at_iteration = 0;
 };
 
@@ -240,34 +233,13 @@ SolverResult TaoPdipmSolver::solve(const QpView& qp, const SolveContext& context
     counters.iterations = run.report.iterations;
     // one A x per objective and gradient evaluation and per harness test in TAO's convergence test
     counters.a_products += run.evaluations + run.kkt_checks;
-    result.info["tao_reason"] = TaoConvergedReasons[run.reason];
-    result.info["tao_gatol"] = run.gatol;
-    result.info["kkt_test_in_tao"] = s.common.stop != StopRule::NATIVE;
-    result.info["tao_stuck"] = run.stuck;
-    result.info["objective_evaluations"] = run.evaluations;
     result.setup_s = loop.setup_s();
     result.solve_s = loop.solve_s();
-    // The verdict judges the point: where TAO's multipliers miss tol, fitted ones are tried.
-    bool fitted = false;
-    if (s.common.stop != StopRule::NATIVE) tao::kkt_holds(qp, result.x, result.lambda, s.common.tol, &fitted);
-    result.info["lambda_fitted"] = fitted;
-    finish_siconos_result(qp, s.common, context, run.report, "tao-pdipm: TAOPDIPM", "iterations", counters, result);
-    std::ostringstream msg;
-    msg << result.message << "; TAO reason " << TaoConvergedReasons[run.reason];
-    if (run.report.info <= -2000)
-        msg << " (PETSc did not start)";
-    else if (run.report.info <= -1000) {
-        const int code = -1000 - run.report.info;
-        const char* text = nullptr;  // PETSc's static table: no PetscInitialize needed
-        PetscErrorMessage(static_cast<PetscErrorCode>(code), &text, nullptr);
-        msg << " (TaoSolve stopped on PETSc error " << code << ": " << (text ? text : "unknown") << ")";
-    }
-    if (run.kkt_met) msg << " (set by the harness: its accuracy test met tol at TAO's iterate)";
-    if (run.stuck)
-        msg << " (set by the harness: TAOPDIPM's Newton step failed " << kStuckEvaluations
-            << " times in a row at iteration " << run.stuck_iteration
-            << ", its inner SNES reporting DIVERGED_LINEAR_SOLVE, and TAOPDIPM retries without end)";
-    result.message = msg.str();
+    std::ostringstream stuck;
+    stuck << "TAOPDIPM's Newton step failed " << kStuckEvaluations << " times in a row at iteration "
+          << run.stuck_iteration
+          << ", its inner SNES reporting DIVERGED_LINEAR_SOLVE, and TAOPDIPM retries without end";
+    tao::finish_result(qp, s.common, context, run, "tao-pdipm: TAOPDIPM", stuck.str(), counters, result);
     return loop.finish(result, result.status, result.criterion);
 }
 

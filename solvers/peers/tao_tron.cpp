@@ -111,15 +111,7 @@ cb::Vec multipliers(const QpView& qp, const Bounds& b, const cb::Vec& x)
 /// radius is below its step tolerance, and this guard only bounds a loop that would not.
 constexpr long kStuckEvaluations = 200;
 
-struct TronRun {
-    SiconosReport report;
-    int reason = 0;  // TaoConvergedReason
-    double gatol = 0.0;
-    bool kkt_met = false;  // the harness's test ended the solve (stop=kkt)
-    long kkt_checks = 0;
-    bool stuck = false;
-    long evaluations = 0;
-};
+using TronRun = tao::Outcome;
 
 /// One TAOTRON solve from qp.x0 (projected onto the bounds by TRON) with gatol = `tol_tao`, under
 /// stop=kkt ended by the harness's accuracy test at the first iterate that meets tol.
@@ -263,33 +255,11 @@ SolverResult TaoTronSolver::solve(const QpView& qp, const SolveContext& context)
     // the multipliers' gradient; one A x per evaluation and per harness test in TAO's convergence test
     counters.a_products += 1 + run.evaluations + 2 * run.kkt_checks;
     counters.iterations = run.report.iterations;
-    result.info["tao_reason"] = TaoConvergedReasons[run.reason];
-    result.info["tao_gatol"] = run.gatol;
-    result.info["kkt_test_in_tao"] = s.common.stop != StopRule::NATIVE;
-    result.info["tao_stuck"] = run.stuck;
-    result.info["objective_evaluations"] = run.evaluations;
     result.setup_s = loop.setup_s();
     result.solve_s = loop.solve_s();
-    // The verdict judges the point: where TAO's multipliers miss tol, fitted ones are tried.
-    bool fitted = false;
-    if (s.common.stop != StopRule::NATIVE) tao::kkt_holds(qp, result.x, result.lambda, s.common.tol, &fitted);
-    result.info["lambda_fitted"] = fitted;
-    finish_siconos_result(qp, s.common, context, run.report, "tao-tron: TAOTRON", "iterations", counters, result);
-    std::ostringstream msg;
-    msg << result.message << "; TAO reason " << TaoConvergedReasons[run.reason];
-    if (run.report.info <= -2000)
-        msg << " (PETSc did not start)";
-    else if (run.report.info <= -1000) {
-        const int code = -1000 - run.report.info;
-        const char* text = nullptr;  // PETSc's static table: no PetscInitialize needed
-        PetscErrorMessage(static_cast<PetscErrorCode>(code), &text, nullptr);
-        msg << " (TaoSolve stopped on PETSc error " << code << ": " << (text ? text : "unknown") << ")";
-    }
-    if (run.stuck)
-        msg << " (set by the harness: " << kStuckEvaluations << " objective evaluations at iteration "
-            << run.report.iterations << ")";
-    if (run.kkt_met) msg << " (set by the harness: its accuracy test met tol at TAO's iterate)";
-    result.message = msg.str();
+    std::ostringstream stuck;
+    stuck << kStuckEvaluations << " objective evaluations at iteration " << run.report.iterations;
+    tao::finish_result(qp, s.common, context, run, "tao-tron: TAOTRON", stuck.str(), counters, result);
     return loop.finish(result, result.status, result.criterion);
 }
 
