@@ -106,10 +106,6 @@ std::string fmt(double v)
     return s.str();
 }
 
-/// deflation = rigid keeps a rigid mode w when w'Aw <= this w'diag(A)w: only then is it a slow
-/// mode worth a coarse space (a stiff body's rigid modes see its mass only).
-constexpr double kRigidMaxRayleigh = 0.1;
-
 /// One solve: the workspace is allocated once, before the loop.
 class MprgpRun {
 public:
@@ -615,7 +611,7 @@ SolverResult MprgpRun::run()
     }
     m_ichol = m_st.precond == "ichol";
     if (m_st.deflation == "rigid") {
-        m_deflate = m_defl.build(m_A, m_J, m_qp.x0, kRigidMaxRayleigh);
+        m_deflate = m_defl.build(m_A, m_J, m_qp.x0, RigidDeflation::kSlowRayleigh);
         m_cnt.a_products += m_defl.build_products();
     }
     m_rows = make_decoupled_rows(m_J, m_dinv);

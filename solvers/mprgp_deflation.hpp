@@ -22,8 +22,9 @@ namespace cb {
 class RigidDeflation {
 public:
     static constexpr int kModes = 6;
-    /// The slow-mode filter of build() used by cg (mprgp's kRigidMaxRayleigh has the same value):
-    /// a rigid mode is kept when w'Aw <= 0.1 w'diag(A)w.
+    /// The slow-mode filter of build() that cg and mprgp use: a rigid mode w is kept when
+    /// w'Aw <= 0.1 w'diag(A)w, only then a slow mode worth a coarse space (a stiff body's rigid
+    /// modes see its mass only).
     static constexpr double kSlowRayleigh = 0.1;
     using Modes = Eigen::Matrix<double, Eigen::Dynamic, kModes>;
 
