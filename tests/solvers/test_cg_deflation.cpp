@@ -4,6 +4,7 @@
 #include "problems/synthetic.hpp"
 #include "solvers/cg.hpp"
 #include "solvers/mprgp_deflation.hpp"
+#include "tests/solvers/tipping_column.hpp"
 
 #include <Eigen/SparseCholesky>
 #include <gtest/gtest.h>
@@ -28,22 +29,6 @@ SolverResult run_cg(const Qp& qp, nlohmann::json settings)
     return solver.solve(qp.view(), {});
 }
 
-/// A stiff column (4 x 10 x 4 cubes, E = 1e10 Pa, h = 0.05 s) on a tilted ground (the case of
-/// test_mprgp_deflation.cpp): its rigid modes are A's slowest ones.
-Qp stiff_column()
-{
-    return cb::make_synthetic("plane",
-                              {{"youngs", 1e10},
-                               {"h", 0.05},
-                               {"nx", 4},
-                               {"ny", 10},
-                               {"nz", 4},
-                               {"tilt_deg", 30.0},
-                               {"speed", 3.0},
-                               {"margin", 4.0}},
-                              4);
-}
-
 TEST(CgDeflation, DefaultIsNoneForEveryPreconditioner)
 {
     for (const char* precond : {"none", "jacobi", "ichol"}) {
@@ -56,7 +41,7 @@ TEST(CgDeflation, DefaultIsNoneForEveryPreconditioner)
 
 TEST(CgDeflation, StiffBodySameSolutionFewerIcholIterations)
 {
-    const Qp qp = stiff_column();
+    const Qp qp = cb::testing_qps::tipping_column();
     const Eigen::SimplicialLDLT<cb::SpMat> ldlt(qp.A);
     ASSERT_EQ(ldlt.info(), Eigen::Success);
     const Vec exact = ldlt.solve(qp.b);

@@ -5,6 +5,7 @@
 #include "solvers/accuracy.hpp"
 #include "solvers/mprgp_deflation.hpp"
 #include "solvers/registry.hpp"
+#include "tests/solvers/tipping_column.hpp"
 
 #include <gtest/gtest.h>
 
@@ -16,23 +17,6 @@ namespace {
 using cb::Qp;
 using cb::SolveStatus;
 using cb::Vec;
-
-/// A stiff column (4 x 10 x 4 cubes, E = 1e10 Pa, h = 0.05 s) dropped at 3 m/s onto a ground
-/// tilted by 30 degrees: it lands on an edge and its slow tipping mode decides which few of its
-/// rows stay active. Without deflation mprgp + ichol needs 2.6x the iterations of cg + ichol.
-Qp tipping_column()
-{
-    return cb::make_synthetic("plane",
-                              {{"youngs", 1e10},
-                               {"h", 0.05},
-                               {"nx", 4},
-                               {"ny", 10},
-                               {"nz", 4},
-                               {"tilt_deg", 30.0},
-                               {"speed", 3.0},
-                               {"margin", 4.0}},
-                              4);
-}
 
 std::vector<char> every_other_row(const Qp& qp, Eigen::Index first)
 {
@@ -110,7 +94,7 @@ TEST(RigidDeflation, CoarseCorrectionLeavesNoCoarseResidualAndStaysOnTheFace)
 
 TEST(RigidDeflation, IncrementalFaceUpdateMatchesAFreshOne)
 {
-    const Qp qp = tipping_column();
+    const Qp qp = cb::testing_qps::tipping_column();
     const cb::DecoupledRows rows = cb::make_decoupled_rows(qp.J, Vec::Ones(qp.n()));
     ASSERT_GT(qp.m(), 20);
     std::vector<char> before = every_other_row(qp, 0);
@@ -139,7 +123,7 @@ TEST(RigidDeflation, IncrementalFaceUpdateMatchesAFreshOne)
 /// from x = 0, F(P(x)) never rises, and the objective matches the active-set reference.
 TEST(MprgpDeflation, TippingColumnWithinTwiceCgIchol)
 {
-    const Qp qp = tipping_column();
+    const Qp qp = cb::testing_qps::tipping_column();
     const cb::SolverResult cg =
         cb::builtin_registry()
             .create("cg", {{"precond", "ichol"}, {"tol", 1e-8}, {"start", "zero"}, {"max_iterations", 20000}})
