@@ -9,8 +9,10 @@ CB_CACHE ?= $(HOME)/.cache/contactbench
 DATA ?= $(CB_CACHE)/paper-data
 # Where `make paper-data` fetches the authors' tree from: a git URL, a folder or a .tar.gz.
 PAPER_DATA_SOURCE ?= https://github.com/simba518/MPRGP.git
-CCACHE := $(shell command -v ccache 2>/dev/null)
-CONFIGURE = cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $(if $(CCACHE),-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+# ccache is looked up when a recipe runs, not when make reads this file: `make deps` may have just
+# installed it. CMakeLists.txt sets its base_dir to the source tree (shared objects across checkouts).
+CONFIGURE = cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release \
+  $$(command -v ccache >/dev/null 2>&1 && echo -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 # The perf gate (tools/perf_gate.py): BASE=<rev> overrides the base revision; PERF_GATE_ARGS
 # passes more options (e.g. --filter '/mprgp$$' --repeats 3).
 GATE = CB_CACHE="$(CB_CACHE)" $(PY) tools/perf_gate.py
@@ -75,12 +77,9 @@ $(BUILD)/CMakeCache.txt:
 build: $(BUILD)/CMakeCache.txt
 	cmake --build $(BUILD) -j $(JOBS)
 
-test: deps
-	rm -rf $(BUILD)
-	$(CONFIGURE)
-	cmake --build $(BUILD) -j $(JOBS)
-	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) --timeout 600
-	@$(MAKE) --no-print-directory perf-gate
+# Stages (deps, configure, build, ctest, perf gate) each timed, with a table at the end.
+test:
+	@tools/make_test.sh $(BUILD) $(JOBS)
 
 contactbench-binary: $(BUILD)/CMakeCache.txt
 	cmake --build $(BUILD) -j $(JOBS) --target contactbench

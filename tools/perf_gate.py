@@ -333,8 +333,12 @@ def build_base(sha, jobs):
                  "-DCB_BUILD_BENCH=OFF"]
     if shutil.which("ccache"):
         configure.append("-DCMAKE_CXX_COMPILER_LAUNCHER=ccache")
+    # ccache's base_dir at the worktree, whatever BASE's own CMakeLists.txt says: sources and
+    # include paths become relative to the build folder, as in this tree's build, so unchanged
+    # files are hits of the build that `make test` just made.
+    env = dict(os.environ, CCACHE_BASEDIR=os.path.realpath(tree))
     for command in (configure, ["cmake", "--build", build, "-j", str(jobs), "--target", "contactbench"]):
-        result = subprocess.run(command, capture_output=True, text=True)
+        result = subprocess.run(command, capture_output=True, text=True, env=env)
         if result.returncode != 0:
             raise RuntimeError("building BASE %s failed: %s\n%s" % (sha[:12], " ".join(command),
                                                                    (result.stdout + result.stderr)[-3000:]))
