@@ -4,6 +4,7 @@
 #include "harness/provenance.hpp"
 #include "solvers/a_product.hpp"
 #include "solvers/decouple.hpp"
+#include "solvers/peak_memory.hpp"
 #include "solvers/registry.hpp"
 #include "solvers/work_units.hpp"
 
@@ -25,6 +26,20 @@ double median(std::vector<double> v)
 }
 
 nlohmann::json finite_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
+
+// Peak resident memory in MiB. The run's peak is the process's plus its largest child's: an upper
+// bound, since pages a forked child shares with the parent and touches count in both (the parent
+// waits while its child solves, so both peaks are held at once).
+nlohmann::json memory_json(const PeakMemory& peak)
+{
+    constexpr double MIB = 1024.0 * 1024.0;
+    auto mib = [&](long bytes) { return bytes >= 0 ? nlohmann::json(bytes / MIB) : nlohmann::json(); };
+    const long total = peak.process_bytes < 0 ? -1 : peak.process_bytes + peak.children_bytes;
+    return {{"peak_rss_mb", mib(total)},
+            {"process_peak_rss_mb", mib(peak.process_bytes)},
+            {"children_peak_rss_mb", mib(peak.children_bytes)},
+            {"peak_reset", peak.reset}};
+}
 
 /// The measure at x on `qp` with the best multipliers at hand: the solver's own (when given for
 /// these rows); a least-squares fit when they are missing, or when they miss `tol` and the fit
@@ -134,6 +149,7 @@ RunOutcome run_solver(const SolverRegistry& registry, const Qp& original, const 
     std::vector<double> setup_times, solve_times, totals;
     nlohmann::json effective = solver->settings();
     long a_products_harness = 0;  // products through solvers/a_product during the (first) solve
+    reset_peak_memory();          // this run's peak, not the process's (solvers/peak_memory.hpp)
     for (int r = 0; r < options.repeat; ++r) {
         if (r > 0) {
             solver = registry.create(solver_name, settings);  // no state carried between repeats
@@ -152,6 +168,7 @@ RunOutcome run_solver(const SolverRegistry& registry, const Qp& original, const 
         if (r == 0) out.result = std::move(result);
     }
     const SolverResult& result = out.result;
+    const PeakMemory peak = read_peak_memory();
 
     // The measure at the returned point, by the harness, on the ORIGINAL QP.
     Vec x = result.x;
@@ -277,6 +294,7 @@ RunOutcome run_solver(const SolverRegistry& registry, const Qp& original, const 
         time["samples_total_s"] = totals;
     }
     rec["time"] = time;
+    rec["memory"] = memory_json(peak);
     rec["info"] = result.info.is_null() ? nlohmann::json::object() : result.info;
     if (options.record_history) rec["history"] = history.to_json();
     rec["provenance"] = provenance();

@@ -1,7 +1,10 @@
 // Fork, pipe, poll, waitpid: see child_process.hpp.
 #include "solvers/peers/child_process.hpp"
 
+#include "solvers/peak_memory.hpp"
+
 #include <poll.h>
+#include <sys/resource.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -56,7 +59,9 @@ ChildOutcome run_in_child(const std::function<std::vector<char>()>& work, const 
     ::close(fds[0]);
     if (outcome.timed_out) ::kill(pid, SIGKILL);
     int wstatus = 0;
-    while (::waitpid(pid, &wstatus, 0) < 0 && errno == EINTR) {}
+    rusage usage{};
+    while (::wait4(pid, &wstatus, 0, &usage) < 0 && errno == EINTR) {}
+    note_child_peak_memory(usage.ru_maxrss * 1024L);  // the child's own peak (kB on Linux)
     if (!outcome.timed_out) {
         std::ostringstream msg;
         if (WIFSIGNALED(wstatus)) {

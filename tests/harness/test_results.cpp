@@ -85,7 +85,7 @@ TEST(Results, SummaryColumnsAndRow)
     const std::string expected =
         "suite,snapshot,label,solver,status,solver_status,criterion,status_confirmed,iterations,a_products,"
         "work,cholmod_factorizations,kkt_rel,stationarity,primal,dual,complementarity,gap,kkt_rel_solved,m_solved,"
-        "objective,energy_gap,violation,native_residual,nonfinite,monotone,setup_s,solve_s,time_s,n,m,tol,"
+        "objective,energy_gap,violation,native_residual,nonfinite,monotone,setup_s,solve_s,time_s,peak_rss_mb,n,m,tol,"
         "length_scale,length_scale_source";
     std::string header;
     for (size_t i = 0; i < summary_columns().size(); ++i) header += (i ? "," : "") + summary_columns()[i];
@@ -115,13 +115,14 @@ TEST(Results, SummaryColumnsAndRow)
                                 {"nonfinite", false},
                                 {"monotone", true},
                                 {"time", {{"setup_s", 0.5}, {"solve_s", 1.5}, {"total_s", 2.0}}},
+                                {"memory", {{"peak_rss_mb", 48.25}}},
                                 {"tol", 1e-6},
                                 {"length_scale", 2.0},
                                 {"length_scale_source", "x0_extent"},
                                 {"message", "a, \"quoted\" message"}};
     EXPECT_EQ(summary_row(run, "demo"),
               "demo,plane-s1,mprgp-jacobi,mprgp,solved_relaxation,converged,kkt,true,54,120,137.5,0,0.25,0.25,0,0,"
-              "0.125,0.0625,0.5,12,-4.5,0.75,0,,false,true,0.5,1.5,2,375,25,9.9999999999999995e-07,2,x0_extent");
+              "0.125,0.0625,0.5,12,-4.5,0.75,0,,false,true,0.5,1.5,2,48.25,375,25,9.9999999999999995e-07,2,x0_extent");
     // A run on an unchanged problem: the solved error and rows are the original's.
     nlohmann::json plain = run;
     plain.erase("accuracy_solved");

@@ -181,6 +181,7 @@ TEST(Runner, RecordHasEverySchemaKey)
                             "tol",
                             "counters",
                             "time",
+                            "memory",
                             "info",
                             "history",
                             "provenance",
@@ -204,6 +205,13 @@ TEST(Runner, RecordHasEverySchemaKey)
     EXPECT_FALSE(run.record.contains("accuracy_solved"));                // the problem was not changed
     for (const char* key : {"setup_s", "solve_s", "total_s", "repeat"})
         EXPECT_TRUE(run.record["time"].contains(key)) << key;
+    // Peak memory beside time: this process's (reset at the run's start), a child's, their sum.
+    const auto& memory = run.record["memory"];
+    for (const char* key : {"peak_rss_mb", "process_peak_rss_mb", "children_peak_rss_mb", "peak_reset"})
+        EXPECT_TRUE(memory.contains(key)) << key;
+    EXPECT_GT(memory["process_peak_rss_mb"].get<double>(), 1.0);  // a gtest binary holds more than 1 MiB
+    EXPECT_DOUBLE_EQ(memory["peak_rss_mb"].get<double>(),
+                     memory["process_peak_rss_mb"].get<double>() + memory["children_peak_rss_mb"].get<double>());
     for (const char* key : {"git_commit", "git_dirty", "build_type", "compiler", "cpu", "cores", "date", "eigen",
                             "suitesparse", "blas", "hostname"})
         EXPECT_TRUE(run.record["provenance"].contains(key)) << key;
