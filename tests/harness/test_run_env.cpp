@@ -55,7 +55,7 @@ std::string write_suite(const std::string& name, bool timed)
     return p.string();
 }
 
-/// summary.csv without the columns that hold times.
+/// summary.csv without the columns that hold times and memory.
 std::string summary_without_times(const fs::path& dir)
 {
     std::ifstream in(dir / "summary.csv");
@@ -68,7 +68,8 @@ std::string summary_without_times(const fs::path& dir)
             cells.push_back(line.substr(start, comma - start));
         cells.push_back(line.substr(start));
         if (keep.empty())
-            for (const auto& c : cells) keep.push_back(c != "setup_s" && c != "solve_s" && c != "time_s");
+            for (const auto& c : cells)  // measurements, not results: they differ between any two runs
+                keep.push_back(c != "setup_s" && c != "solve_s" && c != "time_s" && c != "peak_rss_mb");
         for (size_t i = 0; i < cells.size() && i < keep.size(); ++i)
             if (keep[i]) result += cells[i] + ",";
         result += "\n";
