@@ -21,14 +21,15 @@ export MPLBACKEND ?= Agg
 
 DEB_PACKAGES := build-essential cmake git zlib1g-dev libeigen3-dev libsuitesparse-dev nlohmann-json3-dev \
   libgtest-dev libbenchmark-dev libopenblas0-pthread \
-  python3-numpy python3-pandas python3-matplotlib python3-scipy libcgal-demo ccache valgrind \
+  python3-numpy python3-pandas python3-matplotlib python3-scipy python3-pyflakes clang-format libcgal-demo \
+  ccache valgrind \
   pkg-config coinor-libipopt-dev libsiconos-numerics-dev libfclib-dev libbullet-dev
 # PEERS=all: also PETSc (about 180 MB) for the TAO peers (docs/peers.md); not in the default set.
 ifeq ($(PEERS),all)
 DEB_PACKAGES += petsc-dev
 endif
 
-.PHONY: help deps build test demo bench timing baseline reproduce stress fuzz clean meshes paper-data docs-check tidy \
+.PHONY: help deps build test demo bench timing baseline reproduce stress fuzz clean meshes paper-data docs-check tidy lint \
   ci-perf perf-gate perf-gate-selftest contactbench-binary
 
 help:
@@ -46,6 +47,7 @@ help:
 	@echo "make reproduce  the paper's figures and report in results/paper/ (QUICK=1: about a minute on 2 cores)"
 	@echo "make docs-check fail on a cited document or section that is not in the repository"
 	@echo "make tidy       clang-tidy on the C++ files changed against main (TIDY_BASE=main)"
+	@echo "make lint       pyflakes on every Python file, clang-format on C++ lines changed against main (LINT_BASE=main)"
 	@echo "make stress     the stress suite and its stability table in results/stress/"
 	@echo "make fuzz       fuzz the snapshot, suite and scene readers (FUZZ_SECONDS=60 each)"
 
@@ -117,6 +119,9 @@ paper-data:
 
 docs-check:
 	$(PY) tests/python/docs_check.py .
+
+lint:
+	tools/lint.sh $(or $(LINT_BASE),main)
 
 tidy: $(BUILD)/CMakeCache.txt
 	tools/tidy-changed.sh $(BUILD) $(or $(TIDY_BASE),main)

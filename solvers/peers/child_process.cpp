@@ -4,8 +4,8 @@
 #include "solvers/peak_memory.hpp"
 
 #include <poll.h>
-#include <sys/resource.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
