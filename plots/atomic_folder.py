@@ -131,12 +131,17 @@ class AtomicFolder:
         self.parent = os.path.dirname(self.dest)
         self.prefix = "." + os.path.basename(self.dest) + "-"
         self.made_parents: List[str] = []
-        self._make_parents()
-        self.stale = sorted(os.path.join(self.parent, n) for n in os.listdir(self.parent)
-                            if n.startswith(self.prefix))
-        self.tmp = tempfile.mkdtemp(prefix=self.prefix, dir=self.parent)
-        os.chmod(self.tmp, 0o777 & ~_current_umask())
         self.done = False
+        self.tmp = ""
+        self._make_parents()
+        try:
+            self.stale = sorted(os.path.join(self.parent, n) for n in os.listdir(self.parent)
+                                if n.startswith(self.prefix))
+            self.tmp = tempfile.mkdtemp(prefix=self.prefix, dir=self.parent)
+            os.chmod(self.tmp, 0o777 & ~_current_umask())
+        except BaseException:
+            self.discard()  # the parents made just now
+            raise
 
     def _make_parents(self) -> None:
         missing = []
@@ -200,7 +205,7 @@ class AtomicFolder:
             raise FolderError(f"{dst}: cannot be replaced ({e.strerror})") from None
 
     def discard(self) -> None:
-        if not self.done and getattr(self, "tmp", None) and os.path.isdir(self.tmp):
+        if not self.done and self.tmp and os.path.isdir(self.tmp):
             shutil.rmtree(self.tmp, ignore_errors=True)  # made by mkdtemp: everything in it is ours
         for folder in reversed(self.made_parents):
             try:

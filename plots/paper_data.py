@@ -39,7 +39,7 @@ try:  # run as `python3 -m plots.paper_data`, or imported with plots/ on the pat
     from plots.atomic_folder import AtomicFolder, FolderError
     from plots.safe_extract import Copied, Expected, Refused, check_folder, copy_from_folder, \
         copy_from_tarball, shown
-except ImportError:  # pragma: no cover
+except ImportError:  # run as plots/paper_data.py
     from atomic_folder import AtomicFolder, FolderError  # type: ignore
     from safe_extract import Copied, Expected, Refused, check_folder, copy_from_folder, \
         copy_from_tarball, shown  # type: ignore

@@ -26,6 +26,7 @@ from typing import BinaryIO, Callable, Dict, List, NamedTuple, Optional, Set
 
 MAX_ARCHIVE_BYTES = 1 << 30  # the authors' tree at 57fdd2c declares 33 MB (all of it: about 0.3 GB)
 MAX_MEMBERS = 100_000        # it has 443
+MAX_TRAILING_BYTES = 1 << 20  # after the tar's end marker: padding (GNU tar pads to 10 KiB)
 CHUNK = 1 << 16
 
 
@@ -189,7 +190,25 @@ def _copy_members(archive, raw, wanted, open_sink) -> Copied:
                 raise Refused(f"{where}: damaged or truncated archive (fewer bytes than its header says)")
             if digest != expected.sha256:
                 differing.append(rel)
+        _read_to_the_end(archive, tar.fileobj, last)
     return Copied(found, differing)
+
+
+def _read_to_the_end(archive: str, stream, last: str) -> None:
+    """Reads what follows the tar's end marker (a few KB of padding) so that gzip checks its CRC
+    and length: a cut or corrupted archive is refused even when the files it was read for are whole."""
+    left = MAX_TRAILING_BYTES
+    try:
+        while True:
+            block = stream.read(min(CHUNK, left + 1))
+            if not block:
+                return
+            left -= len(block)
+            if left < 0:
+                raise Refused(f"{archive}: more than {MAX_TRAILING_BYTES} bytes after the end of the tar archive "
+                              f"(after member '{last}')")
+    except (tarfile.TarError, EOFError, zlib.error, OSError) as e:
+        raise Refused(f"{archive}: damaged or truncated archive ({shown(str(e))}) after member '{last}'") from None
 
 
 # ---------------------------------------------------------------- folder
