@@ -24,9 +24,10 @@ import tarfile
 import zlib
 from typing import BinaryIO, Callable, Dict, List, NamedTuple, Optional, Set
 
-MAX_ARCHIVE_BYTES = 1 << 30  # the authors' tree at 57fdd2c declares 33 MB (all of it: about 0.3 GB)
+MAX_ARCHIVE_BYTES = 1 << 30  # the offline tarball of the authors' tree at 57fdd2c declares 33 MB
 MAX_MEMBERS = 100_000        # it has 443
 MAX_TRAILING_BYTES = 1 << 20  # after the tar's end marker: padding (GNU tar pads to 10 KiB)
+MAX_META_BYTES = 1 << 20      # a pax or GNU long-name header, which tarfile reads whole into memory
 CHUNK = 1 << 16
 
 
@@ -111,6 +112,23 @@ def _tree_path(parts: List[str], wanted: Dict[str, Expected], top: Optional[str]
     return None
 
 
+class _MetaTooLarge(Exception):
+    def __init__(self, info: tarfile.TarInfo):
+        super().__init__(f"a {info.type.decode('latin-1')!r} header of {info.size} bytes, more than the "
+                         f"{MAX_META_BYTES} accepted; refused before reading it")
+
+
+class _BoundedTarInfo(tarfile.TarInfo):
+    """tarfile reads a pax or GNU long-name header whole into memory before it returns the member it
+    describes: its declared size is checked first (a hook on tarfile's per-header step)."""
+
+    def _proc_member(self, tarfile_):
+        if self.type in (tarfile.XHDTYPE, tarfile.XGLTYPE, tarfile.SOLARIS_XHDTYPE, tarfile.GNUTYPE_LONGNAME,
+                         tarfile.GNUTYPE_LONGLINK) and self.size > MAX_META_BYTES:
+            raise _MetaTooLarge(self)
+        return super()._proc_member(tarfile_)
+
+
 def _open_archive(path: str) -> BinaryIO:
     return open(path, "rb")
 
@@ -139,7 +157,9 @@ def _copy_members(archive, raw, wanted, open_sink) -> Copied:
     last = "(its first header)"
     damaged = (tarfile.TarError, EOFError, zlib.error, OSError)
     try:
-        tar = tarfile.open(fileobj=raw, mode="r:gz")
+        tar = tarfile.open(fileobj=raw, mode="r:gz", tarinfo=_BoundedTarInfo)
+    except _MetaTooLarge as e:
+        raise Refused(f"{archive}: {e} (at {last})") from None
     except damaged as e:
         raise Refused(f"{archive}: damaged or truncated archive ({shown(str(e))}) at {last}") from None
     with tar:
@@ -149,6 +169,8 @@ def _copy_members(archive, raw, wanted, open_sink) -> Copied:
                 m = next(members)
             except StopIteration:
                 break
+            except _MetaTooLarge as e:
+                raise Refused(f"{archive}: {e} (after member '{last}')") from None
             except damaged as e:
                 raise Refused(f"{archive}: damaged or truncated archive ({shown(str(e))}) after member "
                               f"'{last}'") from None

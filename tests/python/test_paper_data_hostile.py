@@ -289,6 +289,18 @@ class HostileArchives(Hostile):
         counted.close()
         self.assertLess(counted.bytes_read, os.path.getsize(archive) / 4)
 
+    def test_huge_pax_header_is_refused_before_it_is_read(self):
+        members = self.genuine_members()
+        pax = tarfile.TarInfo("././@PaxHeader")
+        pax.type, pax.size = tarfile.XHDTYPE, 64 * MiB
+        archive = os.path.join(self.root, "pax.tar.gz")
+        with open(archive, "wb") as f:
+            f.write(gzip.compress(b"".join(m.tobuf(format=tarfile.GNU_FORMAT) + (d or b"").ljust(
+                -(-len(d or b"") // 512) * 512, b"\0") for m, d in members[:2]) + pax.tobuf(tarfile.USTAR_FORMAT)
+                + bytes(MiB)))  # less than declared: reading it would end in "damaged or truncated"
+        self.assert_refused(archive, f"{archive}: a 'x' header of {64 * MiB} bytes, more than the {MiB} accepted; "
+                                     f"refused before reading it (after member '{members[1][0].name}')")
+
     def test_too_many_members(self):
         with mock.patch.object(safe_extract, "MAX_MEMBERS", 20):
             archive = self.archive(self.genuine_members())
