@@ -371,18 +371,18 @@ def main(argv: Optional[List[str]] = None) -> int:
     args = parser.parse_args(argv)
 
     def say(msg: str) -> None:
-        print(f"paper-data: {msg}", file=sys.stderr, flush=True)
+        print(f"paper-data: {shown(msg)}", file=sys.stderr, flush=True)  # one line, whatever the paths hold
 
     try:
         made = fetch_and_extract(args.source, args.dest, say)
     except (DataError, Refused, FolderError) as e:
-        print(f"paper-data: error: {e}", file=sys.stderr)
+        print(f"paper-data: error: {shown(str(e))}", file=sys.stderr)
         return 2
     except OSError as e:  # the destination or the source could not be read or written
         print(f"paper-data: error: {shown(str(e.filename or args.dest))}: {e.strerror or e}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print(f"paper-data: interrupted; {args.dest} left as it was", file=sys.stderr)
+        print(f"paper-data: interrupted; {shown(args.dest)} left as it was", file=sys.stderr)
         return 130
     say(f"wrote {len(made)} files into {args.dest} (meshes/, scenes/, figures/ converted from script/data/)")
     return 0

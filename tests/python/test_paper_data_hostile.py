@@ -361,6 +361,13 @@ class Destinations(Hostile):
             f.write("mine\n")
         self.assert_refused(self.archive(self.genuine_members()), f"{self.dest}: exists and is not a folder")
 
+    def test_a_newline_in_the_destination_stays_on_one_line(self):
+        dest = os.path.join(self.outside, "a\nb")
+        with open(dest, "w") as f:
+            f.write("mine\n")
+        self.assert_refused(self.archive(self.genuine_members()),
+                            f"{self.outside}/a\\x0ab: exists and is not a folder", dest=dest)
+
     def test_destination_below_a_file(self):
         dest = os.path.join(self.victim, "paper-data")
         self.assert_refused(self.archive(self.genuine_members()),
