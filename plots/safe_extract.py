@@ -4,8 +4,9 @@ The caller names the files it wants (path in the tree -> SHA-256 and size) and w
 (`open_sink(path)` returns a writable binary file). Nothing else is ever written: the archive is
 read as a stream and never unpacked. The rules, the same for an archive and a folder:
 
-- the tree holds only regular files and folders: a symbolic or hard link, a device node, a FIFO, a
-  sparse file, a setuid/setgid bit, an absolute name or a '..' in a name is refused, anywhere in it;
+- the tree holds only regular files and folders: a symbolic link, a device node, a FIFO, a file
+  with a setuid/setgid bit is refused anywhere in it; in an archive also a hard link, a sparse
+  file, a setuid/setgid folder, an absolute name or a '..' in a name;
 - a wanted file's size is compared with the expected one before any of its bytes are copied, and
   at most that many bytes are copied;
 - an archive's members may declare at most MAX_ARCHIVE_BYTES in all and be at most MAX_MEMBERS,
@@ -248,8 +249,9 @@ def _kind(mode: int) -> str:
 
 
 def check_folder(folder: str, skip: Set[str] = frozenset()) -> None:
-    """Refuses a tree holding anything but regular files and folders, or a setuid/setgid bit
-    (top-level names in skip, such as '.git', are not walked)."""
+    """Refuses a tree holding anything but regular files and folders, or a file with a setuid/setgid
+    bit (top-level names in skip, such as '.git', are not walked). A file with several hard links is
+    accepted: it is only read, and a folder cannot tell which of its names came first."""
     for top, dirs, names in os.walk(folder, followlinks=False, onerror=_walk_error):
         if top == folder:
             dirs[:] = [d for d in dirs if d not in skip]
@@ -258,7 +260,7 @@ def check_folder(folder: str, skip: Set[str] = frozenset()) -> None:
             mode = os.lstat(path).st_mode
             if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
                 raise Refused(f"{path}: {_kind(mode)} (only regular files and folders are accepted)")
-            if mode & (stat.S_ISUID | stat.S_ISGID):
+            if stat.S_ISREG(mode) and mode & (stat.S_ISUID | stat.S_ISGID):  # a setgid folder is common
                 raise Refused(f"{path}: setuid/setgid bit (mode {stat.S_IMODE(mode):o}; "
                               "only plain files are accepted)")
 
@@ -314,7 +316,7 @@ def _open_file_nofollow(root: str, root_fd: int, rel: str) -> Optional[int]:
                 raise Refused(f"{path}: {_kind(st.st_mode)} (only regular files and folders are accepted)")
             if last != stat.S_ISREG(st.st_mode):
                 return None  # a folder where the file should be, or a file where a folder should be
-            if st.st_mode & (stat.S_ISUID | stat.S_ISGID):
+            if last and st.st_mode & (stat.S_ISUID | stat.S_ISGID):
                 raise Refused(f"{path}: setuid/setgid bit (mode {stat.S_IMODE(st.st_mode):o}; "
                               "only plain files are accepted)")
             flags = os.O_RDONLY | os.O_NOFOLLOW | os.O_CLOEXEC | (os.O_NONBLOCK if last else os.O_DIRECTORY)

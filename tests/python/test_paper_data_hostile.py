@@ -436,6 +436,12 @@ class HostileFolders(Hostile):
         status, err = self.run_main(os.path.dirname(self.tree))
         self.assertEqual(status, 0, err)
 
+    def test_a_setgid_folder_and_a_hard_linked_file_are_accepted(self):
+        os.chmod(os.path.join(self.tree, "data"), 0o2755)  # common for a shared group folder
+        os.link(os.path.join(self.tree, MESH), os.path.join(self.root, "second-name.abq"))
+        status, err = self.run_main(self.tree)
+        self.assertEqual(status, 0, err)
+
     def test_symlinked_file(self):
         path = os.path.join(self.tree, MESH)
         os.remove(path)
