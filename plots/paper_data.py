@@ -342,7 +342,7 @@ def fetch_and_extract(source: str, dest: str, say) -> Dict[str, str]:
                             f"{COMMIT}?): " + ", ".join(copied.differing))
         say(f"{len(needed)} files verified against {os.path.relpath(MANIFEST)} (SHA-256 of the bytes copied)")
 
-        made = dict((out, src) for out, src in COPIED.items())
+        made = dict(COPIED)
         figures = convert_figures(lambda key: raw[RAW[key]].kept.decode("utf-8", errors="replace"))
         for out, text in figures.items():
             with folder.create(out) as f:
