@@ -114,8 +114,12 @@ demo: deps build
 	@echo "demo: simulation pictures in results/demo/sim/, solver figures and profiles in results/demo/figures/,"
 	@echo "      the paper's figures and claims (quick mode) in results/paper/report.md"
 
+# The paths reach the command through the environment, never spliced into the shell line.
+paper-data: export CB_CACHE := $(CB_CACHE)
+paper-data: export PAPER_DATA_SOURCE := $(PAPER_DATA_SOURCE)
+paper-data: export CB_PAPER_DATA_DEST := $(DATA)
 paper-data:
-	CB_CACHE="$(CB_CACHE)" $(PY) -m plots.paper_data --source "$(PAPER_DATA_SOURCE)" --dest "$(DATA)"
+	$(PY) -m plots.paper_data --source "$$PAPER_DATA_SOURCE" --dest "$$CB_PAPER_DATA_DEST"
 
 docs-check:
 	$(PY) tests/python/docs_check.py .

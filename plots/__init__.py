@@ -19,5 +19,6 @@ The pandas entry point is :mod:`plots.loader`::
 
 Modules: loader (results, snapshot headers and simulation folders -> DataFrames), qpsnap (whole
 .qpsnap files with numpy), figutil, claims, paper_context, the figure scripts fig6 ... fig11 and
-table1, profiles, convergence, stability, report, reproduce, paper_data.
+table1, profiles, convergence, stability, report, reproduce, paper_data (with safe_extract and
+atomic_folder: untrusted sources, all-or-nothing output folders).
 """

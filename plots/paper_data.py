@@ -5,9 +5,13 @@
 
 SRC is a git URL (default: the authors' repository simba518/MPRGP, checked out at commit 57fdd2c),
 a local folder holding that tree, or a .tar.gz of it. Every file used is checked against the
-SHA-256 manifest committed beside this script (paper_data.sha256); a missing or altered file is an
-error that names it, and nothing is written. DIR (default $CB_CACHE/paper-data, CB_CACHE defaulting
-to ~/.cache/contactbench) receives:
+SHA-256 and size in the manifest committed beside this script (paper_data.sha256), on the bytes
+copied; a missing or altered file is an error that names it, and nothing is written. The source is
+untrusted: plots/safe_extract.py reads only the files listed, refuses links, special files and
+setuid bits anywhere in the tree, and stops a compression bomb at its header. DIR (default
+$CB_CACHE/paper-data, CB_CACHE defaulting to ~/.cache/contactbench) is written whole or not at all
+(plots/atomic_folder.py): an existing DIR is replaced only if it holds nothing but an earlier run's
+files. It receives:
 
     meshes/   the authors' tet meshes and obstacle surfaces, under the names the scenes use
     scenes/   their scene settings (.ini) and materials (.elastic)
@@ -25,12 +29,20 @@ import io
 import json
 import os
 import re
-import shutil
+import signal
 import subprocess
 import sys
-import tarfile
 import tempfile
-from typing import Dict, List, Optional, Tuple
+from typing import Dict, List, Optional, Set, Tuple
+
+try:  # run as `python3 -m plots.paper_data`, or imported with plots/ on the path (the tests)
+    from plots.atomic_folder import AtomicFolder, FolderError
+    from plots.safe_extract import Copied, Expected, Refused, check_folder, copy_from_folder, \
+        copy_from_tarball, shown
+except ImportError:  # run as plots/paper_data.py
+    from atomic_folder import AtomicFolder, FolderError  # type: ignore
+    from safe_extract import Copied, Expected, Refused, check_folder, copy_from_folder, \
+        copy_from_tarball, shown  # type: ignore
 
 DEFAULT_SOURCE = "https://github.com/simba518/MPRGP.git"
 COMMIT = "57fdd2c"
@@ -183,8 +195,12 @@ def convert_figures(read) -> Dict[str, str]:
 
 # ---------------------------------------------------------------- fetching and verifying
 
-def read_manifest(path: str) -> Dict[str, str]:
-    """path in the tree -> SHA-256 hex."""
+RECORD = "paper-data.json"
+GIT_URL = re.compile(r"^(https?|git|ssh|file)://|^git@|\.git$")
+
+
+def read_manifest(path: str) -> Dict[str, Expected]:
+    """path in the tree -> (SHA-256 hex, size in bytes)."""
     out = {}
     with open(path) as f:
         for number, line in enumerate(f, 1):
@@ -192,9 +208,9 @@ def read_manifest(path: str) -> Dict[str, str]:
             if not line or line.startswith("#"):
                 continue
             parts = line.split()
-            if len(parts) != 2 or not re.fullmatch(r"[0-9a-f]{64}", parts[0]):
-                raise DataError(f"{path}: line {number}: expected '<sha256> <path>', got '{line}'")
-            out[parts[1]] = parts[0]
+            if len(parts) != 3 or not re.fullmatch(r"[0-9a-f]{64}", parts[0]) or not parts[1].isdigit():
+                raise DataError(f"{path}: line {number}: expected '<sha256> <bytes> <path>', got '{line}'")
+            out[parts[2]] = Expected(parts[0], int(parts[1]))
     return out
 
 
@@ -206,93 +222,140 @@ def sha256(path: str) -> str:
     return h.hexdigest()
 
 
+def needed_files() -> List[str]:
+    return sorted(set(COPIED.values()) | set(RAW.values()))
+
+
 def tree_root(folder: str) -> str:
-    """The folder holding data/ and script/ (the tree itself or its single top-level folder)."""
-    if os.path.isdir(os.path.join(folder, "data")) and os.path.isdir(os.path.join(folder, "script")):
+    """The folder holding data/ and script/ (the tree itself or one of its folders, not a link)."""
+    def holds_tree(d: str) -> bool:
+        return os.path.isdir(os.path.join(d, "data")) and os.path.isdir(os.path.join(d, "script"))
+
+    if holds_tree(folder):
         return folder
-    subs = [os.path.join(folder, d) for d in sorted(os.listdir(folder)) if os.path.isdir(os.path.join(folder, d))]
-    for s in subs:
-        if os.path.isdir(os.path.join(s, "data")) and os.path.isdir(os.path.join(s, "script")):
-            return s
+    for name in sorted(os.listdir(folder)):
+        sub = os.path.join(folder, name)
+        if holds_tree(sub):
+            if os.path.islink(sub):
+                raise DataError(f"{shown(sub)}: the tree's top folder is a symbolic link (refused: only "
+                                "regular files and folders are accepted)")
+            return sub
     raise DataError(f"{folder}: not the authors' tree (no data/ and script/ folders in it or in a subfolder)")
 
 
-def fetch(source: str, scratch: str, say) -> Tuple[str, str]:
-    """Makes the tree available under scratch; returns (tree root, what it was)."""
-    if source.endswith((".tar.gz", ".tgz")) and os.path.isfile(source):
-        say(f"unpacking {source}")
-        with tarfile.open(source, "r:gz") as t:
-            for member in t.getmembers():
-                if member.name.startswith("/") or ".." in member.name.split("/"):
-                    raise DataError(f"{source}: unsafe member path '{member.name}'")
-            t.extractall(scratch)
-        return tree_root(scratch), f"tarball {os.path.abspath(source)}"
+def previous_outputs(dest: str) -> Optional[Set[str]]:
+    """The files an earlier run recorded in DEST/paper-data.json (with the record), or None."""
+    record = os.path.join(dest, RECORD)
+    try:
+        if os.path.islink(dest) or not os.path.isfile(record) or os.path.islink(record) \
+                or os.path.getsize(record) > (1 << 20):
+            return None
+        with open(record) as f:
+            outputs = json.load(f).get("outputs")
+    except (OSError, ValueError, AttributeError):
+        return None
+    if not isinstance(outputs, dict):
+        return None
+    files = {RECORD}
+    for rel in outputs:
+        parts = rel.split("/") if isinstance(rel, str) else [""]
+        if rel.startswith("/") or any(p in ("", ".", "..") for p in parts):
+            return None
+        files.add(rel)
+    return files
+
+
+def git_checkout(source: str, scratch: str, say) -> str:
+    """Clones source into scratch and checks out COMMIT; returns the clone's folder."""
+    target = os.path.join(scratch, "MPRGP")
+    say(f"cloning {shown(source)} at {COMMIT}")
+    env = dict(os.environ, GIT_TERMINAL_PROMPT="0")  # a wrong URL fails instead of asking for a password
+    try:
+        # `--` keeps the URL an argument; ext:: (a URL that runs a command) stays refused
+        subprocess.run(["git", "-c", "protocol.ext.allow=never", "clone", "--quiet", "--no-checkout", "--",
+                        source, target], check=True, env=env, stdin=subprocess.DEVNULL)
+        subprocess.run(["git", "-C", target, "checkout", "--quiet", COMMIT, "--"], check=True, env=env,
+                       stdin=subprocess.DEVNULL)
+    except (OSError, subprocess.CalledProcessError) as e:
+        raise DataError(f"{shown(source)}: git clone/checkout of {COMMIT} failed ({e}); without a network, "
+                        f"set PAPER_DATA_SOURCE to a local copy (folder or .tar.gz)") from None
+    return target
+
+
+def copy_tree(source: str, wanted: Dict[str, Expected], open_sink, say) -> Tuple[Copied, str]:
+    """Copies the wanted files of the source (tarball, folder or git URL); returns them and what it was."""
+    if source.startswith("-"):
+        raise DataError(f"{shown(source)}: a source cannot start with '-'")
     if os.path.isdir(source):
-        return tree_root(source), f"folder {os.path.abspath(source)}"
-    if re.match(r"^(https?|git|ssh)://|^git@|\.git$", source):
-        target = os.path.join(scratch, "MPRGP")
-        say(f"cloning {source} at {COMMIT}")
-        try:
-            subprocess.run(["git", "clone", "--quiet", source, target], check=True)
-            subprocess.run(["git", "-C", target, "checkout", "--quiet", COMMIT], check=True)
-        except (OSError, subprocess.CalledProcessError) as e:
-            raise DataError(f"{source}: git clone/checkout of {COMMIT} failed ({e}); without a network, "
-                            f"set PAPER_DATA_SOURCE to a local copy (folder or .tar.gz)") from None
-        return target, f"git {source} at {COMMIT}"
-    raise DataError(f"{source}: not a .tar.gz file, a folder or a git URL")
+        root = tree_root(source)
+        check_folder(root)
+        return copy_from_folder(root, wanted, open_sink), f"folder {os.path.abspath(source)}"
+    if os.path.lexists(source):
+        if not os.path.isfile(source):
+            raise DataError(f"{shown(source)}: not a regular file, a folder or a git URL")
+        say(f"reading {source}")
+        return copy_from_tarball(source, wanted, open_sink), f"tarball {os.path.abspath(source)}"
+    if GIT_URL.search(source):
+        with tempfile.TemporaryDirectory(prefix="cb-paper-data-") as scratch:
+            root = git_checkout(source, scratch, say)
+            check_folder(root, skip={".git"})
+            return copy_from_folder(root, wanted, open_sink), f"git {source} at {COMMIT}"
+    raise DataError(f"{shown(source)}: no such file or folder, and not a git URL")
 
 
-def verify(root: str, manifest: Dict[str, str], needed: List[str]) -> None:
-    missing = [p for p in needed if not os.path.isfile(os.path.join(root, p))]
-    if missing:
-        raise DataError(f"{root}: the authors' tree lacks {len(missing)} file(s) contactbench uses: "
-                        + ", ".join(missing))
+class KeptBytes(io.BytesIO):
+    """An in-memory sink whose bytes outlive its `with` block."""
+
+    def close(self) -> None:
+        self.kept = self.getvalue()
+        super().close()
+
+
+def fetch_and_extract(source: str, dest: str, say) -> Dict[str, str]:
+    """Copies, verifies and converts into DEST (whole or not at all); returns output -> source."""
+    manifest = read_manifest(MANIFEST)
+    needed = needed_files()
     unlisted = [p for p in needed if p not in manifest]
     if unlisted:
         raise DataError(f"{MANIFEST}: no hash for {', '.join(unlisted)}")
-    bad = [p for p in needed if sha256(os.path.join(root, p)) != manifest[p]]
-    if bad:
-        raise DataError(f"{root}: SHA-256 differs from {os.path.basename(MANIFEST)} (not commit {COMMIT}?): "
-                        + ", ".join(bad))
+    wanted = {p: manifest[p] for p in needed}
+    output_of = {src: out for out, src in COPIED.items()}
+    raw: Dict[str, KeptBytes] = {}
 
+    with AtomicFolder(dest, previous_outputs(dest)) as folder:
+        for leftover in folder.stale:
+            say(f"{leftover}: left by an interrupted run (not removed: remove it if it is not yours)")
 
-def extract(root: str, dest: str, source_desc: str, manifest: Dict[str, str]) -> Dict[str, str]:
-    """Writes DEST atomically (a sibling temporary folder, then a rename); returns output -> source."""
-    parent = os.path.dirname(os.path.abspath(dest)) or "."
-    os.makedirs(parent, exist_ok=True)
-    tmp = tempfile.mkdtemp(prefix=".paper-data-", dir=parent)
-    try:
-        made = {}
-        for out, src in COPIED.items():
-            os.makedirs(os.path.dirname(os.path.join(tmp, out)), exist_ok=True)
-            shutil.copyfile(os.path.join(root, src), os.path.join(tmp, out))
-            made[out] = src
+        def open_sink(rel: str):
+            if rel in output_of:
+                return folder.create(output_of[rel])
+            raw[rel] = KeptBytes()
+            return raw[rel]
 
-        def read(key: str) -> str:
-            with open(os.path.join(root, RAW[key]), encoding="utf-8", errors="replace") as f:
-                return f.read()
+        copied, desc = copy_tree(source, wanted, open_sink, say)
+        missing = [p for p in needed if p not in copied.found]
+        if missing:
+            raise DataError(f"{shown(source)}: the authors' tree lacks {len(missing)} file(s) contactbench "
+                            "uses: " + ", ".join(missing))
+        if copied.differing:
+            raise DataError(f"{shown(source)}: SHA-256 differs from {os.path.basename(MANIFEST)} (not commit "
+                            f"{COMMIT}?): " + ", ".join(copied.differing))
+        say(f"{len(needed)} files verified against {os.path.relpath(MANIFEST)} (SHA-256 of the bytes copied)")
 
-        os.makedirs(os.path.join(tmp, "figures"), exist_ok=True)
-        for out, text in convert_figures(read).items():
-            with open(os.path.join(tmp, out), "w") as f:
-                f.write(text)
+        made = dict(COPIED)
+        figures = convert_figures(lambda key: raw[RAW[key]].kept.decode("utf-8", errors="replace"))
+        for out, text in figures.items():
+            with folder.create(out) as f:
+                f.write(text.encode())
             made[out] = "converted by plots/paper_data.py"
-        used = sorted(set(COPIED.values()) | set(RAW.values()))
-        with open(os.path.join(tmp, "paper-data.json"), "w") as f:
-            json.dump({"source": source_desc, "commit": COMMIT, "files": {p: manifest[p] for p in used},
-                       "outputs": made}, f, indent=1)
-        if os.path.isdir(dest):
-            old = dest + ".old"
-            shutil.rmtree(old, ignore_errors=True)
-            os.rename(dest, old)
-            os.rename(tmp, dest)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.rename(tmp, dest)
-        return made
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
+        with folder.create(RECORD) as f:
+            f.write(json.dumps({"source": desc, "commit": COMMIT,
+                                "files": {p: manifest[p].sha256 for p in needed},
+                                "outputs": made}, indent=1).encode())
+        folder.commit()
+        for note in folder.notes:
+            say(note)
+    return made
 
 
 def default_dest() -> str:
@@ -308,22 +371,27 @@ def main(argv: Optional[List[str]] = None) -> int:
     args = parser.parse_args(argv)
 
     def say(msg: str) -> None:
-        print(f"paper-data: {msg}", file=sys.stderr, flush=True)
+        print(f"paper-data: {shown(msg)}", file=sys.stderr, flush=True)  # one line, whatever the paths hold
 
     try:
-        manifest = read_manifest(MANIFEST)
-        with tempfile.TemporaryDirectory(prefix="cb-paper-data-") as scratch:
-            root, desc = fetch(args.source, scratch, say)
-            needed = sorted(set(COPIED.values()) | set(RAW.values()))
-            verify(root, manifest, needed)
-            say(f"{len(needed)} files verified against {os.path.relpath(MANIFEST)} (SHA-256)")
-            made = extract(root, args.dest, desc, manifest)
-    except DataError as e:
-        print(f"paper-data: error: {e}", file=sys.stderr)
+        made = fetch_and_extract(args.source, args.dest, say)
+    except (DataError, Refused, FolderError) as e:
+        print(f"paper-data: error: {shown(str(e))}", file=sys.stderr)
         return 2
+    except OSError as e:  # the destination or the source could not be read or written
+        print(f"paper-data: error: {shown(str(e.filename or args.dest))}: {e.strerror or e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"paper-data: interrupted; {shown(args.dest)} left as it was", file=sys.stderr)
+        return 130
     say(f"wrote {len(made)} files into {args.dest} (meshes/, scenes/, figures/ converted from script/data/)")
     return 0
 
 
+def _interrupt(signum, frame) -> None:
+    raise KeyboardInterrupt  # a SIGTERM cleans up like Ctrl-C
+
+
 if __name__ == "__main__":
+    signal.signal(signal.SIGTERM, _interrupt)
     sys.exit(main())

@@ -83,7 +83,8 @@ class FetchVerifyExtract(unittest.TestCase):
         self.manifest = os.path.join(self.tmp.name, "manifest.sha256")
         with open(self.manifest, "w") as f:
             for src in sorted(set(paper_data.COPIED.values()) | set(paper_data.RAW.values())):
-                f.write(f"{paper_data.sha256(os.path.join(self.tree, src))} {src}\n")
+                path = os.path.join(self.tree, src)
+                f.write(f"{paper_data.sha256(path)} {os.path.getsize(path)} {src}\n")
         self.saved_manifest = paper_data.MANIFEST
         paper_data.MANIFEST = self.manifest
         self.dest = os.path.join(self.tmp.name, "cache", "paper-data")
@@ -117,7 +118,7 @@ class FetchVerifyExtract(unittest.TestCase):
             self.assertEqual(f.read(), "made-up content of meshes/dino_1303_4014.abq\n")
         with open(os.path.join(self.dest, "figures", "fig6_decoupling_time.csv")) as f:
             self.assertEqual(f.read(), paper_data.convert_figures(read_fixture)["figures/fig6_decoupling_time.csv"])
-        self.assertIn(f"34 files verified", err)
+        self.assertIn("34 files verified", err)
 
     def test_folder_source_works_too(self):
         status, err = self.run_main(self.tree)
@@ -125,11 +126,28 @@ class FetchVerifyExtract(unittest.TestCase):
         self.assertTrue(os.path.isfile(os.path.join(self.dest, "scenes", "dino_two_mprgp_1303.ini")))
 
     def test_altered_file_is_refused_and_nothing_written(self):
+        self.write("data/dino/model/mesh_1303_4014.abq", "made-up content of meshes/dino_1303_4014.abX\n")
+        self.write("script/data/cg.txt", read_fixture("cg_objective").replace("1", "7"))
+        for source in (self.tarball(), self.tree):
+            status, err = self.run_main(source)
+            self.assertEqual(status, 2)
+            self.assertIn(f"paper-data: error: {source}: SHA-256 differs from manifest.sha256 (not commit 57fdd2c?): "
+                          "data/dino/model/mesh_1303_4014.abq, script/data/cg.txt\n", err)
+            self.assertFalse(os.path.exists(self.dest))
+            # no temporary folder left, and the parent the run made for DEST is gone again
+            self.assertFalse(os.path.exists(os.path.dirname(self.dest)))
+
+    def test_file_of_another_size_is_refused_before_it_is_copied(self):
         self.write("data/dino/model/mesh_1303_4014.abq", "altered\n")
+        expected = paper_data.read_manifest(self.manifest)["data/dino/model/mesh_1303_4014.abq"].size
         status, err = self.run_main(self.tarball())
         self.assertEqual(status, 2)
-        self.assertIn("SHA-256 differs from manifest.sha256 (not commit 57fdd2c?): data/dino/model/mesh_1303_4014.abq",
-                      err)
+        self.assertIn(f"member 'MPRGP/data/dino/model/mesh_1303_4014.abq': 8 bytes where {expected} are expected; "
+                      "refused before unpacking it", err)
+        status, err = self.run_main(self.tree)
+        self.assertEqual(status, 2)
+        self.assertIn(f"{self.tree}/data/dino/model/mesh_1303_4014.abq: 8 bytes where {expected} are expected; "
+                      "refused before copying it", err)
         self.assertFalse(os.path.exists(self.dest))
 
     def test_missing_file_is_named(self):
@@ -142,6 +160,7 @@ class FetchVerifyExtract(unittest.TestCase):
     def test_committed_manifest_lists_every_used_file(self):
         listed = paper_data.read_manifest(self.saved_manifest)
         self.assertEqual(sorted(listed), sorted(set(paper_data.COPIED.values()) | set(paper_data.RAW.values())))
+        self.assertEqual(listed["script/data/ica_mprgp.txt"].size, 15329)  # sizes too, checked before copying
 
 
 if __name__ == "__main__":
