@@ -29,7 +29,7 @@ ifeq ($(PEERS),all)
 DEB_PACKAGES += petsc-dev
 endif
 
-.PHONY: help deps build test demo bench timing baseline reproduce stress fuzz clean meshes paper-data docs-check tidy lint \
+.PHONY: help deps build test demo bench timing baseline reproduce stress fuzz clean meshes paper-data docs-check tidy lint ladder \
   ci-perf perf-gate perf-gate-selftest contactbench-binary
 
 help:
@@ -49,6 +49,7 @@ help:
 	@echo "make tidy       clang-tidy on the C++ files changed against main (TIDY_BASE=main)"
 	@echo "make lint       pyflakes on every Python file, clang-format on C++ lines changed against main (LINT_BASE=main)"
 	@echo "make stress     the stress suite and its stability table in results/stress/"
+	@echo "make ladder     which solver when: LADDER=resolution (8k-1M DOFs) or density (8-8840 rows), results/ladder/"
 	@echo "make fuzz       fuzz the snapshot, suite and scene readers (FUZZ_SECONDS=60 each)"
 
 deps:
@@ -142,6 +143,11 @@ bench: build
 
 reproduce: deps build
 	$(PY) -m plots.reproduce --contactbench $(CB) --data $(DATA) --out results/paper $(if $(QUICK),--quick,)
+
+# Which solver when (issue 29): LADDER=resolution (8k to 1M DOFs) or density (8 to 8840 rows at 100k DOFs).
+LADDER ?= resolution
+ladder: build
+	tools/ladder.sh $(LADDER) $(CB)
 
 stress: build
 	$(CB) stress --out results/stress
