@@ -20,6 +20,7 @@ import numpy as np
 from plots import figutil, loader
 
 CONVERGED = "converged"
+STEM = "which_solver"  # the figure's and the table's file name
 
 
 def ladder_table(results) -> list:
@@ -130,7 +131,7 @@ def figure(rows, fits, axis: str, folder: str, title: str):
     from matplotlib.lines import Line2D
     not_reached = Line2D([], [], color="black", marker="x", ls="none", label="did not reach tol (at the cap)")
     figutil.legend_outside(fig, [ax_t], notes=[not_reached])
-    return figutil.save_figure_outside(fig, folder, "which_solver")
+    return figutil.save_figure_outside(fig, folder, STEM)
 
 
 def main(argv=None) -> int:
@@ -152,8 +153,8 @@ def main(argv=None) -> int:
     out = args.out or os.path.join(args.results, "figures")
     os.makedirs(out, exist_ok=True)
     source = os.path.basename(os.path.normpath(args.results))
-    paths = figure(rows, fits, args.axis, out, "Which solver when: " + source)
-    md = os.path.join(out, "which_solver.md")
+    paths = figure(rows, fits, args.axis, out, "Which solver when: " + source)  # STEM.png, STEM.pdf
+    md = os.path.join(out, STEM + ".md")
     with open(md + ".tmp", "w", encoding="utf-8") as f:
         f.write(markdown(rows, fits, args.axis, source))
     os.replace(md + ".tmp", md)

@@ -42,7 +42,7 @@ class WhichSolverTest(unittest.TestCase):
             folder = os.path.join(tmp, "ladder")
             self.make_results(folder)
             self.assertEqual(which_solver.main([folder, "--axis", "n"]), 0)
-            with open(os.path.join(folder, "figures", "which_solver.md")) as f:
+            with open(os.path.join(folder, "figures", which_solver.STEM + ".md")) as f:
                 text = f.read()
             self.assertTrue(os.path.isfile(os.path.join(folder, "figures", "which_solver.png")))
         self.assertIn("| quad | 2.00 | 3 of 3 |", text)
