@@ -42,7 +42,10 @@ const SettingsTable<MprgpCoupledSettings>& mprgp_coupled_settings_table()
                     "components: one small problem per component of J's row graph (dense factors per face) | "
                     "global: one CHOLMOD problem over all rows (the reference)")
             .integer("dense_max_rows", &MprgpCoupledSettings::dense_max_rows, 1, 100000000,
-                     "operators = components: largest component with dense factors; larger ones use CHOLMOD");
+                     "operators = components: largest component with dense factors; larger ones use CHOLMOD")
+            .choice("expansion", &MprgpCoupledSettings::expansion, {"feasible_step", "paper"},
+                    "feasible_step: after a CG trial left the set from a feasible x, first the largest feasible step "
+                    "along p (Dostal's MPRGP), then x = P(x - alpha_bar phi) | paper: only the latter (Alg. 1)");
     return table;
 }
 
@@ -263,7 +266,8 @@ private:
     /// phitilde'phi = phi'phi - lam'(J phi) / alpha_bar with lam of P(x - alpha_bar phi) (eq. 13).
     double reduced_free_gradient_dot();
     bool safeguard(double f_before, double& f_now);
-    bool expansion();
+    /// @param cg_alpha  > 0 after a rejected CG trial from a feasible x (m_Ap, m_jp hold that trial)
+    bool expansion(double cg_alpha);
     bool proportioning();
 
     const QpView& m_qp;
@@ -286,7 +290,8 @@ private:
     std::vector<char> m_active, m_violated, m_mark;
     std::vector<int> m_touched;
     long m_last_drift = 0;
-    double m_f_x = 0.0, m_corr_x = 0.0;
+    long m_feasible_half_steps = 0;
+    double m_f_x = 0.0, m_corr_x = 0.0, m_cg_alpha = 0.0;
     bool m_x_feasible = true;
     double m_native = 0.0, m_error = 0.0, m_face_error = 0.0, m_beta2 = 0.0, m_phi2 = 0.0;
 };
@@ -360,10 +365,25 @@ bool CoupledRun::safeguard(double f_before, double& f_now)
     return true;
 }
 
-bool CoupledRun::expansion()
+bool CoupledRun::expansion(double cg_alpha)
 {
     const double f_before = m_f_x + m_corr_x;  // F(P(x))
-    if (!m_x_feasible) project_x(false);       // y = P(x), g(y) = g + A J'lam
+    if (m_st.expansion == "feasible_step" && m_x_feasible && cg_alpha > 0.0) {
+        // Dostal's half step: the largest feasible step along p first (F decreases on it, the
+        // trial's alpha being the line minimiser), so that the blocking row joins the face; the
+        // fixed step alpha_bar alone moves stiff DOFs by little and adds a row or two per expansion.
+        double step = cg_alpha;
+        for (Eigen::Index i = 0; i < m_m; ++i) {
+            if (m_active[static_cast<size_t>(i)] || !(m_s[i] > 0.0) || !(m_jp[i] > 0.0)) continue;
+            step = std::min(step, std::max(0.0, (m_jx[i] - m_c[i]) / m_jp[i]));
+        }
+        if (step > 0.0) {
+            m_x -= step * m_p;
+            m_g -= step * m_Ap;
+            ++m_feasible_half_steps;
+        }
+    }
+    if (!m_x_feasible) project_x(false);  // y = P(x), g(y) = g + A J'lam
     const std::vector<char> face_before = m_active;
     restart();  // the face of P(x) and phi(P(x))
     m_x -= m_alpha_bar * m_phi;
@@ -513,6 +533,7 @@ SolverResult CoupledRun::run()
                 break;
             }
             const double alpha = m_z.dot(m_phi) / pap;  // z'g = z'phi (z in null(J_A)), without cancellation
+            m_cg_alpha = alpha;
             const double pg = m_p.dot(m_phi);
             const double df = -alpha * pg + 0.5 * alpha * alpha * pap;  // F(x - alpha p) - F(x)
             rows_times(m_p, m_jp);
@@ -552,7 +573,7 @@ SolverResult CoupledRun::run()
         }
         bool ok = true;
         if (do_expansion) {
-            ok = expansion();
+            ok = expansion(proportional ? m_cg_alpha : 0.0);
             last = StepKind::EXPANSION;
         } else {
             if (!proportioning()) {
@@ -587,6 +608,7 @@ SolverResult CoupledRun::run()
                    {"precond", m_st.precond},
                    {"components", m_ops->stats()},
                    {"chain", m_chain.to_json()},
+                   {"feasible_half_steps", m_feasible_half_steps},
                    {"lcp_failures", m_ops->lcp_failures()},
                    {"safeguard_firings", m_cnt.safeguard_steps},
                    {"dependent_rows", "handled by a shift 1e-12 of the unit-diagonal-scaled Gram matrices"}};
