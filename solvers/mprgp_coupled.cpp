@@ -43,9 +43,13 @@ const SettingsTable<MprgpCoupledSettings>& mprgp_coupled_settings_table()
                     "global: one CHOLMOD problem over all rows (the reference)")
             .integer("dense_max_rows", &MprgpCoupledSettings::dense_max_rows, 1, 100000000,
                      "operators = components: largest component with dense factors; larger ones use CHOLMOD")
-            .choice("expansion", &MprgpCoupledSettings::expansion, {"feasible_step", "paper"},
-                    "feasible_step: after a CG trial left the set from a feasible x, first the largest feasible step "
-                    "along p (Dostal's MPRGP), then x = P(x - alpha_bar phi) | paper: only the latter (Alg. 1)");
+            .choice("trial", &MprgpCoupledSettings::trial, {"chain", "project"},
+                    "a CG trial y that left the set with F(P(y)) < F(P(x)): chain (Alg. 2: the chain goes on from the "
+                    "infeasible y) | project: x = P(y) and the chain restarts on its face")
+            .choice("expansion", &MprgpCoupledSettings::expansion, {"paper", "precond", "feasible_step"},
+                    "paper: x = P(x - alpha_bar phi) (Alg. 1) | precond: x = P(x - a z) with z the preconditioned "
+                    "face direction and a = z'g / z'Az (one more A-product) | feasible_step: after a CG trial left "
+                    "the set from a feasible x, first the largest feasible step along p (Dostal), then paper's step");
     return table;
 }
 
@@ -100,6 +104,11 @@ struct ChainCounts {
     long face_done_expansions = 0;         ///< infeasible iterate whose face problem is solved: expansion
     long expansions_same_face = 0;         ///< expansions after which the face was the one before
     long drift_only_trials = 0;            ///< trials whose only violated rows were face rows within tau_i
+    long accepted_infeasible_trials = 0;   ///< CG trials accepted although P moved y (the chain goes on)
+    long violated_rows_accepted = 0;       ///< rows P moved, summed over the accepted infeasible trials
+    long violated_rows_rejected = 0;       ///< rows P moved, summed over the rejected infeasible trials
+    double rejected_gain = 0.0;            ///< sum of -(F(y) - F(x)) over the rejected infeasible trials
+    double rejected_cost = 0.0;            ///< sum of the projection corrections F(P(y)) - F(y) over them
     nlohmann::json to_json() const
     {
         return {{"rejected_infeasible_trials", rejected_infeasible_trials},
@@ -107,7 +116,11 @@ struct ChainCounts {
                 {"infeasible_not_proportional", infeasible_not_proportional},
                 {"face_done_expansions", face_done_expansions},
                 {"expansions_same_face", expansions_same_face},
-                {"drift_only_trials", drift_only_trials}};
+                {"drift_only_trials", drift_only_trials},
+                {"accepted_infeasible_trials", accepted_infeasible_trials},
+                {"violated_rows_accepted", violated_rows_accepted},
+                {"violated_rows_rejected", violated_rows_rejected},
+                {"rejected_cost_over_gain", rejected_gain > 0.0 ? rejected_cost / rejected_gain : 0.0}};
     }
 };
 
@@ -290,7 +303,8 @@ private:
     std::vector<char> m_active, m_violated, m_mark;
     std::vector<int> m_touched;
     long m_last_drift = 0;
-    long m_feasible_half_steps = 0;
+    long m_feasible_half_steps = 0, m_projected_restarts = 0;
+    bool m_project_trials = false;
     double m_f_x = 0.0, m_corr_x = 0.0, m_cg_alpha = 0.0;
     bool m_x_feasible = true;
     double m_native = 0.0, m_error = 0.0, m_face_error = 0.0, m_beta2 = 0.0, m_phi2 = 0.0;
@@ -386,7 +400,21 @@ bool CoupledRun::expansion(double cg_alpha)
     if (!m_x_feasible) project_x(false);  // y = P(x), g(y) = g + A J'lam
     const std::vector<char> face_before = m_active;
     restart();  // the face of P(x) and phi(P(x))
-    m_x -= m_alpha_bar * m_phi;
+    double step = m_alpha_bar;
+    const Vec* direction = &m_phi;
+    if (m_st.expansion == "precond") {
+        // The face direction z with its exact step: alpha_bar = 2/||A|| moves the soft DOFs by
+        // almost nothing, so the face grows by a row or two per expansion; this step reaches
+        // the rows the CG chain was heading for (Alg. 3's safeguard still guarantees descent).
+        a_product(m_A, m_z, m_Ap);
+        ++m_cnt.a_products;
+        const double zaz = m_z.dot(m_Ap), zg = m_z.dot(m_phi);
+        if (zaz > 0.0 && zg > 0.0 && std::isfinite(zaz)) {
+            step = zg / zaz;
+            direction = &m_z;
+        }
+    }
+    m_x -= step * *direction;
     project_x(false);
     exact_gradient();
     double f_now = objective_from_gradient();
@@ -422,6 +450,7 @@ SolverResult CoupledRun::run()
     result.x = m_qp.x0;
     result.lambda = Vec::Zero(m_m);
     m_jacobi = m_st.precond == "jacobi";
+    m_project_trials = m_st.trial == "project";
     m_dinv = Vec::Ones(m_n);
     if (m_jacobi) {
         const Vec diag = m_A.diagonal();
@@ -539,7 +568,8 @@ SolverResult CoupledRun::run()
             rows_times(m_p, m_jp);
             for (Eigen::Index i = 0; i < m_m; ++i) m_q[i] = m_c[i] - m_jx[i] + alpha * m_jp[i];
             ++m_cnt.projections;
-            bool moved = flag_violated(m_q, false) > 0;
+            const long violated_rows = flag_violated(m_q, false);
+            bool moved = violated_rows > 0;
             if (!moved && m_last_drift > 0) ++m_chain.drift_only_trials;
             double corr_y = 0.0;
             if (moved) moved = m_ops->projection_multipliers(m_q, m_violated, m_lam, m_cnt) > 0;
@@ -548,11 +578,28 @@ SolverResult CoupledRun::run()
                 build_d(m_lam);
                 double dg = 0.0;
                 for (int j : m_touched) dg += m_d[j] * (m_g[j] - alpha * m_Ap[j]);
-                corr_y = dg + 0.5 * d_a_d();
-                clear_d();
+                corr_y = dg + 0.5 * d_a_d();  // d is kept for the projected restart below
             }
             const double delta = df + corr_y - m_corr_x;
-            if (moved ? delta < 0.0 : delta <= 0.0) {
+            const bool accept = moved ? delta < 0.0 : delta <= 0.0;
+            if (accept && moved && m_project_trials) {
+                // trial=project: x = P(y) (feasible, F decreased) and the chain restarts on the face of
+                // P(y), which holds every row P moved at once; g(P(y)) = g(y) + A d, sparse.
+                m_x -= alpha * m_p;
+                m_g -= alpha * m_Ap;
+                for (int j : m_touched) m_x[j] += m_d[j];
+                add_a_d(m_g);
+                clear_d();
+                restart();
+                ++m_chain.accepted_infeasible_trials;
+                m_chain.violated_rows_accepted += violated_rows;
+                ++m_projected_restarts;
+                ++m_cnt.cg_steps;
+                last = StepKind::CG;
+                continue;
+            }
+            clear_d();
+            if (accept) {
                 m_x -= alpha * m_p;
                 m_g -= alpha * m_Ap;
                 face_gradient(true);
@@ -561,11 +608,20 @@ SolverResult CoupledRun::run()
                 m_f_x += df;
                 m_corr_x = corr_y;
                 m_x_feasible = !moved;
+                if (moved) {
+                    ++m_chain.accepted_infeasible_trials;
+                    m_chain.violated_rows_accepted += violated_rows;
+                }
                 ++m_cnt.cg_steps;
                 last = StepKind::CG;
                 continue;
             }
             ++(moved ? m_chain.rejected_infeasible_trials : m_chain.rejected_feasible_trials);
+            if (moved) {
+                m_chain.violated_rows_rejected += violated_rows;
+                m_chain.rejected_gain -= df;
+                m_chain.rejected_cost += corr_y;
+            }
             do_expansion = true;
         } else if (!m_x_feasible) {
             ++(face_done ? m_chain.face_done_expansions : m_chain.infeasible_not_proportional);
@@ -609,6 +665,7 @@ SolverResult CoupledRun::run()
                    {"components", m_ops->stats()},
                    {"chain", m_chain.to_json()},
                    {"feasible_half_steps", m_feasible_half_steps},
+                   {"projected_restarts", m_projected_restarts},
                    {"lcp_failures", m_ops->lcp_failures()},
                    {"safeguard_firings", m_cnt.safeguard_steps},
                    {"dependent_rows", "handled by a shift 1e-12 of the unit-diagonal-scaled Gram matrices"}};

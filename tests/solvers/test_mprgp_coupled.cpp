@@ -95,3 +95,30 @@ TEST(MprgpCoupled, NonConvergenceIsReported)
 }
 
 }  // namespace
+
+namespace {
+
+TEST(MprgpCoupled, OneProductPerCgStep)
+{
+    // Difference form of F(P(y)): a CG trial costs one A-product, an expansion one more (the exact
+    // gradient after it), a proportioning step or safeguard repeat one; plus the start, the
+    // convergence confirmations and the final point (a few). The old direct F cost 5.5 per iteration.
+    for (std::uint64_t seed : {1u, 2u, 3u}) {
+        const Qp qp = cb::make_synthetic("coupled", {{"nx", 6}, {"ny", 2}, {"nz", 6}}, seed);
+        const cb::SolverResult r =
+            cb::builtin_registry().create("mprgp-coupled", {{"tol", 1e-8}})->solve(qp.view(), {});
+        ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
+        const cb::Counters& c = r.counters;
+        EXPECT_LE(c.a_products - c.power_products, c.iterations + c.expansion_steps + c.safeguard_steps + 5)
+            << "seed " << seed;
+        EXPECT_EQ(r.info["components"]["operators"], "components");
+        EXPECT_EQ(r.info["chain"]["rejected_infeasible_trials"].get<long>() +
+                      r.info["chain"]["rejected_feasible_trials"].get<long>() +
+                      r.info["chain"]["infeasible_not_proportional"].get<long>() +
+                      r.info["chain"]["face_done_expansions"].get<long>(),
+                  c.expansion_steps)
+            << "every expansion has one counted cause";
+    }
+}
+
+}  // namespace
