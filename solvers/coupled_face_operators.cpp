@@ -22,7 +22,7 @@ namespace {
 // The Gram matrices are scaled to unit diagonal, then shifted by this: relative to each row's
 // own norm, so rows scaled by 1e-3 and 1e3 in one J are not regularised away, while a duplicated
 // or parallel row still gets a (split) multiplier.
-constexpr double kShift = 1e-12;
+constexpr double GRAM_SHIFT = 1e-12;
 
 struct LcpTally {
     long& pgs_fallbacks;
@@ -212,7 +212,7 @@ private:
             for (int c = 0; c <= r; ++c) {
                 const int b = map[c];
                 L[static_cast<size_t>(r) * static_cast<size_t>(q) + static_cast<size_t>(c)] =
-                    sc[static_cast<size_t>(a)] * g(M, a, b) * sc[static_cast<size_t>(b)] + (r == c ? kShift : 0.0);
+                    sc[static_cast<size_t>(a)] * g(M, a, b) * sc[static_cast<size_t>(b)] + (r == c ? GRAM_SHIFT : 0.0);
             }
         }
         cnt.work_flops += dense_factor_flops(q);
@@ -240,7 +240,7 @@ private:
         if (kk == 1) {
             // Closed form (the decoupled rows' lambda = max(0, q / s)), with the same shift.
             const double s = g(m_G, map[0], map[0]);
-            const double lam0 = q[0] > 0.0 && s > 0.0 ? q[0] / (s * (1.0 + kShift)) : 0.0;
+            const double lam0 = q[0] > 0.0 && s > 0.0 ? q[0] / (s * (1.0 + GRAM_SHIFT)) : 0.0;
             lam[0] = lam0;
             set[0] = lam0 > 0.0;
             ++cnt.lcp_iterations;
@@ -360,7 +360,7 @@ SpMatCol submatrix(const SpMatCol& M, const std::vector<int>& idx)
 
 using Simplicial = Eigen::SimplicialLLT<SpMatCol, Eigen::Lower, Eigen::NaturalOrdering<int>>;
 
-/// A sparse factor of a Gram matrix scaled to unit diagonal and shifted by kShift: CHOLMOD (the
+/// A sparse factor of a Gram matrix scaled to unit diagonal and shifted by GRAM_SHIFT: CHOLMOD (the
 /// global oracle, as before issue 31) or, for a large component, Eigen's simplicial LL' in the
 /// block's own order. The block's rows are put in AMD order once, and a principal submatrix of
 /// an AMD-ordered matrix keeps a good order, so each LCP pivot skips the ordering and the
@@ -381,7 +381,7 @@ struct SparseFactor {
         if (simplicial) {
             chol.reset();
             if (!simp) simp = std::make_unique<Simplicial>();
-            simp->setShift(kShift);
+            simp->setShift(GRAM_SHIFT);
             simp->compute(scaled);
             ok = simp->info() == Eigen::Success;
             if (ok) {
@@ -398,7 +398,7 @@ struct SparseFactor {
         }
         simp.reset();
         chol = std::make_unique<Cholmod>();
-        chol->setShift(kShift);
+        chol->setShift(GRAM_SHIFT);
         chol->compute(scaled);
         ++cnt.cholmod_analyses;
         ++cnt.cholmod_factorizations;
