@@ -1,16 +1,18 @@
 // `mprgp-coupled`: extended MPRGP with general J (ALGORITHMS.md §4).
 // Ref: Li et al., "Deformable Objects Collision Handling with Fast Convergence", CGF 2015,
 //      eq. (15)-(16) free gradient, (17)-(18) chopped gradient, (19)-(20) projection, Alg. 3.
-// Not a hot path: written for clarity; every subproblem is on CHOLMOD.
+// The operators split over the components of J's row graph (solvers/coupled_face_operators.*);
+// the steps, the proportioning test and the CG direction stay global. F(P(y)) is formed in
+// difference form from scalar recurrences plus the sparse correction J'lambda of the projection,
+// so a CG step costs one A-product, as in `mprgp` (objective=cheap).
 #include "solvers/mprgp_coupled.hpp"
 #include "solvers/solve_loop.hpp"
 
 #include "solvers/a_product.hpp"
 #include "solvers/accuracy.hpp"
+#include "solvers/coupled_face_operators.hpp"
 #include "solvers/mprgp_kernels.hpp"
-#include "solvers/work_units.hpp"
 
-#include <Eigen/CholmodSupport>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -35,7 +37,19 @@ const SettingsTable<MprgpCoupledSettings>& mprgp_coupled_settings_table()
             .integer("pgs_max_sweeps", &MprgpCoupledSettings::pgs_max_sweeps, 1, 100000000,
                      "PGS fallback sweeps per LCP")
             .integer("safeguard_max", &MprgpCoupledSettings::safeguard_max, 1, 100000000,
-                     "max repeats of Alg. 3's safeguard after one step");
+                     "max repeats of Alg. 3's safeguard after one step")
+            .choice("operators", &MprgpCoupledSettings::operators, {"components", "global"},
+                    "components: one small problem per component of J's row graph (dense factors per face) | "
+                    "global: one CHOLMOD problem over all rows (the reference)")
+            .integer("dense_max_rows", &MprgpCoupledSettings::dense_max_rows, 1, 100000000,
+                     "operators = components: largest component with dense factors; larger ones use CHOLMOD")
+            .choice("trial", &MprgpCoupledSettings::trial, {"chain", "project"},
+                    "a CG trial y that left the set with F(P(y)) < F(P(x)): chain (Alg. 2: the chain goes on from the "
+                    "infeasible y) | project: x = P(y) and the chain restarts on its face")
+            .choice("expansion", &MprgpCoupledSettings::expansion, {"paper", "precond", "feasible_step"},
+                    "paper: x = P(x - alpha_bar phi) (Alg. 1) | precond: x = P(x - a z) with z the preconditioned "
+                    "face direction and a = z'g / z'Az (one more A-product) | feasible_step: after a CG trial left "
+                    "the set from a feasible x, first the largest feasible step along p (Dostal), then paper's step");
     return table;
 }
 
@@ -66,14 +80,13 @@ SolverEntry mprgp_coupled_entry()
     entry.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
         return std::make_unique<MprgpCoupledSolver>(MprgpCoupledSettings::from_json(settings));
     };
-    entry.description = "extended MPRGP with general (coupled) J: CHOLMOD subproblems, LCPs by principal pivoting";
+    entry.description =
+        "extended MPRGP with general (coupled) J: per-component dense subproblems, LCPs by principal pivoting";
     entry.settings = mprgp_coupled_setting_docs();
     return entry;
 }
 
 namespace {
-
-using Cholmod = Eigen::CholmodDecomposition<SpMatCol, Eigen::Lower>;
 
 std::string fmt(double v)
 {
@@ -83,430 +96,598 @@ std::string fmt(double v)
     return s.str();
 }
 
-/// The principal submatrix M(idx, idx).
-SpMatCol submatrix(const SpMatCol& M, const std::vector<int>& idx)
-{
-    std::vector<int> local(static_cast<size_t>(M.rows()), -1);
-    for (size_t k = 0; k < idx.size(); ++k) local[static_cast<size_t>(idx[k])] = static_cast<int>(k);
-    std::vector<Triplet> t;
-    for (size_t k = 0; k < idx.size(); ++k)
-        for (SpMatCol::InnerIterator it(M, idx[k]); it; ++it)
-            if (local[static_cast<size_t>(it.row())] >= 0)
-                t.emplace_back(local[static_cast<size_t>(it.row())], static_cast<int>(k), it.value());
-    SpMatCol S(static_cast<Eigen::Index>(idx.size()), static_cast<Eigen::Index>(idx.size()));
-    S.setFromTriplets(t.begin(), t.end());
-    return S;
-}
-
-/// A CHOLMOD factor of a (shifted) SPD Gram matrix, symmetrically scaled to unit diagonal
-/// first so that the shift 1e-12 is relative to each row's own norm (rows scaled by 1e-3 and
-/// 1e3 in one J must not be regularised away); the shift keeps dependent rows solvable (the
-/// solve then splits their multiplier).
-struct Factor {
-    std::unique_ptr<Cholmod> chol;
-    Vec scale;  ///< 1 / sqrt(diag)
-    bool ok = false;
-    bool compute(const SpMatCol& S, Counters& cnt)
+/// Why chains end (issue 31's question: why the coupled chain keeps expanding), counted.
+struct ChainCounts {
+    long rejected_infeasible_trials = 0;   ///< CG trial with a projected P(y) and F(P(y)) >= F(P(x)): expansion
+    long rejected_feasible_trials = 0;     ///< CG trial at a feasible y with F(y) > F(P(x)) (rounding): expansion
+    long infeasible_not_proportional = 0;  ///< not proportional at an infeasible chain iterate: expansion
+    long face_done_expansions = 0;         ///< infeasible iterate whose face problem is solved: expansion
+    long expansions_same_face = 0;         ///< expansions after which the face was the one before
+    long drift_only_trials = 0;            ///< trials whose only violated rows were face rows within tau_i
+    long accepted_infeasible_trials = 0;   ///< CG trials accepted although P moved y (the chain goes on)
+    long violated_rows_accepted = 0;       ///< rows P moved, summed over the accepted infeasible trials
+    long violated_rows_rejected = 0;       ///< rows P moved, summed over the rejected infeasible trials
+    double rejected_gain = 0.0;            ///< sum of -(F(y) - F(x)) over the rejected infeasible trials
+    double rejected_cost = 0.0;            ///< sum of the projection corrections F(P(y)) - F(y) over them
+    nlohmann::json to_json() const
     {
-        chol = std::make_unique<Cholmod>();
-        scale.resize(S.rows());
-        for (Eigen::Index i = 0; i < S.rows(); ++i) {
-            const double d = S.coeff(i, i);
-            scale[i] = d > 0.0 ? 1.0 / std::sqrt(d) : 1.0;
-        }
-        const SpMatCol scaled = SpMatCol(scale.asDiagonal() * S * scale.asDiagonal());
-        chol->setShift(1e-12);
-        chol->compute(scaled);
-        ++cnt.cholmod_analyses;
-        ++cnt.cholmod_factorizations;
-        cnt.work_flops += cholmod_factor_flops(chol->cholmod());
-        ok = chol->info() == Eigen::Success;
-        return ok;
-    }
-    Vec solve(const Vec& rhs, Counters& cnt)
-    {
-        ++cnt.cholmod_solves;
-        cnt.work_flops += cholmod_solve_flops(chol->cholmod());
-        return scale.cwiseProduct(Vec(chol->solve(Vec(scale.cwiseProduct(rhs)))));
+        return {{"rejected_infeasible_trials", rejected_infeasible_trials},
+                {"rejected_feasible_trials", rejected_feasible_trials},
+                {"infeasible_not_proportional", infeasible_not_proportional},
+                {"face_done_expansions", face_done_expansions},
+                {"expansions_same_face", expansions_same_face},
+                {"drift_only_trials", drift_only_trials},
+                {"accepted_infeasible_trials", accepted_infeasible_trials},
+                {"violated_rows_accepted", violated_rows_accepted},
+                {"violated_rows_rejected", violated_rows_rejected},
+                {"rejected_cost_over_gain", rejected_gain > 0.0 ? rejected_cost / rejected_gain : 0.0}};
     }
 };
 
-/// Solves 0 <= lambda  perp  M lambda - q >= 0 (M SPD up to the shift) by block principal
-/// pivoting (Judice-Pires, Murty's single pivot when the infeasible count stops dropping),
-/// warm-started from `set` (in/out); falls back to projected Gauss-Seidel.
-/// @return false when neither method met the tolerance.
-bool solve_lcp(const SpMatCol& M, const Vec& q, std::vector<char>& set, Vec& lambda, Counters& cnt, long max_pivots,
-               long max_sweeps, long& pgs_fallbacks)
+/// One solve; every vector is allocated before the loop.
+class CoupledRun {
+public:
+    CoupledRun(const QpView& qp, const MprgpCoupledSettings& st, const SolveContext& context)
+        : m_qp(qp), m_A(qp.A), m_J(qp.J), m_c(qp.c), m_st(st), m_ctx(context), m_n(qp.n()), m_m(qp.m()),
+          m_loop("mprgp-coupled", qp, st.common, context)
+    {
+    }
+    SolverResult run();
+
+private:
+    void rows_times(const Vec& v, Vec& out) const
+    {
+        for (Eigen::Index i = 0; i < m_m; ++i) out[i] = row_dot(m_J, i, v);
+    }
+    /// v += a J' coef over the rows with coef_i != 0.
+    void add_rows_transpose(const Vec& coef, double a, Vec& v) const
+    {
+        for (Eigen::Index i = 0; i < m_m; ++i)
+            if (coef[i] != 0.0) row_axpy(m_J, i, a * coef[i], v);
+    }
+    void exact_gradient()
+    {
+        m_tmp = m_x - m_x_ref;
+        a_product(m_A, m_tmp, m_g);
+        m_g += m_g_ref;
+        ++m_cnt.a_products;
+    }
+    /// F(x) - F(x_ref) = 1/2 u'(g + g_ref), u = x - x_ref (no A-product; translation invariant).
+    double objective_from_gradient() const
+    {
+        double f = 0.0;
+        for (Eigen::Index j = 0; j < m_n; ++j) f += (m_x[j] - m_x_ref[j]) * (m_g[j] + m_g_ref[j]);
+        return 0.5 * f;
+    }
+    /// Flags the rows that P must move for q = c - J v: zero rows never, face rows only beyond
+    /// tau_i (J_A p = 0 holds to rounding only: their drift is not a violation), others when q_i > 0.
+    long flag_violated(const Vec& q, bool strict)
+    {
+        long count = 0, drift = 0;
+        for (Eigen::Index i = 0; i < m_m; ++i) {
+            const bool face = m_active[static_cast<size_t>(i)] != 0;
+            const double thr = face && !strict ? active_tolerance(m_c[i]) : 0.0;
+            const bool v = m_s[i] > 0.0 && q[i] > thr;
+            m_violated[static_cast<size_t>(i)] = v;
+            count += v;
+            drift += !v && face && m_s[i] > 0.0 && q[i] > 0.0;
+        }
+        m_last_drift = drift;
+        return count;
+    }
+    /// Sparse d = J' lam over the rows with lam_i > 0 (m_touched lists its DOFs once).
+    void build_d(const Vec& lam)
+    {
+        m_touched.clear();
+        for (Eigen::Index i = 0; i < m_m; ++i) {
+            if (lam[i] == 0.0) continue;
+            for (SpMat::InnerIterator it(m_J, i); it; ++it) {
+                const int j = static_cast<int>(it.col());
+                if (!m_mark[static_cast<size_t>(j)]) {
+                    m_mark[static_cast<size_t>(j)] = 1;
+                    m_touched.push_back(j);
+                }
+                m_d[j] += lam[i] * it.value();
+            }
+        }
+    }
+    void clear_d()
+    {
+        for (int j : m_touched) {
+            m_d[j] = 0.0;
+            m_mark[static_cast<size_t>(j)] = 0;
+        }
+        m_touched.clear();
+    }
+    /// d'Ad over the touched rows of A (A symmetric, d sparse).
+    double d_a_d() const
+    {
+        const int* outer = m_A.outerIndexPtr();
+        const int* inner = m_A.innerIndexPtr();
+        const double* val = m_A.valuePtr();
+        double dad = 0.0;
+        for (int j : m_touched) {
+            double s = 0.0;
+            for (int k = outer[j]; k < outer[j + 1]; ++k) s += val[k] * m_d[inner[k]];
+            dad += m_d[j] * s;
+        }
+        return dad;
+    }
+    /// g += A d (columns of A = rows, A symmetric), O(nnz of the touched columns).
+    void add_a_d(Vec& g) const
+    {
+        const int* outer = m_A.outerIndexPtr();
+        const int* inner = m_A.innerIndexPtr();
+        const double* val = m_A.valuePtr();
+        for (int j : m_touched)
+            for (int k = outer[j]; k < outer[j + 1]; ++k) g[inner[k]] += val[k] * m_d[j];
+    }
+    /// x = P(x) with g updated sparsely (g += A J'lam). @return whether x moved.
+    bool project_x(bool strict)
+    {
+        ++m_cnt.projections;
+        rows_times(m_x, m_jx);
+        m_q = m_c - m_jx;
+        if (flag_violated(m_q, strict) == 0) return false;
+        if (m_ops->projection_multipliers(m_q, m_violated, m_lam, m_cnt) == 0) return false;
+        build_d(m_lam);
+        for (int j : m_touched) m_x[j] += m_d[j];
+        add_a_d(m_g);
+        clear_d();
+        return true;
+    }
+    /// nu, phi = g - J_A' nu and (with with_z) the direction z, from the current g and face.
+    void face_gradient(bool with_z)
+    {
+        rows_times(m_g, m_jg);
+        m_ops->face_multipliers(m_jg, m_nu, m_cnt);
+        m_phi = m_g;
+        add_rows_transpose(m_nu, -1.0, m_phi);
+        if (!with_z) return;
+        ++m_cnt.precond_applications;
+        if (!m_jacobi) {
+            m_z = m_phi;
+            return;
+        }
+        m_tmp = m_dinv.cwiseProduct(m_g);
+        rows_times(m_tmp, m_jdg);
+        m_ops->jacobi_multipliers(m_jdg, m_eta, m_cnt);
+        m_tmp = m_g;
+        add_rows_transpose(m_eta, -1.0, m_tmp);
+        m_z = m_dinv.cwiseProduct(m_tmp);  // J_A z = 0
+    }
+    /// Chain start at the current (feasible) x with the current g: face, phi, z, p, F.
+    void restart()
+    {
+        rows_times(m_x, m_jx);
+        bool changed = false;
+        for (Eigen::Index i = 0; i < m_m; ++i) {
+            const char a = m_s[i] > 0.0 && std::abs(m_jx[i] - m_c[i]) <= active_tolerance(m_c[i]);
+            changed = changed || a != m_active[static_cast<size_t>(i)];
+            m_active[static_cast<size_t>(i)] = a;
+        }
+        if (changed) ++m_cnt.pivots;  // an active-set change
+        m_ops->set_face(m_active, m_cnt);
+        face_gradient(true);
+        m_p = m_z;
+        m_f_x = objective_from_gradient();
+        m_corr_x = 0.0;
+        m_x_feasible = true;
+    }
+    /// Chopped gradient, multipliers, native residual and the accuracy error at x.
+    void evaluate();
+    /// phitilde'phi = phi'phi - lam'(J phi) / alpha_bar with lam of P(x - alpha_bar phi) (eq. 13).
+    double reduced_free_gradient_dot();
+    bool safeguard(double f_before, double& f_now);
+    /// @param cg_alpha  > 0 after a rejected CG trial from a feasible x (m_Ap, m_jp hold that trial)
+    bool expansion(double cg_alpha);
+    bool proportioning();
+
+    const QpView& m_qp;
+    const SpMat& m_A;
+    const SpMat& m_J;
+    const Vec& m_c;
+    const MprgpCoupledSettings& m_st;
+    const SolveContext& m_ctx;
+    const Eigen::Index m_n, m_m;
+    SolveLoop m_loop;
+    Counters m_cnt;
+    ChainCounts m_chain;
+    std::unique_ptr<CoupledFaceOperators> m_ops;
+    bool m_jacobi = false;
+    double m_alpha_bar = 1.0;
+    AccuracyScale m_scale;
+    Vec m_s, m_dinv;
+    Vec m_x, m_g, m_phi, m_z, m_p, m_Ap, m_beta, m_tmp, m_d, m_x_ref, m_g_ref;
+    Vec m_jx, m_jg, m_jp, m_jphi, m_jdg, m_q, m_nu, m_eta, m_mu, m_lam;
+    std::vector<char> m_active, m_violated, m_mark;
+    std::vector<int> m_touched;
+    long m_last_drift = 0;
+    long m_feasible_half_steps = 0, m_projected_restarts = 0;
+    bool m_project_trials = false;
+    double m_f_x = 0.0, m_corr_x = 0.0, m_cg_alpha = 0.0;
+    bool m_x_feasible = true;
+    double m_native = 0.0, m_error = 0.0, m_face_error = 0.0, m_beta2 = 0.0, m_phi2 = 0.0;
+};
+
+void CoupledRun::evaluate()
 {
-    const Eigen::Index k = q.size();
-    lambda = Vec::Zero(k);
-    if (k == 0) return true;
-    if (static_cast<Eigen::Index>(set.size()) != k) set.assign(static_cast<size_t>(k), 0);
-    const double tol_w = 1e-12 * std::max(1.0, q.lpNorm<Eigen::Infinity>());
-    long best = std::numeric_limits<long>::max();
-    int chances = 3;
-    for (long it = 0; it < max_pivots; ++it) {
-        std::vector<int> idx;
-        for (Eigen::Index i = 0; i < k; ++i)
-            if (set[static_cast<size_t>(i)]) idx.push_back(static_cast<int>(i));
-        lambda.setZero();
-        if (!idx.empty()) {
-            Factor f;
-            if (!f.compute(submatrix(M, idx), cnt)) break;
-            Vec rhs(static_cast<Eigen::Index>(idx.size()));
-            for (size_t r = 0; r < idx.size(); ++r) rhs[static_cast<Eigen::Index>(r)] = q[idx[r]];
-            const Vec sol = f.solve(rhs, cnt);
-            for (size_t r = 0; r < idx.size(); ++r) lambda[idx[r]] = sol[static_cast<Eigen::Index>(r)];
+    // q_A = J_A (g - phi) on the face rows for the chopped LCP; beta = J_A'(nu - mu).
+    rows_times(m_phi, m_jphi);
+    for (Eigen::Index i = 0; i < m_m; ++i) m_q[i] = m_active[static_cast<size_t>(i)] ? m_jg[i] - m_jphi[i] : 0.0;
+    m_ops->chopped_multipliers(m_q, m_nu, m_mu, m_cnt);
+    m_beta.setZero();
+    for (Eigen::Index i = 0; i < m_m; ++i)
+        if (m_nu[i] != m_mu[i]) row_axpy(m_J, i, m_nu[i] - m_mu[i], m_beta);
+    // phi + beta = g - J'mu: the native residual and the measure's stationarity part together.
+    double pb2 = 0.0, stat = 0.0;
+    m_beta2 = m_beta.squaredNorm();
+    m_phi2 = m_phi.squaredNorm();
+    for (Eigen::Index j = 0; j < m_n; ++j) {
+        const double r = m_phi[j] + m_beta[j];
+        pb2 += r * r;
+        stat = std::max(stat, std::abs(r) * m_scale.inv_diag[j]);
+    }
+    double stat_phi = 0.0;
+    for (Eigen::Index j = 0; j < m_n; ++j) stat_phi = std::max(stat_phi, std::abs(m_phi[j]) * m_scale.inv_diag[j]);
+    rows_times(m_x, m_jx);
+    double primal = 0.0, dual = 0.0, comp = 0.0, gap = 0.0;
+    for (Eigen::Index i = 0; i < m_m; ++i) {
+        const double slack = m_jx[i] - m_c[i];
+        const double inv_norm = m_scale.inv_row_norm[i];
+        if (inv_norm == 0.0) {
+            if (!(m_c[i] <= 0.0)) primal = std::numeric_limits<double>::infinity();
+            continue;
         }
-        ++cnt.lcp_iterations;
-        const Vec w = M * lambda - q;
-        cnt.work_flops += sparse_product_flops(static_cast<double>(M.nonZeros()));
-        const double tol_l = 1e-12 * std::max(1e-300, lambda.lpNorm<Eigen::Infinity>());
-        std::vector<int> bad;
-        for (Eigen::Index i = 0; i < k; ++i) {
-            if (set[static_cast<size_t>(i)] ? lambda[i] < -tol_l : w[i] < -tol_w) bad.push_back(static_cast<int>(i));
+        primal = std::max(primal, std::max(-slack, 0.0) * inv_norm);
+        const double push = m_mu[i] * m_scale.length_per_multiplier[i];
+        dual = std::max(dual, std::max(-push, 0.0));
+        comp = std::max(comp, std::min(std::abs(push), std::abs(slack) * inv_norm));
+        gap += std::abs(m_mu[i] * slack);
+    }
+    m_native = std::sqrt(pb2);
+    const double error =
+        std::max(std::max(std::max(stat, primal), std::max(dual, comp)) * m_scale.inv_length, gap * m_scale.inv_energy);
+    m_error = std::isfinite(error) ? error : std::numeric_limits<double>::infinity();
+    m_face_error = stat_phi * m_scale.inv_length;
+}
+
+double CoupledRun::reduced_free_gradient_dot()
+{
+    ++m_cnt.projections;
+    for (Eigen::Index i = 0; i < m_m; ++i) m_q[i] = m_c[i] - m_jx[i] + m_alpha_bar * m_jphi[i];
+    if (flag_violated(m_q, false) == 0 || m_ops->projection_multipliers(m_q, m_violated, m_lam, m_cnt) == 0)
+        return m_phi2;
+    double lj = 0.0;
+    for (Eigen::Index i = 0; i < m_m; ++i) lj += m_lam[i] * m_jphi[i];
+    return m_phi2 - lj / m_alpha_bar;
+}
+
+bool CoupledRun::safeguard(double f_before, double& f_now)
+{
+    auto increased = [&](double f) { return f > f_before + 1e-12 * (std::abs(f_before) + std::abs(f)); };
+    long repeats = 0;
+    while (increased(f_now) && repeats < m_st.safeguard_max) {
+        m_x -= m_alpha_bar * m_g;
+        project_x(false);
+        exact_gradient();
+        f_now = objective_from_gradient();
+        ++m_cnt.safeguard_steps;
+        ++repeats;
+        if (m_loop.time_up()) return false;
+    }
+    return true;
+}
+
+bool CoupledRun::expansion(double cg_alpha)
+{
+    const double f_before = m_f_x + m_corr_x;  // F(P(x))
+    if (m_st.expansion == "feasible_step" && m_x_feasible && cg_alpha > 0.0) {
+        // Dostal's half step: the largest feasible step along p first (F decreases on it, the
+        // trial's alpha being the line minimiser), so that the blocking row joins the face; the
+        // fixed step alpha_bar alone moves stiff DOFs by little and adds a row or two per expansion.
+        double step = cg_alpha;
+        for (Eigen::Index i = 0; i < m_m; ++i) {
+            if (m_active[static_cast<size_t>(i)] || !(m_s[i] > 0.0) || !(m_jp[i] > 0.0)) continue;
+            step = std::min(step, std::max(0.0, (m_jx[i] - m_c[i]) / m_jp[i]));
         }
-        if (bad.empty()) {
-            for (Eigen::Index i = 0; i < k; ++i) lambda[i] = std::max(0.0, lambda[i]);
-            return true;
+        if (step > 0.0) {
+            m_x -= step * m_p;
+            m_g -= step * m_Ap;
+            ++m_feasible_half_steps;
         }
-        const long count = static_cast<long>(bad.size());
-        if (count < best) {
-            best = count;
-            chances = 3;
-            for (int i : bad) set[static_cast<size_t>(i)] ^= 1;
-        } else if (chances > 0) {
-            --chances;
-            for (int i : bad) set[static_cast<size_t>(i)] ^= 1;
+    }
+    if (!m_x_feasible) project_x(false);  // y = P(x), g(y) = g + A J'lam
+    const std::vector<char> face_before = m_active;
+    restart();  // the face of P(x) and phi(P(x))
+    double step = m_alpha_bar;
+    const Vec* direction = &m_phi;
+    if (m_st.expansion == "precond") {
+        // The face direction z with its exact step: alpha_bar = 2/||A|| moves the soft DOFs by
+        // almost nothing, so the face grows by a row or two per expansion; this step reaches
+        // the rows the CG chain was heading for (Alg. 3's safeguard still guarantees descent).
+        a_product(m_A, m_z, m_Ap);
+        ++m_cnt.a_products;
+        const double zaz = m_z.dot(m_Ap), zg = m_z.dot(m_phi);
+        if (zaz > 0.0 && zg > 0.0 && std::isfinite(zaz)) {
+            step = zg / zaz;
+            direction = &m_z;
+        }
+    }
+    m_x -= step * *direction;
+    project_x(false);
+    exact_gradient();
+    double f_now = objective_from_gradient();
+    ++m_cnt.expansion_steps;
+    const bool ok = safeguard(f_before, f_now);
+    restart();
+    if (m_active == face_before) ++m_chain.expansions_same_face;
+    return ok;
+}
+
+bool CoupledRun::proportioning()
+{
+    const double f_before = m_f_x;
+    a_product(m_A, m_beta, m_Ap);
+    ++m_cnt.a_products;
+    const double dad = m_beta.dot(m_Ap);
+    if (!(dad > 0.0) || !std::isfinite(dad)) return false;
+    const double alpha_p = m_g.dot(m_beta) / dad;
+    m_x -= alpha_p * m_beta;
+    m_g -= alpha_p * m_Ap;
+    project_x(false);  // -beta may leave the set when rows are coupled (Sec. 4.4)
+    double f_now = objective_from_gradient();
+    ++m_cnt.proportioning_steps;
+    const bool ok = safeguard(f_before, f_now);
+    restart();
+    return ok;
+}
+
+SolverResult CoupledRun::run()
+{
+    const CommonSettings& common = m_st.common;
+    SolverResult result;
+    result.x = m_qp.x0;
+    result.lambda = Vec::Zero(m_m);
+    m_jacobi = m_st.precond == "jacobi";
+    m_project_trials = m_st.trial == "project";
+    m_dinv = Vec::Ones(m_n);
+    if (m_jacobi) {
+        const Vec diag = m_A.diagonal();
+        if (!(diag.minCoeff() > 0.0)) {
+            result.status = SolveStatus::INVALID_INPUT;
+            result.message = "mprgp-coupled: precond=jacobi needs a positive diagonal of A";
+            return m_loop.finish(result, result.status);
+        }
+        m_dinv = diag.cwiseInverse();
+    }
+    CoupledOperatorOptions opt;
+    opt.global = m_st.operators == "global";
+    opt.jacobi = m_jacobi;
+    opt.dense_max_rows = m_st.dense_max_rows;
+    opt.lcp_max_pivots = m_st.lcp_max_pivots;
+    opt.pgs_max_sweeps = m_st.pgs_max_sweeps;
+    m_ops = std::make_unique<CoupledFaceOperators>(m_J, m_dinv, opt);
+    m_s = m_ops->row_norm2();
+    for (Eigen::Index i = 0; i < m_m; ++i)
+        if (!(m_s[i] > 0.0) && m_c[i] > active_tolerance(m_c[i])) {
+            result.status = SolveStatus::INFEASIBLE;
+            result.message = "mprgp-coupled: row " + std::to_string(i) + " is zero but c > 0: empty feasible set";
+            return m_loop.finish(result, result.status);
+        }
+    Vec eigenvector;
+    const bool warm = m_ctx.eigenvector && m_ctx.eigenvector->size() == m_n;
+    if (warm) eigenvector = *m_ctx.eigenvector;
+    const PowerResult power =
+        power_method(m_A, eigenvector, PowerRule::POWER, m_st.power_max, common.tol, warm, common.seed);
+    if (m_ctx.eigenvector) *m_ctx.eigenvector = eigenvector;
+    m_cnt.power_products = power.products;
+    m_cnt.a_products += power.products;
+    m_alpha_bar = power.estimate > 0.0 ? 2.0 / (1.01 * power.estimate) : 1.0;
+    m_scale = accuracy_scale(m_qp);
+    m_cnt.a_products += m_scale.a_products;
+    if (!m_loop.end_setup()) return m_loop.finish(result, SolveStatus::TIME_LIMIT, "", m_loop.time_limit_message());
+
+    for (Vec* v : {&m_g, &m_phi, &m_z, &m_p, &m_Ap, &m_beta, &m_tmp, &m_x_ref, &m_g_ref}) v->setZero(m_n);
+    m_d = Vec::Zero(m_n);
+    for (Vec* v : {&m_jx, &m_jg, &m_jp, &m_jphi, &m_jdg, &m_q, &m_nu, &m_eta, &m_mu, &m_lam}) v->setZero(m_m);
+    m_active.assign(static_cast<size_t>(m_m), 0);
+    m_violated.assign(static_cast<size_t>(m_m), 0);
+    m_mark.assign(static_cast<size_t>(m_n), 0);
+    m_touched.reserve(static_cast<size_t>(m_J.nonZeros()));
+
+    // Translation invariance: positions enter only as differences from x_ref = P(x0), whose
+    // gradient g_ref = A x_ref - b is formed once; F(v) - F(x_ref) and g(v) then round relative
+    // to |A||v - x_ref|, not |A||v| (a scene 100 m from the origin gives the same decisions).
+    m_x = m_qp.x0;
+    project_x(true);
+    m_x_ref = m_x;
+    a_product(m_A, m_x, m_g_ref);
+    ++m_cnt.a_products;
+    m_g_ref -= m_qp.b;
+    m_g = m_g_ref;
+    restart();
+
+    const bool native = common.stop == StopRule::NATIVE;
+    const double gamma2 = m_st.gamma * m_st.gamma;
+    SolveStatus status = SolveStatus::MAX_ITERATIONS;
+    std::string why = "iteration cap " + std::to_string(common.max_iterations) + " reached";
+    StepKind last = StepKind::START;
+    auto criterion = [&]() { return m_x_feasible && (native ? m_native <= common.tol : m_error <= common.tol); };
+    while (true) {
+        evaluate();
+        bool converged = criterion();
+        if (converged) {
+            // Confirm at the exact gradient: the recurrence g -= alpha Ap drifts, and on
+            // ill-conditioned problems the drift alone can fake convergence (stress case tiny-h2K).
+            exact_gradient();
+            restart();
+            evaluate();
+            converged = criterion();
+        }
+        IterationInfo info;
+        info.iteration = m_cnt.iterations;
+        info.step = last;
+        info.x = &m_x;
+        info.lambda = &m_mu;
+        info.native_residual = m_native;
+        info.active_set_size = static_cast<long>(std::count(m_active.begin(), m_active.end(), 1));
+        info.counters = &m_cnt;
+        if (!m_loop.notify(info)) {
+            status = SolveStatus::STOPPED_BY_MONITOR;
+            why = "the monitor asked to stop";
+            break;
+        }
+        status = m_loop.exit_status(std::isfinite(m_native), converged, m_cnt.iterations);
+        if (status != SolveStatus::NOT_RUN) {
+            if (status == SolveStatus::DIVERGED) why = "non-finite gradient";
+            if (status == SolveStatus::TIME_LIMIT) why = m_loop.time_limit_reason();
+            if (status == SolveStatus::MAX_ITERATIONS)
+                why = "iteration cap " + std::to_string(common.max_iterations) + " reached";
+            break;
+        }
+        ++m_cnt.iterations;
+        // An infeasible chain iterate whose face problem is solved cannot improve along the face.
+        const bool face_done = !m_x_feasible && (native ? std::sqrt(m_phi2) <= common.tol : m_face_error <= common.tol);
+        const bool proportional = !face_done && m_beta2 <= gamma2 * reduced_free_gradient_dot();
+        bool do_expansion = false;
+        if (proportional) {
+            // --- CG trial step (Alg. 2), F(P(y)) - F(P(x)) in difference form ---
+            a_product(m_A, m_p, m_Ap);
+            ++m_cnt.a_products;
+            const double pap = m_p.dot(m_Ap);
+            if (!(pap > 0.0) || !std::isfinite(pap)) {
+                status = pap == 0.0 ? SolveStatus::STALLED : SolveStatus::DIVERGED;
+                why = "p'Ap <= 0";
+                break;
+            }
+            const double alpha = m_z.dot(m_phi) / pap;  // z'g = z'phi (z in null(J_A)), without cancellation
+            m_cg_alpha = alpha;
+            const double pg = m_p.dot(m_phi);
+            const double df = -alpha * pg + 0.5 * alpha * alpha * pap;  // F(x - alpha p) - F(x)
+            rows_times(m_p, m_jp);
+            for (Eigen::Index i = 0; i < m_m; ++i) m_q[i] = m_c[i] - m_jx[i] + alpha * m_jp[i];
+            ++m_cnt.projections;
+            const long violated_rows = flag_violated(m_q, false);
+            bool moved = violated_rows > 0;
+            if (!moved && m_last_drift > 0) ++m_chain.drift_only_trials;
+            double corr_y = 0.0;
+            if (moved) moved = m_ops->projection_multipliers(m_q, m_violated, m_lam, m_cnt) > 0;
+            if (moved) {
+                // F(y + d) - F(y) = d'(g - alpha Ap) + 1/2 d'Ad, d = J' lam sparse.
+                build_d(m_lam);
+                double dg = 0.0;
+                for (int j : m_touched) dg += m_d[j] * (m_g[j] - alpha * m_Ap[j]);
+                corr_y = dg + 0.5 * d_a_d();  // d is kept for the projected restart below
+            }
+            const double delta = df + corr_y - m_corr_x;
+            const bool accept = moved ? delta < 0.0 : delta <= 0.0;
+            if (accept && moved && m_project_trials) {
+                // trial=project: x = P(y) (feasible, F decreased) and the chain restarts on the face of
+                // P(y), which holds every row P moved at once; g(P(y)) = g(y) + A d, sparse.
+                m_x -= alpha * m_p;
+                m_g -= alpha * m_Ap;
+                for (int j : m_touched) m_x[j] += m_d[j];
+                add_a_d(m_g);
+                clear_d();
+                restart();
+                ++m_chain.accepted_infeasible_trials;
+                m_chain.violated_rows_accepted += violated_rows;
+                ++m_projected_restarts;
+                ++m_cnt.cg_steps;
+                last = StepKind::CG;
+                continue;
+            }
+            clear_d();
+            if (accept) {
+                m_x -= alpha * m_p;
+                m_g -= alpha * m_Ap;
+                face_gradient(true);
+                const double beta_cg = m_z.dot(m_Ap) / pap;
+                m_p = m_z - beta_cg * m_p;
+                m_f_x += df;
+                m_corr_x = corr_y;
+                m_x_feasible = !moved;
+                if (moved) {
+                    ++m_chain.accepted_infeasible_trials;
+                    m_chain.violated_rows_accepted += violated_rows;
+                }
+                ++m_cnt.cg_steps;
+                last = StepKind::CG;
+                continue;
+            }
+            ++(moved ? m_chain.rejected_infeasible_trials : m_chain.rejected_feasible_trials);
+            if (moved) {
+                m_chain.violated_rows_rejected += violated_rows;
+                m_chain.rejected_gain -= df;
+                m_chain.rejected_cost += corr_y;
+            }
+            do_expansion = true;
+        } else if (!m_x_feasible) {
+            ++(face_done ? m_chain.face_done_expansions : m_chain.infeasible_not_proportional);
+            do_expansion = true;
+        }
+        bool ok = true;
+        if (do_expansion) {
+            ok = expansion(proportional ? m_cg_alpha : 0.0);
+            last = StepKind::EXPANSION;
         } else {
-            set[static_cast<size_t>(bad.back())] ^= 1;  // Murty: finite for P-matrices
+            if (!proportioning()) {
+                status = SolveStatus::STALLED;
+                why = "beta'A beta <= 0";
+                break;
+            }
+            last = StepKind::PROPORTIONING;
+        }
+        if (!ok) {
+            status = SolveStatus::TIME_LIMIT;
+            why = "time limit reached in a safeguard loop";
+            break;
         }
     }
-    // Projected Gauss-Seidel fallback.
-    ++pgs_fallbacks;
-    lambda = lambda.cwiseMax(0.0);
-    Vec diag = M.diagonal();
-    for (long sweep = 0; sweep < max_sweeps; ++sweep) {
-        double change = 0.0;
-        for (Eigen::Index i = 0; i < k; ++i) {
-            if (!(diag[i] > 0.0)) continue;
-            double mi = 0.0;
-            for (SpMatCol::InnerIterator it(M, i); it; ++it) mi += it.value() * lambda[it.row()];  // symmetric
-            const double next = std::max(0.0, lambda[i] - (mi - q[i]) / diag[i]);
-            change = std::max(change, std::abs(next - lambda[i]));
-            lambda[i] = next;
-        }
-        ++cnt.pgs_sweeps;
-        ++cnt.lcp_iterations;
-        cnt.work_flops += sparse_product_flops(static_cast<double>(M.nonZeros()));
-        if (change <= 1e-14 * std::max(1.0, lambda.lpNorm<Eigen::Infinity>())) break;
+    // The returned point: P(x) with rows feasible exactly (no face tolerance), at an exact gradient.
+    if (project_x(true) || status != SolveStatus::CONVERGED) {
+        exact_gradient();
+        restart();
+        evaluate();
     }
-    const Vec w = M * lambda - q;
-    for (Eigen::Index i = 0; i < k; ++i) set[static_cast<size_t>(i)] = lambda[i] > 0.0;
-    return w.minCoeff() >= -1e-8 * std::max(1.0, q.lpNorm<Eigen::Infinity>());
+    if (status == SolveStatus::CONVERGED && !criterion()) {
+        status = SolveStatus::STALLED;
+        why = "the criterion held before the final projection but not after it";
+    }
+    result.x = m_x;
+    result.lambda = m_mu;
+    result.counters = m_cnt;
+    result.native_residual = m_native;
+    result.info = {{"alpha_bar", m_alpha_bar},
+                   {"power", {{"products", power.products}, {"estimate", power.estimate}, {"warm_start", power.warm}}},
+                   {"precond", m_st.precond},
+                   {"components", m_ops->stats()},
+                   {"chain", m_chain.to_json()},
+                   {"feasible_half_steps", m_feasible_half_steps},
+                   {"projected_restarts", m_projected_restarts},
+                   {"lcp_failures", m_ops->lcp_failures()},
+                   {"safeguard_firings", m_cnt.safeguard_steps},
+                   {"dependent_rows", "handled by a shift 1e-12 of the unit-diagonal-scaled Gram matrices"}};
+    if (status == SolveStatus::CONVERGED) {
+        result.message =
+            "converged: " +
+            std::string(native ? "||phi+beta||_2 = " + fmt(m_native) : "accuracy error = " + fmt(m_error)) +
+            " <= tol; safeguard firings " + std::to_string(m_cnt.safeguard_steps);
+    } else {
+        result.message = "not converged: " + why + " (accuracy error " + fmt(m_error) + ")";
+    }
+    if (m_ops->lcp_failures() > 0)
+        result.message += "; " + std::to_string(m_ops->lcp_failures()) + " LCP solves missed their tolerance";
+    return m_loop.finish(result, status, status == SolveStatus::CONVERGED ? (native ? "native" : "kkt") : "");
 }
 
 }  // namespace
 
 SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& context)
 {
-    const MprgpCoupledSettings& st = m_settings;
-    const CommonSettings& common = st.common;
-    const SpMat& A = qp.A;
-    const SpMat& J = qp.J;
-    const Eigen::Index n = qp.n(), m = qp.m();
-    SolverResult result;
-    Counters cnt;
-    SolveLoop loop("mprgp-coupled", qp, common, context);
-    result.x = qp.x0;
-    result.lambda = Vec::Zero(m);
-    Vec dinv = Vec::Ones(n);
-    if (st.precond == "jacobi") {
-        const Vec diag = A.diagonal();
-        if (!(diag.minCoeff() > 0.0)) {
-            result.status = SolveStatus::INVALID_INPUT;
-            result.message = "mprgp-coupled: precond=jacobi needs a positive diagonal of A";
-            return loop.finish(result, result.status);
-        }
-        dinv = diag.cwiseInverse();
-    }
-    const SpMatCol Jt = SpMatCol(J.transpose());
-    const SpMatCol gram = SpMatCol(J * J.transpose());                        // J J'
-    const SpMatCol gram_d = SpMatCol(J * dinv.asDiagonal() * J.transpose());  // J D^-1 J'
-    for (Eigen::Index i = 0; i < m; ++i)
-        if (!(gram.coeff(i, i) > 0.0) && qp.c[i] > active_tolerance(qp.c[i])) {
-            result.status = SolveStatus::INFEASIBLE;
-            result.message = "mprgp-coupled: row " + std::to_string(i) + " is zero but c > 0: empty feasible set";
-            return loop.finish(result, result.status);
-        }
-    Vec eigenvector;
-    const bool warm = context.eigenvector && context.eigenvector->size() == n;
-    if (warm) eigenvector = *context.eigenvector;
-    const PowerResult power =
-        power_method(A, eigenvector, PowerRule::POWER, st.power_max, common.tol, warm, common.seed);
-    if (context.eigenvector) *context.eigenvector = eigenvector;
-    cnt.power_products = power.products;
-    cnt.a_products += power.products;
-    const double alpha_bar = power.estimate > 0.0 ? 2.0 / (1.01 * power.estimate) : 1.0;
-    const AccuracyScale scale = accuracy_scale(qp);
-    cnt.a_products += scale.a_products;
-    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT, "", loop.time_limit_message());
-
-    long pgs_fallbacks = 0, lcp_failures = 0, face_factorizations = 0;
-    std::vector<char> proj_set;
-    // P(v): the projection LCP (eq. 20) over all rows, warm-started.
-    auto project = [&](Vec& v) -> bool {
-        ++cnt.projections;
-        const Vec q = qp.c - J * v;
-        if (m == 0 || q.maxCoeff() <= 0.0) return false;
-        Vec lambda;
-        if (!solve_lcp(gram, q, proj_set, lambda, cnt, st.lcp_max_pivots, st.pgs_max_sweeps, pgs_fallbacks))
-            ++lcp_failures;
-        v += Jt * lambda;
-        return true;
-    };
-    // Translation invariance: positions enter only as differences from a reference point
-    // x_ref = P(x0), whose gradient g_ref = A x_ref - b is formed once. F(v) - F(x_ref) and
-    // g(v) = A (v - x_ref) + g_ref then carry rounding errors relative to |A||v - x_ref|,
-    // not to |A||v|: a problem translated by 100 m gives the same F decreases, where
-    // 1/2 v'Av - b'v would bury them under rounding of its huge absolute value (the
-    // monotonicity tests then reject every CG step and the chain degenerates into expansions).
-    Vec x_ref, g_ref;
-    auto F = [&](const Vec& v) {
-        ++cnt.a_products;
-        const Vec u = v - x_ref;
-        return 0.5 * u.dot(a_product(A, u)) + g_ref.dot(u);
-    };
-    auto gradient = [&](const Vec& v) {
-        ++cnt.a_products;
-        return Vec(a_product(A, Vec(v - x_ref)) + g_ref);
-    };
-
-    // Face data, refactored only when the active set changes.
-    std::vector<int> face;
-    std::vector<char> active(static_cast<size_t>(m), 0), beta_set;
-    Factor face_factor, face_factor_d;
-    SpMat JA;
-    auto set_face = [&](const Vec& v) {
-        const Vec slack = J * v - qp.c;
-        std::vector<int> next;
-        for (Eigen::Index i = 0; i < m; ++i)
-            if (std::abs(slack[i]) <= active_tolerance(qp.c[i]) && gram.coeff(i, i) > 0.0)
-                next.push_back(static_cast<int>(i));
-        if (next == face && (face.empty() || face_factor.ok)) return;
-        if (next != face) ++cnt.pivots;  // an active-set change
-        face = next;
-        std::fill(active.begin(), active.end(), 0);
-        for (int i : face) active[static_cast<size_t>(i)] = 1;
-        std::vector<Triplet> t;
-        for (size_t r = 0; r < face.size(); ++r)
-            for (SpMat::InnerIterator it(J, face[r]); it; ++it)
-                t.emplace_back(static_cast<int>(r), static_cast<int>(it.col()), it.value());
-        JA.resize(static_cast<Eigen::Index>(face.size()), n);
-        JA.setFromTriplets(t.begin(), t.end());
-        beta_set.assign(face.size(), 0);
-        if (!face.empty()) {
-            face_factor.compute(submatrix(gram, face), cnt);
-            if (st.precond == "jacobi") face_factor_d.compute(submatrix(gram_d, face), cnt);
-            ++face_factorizations;
-        }
-    };
-    // phi = g - J_A' (J_A J_A')^-1 J_A g  (eq. 15-16)
-    auto free_grad = [&](const Vec& g) -> Vec {
-        if (face.empty()) return g;
-        return g - JA.transpose() * face_factor.solve(JA * g, cnt);
-    };
-    // z = D^-1 g - D^-1 J_A' (J_A D^-1 J_A')^-1 J_A D^-1 g: J_A z = 0.
-    auto precondition = [&](const Vec& g, const Vec& phi) -> Vec {
-        ++cnt.precond_applications;
-        if (st.precond != "jacobi") return phi;
-        const Vec dg = dinv.cwiseProduct(g);
-        if (face.empty()) return dg;
-        return dg - dinv.cwiseProduct(Vec(JA.transpose() * face_factor_d.solve(JA * dg, cnt)));
-    };
-    // beta = g_b - J_A' mu, 0 <= mu perp J_A J_A' mu - J_A g_b >= 0 (eq. 17-18); mu = multipliers.
-    auto chopped = [&](const Vec& g, const Vec& phi, Vec& mu) -> Vec {
-        const Vec gb = g - phi;
-        if (face.empty()) {
-            mu.resize(0);
-            return Vec::Zero(n);
-        }
-        const SpMatCol MA = submatrix(gram, face);
-        if (!solve_lcp(MA, Vec(JA * gb), beta_set, mu, cnt, st.lcp_max_pivots, st.pgs_max_sweeps, pgs_fallbacks))
-            ++lcp_failures;
-        return gb - JA.transpose() * mu;
-    };
-    auto safeguard = [&](Vec& x, Vec& g, double f_before, double& f_now) {
-        long repeats = 0;
-        while (f_now > f_before + 1e-12 * (std::abs(f_before) + std::abs(f_now)) && repeats < st.safeguard_max) {
-            x -= alpha_bar * g;
-            project(x);
-            g = gradient(x);
-            f_now = F(x);
-            ++cnt.safeguard_steps;
-            ++repeats;
-            if (loop.time_up()) break;
-        }
-    };
-
-    Vec x = qp.x0;
-    project(x);
-    x_ref = x;
-    g_ref = a_product(A, x) - qp.b;
-    ++cnt.a_products;
-    Vec g = g_ref;
-    set_face(x);
-    Vec phi = free_grad(g), z = precondition(g, phi), p = z, mu, beta, lambda = Vec::Zero(m);
-    double f_proj_x = F(x);
-    bool x_feasible = true;
-    const bool native = common.stop == StopRule::NATIVE;
-    SolveStatus status = SolveStatus::MAX_ITERATIONS;
-    std::string why = "iteration cap " + std::to_string(common.max_iterations) + " reached";
-    StepKind last = StepKind::START;
-    double native_residual = 0.0, error = 0.0;
-    auto restart = [&]() {
-        set_face(x);
-        phi = free_grad(g);
-        z = precondition(g, phi);
-        p = z;
-        f_proj_x = F(x);
-        x_feasible = true;
-    };
-    while (true) {
-        beta = chopped(g, phi, mu);
-        lambda.setZero();
-        for (size_t r = 0; r < face.size(); ++r) lambda[face[r]] = mu[static_cast<Eigen::Index>(r)];
-        native_residual = (phi + beta).norm();
-        error = accuracy_from_gradient(qp, scale, x, g, lambda).max();
-        bool converged = x_feasible && (native ? native_residual <= common.tol : error <= common.tol);
-        IterationInfo info;
-        info.iteration = cnt.iterations;
-        info.step = last;
-        info.x = &x;
-        info.lambda = &lambda;
-        info.native_residual = native_residual;
-        info.active_set_size = static_cast<long>(face.size());
-        info.counters = &cnt;
-        if (!loop.notify(info)) {
-            status = SolveStatus::STOPPED_BY_MONITOR;
-            why = "the monitor asked to stop";
-            break;
-        }
-        // The exit checks in the loop's order (a non-finite residual never counts as converged).
-        status = loop.exit_status(std::isfinite(native_residual), converged, cnt.iterations);
-        if (status != SolveStatus::NOT_RUN) {
-            if (status == SolveStatus::DIVERGED) why = "non-finite gradient";
-            if (status == SolveStatus::TIME_LIMIT) why = loop.time_limit_reason();
-            break;
-        }
-        ++cnt.iterations;
-        // phitilde'phi through one projection (eq. 13).
-        Vec trial = x - alpha_bar * phi;
-        project(trial);
-        const double phitilde_phi = (x - trial).dot(phi) / alpha_bar;
-        // An infeasible chain iterate whose face problem is solved cannot improve along the face.
-        // (The face residual phi measured like the stationarity part of the accuracy error.)
-        const bool face_done =
-            !x_feasible &&
-            (native ? phi.norm() <= common.tol
-                    : phi.cwiseProduct(scale.inv_diag).lpNorm<Eigen::Infinity>() * scale.inv_length <= common.tol);
-        const bool proportional = !face_done && beta.squaredNorm() <= st.gamma * st.gamma * phitilde_phi;
-        bool do_expansion = false;
-        if (proportional) {
-            const Vec Ap = a_product(A, p);
-            ++cnt.a_products;
-            const double pap = p.dot(Ap);
-            if (!(pap > 0.0)) {
-                status = pap == 0.0 ? SolveStatus::STALLED : SolveStatus::DIVERGED;
-                why = "p'Ap <= 0";
-                break;
-            }
-            const double alpha = z.dot(phi) / pap;  // z'g = z'phi (z in null(J_A)), without cancellation
-            Vec y = x - alpha * p;
-            Vec py = y;
-            const bool moved = project(py);
-            const double f_proj_y = F(py);
-            if (moved ? f_proj_y < f_proj_x : f_proj_y <= f_proj_x) {
-                x = y;
-                g -= alpha * Ap;
-                phi = free_grad(g);
-                z = precondition(g, phi);
-                p = z - (z.dot(Ap) / pap) * p;
-                f_proj_x = f_proj_y;
-                x_feasible = !moved;
-                ++cnt.cg_steps;
-                last = StepKind::CG;
-                continue;
-            }
-            do_expansion = true;
-        } else if (!x_feasible) {
-            do_expansion = true;
-        }
-        double f_before = f_proj_x, f_now = 0.0;
-        if (do_expansion) {
-            if (project(x)) g = gradient(x);  // y = P(x)
-            set_face(x);
-            x -= alpha_bar * free_grad(g);
-            project(x);
-            g = gradient(x);
-            f_now = F(x);
-            ++cnt.expansion_steps;
-            last = StepKind::EXPANSION;
-        } else {
-            const Vec Ad = a_product(A, beta);
-            ++cnt.a_products;
-            const double dad = beta.dot(Ad);
-            if (!(dad > 0.0)) {
-                status = SolveStatus::STALLED;
-                why = "beta'A beta <= 0";
-                break;
-            }
-            x -= (g.dot(beta) / dad) * beta;
-            project(x);  // -beta may leave the set when rows are coupled (Sec. 4.4)
-            g = gradient(x);
-            f_now = F(x);
-            ++cnt.proportioning_steps;
-            last = StepKind::PROPORTIONING;
-        }
-        safeguard(x, g, f_before, f_now);
-        restart();
-    }
-    // Confirm at the exact gradient: the recurrence g -= alpha Ap drifts, and on ill-conditioned
-    // problems the drift alone can fake convergence (stress case tiny-h2K). One more A-product.
-    project(x);
-    g = gradient(x);
-    restart();
-    beta = chopped(g, phi, mu);
-    lambda.setZero();
-    for (size_t r = 0; r < face.size(); ++r) lambda[face[r]] = mu[static_cast<Eigen::Index>(r)];
-    native_residual = (phi + beta).norm();
-    error = accuracy_from_gradient(qp, scale, x, g, lambda).max();
-    if (status == SolveStatus::CONVERGED && !(native ? native_residual <= common.tol : error <= common.tol)) {
-        status = SolveStatus::STALLED;
-        why = "the criterion held on the updated gradient but not at the exact gradient (rounding drift)";
-    }
-    result.x = x;
-    result.lambda = lambda;
-    result.counters = cnt;
-    result.native_residual = native_residual;
-    result.info = {{"alpha_bar", alpha_bar},
-                   {"power", {{"products", power.products}, {"estimate", power.estimate}, {"warm_start", power.warm}}},
-                   {"precond", st.precond},
-                   {"face_factorizations", face_factorizations},
-                   {"pgs_fallbacks", pgs_fallbacks},
-                   {"lcp_failures", lcp_failures},
-                   {"safeguard_firings", cnt.safeguard_steps},
-                   {"dependent_rows", "handled by a shift 1e-12 of the unit-diagonal-scaled J_A J_A' and J J'"}};
-    if (status == SolveStatus::CONVERGED) {
-        result.message =
-            "converged: " +
-            std::string(native ? "||phi+beta||_2 = " + fmt(native_residual) : "accuracy error = " + fmt(error)) +
-            " <= tol; safeguard firings " + std::to_string(cnt.safeguard_steps);
-    } else {
-        result.message = "not converged: " + why + " (accuracy error " + fmt(error) + ")";
-    }
-    if (lcp_failures > 0) result.message += "; " + std::to_string(lcp_failures) + " LCP solves missed their tolerance";
-    return loop.finish(result, status, status == SolveStatus::CONVERGED ? (native ? "native" : "kkt") : "");
+    CoupledRun run(qp, m_settings, context);
+    return run.run();
 }
 
 }  // namespace cb

@@ -1,10 +1,12 @@
 #pragma once
 /// `mprgp-coupled`: the extended MPRGP with a general J (no decoupling; ALGORITHMS.md §4).
-/// The free gradient, chopped gradient and projection are small subproblems on CHOLMOD:
-/// phi from (J_A J_A') mu = J_A g (factor reused while the face is unchanged), beta and P(x)
-/// from LCPs solved by block principal pivoting (warm-started) with a projected Gauss-Seidel
-/// fallback. Dependent rows (duplicates, parallel rows) are handled by a shift 1e-12 of the
-/// Gram matrices scaled to unit diagonal (reported in info). Alg. 3's safeguards are on.
+/// The free gradient, chopped gradient and projection are small subproblems, one per component
+/// of J's row graph (solvers/coupled_face_operators.hpp): dense Cholesky factors kept per face,
+/// LCPs by block principal pivoting (warm-started) with a projected Gauss-Seidel fallback;
+/// `operators=global` keeps the single CHOLMOD problem over all rows. Dependent rows
+/// (duplicates, parallel rows) are handled by a shift 1e-12 of the Gram matrices scaled to unit
+/// diagonal. F(P(y)) is formed in difference form (one A-product per CG step, as `mprgp`).
+/// Alg. 3's safeguards are on.
 /// Ref: Li et al., CGF 2015, eq. (15)-(20), Alg. 3, Appendix A.
 #include "solvers/registry.hpp"
 #include "solvers/settings.hpp"
@@ -17,12 +19,16 @@ namespace cb {
 
 struct MprgpCoupledSettings {
     CommonSettings common;
-    double gamma = 1.0;              ///< proportioning constant Gamma (> 0)
-    std::string precond = "jacobi";  ///< none (the authors' Fig. 6 setting) | jacobi (keeps J_A z = 0)
-    long power_max = 100;            ///< max power-method products
-    long lcp_max_pivots = 200;       ///< block-principal-pivoting iterations before the PGS fallback
-    long pgs_max_sweeps = 10000;     ///< PGS fallback sweeps
-    long safeguard_max = 100;        ///< max repeats of Alg. 3's safeguard after one step
+    double gamma = 1.0;                    ///< proportioning constant Gamma (> 0)
+    std::string precond = "jacobi";        ///< none (the authors' Fig. 6 setting) | jacobi (keeps J_A z = 0)
+    long power_max = 100;                  ///< max power-method products
+    long lcp_max_pivots = 200;             ///< block-principal-pivoting iterations before the PGS fallback
+    long pgs_max_sweeps = 10000;           ///< PGS fallback sweeps
+    long safeguard_max = 100;              ///< max repeats of Alg. 3's safeguard after one step
+    std::string operators = "components";  ///< components (per row-graph component) | global (one CHOLMOD problem)
+    long dense_max_rows = 128;  ///< largest component with dense factors (larger: CHOLMOD; measured crossover 100-200)
+    std::string trial = "chain";      ///< chain (Alg. 2) | project (x = P(y), restart on its face)
+    std::string expansion = "paper";  ///< paper (x = P(x - alpha_bar phi)) | feasible_step (half step first)
 
     static MprgpCoupledSettings from_json(const nlohmann::json& settings);
     nlohmann::json to_json() const;
