@@ -63,7 +63,7 @@ int cmd_cluster(const Args& args)
     o.contactbench = this_binary();
     o.suite = fs::absolute(suite.path).lexically_normal().string();
     o.suite_name = suite.name;
-    o.out = fs::absolute(cl.value("--out")).lexically_normal().string();
+    o.out = fs::absolute(cl.path("--out")).lexically_normal().string();
     while (o.out.size() > 1 && o.out.back() == '/') o.out.pop_back();
     o.shards = cl.integer("--shards", 1);
     o.first_index = cl.integer("--first-index", 0);

@@ -190,7 +190,7 @@ int cmd_run(const Args& args)
     Suite suite = load_suite(cl.positional()[0]);
     for (const std::string& notice : drop_unbuilt_optional_solvers(suite, builtin_registry().names()))
         std::cerr << "run: " << notice << "\n";
-    std::string out = cl.value("--out", "results/" + suite.name);
+    std::string out = cl.path("--out", "results/" + suite.name);
     Shard shard = cl.has("--shard") ? parse_shard(cl.value("--shard")) : Shard{};
     if (!cl.has("--shard")) {
         // A Slurm array task: its shard from the array variables, its own folder inside --out.

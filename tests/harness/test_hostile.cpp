@@ -16,6 +16,7 @@
 #include <fstream>
 #include <sys/file.h>
 #include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -446,6 +447,101 @@ TEST(Hostile, SpecialFilesAreRefusedNamingTheFile)
     EXPECT_EQ(unwritable.status, 2);
     EXPECT_EQ(unwritable.err, "contactbench run: error: " + (dir / "a.qpsnap" / "out").string() +
                                   ": --out: cannot create the results folder: Not a directory\n");
+}
+
+// Issue 27: writing through a temporary name and a rename replaced a FIFO or a device given as
+// --json or a convert target by a regular file (as root, /dev/null too), exit 0.
+TEST(Hostile, SpecialOutputTargetsAreNeverReplaced)
+{
+    const fs::path dir = fresh_dir("special_out");
+    write_snapshot(dir / "a.qpsnap", 1);
+    const std::string solve = "solve " + q(dir / "a.qpsnap") + " --solver mprgp";
+    auto is_fifo = [](const fs::path& p) {
+        struct stat st {};
+        return ::lstat(p.c_str(), &st) == 0 && S_ISFIFO(st.st_mode);
+    };
+    // A FIFO without a reader: exit 2, the FIFO stays; with a reader, the record flows through it.
+    const fs::path fifo = dir / "record.json";
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
+    const Output lonely = run(solve + " --json " + q(fifo));
+    EXPECT_EQ(lonely.status, 2);
+    EXPECT_NE(lonely.err.find("contactbench solve: error: " + fifo.string() +
+                              ": is a FIFO with no reader: nothing written\n"),
+              std::string::npos)
+        << lonely.err;
+    EXPECT_TRUE(is_fifo(fifo));
+    const fs::path got = dir / "got.json";
+    const Output piped = run(solve + " --json " + q(fifo), "{ cat " + q(fifo) + " >" + q(got) + " & }");
+    EXPECT_EQ(piped.status, 0) << piped.err;
+    nlohmann::json record;
+    for (int tries = 0; tries < 100 && !record.is_object(); ++tries) {  // cat finishes after the writer closes
+        record = nlohmann::json::parse(slurp(got), nullptr, false);
+        if (!record.is_object()) ::usleep(50000);
+    }
+    EXPECT_EQ(record.value("status", ""), "converged") << slurp(got);
+    EXPECT_TRUE(is_fifo(fifo)) << "the FIFO was replaced";
+    // A character device (a twin of /dev/null, made where the test may: root) is written to, not replaced.
+    const fs::path null_twin = dir / "null";
+    if (::mknod(null_twin.c_str(), S_IFCHR | 0666, makedev(1, 3)) == 0) {
+        const Output null_out = run(solve + " --json " + q(null_twin));
+        EXPECT_EQ(null_out.status, 0) << null_out.err;
+        struct stat st {};
+        ASSERT_EQ(::lstat(null_twin.c_str(), &st), 0);
+        EXPECT_TRUE(S_ISCHR(st.st_mode)) << "the device was replaced by a regular file";
+    }
+    // A folder as --json; FIFOs as convert targets (a .qpsnap streams, an FCLIB file needs to seek).
+    const Output folder = run(solve + " --json " + q(dir));
+    EXPECT_EQ(folder.status, 2);
+    EXPECT_NE(folder.err.find(dir.string() + ": is a folder: not replaced (name a file)\n"), std::string::npos)
+        << folder.err;
+    const fs::path snap_fifo = dir / "out.qpsnap", hdf5_fifo = dir / "out.hdf5";
+    ASSERT_EQ(::mkfifo(snap_fifo.c_str(), 0644), 0);
+    ASSERT_EQ(::mkfifo(hdf5_fifo.c_str(), 0644), 0);
+    const Output snap = run("convert " + q(dir / "a.qpsnap") + " " + q(snap_fifo));
+    EXPECT_EQ(snap.status, 2);
+    EXPECT_EQ(snap.err,
+              "contactbench convert: error: " + snap_fifo.string() + ": is a FIFO with no reader: nothing written\n");
+    const Output hdf5 = run("convert " + q(dir / "a.qpsnap") + " " + q(hdf5_fifo));
+    EXPECT_EQ(hdf5.status, 2);
+    EXPECT_EQ(hdf5.err, "contactbench convert: error: " + hdf5_fifo.string() +
+                            ": is a FIFO: not replaced (this output needs a regular file)\n");
+    EXPECT_TRUE(is_fifo(snap_fifo) && is_fifo(hdf5_fifo));
+    // Unclear before: an empty --json, and --save-solution onto a file (both before the solve).
+    const Output empty = run(solve + " --json ''");
+    EXPECT_EQ(empty.status, 2);
+    EXPECT_EQ(empty.err, "contactbench solve: error: solve: --json: expects a file or folder name, got \"\"\n");
+    const Output onto_file = run(solve + " --save-solution " + q(dir / "a.qpsnap"));
+    EXPECT_EQ(onto_file.status, 2);
+    EXPECT_EQ(onto_file.err, "contactbench solve: error: " + (dir / "a.qpsnap").string() +
+                                 ": --save-solution: exists and is not a folder (x.mtx and lambda.mtx are written "
+                                 "into a folder)\n");
+    EXPECT_EQ(count_matching(dir, ".tmp."), 0u);
+}
+
+// Issue 27: an interrupted convert or merge left PATH.tmp.<pid> that no later run cleaned.
+TEST(Hostile, TemporariesOfAnInterruptedRunAreRemovedByTheNext)
+{
+    const fs::path dir = fresh_dir("stale_tmp");
+    write_snapshot(dir / "a.qpsnap", 1);
+    const pid_t child = ::fork();  // a pid that is surely gone
+    ASSERT_GE(child, 0);
+    if (child == 0) ::_exit(0);
+    ASSERT_EQ(::waitpid(child, nullptr, 0), child);
+    const std::string dead = std::to_string(child);
+    std::ofstream(dir / ("b.qpsnap.tmp." + dead)) << "half a snapshot";
+    std::ofstream(dir / ("b.hdf5.tmp." + dead)) << "half an HDF5 file";
+    fs::create_directories(dir / ("b_mm.tmp." + dead));
+    std::ofstream(dir / ("b_mm.tmp." + dead) / "A.mtx") << "half a folder";
+    std::ofstream(dir / ("other.txt.tmp." + dead)) << "not a target of this run: kept";
+    for (const std::string target : {"b.qpsnap", "b.hdf5", "b_mm"}) {
+        const Output r = run("convert " + q(dir / "a.qpsnap") + " " + q(dir / target));
+        ASSERT_EQ(r.status, 0) << r.err;
+        EXPECT_EQ(r.err, "note: removed " + (dir / (target + ".tmp." + dead)).string() +
+                             ", left by an interrupted earlier run (process " + dead + " is gone)\n");
+        EXPECT_FALSE(fs::exists(dir / (target + ".tmp." + dead)));
+    }
+    EXPECT_TRUE(fs::exists(dir / ("other.txt.tmp." + dead)));
+    EXPECT_EQ(count_matching(dir, ".tmp."), 1u);
 }
 
 TEST(Hostile, DeepJsonIsRefusedNotACrash)
