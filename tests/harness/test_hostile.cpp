@@ -14,6 +14,7 @@
 #include <fcntl.h>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <sys/sysmacros.h>
@@ -310,6 +311,74 @@ TEST(Merge, RefusesIncompleteOrMixedShards)
     const Output ok = run("merge " + q(dir / "m4") + " " + q(s1) + " " + q(s2));
     ASSERT_EQ(ok.status, 0) << ok.err;
     EXPECT_EQ(count_matching(dir / "m4" / "runs", ".json"), 4u);
+}
+
+// Issue 27: a refused merge still wrote run files into OUT; run files edited to another suite or
+// an unknown status ("banana" reached summary.csv) were merged; a shard claiming 3-of-2 was
+// reported only as a missing shard 2/2.
+TEST(Merge, EveryShardIsCheckedWholeBeforeAnythingIsWritten)
+{
+    const fs::path dir = fresh_dir("merge_hostile");
+    write_snapshot(dir / "a.qpsnap", 1);
+    write_snapshot(dir / "b.qpsnap", 2);
+    const fs::path suite = write_suite(dir, "sharded", kTwoSolvers);
+    const fs::path s1 = dir / "s1", s2 = dir / "s2", good = dir / "good";
+    ASSERT_EQ(run("run " + q(suite) + " --out " + q(s1) + " --shard 1/2").status, 0);
+    ASSERT_EQ(run("run " + q(suite) + " --out " + q(s2) + " --shard 2/2").status, 0);
+    ASSERT_EQ(run("merge " + q(good) + " " + q(s1) + " " + q(s2)).status, 0);
+    const std::string good_summary = slurp(good / "summary.csv");
+    const fs::path victim = s2 / "runs" / "a__exact.json";
+    const std::string original = slurp(victim);
+    auto edited = [&](const fs::path& file, const std::function<void(nlohmann::json&)>& edit) {
+        nlohmann::json j = nlohmann::json::parse(slurp(file));
+        edit(j);
+        write_json_atomic(file.string(), j);
+    };
+    // Each refused merge goes to a fresh OUT (never created) and to the good OUT (left as it was).
+    auto refused = [&](const std::string& expected_error, const std::vector<fs::path>& shards, bool prefix = false) {
+        for (const fs::path& out : {dir / "fresh", good}) {
+            std::string args = "merge " + q(out);
+            for (const auto& sh : shards) args += " " + q(sh);
+            const Output r = run(args);
+            EXPECT_EQ(r.status, 2) << r.err;
+            const std::string expected = "contactbench merge: error: " + expected_error + (prefix ? "" : "\n");
+            EXPECT_EQ(prefix ? r.err.substr(0, expected.size()) : r.err, expected);
+            EXPECT_FALSE(fs::exists(dir / "fresh"));
+            EXPECT_EQ(slurp(good / "summary.csv"), good_summary);
+            EXPECT_EQ(slurp(good / "runs" / "a__exact.json"), original);
+            EXPECT_EQ(count_matching(dir, ".tmp."), 0u);
+        }
+    };
+    edited(victim, [](nlohmann::json& j) { j["suite"] = "another"; });
+    refused(victim.string() + ": suite: expected \"sharded\" (the shard's suite), got \"another\"", {s1, s2});
+    edited(victim, [](nlohmann::json& j) {
+        j["suite"] = "sharded";
+        j["status"] = "banana";
+    });
+    refused(victim.string() + ": status: not a known run status: \"banana\"", {s1, s2});
+    std::ofstream(victim, std::ios::trunc) << original.substr(0, original.size() / 2);  // a torn run file
+    refused(victim.string() + ": not valid JSON: ", {s1, s2}, true);
+    std::ofstream(victim, std::ios::trunc) << original;
+    const std::string jobs = slurp(s2 / "jobs.json");
+    edited(s2 / "jobs.json", [](nlohmann::json& j) { j["shard"]["index"] = 3; });
+    refused((s2 / "jobs.json").string() + ": shard: shard 3 of 2: expected 1 <= i <= N <= 100000", {s1, s2});
+    edited(s2 / "jobs.json", [](nlohmann::json& j) {
+        j["shard"]["index"] = 2;
+        j["jobs"].push_back(j["jobs"][0]);
+    });
+    refused((s2 / "jobs.json").string() + ": jobs: " + nlohmann::json::parse(jobs)["jobs"][0].get<std::string>() +
+                " listed twice",
+            {s1, s2});
+    std::ofstream(s2 / "jobs.json", std::ios::trunc) << jobs;
+    refused((s1 / "jobs.json").string() + ": shard: shard 1 of 2 given twice (also " + s1.string() + ")", {s1, s1, s2});
+    edited(s2 / "suite.json", [](nlohmann::json& j) { j["tol"] = 1e-3; });
+    refused((s2 / "suite.json").string() + ": does not match the suite hash " +
+                nlohmann::json::parse(jobs)["suite_hash"].get<std::string>() + " of " + (s2 / "jobs.json").string() +
+                " (edited?)",
+            {s1, s2});
+    write_json_atomic((s2 / "suite.json").string(), nlohmann::json::parse(slurp(s1 / "suite.json")));
+    const Output again = run("merge " + q(good) + " " + q(s1) + " " + q(s2));
+    EXPECT_EQ(again.status, 0) << again.err;
 }
 
 // ---- writes -----------------------------------------------------------------------------------
