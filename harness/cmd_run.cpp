@@ -36,6 +36,7 @@
 #include <optional>
 #include <set>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace cb {
@@ -109,8 +110,14 @@ nlohmann::json failed_record(const SuiteSolver& sv, const nlohmann::json& settin
 void lock_out_dir(const std::string& out)
 {
     const std::string path = (fs::path(out) / ".lock").string();
-    const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    // O_NOFOLLOW: a symlink planted as .lock would make the ftruncate below empty its target.
+    const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC, 0644);
     if (fd < 0) throw_input_error(path, "", std::string("cannot create the lock file: ") + std::strerror(errno));
+    struct stat st {};
+    if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        ::close(fd);
+        throw_input_error(path, "", "not a regular file: not used as the lock");
+    }
     if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
         char holder[32] = {0};
         const ssize_t got = ::pread(fd, holder, sizeof holder - 1, 0);

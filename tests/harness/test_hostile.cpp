@@ -587,6 +587,23 @@ TEST(Hostile, SpecialOutputTargetsAreNeverReplaced)
     EXPECT_EQ(count_matching(dir, ".tmp."), 0u);
 }
 
+// A symlink planted as OUT/.lock made `run` truncate the file it points to (outside OUT).
+TEST(Hostile, PlantedLockLinkIsNotFollowed)
+{
+    const fs::path dir = fresh_dir("lock_link");
+    write_snapshot(dir / "a.qpsnap", 1);
+    write_snapshot(dir / "b.qpsnap", 2);
+    const fs::path suite = write_suite(dir, "locked", {"mprgp"});
+    std::ofstream(dir / "victim.txt") << "precious\n";
+    fs::create_directories(dir / "out");
+    fs::create_symlink(dir / "victim.txt", dir / "out" / ".lock");
+    const Output r = run("run " + q(suite) + " --out " + q(dir / "out"));
+    EXPECT_EQ(r.status, 2);
+    EXPECT_EQ(r.err, "contactbench run: error: " + (dir / "out" / ".lock").string() +
+                         ": cannot create the lock file: Too many levels of symbolic links\n");
+    EXPECT_EQ(slurp(dir / "victim.txt"), "precious\n");
+}
+
 // Issue 27: an interrupted convert or merge left PATH.tmp.<pid> that no later run cleaned.
 TEST(Hostile, TemporariesOfAnInterruptedRunAreRemovedByTheNext)
 {
