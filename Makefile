@@ -45,7 +45,7 @@ help:
 	@echo "make docs-check fail on a cited document or section that is not in the repository"
 	@echo "make tidy       clang-tidy on the C++ files changed against main (TIDY_BASE=main)"
 	@echo "make stress     the stress suite and its stability table in results/stress/"
-	@echo "make fuzz       fuzz the snapshot, suite and scene readers (FUZZ_SECONDS=60 each)"
+	@echo "make fuzz       fuzz the snapshot, suite, scene and FCLIB readers (FUZZ_SECONDS=60 each)"
 
 deps:
 	@missing=""; for p in $(DEB_PACKAGES); do \
@@ -140,7 +140,7 @@ stress: build
 	$(PY) -m plots.stability results/stress
 
 # Each reader on its own corpus: FUZZ_SECONDS per target (FUZZ_TARGETS to pick some).
-FUZZ_TARGETS ?= qpsnap suite scene
+FUZZ_TARGETS ?= qpsnap suite scene fclib
 fuzz: deps
 	cmake -S . -B $(BUILD)-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DCB_FUZZ=ON \
 	  -DCB_BUILD_TESTS=OFF -DCB_BUILD_BENCH=OFF
