@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <csignal>
 #include <cstring>
+#include <ctime>
 #include <fcntl.h>
 #include <filesystem>
 #include <iostream>
@@ -21,6 +22,9 @@ namespace cb {
 namespace fs = std::filesystem;
 
 namespace {
+
+/// A temporary of a gone process untouched for this long is a leftover (see remove_stale_temporaries).
+constexpr long kStaleAfterSeconds = 600;
 
 std::string folder_of(const std::string& path)
 {
@@ -45,7 +49,7 @@ bool process_gone(long pid) { return pid > 0 && pid != ::getpid() && ::kill(pid_
 /// Per folder, the stale temporaries found by its one listing: base name -> entry names.
 using StaleByBase = std::map<std::string, std::set<std::string>>;
 
-const StaleByBase& stale_in(const std::string& folder)
+StaleByBase& stale_in(const std::string& folder)
 {
     static std::map<std::string, StaleByBase> listed;
     auto it = listed.find(folder);
@@ -77,15 +81,27 @@ std::size_t remove_stale_temporaries(const std::string& target)
     static std::mutex mutex;
     const std::lock_guard<std::mutex> lock(mutex);
     const std::string folder = folder_of(target);
-    const StaleByBase& stale = stale_in(folder);
+    StaleByBase& stale = stale_in(folder);
     const auto it = stale.find(fs::path(target).filename().string());
     if (it == stale.end()) return 0;
     std::size_t removed = 0;
     for (const auto& name : it->second) {
         const fs::path entry = fs::path(folder) / name;
+        const std::string pid = name.substr(name.rfind(".tmp.") + 5);
+        struct stat st {};
+        if (::lstat(entry.c_str(), &st) != 0) continue;  // already gone
+        // The pid is only known gone on this machine: a young temporary may be another machine's
+        // write in progress on a shared file system (a cache written by two array tasks). Ours are
+        // written within seconds, so one untouched for kStaleAfterSeconds is left over.
+        if (std::time(nullptr) - st.st_mtime < kStaleAfterSeconds) {
+            std::cerr << "note: kept " << entry.string() << ": process " << pid
+                      << " is gone here, but the file is younger than " << kStaleAfterSeconds / 60
+                      << " minutes (another machine may be writing it); remove it if not\n";
+            continue;
+        }
         std::error_code ec;
         const fs::file_status status = fs::symlink_status(entry, ec);
-        if (ec || !fs::exists(status)) continue;  // already gone (an earlier call)
+        if (ec || !fs::exists(status)) continue;
         // A folder is removed as a whole only when it is a real folder (never through a link).
         if (fs::is_directory(status))
             fs::remove_all(entry, ec);
@@ -93,9 +109,10 @@ std::size_t remove_stale_temporaries(const std::string& target)
             fs::remove(entry, ec);
         if (ec) continue;
         ++removed;
-        std::cerr << "note: removed " << entry.string() << ", left by an interrupted earlier run (process "
-                  << name.substr(name.rfind(".tmp.") + 5) << " is gone)\n";
+        std::cerr << "note: removed " << entry.string() << ", left by an interrupted earlier run (process " << pid
+                  << " is gone)\n";
     }
+    stale.erase(it);  // each is removed or named once per process
     return removed;
 }
 

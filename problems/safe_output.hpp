@@ -11,8 +11,10 @@
 ///    what it points to. SpecialTarget::refuse refuses FIFOs and devices too (for writers that
 ///    need to seek, such as HDF5);
 ///  - the temporary is created fresh (an entry of that name is unlinked first, never followed);
-///  - PATH.tmp.<pid> files left by an interrupted earlier run (that process is gone) are removed,
-///    with a note on stderr naming each, before the new temporary is created.
+///  - PATH.tmp.<pid> files left by an interrupted earlier run (that process is gone, and the file
+///    untouched for 10 minutes) are removed, with a note on stderr naming each, before the new
+///    temporary is created; a younger one is named in a note and kept (on a shared file system
+///    another machine's process of that pid may be writing it).
 /// Errors are InputErrors naming PATH, so the command line exits 2.
 #include <cstddef>
 #include <string>
@@ -58,10 +60,11 @@ private:
 /// Writes `content` to `path` through an AtomicFile; creates missing parent folders.
 void write_file_atomic(const std::string& path, const std::string& content);
 
-/// Removes TARGET.tmp.<pid> entries beside `target` whose process is gone (a file, a link, or a
-/// folder such as DIR.tmp.<pid> of the Matrix Market writer), printing "note: removed ..." for
-/// each; returns how many. A temporary of a live process is left alone. The folder is listed
-/// once per process (later calls look up what that listing found).
+/// Removes TARGET.tmp.<pid> entries beside `target` whose process is gone and that are untouched
+/// for 10 minutes (a file, a link, or a folder such as DIR.tmp.<pid> of the Matrix Market
+/// writer), printing "note: removed ..." for each, and names younger ones ("note: kept ...");
+/// returns how many were removed. A temporary of a live process is left alone. The folder is
+/// listed once per process (later calls look up what that listing found).
 std::size_t remove_stale_temporaries(const std::string& target);
 
 }  // namespace cb

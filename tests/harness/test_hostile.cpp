@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <fcntl.h>
 #include <filesystem>
@@ -619,6 +620,18 @@ TEST(Hostile, TemporariesOfAnInterruptedRunAreRemovedByTheNext)
     fs::create_directories(dir / ("b_mm.tmp." + dead));
     std::ofstream(dir / ("b_mm.tmp." + dead) / "A.mtx") << "half a folder";
     std::ofstream(dir / ("other.txt.tmp." + dead)) << "not a target of this run: kept";
+    // Left over: untouched for an hour. A young one may be another machine's write in progress on
+    // a shared file system (the pid is only known gone here): named and kept.
+    for (const std::string target : {"b.qpsnap", "b.hdf5", "b_mm"})
+        fs::last_write_time(dir / (target + ".tmp." + dead), fs::file_time_type::clock::now() - std::chrono::hours(1));
+    std::ofstream(dir / ("young.qpsnap.tmp." + dead)) << "maybe another machine's";
+    const Output young = run("convert " + q(dir / "a.qpsnap") + " " + q(dir / "young.qpsnap"));
+    ASSERT_EQ(young.status, 0) << young.err;
+    EXPECT_EQ(young.err, "note: kept " + (dir / ("young.qpsnap.tmp." + dead)).string() + ": process " + dead +
+                             " is gone here, but the file is younger than 10 minutes (another machine may be "
+                             "writing it); remove it if not\n");
+    EXPECT_TRUE(fs::exists(dir / ("young.qpsnap.tmp." + dead)));
+    fs::remove(dir / ("young.qpsnap.tmp." + dead));
     for (const std::string target : {"b.qpsnap", "b.hdf5", "b_mm"}) {
         const Output r = run("convert " + q(dir / "a.qpsnap") + " " + q(dir / target));
         ASSERT_EQ(r.status, 0) << r.err;

@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -286,6 +287,7 @@ TEST(FclibHostile, ExportRefusesNoContactsAndSpecialTargetsLeavingNothing)
     ASSERT_EQ(::waitpid(child, nullptr, 0), child);
     const fs::path stale = dir / ("plane.hdf5.tmp." + std::to_string(child));
     std::ofstream(stale) << "half an HDF5 file";
+    fs::last_write_time(stale, fs::file_time_type::clock::now() - std::chrono::hours(1));  // left over, not young
     cb::write_fclib_global((dir / "plane.hdf5").string(), qp);
     EXPECT_FALSE(fs::exists(stale));
     std::vector<std::string> names;
