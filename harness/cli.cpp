@@ -48,6 +48,14 @@ std::string CommandLine::value(const std::string& option, const std::string& fal
     return it == m_values.end() ? fallback : it->second.back();
 }
 
+std::string CommandLine::path(const std::string& option, const std::string& fallback) const
+{
+    const auto it = m_values.find(option);
+    if (it == m_values.end()) return fallback;
+    if (it->second.back().empty()) throw_input_error(m_command, option, "expects a file or folder name, got \"\"");
+    return it->second.back();
+}
+
 std::vector<std::string> CommandLine::values(const std::string& option) const
 {
     const auto it = m_values.find(option);

@@ -22,6 +22,9 @@ public:
     bool has(const std::string& option) const { return m_values.count(option) != 0 || m_flags.count(option) != 0; }
     /// Last value of an option, or `fallback`.
     std::string value(const std::string& option, const std::string& fallback = "") const;
+    /// Last value of an option that names a file or folder, or `fallback`; an empty value given
+    /// on the command line (`--json ""`) is an InputError naming the option.
+    std::string path(const std::string& option, const std::string& fallback = "") const;
     /// Every value of a repeated option, in order.
     std::vector<std::string> values(const std::string& option) const;
     double number(const std::string& option, double fallback) const;

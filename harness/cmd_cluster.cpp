@@ -30,15 +30,6 @@ std::string this_binary()
     return self.string();
 }
 
-/// sbatch reads `#SBATCH --output=PATH` without shell quoting and expands % in it.
-void check_sbatch_safe(const std::string& option, const std::string& value)
-{
-    for (const char c : value)
-        if (c == ' ' || c == '\t' || c == '\n' || c == '%' || c == '\'' || c == '"')
-            throw_input_error("cluster", option,
-                              "'" + value + "' holds a space, quote or %, which #SBATCH lines cannot carry");
-}
-
 }  // namespace
 
 int cmd_cluster(const Args& args)
@@ -72,7 +63,7 @@ int cmd_cluster(const Args& args)
     o.contactbench = this_binary();
     o.suite = fs::absolute(suite.path).lexically_normal().string();
     o.suite_name = suite.name;
-    o.out = fs::absolute(cl.value("--out")).lexically_normal().string();
+    o.out = fs::absolute(cl.path("--out")).lexically_normal().string();
     while (o.out.size() > 1 && o.out.back() == '/') o.out.pop_back();
     o.shards = cl.integer("--shards", 1);
     o.first_index = cl.integer("--first-index", 0);
@@ -83,21 +74,7 @@ int cmd_cluster(const Args& args)
     o.mem = cl.value("--mem");
     o.exclusive = cl.has("--exclusive");
     o.extra = cl.values("--sbatch-option");
-    if (o.shards < 1) throw_input_error("cluster", "--shards", "must be >= 1, got " + std::to_string(o.shards));
-    if (o.first_index < 0)
-        throw_input_error("cluster", "--first-index", "must be >= 0, got " + std::to_string(o.first_index));
-    if (o.cpus_per_task < 1)
-        throw_input_error("cluster", "--cpus-per-task", "must be >= 1, got " + std::to_string(o.cpus_per_task));
-    if (o.max_parallel < 0)
-        throw_input_error("cluster", "--max-parallel", "must be >= 0, got " + std::to_string(o.max_parallel));
-    check_sbatch_safe("--out", o.out);
-    for (const auto& [option, value] :
-         {std::pair<std::string, std::string>{"--partition", o.partition}, {"--time", o.time}, {"--mem", o.mem}})
-        check_sbatch_safe(option, value);
-    for (const auto& line : o.extra)
-        if (line.rfind("--", 0) != 0 || line.find('\n') != std::string::npos)
-            throw_input_error("cluster", "--sbatch-option",
-                              "expected one option such as --account=abc, got '" + line + "'");
+    check_sbatch_options(o);  // bounds and safe values before any snapshot is generated or file written
 
     const size_t jobs = resolve_snapshots(suite).size() * suite.solvers.size();
     if (static_cast<size_t>(o.shards) > jobs)

@@ -59,7 +59,7 @@ int cmd_compare(const Args& args)
     const CompareInput next = read_compare_input(new_path);
     const CompareReport report = compare_inputs(base, next, options, cl.value("--filter"));
     std::cout << report.header() << "\n" << report.table(cl.has("--only-changes")) << "\n" << report.verdict() << "\n";
-    if (cl.has("--json")) write_json_atomic(cl.value("--json"), report.to_json());
+    if (cl.has("--json")) write_json_atomic(cl.path("--json"), report.to_json());
     return report.failed() ? kRegression : 0;
 }
 

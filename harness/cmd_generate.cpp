@@ -56,7 +56,7 @@ int cmd_generate(const Args& args)
     }
     // Bounded parameters, finite values (problems/synthetic.hpp): never a file our reader rejects.
     const Qp qp = make_synthetic(family, params, std::uint64_t(seed));
-    const std::string out = cl.value("--out");
+    const std::string out = cl.path("--out");
     write_qpsnap(out, qp);
     long violated = 0;
     if (qp.m()) violated = long(((qp.J * qp.x0 - qp.c).array() < 0).count());

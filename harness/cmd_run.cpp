@@ -36,6 +36,7 @@
 #include <optional>
 #include <set>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace cb {
@@ -109,8 +110,14 @@ nlohmann::json failed_record(const SuiteSolver& sv, const nlohmann::json& settin
 void lock_out_dir(const std::string& out)
 {
     const std::string path = (fs::path(out) / ".lock").string();
-    const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    // O_NOFOLLOW: a symlink planted as .lock would make the ftruncate below empty its target.
+    const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC, 0644);
     if (fd < 0) throw_input_error(path, "", std::string("cannot create the lock file: ") + std::strerror(errno));
+    struct stat st {};
+    if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        ::close(fd);
+        throw_input_error(path, "", "not a regular file: not used as the lock");
+    }
     if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
         char holder[32] = {0};
         const ssize_t got = ::pread(fd, holder, sizeof holder - 1, 0);
@@ -190,7 +197,7 @@ int cmd_run(const Args& args)
     Suite suite = load_suite(cl.positional()[0]);
     for (const std::string& notice : drop_unbuilt_optional_solvers(suite, builtin_registry().names()))
         std::cerr << "run: " << notice << "\n";
-    std::string out = cl.value("--out", "results/" + suite.name);
+    std::string out = cl.path("--out", "results/" + suite.name);
     Shard shard = cl.has("--shard") ? parse_shard(cl.value("--shard")) : Shard{};
     if (!cl.has("--shard")) {
         // A Slurm array task: its shard from the array variables, its own folder inside --out.

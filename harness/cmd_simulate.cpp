@@ -49,7 +49,7 @@ int cmd_simulate(const Args& args)
         std::cerr << "simulate: no authors' data in " << cached
                   << " (`make paper-data` writes it); \"data:\" meshes use their stand-ins\n";
     sim::SimulatorOptions opt;
-    opt.out_dir = cl.value("--out", "results/sim/" + scene.name);
+    opt.out_dir = cl.path("--out", "results/sim/" + scene.name);
     opt.solver = cl.value("--solver");
     opt.data_dir = data;  // the folder actually used, for simulation.json and the caches keyed on it
     opt.snapshots = !cl.has("--no-snapshots");

@@ -86,6 +86,12 @@ int cmd_solve(const Args& args)
     const std::string snap = cl.positional()[0];
     const std::string name = cl.value("--solver");
     if (!builtin_registry().contains(name)) builtin_registry().entry(name);  // throws the named InputError
+    // Output names are checked before the solve, so a bad one does not cost a solve.
+    cl.path("--json");
+    const std::string solution_dir = cl.path("--save-solution");
+    if (!solution_dir.empty() && std::filesystem::exists(solution_dir) && !std::filesystem::is_directory(solution_dir))
+        throw_input_error(solution_dir, "--save-solution",
+                          "exists and is not a folder (x.mtx and lambda.mtx are written into a folder)");
 
     RunOptions options;
     options.record_history = cl.has("--history");
@@ -151,10 +157,12 @@ int cmd_solve(const Args& args)
     if (!run.result.message.empty()) out << "message     " << run.result.message << "\n";
     std::cout << out.str();
 
-    if (cl.has("--json")) write_json_atomic(cl.value("--json"), r);
+    if (cl.has("--json")) write_json_atomic(cl.path("--json"), r);
     if (cl.has("--save-solution")) {
-        const std::string dir = cl.value("--save-solution");
-        std::filesystem::create_directories(dir);
+        const std::string& dir = solution_dir;
+        std::error_code ec;
+        std::filesystem::create_directories(dir, ec);
+        if (ec) throw_input_error(dir, "--save-solution", "cannot create the folder: " + ec.message());
         write_mtx_vector(dir + "/x.mtx", run.result.x);
         write_mtx_vector(dir + "/lambda.mtx", run.lambda_full);  // one entry per row of the snapshot's J
     }

@@ -31,14 +31,15 @@ int cmd_stress(const Args& args)
     const CommandLine cl("stress", args, {"--out", "--time-limit", "--tol", "--solvers", "--cases"},
                          {"--quick", "--no-isolate", "--list"});
     if (cl.help()) {
-        std::cout << "usage: " << kUsage << "\n\n"
-                  << "Runs every registered solver plus cg:precond=ichol and mprgp:precond=ichol (or --solvers;\n"
-                  << "a solver may carry settings: NAME:key=value[:key=value...]) on every stress case (or --cases: ids or\n"
-                  << "families) with a time limit per run (default 5 s), each run in a child process so that\n"
-                  << "a crash or hang is recorded. Writes DIR/stability.csv, DIR/stability.md and\n"
-                  << "DIR/runs/<case>__<solver>.json (default DIR: results/stress). --quick: 4 cases.\n"
-                  << "--list prints the cases. The stiff families (stiffness, stiff-slab, stiff-dino) keep their\n"
-                  << "histories in runs/ for the error-against-time figure of `python3 -m plots.stability DIR`.\n";
+        std::cout
+            << "usage: " << kUsage << "\n\n"
+            << "Runs every registered solver plus cg:precond=ichol and mprgp:precond=ichol (or --solvers;\n"
+            << "a solver may carry settings: NAME:key=value[:key=value...]) on every stress case (or --cases: ids or\n"
+            << "families) with a time limit per run (default 5 s), each run in a child process so that\n"
+            << "a crash or hang is recorded. Writes DIR/stability.csv, DIR/stability.md and\n"
+            << "DIR/runs/<case>__<solver>.json (default DIR: results/stress). --quick: 4 cases.\n"
+            << "--list prints the cases. The stiff families (stiffness, stiff-slab, stiff-dino) keep their\n"
+            << "histories in runs/ for the error-against-time figure of `python3 -m plots.stability DIR`.\n";
         return 0;
     }
     cl.expect_positional(0, 0, kUsage);
@@ -49,7 +50,7 @@ int cmd_stress(const Args& args)
             std::cout << c.id << "\t" << c.family << "\tseverity " << c.severity << "\t" << c.description << "\n";
         return 0;
     }
-    options.out_dir = cl.value("--out", "results/stress");
+    options.out_dir = cl.path("--out", "results/stress");
     options.time_limit_s = cl.number("--time-limit", 5.0);
     if (!(options.time_limit_s > 0)) throw_input_error("stress", "--time-limit", "must be > 0");
     options.tol = cl.number("--tol", 1e-6);

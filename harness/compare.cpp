@@ -128,6 +128,28 @@ std::string instructions_text(const nlohmann::json& b, const nlohmann::json& n)
     return count(b) + " " + (pct >= 0 ? "+" : "") + format_fixed(pct, 3) + "%";
 }
 
+/// NaN compares false both ways, so a NaN counter would pass as "equal": refused instead.
+void require_finite(const std::string& source, const Key& key, const nlohmann::json& run)
+{
+    std::vector<std::pair<std::string, nlohmann::json>> values = {{"kkt_rel", kkt_rel(run)}};
+    for (const auto& c : compared_counters()) values.emplace_back(c, counter(run, c));
+    for (const auto& [name, value] : values)
+        if (value.is_number_float() && !std::isfinite(value.get<double>()))
+            throw_input_error(source, key.first + "/" + key.second + ": " + name,
+                              "not a finite number (NaN or infinite): it cannot be judged");
+        else if (!value.is_null() && !value.is_number())
+            throw_input_error(source, key.first + "/" + key.second + ": " + name,
+                              "expected a number, got " + value.dump());
+}
+
+/// A compact BASE that lacks a quantity NEW records would let NEW pass unjudged on it.
+[[noreturn]] void unjudged(const std::string& source, const Key& key, const std::string& name)
+{
+    throw_input_error(source, key.first + "/" + key.second + ": " + name,
+                      "not recorded in BASE but recorded in NEW, so it would not be judged (a baseline must record "
+                      "every judged quantity: regenerate it)");
+}
+
 bool is_results_folder(const std::string& path) { return std::filesystem::is_directory(path); }
 
 nlohmann::json folder_machine(const std::string& dir, const std::vector<nlohmann::json>& runs)
@@ -179,6 +201,7 @@ CompareInput read_compare_input(const std::string& path)
     if (std::filesystem::path(path).extension() != ".csv")
         throw_input_error(path, "", "expected a results folder or a performance record (.csv)");
     input.runs = read_perf_record(path);
+    input.compact = true;
     const std::string machine_file = machine_file_for(path);
     if (std::filesystem::is_regular_file(machine_file)) {
         const nlohmann::json machine = read_json_file(machine_file);
@@ -245,6 +268,8 @@ CompareReport compare_inputs(const CompareInput& base_input, const CompareInput&
             continue;
         }
         const nlohmann::json& n = *it->second;
+        require_finite(base_input.source, key, *b);
+        require_finite(next_input.source, key, n);
         row.new_status = n.value("status", "");
         for (const auto& c : compared_counters()) row.next[c] = counter(n, c);
         row.next["kkt_rel"] = kkt_rel(n);
@@ -255,7 +280,10 @@ CompareReport compare_inputs(const CompareInput& base_input, const CompareInput&
         for (const auto& c : compared_counters()) {
             const auto& bv = row.base[c];
             const auto& nv = row.next[c];
-            if (bv.is_null()) continue;  // not recorded by BASE (an older binary): shown, not judged
+            if (bv.is_null()) {
+                if (base_input.compact && nv.is_number()) unjudged(base_input.source, key, c);
+                continue;  // not recorded by BASE (an older binary): shown, not judged
+            }
             if (!nv.is_number()) {
                 row.regressed.push_back(c);  // recorded by BASE, vanished in NEW
                 continue;
@@ -270,6 +298,8 @@ CompareReport compare_inputs(const CompareInput& base_input, const CompareInput&
             else if (y < better)
                 row.improved.push_back(c);
         }
+        if (base_input.compact && row.base["kkt_rel"].is_null() && row.next["kkt_rel"].is_number())
+            unjudged(base_input.source, key, "kkt_rel");
         const double tol = n.value("tol", b->value("tol", 0.0));
         const auto& bk = row.base["kkt_rel"];
         const auto& nk = row.next["kkt_rel"];
@@ -284,6 +314,8 @@ CompareReport compare_inputs(const CompareInput& base_input, const CompareInput&
         }
         const auto& bi = row.base["instructions"];
         const auto& ni = row.next["instructions"];
+        if (exact && base_input.compact && bi.is_null() && ni.is_number())
+            unjudged(base_input.source, key, "instructions");
         if (exact && bi.is_number() && ni.is_number() && bi.get<double>() > 0.0) {
             const double change = ni.get<double>() / bi.get<double>() - 1.0;
             if (change > options.instructions_rtol)

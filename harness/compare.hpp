@@ -16,7 +16,9 @@
 ///  - wall time: the ratio of the minimum times NEW/BASE with a noise band (the sum of both
 ///    sides' relative spreads, median/min - 1); regressed only when the ratio exceeds
 ///    time_ratio_max and 1 + band, and never from a single sample per side.
-/// A counter or measure absent on either side is shown and not judged. Runs only in NEW are
+/// A counter or measure absent on either side is shown and not judged, except in a compact BASE
+/// (InputError: the baseline must record what it judges); a counter or kkt_rel that is NaN or
+/// infinite on either side is an InputError naming the side, the run and the quantity. Runs only in NEW are
 /// listed as "new" and are not failures.
 #include <nlohmann/json.hpp>
 #include <string>
@@ -41,6 +43,10 @@ struct CompareInput {
     std::string source;
     std::vector<nlohmann::json> runs;
     nlohmann::json machine = nlohmann::json::object();  ///< machine_fingerprint(); empty when unknown
+    /// A compact record (CSV): as BASE, every judged quantity NEW records must be in it (an
+    /// absent column or empty cell would leave that quantity unjudged); a results folder of an
+    /// older binary may lack newer counters, which are then shown and not judged.
+    bool compact = false;
 };
 
 /// Reads a results folder (machine from provenance.json or the runs' provenance) or a compact

@@ -1,9 +1,11 @@
 #include "harness/perf_record.hpp"
 
 #include "harness/results.hpp"
+#include "problems/io_util.hpp"
 #include "solvers/types.hpp"
 
 #include <cerrno>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -62,6 +64,8 @@ nlohmann::json parse_cell(const std::string& text, Kind kind, const std::string&
     const double v = std::strtod(text.c_str(), &end);
     if (errno || end == text.c_str() || *end != '\0')
         throw_input_error(where, "column " + column, "expected a number, got '" + text + "'");
+    if (!std::isfinite(v))  // NaN compares false both ways: a NaN counter would pass as equal
+        throw_input_error(where, "column " + column, "expected a finite number, got '" + text + "'");
     return v;
 }
 
@@ -89,6 +93,7 @@ const std::vector<std::string>& perf_record_columns()
 
 std::vector<nlohmann::json> read_perf_record(const std::string& csv_path)
 {
+    require_regular_file(csv_path);  // a FIFO or a device: refused without blocking
     std::ifstream in(csv_path);
     if (!in) throw_input_error(csv_path, "", "cannot open the performance record");
     std::string line;
@@ -109,6 +114,9 @@ std::vector<nlohmann::json> read_perf_record(const std::string& csv_path)
     long number = 1;
     while (std::getline(in, line)) {
         ++number;
+        if (line.size() > kMaxPerfRecordLine)
+            throw_input_error(csv_path + ": line " + std::to_string(number), "",
+                              "longer than " + std::to_string(kMaxPerfRecordLine) + " characters");
         if (!line.empty() && line.back() == '\r') line.pop_back();
         if (line.empty()) continue;
         const std::string where = csv_path + ": line " + std::to_string(number);
@@ -143,6 +151,10 @@ std::vector<nlohmann::json> read_perf_record(const std::string& csv_path)
             run["time"] = time;
         }
         runs.push_back(std::move(run));
+        if (runs.size() > kMaxPerfRecordRuns)
+            throw_input_error(csv_path + ": line " + std::to_string(number), "",
+                              "more than " + std::to_string(kMaxPerfRecordRuns) +
+                                  " runs: not a performance record of a suite (memory is bounded)");
     }
     if (runs.empty()) throw_input_error(csv_path, "", "no runs (only a header)");
     return runs;

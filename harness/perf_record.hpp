@@ -14,9 +14,15 @@ namespace cb {
 /// empty cell means "not measured".
 const std::vector<std::string>& perf_record_columns();
 
+/// At most this many runs in a record (a run costs ~4 kB in memory as a record: 400 MB at most;
+/// the largest suite, fig6 over every frame, has a few thousand), and this many characters a line.
+constexpr std::size_t kMaxPerfRecordRuns = 100000;
+constexpr std::size_t kMaxPerfRecordLine = 4096;
+
 /// Reads a compact CSV into run records shaped like results JSON (label, snapshot.id, status,
 /// iterations, counters{...}, kkt_relative.max, tol, instructions, time{min_total_s, noise,
-/// samples}). InputError naming the file, line and column on anything malformed.
+/// samples}). InputError naming the file, line and column on anything malformed: an unknown or
+/// repeated column, a cell that is not a count or a finite number, too many runs or a long line.
 std::vector<nlohmann::json> read_perf_record(const std::string& csv_path);
 
 /// The fingerprint file beside a record: "dir/ci.csv" -> "dir/ci-machine.json".

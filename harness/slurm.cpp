@@ -2,7 +2,9 @@
 
 #include "solvers/types.hpp"  // throw_input_error
 
+#include <cctype>
 #include <cerrno>
+#include <cstdio>
 #include <cstdlib>
 #include <sstream>
 #include <unistd.h>
@@ -41,6 +43,41 @@ std::string host_name()
 {
     char host[256] = {0};
     return ::gethostname(host, sizeof(host) - 1) == 0 ? std::string(host) : std::string("unknown");
+}
+
+/// A newline would end a comment or #SBATCH line and start a command; other control characters
+/// (carriage return, escape) hide text on a terminal or confuse sbatch's parser.
+void refuse_control_characters(const std::string& field, const std::string& value)
+{
+    for (const char c : value) {
+        const auto byte = static_cast<unsigned char>(c);
+        if (byte < 0x20 || byte == 0x7f) {
+            char code[8];
+            std::snprintf(code, sizeof(code), "0x%02x", byte);
+            throw_input_error("cluster", field,
+                              "holds the control character " + std::string(code) +
+                                  ", which a generated sbatch file cannot carry safely");
+        }
+    }
+}
+
+/// sbatch reads `#SBATCH --output=PATH` without shell quoting and expands % in it.
+void refuse_sbatch_unsafe(const std::string& field, const std::string& value)
+{
+    refuse_control_characters(field, value);
+    for (const char c : value)
+        if (c == ' ' || c == '%' || c == '\'' || c == '"' || c == '\\')
+            throw_input_error("cluster", field,
+                              "'" + value + "' holds a space, quote, backslash or %, which #SBATCH lines cannot carry");
+}
+
+/// The suite name as a job name: letters, digits, '.', '_' and '-' kept, anything else '_'.
+std::string job_name(const std::string& suite_name)
+{
+    std::string name;
+    for (const char c : suite_name)
+        name += (std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-') ? c : '_';
+    return name.substr(0, 100);
 }
 
 void sbatch_common(std::ostringstream& s, const SbatchOptions& o)
@@ -123,14 +160,48 @@ std::string shell_quote(const std::string& word)
     return quoted + "'";
 }
 
+void check_sbatch_options(const SbatchOptions& o)
+{
+    if (o.shards < 1 || o.shards > kMaxArrayShards)
+        throw_input_error("cluster", "--shards",
+                          "must be in 1.." + std::to_string(kMaxArrayShards) + ", got " + std::to_string(o.shards));
+    if (o.first_index < 0 || o.first_index > kMaxArrayIndex - o.shards + 1)
+        throw_input_error("cluster", "--first-index",
+                          "must be in 0.." + std::to_string(kMaxArrayIndex - o.shards + 1) + " for " +
+                              std::to_string(o.shards) + " shards (Slurm array indices end at " +
+                              std::to_string(kMaxArrayIndex) + "), got " + std::to_string(o.first_index));
+    if (o.cpus_per_task < 1 || o.cpus_per_task > 100000)
+        throw_input_error("cluster", "--cpus-per-task", "must be in 1..100000, got " + std::to_string(o.cpus_per_task));
+    if (o.max_parallel < 0 || o.max_parallel > kMaxArrayShards)
+        throw_input_error("cluster", "--max-parallel",
+                          "must be in 0.." + std::to_string(kMaxArrayShards) + ", got " +
+                              std::to_string(o.max_parallel));
+    // Shell-quoted words and comment lines: only a line break (or another control character) escapes.
+    refuse_control_characters("contactbench binary", o.contactbench);
+    refuse_control_characters("suite", o.suite);
+    refuse_control_characters("suite name", o.suite_name);
+    // Values on #SBATCH lines: sbatch splits them at spaces and expands %.
+    refuse_sbatch_unsafe("--out", o.out);
+    refuse_sbatch_unsafe("--partition", o.partition);
+    refuse_sbatch_unsafe("--time", o.time);
+    refuse_sbatch_unsafe("--mem", o.mem);
+    for (const auto& line : o.extra) {
+        refuse_control_characters("--sbatch-option", line);
+        if (line.rfind("--", 0) != 0)
+            throw_input_error("cluster", "--sbatch-option",
+                              "expected one option such as --account=abc, got '" + line + "'");
+    }
+}
+
 std::string sbatch_array_script(const SbatchOptions& o)
 {
+    check_sbatch_options(o);
     std::ostringstream s;
     s << "#!/bin/bash\n"
       << "# Written by `contactbench cluster slurm`: one array task per shard of the suite\n"
       << "# " << o.suite << "; task i writes " << o.out << "/shard-<i>-of-" << o.shards << ".\n"
       << "# Submit it first: jobid=$(sbatch --parsable " << shell_quote(o.out + "/slurm/array.sbatch") << ")\n"
-      << "#SBATCH --job-name=cb-" << o.suite_name << "\n"
+      << "#SBATCH --job-name=cb-" << job_name(o.suite_name) << "\n"
       << "#SBATCH --array=" << o.first_index << "-" << o.first_index + o.shards - 1;
     if (o.max_parallel > 0) s << "%" << o.max_parallel;
     s << "\n"
@@ -155,12 +226,13 @@ std::string sbatch_array_script(const SbatchOptions& o)
 
 std::string sbatch_merge_script(const SbatchOptions& o)
 {
+    check_sbatch_options(o);
     std::ostringstream s;
     s << "#!/bin/bash\n"
       << "# Written by `contactbench cluster slurm`: joins the " << o.shards << " shards of " << o.suite << "\n"
       << "# into " << o.out << "/summary.csv once the array has succeeded:\n"
       << "#   sbatch --dependency=afterok:$jobid " << shell_quote(o.out + "/slurm/merge.sbatch") << "\n"
-      << "#SBATCH --job-name=cb-" << o.suite_name << "-merge\n"
+      << "#SBATCH --job-name=cb-" << job_name(o.suite_name) << "-merge\n"
       << "#SBATCH --ntasks=1\n"
       << "#SBATCH --cpus-per-task=1\n";
     sbatch_common(s, o);

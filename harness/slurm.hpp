@@ -38,6 +38,13 @@ std::string shard_folder_name(long index, long count);
 /// when SLURM_JOB_ID is not set.
 nlohmann::json slurm_job_provenance(const Environment& env);
 
+/// At most this many array tasks: the merge job names every shard on its command line, and Slurm's
+/// default MaxArraySize is 1001 (a larger array needs a site that raised it).
+constexpr long kMaxArrayShards = 10000;
+
+/// Highest array index Slurm accepts (MaxArraySize is at most 4000001).
+constexpr long kMaxArrayIndex = 4000000;
+
 /// What `contactbench cluster slurm` writes.
 struct SbatchOptions {
     std::string contactbench;        ///< absolute path of the binary the jobs run
@@ -54,6 +61,12 @@ struct SbatchOptions {
     long max_parallel = 0;           ///< array throttle (%K); 0: no limit
     std::vector<std::string> extra;  ///< further #SBATCH options, written as given
 };
+
+/// Throws InputError("cluster: FIELD: ...") when a value the sbatch files embed could leave its
+/// line or its word: a control character (newline, carriage return, tab, escape ...) anywhere, a
+/// space, quote or % in a value written on an #SBATCH line, shards or indices out of range.
+/// Both script functions call it first, so no script is ever built from such a value.
+void check_sbatch_options(const SbatchOptions& options);
 
 /// The sbatch file of the job array: each task runs `contactbench run SUITE --out OUT` pinned
 /// to its cores (srun --cpu-bind=cores, one thread per core, one BLAS thread); `run` finds its

@@ -1,9 +1,11 @@
 #pragma once
 /// Safe file access shared by every reader and writer: inputs must be regular files (a FIFO, a
 /// folder or a device is refused before anything blocks on it), JSON nesting is bounded before
-/// the parser sees it, and outputs are written atomically (temporary name, every write checked,
-/// fsync of the file before the rename and of the folder after). Errors are InputErrors naming
-/// the file ("PATH: problem"), so the command line exits 2.
+/// the parser sees it, and outputs are written atomically (problems/safe_output.hpp: AtomicFile,
+/// write_file_atomic). Errors are InputErrors naming the file ("PATH: problem"), so the command
+/// line exits 2.
+#include "problems/safe_output.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
@@ -35,32 +37,6 @@ nlohmann::json parse_json_text(const std::string& text, const std::string& where
 
 /// read_regular_file + parse_json_text.
 nlohmann::json read_json_checked(const std::string& path, bool allow_comments = false);
-
-/// An output file written under PATH.tmp.<pid> and renamed over PATH by commit(); every write is
-/// checked (a full disk or a file-size limit is an InputError naming PATH), the data are
-/// fsync'ed before the rename and the folder after. Destroyed uncommitted, it removes the
-/// temporary file, so a failed write leaves no partial output.
-class AtomicFile {
-public:
-    explicit AtomicFile(std::string path);
-    ~AtomicFile();
-    AtomicFile(const AtomicFile&) = delete;
-    AtomicFile& operator=(const AtomicFile&) = delete;
-
-    void write(const void* data, std::size_t bytes);
-    void write(const std::string& text) { write(text.data(), text.size()); }
-    void commit();
-    const std::string& path() const { return m_path; }
-
-private:
-    [[noreturn]] void fail(const std::string& what, int err);
-    std::string m_path, m_tmp;
-    int m_fd = -1;
-    bool m_committed = false;
-};
-
-/// Writes `content` to `path` atomically (an AtomicFile); creates missing parent folders.
-void write_file_atomic(const std::string& path, const std::string& content);
 
 /// fsync of a folder, so that a rename inside it survives a crash (errors ignored: some file
 /// systems refuse fsync on folders).

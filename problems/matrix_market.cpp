@@ -453,6 +453,7 @@ void write_matrix_market_folder(const std::string& dir, const Qp& qp, const Snap
     while (!target.empty() && !target.has_filename()) target = target.parent_path();  // "out/" -> "out"
     if (fs::exists(target) && !(fs::is_directory(target) && fs::exists(target / "A.mtx")))
         throw_input_error(dir, "", "exists and is not a snapshot folder (no A.mtx); not replacing it");
+    remove_stale_temporaries(target.string());  // DIR.tmp.<pid> of an interrupted earlier convert
     const fs::path tmp = target.string() + ".tmp." + std::to_string(::getpid());
     std::error_code ec;
     fs::remove_all(tmp, ec);

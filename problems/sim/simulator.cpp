@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <fcntl.h>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -52,8 +53,15 @@ public:
     {
         m_path = path;
         m_partial = path + ".partial";
-        m_file = std::fopen(m_partial.c_str(), "w");
-        if (!m_file) throw_input_error(m_path, "", std::string("cannot write: ") + std::strerror(errno));
+        // Created fresh: an entry of that name is removed, never followed (O_EXCL | O_NOFOLLOW).
+        ::unlink(m_partial.c_str());
+        const int fd = ::open(m_partial.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
+        m_file = fd < 0 ? nullptr : ::fdopen(fd, "w");
+        if (!m_file) {
+            const int err = errno;
+            if (fd >= 0) ::close(fd);
+            throw_input_error(m_path, "", std::string("cannot write: ") + std::strerror(err));
+        }
         append(header);
     }
     void append(const std::string& rows)

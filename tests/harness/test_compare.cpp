@@ -8,6 +8,12 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
+#include <cmath>
+
+#include <functional>
+
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -237,12 +243,23 @@ TEST(ComparePerfRecord, InstructionsAndHarnessCountedProductsOnOneMachine)
     EXPECT_NE(header.find("NEW   " + n.source + "  measured on the same machine"), std::string::npos) << header;
     EXPECT_NE(header.find("instructions in the solve within +3%"), std::string::npos) << header;
 
-    // An older BASE without the harness count: shown, not judged.
+    // An older BASE without the harness count: a results folder of an older binary is shown, not
+    // judged; a compact record (a baseline) is refused, since NEW's count would go unjudged (issue 27).
     std::vector<nlohmann::json> old_runs = b.runs;
     for (auto& r : old_runs) r["counters"].erase("a_products_harness");
     CompareInput old = b;
     old.runs = old_runs;
+    old.compact = false;
     EXPECT_TRUE(regressed_of(compare_inputs(old, n), "c").empty());
+    old.compact = true;
+    try {
+        compare_inputs(old, n);
+        ADD_FAILURE() << "a compact BASE without a judged counter was accepted";
+    } catch (const InputError& e) {
+        EXPECT_EQ(std::string(e.what()), b.source + ": a/mprgp: a_products_harness: not recorded in BASE but recorded "
+                                                    "in NEW, so it would not be judged (a baseline must record every "
+                                                    "judged quantity: regenerate it)");
+    }
 }
 
 TEST(ComparePerfRecord, WallTimeIsJudgedOnlyBeyondTheRatioTimesTheNoiseBand)
@@ -327,6 +344,68 @@ TEST(ComparePerfRecord, MalformedRecordsNameTheFileLineAndColumn)
               p4 + ": line 3: run a/cg appears twice");
     const std::string p5 = (dir / "nostatus.csv").string();
     EXPECT_EQ(error_of("nostatus.csv", "snapshot,label\na,cg\n"), p5 + ": line 1: missing column 'status'");
+}
+
+// Issue 27: compare passed NaN counters and a BASE lacking a judged column; a 1e6-row CSV took 3.7 GB.
+TEST(ComparePerfRecord, NanCountersMissingJudgedColumnsAndHugeRecordsAreRefused)
+{
+    const fs::path dir = perf_dir();
+    auto error_of = [&](const std::function<void()>& f) -> std::string {
+        try {
+            f();
+        } catch (const InputError& e) {
+            return e.what();
+        }
+        return "no error";
+    };
+    auto record = [&](const std::string& name, const std::string& text) {
+        const std::string path = (dir / name).string();
+        write_file_atomic(path, text);
+        return path;
+    };
+    const std::string nan_csv = record("nan.csv", "snapshot,label,status,work,kkt_rel\na,cg,converged,nan,1e-9\n");
+    EXPECT_EQ(error_of([&] { read_perf_record(nan_csv); }),
+              nan_csv + ": line 2: column work: expected a finite number, got 'nan'");
+    const std::string inf_csv = record("inf.csv", "snapshot,label,status,kkt_rel\na,cg,converged,-inf\n");
+    EXPECT_EQ(error_of([&] { read_perf_record(inf_csv); }),
+              inf_csv + ": line 2: column kkt_rel: expected a finite number, got '-inf'");
+    // NaN through the API (a record built in memory): NaN > x and NaN < x are both false.
+    nlohmann::json run = {
+        {"snapshot", {{"id", "a"}}}, {"label", "cg"}, {"status", "converged"}, {"counters", {{"work", 10.0}}}};
+    nlohmann::json bad = run;
+    bad["counters"]["work"] = std::nan("");
+    CompareInput base, next;
+    base.source = "BASE";
+    next.source = "NEW";
+    base.runs = {run};
+    next.runs = {bad};
+    EXPECT_EQ(error_of([&] { compare_inputs(base, next); }),
+              "NEW: a/cg: work: not a finite number (NaN or infinite): it cannot be judged");
+    // A baseline (CSV) whose column or cell is empty where NEW records the quantity.
+    const std::string no_column = record("no_column.csv", "snapshot,label,status,iterations\na,cg,converged,5\n");
+    const std::string with_column =
+        record("with_column.csv", "snapshot,label,status,iterations,a_products\na,cg,converged,5,7\n");
+    EXPECT_EQ(error_of([&] { compare_inputs(read_compare_input(no_column), read_compare_input(with_column)); }),
+              no_column + ": a/cg: a_products: not recorded in BASE but recorded in NEW, so it would not be judged "
+                          "(a baseline must record every judged quantity: regenerate it)");
+    const std::string empty_cell =
+        record("empty_cell.csv", "snapshot,label,status,iterations,kkt_rel\na,cg,converged,5,\n");
+    const std::string kkt = record("kkt.csv", "snapshot,label,status,iterations,kkt_rel\na,cg,converged,5,1e-3\n");
+    EXPECT_EQ(error_of([&] { compare_inputs(read_compare_input(empty_cell), read_compare_input(kkt)); }),
+              empty_cell + ": a/cg: kkt_rel: not recorded in BASE but recorded in NEW, so it would not be judged "
+                           "(a baseline must record every judged quantity: regenerate it)");
+    // Bounded memory: at most 100000 runs and 4096 characters a line; a FIFO is not waited on.
+    std::string huge = "snapshot,label,status\n";
+    for (int i = 0; i <= 100000; ++i) huge += "s" + std::to_string(i) + ",cg,converged\n";
+    const std::string huge_csv = record("huge.csv", huge);
+    EXPECT_EQ(error_of([&] { read_perf_record(huge_csv); }),
+              huge_csv +
+                  ": line 100002: more than 100000 runs: not a performance record of a suite (memory is bounded)");
+    const std::string long_csv = record("long.csv", "snapshot,label,status\n" + std::string(5000, 'a') + ",cg,x\n");
+    EXPECT_EQ(error_of([&] { read_perf_record(long_csv); }), long_csv + ": line 2: longer than 4096 characters");
+    const fs::path fifo = dir / "fifo.csv";
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
+    EXPECT_EQ(error_of([&] { read_perf_record(fifo.string()); }), fifo.string() + ": not a regular file (a FIFO)");
 }
 
 TEST(ComparePerfRecord, BinaryOnlyChangesFilterAndExitCodes)

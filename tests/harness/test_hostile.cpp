@@ -10,12 +10,15 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <fcntl.h>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sys/file.h>
 #include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -311,6 +314,74 @@ TEST(Merge, RefusesIncompleteOrMixedShards)
     EXPECT_EQ(count_matching(dir / "m4" / "runs", ".json"), 4u);
 }
 
+// Issue 27: a refused merge still wrote run files into OUT; run files edited to another suite or
+// an unknown status ("banana" reached summary.csv) were merged; a shard claiming 3-of-2 was
+// reported only as a missing shard 2/2.
+TEST(Merge, EveryShardIsCheckedWholeBeforeAnythingIsWritten)
+{
+    const fs::path dir = fresh_dir("merge_hostile");
+    write_snapshot(dir / "a.qpsnap", 1);
+    write_snapshot(dir / "b.qpsnap", 2);
+    const fs::path suite = write_suite(dir, "sharded", kTwoSolvers);
+    const fs::path s1 = dir / "s1", s2 = dir / "s2", good = dir / "good";
+    ASSERT_EQ(run("run " + q(suite) + " --out " + q(s1) + " --shard 1/2").status, 0);
+    ASSERT_EQ(run("run " + q(suite) + " --out " + q(s2) + " --shard 2/2").status, 0);
+    ASSERT_EQ(run("merge " + q(good) + " " + q(s1) + " " + q(s2)).status, 0);
+    const std::string good_summary = slurp(good / "summary.csv");
+    const fs::path victim = s2 / "runs" / "a__exact.json";
+    const std::string original = slurp(victim);
+    auto edited = [&](const fs::path& file, const std::function<void(nlohmann::json&)>& edit) {
+        nlohmann::json j = nlohmann::json::parse(slurp(file));
+        edit(j);
+        write_json_atomic(file.string(), j);
+    };
+    // Each refused merge goes to a fresh OUT (never created) and to the good OUT (left as it was).
+    auto refused = [&](const std::string& expected_error, const std::vector<fs::path>& shards, bool prefix = false) {
+        for (const fs::path& out : {dir / "fresh", good}) {
+            std::string args = "merge " + q(out);
+            for (const auto& sh : shards) args += " " + q(sh);
+            const Output r = run(args);
+            EXPECT_EQ(r.status, 2) << r.err;
+            const std::string expected = "contactbench merge: error: " + expected_error + (prefix ? "" : "\n");
+            EXPECT_EQ(prefix ? r.err.substr(0, expected.size()) : r.err, expected);
+            EXPECT_FALSE(fs::exists(dir / "fresh"));
+            EXPECT_EQ(slurp(good / "summary.csv"), good_summary);
+            EXPECT_EQ(slurp(good / "runs" / "a__exact.json"), original);
+            EXPECT_EQ(count_matching(dir, ".tmp."), 0u);
+        }
+    };
+    edited(victim, [](nlohmann::json& j) { j["suite"] = "another"; });
+    refused(victim.string() + ": suite: expected \"sharded\" (the shard's suite), got \"another\"", {s1, s2});
+    edited(victim, [](nlohmann::json& j) {
+        j["suite"] = "sharded";
+        j["status"] = "banana";
+    });
+    refused(victim.string() + ": status: not a known run status: \"banana\"", {s1, s2});
+    std::ofstream(victim, std::ios::trunc) << original.substr(0, original.size() / 2);  // a torn run file
+    refused(victim.string() + ": not valid JSON: ", {s1, s2}, true);
+    std::ofstream(victim, std::ios::trunc) << original;
+    const std::string jobs = slurp(s2 / "jobs.json");
+    edited(s2 / "jobs.json", [](nlohmann::json& j) { j["shard"]["index"] = 3; });
+    refused((s2 / "jobs.json").string() + ": shard: shard 3 of 2: expected 1 <= i <= N <= 100000", {s1, s2});
+    edited(s2 / "jobs.json", [](nlohmann::json& j) {
+        j["shard"]["index"] = 2;
+        j["jobs"].push_back(j["jobs"][0]);
+    });
+    refused((s2 / "jobs.json").string() + ": jobs: " + nlohmann::json::parse(jobs)["jobs"][0].get<std::string>() +
+                " listed twice",
+            {s1, s2});
+    std::ofstream(s2 / "jobs.json", std::ios::trunc) << jobs;
+    refused((s1 / "jobs.json").string() + ": shard: shard 1 of 2 given twice (also " + s1.string() + ")", {s1, s1, s2});
+    edited(s2 / "suite.json", [](nlohmann::json& j) { j["tol"] = 1e-3; });
+    refused((s2 / "suite.json").string() + ": does not match the suite hash " +
+                nlohmann::json::parse(jobs)["suite_hash"].get<std::string>() + " of " + (s2 / "jobs.json").string() +
+                " (edited?)",
+            {s1, s2});
+    write_json_atomic((s2 / "suite.json").string(), nlohmann::json::parse(slurp(s1 / "suite.json")));
+    const Output again = run("merge " + q(good) + " " + q(s1) + " " + q(s2));
+    EXPECT_EQ(again.status, 0) << again.err;
+}
+
 // ---- writes -----------------------------------------------------------------------------------
 
 namespace {
@@ -446,6 +517,130 @@ TEST(Hostile, SpecialFilesAreRefusedNamingTheFile)
     EXPECT_EQ(unwritable.status, 2);
     EXPECT_EQ(unwritable.err, "contactbench run: error: " + (dir / "a.qpsnap" / "out").string() +
                                   ": --out: cannot create the results folder: Not a directory\n");
+}
+
+// Issue 27: writing through a temporary name and a rename replaced a FIFO or a device given as
+// --json or a convert target by a regular file (as root, /dev/null too), exit 0.
+TEST(Hostile, SpecialOutputTargetsAreNeverReplaced)
+{
+    const fs::path dir = fresh_dir("special_out");
+    write_snapshot(dir / "a.qpsnap", 1);
+    const std::string solve = "solve " + q(dir / "a.qpsnap") + " --solver mprgp";
+    auto is_fifo = [](const fs::path& p) {
+        struct stat st {};
+        return ::lstat(p.c_str(), &st) == 0 && S_ISFIFO(st.st_mode);
+    };
+    // A FIFO without a reader: exit 2, the FIFO stays; with a reader, the record flows through it.
+    const fs::path fifo = dir / "record.json";
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
+    const Output lonely = run(solve + " --json " + q(fifo));
+    EXPECT_EQ(lonely.status, 2);
+    EXPECT_NE(lonely.err.find("contactbench solve: error: " + fifo.string() +
+                              ": is a FIFO with no reader: nothing written\n"),
+              std::string::npos)
+        << lonely.err;
+    EXPECT_TRUE(is_fifo(fifo));
+    const fs::path got = dir / "got.json";
+    const Output piped = run(solve + " --json " + q(fifo), "{ cat " + q(fifo) + " >" + q(got) + " & }");
+    EXPECT_EQ(piped.status, 0) << piped.err;
+    nlohmann::json record;
+    for (int tries = 0; tries < 100 && !record.is_object(); ++tries) {  // cat finishes after the writer closes
+        record = nlohmann::json::parse(slurp(got), nullptr, false);
+        if (!record.is_object()) ::usleep(50000);
+    }
+    EXPECT_EQ(record.value("status", ""), "converged") << slurp(got);
+    EXPECT_TRUE(is_fifo(fifo)) << "the FIFO was replaced";
+    // A character device (a twin of /dev/null, made where the test may: root) is written to, not replaced.
+    const fs::path null_twin = dir / "null";
+    if (::mknod(null_twin.c_str(), S_IFCHR | 0666, makedev(1, 3)) == 0) {
+        const Output null_out = run(solve + " --json " + q(null_twin));
+        EXPECT_EQ(null_out.status, 0) << null_out.err;
+        struct stat st {};
+        ASSERT_EQ(::lstat(null_twin.c_str(), &st), 0);
+        EXPECT_TRUE(S_ISCHR(st.st_mode)) << "the device was replaced by a regular file";
+    }
+    // A folder as --json; FIFOs as convert targets (a .qpsnap streams, an FCLIB file needs to seek).
+    const Output folder = run(solve + " --json " + q(dir));
+    EXPECT_EQ(folder.status, 2);
+    EXPECT_NE(folder.err.find(dir.string() + ": is a folder: not replaced (name a file)\n"), std::string::npos)
+        << folder.err;
+    const fs::path snap_fifo = dir / "out.qpsnap", hdf5_fifo = dir / "out.hdf5";
+    ASSERT_EQ(::mkfifo(snap_fifo.c_str(), 0644), 0);
+    ASSERT_EQ(::mkfifo(hdf5_fifo.c_str(), 0644), 0);
+    const Output snap = run("convert " + q(dir / "a.qpsnap") + " " + q(snap_fifo));
+    EXPECT_EQ(snap.status, 2);
+    EXPECT_EQ(snap.err,
+              "contactbench convert: error: " + snap_fifo.string() + ": is a FIFO with no reader: nothing written\n");
+    const Output hdf5 = run("convert " + q(dir / "a.qpsnap") + " " + q(hdf5_fifo));
+    EXPECT_EQ(hdf5.status, 2);
+    EXPECT_EQ(hdf5.err, "contactbench convert: error: " + hdf5_fifo.string() +
+                            ": is a FIFO: not replaced (this output needs a regular file)\n");
+    EXPECT_TRUE(is_fifo(snap_fifo) && is_fifo(hdf5_fifo));
+    // Unclear before: an empty --json, and --save-solution onto a file (both before the solve).
+    const Output empty = run(solve + " --json ''");
+    EXPECT_EQ(empty.status, 2);
+    EXPECT_EQ(empty.err, "contactbench solve: error: solve: --json: expects a file or folder name, got \"\"\n");
+    const Output onto_file = run(solve + " --save-solution " + q(dir / "a.qpsnap"));
+    EXPECT_EQ(onto_file.status, 2);
+    EXPECT_EQ(onto_file.err, "contactbench solve: error: " + (dir / "a.qpsnap").string() +
+                                 ": --save-solution: exists and is not a folder (x.mtx and lambda.mtx are written "
+                                 "into a folder)\n");
+    EXPECT_EQ(count_matching(dir, ".tmp."), 0u);
+}
+
+// A symlink planted as OUT/.lock made `run` truncate the file it points to (outside OUT).
+TEST(Hostile, PlantedLockLinkIsNotFollowed)
+{
+    const fs::path dir = fresh_dir("lock_link");
+    write_snapshot(dir / "a.qpsnap", 1);
+    write_snapshot(dir / "b.qpsnap", 2);
+    const fs::path suite = write_suite(dir, "locked", {"mprgp"});
+    std::ofstream(dir / "victim.txt") << "precious\n";
+    fs::create_directories(dir / "out");
+    fs::create_symlink(dir / "victim.txt", dir / "out" / ".lock");
+    const Output r = run("run " + q(suite) + " --out " + q(dir / "out"));
+    EXPECT_EQ(r.status, 2);
+    EXPECT_EQ(r.err, "contactbench run: error: " + (dir / "out" / ".lock").string() +
+                         ": cannot create the lock file: Too many levels of symbolic links\n");
+    EXPECT_EQ(slurp(dir / "victim.txt"), "precious\n");
+}
+
+// Issue 27: an interrupted convert or merge left PATH.tmp.<pid> that no later run cleaned.
+TEST(Hostile, TemporariesOfAnInterruptedRunAreRemovedByTheNext)
+{
+    const fs::path dir = fresh_dir("stale_tmp");
+    write_snapshot(dir / "a.qpsnap", 1);
+    const pid_t child = ::fork();  // a pid that is surely gone
+    ASSERT_GE(child, 0);
+    if (child == 0) ::_exit(0);
+    ASSERT_EQ(::waitpid(child, nullptr, 0), child);
+    const std::string dead = std::to_string(child);
+    std::ofstream(dir / ("b.qpsnap.tmp." + dead)) << "half a snapshot";
+    std::ofstream(dir / ("b.hdf5.tmp." + dead)) << "half an HDF5 file";
+    fs::create_directories(dir / ("b_mm.tmp." + dead));
+    std::ofstream(dir / ("b_mm.tmp." + dead) / "A.mtx") << "half a folder";
+    std::ofstream(dir / ("other.txt.tmp." + dead)) << "not a target of this run: kept";
+    // Left over: untouched for an hour. A young one may be another machine's write in progress on
+    // a shared file system (the pid is only known gone here): named and kept.
+    for (const std::string target : {"b.qpsnap", "b.hdf5", "b_mm"})
+        fs::last_write_time(dir / (target + ".tmp." + dead), fs::file_time_type::clock::now() - std::chrono::hours(1));
+    std::ofstream(dir / ("young.qpsnap.tmp." + dead)) << "maybe another machine's";
+    const Output young = run("convert " + q(dir / "a.qpsnap") + " " + q(dir / "young.qpsnap"));
+    ASSERT_EQ(young.status, 0) << young.err;
+    EXPECT_EQ(young.err, "note: kept " + (dir / ("young.qpsnap.tmp." + dead)).string() + ": process " + dead +
+                             " is gone here, but the file is younger than 10 minutes (another machine may be "
+                             "writing it); remove it if not\n");
+    EXPECT_TRUE(fs::exists(dir / ("young.qpsnap.tmp." + dead)));
+    fs::remove(dir / ("young.qpsnap.tmp." + dead));
+    for (const std::string target : {"b.qpsnap", "b.hdf5", "b_mm"}) {
+        const Output r = run("convert " + q(dir / "a.qpsnap") + " " + q(dir / target));
+        ASSERT_EQ(r.status, 0) << r.err;
+        EXPECT_EQ(r.err, "note: removed " + (dir / (target + ".tmp." + dead)).string() +
+                             ", left by an interrupted earlier run (process " + dead + " is gone)\n");
+        EXPECT_FALSE(fs::exists(dir / (target + ".tmp." + dead)));
+    }
+    EXPECT_TRUE(fs::exists(dir / ("other.txt.tmp." + dead)));
+    EXPECT_EQ(count_matching(dir, ".tmp."), 1u);
 }
 
 TEST(Hostile, DeepJsonIsRefusedNotACrash)

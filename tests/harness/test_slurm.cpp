@@ -169,6 +169,87 @@ TEST(SlurmSbatch, ArrayAndMergeFiles)
     EXPECT_EQ(shell_quote("it's"), "'it'\\''s'");
 }
 
+namespace {
+
+/// The message of the InputError both script functions throw for `o`, or "no error".
+std::string sbatch_error(const SbatchOptions& o)
+{
+    std::string array_error = "no error", merge_error = "no error";
+    try {
+        sbatch_array_script(o);
+    } catch (const InputError& e) {
+        array_error = e.what();
+    }
+    try {
+        sbatch_merge_script(o);
+    } catch (const InputError& e) {
+        merge_error = e.what();
+    }
+    EXPECT_EQ(array_error, merge_error);
+    return array_error;
+}
+
+SbatchOptions plain_options()
+{
+    SbatchOptions o;
+    o.contactbench = "/opt/cb/bin/contactbench";
+    o.suite = "/home/u/suites/ci.json";
+    o.suite_name = "ci";
+    o.out = "/scratch/u/ci";
+    o.shards = 4;
+    return o;
+}
+
+}  // namespace
+
+TEST(SlurmSbatch, LineBreaksInEmbeddedValuesAreRefused)
+{
+    // Issue 27: a newline in the suite path ended the comment line and ran the next line on the cluster.
+    SbatchOptions o = plain_options();
+    o.suite = "/home/u/x\ntouch /tmp/pwned\n.json";
+    EXPECT_EQ(sbatch_error(o),
+              "cluster: suite: holds the control character 0x0a, which a generated sbatch file cannot carry safely");
+    o = plain_options();
+    o.contactbench = "/opt/cb\r/contactbench";
+    EXPECT_EQ(sbatch_error(o), "cluster: contactbench binary: holds the control character 0x0d, which a generated "
+                               "sbatch file cannot carry safely");
+    o = plain_options();
+    o.suite_name = "ci\nrm -rf ~";
+    EXPECT_EQ(
+        sbatch_error(o),
+        "cluster: suite name: holds the control character 0x0a, which a generated sbatch file cannot carry safely");
+    o = plain_options();
+    o.extra = {"--comment=a\x1b[2Jb"};
+    EXPECT_EQ(sbatch_error(o), "cluster: --sbatch-option: holds the control character 0x1b, which a generated "
+                               "sbatch file cannot carry safely");
+    o = plain_options();
+    o.out = "/scratch/u/a b";
+    EXPECT_EQ(sbatch_error(o), "cluster: --out: '/scratch/u/a b' holds a space, quote, backslash or %, which "
+                               "#SBATCH lines cannot carry");
+    // Shell metacharacters that stay on their line are quoted, and the job name keeps only safe characters.
+    o = plain_options();
+    o.suite = "/home/u/$(touch x);`id` 'q'.json";
+    o.suite_name = "ci $(id)";
+    const std::string array = sbatch_array_script(o);
+    EXPECT_NE(array.find(" run '/home/u/$(touch x);`id` '\\''q'\\''.json' --out "), std::string::npos) << array;
+    EXPECT_NE(array.find("\n#SBATCH --job-name=cb-ci___id_\n"), std::string::npos) << array;
+}
+
+TEST(SlurmSbatch, ShardsAndIndicesAreBounded)
+{
+    SbatchOptions o = plain_options();
+    o.shards = 1000000000;  // issue 27: ran on with a growing memory footprint
+    EXPECT_EQ(sbatch_error(o), "cluster: --shards: must be in 1..10000, got 1000000000");
+    o.shards = 0;
+    EXPECT_EQ(sbatch_error(o), "cluster: --shards: must be in 1..10000, got 0");
+    o.shards = 4;
+    o.first_index = 3999998;  // 3999998..4000001 passes Slurm's last index
+    EXPECT_EQ(sbatch_error(o), "cluster: --first-index: must be in 0..3999997 for 4 shards (Slurm array indices end "
+                               "at 4000000), got 3999998");
+    o.first_index = 3999997;
+    EXPECT_NE(sbatch_array_script(o).find("\n#SBATCH --array=3999997-4000000\n"), std::string::npos);
+}
+
 TEST(TimingHygiene, MixedCpuModelsWarn)
 {
     const nlohmann::json a = {{"status", "converged"}, {"provenance", {{"cpu", "Xeon A"}}}};

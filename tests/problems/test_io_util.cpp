@@ -10,6 +10,7 @@
 #include <fstream>
 #include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -92,6 +93,48 @@ TEST(IoUtil, AtomicWritePastAFileSizeLimitLeavesNothing)
     for (const auto& e : fs::directory_iterator(scratch()))
         if (e.path().filename().string().find(".tmp.") != std::string::npos) ++leftovers;
     EXPECT_EQ(leftovers, 0u);
+}
+
+// Issue 27: the temporary name is predictable; an entry planted there is removed, never followed.
+TEST(IoUtil, AtomicWriteNeverFollowsAPlantedTemporary)
+{
+    const fs::path victim = scratch() / "victim.txt", target = scratch() / "planted.txt";
+    std::ofstream(victim) << "precious\n";
+    fs::create_symlink(victim, scratch() / ("planted.txt.tmp." + std::to_string(::getpid())));
+    write_file_atomic(target.string(), "new\n");
+    std::ifstream in(victim), out(target);
+    EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), {}), "precious\n");
+    EXPECT_EQ(std::string(std::istreambuf_iterator<char>(out), {}), "new\n");
+    EXPECT_FALSE(fs::is_symlink(target));
+}
+
+TEST(IoUtil, SpecialTargetsAreWrittenThroughOrRefusedNeverReplaced)
+{
+    const fs::path fifo = scratch() / "out.fifo";
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
+    EXPECT_EQ(error_of([&] { write_file_atomic(fifo.string(), "x"); }),
+              fifo.string() + ": is a FIFO with no reader: nothing written");
+    EXPECT_EQ(error_of([&] { AtomicFile f(fifo.string(), SpecialTarget::refuse); }),
+              fifo.string() + ": is a FIFO: not replaced (this output needs a regular file)");
+    EXPECT_EQ(error_of([&] { write_file_atomic(scratch().string(), "x"); }),
+              scratch().string() + ": is a folder: not replaced (name a file)");
+    EXPECT_EQ(error_of([&] { write_file_atomic("", "x"); }), "(empty path): an output file name is required, got \"\"");
+    // Twins of /dev/null and /dev/full made here (root only), never the machine's own: a
+    // regression would replace them.
+    const fs::path null_twin = scratch() / "null", full_twin = scratch() / "full";
+    struct stat st {};
+    if (::mknod(null_twin.c_str(), S_IFCHR | 0666, makedev(1, 3)) == 0 &&
+        ::mknod(full_twin.c_str(), S_IFCHR | 0666, makedev(1, 7)) == 0) {
+        EXPECT_EQ(error_of([&] { write_file_atomic(full_twin.string(), "x"); }),
+                  full_twin.string() + ": write failed: No space left on device");
+        write_file_atomic(null_twin.string(), "discarded");
+        ASSERT_EQ(::lstat(null_twin.c_str(), &st), 0);
+        EXPECT_TRUE(S_ISCHR(st.st_mode));
+        ASSERT_EQ(::lstat(full_twin.c_str(), &st), 0);
+        EXPECT_TRUE(S_ISCHR(st.st_mode));
+    }
+    ASSERT_EQ(::lstat(fifo.c_str(), &st), 0);
+    EXPECT_TRUE(S_ISFIFO(st.st_mode));
 }
 
 TEST(IoUtil, ReplaceDirLeavesNoOldFolder)
