@@ -42,4 +42,10 @@ void register_builtin_solvers(SolverRegistry& registry);
 /// The registry with every built-in solver.
 const SolverRegistry& builtin_registry();
 
+/// Adds a registration that builtin_registry() runs after register_builtin_solvers: solvers
+/// living above solvers/ (harness/command_solver writes files, which solvers/ never does) join
+/// the one registry this way. Must be called before the first builtin_registry() call (main()
+/// does it first thing); later, or twice with the same function, it throws std::logic_error.
+void add_builtin_registration(void (*registration)(SolverRegistry&));
+
 }  // namespace cb
