@@ -214,8 +214,20 @@ class TestExampleSuite(unittest.TestCase):
 
     def test_python_example_beside_mprgp_and_active_set_judged_on_the_original_qp(self):
         out = os.path.join(self.tmp, "results")
-        r = run(["run", os.path.join(ROOT, "suites", "command_example.json"), "--out", out], cwd=ROOT)
+        # The suite names build/bin/contactbench (run from the root after `make`): the binary under
+        # test instead, in a copy (its snapshots are generated, so no path depends on its folder).
+        with open(os.path.join(ROOT, "suites", "command_example.json")) as f:
+            suite = json.load(f)
+        for entry in suite["solvers"]:
+            settings = entry.get("settings", {})
+            if "argv" in settings:
+                settings["argv"] = [CB if a == "build/bin/contactbench" else a for a in settings["argv"]]
+        path = os.path.join(self.tmp, "command_example.json")
+        with open(path, "w") as f:
+            json.dump(suite, f)
+        r = run(["run", path, "--out", out], cwd=ROOT)
         self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertEqual(len(loader.load_results(out).runs), 3 * 4)
         res = loader.load_results(out)
         runs = {(row["snapshot"], row["label"]): row for _, row in res.runs.iterrows()}
         for snap in ("plane-s1", "plane-s2"):
@@ -225,6 +237,10 @@ class TestExampleSuite(unittest.TestCase):
             # the same optimum as the registry solvers: objectives agree to 1e-8 relative
             exact = runs[(snap, "active-set")]["objective"]
             self.assertLessEqual(abs(python["objective"] - exact), 1e-8 * abs(exact))
+            shell = runs[(snap, "pgs-shell")]  # the shell script around a command-line tool
+            self.assertEqual(shell["status"], "converged")
+            self.assertLessEqual(shell["kkt_rel"], 1e-6)
+            self.assertLessEqual(abs(shell["objective"] - exact), 1e-8 * abs(exact))
         coupled = runs[("coupled", "pgd-python")]
         self.assertEqual(coupled["status"], "solved_relaxation")  # decoupled by the harness, judged on all rows
         self.assertLess(coupled["rows_after"], coupled["rows_before"])
