@@ -191,6 +191,35 @@ class TestHonestStatuses(CommandCase):
         self.assertIn("command: /argv: must name {settings}, or both {snapshot} and {out}", r.stderr)
 
 
+class TestJudgeCli(CommandCase):
+    def test_judge_prints_solves_error_and_exits_2_on_bad_solutions(self):
+        saved = os.path.join(self.tmp, "pgs_solution")
+        r = run(["solve", self.snap, "--solver", "pgs", "--set", "max_iterations=5", "--save-solution", saved])
+        self.assertEqual(r.returncode, 0, r.stderr)
+        first_part = [ln for ln in r.stdout.splitlines() if ln.startswith("error")][0].split("; tol")[0]
+        r = run(["judge", self.snap, saved])
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn(first_part, r.stdout)  # e and its parts, as solve printed them
+        self.assertIn("verdict     not converged at tol 1e-06 (e > tol)", r.stdout)
+        self.assertIn("units       stationarity, primal, dual, complementarity: lengths / l", r.stdout)
+        r = run(["judge", self.snap, self.exact])
+        self.assertIn("verdict     converged at tol 1e-06 (e <= tol)", r.stdout)
+        n = json.loads(run(["info", self.snap, "--json"]).stdout)["n"]
+        out = os.path.join(self.tmp, "judged.json")
+        bad = os.path.join(self.tmp, "bad.txt")
+        with open(bad, "w") as f:
+            f.write("1 2 3\n")
+        for args, message in [([os.path.join(self.tmp, "missing.npy")], "missing.npy: x: no such file or folder"),
+                              ([bad], f"bad.txt: x: expected {n} entries (n of the snapshot), got 3"),
+                              ([self.exact, "--lambda", bad], "bad.txt: lambda: expected "),
+                              ([self.exact, "--record", bad], "bad.txt: not valid JSON")]:
+            with self.subTest(args=args):
+                r = run(["judge", self.snap] + args + ["--json", out])
+                self.assertEqual(r.returncode, 2, r.stdout)
+                self.assertIn(message, r.stderr)
+                self.assertFalse(os.path.exists(out))  # no partial output
+
+
 class TestExampleSuite(unittest.TestCase):
     def setUp(self):
         self.tmp = tempfile.mkdtemp(prefix="cb_command_suite_")
