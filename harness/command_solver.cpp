@@ -403,6 +403,7 @@ SolverEntry command_entry()
     const auto rows = command_settings_table().docs();
     entry.settings.insert(entry.settings.end(), rows.begin(), rows.end());
     entry.applies_to = "what its program declares: any J, or decoupled rows only (setting accepts)";
+    entry.needs_settings = true;
     return entry;
 }
 

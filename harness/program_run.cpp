@@ -60,7 +60,11 @@ ProgramOutcome run_program(const std::vector<std::string>& argv, const std::stri
     }
     const auto start = std::chrono::steady_clock::now();
     const pid_t pid = ::fork();
-    if (pid < 0) throw std::runtime_error(std::string("fork: ") + std::strerror(errno));
+    if (pid < 0) {
+        const int err = errno;
+        for (int fd : {out_fd, err_fd, null_fd}) ::close(fd);
+        throw std::runtime_error(std::string("fork: ") + std::strerror(err));
+    }
     if (pid == 0) {
         ::setpgid(0, 0);
         ::dup2(null_fd, 0);

@@ -20,6 +20,7 @@ struct SolverEntry {
     std::vector<SettingDoc> settings;  ///< solver-specific keys (the common ones are implied)
     std::string applies_to = "any J";  ///< which problems it accepts, for `contactbench solvers`
     std::string library;               ///< external peers: the library and its version ("Bullet 3.24"); else empty
+    bool needs_settings = false;  ///< cannot run without its own settings (command: argv); left out of "every solver"
 };
 
 class SolverRegistry {
