@@ -4,6 +4,7 @@
 #include "harness/program_run.hpp"
 #include "harness/results.hpp"
 #include "problems/io_util.hpp"
+#include "problems/matrix_market.hpp"
 #include "problems/qpsnap.hpp"
 #include "problems/solution_io.hpp"
 
@@ -34,8 +35,6 @@ const SettingsTable<CommandSettings>& command_settings_table()
     return table;
 }
 
-const char* const kPlaceholders[] = {"{snapshot}", "{settings}", "{out}"};
-
 std::vector<std::string> read_argv(const nlohmann::json& settings)
 {
     const auto it = settings.find("argv");
@@ -63,14 +62,14 @@ std::vector<std::string> read_argv(const nlohmann::json& settings)
         out.push_back(argv[i].get<std::string>());
         const std::string& a = out.back();
         if (a.find("{settings}") != std::string::npos) names_problem = names_output = true;
-        if (a.find("{snapshot}") != std::string::npos) names_problem = true;
+        if (a.find("{snapshot}") != std::string::npos || a.find("{mtx}") != std::string::npos) names_problem = true;
         if (a.find("{out}") != std::string::npos) names_output = true;
     }
     if (out[0].empty()) throw_input_error("command", "/argv/0", "the program is empty");
     if (!names_problem || !names_output)
         throw_input_error("command", "/argv",
-                          "must name {settings}, or both {snapshot} and {out}: the program would not know what to "
-                          "solve or where to write x");
+                          "must name {settings}, or {snapshot} (or {mtx}) and {out}: the program would not know what "
+                          "to solve or where to write x");
     return out;
 }
 
@@ -302,17 +301,40 @@ SolverResult CommandSolver::solve(const QpView& qp, const SolveContext& context)
                                     {"seed", common.seed},
                                     {"accepts", m_settings.accepts},
                                     {"x0", "the snapshot's array x0"},
-                                    {"lambda0", nullptr}};
+                                    {"lambda0", nullptr},
+                                    {"mtx", nullptr}};
     if (context.lambda0 && context.lambda0->size() == qp.m()) {
         write_text_vector(work.path() / "lambda0.txt", *context.lambda0);
         settings_file["lambda0"] = (work.path() / "lambda0.txt").string();
     }
+    // The same problem as a Matrix Market folder, only for a program that names {mtx}.
+    bool wants_mtx = false;
+    for (const auto& a : m_settings.argv) wants_mtx = wants_mtx || a.find("{mtx}") != std::string::npos;
+    if (wants_mtx) {
+        write_matrix_market_folder((work.path() / "problem_mtx").string(), problem);
+        settings_file["mtx"] = (work.path() / "problem_mtx").string();
+    }
     write_json_atomic(settings_path.string(), settings_file);
+    auto number = [](double v) {
+        char buffer[40];
+        std::snprintf(buffer, sizeof buffer, "%.17g", v);
+        return std::string(buffer);
+    };
+    const std::vector<std::pair<std::string, std::string>> placeholders = {
+        {"{snapshot}", snapshot.string()},
+        {"{settings}", settings_path.string()},
+        {"{out}", out.string()},
+        {"{mtx}", (work.path() / "problem_mtx").string()},
+        {"{tol}", number(common.tol)},
+        {"{max_iterations}", std::to_string(common.max_iterations)},
+        {"{time_limit_s}", number(common.time_limit_s)},
+        {"{seed}", std::to_string(common.seed)}};
     std::vector<std::string> argv;
-    for (const auto& a : m_settings.argv)
-        argv.push_back(replace_all(
-            replace_all(replace_all(a, "{snapshot}", snapshot.string()), "{settings}", settings_path.string()), "{out}",
-            out.string()));
+    for (const auto& a : m_settings.argv) {
+        std::string arg = a;
+        for (const auto& [name, value] : placeholders) arg = replace_all(arg, name, value);
+        argv.push_back(arg);
+    }
     const double prepare_s = seconds_since(t0);
 
     const ProgramOutcome run = run_program(argv, (work.path() / "stdout.txt").string(),

@@ -25,6 +25,7 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 from plots import loader, profiles  # noqa: E402
 
 CB = os.environ.get("CB_CONTACTBENCH", os.path.join(ROOT, "build", "bin", "contactbench"))
+BUILD = os.path.dirname(os.path.dirname(os.path.abspath(CB)))  # the build folder holding bin/ and examples/
 FAKE = os.path.join(HERE, "fixtures", "fake_command_solver.py")
 PY = "/usr/bin/python3"
 
@@ -188,7 +189,7 @@ class TestHonestStatuses(CommandCase):
         self.assertIn('command: /argv: expected a JSON array of strings, got the string "python3 solver.py"', r.stderr)
         r = run(["solve", self.snap, "--solver", "command", "--set", 'argv=["python3", "solver.py"]'])
         self.assertEqual(r.returncode, 2)
-        self.assertIn("command: /argv: must name {settings}, or both {snapshot} and {out}", r.stderr)
+        self.assertIn("command: /argv: must name {settings}, or {snapshot} (or {mtx}) and {out}", r.stderr)
 
 
 class TestJudgeCli(CommandCase):
@@ -243,6 +244,8 @@ class TestExampleSuite(unittest.TestCase):
 
     def test_python_example_beside_mprgp_and_active_set_judged_on_the_original_qp(self):
         out = os.path.join(self.tmp, "results")
+        self.assertTrue(os.path.isfile(os.path.join(BUILD, "examples", "pgd_solver_c")),
+                        "build the C example first: cmake --build build --target pgd_solver_c")
         # The suite names build/bin/contactbench (run from the root after `make`): the binary under
         # test instead, in a copy (its snapshots are generated, so no path depends on its folder).
         with open(os.path.join(ROOT, "suites", "command_example.json")) as f:
@@ -250,13 +253,14 @@ class TestExampleSuite(unittest.TestCase):
         for entry in suite["solvers"]:
             settings = entry.get("settings", {})
             if "argv" in settings:
-                settings["argv"] = [CB if a == "build/bin/contactbench" else a for a in settings["argv"]]
+                settings["argv"] = [a.replace("build/", BUILD + "/", 1) if a.startswith("build/") else a
+                                    for a in settings["argv"]]
         path = os.path.join(self.tmp, "command_example.json")
         with open(path, "w") as f:
             json.dump(suite, f)
         r = run(["run", path, "--out", out], cwd=ROOT)
         self.assertEqual(r.returncode, 0, r.stderr)
-        self.assertEqual(len(loader.load_results(out).runs), 3 * 4)
+        self.assertEqual(len(loader.load_results(out).runs), 3 * 5)
         res = loader.load_results(out)
         runs = {(row["snapshot"], row["label"]): row for _, row in res.runs.iterrows()}
         for snap in ("plane-s1", "plane-s2"):
@@ -266,17 +270,20 @@ class TestExampleSuite(unittest.TestCase):
             # the same optimum as the registry solvers: objectives agree to 1e-8 relative
             exact = runs[(snap, "active-set")]["objective"]
             self.assertLessEqual(abs(python["objective"] - exact), 1e-8 * abs(exact))
-            shell = runs[(snap, "pgs-shell")]  # the shell script around a command-line tool
-            self.assertEqual(shell["status"], "converged")
-            self.assertLessEqual(shell["kkt_rel"], 1e-6)
-            self.assertLessEqual(abs(shell["objective"] - exact), 1e-8 * abs(exact))
+            for label in ("pgd-c", "pgs-shell"):  # the C program; the shell script around a command-line tool
+                other = runs[(snap, label)]
+                self.assertEqual(other["status"], "converged", label)
+                self.assertLessEqual(other["kkt_rel"], 1e-6, label)
+                self.assertLessEqual(abs(other["objective"] - exact), 1e-8 * abs(exact), label)
         coupled = runs[("coupled", "pgd-python")]
         self.assertEqual(coupled["status"], "solved_relaxation")  # decoupled by the harness, judged on all rows
         self.assertLess(coupled["rows_after"], coupled["rows_before"])
         self.assertGreater(coupled["kkt_rel"], 1e-6)
         self.assertLessEqual(coupled["kkt_rel_solved"], 1e-6)
+        self.assertEqual(runs[("coupled", "pgd-c")]["status"], "solved_relaxation")
         numbers = profiles.compute(res)
-        self.assertIn("pgd-python", numbers["tiers"]["label"].tolist())
+        for label in ("pgd-python", "pgd-c", "pgs-shell", "mprgp", "active-set"):
+            self.assertIn(label, numbers["tiers"]["label"].tolist())
         self.assertEqual(profiles.main([out]), 0)
         with open(os.path.join(out, "profiles.md"), encoding="utf-8") as f:
             self.assertIn("| pgd-python |", f.read())
