@@ -21,21 +21,21 @@
 typedef struct { /* a matrix as its entries (coordinate form); products loop over them */
     long rows, cols, nnz;
     long *r, *c;
-    double *v;
+    double* v;
 } Coo;
 
-static void die(const char *what, const char *path)
+static void die(const char* what, const char* path)
 {
     fprintf(stderr, "pgd_solver: %s: %s\n", path, what);
     exit(2);
 }
 
 /* Opens a .mtx file, skips the banner and comments, reads the size line. */
-static FILE *open_mtx(const char *dir, const char *name, long *rows, long *cols, long *nnz, int *coordinate)
+static FILE* open_mtx(const char* dir, const char* name, long* rows, long* cols, long* nnz, int* coordinate)
 {
     static char path[4096], line[4096];
     snprintf(path, sizeof path, "%s/%s", dir, name);
-    FILE *f = fopen(path, "r");
+    FILE* f = fopen(path, "r");
     if (!f) die("cannot open", path);
     if (!fgets(line, sizeof line, f) || strncmp(line, "%%MatrixMarket", 14)) die("not a Matrix Market file", path);
     *coordinate = strstr(line, "coordinate") != NULL;
@@ -47,11 +47,11 @@ static FILE *open_mtx(const char *dir, const char *name, long *rows, long *cols,
     return f;
 }
 
-static Coo read_matrix(const char *dir, const char *name)
+static Coo read_matrix(const char* dir, const char* name)
 {
     Coo m;
     int coordinate;
-    FILE *f = open_mtx(dir, name, &m.rows, &m.cols, &m.nnz, &coordinate);
+    FILE* f = open_mtx(dir, name, &m.rows, &m.cols, &m.nnz, &coordinate);
     if (!coordinate) die("expected a coordinate matrix", name);
     m.r = malloc(sizeof(long) * (size_t)(m.nnz + 1));
     m.c = malloc(sizeof(long) * (size_t)(m.nnz + 1));
@@ -64,13 +64,13 @@ static Coo read_matrix(const char *dir, const char *name)
     return m;
 }
 
-static double *read_vector(const char *dir, const char *name, long expected)
+static double* read_vector(const char* dir, const char* name, long expected)
 {
     long rows, cols, nnz;
     int coordinate;
-    FILE *f = open_mtx(dir, name, &rows, &cols, &nnz, &coordinate);
+    FILE* f = open_mtx(dir, name, &rows, &cols, &nnz, &coordinate);
     if (coordinate || cols != 1 || rows != expected) die("expected an array vector of the right size", name);
-    double *v = malloc(sizeof(double) * (size_t)(rows + 1));
+    double* v = malloc(sizeof(double) * (size_t)(rows + 1));
     for (long i = 0; i < rows; ++i)
         if (fscanf(f, "%lf", &v[i]) != 1) die("short vector", name);
     fclose(f);
@@ -78,7 +78,7 @@ static double *read_vector(const char *dir, const char *name, long expected)
 }
 
 /* y = M x (or M' x when transpose). */
-static void multiply(const Coo *M, const double *x, double *y, int transpose)
+static void multiply(const Coo* M, const double* x, double* y, int transpose)
 {
     memset(y, 0, sizeof(double) * (size_t)(transpose ? M->cols : M->rows));
     for (long k = 0; k < M->nnz; ++k) {
@@ -96,7 +96,7 @@ static double now(void)
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
-int main(int argc, char **argv)
+int main(int argc, char** argv)
 {
     if (argc != 5) {
         fprintf(stderr, "usage: pgd_solver MTX_DIR OUT_DIR TOL MAX_ITERATIONS\n");
@@ -111,7 +111,7 @@ int main(int argc, char **argv)
     double *b = read_vector(dir, "b.mtx", n), *c = read_vector(dir, "c.mtx", m), *x0 = read_vector(dir, "x0.mtx", n);
 
     double *diag = calloc((size_t)n + 1, sizeof(double)), *rowsum = calloc((size_t)n + 1, sizeof(double));
-    double *norm2 = calloc((size_t)m + 1, sizeof(double));
+    double* norm2 = calloc((size_t)m + 1, sizeof(double));
     for (long k = 0; k < A.nnz; ++k) {
         rowsum[A.r[k]] += fabs(A.v[k]);
         if (A.r[k] == A.c[k]) diag[A.r[k]] = A.v[k];
@@ -133,12 +133,12 @@ int main(int argc, char **argv)
     double *lambda = calloc((size_t)m + 1, sizeof(double)), *r = malloc(sizeof(double) * (size_t)n);
 
 /* x += J' max(0, c - Jx) / |J_i|^2: exact projection when rows share no column. */
-#define PROJECT(v)                                                                   \
-    do {                                                                             \
-        multiply(&J, v, Jx, 0);                                                      \
-        for (long i = 0; i < m; ++i) w[i] = norm2[i] > 0 && c[i] > Jx[i] ? (c[i] - Jx[i]) / norm2[i] : 0.0; \
-        multiply(&J, w, r, 1);                                                       \
-        for (long j = 0; j < n; ++j) v[j] += r[j];                                   \
+#define PROJECT(v)                                                                                                     \
+    do {                                                                                                               \
+        multiply(&J, v, Jx, 0);                                                                                        \
+        for (long i = 0; i < m; ++i) w[i] = norm2[i] > 0 && c[i] > Jx[i] ? (c[i] - Jx[i]) / norm2[i] : 0.0;            \
+        multiply(&J, w, r, 1);                                                                                         \
+        for (long j = 0; j < n; ++j) v[j] += r[j];                                                                     \
     } while (0)
 
     memcpy(x, x0, sizeof(double) * (size_t)n);
@@ -148,7 +148,7 @@ int main(int argc, char **argv)
     double t = 1.0, f_prev = INFINITY, error = INFINITY;
     const double setup_end = now();
     long it = 0;
-    const char *status = "max_iterations";
+    const char* status = "max_iterations";
     while (it < max_it) {
         ++it;
         multiply(&A, y, g, 0);
@@ -186,7 +186,7 @@ int main(int argc, char **argv)
 
     char path[4096];
     snprintf(path, sizeof path, "%s/x.txt", out);
-    FILE *f = fopen(path, "w");
+    FILE* f = fopen(path, "w");
     if (!f) die("cannot write", path);
     for (long j = 0; j < n; ++j) fprintf(f, "%.17g\n", x[j]);
     fclose(f);
