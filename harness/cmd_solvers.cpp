@@ -34,6 +34,7 @@ int cmd_solvers(const Args& args)
                            {"applies_to", e.applies_to},
                            {"description", e.description},
                            {"library", e.library},
+                           {"needs_settings", e.needs_settings},  // command: runs only with its argv
                            {"settings", settings}});
         }
         std::cout << out.dump(1) << "\n";

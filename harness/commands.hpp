@@ -11,6 +11,7 @@ using Args = std::vector<std::string>;
 int cmd_info(const Args& args);
 int cmd_convert(const Args& args);
 int cmd_solve(const Args& args);
+int cmd_judge(const Args& args);
 int cmd_run(const Args& args);
 int cmd_merge(const Args& args);
 int cmd_simulate(const Args& args);

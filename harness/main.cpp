@@ -1,4 +1,5 @@
 // contactbench: parse the subcommand and dispatch. Exit status: 0 ran, 2 bad input, 1 internal error.
+#include "harness/command_solver.hpp"
 #include "harness/commands.hpp"
 #include "solvers/types.hpp"
 
@@ -20,6 +21,9 @@ const std::map<std::string, Command>& commands()
         {"info", {cb::cmd_info, "info SNAP: header, sizes, contact kinds, content hash"}},
         {"convert", {cb::cmd_convert, "convert IN OUT: .qpsnap <-> Matrix Market folder (by extension)"}},
         {"solve", {cb::cmd_solve, "solve SNAP --solver NAME [--set k=v ...] [--json FILE] [--save-solution DIR]"}},
+        {"judge",
+         {cb::cmd_judge,
+          "judge SNAP SOLUTION [--tol T] [--record RUN.json] [--json FILE]: the accuracy of any answer"}},
         {"run", {cb::cmd_run, "run SUITE.json [--out DIR] [--shard i/N]: a suite of snapshots x solvers"}},
         {"merge", {cb::cmd_merge, "merge OUT DIR...: join the shard folders DIR... of a suite run into OUT"}},
         {"generate", {cb::cmd_generate, "generate FAMILY --out FILE [--seed S ...]: write a synthetic snapshot"}},
@@ -49,6 +53,7 @@ void usage(std::ostream& out)
 
 int main(int argc, char** argv)
 {
+    cb::install_command_solver();  // `command` lives in harness/ (it writes files); see command_solver.hpp
     if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "help")) {
         usage(std::cout);
         return argc < 2 ? 2 : 0;

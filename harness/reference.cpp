@@ -12,26 +12,53 @@ namespace cb {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+// Keyed on everything F* depends on: the snapshot (content hash in `key`), the reference
+// solver, its settings and kReferenceVersion; not on the binary, so a rebuild keeps the cache.
+const nlohmann::json& reference_settings()
+{
+    static const nlohmann::json settings = {{"tol", 1e-10}, {"max_iterations", 100000}, {"monitor_every", 0}};
+    return settings;
+}
+
+nlohmann::json reference_method()
+{
+    return {{"solver", "active-set"}, {"settings", reference_settings()}, {"version", kReferenceVersion}};
+}
+
+std::string reference_path(const std::string& key, const std::string& cache)
+{
+    const std::string dir = (cache.empty() ? cache_dir() : cache) + "/reference";
+    return dir + "/" + key + "-" + fnv1a_hex(reference_method().dump()).substr(0, 8) + ".json";
+}
+
+}  // namespace
+
+nlohmann::json cached_reference(const std::string& key, const std::string& cache)
+{
+    const std::string path = reference_path(key, cache);
+    if (!fs::is_regular_file(path)) return nullptr;
+    try {
+        nlohmann::json cached = read_json_file(path);
+        if (cached.is_object() && cached.value("key", "") == key &&
+            cached.value("method", nlohmann::json()) == reference_method()) {
+            cached["cached"] = true;
+            return cached;
+        }
+    } catch (const InputError&) {
+        // A damaged cache entry counts as absent (reference_solution recomputes it).
+    }
+    return nullptr;
+}
+
 nlohmann::json reference_solution(const Qp& qp, const std::string& key, const std::string& cache)
 {
-    // Keyed on everything F* depends on: the snapshot (content hash in `key`), the reference
-    // solver, its settings and kReferenceVersion; not on the binary, so a rebuild keeps the cache.
-    const nlohmann::json settings = {{"tol", 1e-10}, {"max_iterations", 100000}, {"monitor_every", 0}};
-    const nlohmann::json method = {{"solver", "active-set"}, {"settings", settings}, {"version", kReferenceVersion}};
-    const std::string dir = (cache.empty() ? cache_dir() : cache) + "/reference";
-    const std::string path = dir + "/" + key + "-" + fnv1a_hex(method.dump()).substr(0, 8) + ".json";
-    if (fs::is_regular_file(path)) {
-        try {
-            nlohmann::json cached = read_json_file(path);
-            if (cached.is_object() && cached.value("key", "") == key &&
-                cached.value("method", nlohmann::json()) == method) {
-                cached["cached"] = true;
-                return cached;
-            }
-        } catch (const InputError&) {
-            // A damaged cache entry is recomputed.
-        }
-    }
+    nlohmann::json cached = cached_reference(key, cache);
+    if (!cached.is_null()) return cached;
+    const nlohmann::json& settings = reference_settings();
+    const nlohmann::json method = reference_method();
+    const std::string path = reference_path(key, cache);
     RunOptions options;
     options.record_history = false;
     options.decouple = "none";  // the caller passes the QP the solvers saw

@@ -19,6 +19,9 @@ constexpr int kReferenceVersion = 2;
 /// A failed reference solve is still cached, with its status, and "objective" null.
 nlohmann::json reference_solution(const Qp& qp, const std::string& key, const std::string& cache = "");
 
+/// The cached reference of snapshot `key`, or null when none is cached (nothing is computed).
+nlohmann::json cached_reference(const std::string& key, const std::string& cache = "");
+
 /// Adds "reference" to a run record, "energy_gap" = |F - F*| / (d_ref l^2) (docs/accuracy.md; d_ref
 /// and l from the record's stiffness_scale and length_scale) to it and as a history column
 /// (null where undefined). Refuses (adds nothing but "reference") a reference whose key is not the

@@ -41,9 +41,8 @@ nlohmann::json memory_json(const PeakMemory& peak)
             {"peak_reset", peak.reset}};
 }
 
-/// The measure at x on `qp` with the best multipliers at hand: the solver's own (when given for
-/// these rows); a least-squares fit when they are missing, or when they miss `tol` and the fit
-/// does better (e judges the point x, so the harness takes the smaller). `fitted` says which.
+}  // namespace
+
 AccuracyParts measure_point(const QpView& qp, const AccuracyScale& scale, const Vec& x, const Vec& g,
                             const Vec* own_lambda, double tol, Vec& lambda, bool& fitted)
 {
@@ -65,8 +64,6 @@ AccuracyParts measure_point(const QpView& qp, const AccuracyScale& scale, const 
     }
     return best;
 }
-
-}  // namespace
 
 RunOutcome run_solver(const Qp& qp, const std::string& solver_name, const nlohmann::json& settings,
                       const RunOptions& options, const nlohmann::json& snapshot_info)
@@ -282,7 +279,7 @@ RunOutcome run_solver(const SolverRegistry& registry, const Qp& original, const 
     if (result.status == SolveStatus::CONVERGED && native) rec["native_confirmed"] = native_ok;
     rec["tol"] = tol;
     rec["counters"] = result.counters.to_json();
-    rec["counters"]["a_products_harness"] = a_products_harness;  // counted by the harness, not the solver
+    rec["counters"]["a_products_harness"] = a_products_harness;         // counted by the harness, not the solver
     rec["counters"]["work"] = work_units(result.counters, original.A);  // A-product equivalents (docs/work.md)
     nlohmann::json time = {{"setup_s", median(setup_times)},
                            {"solve_s", median(solve_times)},

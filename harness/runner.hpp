@@ -62,6 +62,13 @@ RunOutcome run_solver(const Qp& qp, const std::string& solver_name, const nlohma
 RunOutcome run_solver(const Qp& qp, const std::string& solver_name, const nlohmann::json& settings,
                       const RunOptions& options, const nlohmann::json& snapshot_info, const SolveContext& warm);
 
+/// The measure at x on `qp` with the best multipliers at hand: `own_lambda` (when given, of size
+/// m); a least-squares fit when it is missing, or when it misses `tol` and the fit does better
+/// (e judges the point x, so the harness takes the smaller). `lambda` gets the multipliers used,
+/// `fitted` is set when they are the fit. `solve` and `judge` both measure with this.
+AccuracyParts measure_point(const QpView& qp, const AccuracyScale& scale, const Vec& x, const Vec& g,
+                            const Vec* own_lambda, double tol, Vec& lambda, bool& fitted);
+
 class SolverRegistry;
 /// Same, with the solver taken from `registry` (tests register small local solvers).
 RunOutcome run_solver(const SolverRegistry& registry, const Qp& qp, const std::string& solver_name,

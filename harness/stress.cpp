@@ -361,7 +361,8 @@ StressReport run_stress(const StressOptions& options)
     if (solvers.empty()) {
         // Every registered solver, plus the ichol variants so that the stiff section shows the
         // preconditioner's effect (docs/preconditioners.md).
-        solvers = builtin_registry().names();
+        for (const auto& name : builtin_registry().names())
+            if (!builtin_registry().entry(name).needs_settings) solvers.push_back(name);  // not command
         for (const char* variant : {"cg:precond=ichol", "mprgp:precond=ichol"})
             if (builtin_registry().contains(parse_solver_spec(variant).first)) solvers.push_back(variant);
     }

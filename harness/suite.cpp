@@ -23,9 +23,10 @@ namespace {
 
 const std::set<std::string>& known_keys()
 {
-    static const std::set<std::string> keys = {
-        "name",      "snapshots", "generate",      "solvers", "tol",         "time_limit_s", "repeat",  "history_max",
-        "reference", "decouple",  "decouple_seed", "chain",   "description", "tiers",        "comment", "timed"};
+    static const std::set<std::string> keys = {"name",          "snapshots",     "generate",    "solvers",   "tol",
+                                               "time_limit_s",  "repeat",        "history_max", "reference", "decouple",
+                                               "decouple_seed", "chain",         "description", "tiers",     "comment",
+                                               "timed",         "allow_commands"};
     return keys;
 }
 
@@ -268,6 +269,13 @@ Suite parse_suite(const nlohmann::json& j, const std::string& where)
     s.decouple_seed = static_cast<std::uint64_t>(get_integer(j, "decouple_seed", where, 0, 0));
     s.chain = get_bool(j, "chain", where, false);
     s.timed = get_bool(j, "timed", where, true);
+    // Running a program named in a suite file is the suite author's explicit choice.
+    s.allow_commands = get_bool(j, "allow_commands", where, false);
+    for (size_t i = 0; i < s.solvers.size(); ++i)
+        if (s.solvers[i].solver == "command" && !s.allow_commands)
+            throw_input_error(
+                where, "/solvers/" + std::to_string(i) + "/solver",
+                "'command' runs an external program; the suite must opt in with \"allow_commands\": true");
     if (j.contains("tiers")) {
         const auto& t = j["tiers"];
         if (!t.is_array()) throw_input_error(where, "/tiers", "expected an array of numbers, got " + t.dump());

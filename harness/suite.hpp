@@ -55,8 +55,9 @@ struct Suite {
     std::string decouple = "auto";
     std::uint64_t decouple_seed = 0;
     bool chain = false;
-    bool timed = true;   ///< false: times are not judged (counters only); `run --jobs` runs it in parallel
-    nlohmann::json raw;  ///< the file as read
+    bool timed = true;            ///< false: times are not judged (counters only); `run --jobs` runs it in parallel
+    bool allow_commands = false;  ///< true: `command` solvers (external programs) may run; without it they are refused
+    nlohmann::json raw;           ///< the file as read
 };
 
 /// Reads and validates a suite file; InputError("SUITE: /field: problem") on any bad or unknown key.

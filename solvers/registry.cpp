@@ -33,11 +33,38 @@ std::vector<std::string> SolverRegistry::names() const
     return out;
 }
 
+namespace {
+
+struct ExtraRegistrations {
+    std::vector<void (*)(SolverRegistry&)> functions;
+    bool registry_built = false;
+};
+
+ExtraRegistrations& extra_registrations()
+{
+    static ExtraRegistrations extra;
+    return extra;
+}
+
+}  // namespace
+
+void add_builtin_registration(void (*registration)(SolverRegistry&))
+{
+    ExtraRegistrations& extra = extra_registrations();
+    if (extra.registry_built) throw std::logic_error("add_builtin_registration after the registry was built");
+    for (auto* f : extra.functions)
+        if (f == registration) throw std::logic_error("add_builtin_registration: the same registration twice");
+    extra.functions.push_back(registration);
+}
+
 const SolverRegistry& builtin_registry()
 {
     static const SolverRegistry registry = [] {
         SolverRegistry r;
         register_builtin_solvers(r);
+        ExtraRegistrations& extra = extra_registrations();
+        for (auto* f : extra.functions) f(r);
+        extra.registry_built = true;
         return r;
     }();
     return registry;

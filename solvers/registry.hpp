@@ -20,6 +20,7 @@ struct SolverEntry {
     std::vector<SettingDoc> settings;  ///< solver-specific keys (the common ones are implied)
     std::string applies_to = "any J";  ///< which problems it accepts, for `contactbench solvers`
     std::string library;               ///< external peers: the library and its version ("Bullet 3.24"); else empty
+    bool needs_settings = false;  ///< cannot run without its own settings (command: argv); left out of "every solver"
 };
 
 class SolverRegistry {
@@ -41,5 +42,11 @@ private:
 void register_builtin_solvers(SolverRegistry& registry);
 /// The registry with every built-in solver.
 const SolverRegistry& builtin_registry();
+
+/// Adds a registration that builtin_registry() runs after register_builtin_solvers: solvers
+/// living above solvers/ (harness/command_solver writes files, which solvers/ never does) join
+/// the one registry this way. Must be called before the first builtin_registry() call (main()
+/// does it first thing); later, or twice with the same function, it throws std::logic_error.
+void add_builtin_registration(void (*registration)(SolverRegistry&));
 
 }  // namespace cb

@@ -1,0 +1,99 @@
+// `contactbench judge SNAP SOLUTION`: the accuracy measure of any program's answer, with units,
+// the verdict at tol, the objective and its gap to a cached reference (harness/judge.hpp).
+#include "harness/cli.hpp"
+#include "harness/commands.hpp"
+#include "harness/judge.hpp"
+#include "harness/results.hpp"
+#include "problems/qpsnap.hpp"
+#include "problems/solution_io.hpp"
+
+#include <cstdio>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+namespace cb {
+
+namespace {
+
+const char* const kUsage =
+    "contactbench judge SNAP SOLUTION [--lambda FILE] [--tol T] [--record RUN.json] [--json FILE]\n"
+    "  SOLUTION: a folder with x.{mtx,npy,txt} and optionally lambda.{mtx,npy,txt} (solve --save-solution),\n"
+    "            or one file holding x: .npy, .mtx, or plain text (numbers separated by white space)";
+
+std::string sci(double v)
+{
+    char buffer[32];
+    std::snprintf(buffer, sizeof(buffer), "%.3g", v);
+    return buffer;
+}
+
+}  // namespace
+
+int cmd_judge(const Args& args)
+{
+    const CommandLine cl("judge", args, {"--lambda", "--tol", "--record", "--json"}, {});
+    if (cl.help()) {
+        std::cout << "usage: " << kUsage << "\n";
+        return 0;
+    }
+    cl.expect_positional(2, 2, kUsage);
+    const std::string snap = cl.positional()[0];
+    const std::string solution = cl.positional()[1];
+    JudgeOptions options;
+    options.tol = cl.number("--tol", 0.0);
+    if (cl.has("--tol") && !(options.tol > 0.0)) throw_input_error("judge", "--tol", "must be > 0");
+    if (cl.has("--record")) {
+        options.record_path = cl.value("--record");
+        options.record = read_json_file(options.record_path);
+    }
+
+    const Qp qp = read_qpsnap(snap);
+    options.snapshot_hash = qpsnap_content_hash(snap);
+    const SolutionPoint point = read_solution(solution, qp.n(), qp.m(), cl.value("--lambda"));
+    const Judgement j = judge_point(qp, point, options);
+
+    std::ostringstream out;
+    out << "snapshot    " << snap << " (n " << qp.n() << ", m " << qp.m() << ")\n";
+    out << "solution    x from " << point.x_path;
+    if (!point.lambda_path.empty()) out << ", lambda from " << point.lambda_path;
+    out << (j.lambda_fitted
+                ? (point.lambda_path.empty() ? "; lambda fitted (none given)"
+                                             : "; lambda fitted (the given one missed tol, the fit did better)")
+                : "")
+        << "\n";
+    out << "error       " << sci(j.accuracy.max()) << " of the scene size l = " << sci(j.scale.length) << " ("
+        << j.scale.length_source << "); stationarity " << sci(j.accuracy.stationarity) << ", primal "
+        << sci(j.accuracy.primal) << ", dual " << sci(j.accuracy.dual) << ", complementarity "
+        << sci(j.accuracy.complementarity) << ", gap " << sci(j.accuracy.gap) << "\n";
+    out << "units       stationarity, primal, dual, complementarity: lengths / l; gap: energy / (d_ref l^2), d_ref "
+        << sci(j.scale.stiffness) << "\n";
+    out << "verdict     " << (j.meets_tol ? "converged" : "not converged") << " at tol " << sci(j.tol) << " (e "
+        << (j.meets_tol ? "<=" : ">") << " tol)\n";
+    if (!j.status.empty()) {
+        out << "status      " << j.status << " (with the run's record " << options.record_path << ")";
+        if (j.have_solved) out << "; error on the problem it solved " << sci(j.accuracy_solved.max());
+        out << "\n";
+    }
+    out << "objective   " << std::setprecision(10) << j.objective << ", violation " << sci(j.violation) << "\n";
+    if (j.reference.is_object() && j.reference["objective"].is_number())
+        out << "reference   F* " << std::setprecision(10) << j.reference["objective"].get<double>() << ", energy gap "
+            << sci(j.energy_gap) << " (|F - F*| / (d_ref l^2))\n";
+    else
+        out << "reference   none cached (a suite with \"reference\": true computes one)\n";
+    std::cout << out.str();
+
+    if (cl.has("--json")) {
+        nlohmann::json record = j.to_json();
+        record["snapshot"] = {{"path", snap}, {"hash", options.snapshot_hash}, {"n", qp.n()}, {"m", qp.m()}};
+        record["solution"] = {
+            {"x", point.x_path},
+            {"lambda", point.lambda_path.empty() ? nlohmann::json() : nlohmann::json(point.lambda_path)}};
+        if (!options.record_path.empty()) record["record"] = options.record_path;
+        write_json_atomic(cl.value("--json"), record);
+    }
+    return 0;
+}
+
+}  // namespace cb

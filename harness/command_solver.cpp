@@ -1,0 +1,447 @@
+// `command`: an external program as a solver (command_solver.hpp, docs/INTERFACES.md).
+#include "harness/command_solver.hpp"
+
+#include "harness/program_run.hpp"
+#include "harness/results.hpp"
+#include "problems/io_util.hpp"
+#include "problems/matrix_market.hpp"
+#include "problems/qpsnap.hpp"
+#include "problems/solution_io.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <limits>
+
+namespace cb {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const SettingsTable<CommandSettings>& command_settings_table()
+{
+    static const SettingsTable<CommandSettings> table =
+        SettingsTable<CommandSettings>()
+            .choice("accepts", &CommandSettings::accepts, {"any", "decoupled"},
+                    "any | decoupled: what J the program takes; with decoupled the harness decouples a coupled J "
+                    "first and judges on the original QP")
+            .choice("time", &CommandSettings::time, {"harness", "self"},
+                    "harness | self: the run's solve time is the harness's wall time of the child (start-up "
+                    "included) or the program's self-reported solve_s; both are recorded")
+            .boolean("keep_files", &CommandSettings::keep_files,
+                     "keep the work folder (snapshot, settings.json, out/, stdout.txt, stderr.txt)");
+    return table;
+}
+
+std::vector<std::string> read_argv(const nlohmann::json& settings)
+{
+    const auto it = settings.find("argv");
+    if (it == settings.end())
+        throw_input_error(
+            "command", "/argv",
+            "missing: the program and its arguments, e.g. [\"python3\", \"my_solver.py\", \"{settings}\"]");
+    nlohmann::json argv = *it;
+    if (argv.is_string()) {  // --set argv='["python3", ...]' arrives as a string
+        try {
+            argv = nlohmann::json::parse(argv.get<std::string>());
+        } catch (const nlohmann::json::exception&) {
+            throw_input_error("command", "/argv",
+                              "expected a JSON array of strings, got the string " + it->dump() +
+                                  " (no shell splits it: write [\"prog\", \"arg\", ...])");
+        }
+    }
+    if (!argv.is_array() || argv.empty())
+        throw_input_error("command", "/argv", "expected a non-empty array of strings, got " + argv.dump());
+    std::vector<std::string> out;
+    bool names_problem = false, names_output = false;
+    for (size_t i = 0; i < argv.size(); ++i) {
+        if (!argv[i].is_string())
+            throw_input_error("command", "/argv/" + std::to_string(i), "expected a string, got " + argv[i].dump());
+        out.push_back(argv[i].get<std::string>());
+        const std::string& a = out.back();
+        if (a.find("{settings}") != std::string::npos) names_problem = names_output = true;
+        if (a.find("{snapshot}") != std::string::npos || a.find("{mtx}") != std::string::npos) names_problem = true;
+        if (a.find("{out}") != std::string::npos) names_output = true;
+    }
+    if (out[0].empty()) throw_input_error("command", "/argv/0", "the program is empty");
+    if (!names_problem || !names_output)
+        throw_input_error("command", "/argv",
+                          "must name {settings}, or {snapshot} (or {mtx}) and {out}: the program would not know what "
+                          "to solve or where to write x");
+    return out;
+}
+
+std::string replace_all(std::string s, const std::string& from, const std::string& to)
+{
+    for (size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size()))
+        s.replace(at, from.size(), to);
+    return s;
+}
+
+/// A fresh folder under the system's temporary folder, removed on destruction unless kept.
+class WorkFolder {
+public:
+    explicit WorkFolder(bool keep) : m_keep(keep)
+    {
+        std::string pattern = (fs::temp_directory_path() / "contactbench-command-XXXXXX").string();
+        if (!::mkdtemp(pattern.data())) throw std::runtime_error("command: cannot create a work folder in " + pattern);
+        m_path = pattern;
+    }
+    ~WorkFolder()
+    {
+        std::error_code ignored;
+        if (!m_keep) fs::remove_all(m_path, ignored);
+    }
+    WorkFolder(const WorkFolder&) = delete;
+    WorkFolder& operator=(const WorkFolder&) = delete;
+    const fs::path& path() const { return m_path; }
+
+private:
+    fs::path m_path;
+    bool m_keep;
+};
+
+/// The last `max_chars` of a text file on one line (for messages).
+std::string tail_of(const fs::path& path, size_t max_chars = 300)
+{
+    std::string text;
+    try {
+        text = read_regular_file(path.string(), std::uint64_t(1) << 26);
+    } catch (const InputError&) {
+        return "";
+    }
+    while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
+    if (text.size() > max_chars) text = "..." + text.substr(text.size() - max_chars);
+    for (auto& ch : text)
+        if (ch == '\n' || ch == '\r' || ch == '\t') ch = ' ';
+    return text;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t0)
+{
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// What the program reported in result.json (every field optional).
+struct ProgramReport {
+    bool has_status = false;
+    SolveStatus status = SolveStatus::CONVERGED;
+    std::string status_text;
+    long iterations = 0;
+    double solve_s = std::numeric_limits<double>::quiet_NaN();
+    double setup_s = std::numeric_limits<double>::quiet_NaN();
+    double residual = std::numeric_limits<double>::quiet_NaN();
+    std::string message;
+    nlohmann::json history = nlohmann::json::array();
+};
+
+double number_field(const nlohmann::json& j, const char* key, const std::string& where, bool non_negative)
+{
+    const auto& v = j[key];
+    if (!v.is_number() || !std::isfinite(v.get<double>()) || (non_negative && v.get<double>() < 0))
+        throw_input_error(where, std::string("/") + key,
+                          std::string("expected a finite ") + (non_negative ? "number >= 0" : "number") + ", got " +
+                              v.dump());
+    return v.get<double>();
+}
+
+ProgramReport read_report(const fs::path& path)
+{
+    ProgramReport report;
+    if (!fs::exists(path)) return report;
+    const std::string where = path.string();
+    const nlohmann::json j = read_json_checked(where);
+    if (!j.is_object()) throw_input_error(where, "", "expected a JSON object");
+    static const char* const known[] = {"status", "iterations", "solve_s", "setup_s", "residual", "message", "history"};
+    for (const auto& item : j.items())
+        if (std::find_if(std::begin(known), std::end(known), [&](const char* k) { return item.key() == k; }) ==
+            std::end(known))
+            throw_input_error(where, "/" + item.key(),
+                              "unknown key; known: status, iterations, solve_s, setup_s, residual, message, history");
+    if (j.contains("status")) {
+        if (!j["status"].is_string())
+            throw_input_error(where, "/status", "expected a string, got " + j["status"].dump());
+        report.status_text = j["status"].get<std::string>();
+        try {
+            report.status = solve_status_from_string(report.status_text);
+        } catch (const InputError&) {
+            throw_input_error(where, "/status",
+                              "unknown status '" + report.status_text +
+                                  "'; known: converged, max_iterations, time_limit, stalled, diverged, infeasible, "
+                                  "invalid_input, not_applicable");
+        }
+        report.has_status = true;
+    }
+    if (j.contains("iterations")) {
+        if (!j["iterations"].is_number_integer() || j["iterations"].get<long>() < 0)
+            throw_input_error(where, "/iterations", "expected an integer >= 0, got " + j["iterations"].dump());
+        report.iterations = j["iterations"].get<long>();
+    }
+    if (j.contains("solve_s")) report.solve_s = number_field(j, "solve_s", where, true);
+    if (j.contains("setup_s")) report.setup_s = number_field(j, "setup_s", where, true);
+    if (j.contains("residual")) report.residual = number_field(j, "residual", where, false);
+    if (j.contains("message")) {
+        if (!j["message"].is_string())
+            throw_input_error(where, "/message", "expected a string, got " + j["message"].dump());
+        report.message = j["message"].get<std::string>();
+    }
+    if (j.contains("history")) {
+        if (!j["history"].is_array()) throw_input_error(where, "/history", "expected an array of objects");
+        for (size_t k = 0; k < j["history"].size(); ++k) {
+            const auto& row = j["history"][k];
+            const std::string at = where + ": /history/" + std::to_string(k);
+            if (!row.is_object()) throw_input_error(at, "", "expected an object {iteration, time_s, residual, x}");
+            for (const auto& item : row.items())
+                if (item.key() != "iteration" && item.key() != "time_s" && item.key() != "residual" &&
+                    item.key() != "x")
+                    throw_input_error(at, "/" + item.key(), "unknown key; known: iteration, time_s, residual, x");
+            if (row.contains("iteration") &&
+                (!row["iteration"].is_number_integer() || row["iteration"].get<long>() < 0))
+                throw_input_error(at, "/iteration", "expected an integer >= 0, got " + row["iteration"].dump());
+            if (row.contains("time_s")) number_field(row, "time_s", at, true);
+            if (row.contains("residual")) number_field(row, "residual", at, false);
+            if (row.contains("x") && !row["x"].is_string())
+                throw_input_error(at, "/x", "expected a file name in {out}, got " + row["x"].dump());
+        }
+        report.history = j["history"];
+    }
+    return report;
+}
+
+/// The program's iterates, measured by the harness's monitor (time axis: the program's time_s).
+/// `offset_s` moves the program's time_s (from the start of its solve) onto the run's clock.
+void replay_history(const ProgramReport& report, const fs::path& out, const QpView& qp, const SolveContext& context,
+                    double offset_s, nlohmann::json& program_history)
+{
+    for (const auto& row : report.history) {
+        program_history.push_back({{"iteration", row.value("iteration", 0L)},
+                                   {"time_s", row.contains("time_s") ? row["time_s"] : nlohmann::json()},
+                                   {"residual", row.contains("residual") ? row["residual"] : nlohmann::json()}});
+        if (!context.monitor || !row.contains("x")) continue;
+        const std::string name = row["x"].get<std::string>();
+        if (name.find('/') != std::string::npos || name.find("..") != std::string::npos)
+            throw_input_error((out / "result.json").string(), "/history/x",
+                              "expected a file name inside {out}, got '" + name + "'");
+        const fs::path file = out / name;
+        const Vec x = read_vector_file(file.string(), "x");
+        if (x.size() != qp.n())
+            throw_input_error(file.string(), "x",
+                              "expected " + std::to_string(qp.n()) + " entries, got " + std::to_string(x.size()));
+        IterationInfo info;
+        info.iteration = row.value("iteration", 0L);
+        info.step = StepKind::OUTER;
+        info.x = &x;
+        info.native_residual = row.value("residual", std::numeric_limits<double>::quiet_NaN());
+        info.elapsed_s = offset_s + row.value("time_s", 0.0);
+        context.monitor->on_iteration(info);
+    }
+}
+
+void write_text_vector(const fs::path& path, const Vec& v)
+{
+    std::string text;
+    char buffer[40];
+    for (Eigen::Index i = 0; i < v.size(); ++i) {
+        std::snprintf(buffer, sizeof buffer, "%.17g\n", v[i]);
+        text += buffer;
+    }
+    write_file_atomic(path.string(), text);
+}
+
+}  // namespace
+
+CommandSettings CommandSettings::from_json(const nlohmann::json& settings_in)
+{
+    const nlohmann::json settings = settings_in.is_null() ? nlohmann::json::object() : settings_in;
+    if (!settings.is_object()) throw_input_error("command", "", "settings must be a JSON object");
+    CommandSettings s;
+    s.argv = read_argv(settings);
+    nlohmann::json rest = settings;
+    rest.erase("argv");
+    SettingsReader reader(rest, "command");
+    s.common = reader.common();
+    command_settings_table().read(reader, s);
+    reader.finish();
+    return s;
+}
+
+nlohmann::json CommandSettings::to_json() const
+{
+    nlohmann::json j = common.to_json();
+    j["argv"] = argv;
+    command_settings_table().write(*this, j);
+    return j;
+}
+
+SolverResult CommandSolver::solve(const QpView& qp, const SolveContext& context)
+{
+    const auto t0 = std::chrono::steady_clock::now();
+    SolverResult result;
+    result.native_residual = std::numeric_limits<double>::quiet_NaN();
+    const CommonSettings& common = m_settings.common;
+    WorkFolder work(m_settings.keep_files);
+    const fs::path snapshot = work.path() / "problem.qpsnap", settings_path = work.path() / "settings.json",
+                   out = work.path() / "out";
+    fs::create_directories(out);
+
+    // The problem exactly as this solver is given it (decoupled rows when the harness decoupled).
+    Qp problem{qp.A, qp.b, qp.J, qp.c, qp.x0, {}, {{"source", "contactbench command solver"}}};
+    write_qpsnap(snapshot.string(), problem);
+    nlohmann::json settings_file = {{"protocol", kCommandProtocolVersion},
+                                    {"snapshot", snapshot.string()},
+                                    {"out", out.string()},
+                                    {"n", qp.n()},
+                                    {"m", qp.m()},
+                                    {"tol", common.tol},
+                                    {"stop", common.stop == StopRule::KKT ? "kkt" : "native"},
+                                    {"max_iterations", common.max_iterations},
+                                    {"time_limit_s", common.time_limit_s},
+                                    {"seed", common.seed},
+                                    {"accepts", m_settings.accepts},
+                                    {"x0", "the snapshot's array x0"},
+                                    {"lambda0", nullptr},
+                                    {"mtx", nullptr}};
+    if (context.lambda0 && context.lambda0->size() == qp.m()) {
+        write_text_vector(work.path() / "lambda0.txt", *context.lambda0);
+        settings_file["lambda0"] = (work.path() / "lambda0.txt").string();
+    }
+    // The same problem as a Matrix Market folder, only for a program that names {mtx}.
+    bool wants_mtx = false;
+    for (const auto& a : m_settings.argv) wants_mtx = wants_mtx || a.find("{mtx}") != std::string::npos;
+    if (wants_mtx) {
+        write_matrix_market_folder((work.path() / "problem_mtx").string(), problem);
+        settings_file["mtx"] = (work.path() / "problem_mtx").string();
+    }
+    write_json_atomic(settings_path.string(), settings_file);
+    auto number = [](double v) {
+        char buffer[40];
+        std::snprintf(buffer, sizeof buffer, "%.17g", v);
+        return std::string(buffer);
+    };
+    const std::vector<std::pair<std::string, std::string>> placeholders = {
+        {"{snapshot}", snapshot.string()},
+        {"{settings}", settings_path.string()},
+        {"{out}", out.string()},
+        {"{mtx}", (work.path() / "problem_mtx").string()},
+        {"{tol}", number(common.tol)},
+        {"{max_iterations}", std::to_string(common.max_iterations)},
+        {"{time_limit_s}", number(common.time_limit_s)},
+        {"{seed}", std::to_string(common.seed)}};
+    std::vector<std::string> argv;
+    for (const auto& a : m_settings.argv) {
+        std::string arg = a;
+        for (const auto& [name, value] : placeholders) arg = replace_all(arg, name, value);
+        argv.push_back(arg);
+    }
+    const double prepare_s = seconds_since(t0);
+
+    const ProgramOutcome run = run_program(argv, (work.path() / "stdout.txt").string(),
+                                           (work.path() / "stderr.txt").string(), common.time_limit_s);
+    nlohmann::json info = {{"argv", argv},
+                           {"time_child_wall_s", run.wall_s},
+                           {"time_prepare_s", prepare_s},
+                           {"time_self_s", nullptr},
+                           {"time_source", "harness"},
+                           {"exit_status", run.exit_status},
+                           {"signal", run.signal},
+                           {"crashed", false},
+                           {"garbage", false},
+                           {"timed_out", run.timed_out}};
+    if (m_settings.keep_files) info["workdir"] = work.path().string();
+    const std::string stderr_tail = tail_of(work.path() / "stderr.txt");
+    result.setup_s = prepare_s;
+    result.solve_s = run.wall_s;
+    auto finish = [&](SolveStatus status, const std::string& message) {
+        result.status = status;
+        result.message = message;
+        result.info["command"] = info;
+        return result;
+    };
+    if (run.timed_out)
+        return finish(SolveStatus::TIME_LIMIT, "command: killed at the time limit of " +
+                                                   nlohmann::json(common.time_limit_s).dump() +
+                                                   " s (harness wall time of the child)");
+    if (!run.failure().empty()) {
+        info["crashed"] = true;
+        return finish(SolveStatus::DIVERGED, "command: the program " + run.failure() +
+                                                 (stderr_tail.empty() ? "" : "; stderr: " + stderr_tail));
+    }
+    ProgramReport report;
+    SolutionPoint point;
+    nlohmann::json program_history = nlohmann::json::array();
+    try {
+        report = read_report(out / "result.json");
+        point = read_solution(out.string(), qp.n(), qp.m());
+        // On the harness's clock the program's solve ends with the child (start-up before it);
+        // on its own clock, after its setup.
+        const bool self_time = m_settings.time == "self" && std::isfinite(report.solve_s);
+        const double offset_s =
+            self_time
+                ? (std::isfinite(report.setup_s) ? report.setup_s : 0.0)
+                : (std::isfinite(report.solve_s) ? prepare_s + std::max(0.0, run.wall_s - report.solve_s) : prepare_s);
+        replay_history(report, out, qp, context, offset_s, program_history);
+    } catch (const InputError& e) {
+        info["garbage"] = true;
+        result.x = Vec();
+        return finish(SolveStatus::DIVERGED, std::string("command: the program's output is unusable: ") + e.what());
+    }
+    result.x = point.x;
+    result.lambda = point.lambda;
+    result.iterations = report.iterations;
+    result.counters.iterations = report.iterations;
+    result.native_residual = report.residual;
+    info["program_status"] = report.has_status ? nlohmann::json(report.status_text) : nlohmann::json();
+    info["program_history"] = program_history;
+    if (std::isfinite(report.solve_s))
+        info["time_self_s"] = report.solve_s + (std::isfinite(report.setup_s) ? report.setup_s : 0.0);
+    std::string message = report.message;
+    if (m_settings.time == "self") {
+        if (std::isfinite(report.solve_s)) {
+            result.setup_s = std::isfinite(report.setup_s) ? report.setup_s : 0.0;
+            result.solve_s = report.solve_s;
+            info["time_source"] = "self";
+        } else {
+            message += std::string(message.empty() ? "" : "; ") +
+                       "time=self but the program reported no solve_s: the harness's wall time is used";
+        }
+    }
+    // A program that exits 0 without a status claims it solved the problem: the measure checks it.
+    const SolveStatus status = report.has_status ? report.status : SolveStatus::CONVERGED;
+    if (status == SolveStatus::CONVERGED) result.criterion = "program";
+    return finish(status, message.empty() ? "command: the program exited normally" : message);
+}
+
+SolverEntry command_entry()
+{
+    SolverEntry entry;
+    entry.make = [](const nlohmann::json& settings) {
+        return std::make_unique<CommandSolver>(CommandSettings::from_json(settings));
+    };
+    entry.description = "an external program in any language (docs/INTERFACES.md \"The command protocol\")";
+    entry.settings = {
+        {"argv", "(required)", "the program and its arguments, no shell: {snapshot}, {settings}, {out} become paths"}};
+    const auto rows = command_settings_table().docs();
+    entry.settings.insert(entry.settings.end(), rows.begin(), rows.end());
+    entry.applies_to = "what its program declares: any J, or decoupled rows only (setting accepts)";
+    entry.needs_settings = true;
+    return entry;
+}
+
+namespace {
+
+void register_command(SolverRegistry& registry) { registry.add("command", command_entry()); }
+
+}  // namespace
+
+void install_command_solver()
+{
+    static const bool installed = [] {
+        add_builtin_registration(register_command);
+        return true;
+    }();
+    (void)installed;
+}
+
+}  // namespace cb

@@ -1,0 +1,55 @@
+#pragma once
+/// `command`: a solver in any language, run as an external program (docs/INTERFACES.md "The
+/// command protocol"). The harness writes the QP it gives the solver as a .qpsnap and the
+/// settings as JSON into a fresh work folder, runs argv (no shell; {snapshot}, {settings} and
+/// {out} replaced by paths), kills the program at time_limit_s, and reads back from {out}:
+/// x.{npy,mtx,txt} (required), lambda.{npy,mtx,txt} and result.json (status, iterations,
+/// self-reported times, residual, history with optional iterates). The run is then judged like
+/// any registry solver's: on the ORIGINAL QP, so a wrong x claimed `converged` is `unconfirmed`.
+///
+/// Statuses: killed at the limit -> time_limit; crashed (signal, non-zero exit, not startable)
+/// -> diverged with info.command.crashed; unusable output (no x, wrong length, NaN, bad
+/// result.json) -> diverged with info.command.garbage. Lives in harness/ because it writes
+/// files (solvers/ never does); main() adds it to the registry (install_command_solver).
+#include "solvers/registry.hpp"
+#include "solvers/settings.hpp"
+#include "solvers/solver.hpp"
+
+#include <string>
+#include <vector>
+
+namespace cb {
+
+struct CommandSettings {
+    CommonSettings common;
+    std::vector<std::string> argv;  ///< the program and its arguments, placeholders replaced at run time
+    std::string accepts = "any";    ///< any | decoupled (the harness decouples a coupled J first)
+    std::string time = "harness";   ///< harness | self: which time is the run's solve_s
+    bool keep_files = false;        ///< keep the work folder (its path goes to info.command.workdir)
+
+    static CommandSettings from_json(const nlohmann::json& settings);
+    nlohmann::json to_json() const;
+};
+
+/// The protocol version written into settings.json.
+inline constexpr int kCommandProtocolVersion = 1;
+
+class CommandSolver : public Solver {
+public:
+    explicit CommandSolver(CommandSettings settings) : m_settings(std::move(settings)) {}
+    std::string name() const override { return "command"; }
+    nlohmann::json settings() const override { return m_settings.to_json(); }
+    bool requires_decoupled() const override { return m_settings.accepts == "decoupled"; }
+    SolverResult solve(const QpView& qp, const SolveContext& context) override;
+
+private:
+    CommandSettings m_settings;
+};
+
+SolverEntry command_entry();
+
+/// Adds `command` to builtin_registry() (add_builtin_registration); call before its first use.
+/// Idempotent.
+void install_command_solver();
+
+}  // namespace cb

@@ -1,0 +1,135 @@
+// `judge`'s core: the measure of a given point, its verdict, and the run's status from a record.
+#include "harness/judge.hpp"
+
+#include "harness/reference.hpp"
+#include "harness/runner.hpp"
+#include "solvers/decouple.hpp"
+
+#include <cmath>
+#include <limits>
+
+namespace cb {
+
+namespace {
+
+nlohmann::json finite_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
+
+/// The record's string at `key`, or an InputError naming the record and the field.
+std::string record_string(const JudgeOptions& options, const char* key)
+{
+    const auto it = options.record.find(key);
+    if (it == options.record.end() || !it->is_string())
+        throw_input_error(options.record_path, std::string("/") + key,
+                          "missing or not a string: is this a run record (solve --json, a suite's runs/*.json)?");
+    return it->get<std::string>();
+}
+
+/// `runner.cpp`'s rule: a solver's own arithmetic may round the last digit differently.
+bool within(double e, double tol) { return std::isfinite(e) && e <= tol * (1.0 + 1e-9); }
+
+}  // namespace
+
+nlohmann::json Judgement::to_json() const
+{
+    nlohmann::json j;
+    j["accuracy"] = accuracy.to_json();
+    j["tol"] = tol;
+    j["verdict"] = meets_tol ? "converged" : "not_converged";
+    j["lambda_fitted"] = lambda_fitted;
+    j["objective"] = finite_or_null(objective);
+    j["violation"] = finite_or_null(violation);
+    j["length_scale"] = finite_or_null(scale.length);
+    j["length_scale_source"] = scale.length_source;
+    j["stiffness_scale"] = finite_or_null(scale.stiffness);
+    j["status"] = status.empty() ? nlohmann::json() : nlohmann::json(status);
+    if (have_solved) j["accuracy_solved"] = accuracy_solved.to_json();
+    j["reference"] = reference;
+    j["energy_gap"] = finite_or_null(energy_gap);
+    return j;
+}
+
+Judgement judge_point(const Qp& qp, const SolutionPoint& point, const JudgeOptions& options)
+{
+    const bool have_record = !options.record.is_null();
+    if (have_record && !options.record.is_object())
+        throw_input_error(options.record_path, "", "expected a run record (a JSON object)");
+    if (have_record && !options.snapshot_hash.empty() && options.record.contains("snapshot")) {
+        const std::string hash = options.record["snapshot"].value("hash", "");
+        if (!hash.empty() && hash != options.snapshot_hash)
+            throw_input_error(options.record_path, "/snapshot/hash",
+                              "the run was on another snapshot (hash " + hash + ", this one " + options.snapshot_hash +
+                                  ")");
+    }
+    Judgement out;
+    out.tol = options.tol;
+    if (!(out.tol > 0.0) && have_record) {
+        const auto it = options.record.find("accuracy_tol");
+        if (it == options.record.end() || !it->is_number() || !(it->get<double>() > 0.0))
+            throw_input_error(options.record_path, "/accuracy_tol", "missing or not a positive number");
+        out.tol = it->get<double>();
+    }
+    if (!(out.tol > 0.0)) out.tol = DEFAULT_ACCURACY_TOL;
+
+    const QpView view = qp.view();
+    out.scale = accuracy_scale(view);
+    const Vec& x = point.x;
+    const Vec g = qp.A * x - qp.b;
+    const bool own = point.lambda.size() == qp.m() && !point.lambda_path.empty();
+    out.lambda_fitted = !own;
+    out.accuracy =
+        measure_point(view, out.scale, x, g, own ? &point.lambda : nullptr, out.tol, out.lambda, out.lambda_fitted);
+    out.meets_tol = within(out.accuracy.max(), out.tol);
+    out.objective = 0.5 * x.dot(g) - 0.5 * qp.b.dot(x);
+    out.violation = max_violation(view, x);
+
+    if (have_record) {
+        const std::string solver_status = record_string(options, "solver_status");
+        solve_status_from_string(solver_status);  // an unknown name is an InputError
+        if (solver_status != to_string(SolveStatus::CONVERGED)) {
+            out.status = solver_status;
+        } else if (out.meets_tol) {
+            out.status = to_string(SolveStatus::CONVERGED);
+        } else {
+            // The solver said converged and the point misses tol on the original QP: on the
+            // problem it solved (when it changed the problem) it may still have met it.
+            const std::string solved = options.record.value("solved_problem", "");
+            if (solved == "unconstrained") {
+                const SpMat no_rows(0, qp.n());
+                const Vec no_c(0);
+                const QpView relaxed{qp.A, qp.b, no_rows, no_c, qp.x0};
+                out.accuracy_solved = accuracy_from_gradient(relaxed, accuracy_scale(relaxed), x, g, Vec(0));
+                out.have_solved = true;
+            } else if (solved == "decoupled") {
+                const nlohmann::json decouple = options.record.value("decouple", nlohmann::json::object());
+                const std::string order = decouple.value("order", "");
+                const auto seed = decouple.value("seed", std::uint64_t(0));
+                const DecoupleReport report = decouple_rows(view, qp.contacts, decouple_order_from_string(order), seed);
+                const Qp reduced = select_rows(qp, report.kept_rows);
+                Vec lambda_kept(static_cast<Eigen::Index>(report.kept_rows.size()));
+                for (size_t k = 0; k < report.kept_rows.size(); ++k)
+                    lambda_kept[static_cast<Eigen::Index>(k)] = out.lambda[report.kept_rows[k]];
+                const QpView reduced_view = reduced.view();
+                Vec used;
+                bool fitted = false;
+                out.accuracy_solved = measure_point(reduced_view, accuracy_scale(reduced_view), x, g, &lambda_kept,
+                                                    out.tol, used, fitted);
+                out.have_solved = true;
+            } else if (!solved.empty()) {
+                throw_input_error(options.record_path, "/solved_problem",
+                                  "expected unconstrained or decoupled, got '" + solved + "'");
+            }
+            out.status = out.have_solved && within(out.accuracy_solved.max(), out.tol) ? STATUS_SOLVED_RELAXATION
+                                                                                       : STATUS_UNCONFIRMED;
+        }
+    }
+
+    out.energy_gap = std::numeric_limits<double>::quiet_NaN();
+    if (options.look_up_reference && !options.snapshot_hash.empty()) {
+        out.reference = cached_reference(options.snapshot_hash);
+        if (out.reference.is_object() && out.reference["objective"].is_number())
+            out.energy_gap = energy_gap(out.scale, out.objective, out.reference["objective"].get<double>());
+    }
+    return out;
+}
+
+}  // namespace cb

@@ -1,0 +1,44 @@
+#pragma once
+/// The harness's yardstick applied to a point written by any program: the accuracy measure of
+/// docs/accuracy.md on the snapshot's QP at (x, lambda), exactly as `solve` measures a run
+/// (measure_point), the verdict at tol, the objective and its gap to a cached reference. With
+/// the run's record (`solve --json`, a suite's runs/*.json) the run's status is rebuilt too,
+/// including `solved_relaxation` and `unconfirmed`, which need the solver's own word.
+#include "problems/solution_io.hpp"
+#include "solvers/accuracy.hpp"
+#include "solvers/qp.hpp"
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace cb {
+
+struct JudgeOptions {
+    double tol = 0.0;               ///< > 0: the tolerance of the verdict; else the record's accuracy_tol, else 1e-6
+    nlohmann::json record;          ///< the run's record, or null
+    std::string record_path;        ///< names the record in messages
+    std::string snapshot_hash;      ///< of the snapshot file (checked against the record's)
+    bool look_up_reference = true;  ///< read a cached reference (never computes one)
+};
+
+struct Judgement {
+    AccuracyScale scale;
+    AccuracyParts accuracy;  ///< e on the snapshot's QP at (x, lambda)
+    Vec lambda;              ///< the multipliers the measure used
+    bool lambda_fitted = false;
+    double tol = 0.0;
+    bool meets_tol = false;  ///< e <= tol: the verdict `converged` of the point
+    double objective = 0.0, violation = 0.0;
+    std::string status;             ///< the run's status, only with a record ("" otherwise)
+    AccuracyParts accuracy_solved;  ///< with a record of a changed problem: e on the problem it solved
+    bool have_solved = false;
+    nlohmann::json reference;  ///< the cached reference, or null
+    double energy_gap = 0.0;   ///< |F - F*| / (d_ref l^2), NaN without a reference
+    nlohmann::json to_json() const;
+};
+
+/// Judges `point` on `qp`. InputError naming the record and field when the record is not a run
+/// record of this snapshot.
+Judgement judge_point(const Qp& qp, const SolutionPoint& point, const JudgeOptions& options);
+
+}  // namespace cb

@@ -1,0 +1,36 @@
+#pragma once
+/// Readers for a solution point (x, and optionally lambda) written by any program, checked
+/// against the snapshot it answers. A SOLUTION is
+///   a folder   x.{mtx,npy,txt} required, lambda.{mtx,npy,txt} optional (what `solve
+///              --save-solution` writes, and what a `command` solver writes into {out})
+///   a file     x alone, by extension: .npy (numpy, float64/float32, shape (n,) or (n, 1)),
+///              .mtx (Matrix Market array or coordinate vector), anything else plain text
+///              (numbers separated by white space, commas allowed, `#` starts a comment).
+/// Every error is an InputError naming the file and the field ("x.npy: x: expected 12 entries
+/// (n of the snapshot), got 11"; "x.txt: x[3]: not finite (nan)").
+#include "solvers/types.hpp"
+
+#include <string>
+
+namespace cb {
+
+struct SolutionPoint {
+    Vec x;
+    Vec lambda;               ///< empty when the solution has none
+    std::string x_path;       ///< the file x came from
+    std::string lambda_path;  ///< empty when there is no lambda
+};
+
+/// One vector from a file (format by extension, as above); `field` names it in messages.
+/// Sizes are not checked here; values must be finite.
+Vec read_vector_file(const std::string& path, const std::string& field);
+
+/// The file `stem`.{mtx,npy,txt} in `dir`; "" when none exists. Two of them is an error (which
+/// one the program meant is unknown).
+std::string find_vector_file(const std::string& dir, const std::string& stem);
+
+/// x (size n) and, when present, lambda (size m) of a SOLUTION folder or file. `lambda_file`
+/// (optional) overrides the folder's lambda.
+SolutionPoint read_solution(const std::string& path, long n, long m, const std::string& lambda_file = "");
+
+}  // namespace cb
