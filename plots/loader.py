@@ -40,6 +40,8 @@ SUMMARY_COLUMNS = ["suite", "snapshot", "label", "solver", "status", "solver_sta
 #: run statuses beside the solvers' own (harness/runner.hpp)
 RELAXATION_STATUS = "solved_relaxation"
 UNCONFIRMED_STATUS = "unconfirmed"
+#: a run that met tol on the problem it solved: the original QP, or the one it changed
+SOLVED_OWN_PROBLEM = ("converged", RELAXATION_STATUS)
 #: a problem class the solver does not take (mprgp-box on general rows, pgs over max_rows): "n/a",
 #: neither a success nor a failure
 NOT_APPLICABLE_STATUS = "not_applicable"

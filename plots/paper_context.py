@@ -48,6 +48,9 @@ class PaperContext:
     sims: Dict[str, str] = field(default_factory=dict)      #: scene key -> simulation folder
     reasons: Dict[str, str] = field(default_factory=dict)   #: suite/scene -> why it is missing
     notes: Dict[str, List[str]] = field(default_factory=dict)  #: suite -> notes (e.g. substitutions)
+    #: timed suite -> its rounds' results folders, round 1 (= results[suite]) first (reproduce.py)
+    rounds: Dict[str, List[str]] = field(default_factory=dict)
+    _round_cache: Dict[str, list] = field(default_factory=dict, repr=False)
 
     @property
     def fig_dir(self) -> str:
@@ -64,6 +67,21 @@ class PaperContext:
         if res.runs.empty:
             raise NotProduced(f"suite '{suite}' produced no runs ({folder})")
         return res
+
+    def round_results(self, suite: str) -> List[Results]:
+        """Every round of a timed suite, round 1 first; [round 1] alone when it ran once (the
+        claims then have one timing and say so). Folders that do not load are left out."""
+        if suite not in self._round_cache:
+            loaded = []
+            for folder in self.rounds.get(suite) or [self.results.get(suite) or os.path.join(self.out, "runs", suite)]:
+                try:
+                    res = load_results(folder)
+                except (FileNotFoundError, ValueError):
+                    continue
+                if not res.runs.empty:
+                    loaded.append(res)
+            self._round_cache[suite] = loaded
+        return self._round_cache[suite]
 
     def simulation(self, key: str) -> Optional[dict]:
         folder = self.sims.get(key)

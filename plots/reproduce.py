@@ -38,6 +38,7 @@ import pandas as pd  # noqa: E402
 
 from plots import profiles  # noqa: E402
 from plots import report  # noqa: E402
+from plots.intervals import min_rounds  # noqa: E402
 from plots.loader import NOT_APPLICABLE_STATUS, UNMEASURED_STATUSES, load_results, snapshot_table  # noqa: E402
 from plots.paper_context import PaperContext, default_data_dir  # noqa: E402
 
@@ -68,6 +69,11 @@ TABLE1_MAX = {"full": 20, "quick": 4}
 #: per-run time limit in quick mode [s]
 QUICK_TIME_LIMIT_S = 10
 QUICK_BUDGET_S = 280
+#: suites whose claims are timed: run in ROUNDS interleaved rounds (docs/work.md "Claims"); the
+#: rounds alternate the order of the solvers, so no label always runs first on a snapshot
+TIMED_SUITES = ("fig6", "fig10", "fig11")
+#: rounds per timed suite: 5 is the fewest whose [min, max] is a >= 90% interval of the median
+ROUNDS = {"full": min_rounds(), "quick": min_rounds()}
 
 
 class Runner:
@@ -105,20 +111,20 @@ class Runner:
             with open(self.log_path, "a", encoding="utf-8") as log:
                 log.write(f"\n$ {' '.join(cmd)}\n")
                 log.flush()
-                proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                                        bufsize=1)
-                timer = threading.Timer(timeout, proc.kill)
-                timer.start()
-                try:
-                    for line in proc.stdout:
-                        log.write(line)
-                        print("    " + line.rstrip(), flush=True)
-                        if line.strip():
-                            errors.append(line.strip())
-                            errors[:] = errors[-1:]
-                    proc.wait()
-                finally:
-                    timer.cancel()
+                with subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                                      bufsize=1) as proc:
+                    timer = threading.Timer(timeout, proc.kill)
+                    timer.start()
+                    try:
+                        for line in proc.stdout:
+                            log.write(line)
+                            print("    " + line.rstrip(), flush=True)
+                            if line.strip():
+                                errors.append(line.strip())
+                                errors[:] = errors[-1:]
+                        proc.wait()
+                    finally:
+                        timer.cancel()
         except OSError as err:
             self.steps.append(f"{what}: could not start: {err}")
             return 127, str(err)
@@ -257,10 +263,15 @@ def snapshots_of(ctx: PaperContext, key: str) -> pd.DataFrame:
     return snapshot_table(os.path.join(folder, "snapshots"))
 
 
-def instantiate(template: str, name: str, snapshots: List[str], out: str, quick: bool) -> str:
+def instantiate(template: str, name: str, snapshots: List[str], out: str, quick: bool,
+                round_index: int = 1) -> str:
+    """The runnable suite OUT/suites/<name>.json (round 1) or <name>.round<k>.json: round k > 1 is
+    the same suite, its solvers in reverse order when k is even."""
     with open(template, encoding="utf-8") as f:
         suite = json.load(f)
     suite["name"] = name
+    if round_index % 2 == 0:
+        suite["solvers"] = list(reversed(suite.get("solvers", [])))
     suite["snapshots"] = [os.path.abspath(p) for p in snapshots]
     if quick:
         suite["time_limit_s"] = min(float(suite.get("time_limit_s", QUICK_TIME_LIMIT_S)), QUICK_TIME_LIMIT_S)
@@ -268,21 +279,45 @@ def instantiate(template: str, name: str, snapshots: List[str], out: str, quick:
             if "time_limit_s" in s.get("settings", {}):
                 s["settings"]["time_limit_s"] = min(s["settings"]["time_limit_s"], QUICK_TIME_LIMIT_S)
     os.makedirs(os.path.join(out, "suites"), exist_ok=True)
-    path = os.path.join(out, "suites", f"{name}.json")
+    path = os.path.join(out, "suites", f"{name}.json" if round_index == 1 else f"{name}.round{round_index}.json")
     with open(path, "w", encoding="utf-8") as f:
         json.dump(suite, f, indent=1)
     return path
 
 
+def round_folder(out: str, name: str, round_index: int) -> str:
+    """Round 1 of a suite is OUT/runs/<name>; round k > 1 is OUT/rounds/<name>/<k>."""
+    return os.path.join(out, "runs", name) if round_index == 1 else os.path.join(out, "rounds", name, str(round_index))
+
+
 def run_suite(runner: Runner, ctx: PaperContext, name: str, template: str, snapshots: List[str],
               force: bool) -> None:
+    """Runs a suite; a timed suite (TIMED_SUITES) in ROUNDS rounds, one after the other."""
     if not snapshots:
         ctx.reasons.setdefault(name, f"no snapshots selected for suite '{name}'")
         return
-    suite_path = instantiate(template, name, snapshots, ctx.out, ctx.quick)
+    rounds = ROUNDS["quick" if ctx.quick else "full"] if name in TIMED_SUITES else 1
+    for k in range(1, rounds + 1):
+        run_round(runner, ctx, name, template, snapshots, force, k, rounds)
+        if name in ctx.reasons:
+            return
+    if rounds > 1:
+        ctx.rounds[name] = [round_folder(ctx.out, name, k) for k in range(1, rounds + 1)
+                            if os.path.isfile(os.path.join(round_folder(ctx.out, name, k), "summary.csv"))]
+
+
+def run_round(runner: Runner, ctx: PaperContext, name: str, template: str, snapshots: List[str], force: bool,
+              round_index: int, rounds: int) -> None:
+    suite_path = instantiate(template, name, snapshots, ctx.out, ctx.quick, round_index)
     with open(suite_path, encoding="utf-8") as f:
         suite = json.load(f)
-    folder = os.path.join(ctx.out, "runs", name)
+    folder = round_folder(ctx.out, name, round_index)
+    if round_index > 1:
+        name_shown = f"{name} round {round_index}/{rounds}"
+        rc, _ = _run_cached(runner, suite, suite_path, folder, name_shown, force)
+        if rc != 0:
+            ctx.notes.setdefault(name, []).append(f"round {round_index} of {rounds}: contactbench run exited {rc}")
+        return
     marker = read_marker(folder)
     # The suite and the build: contactbench itself redoes a run whose snapshot, settings or build
     # changed (run identity), and keys reference solutions on content and method, not the binary.
@@ -310,6 +345,23 @@ def run_suite(runner: Runner, ctx: PaperContext, name: str, template: str, snaps
         ctx.notes.setdefault(name, []).append(f"contactbench run exited {rc} ({err}); partial results used")
     else:
         ctx.reasons[name] = f"contactbench run {name} failed (exit {rc}{': ' + err if err else ''})"
+
+
+def _run_cached(runner: Runner, suite: dict, suite_path: str, folder: str, what: str, force: bool) -> (int, str):
+    """A repeat round of a suite, cached like round 1 (same suite, same binary)."""
+    marker = read_marker(folder)
+    build = file_sha(runner.cb) if os.path.isfile(runner.cb) else None
+    if not force and marker.get("suite") == suite and marker.get("build") == build and \
+            os.path.isfile(os.path.join(folder, "summary.csv")):
+        runner.steps.append(f"run {what}: cached")
+        return 0, ""
+    if os.path.isdir(folder):
+        shutil.rmtree(folder)  # a round is only ever the whole suite on one build: start over
+    os.makedirs(os.path.dirname(folder), exist_ok=True)
+    rc, err = runner.call(["run", suite_path, "--out", folder], f"run {what}")
+    if rc == 0 and os.path.isfile(os.path.join(folder, "summary.csv")):
+        write_marker(folder, {"suite": suite, "build": build})
+    return rc, err
 
 
 def unmeasured_count(folder: str) -> int:

@@ -483,10 +483,20 @@ class TestReproduce(TempDirCase):
             reproduce.run_suite(runner, ctx, "fig11", tpl, reproduce.pick_frame(snaps, 11), False)
             reproduce.run_suite(runner, ctx, "fig11", tpl, reproduce.pick_frame(snaps, 11), False)
         self.assertEqual(runner.steps[1], "simulate two_dinos_1303: cached (12 frames)")
+        rounds = reproduce.ROUNDS["quick"]
+        self.assertEqual(rounds, 5)
         self.assertTrue(runner.steps[2].startswith("run fig11: exit 0"))
-        self.assertEqual(runner.steps[3], "run fig11: cached")
+        for k in range(2, rounds + 1):  # a timed suite runs in rounds, each cached like the first
+            self.assertTrue(runner.steps[1 + k].startswith(f"run fig11 round {k}/{rounds}: exit 0"), runner.steps)
+            self.assertEqual(runner.steps[2 + rounds + k - 1], f"run fig11 round {k}/{rounds}: cached")
+        self.assertEqual(runner.steps[2 + rounds], "run fig11: cached")
+        self.assertEqual(ctx.rounds["fig11"][0], os.path.join(out, "runs", "fig11"))
+        self.assertEqual(ctx.rounds["fig11"][1:], [os.path.join(out, "rounds", "fig11", str(k)) for k in range(2, 6)])
         with open(os.path.join(out, "suites", "fig11.json"), encoding="utf-8") as f:
             suite = json.load(f)
+        with open(os.path.join(out, "suites", "fig11.round2.json"), encoding="utf-8") as f:
+            second = json.load(f)
+        self.assertEqual(second["solvers"], suite["solvers"][::-1])  # the order alternates between rounds
         self.assertEqual(suite["time_limit_s"], reproduce.QUICK_TIME_LIMIT_S)
         self.assertTrue(os.path.isabs(suite["snapshots"][0]))
 
@@ -543,8 +553,10 @@ class TestReproduce(TempDirCase):
             with open(cb, "a") as f:
                 f.write("# rebuilt\n")
             reproduce.run_suite(runner, ctx, "fig11", tpl, snaps, False)
-        self.assertEqual(runner.steps[2], "run fig11: cached")
-        self.assertTrue(runner.steps[3].startswith("run fig11: exit 0"), runner.steps[3])
+        rounds = reproduce.ROUNDS["quick"]
+        self.assertEqual(runner.steps[1 + rounds], "run fig11: cached")
+        self.assertTrue(runner.steps[1 + 2 * rounds].startswith("run fig11: exit 0"), runner.steps)
+        self.assertTrue(runner.steps[2 + 2 * rounds].startswith("run fig11 round 2/5: exit 0"), runner.steps)
 
 
 class TestSuiteTemplates(unittest.TestCase):
