@@ -167,6 +167,12 @@ def combine_published_fair(published: str, fair: str, qualified: str = HOLDS_AS_
     return DOES_NOT_HOLD
 
 
+def combined_reason(published: Judgement, fair: Judgement) -> str:
+    """The reason of a row judged on two readings: each reading's, named."""
+    parts = [f"fair: {fair.reason}" if fair.reason else "", f"as published: {published.reason}" if published.reason else ""]
+    return "; ".join(p for p in parts if p)
+
+
 def verdict_published_fair(published_ok: Optional[bool], fair_ok: Optional[bool]) -> str:
     """holds (fair comparison passes), holds only as published, does not hold, not measured."""
     if fair_ok is None and published_ok is None:

@@ -18,10 +18,10 @@ import sys
 import numpy as np  # noqa: E402
 
 from plots import figutil  # noqa: E402
-from plots.claims import NOT_MEASURED, Claim, combine_published_fair, judge_rounds  # noqa: E402
+from plots.claims import NOT_MEASURED, Claim, combine_published_fair, combined_reason, judge_rounds  # noqa: E402
 from plots.figutil import fmt, plt  # noqa: E402
 from plots.loader import RELAXATION_STATUS, SOLVED_OWN_PROBLEM, measured, unmeasured_notes  # noqa: E402
-from plots.paper_context import FigureOutcome, NotProduced, PaperContext, run_standalone  # noqa: E402
+from plots.paper_context import FigureOutcome, NotProduced, PaperContext, median_over_rounds, run_standalone  # noqa: E402
 
 SUITE = "fig6"
 DECOUPLED, PUBLISHED, FAIR = "mprgp", "coupled-published", "coupled-fair"
@@ -79,19 +79,28 @@ def produce(ctx: PaperContext) -> FigureOutcome:
     panels = [("as published (coupled: precond none)", PUBLISHED), ("fair (both Jacobi, same tol)", FAIR)]
     fig, axes = plt.subplots(1, 3 if authors is not None else 2, figsize=(14 if authors is not None else 10, 3.6),
                              squeeze=False)
+    rounds = ctx.round_results(SUITE) or [res]
+    shown = median_over_rounds(rounds)
     for ax, (title, label) in zip(axes.flat, panels):
-        for lab, colour in ((DECOUPLED, figutil.solver_colour("mprgp")), (label, figutil.solver_colour("mprgp-coupled"))):
-            sel = per_frame(runs, lab)
+        for lab, solver in ((DECOUPLED, "mprgp"), (label, "mprgp-coupled")):
+            sel = per_frame(shown, lab)
             if sel.empty:
                 continue
-            ax.plot(sel["frame"], figutil.positive(sel["time_s"]), ".-", color=colour, label=lab, lw=1)
+            style = figutil.solver_style(solver)
+            name = f"{lab} (decoupled rows)" if lab == DECOUPLED else lab
+            ax.plot(sel["frame"], figutil.positive(sel["time_s"]), color=style["color"], marker=style["marker"], ms=4,
+                    label=name, lw=1)
             capped = sel[sel["status"] != "converged"]
             if not capped.empty:
-                ax.plot(capped["frame"], figutil.positive(capped["time_s"]), "x", color=colour, ms=6,
-                        label=f"{lab}: not converged ({len(capped)})")
+                ax.plot(capped["frame"], figutil.positive(capped["time_s"]), **figutil.FAILED_MARK)
+        contact = per_frame(shown, DECOUPLED)
+        contact = contact[contact["m"] > 0]
+        if not contact.empty:
+            ax.axvspan(contact["frame"].min() - 0.5, contact["frame"].max() + 0.5, color="grey", alpha=0.1,
+                       label="frames with contact rows (judged)")
         ax.set_yscale("log")
         ax.set_xlabel("frame")
-        ax.set_ylabel("QP time per frame [s]")
+        ax.set_ylabel(f"time, setup + solve [s] (median of {len(rounds)})")
         ax.set_title("ours, " + title, fontsize=9)
         ax.grid(True, which="both", alpha=0.3)
     authors_ratio = authors_ratio_all = float("nan")
@@ -110,11 +119,10 @@ def produce(ctx: PaperContext) -> FigureOutcome:
         both = authors.dropna()
         authors_ratio_all = float(both["coupled_time_s"].sum() / both["decoupled_time_s"].sum())
     fig.tight_layout()
-    figutil.legend_outside(fig, axes.flat)
+    figutil.legend_outside(fig, axes.flat, notes=[figutil.failed_mark()])
     out.files += figutil.save_figure_outside(fig, ctx.fig_dir, "fig6_decoupling_time")
 
     out.notes += unmeasured_notes(runs)
-    rounds = ctx.round_results(SUITE) or [res]
     pub, fair = judge(rounds, PUBLISHED), judge(rounds, FAIR)
     frames, with_contact, left_out = judged_frames(runs, FAIR)
     e_dec = frames["kkt_rel_d"].max() if not frames.empty else float("nan")
@@ -145,7 +153,7 @@ def produce(ctx: PaperContext) -> FigureOutcome:
                    "original QP; summed time per round"),
         rule=f"holds when the fair ratio's interval is above {SPEEDUP_THRESHOLD} (coupled Jacobi vs decoupled "
              "Jacobi); 'only as published' when only the published one is (coupled unpreconditioned)",
-        reason=reason)
+        reason=reason or combined_reason(pub, fair))
     out.claims.append(claim.decided_by(fair if fair.verdict != NOT_MEASURED else pub, SPEEDUP_THRESHOLD))
     rows = ["| label | frames | with contact | converged (original QP) | solved_relaxation | other status | "
             "mean time, setup + solve [s] (round 1) | max time [s] |", "|---|---|---|---|---|---|---|---|"]

@@ -200,11 +200,16 @@ def legend_outside(fig, axes: Iterable, title: Optional[str] = None, notes: Iter
                frameon=False)
 
 
+#: the one legend entry for the mark on a run whose status is not `converged` (every figure)
+NOT_CONVERGED_LABEL = "x: status not `converged` (e above tol on the original QP, or stopped; final point)"
+#: matplotlib keywords of that mark (drawn without a label: failed_mark() is its legend entry)
+FAILED_MARK = {"color": "black", "marker": "x", "ls": "none", "markersize": 7, "zorder": 5}
+
+
 def failed_mark(**kwargs):
     """The legend handle of the mark on runs that did not converge."""
     from matplotlib.lines import Line2D
-    return Line2D([], [], color="black", marker="x", ls="none", markersize=7, label="not converged (final point)",
-                  **kwargs)
+    return Line2D([], [], label=NOT_CONVERGED_LABEL, **{**FAILED_MARK, **kwargs})
 
 
 def save_figure_outside(fig, folder: str, stem: str) -> List[str]:

@@ -32,6 +32,22 @@ class FigureOutcome:
     missing: Optional[str] = None           #: reason when not produced
 
 
+def median_over_rounds(rounds: List[Results]) -> pd.DataFrame:
+    """Round 1's runs with time_s, setup_s and solve_s replaced by their medians over the rounds
+    (per snapshot and label), for figures and tables that show one time per run."""
+    if not rounds:
+        return pd.DataFrame()
+    first = rounds[0].runs.copy()
+    if len(rounds) == 1:
+        return first
+    cols = [c for c in ("time_s", "setup_s", "solve_s") if c in first]
+    every = pd.concat([r.runs[["snapshot", "label"] + cols] for r in rounds], ignore_index=True)
+    med = every.groupby(["snapshot", "label"], sort=False)[cols].median()
+    keyed = first.set_index(["snapshot", "label"])
+    keyed.loc[med.index.intersection(keyed.index), cols] = med.loc[med.index.intersection(keyed.index), cols]
+    return keyed.reset_index()
+
+
 def default_data_dir() -> str:
     """Where `make paper-data` puts the authors' data: $CB_CACHE/paper-data (CB_CACHE defaults to
     ~/.cache/contactbench). Callers treat a missing folder as "no authors' data"."""
