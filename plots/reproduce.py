@@ -530,11 +530,15 @@ def main(argv=None) -> int:
         if res.runs.empty:
             continue
         provenance = provenance or res.provenance
+        t0 = time.monotonic()
+        runner.say(f"profiles {name}: {len(res.runs)} runs ...")
         numbers = profiles.compute(res)
-        figs = profiles.plot_profiles(numbers, os.path.join(folder, "figures"))
+        figs = profiles.plot_profiles(numbers, os.path.join(folder, "figures"), res.runs)
         md = os.path.join(folder, "profiles.md")
         profiles.write_markdown(res, numbers, md, figs)
         profile_paths[name] = md
+        runner.say(f"profiles {name}: wrote {md} in {time.monotonic() - t0:.1f} s")
+    runner.say("figures and claims: fig6, fig8, fig9, fig10, fig11, table1 ...")
     outcomes = report.produce_all(ctx, log=runner.say)
     for o in outcomes:
         for suite in (o.name, "fig8" if o.name == "fig9" else o.name):

@@ -239,24 +239,33 @@ class TestProfiles(TempDirCase):
         self.assertEqual(row["a_products"], 2)
         self.assertAlmostEqual(tt[tt["tier"] == 1e-8].iloc[0]["time_s"], 8.0, places=9)
 
-    def test_solved_relaxation_is_neither_success_nor_failure(self):
-        # b met tol only on a problem it changed (decoupled rows) on p1: its own column, left out of
-        # b's success rate, its geometric mean and its profile denominators.
+    def test_solved_relaxation_is_judged_on_the_original_qp(self):
+        # b met tol only on a problem it changed (decoupled rows) on p1; its error e on the original
+        # QP is 1e-3: it reaches the 1e-2 tier but fails 1e-4 and 1e-6, and both solvers are judged on
+        # the same two problems (issue 24: no solver ranked on a subset of its own choosing).
         relax = mf.make_run("p1", "b", solve_s=2.0, final_kkt_rel=1e-3, history=False)
         relax["status"], relax["solver_status"] = "solved_relaxation", "converged"
         recs = [mf.make_run("p0", "a", solve_s=1.0, history=False), mf.make_run("p0", "b", solve_s=2.0, history=False),
                 mf.make_run("p1", "a", solve_s=4.0, history=False), relax]
         res = loader.load_results(mf.write_results(self.tmp, recs))
         numbers = profiles.compute(res, shift=10)
-        self.assertAlmostEqual(numbers["success"].loc["b", 1e-6], 1.0)  # 1 of 1 judged run
+        self.assertAlmostEqual(numbers["success"].loc["b", 1e-6], 0.5)  # 1 of 2 judged problems
+        self.assertAlmostEqual(numbers["success"].loc["b", 1e-2], 1.0)  # e = 1e-3 <= 1e-2 on the original QP
+        self.assertEqual(numbers["success"].loc["b", "judged"], 2)
+        self.assertEqual(numbers["success"].loc["a", "judged"], 2)
         self.assertEqual(numbers["success"].loc["b", "solved_relaxation"], 1)
         self.assertEqual(numbers["success"].loc["a", "solved_relaxation"], 0)
-        self.assertAlmostEqual(numbers["sgm"].loc["b", 1e-6], 2.0, places=9)
+        # b at 1e-6: 2 s on p0, the penalty time on p1; sgm with shift 10
+        penalty = numbers["penalty_s"]
+        self.assertAlmostEqual(numbers["sgm"].loc["b", 1e-6], math.sqrt(12 * (penalty + 10)) - 10, places=9)
         tt = numbers["tiers"]
         ratios = profiles.performance_ratios(profiles.cost_matrix(tt, 1e-6))
-        prof = profiles.performance_profile(ratios, [1.0], profiles.relaxation_matrix(tt, 1e-6))
-        self.assertAlmostEqual(prof.loc[1.0, "b"], 0.0)  # p0: 2 s vs a's 1 s; p1 not judged
-        self.assertAlmostEqual(prof.loc[1.0, "a"], 1.0)  # best on both (alone on p1)
+        prof = profiles.performance_profile(ratios, [1.0], profiles.excluded_matrix(tt, 1e-6))
+        self.assertAlmostEqual(prof.loc[1.0, "b"], 0.0)  # p0: 2 s vs a's 1 s; p1 not reached
+        self.assertAlmostEqual(prof.loc[1.0, "a"], 1.0)  # best on both
+        prof2 = profiles.performance_profile(profiles.performance_ratios(profiles.cost_matrix(tt, 1e-2)), [1.0],
+                                             profiles.excluded_matrix(tt, 1e-2))
+        self.assertAlmostEqual(prof2.loc[1.0, "b"], 0.5)  # p1: b's 2 s beats a's 4 s at e <= 1e-2
         hon = profiles.status_honesty(res.runs).set_index("label")
         self.assertEqual(hon.loc["b", "converged"], 2)
         self.assertEqual(hon.loc["b", "confirmed"], 1)
