@@ -137,5 +137,51 @@ class TestCombine(unittest.TestCase):
         self.assertEqual(j.text(), "6 [5, 7]")
 
 
+class TestClaimRulesOnConstructedRuns(unittest.TestCase):
+    def test_fig8_measures_a_relaxation_against_its_own_optimum(self):
+        import pandas as pd
+        from plots import fig8
+        # decoupled mprgp: its objective passes through the coupled QP's F* = -1 at iteration 2 and
+        # settles at its own optimum -1.2; against -1 it would "reach 1e-4" at the crossing
+        h = pd.DataFrame({"iteration": [0, 1, 2, 3, 4], "objective": [0.0, -0.8, -1.0, -1.19, -1.2]})
+        run = pd.Series({"status": "solved_relaxation", "solved_problem": "decoupled", "reference_objective": -1.0,
+                         "objective": -1.2})
+        f_star, source = fig8.own_optimum(run, h)
+        self.assertEqual((f_star, source), (-1.2, "its decoupled QP's minimum"))
+        err = fig8.relative_error(h["objective"], f_star)
+        self.assertEqual(fig8.iterations_to(err, h["iteration"], 1e-4), 4)
+        self.assertEqual(fig8.iterations_to(fig8.relative_error(h["objective"], -1.0), h["iteration"], 1e-4), 2)
+        # a run that solved the original QP is measured against the reference
+        orig = pd.Series({"status": "converged", "solved_problem": float("nan"), "reference_objective": -1.2,
+                          "objective": -1.2})
+        self.assertEqual(fig8.own_optimum(orig, h), (-1.2, "reference"))
+
+    def test_fig8_fair_reading_counts_a_floor_as_not_reached(self):
+        from plots import fig8
+        j = fig8.fair_judgement(float("nan"), float("nan"), 7.4e-3, 5e-2)
+        self.assertEqual(j.verdict, claims.NOT_MEASURED)
+        self.assertIn("neither run brought e below 0.0001 on the original QP (final e: mprgp 0.0074", j.reason)
+        self.assertEqual(fig8.fair_judgement(30, float("nan"), 1e-6, 5e-2).verdict, claims.HOLDS)
+        self.assertEqual(fig8.fair_judgement(float("nan"), 40, 7.4e-3, 1e-6).verdict, claims.DOES_NOT_HOLD)
+        self.assertEqual(fig8.fair_judgement(50, 40, 1e-6, 1e-6).verdict, claims.HOLDS)      # 1.25 <= 1.5
+        self.assertEqual(fig8.fair_judgement(70, 40, 1e-6, 1e-6).verdict, claims.DOES_NOT_HOLD)  # 1.75
+
+    def test_fig6_judges_only_frames_with_contact_both_solved(self):
+        import pandas as pd
+        from plots import fig6
+        rows = []
+        for frame, m in enumerate([0, 0, 5, 7]):
+            for label, t, status in (("mprgp", 1.0, "converged" if m == 0 else "solved_relaxation"),
+                                     ("coupled-fair", 3.0, "converged" if frame != 3 else "max_iterations")):
+                rows.append({"snapshot": f"f{frame}", "label": label, "frame": frame, "m": m, "time_s": t,
+                             "status": status, "kkt_rel": 0.01 if m else 1e-7})
+        runs = pd.DataFrame(rows)
+        frames, with_contact, left_out = fig6.judged_frames(runs, "coupled-fair")
+        self.assertEqual((list(frames["snapshot"]), with_contact, left_out), (["f2"], 2, 1))
+        self.assertEqual(fig6.time_ratio(runs, "coupled-fair"), (3.0, 1))
+        no_contact = runs.assign(m=0)
+        self.assertTrue(math.isnan(fig6.time_ratio(no_contact, "coupled-fair")[0]))
+
+
 if __name__ == "__main__":
     unittest.main()

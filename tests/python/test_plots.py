@@ -4,6 +4,7 @@ Run from tests/python with PYTHONPATH=plots and MPLBACKEND=Agg:
     /usr/bin/python3 -m unittest
 """
 import io
+import itertools
 import json
 import math
 import os
@@ -294,21 +295,49 @@ class TestProfiles(TempDirCase):
             self.assertTrue(os.path.isfile(os.path.join(folder, "figures", stem + ".pdf")))
 
 
+def _lab(hex_colour):
+    """CIELAB (D65) of an sRGB colour, for colour distances."""
+    lin = [c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4
+           for c in (int(hex_colour[i:i + 2], 16) / 255 for i in (1, 3, 5))]
+    x = (0.4124 * lin[0] + 0.3576 * lin[1] + 0.1805 * lin[2]) / 0.95047
+    y = 0.2126 * lin[0] + 0.7152 * lin[1] + 0.0722 * lin[2]
+    z = (0.0193 * lin[0] + 0.1192 * lin[1] + 0.9505 * lin[2]) / 1.08883
+    f = lambda v: v ** (1 / 3) if v > 0.008856 else 7.787 * v + 16 / 116  # noqa: E731
+    return (116 * f(y) - 16, 500 * (f(x) - f(y)), 200 * (f(y) - f(z)))
+
+
 class TestFigureRules(unittest.TestCase):
     def test_one_colour_and_marker_per_solver(self):
         from plots import figutil
-        self.assertEqual(figutil.solver_style("pgs"), {"color": "#9467bd", "marker": "D", "linestyle": "-"})
-        self.assertEqual(figutil.solver_style("mprgp")["color"], "#1f77b4")
+        self.assertEqual(figutil.solver_style("pgs"), {"color": "#CC79A7", "marker": "D", "linestyle": "-"})
         colours = [figutil.SOLVER_STYLES[s][0] for s in figutil.SOLVER_STYLES]
         markers = [figutil.SOLVER_STYLES[s][1] for s in figutil.SOLVER_STYLES]
         self.assertEqual(len(set(colours)), len(colours))
         self.assertEqual(len(set(markers)), len(markers))
+        self.assertNotIn("x", markers)  # the not-converged mark
+        # colours apart: CIELAB distance >= 15 between any two fixed styles (bullet-dantzig's old
+        # hashed colour was within 10 of mprgp's blue)
+        for (a, ca), (b, cb) in itertools.combinations([(s, figutil.SOLVER_STYLES[s][0]) for s in figutil.SOLVER_STYLES], 2):
+            self.assertGreater(math.dist(_lab(ca), _lab(cb)), 15.0, (a, b))
         # a label of a known solver keeps the solver's colour and marker, with a dashed style
         variant = figutil.solver_style("mprgp-ichol", "mprgp")
-        self.assertEqual((variant["color"], variant["marker"]), ("#1f77b4", "o"))
+        self.assertEqual((variant["color"], variant["marker"]), figutil.SOLVER_STYLES["mprgp"])
         self.assertNotEqual(variant["linestyle"], "-")
-        # unknown names: the same style every time, whatever else is drawn
-        self.assertEqual(figutil.solver_style("my-solver"), figutil.solver_style("my-solver"))
+        # a new solver: the same style every time, with a marker no registered solver has
+        for name in ("my-solver", "another-qp", "x"):
+            style = figutil.solver_style(name)
+            self.assertEqual(style, figutil.solver_style(name))
+            self.assertNotIn(style["marker"], markers)
+
+    def test_every_registered_solver_has_a_fixed_style(self):
+        cb = os.environ.get("CB_CONTACTBENCH")
+        if not cb or not os.path.isfile(cb):
+            self.skipTest("CB_CONTACTBENCH (the contactbench binary) not set: ctest sets it")
+        import subprocess
+        from plots import figutil
+        listed = json.loads(subprocess.run([cb, "solvers", "--json"], capture_output=True, text=True, check=True).stdout)
+        missing = [s["name"] for s in listed if s["name"] not in figutil.SOLVER_STYLES]
+        self.assertEqual(missing, [], "add a fixed style to plots/figutil.py SOLVER_STYLES")
 
     def test_titles_and_relaxation_labels(self):
         import pandas as pd
