@@ -141,6 +141,24 @@ def solver_style(label: str, solver: Optional[str] = None) -> dict:
             "linestyle": "-"}
 
 
+#: solvers whose work the harness cannot count in full (docs/work.md, docs/peers.md): they are left
+#: out of work-based figures (data profiles, convergence against work) with this note
+WORK_NOT_COUNTED: Dict[str, str] = {
+    "ipopt": "Ipopt's MUMPS factorisations and solves are not counted",
+    "tao-pdipm": "MUMPS's factorisations inside TAO are not counted",
+    "tao-tron": "the Krylov iterations inside PETSc's TRON are not counted",
+    "siconos-lemke": "the pivots inside Siconos's Lemke are not counted (only forming W = J A^-1 J')",
+    "siconos-nsn": "the Newton iterations inside Siconos are not counted (only forming W = J A^-1 J')",
+    "bullet-dantzig": "the pivots inside Bullet's Dantzig solver are not counted (only forming W = J A^-1 J')",
+}
+
+
+def work_left_out(labels: Iterable[str], solvers: Dict[str, str]) -> Dict[str, str]:
+    """label -> why its work is not counted, for the labels of WORK_NOT_COUNTED's solvers."""
+    return {lab: WORK_NOT_COUNTED[solvers.get(lab, lab)] for lab in labels
+            if solvers.get(lab, lab) in WORK_NOT_COUNTED}
+
+
 def solver_colour(solver: str) -> str:
     """The fixed colour of a solver (SOLVER_STYLES; hashed for other names)."""
     return solver_style(solver)["color"]

@@ -256,7 +256,10 @@ def _draw_profiles(numbers: dict, labels: List[str], solvers: Dict[str, str], di
             xs = np.logspace(math.log10(lo), math.log10(hi), 200)
             prof = data_profile(cost, xs, excluded)
         judged = _denominators(labels, len(cost), excluded)
+        no_work = figutil.work_left_out(labels, solvers) if column != "time_s" else {}
         for label in labels:
+            if label in no_work:
+                continue  # its work is not counted in full (figutil.WORK_NOT_COUNTED): said in profiles.md
             if len(cost) - (int(excluded[label].fillna(False).astype(bool).sum()) if label in excluded else 0) <= 0:
                 continue  # every run of the label is n/a: nothing to draw
             style = figutil.solver_style(label, solvers.get(label))
@@ -358,6 +361,10 @@ def write_markdown(results: Results, numbers: dict, path: str, figures: List[str
             parts += ["", "Unconfirmed `converged` claims:", ""]
             for _, r in unconfirmed.iterrows():
                 parts.append(f"- {r['snapshot']} / {r['label']}: error {fmt(r.get('kkt_rel'))} (tol {fmt(r.get('tol'))})")
+    no_work = figutil.work_left_out(numbers["labels"], figutil.label_solvers(results.runs))
+    if no_work:
+        parts += ["", "Left out of the data profiles (work not counted in full): "
+                  + "; ".join(f"`{k}`: {v}" for k, v in no_work.items()) + "."]
     parts += ["", "## Figures", ""]
     for f in figures:
         if f.endswith(".png"):

@@ -294,6 +294,17 @@ class TestProfiles(TempDirCase):
         for stem in ("profiles_performance", "profiles_data"):
             self.assertTrue(os.path.isfile(os.path.join(folder, "figures", stem + ".pdf")))
 
+    def test_solvers_with_uncounted_work_leave_the_data_profiles(self):
+        recs = [mf.make_run("p0", "a", solver="mprgp"), mf.make_run("p0", "ip", solver="ipopt")]
+        folder = mf.write_results(self.tmp, recs)
+        with redirect_stdout(io.StringIO()):
+            self.assertEqual(profiles.main([folder]), 0)
+        with open(os.path.join(folder, "profiles.md"), encoding="utf-8") as f:
+            md = f.read()
+        self.assertIn("Left out of the data profiles (work not counted in full): `ip`: Ipopt's MUMPS "
+                      "factorisations and solves are not counted.", md)
+        self.assertIn("| ip | 100% |", md)  # still in the success table and the time profiles
+
 
 def _lab(hex_colour):
     """CIELAB (D65) of an sRGB colour, for colour distances."""
