@@ -19,7 +19,7 @@ import sys
 import numpy as np  # noqa: E402
 
 from plots import figutil  # noqa: E402
-from plots.claims import BELOW, NOT_MEASURED, Claim, combine_published_fair, combined_reason, judge_rounds  # noqa: E402
+from plots.claims import BELOW, INCONCLUSIVE, NOT_MEASURED, Claim, combine_published_fair, combined_reason, judge_rounds  # noqa: E402
 from plots.figutil import fmt, plt  # noqa: E402
 from plots.loader import history_time, measured, status_notes, unmeasured_notes  # noqa: E402
 from plots.paper_context import FigureOutcome, NotProduced, PaperContext, median_over_rounds, run_standalone  # noqa: E402
@@ -161,10 +161,16 @@ def produce(ctx: PaperContext) -> FigureOutcome:
     out.files += figutil.save_figure_outside(fig, ctx.fig_dir, "fig11_scaling")
 
     small, grows, texts = {}, {}, []
+    never = [f"{r['label']} at {fmt(r['n'])} DOF (final e {fmt(r['kkt_rel'])})"
+             for lab in PAIRS["fair"] for _, r in by_dof(runs, lab).iterrows() if not np.isfinite(fair_time(res, r))]
     for mode in PAIRS:
         s_vals, g_vals = round_values(rounds, mode)
         small[mode] = judge_rounds(s_vals, 1.0, BELOW)
         grows[mode] = judge_rounds(g_vals, GROWTH)
+        if mode == "fair" and never:
+            for j in (small[mode], grows[mode]):
+                if j.verdict in (NOT_MEASURED, INCONCLUSIVE) and "never" not in j.reason:
+                    j.reason += f" (e never stayed <= {FAIR_LEVEL:g} on the original QP: {', '.join(never)})"
         r = ratios(res, *PAIRS[mode], mode=mode)
         if r is not None and len(r) > 1:
             texts.append(f"{mode}: ICA/MPRGP at {fmt(r['n_m'].iloc[0])} DOF {small[mode].text()}x, at "

@@ -15,6 +15,7 @@ from typing import Dict, List, Optional
 
 
 from plots.claims import ABOVE, INCONCLUSIVE, NOT_MEASURED, Claim  # noqa: E402
+from plots.loader import STATUS_MEANINGS  # noqa: E402
 from plots.paper_context import FigureOutcome, NotProduced, PaperContext  # noqa: E402
 
 #: the claims every report has a row for, in order, with the figure that measures each
@@ -85,6 +86,12 @@ VERDICT_LEGEND = (
     "names the problem each verdict is judged on.")
 
 
+def status_legend() -> str:
+    """The statuses every figure, table and claim row uses, each explained once."""
+    return ("Run statuses (one vocabulary in every figure, table and row; figures mark every status but "
+            "`converged` with a black x): " + "; ".join(f"`{k}`: {v}" for k, v in STATUS_MEANINGS.items()) + ".")
+
+
 def _cell(text: str) -> str:
     return str(text).replace("|", "\\|").replace("\n", " ")
 
@@ -112,7 +119,7 @@ def render(ctx: PaperContext, outcomes: List[FigureOutcome], meta: Optional[dict
         why = f" ({_cell(c.reason)})" if c.reason and c.verdict in (INCONCLUSIVE, NOT_MEASURED) else ""
         lines.append(f"| {_cell(c.claim)} ({_cell(c.source)}) | {_cell(c.judged_on or '—')} | {_cell(c.paper)} | "
                      f"{_cell(c.authors)} | {_cell(c.ours)} | **{_cell(c.verdict)}**{why} |")
-    lines += ["", VERDICT_LEGEND, "", "Verdict rules:", ""]
+    lines += ["", VERDICT_LEGEND, "", status_legend(), "", "Verdict rules:", ""]
     for c in claims:
         rule = c.rule or "; ".join(c.notes) or "—"
         if c.interval is not None and c.threshold is not None:

@@ -12,7 +12,10 @@ Steps (each printed as it runs):
 3. contactbench run OUT/suites/<name>.json --out OUT/runs/<name>, skipped when that folder already
    holds the results of the identical suite from the same contactbench binary (after a rebuild the
    harness resumes and redoes the runs whose identity changed; it caches reference solutions by
-   snapshot content and reference method, so a rebuild does not redo them);
+   snapshot content and reference method, so a rebuild does not redo them); a timed suite
+   (TIMED_SUITES: fig6, fig10, fig11) runs in ROUNDS = 5 rounds, round k > 1 into
+   OUT/rounds/<name>/<k> with the solvers' order reversed in even rounds, each cached the same way
+   (the claims' intervals come from the rounds: docs/work.md "Claims");
 4. profiles.md per suite, the figures (fig6, fig8, fig9, fig10, fig11, table1) and the report.
 A figure whose inputs are missing is reported as "not produced: <reason>".
 --quick: the coarsest two-dinosaur meshes stand in for the eight dinosaurs, few frames, short time
