@@ -101,15 +101,16 @@ def produce(ctx: PaperContext) -> FigureOutcome:
     fig, axes = plt.subplots(1, 4, figsize=(19, 4), squeeze=False)
     for ax, (mode, (ml, il)) in zip(axes.flat[:2], PAIRS.items()):
         m, i = by_dof(shown, ml), by_dof(shown, il)
+        filled = mode == "published"  # fair series: dashed, open markers, in every panel
         if not m.empty:
-            _draw(ax, m, ml, "time_s", True, True)
+            _draw(ax, m, ml, "time_s", filled, True)
             ax.plot(m["n"], figutil.positive(m["setup_s"]), ":", color=figutil.solver_colour("mprgp"), alpha=0.6,
                     label=f"{ml}: setup (power method)")
             for _, r in m.iterrows():
                 ax.annotate(fmt(r["rows_after"] if np.isfinite(r["rows_after"]) else r["m"]), (r["n"], r["time_s"]),
                             fontsize=6, xytext=(3, 3), textcoords="offset points")
         if not i.empty:
-            _draw(ax, i, il, "time_s", True, True)
+            _draw(ax, i, il, "time_s", filled, True)
         if authors is not None and mode == "published":
             ax.plot(authors["dofs"], authors["mprgp_time_s"], "^:", mfc="none", color=figutil.solver_colour("mprgp"),
                     alpha=0.7, label="authors: mprgp (2009 machine)")

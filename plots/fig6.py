@@ -89,7 +89,7 @@ def produce(ctx: PaperContext) -> FigureOutcome:
             style = figutil.solver_style(solver)
             name = f"{lab} (decoupled rows)" if lab == DECOUPLED else lab
             ax.plot(sel["frame"], figutil.positive(sel["time_s"]), color=style["color"], marker=style["marker"], ms=4,
-                    label=name, lw=1)
+                    ls="--" if lab == FAIR else "-", label=name, lw=1)
             capped = sel[sel["status"] != "converged"]
             if not capped.empty:
                 ax.plot(capped["frame"], figutil.positive(capped["time_s"]), **figutil.FAILED_MARK)

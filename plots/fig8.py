@@ -22,7 +22,7 @@ import pandas as pd  # noqa: E402
 from plots import figutil  # noqa: E402
 from plots.claims import BELOW, DOES_NOT_HOLD, HOLDS, NOT_MEASURED, Claim, Judgement, combine_published_fair, combined_reason, judge_count  # noqa: E402
 from plots.figutil import fmt, plt  # noqa: E402
-from plots.loader import SOLVED_OWN_PROBLEM, UNMEASURED_STATUSES, unmeasured_notes  # noqa: E402
+from plots.loader import SOLVED_OWN_PROBLEM, UNMEASURED_STATUSES, history_time, unmeasured_notes  # noqa: E402
 from plots.paper_context import FigureOutcome, NotProduced, PaperContext, run_standalone  # noqa: E402
 
 SUITE = "fig8"
@@ -125,14 +125,16 @@ def produce(ctx: PaperContext) -> FigureOutcome:
     styles = {MPRGP: (mprgp, "-"), CG_NONE: (cg, "--"), CG_JACOBI: (cg, "-.")}
     fig, axes = plt.subplots(1, 4, figsize=(18, 3.8), squeeze=False)
     for ax, (x, xlabel) in zip(axes.flat, (("iteration", "iterations"), ("a_products", "A-products"),
-                                           ("time_s", "time [s]"))):
+                                           ("time_s", "time from the start of setup [s]"))):
         for lab, c in curves.items():
             if c is None:
                 continue
             h, err, source = c
             colour, ls = styles[lab]
-            name = f"{lab} (J ignored: relaxation)" if lab in (CG_NONE, CG_JACOBI) else lab
-            ax.plot(h[x], figutil.positive(err), ls, color=colour, label=f"{name} (F*: {source})", lw=1.3)
+            name = figutil.display_label(lab, res.runs[res.runs["snapshot"] == snap])
+            run = res.runs[(res.runs["snapshot"] == snap) & (res.runs["label"] == lab)].iloc[0]
+            xs = history_time(h, run, include_setup=True) if x == "time_s" else h[x]
+            ax.plot(xs, figutil.positive(err), ls, color=colour, label=f"{name} (F*: {source})", lw=1.3)
         if x == "iteration":
             for (name, (it, err)), colour in zip(a_curves.items(), (mprgp, cg)):
                 ax.plot(it, figutil.positive(err), ":", color=colour, alpha=0.6, label=name)
