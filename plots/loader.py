@@ -277,6 +277,11 @@ def load_results(path: str, with_history: bool = True) -> Results:
                     raise ValueError(f"{file}: not valid JSON: {err}") from err
             row = flatten_run(record)
             row["file"] = name
+            stem_label = os.path.splitext(name)[0].partition("__")[2]
+            if (row["snapshot"], row["label"]) in records and stem_label and stem_label != row["label"]:
+                # two runs of one solver under one label (the stress table writes "cg" for both cg
+                # and cg:precond=ichol): the file name keeps them apart, as one label per run
+                row["label"] = stem_label
             rows.append(row)
             records[(row["snapshot"], row["label"])] = record
             if with_history:

@@ -294,6 +294,18 @@ class TestProfiles(TempDirCase):
         for stem in ("profiles_performance", "profiles_data"):
             self.assertTrue(os.path.isfile(os.path.join(folder, "figures", stem + ".pdf")))
 
+    def test_two_runs_of_one_solver_under_one_label_stay_apart(self):
+        # the stress table writes label "cg" for both cg and cg:precond=ichol; the file names differ
+        folder = mf.write_results(self.tmp, [mf.make_run("p0", "cg", solve_s=1.0, history=False)])
+        ichol = mf.make_run("p0", "cg", solve_s=3.0, history=False)
+        with open(os.path.join(folder, "runs", "p0__cg:precond=ichol.json"), "w", encoding="utf-8") as f:
+            json.dump(ichol, f)
+        os.remove(os.path.join(folder, "summary.csv"))
+        res = loader.load_results(folder)
+        self.assertEqual(sorted(res.runs["label"]), ["cg", "cg:precond=ichol"])
+        numbers = profiles.compute(res, shift=1)
+        self.assertEqual(list(numbers["success"]["judged"]), [1, 1])
+
     def test_solvers_with_uncounted_work_leave_the_data_profiles(self):
         recs = [mf.make_run("p0", "a", solver="mprgp"), mf.make_run("p0", "ip", solver="ipopt")]
         folder = mf.write_results(self.tmp, recs)
