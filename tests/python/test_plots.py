@@ -515,6 +515,19 @@ class TestReproduce(TempDirCase):
         # the fake's ICA is ~17x slower than its MPRGP at the smallest size: computed, not typed in
         low_res = next(c for c in saved if c["key"] == "fig11-ica-low-res")
         self.assertEqual(low_res["verdict"], claims.DOES_NOT_HOLD)
+        # every row says the problem it is judged on; timed rows carry the rounds' interval
+        for c in saved:
+            self.assertTrue(c["judged_on"], c["key"])
+            self.assertIn(c["verdict"], claims.VERDICTS)
+        for key in ("fig6-decoupling", "fig10-ica-10x", "fig11-ica-low-res"):
+            c = next(c for c in saved if c["key"] == key)
+            self.assertEqual(c["samples"], reproduce.ROUNDS["quick"], key)
+            self.assertLessEqual(c["interval"][0], c["estimate"])
+            self.assertLessEqual(c["estimate"], c["interval"][1])
+        # the fake's long cube has contact from frame 3: Table 1 judges only those frames
+        dominates = next(c for c in saved if c["key"] == "table1-cg-dominates")
+        self.assertIn("frames with contact rows", dominates["judged_on"])
+        self.assertEqual(len(os.listdir(os.path.join(out, "rounds", "fig6"))), reproduce.ROUNDS["quick"] - 1)
         self.assertIn("not simulated: dragon_stair", text)
         # the fake's ica-published runs (stop=native) are `unconfirmed`: the report says what that means
         self.assertIn(loader.UNCONFIRMED_MEANING, text)
