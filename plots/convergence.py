@@ -98,7 +98,8 @@ def plot_convergence(results: Results, out_dir: str, column: str = "kkt_rel",
         if len(snapshots) > len(shown):
             title += f" (first {len(shown)} of {len(snapshots)} snapshots)"
         if x == "work" and no_work:
-            title += "\nleft out, work not counted: " + "; ".join(f"{k} ({v})" for k, v in no_work.items())
+            title += ("\nleft out, their work is not counted in full (docs/work.md \"Figures\"): "
+                      + ", ".join(no_work))
         fig.suptitle(title, fontsize=10)
         fig.tight_layout()
         figutil.legend_outside(fig, axes.flat, notes=[figutil.failed_mark()])
