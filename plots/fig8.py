@@ -198,7 +198,7 @@ def produce(ctx: PaperContext) -> FigureOutcome:
         judged_on=(f"one QP, {snap} (n = {fmt(run0['n'])}, m = {fmt(run0['m'])}); as published each run against the "
                    f"optimum of the problem it solved (mprgp: {status[MPRGP]}"
                    + (f", its {on} QP" if isinstance(on, str) else ", the original QP")
-                   + f"; cg: the unconstrained QP, J ignored); fair: the accuracy error e of the original QP"),
+                   + "; cg: the unconstrained QP, J ignored); fair: the accuracy error e of the original QP"),
         rule=f"holds when mprgp needs <= {SIMILAR}x the iterations of Jacobi-PCG to reach {LEVEL:g} (DESIGN.md "
              "target) on the fair reading; 'only as published' when only on each run's own problem (a "
              f"relaxation that never brings e to {LEVEL:g} on the original QP does not reach it). Against "
