@@ -30,6 +30,15 @@ class TestMedianInterval(unittest.TestCase):
         self.assertEqual((iv.low, iv.high, iv.estimate), (2.0, 9.0, 5.5))
         self.assertAlmostEqual(iv.coverage, 1 - 22 / 1024)
 
+    def test_eight_rounds_leave_out_one_outlier_each_side(self):
+        iv = intervals.median_interval(range(1, 9))  # k = 2: 1 - 2 * 9 / 256 = 0.93; k = 3: 0.71
+        self.assertEqual((iv.low, iv.high), (2.0, 7.0))
+        self.assertAlmostEqual(iv.coverage, 1 - 18 / 256)
+        # one round caught by a load spike (30x) does not widen the interval of eight
+        spiked = [6.0, 6.5, 7.0, 6.8, 6.2, 7.1, 6.4, 30.0]
+        self.assertEqual(claims.judge_rounds(spiked, 10.0).verdict, claims.DOES_NOT_HOLD)
+        self.assertEqual(claims.judge_rounds(spiked[3:], 10.0).verdict, claims.INCONCLUSIVE)  # five: [min, max]
+
     def test_too_few_and_nan_values(self):
         self.assertIsNone(intervals.median_interval([1.0, 2.0, 3.0, 4.0]))
         self.assertIsNone(intervals.median_interval([1.0, float("nan"), 2.0, 3.0, None, 4.0]))

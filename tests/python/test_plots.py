@@ -521,13 +521,13 @@ class TestReproduce(TempDirCase):
             self.assertIn(c["verdict"], claims.VERDICTS)
         for key in ("fig6-decoupling", "fig10-ica-10x", "fig11-ica-low-res"):
             c = next(c for c in saved if c["key"] == key)
-            self.assertEqual(c["samples"], reproduce.ROUNDS["quick"], key)
+            self.assertEqual(c["samples"], reproduce.TIMED_SUITES[key.split("-")[0]], key)
             self.assertLessEqual(c["interval"][0], c["estimate"])
             self.assertLessEqual(c["estimate"], c["interval"][1])
         # the fake's long cube has contact from frame 3: Table 1 judges only those frames
         dominates = next(c for c in saved if c["key"] == "table1-cg-dominates")
         self.assertIn("frames with contact rows", dominates["judged_on"])
-        self.assertEqual(len(os.listdir(os.path.join(out, "rounds", "fig6"))), reproduce.ROUNDS["quick"] - 1)
+        self.assertEqual(len(os.listdir(os.path.join(out, "rounds", "fig6"))), reproduce.TIMED_SUITES["fig6"] - 1)
         self.assertIn("not simulated: dragon_stair", text)
         # the fake's ica-published runs (stop=native) are `unconfirmed`: the report says what that means
         self.assertIn(loader.UNCONFIRMED_MEANING, text)
@@ -557,15 +557,15 @@ class TestReproduce(TempDirCase):
             reproduce.run_suite(runner, ctx, "fig11", tpl, reproduce.pick_frame(snaps, 11), False)
             reproduce.run_suite(runner, ctx, "fig11", tpl, reproduce.pick_frame(snaps, 11), False)
         self.assertEqual(runner.steps[1], "simulate two_dinos_1303: cached (12 frames)")
-        rounds = reproduce.ROUNDS["quick"]
-        self.assertEqual(rounds, 5)
+        rounds = reproduce.TIMED_SUITES["fig11"]
+        self.assertEqual(rounds, 8)
         self.assertTrue(runner.steps[2].startswith("run fig11: exit 0"))
         for k in range(2, rounds + 1):  # a timed suite runs in rounds, each cached like the first
             self.assertTrue(runner.steps[1 + k].startswith(f"run fig11 round {k}/{rounds}: exit 0"), runner.steps)
             self.assertEqual(runner.steps[2 + rounds + k - 1], f"run fig11 round {k}/{rounds}: cached")
         self.assertEqual(runner.steps[2 + rounds], "run fig11: cached")
         self.assertEqual(ctx.rounds["fig11"][0], os.path.join(out, "runs", "fig11"))
-        self.assertEqual(ctx.rounds["fig11"][1:], [os.path.join(out, "rounds", "fig11", str(k)) for k in range(2, 6)])
+        self.assertEqual(ctx.rounds["fig11"][1:], [os.path.join(out, "rounds", "fig11", str(k)) for k in range(2, 9)])
         with open(os.path.join(out, "suites", "fig11.json"), encoding="utf-8") as f:
             suite = json.load(f)
         with open(os.path.join(out, "suites", "fig11.round2.json"), encoding="utf-8") as f:
@@ -627,10 +627,10 @@ class TestReproduce(TempDirCase):
             with open(cb, "a") as f:
                 f.write("# rebuilt\n")
             reproduce.run_suite(runner, ctx, "fig11", tpl, snaps, False)
-        rounds = reproduce.ROUNDS["quick"]
+        rounds = reproduce.TIMED_SUITES["fig11"]
         self.assertEqual(runner.steps[1 + rounds], "run fig11: cached")
         self.assertTrue(runner.steps[1 + 2 * rounds].startswith("run fig11: exit 0"), runner.steps)
-        self.assertTrue(runner.steps[2 + 2 * rounds].startswith("run fig11 round 2/5: exit 0"), runner.steps)
+        self.assertTrue(runner.steps[2 + 2 * rounds].startswith(f"run fig11 round 2/{rounds}: exit 0"), runner.steps)
 
 
 class TestSuiteTemplates(unittest.TestCase):
