@@ -47,6 +47,7 @@ def plot_convergence(results: Results, out_dir: str, column: str = "kkt_rel",
     tol = float(np.nanmax(results.runs["accuracy_tol"])) if "accuracy_tol" in results.runs and \
         results.runs["accuracy_tol"].notna().any() else float("nan")
     has_work = "work" in results.runs and results.runs["work"].notna().any()
+    no_work = figutil.work_left_out(labels, solvers)
     written = []
     for x, xlabel, stem in AXES:
         if x == "work" and not has_work:
@@ -68,6 +69,8 @@ def plot_convergence(results: Results, out_dir: str, column: str = "kkt_rel",
                 n, m = run.get("n"), run.get("m")
                 if run.get("status") in UNMEASURED_STATUSES:
                     continue  # n/a, refused or never run: there is no curve to draw
+                if x == "work" and label in no_work:
+                    continue  # its work is not counted in full: a curve would understate it
                 style = figutil.solver_style(label, solvers.get(label))
                 h = results.history(snap, label)
                 if h.empty or x not in h or column not in h:
@@ -94,6 +97,9 @@ def plot_convergence(results: Results, out_dir: str, column: str = "kkt_rel",
         title = f"{results.suite.get('name', os.path.basename(os.path.normpath(results.path)))}: {column} vs {xlabel}"
         if len(snapshots) > len(shown):
             title += f" (first {len(shown)} of {len(snapshots)} snapshots)"
+        if x == "work" and no_work:
+            title += ("\nleft out, their work is not counted in full (docs/work.md \"Figures\"): "
+                      + ", ".join(no_work))
         fig.suptitle(title, fontsize=10)
         fig.tight_layout()
         figutil.legend_outside(fig, axes.flat, notes=[figutil.failed_mark()])

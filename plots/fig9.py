@@ -43,6 +43,7 @@ def produce(ctx: PaperContext) -> FigureOutcome:
         ax.set_ylabel("||phi + beta||_2")
         ax.grid(True, which="both", alpha=0.3)
     run0 = res.runs[res.runs["snapshot"] == snap].iloc[0]
+    mrun = res.runs[(res.runs["snapshot"] == snap) & (res.runs["label"] == MPRGP)].iloc[0]
     fig.suptitle(figutil.panel_title(snap, run0.get("n"), run0.get("m"), width=80), fontsize=9)
     fig.tight_layout()
     figutil.legend_outside(fig, axes.flat)
@@ -66,6 +67,10 @@ def produce(ctx: PaperContext) -> FigureOutcome:
         ours=(f"iterations to ||phi+beta|| = {level:.2e}: Jacobi {fmt(it_j)} ({statuses[MPRGP]}), none "
               f"{fmt(it_n)} ({statuses[MPRGP_NONE]}); ratio {fmt(ratio)}"),
         verdict=verdict_threshold(ratio, SIGNIFICANT),
+        judged_on=(f"one QP, {snap} (n = {fmt(run0['n'])}, m = {fmt(run0['m'])}): both runs are mprgp on the same "
+                   "rows (" + (f"its {mrun.get('solved_problem')} QP" if isinstance(mrun.get("solved_problem"), str)
+                               else "the original QP") + "), judged on that problem's native residual ||phi+beta||"),
+        threshold=SIGNIFICANT, estimate=ratio if np.isfinite(ratio) else None,
         rule=f"holds when the unpreconditioned run needs >= {SIGNIFICANT}x the iterations to the smallest "
              "residual both reached"))
     return out

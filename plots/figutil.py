@@ -93,24 +93,32 @@ def grid(count: int, max_cols: int = 4):
     return rows, cols
 
 
-#: one colour and marker per solver, the same in every figure (a label that is not a solver's
-#: name takes its solver's colour and marker and a dashed line style of its own)
+#: one colour and marker per registered solver (`contactbench solvers --json`), the same in every
+#: figure. Colours: Okabe-Ito's colour-blind-safe palette for the first six, then Tol's and greys
+#: chosen one by one to stay apart from those already taken, in CIELAB and under simulated
+#: deuteranopia; every solver also has a marker of its own, so that no two solvers depend on
+#: colour alone. A label that is not a solver's name takes its solver's colour and marker and a
+#: dashed line style of its own.
 SOLVER_STYLES: Dict[str, tuple] = {
-    "mprgp": ("#1f77b4", "o"),
-    "mprgp-coupled": ("#ff7f0e", "s"),
-    "mprgp-box": ("#2ca02c", "^"),
-    "ica": ("#d62728", "v"),
-    "pgs": ("#9467bd", "D"),
-    "active-set": ("#8c564b", "P"),
-    "cg": ("#7f7f7f", "X"),
-    "ipopt": ("#e377c2", "*"),
-    "siconos-lemke": ("#bcbd22", "h"),
-    "siconos-nsn": ("#17becf", "p"),
+    "mprgp": ("#0072B2", "o"),            # Okabe-Ito blue
+    "mprgp-coupled": ("#E69F00", "s"),    # orange
+    "mprgp-box": ("#009E73", "^"),        # bluish green
+    "ica": ("#D55E00", "v"),              # vermillion
+    "pgs": ("#CC79A7", "D"),              # reddish purple
+    "active-set": ("#56B4E9", "P"),       # sky blue
+    "cg": ("#555555", "p"),               # dark grey
+    "ipopt": ("#332288", "*"),            # Tol indigo
+    "siconos-lemke": ("#661100", "h"),    # Tol dark brown-red
+    "siconos-nsn": ("#DDCC77", "<"),      # Tol sand
+    "bullet-dantzig": ("#000000", ">"),   # black
+    "tao-pdipm": ("#F0E442", "X"),        # Okabe-Ito yellow
+    "tao-tron": ("#AA4499", "d"),         # Tol purple
 }
-#: colours and markers for names outside SOLVER_STYLES, chosen by a hash of the name (stable
-#: across runs and figures, whatever else the figure shows)
-_EXTRA_COLOURS = ("#393b79", "#637939", "#8c6d31", "#843c39", "#7b4173", "#3182bd", "#e6550d", "#31a354")
-_EXTRA_MARKERS = ("<", ">", "d", "H", "8", "1", "2", "3")
+#: a solver without a fixed style (a new one) gets a marker no registered solver has, chosen by a
+#: hash of its name, and a colour of this spare list: its style is one that no fixed style has
+#: (add it to SOLVER_STYLES when it is registered)
+SPARE_MARKERS = ("H", "8", "1", "2", "3", "4", "+")
+SPARE_COLOURS = ("#117733", "#88CCEE", "#CC6677", "#999933", "#6699CC", "#44AA99")
 _VARIANT_STYLES = ("--", ":", "-.", (0, (5, 1, 1, 1)))
 
 
@@ -121,16 +129,34 @@ def _hash(name: str) -> int:
 def solver_style(label: str, solver: Optional[str] = None) -> dict:
     """Matplotlib keyword arguments (color, marker, linestyle) of a solver label: the fixed style
     of SOLVER_STYLES for a solver's own name; its solver's colour and marker with a dashed style
-    for another label of a known solver (e.g. "mprgp-ichol"); a hashed colour otherwise."""
+    for another label of a known solver (e.g. "mprgp-ichol"); a spare marker and colour otherwise."""
     if label in SOLVER_STYLES:
         colour, marker = SOLVER_STYLES[label]
         return {"color": colour, "marker": marker, "linestyle": "-"}
     if solver in SOLVER_STYLES:
         colour, marker = SOLVER_STYLES[solver]
         return {"color": colour, "marker": marker, "linestyle": _VARIANT_STYLES[_hash(label) % len(_VARIANT_STYLES)]}
-    h = _hash(label)
-    return {"color": _EXTRA_COLOURS[h % len(_EXTRA_COLOURS)], "marker": _EXTRA_MARKERS[(h >> 8) % len(_EXTRA_MARKERS)],
+    h = _hash(solver or label)
+    return {"color": SPARE_COLOURS[h % len(SPARE_COLOURS)], "marker": SPARE_MARKERS[(h >> 8) % len(SPARE_MARKERS)],
             "linestyle": "-"}
+
+
+#: solvers whose work the harness cannot count in full (docs/work.md, docs/peers.md): they are left
+#: out of work-based figures (data profiles, convergence against work) with this note
+WORK_NOT_COUNTED: Dict[str, str] = {
+    "ipopt": "Ipopt's MUMPS factorisations and solves are not counted",
+    "tao-pdipm": "MUMPS's factorisations inside TAO are not counted",
+    "tao-tron": "the Krylov iterations inside PETSc's TRON are not counted",
+    "siconos-lemke": "the pivots inside Siconos's Lemke are not counted (only forming W = J A^-1 J')",
+    "siconos-nsn": "the Newton iterations inside Siconos are not counted (only forming W = J A^-1 J')",
+    "bullet-dantzig": "the pivots inside Bullet's Dantzig solver are not counted (only forming W = J A^-1 J')",
+}
+
+
+def work_left_out(labels: Iterable[str], solvers: Dict[str, str]) -> Dict[str, str]:
+    """label -> why its work is not counted, for the labels of WORK_NOT_COUNTED's solvers."""
+    return {lab: WORK_NOT_COUNTED[solvers.get(lab, lab)] for lab in labels
+            if solvers.get(lab, lab) in WORK_NOT_COUNTED}
 
 
 def solver_colour(solver: str) -> str:
@@ -200,11 +226,16 @@ def legend_outside(fig, axes: Iterable, title: Optional[str] = None, notes: Iter
                frameon=False)
 
 
+#: the one legend entry for the mark on a run whose status is not `converged` (every figure)
+NOT_CONVERGED_LABEL = "x: status not `converged` (e above tol on the original QP, or stopped; final point)"
+#: matplotlib keywords of that mark (drawn without a label: failed_mark() is its legend entry)
+FAILED_MARK = {"color": "black", "marker": "x", "ls": "none", "markersize": 7, "zorder": 5}
+
+
 def failed_mark(**kwargs):
     """The legend handle of the mark on runs that did not converge."""
     from matplotlib.lines import Line2D
-    return Line2D([], [], color="black", marker="x", ls="none", markersize=7, label="not converged (final point)",
-                  **kwargs)
+    return Line2D([], [], label=NOT_CONVERGED_LABEL, **{**FAILED_MARK, **kwargs})
 
 
 def save_figure_outside(fig, folder: str, stem: str) -> List[str]:

@@ -40,6 +40,8 @@ SUMMARY_COLUMNS = ["suite", "snapshot", "label", "solver", "status", "solver_sta
 #: run statuses beside the solvers' own (harness/runner.hpp)
 RELAXATION_STATUS = "solved_relaxation"
 UNCONFIRMED_STATUS = "unconfirmed"
+#: a run that met tol on the problem it solved: the original QP, or the one it changed
+SOLVED_OWN_PROBLEM = ("converged", RELAXATION_STATUS)
 #: a problem class the solver does not take (mprgp-box on general rows, pgs over max_rows): "n/a",
 #: neither a success nor a failure
 NOT_APPLICABLE_STATUS = "not_applicable"
@@ -207,6 +209,25 @@ def unmeasured_notes(runs: pd.DataFrame, labels=None) -> list:
     return notes
 
 
+#: the one vocabulary of run statuses (harness/runner.hpp, solvers/solver.cpp), as figures, tables
+#: and the report use them; figures mark every status but `converged` with the same black x
+STATUS_MEANINGS = {
+    "converged": "the solver said converged and the accuracy error e on the original QP is <= tol",
+    RELAXATION_STATUS: "tol met only on the problem the solver changed (decoupled rows, or J ignored); "
+                       "e on the original QP is above tol",
+    UNCONFIRMED_STATUS: "the solver's own stopping test was met, but e of the QP it solved is above the "
+                        "common tolerance",
+    "max_iterations": "stopped at its iteration limit",
+    "time_limit": "stopped at its time limit",
+    "stalled": "stopped making progress",
+    "diverged": "diverged",
+    "infeasible": "reported the problem infeasible",
+    "stopped_by_monitor": "stopped by the harness's monitor",
+    NOT_APPLICABLE_STATUS: "a problem class the solver does not take (n/a: neither a success nor a failure)",
+    "invalid_input": "refused its input (settings or problem)",
+    "not_run": "not run (solver not built or not registered)",
+}
+
 #: what the report says about a run with status `unconfirmed` (harness/README.md, docs/accuracy.md)
 UNCONFIRMED_MEANING = ("`unconfirmed`: the solver's own stopping test was met (with stop=native the paper's "
                        "residual at the paper's tolerance) but the accuracy error e (docs/accuracy.md) of "
@@ -256,6 +277,11 @@ def load_results(path: str, with_history: bool = True) -> Results:
                     raise ValueError(f"{file}: not valid JSON: {err}") from err
             row = flatten_run(record)
             row["file"] = name
+            stem_label = os.path.splitext(name)[0].partition("__")[2]
+            if (row["snapshot"], row["label"]) in records and stem_label and stem_label != row["label"]:
+                # two runs of one solver under one label (the stress table writes "cg" for both cg
+                # and cg:precond=ichol): the file name keeps them apart, as one label per run
+                row["label"] = stem_label
             rows.append(row)
             records[(row["snapshot"], row["label"])] = record
             if with_history:

@@ -32,6 +32,22 @@ class FigureOutcome:
     missing: Optional[str] = None           #: reason when not produced
 
 
+def median_over_rounds(rounds: List[Results]) -> pd.DataFrame:
+    """Round 1's runs with time_s, setup_s and solve_s replaced by their medians over the rounds
+    (per snapshot and label), for figures and tables that show one time per run."""
+    if not rounds:
+        return pd.DataFrame()
+    first = rounds[0].runs.copy()
+    if len(rounds) == 1:
+        return first
+    cols = [c for c in ("time_s", "setup_s", "solve_s") if c in first]
+    every = pd.concat([r.runs[["snapshot", "label"] + cols] for r in rounds], ignore_index=True)
+    med = every.groupby(["snapshot", "label"], sort=False)[cols].median()
+    keyed = first.set_index(["snapshot", "label"])
+    keyed.loc[med.index.intersection(keyed.index), cols] = med.loc[med.index.intersection(keyed.index), cols]
+    return keyed.reset_index()
+
+
 def default_data_dir() -> str:
     """Where `make paper-data` puts the authors' data: $CB_CACHE/paper-data (CB_CACHE defaults to
     ~/.cache/contactbench). Callers treat a missing folder as "no authors' data"."""
@@ -48,6 +64,9 @@ class PaperContext:
     sims: Dict[str, str] = field(default_factory=dict)      #: scene key -> simulation folder
     reasons: Dict[str, str] = field(default_factory=dict)   #: suite/scene -> why it is missing
     notes: Dict[str, List[str]] = field(default_factory=dict)  #: suite -> notes (e.g. substitutions)
+    #: timed suite -> its rounds' results folders, round 1 (= results[suite]) first (reproduce.py)
+    rounds: Dict[str, List[str]] = field(default_factory=dict)
+    _round_cache: Dict[str, list] = field(default_factory=dict, repr=False)
 
     @property
     def fig_dir(self) -> str:
@@ -64,6 +83,21 @@ class PaperContext:
         if res.runs.empty:
             raise NotProduced(f"suite '{suite}' produced no runs ({folder})")
         return res
+
+    def round_results(self, suite: str) -> List[Results]:
+        """Every round of a timed suite, round 1 first; [round 1] alone when it ran once (the
+        claims then have one timing and say so). Folders that do not load are left out."""
+        if suite not in self._round_cache:
+            loaded = []
+            for folder in self.rounds.get(suite) or [self.results.get(suite) or os.path.join(self.out, "runs", suite)]:
+                try:
+                    res = load_results(folder)
+                except (FileNotFoundError, ValueError):
+                    continue
+                if not res.runs.empty:
+                    loaded.append(res)
+            self._round_cache[suite] = loaded
+        return self._round_cache[suite]
 
     def simulation(self, key: str) -> Optional[dict]:
         folder = self.sims.get(key)

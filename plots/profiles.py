@@ -7,10 +7,11 @@ in docs/work.md "Profiles").
   tol is not asked for more); the dropped tiers are named in the report;
 - time to a tier, read off the histories (the final point when a run has no history), counted
   from the start of setup (solve-only with --solve-only, labelled so);
-- runs that are neither successes nor failures are left out of the success rates, the means and
-  the profiles' denominators, and counted in their own columns: `solved_relaxation` (tol met only
-  on a problem the solver changed) and `not_applicable` ("n/a": a problem class the solver does
-  not take, e.g. mprgp-box on general rows, pgs over max_rows);
+- one problem set per tier: every solver is judged on every problem of the suite it applies to;
+  `not_applicable` runs ("n/a": a problem class the solver does not take, e.g. mprgp-box on
+  general rows, pgs over max_rows) leave that solver's denominator and are counted beside; a
+  `solved_relaxation` run (tol met only on a problem the solver changed) is judged on e of the
+  original QP like any run, so it reaches a tier only if it brought e there;
 - shifted geometric mean of the times, sgm = exp(mean(log(t + s))) - s, normalised to the best
   solver of the tier (ratio 1 = best), with the shift scaled to the data: s = 10% of the median of
   the times-to-tier reached over the report (printed; --shift sets it in seconds); a run that never
@@ -48,6 +49,8 @@ from plots.loader import (NOT_APPLICABLE_STATUS, RELAXATION_STATUS, Results, his
 SHIFT_FRACTION = 0.1
 #: the column a run's n/a count goes in
 NA_COLUMN = "n/a"
+#: the column of the number of problems a solver is judged on (every problem but its n/a ones)
+JUDGED_COLUMN = "judged"
 
 
 def shifted_geomean(values: Iterable[float], shift: float) -> float:
@@ -88,7 +91,8 @@ def judged_tiers(runs: pd.DataFrame, tiers=TIERS) -> Tuple[list, list, float]:
 def tier_table(results: Results, tiers=TIERS, include_setup: bool = True) -> pd.DataFrame:
     """One row per (snapshot, label, tier): reached, time_s (from the start of setup unless
     include_setup is False), a_products and work (A-product equivalents) when first reached;
-    relaxation = the run is solved_relaxation, na = not_applicable (neither success nor failure)."""
+    relaxation = the run is solved_relaxation (judged on e of the original QP, like any run),
+    na = not_applicable (not judged)."""
     rows = []
     for _, run in results.runs.iterrows():
         snap, label = run["snapshot"], run["label"]
@@ -111,8 +115,10 @@ def tier_table(results: Results, tiers=TIERS, include_setup: bool = True) -> pd.
                 t = final_time
                 a = float(run.get("a_products", np.nan))
                 w = float(run.get("work", np.nan))
-            if relaxation or na:
+            if na:  # the solver does not take this problem class: not judged on it
                 t = a = w = float("nan")
+            # a relaxation is judged like every run, on e of the ORIGINAL QP (the history's and the
+            # final point's kkt_rel): it reaches a tier only if it brought e there
             rows.append({"snapshot": snap, "label": label, "tier": tier, "reached": not math.isnan(t),
                          "time_s": t, "a_products": a, "work": w, "relaxation": relaxation, "na": na})
     return pd.DataFrame(rows, columns=["snapshot", "label", "tier", "reached", "time_s", "a_products", "work",
@@ -137,8 +143,7 @@ def performance_ratios(cost: pd.DataFrame) -> pd.DataFrame:
 
 
 def _denominators(columns, count: int, excluded: pd.DataFrame = None) -> Dict[str, int]:
-    """Problems each solver is judged on: all of them minus its excluded (solved_relaxation and
-    not_applicable) runs."""
+    """Problems each solver is judged on: all of them minus its excluded (not_applicable) runs."""
     if excluded is None:
         return {s: max(1, count) for s in columns}
     return {s: max(1, count - int(excluded[s].fillna(False).astype(bool).sum()) if s in excluded else count)
@@ -147,7 +152,7 @@ def _denominators(columns, count: int, excluded: pd.DataFrame = None) -> Dict[st
 
 def performance_profile(ratios: pd.DataFrame, taus: np.ndarray, excluded: pd.DataFrame = None) -> pd.DataFrame:
     """rho_s(tau) for each tau (rows) and solver (columns); `excluded` (problems x solvers, True for
-    solved_relaxation and not_applicable runs) leaves those runs out of the solver's denominator."""
+    not_applicable runs) leaves those runs out of the solver's denominator."""
     n = _denominators(ratios.columns, len(ratios), excluded)
     return pd.DataFrame({s: [(ratios[s] <= tau).sum() / n[s] for tau in taus] for s in ratios.columns},
                         index=taus)
@@ -185,7 +190,7 @@ def compute(results: Results, shift: Optional[float] = None, tiers=TIERS,
     tt = tier_table(results, kept, include_setup)
     labels = results.labels()
     penalty = penalty_time(results)
-    judged = tt[~(tt["relaxation"].astype(bool) | tt["na"].astype(bool))]  # neither success nor failure
+    judged = tt[~tt["na"].astype(bool)]  # every problem the solver applies to; relaxations included
     shift_rule = "given"
     if shift is None:
         shift = data_shift(judged.loc[judged["reached"], "time_s"])
@@ -195,10 +200,12 @@ def compute(results: Results, shift: Optional[float] = None, tiers=TIERS,
         sel = judged[judged["tier"] == tier]
         success[tier] = sel.groupby("label")["reached"].mean().reindex(labels)
         times = sel.assign(t=sel["time_s"].where(sel["reached"], penalty))
-        sgm[tier] = times.groupby("label")["t"].apply(lambda v: shifted_geomean(v, shift)).reindex(labels)
+        sgm[tier] = times.groupby("label")["t"].agg(lambda v: shifted_geomean(v, shift)).reindex(labels)
         median[tier] = sel[sel["reached"]].groupby("label")["time_s"].median().reindex(labels)
     success_table = pd.DataFrame(success, index=labels)
     first = tt[tt["tier"] == kept[0]] if len(tt) and kept else tt
+    success_table[JUDGED_COLUMN] = (first.groupby("label")["na"].apply(lambda v: int((~v.astype(bool)).sum()))
+                                    .reindex(labels).fillna(0) if len(first) else pd.Series(0, index=labels))
     for col, key in ((RELAXATION_STATUS, "relaxation"), (NA_COLUMN, "na")):
         success_table[col] = (first.groupby("label")[key].sum().reindex(labels).fillna(0)
                               if len(first) else pd.Series(0, index=labels))
@@ -218,9 +225,9 @@ def cost_matrix(tt: pd.DataFrame, tier: float, column: str = "time_s") -> pd.Dat
 
 
 def excluded_matrix(tt: pd.DataFrame, tier: float) -> pd.DataFrame:
-    """problems x solvers, True where the run is solved_relaxation or not_applicable."""
-    sel = tt[tt["tier"] == tier].assign(
-        excluded=lambda d: (d["relaxation"].astype(bool) | d["na"].astype(bool)).astype(float))
+    """problems x solvers, True where the run is not_applicable (the solver is not judged on that
+    problem; a solved_relaxation run is judged, on e of the original QP)."""
+    sel = tt[tt["tier"] == tier].assign(excluded=lambda d: d["na"].astype(bool).astype(float))
     return sel.pivot_table(index="snapshot", columns="label", values="excluded", aggfunc="first",
                            dropna=False) > 0
 
@@ -249,9 +256,12 @@ def _draw_profiles(numbers: dict, labels: List[str], solvers: Dict[str, str], di
             xs = np.logspace(math.log10(lo), math.log10(hi), 200)
             prof = data_profile(cost, xs, excluded)
         judged = _denominators(labels, len(cost), excluded)
+        no_work = figutil.work_left_out(labels, solvers) if column != "time_s" else {}
         for label in labels:
+            if label in no_work:
+                continue  # its work is not counted in full (figutil.WORK_NOT_COUNTED): said in profiles.md
             if len(cost) - (int(excluded[label].fillna(False).astype(bool).sum()) if label in excluded else 0) <= 0:
-                continue  # every run of the label is excluded (n/a or relaxation): nothing to draw
+                continue  # every run of the label is n/a: nothing to draw
             style = figutil.solver_style(label, solvers.get(label))
             ax.step(xs, prof[label], where="post", color=style["color"], ls=style["linestyle"], lw=1.4,
                     marker=style["marker"], markevery=[len(xs) - 1], markersize=5,
@@ -264,7 +274,7 @@ def _draw_profiles(numbers: dict, labels: List[str], solvers: Dict[str, str], di
         ax.grid(True, alpha=0.3)
     axes.flat[0].set_ylabel("share of problems" + (" solved" if column != "time_s" else ""))
     fig.tight_layout()
-    figutil.legend_outside(fig, axes.flat[:1], title="solver (n/a runs left out)")
+    figutil.legend_outside(fig, axes.flat[:1], title="solver (problems judged; n/a left out)")
     return figutil.save_figure_outside(fig, out_dir, stem)
 
 
@@ -285,7 +295,7 @@ def _table(df: pd.DataFrame, index_name: str, fmt_cell=fmt) -> str:
     cols = [str(c) if not isinstance(c, float) else f"{c:.0e}" for c in df.columns]
     cells = {c: fmt_cell for c in df.columns}
     for c in df.columns:
-        if c in (RELAXATION_STATUS, NA_COLUMN):  # a count, whatever the table's cell format
+        if c in (RELAXATION_STATUS, NA_COLUMN, JUDGED_COLUMN):  # a count, whatever the table's cell format
             cells[c] = lambda v: "—" if v is None or (isinstance(v, float) and math.isnan(v)) else str(int(v))
     lines = ["| " + index_name + " | " + " | ".join(cols) + " |", "|" + "---|" * (len(cols) + 1)]
     for idx, row in df.iterrows():
@@ -319,10 +329,11 @@ def write_markdown(results: Results, numbers: dict, path: str, figures: List[str
              f"lengths as a fraction of the scene size); times are read off the histories, {clock}. "
              + tiers_note, "",
              "## Success rate per tier", "",
-             "Runs with status `solved_relaxation` (tol met only on a problem the solver changed: decoupled "
-             "rows, or J ignored) and `not_applicable` (n/a: a problem class the solver does not take) are "
-             "neither successes nor failures: they are left out of the rates, the means and the profiles' "
-             "denominators, and counted in their own columns.", "",
+             f"Every solver is judged on the same problems: all {len(results.snapshots())} of the suite but those "
+             "of a class it does not take (`not_applicable`, column n/a); column `judged` gives the count. A run "
+             "with status `solved_relaxation` (tol met only on a problem the solver changed: decoupled rows, or J "
+             "ignored) is judged like any other, on the accuracy error e of the original QP: it reaches a tier "
+             "only if it brought e there (column `solved_relaxation` counts them).", "",
              _table(numbers["success"], "label", pct), "",
              f"## Time to tier: shifted geometric mean, normalised to the best solver "
              f"(shift = {shift:.3g} s = {numbers.get('shift_rule', 'given')}; failures count {penalty:g} s)", "",
@@ -350,6 +361,10 @@ def write_markdown(results: Results, numbers: dict, path: str, figures: List[str
             parts += ["", "Unconfirmed `converged` claims:", ""]
             for _, r in unconfirmed.iterrows():
                 parts.append(f"- {r['snapshot']} / {r['label']}: error {fmt(r.get('kkt_rel'))} (tol {fmt(r.get('tol'))})")
+    no_work = figutil.work_left_out(numbers["labels"], figutil.label_solvers(results.runs))
+    if no_work:
+        parts += ["", "Left out of the data profiles (work not counted in full): "
+                  + "; ".join(f"`{k}`: {v}" for k, v in no_work.items()) + "."]
     parts += ["", "## Figures", ""]
     for f in figures:
         if f.endswith(".png"):

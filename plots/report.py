@@ -14,7 +14,8 @@ import sys
 from typing import Dict, List, Optional
 
 
-from plots.claims import NOT_MEASURED, Claim  # noqa: E402
+from plots.claims import ABOVE, INCONCLUSIVE, NOT_MEASURED, Claim  # noqa: E402
+from plots.loader import STATUS_MEANINGS  # noqa: E402
 from plots.paper_context import FigureOutcome, NotProduced, PaperContext  # noqa: E402
 
 #: the claims every report has a row for, in order, with the figure that measures each
@@ -73,6 +74,24 @@ def collect_claims(outcomes: List[FigureOutcome]) -> List[Claim]:
     return rows
 
 
+#: the report's one explanation of the verdicts (plots/claims.py)
+VERDICT_LEGEND = (
+    "Verdicts: **holds** / **does not hold** are decided: a timed ratio only when its whole interval (the "
+    "median of repeated, interleaved rounds with its distribution-free interval, docs/work.md \"Claims\") lies "
+    "on one side of the threshold; counts (iterations, CG steps) are deterministic. **holds only as "
+    "published** / **holds only on native residuals**: the fair reading (the same preconditioner and tolerance "
+    "for both, the accuracy error e on the original QP, setup timed) does not hold or was not measured, while "
+    "the authors' setting or measure does. **inconclusive**: measured, but the interval straddles the threshold "
+    "(reason given). **not measured**: nothing exercised the claim (reason given). The column \"judged on\" "
+    "names the problem each verdict is judged on.")
+
+
+def status_legend() -> str:
+    """The statuses every figure, table and claim row uses, each explained once."""
+    return ("Run statuses (one vocabulary in every figure, table and row; figures mark every status but "
+            "`converged` with a black x): " + "; ".join(f"`{k}`: {v}" for k, v in STATUS_MEANINGS.items()) + ".")
+
+
 def _cell(text: str) -> str:
     return str(text).replace("|", "\\|").replace("\n", " ")
 
@@ -95,13 +114,18 @@ def render(ctx: PaperContext, outcomes: List[FigureOutcome], meta: Optional[dict
     lines += ["", "Every number below is computed from this run's results and the authors' CSV files; the "
               "paper's numbers are quoted from paper.txt with their section. Verdicts are computed by rules "
               "stated per row.", "", "## Claims", "",
-              "| claim | paper | authors' data | ours | verdict |", "|---|---|---|---|---|"]
+              "| claim | judged on | paper | authors' data | ours | verdict |", "|---|---|---|---|---|---|"]
     for c in claims:
-        lines.append(f"| {_cell(c.claim)} ({_cell(c.source)}) | {_cell(c.paper)} | {_cell(c.authors)} | "
-                     f"{_cell(c.ours)} | **{_cell(c.verdict)}** |")
-    lines += ["", "Verdict rules:", ""]
+        why = f" ({_cell(c.reason)})" if c.reason and c.verdict in (INCONCLUSIVE, NOT_MEASURED) else ""
+        lines.append(f"| {_cell(c.claim)} ({_cell(c.source)}) | {_cell(c.judged_on or '—')} | {_cell(c.paper)} | "
+                     f"{_cell(c.authors)} | {_cell(c.ours)} | **{_cell(c.verdict)}**{why} |")
+    lines += ["", VERDICT_LEGEND, "", status_legend(), "", "Verdict rules:", ""]
     for c in claims:
         rule = c.rule or "; ".join(c.notes) or "—"
+        if c.interval is not None and c.threshold is not None:
+            rule += (f" Deciding quantity: {c.estimate:.3g}, {100 * (c.coverage or 0):.1f}% interval "
+                     f"[{c.interval[0]:.3g}, {c.interval[1]:.3g}] from {c.samples} interleaved rounds, "
+                     f"threshold {c.threshold:g} ({'holds above' if c.direction == ABOVE else 'holds below'}).")
         lines.append(f"- {c.key}: {rule}")
     lines += ["", "## Figures", ""]
     for o in outcomes:
@@ -158,6 +182,12 @@ def context_from_out(out: str, data: Optional[str], quick: bool = False) -> Pape
     if os.path.isdir(runs):
         for name in sorted(os.listdir(runs)):
             ctx.results[name] = os.path.join(runs, name)
+    rounds = os.path.join(out, "rounds")
+    if os.path.isdir(rounds):
+        for name in sorted(os.listdir(rounds)):
+            extra = sorted((d for d in os.listdir(os.path.join(rounds, name)) if d.isdigit()), key=int)
+            if name in ctx.results and extra:
+                ctx.rounds[name] = [ctx.results[name]] + [os.path.join(rounds, name, d) for d in extra]
     sims = os.path.join(out, "sim")
     if os.path.isdir(sims):
         for name in sorted(os.listdir(sims)):

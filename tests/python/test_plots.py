@@ -4,6 +4,7 @@ Run from tests/python with PYTHONPATH=plots and MPLBACKEND=Agg:
     /usr/bin/python3 -m unittest
 """
 import io
+import itertools
 import json
 import math
 import os
@@ -239,24 +240,33 @@ class TestProfiles(TempDirCase):
         self.assertEqual(row["a_products"], 2)
         self.assertAlmostEqual(tt[tt["tier"] == 1e-8].iloc[0]["time_s"], 8.0, places=9)
 
-    def test_solved_relaxation_is_neither_success_nor_failure(self):
-        # b met tol only on a problem it changed (decoupled rows) on p1: its own column, left out of
-        # b's success rate, its geometric mean and its profile denominators.
+    def test_solved_relaxation_is_judged_on_the_original_qp(self):
+        # b met tol only on a problem it changed (decoupled rows) on p1; its error e on the original
+        # QP is 1e-3: it reaches the 1e-2 tier but fails 1e-4 and 1e-6, and both solvers are judged on
+        # the same two problems (issue 24: no solver ranked on a subset of its own choosing).
         relax = mf.make_run("p1", "b", solve_s=2.0, final_kkt_rel=1e-3, history=False)
         relax["status"], relax["solver_status"] = "solved_relaxation", "converged"
         recs = [mf.make_run("p0", "a", solve_s=1.0, history=False), mf.make_run("p0", "b", solve_s=2.0, history=False),
                 mf.make_run("p1", "a", solve_s=4.0, history=False), relax]
         res = loader.load_results(mf.write_results(self.tmp, recs))
         numbers = profiles.compute(res, shift=10)
-        self.assertAlmostEqual(numbers["success"].loc["b", 1e-6], 1.0)  # 1 of 1 judged run
+        self.assertAlmostEqual(numbers["success"].loc["b", 1e-6], 0.5)  # 1 of 2 judged problems
+        self.assertAlmostEqual(numbers["success"].loc["b", 1e-2], 1.0)  # e = 1e-3 <= 1e-2 on the original QP
+        self.assertEqual(numbers["success"].loc["b", "judged"], 2)
+        self.assertEqual(numbers["success"].loc["a", "judged"], 2)
         self.assertEqual(numbers["success"].loc["b", "solved_relaxation"], 1)
         self.assertEqual(numbers["success"].loc["a", "solved_relaxation"], 0)
-        self.assertAlmostEqual(numbers["sgm"].loc["b", 1e-6], 2.0, places=9)
+        # b at 1e-6: 2 s on p0, the penalty time on p1; sgm with shift 10
+        penalty = numbers["penalty_s"]
+        self.assertAlmostEqual(numbers["sgm"].loc["b", 1e-6], math.sqrt(12 * (penalty + 10)) - 10, places=9)
         tt = numbers["tiers"]
         ratios = profiles.performance_ratios(profiles.cost_matrix(tt, 1e-6))
-        prof = profiles.performance_profile(ratios, [1.0], profiles.relaxation_matrix(tt, 1e-6))
-        self.assertAlmostEqual(prof.loc[1.0, "b"], 0.0)  # p0: 2 s vs a's 1 s; p1 not judged
-        self.assertAlmostEqual(prof.loc[1.0, "a"], 1.0)  # best on both (alone on p1)
+        prof = profiles.performance_profile(ratios, [1.0], profiles.excluded_matrix(tt, 1e-6))
+        self.assertAlmostEqual(prof.loc[1.0, "b"], 0.0)  # p0: 2 s vs a's 1 s; p1 not reached
+        self.assertAlmostEqual(prof.loc[1.0, "a"], 1.0)  # best on both
+        prof2 = profiles.performance_profile(profiles.performance_ratios(profiles.cost_matrix(tt, 1e-2)), [1.0],
+                                             profiles.excluded_matrix(tt, 1e-2))
+        self.assertAlmostEqual(prof2.loc[1.0, "b"], 0.5)  # p1: b's 2 s beats a's 4 s at e <= 1e-2
         hon = profiles.status_honesty(res.runs).set_index("label")
         self.assertEqual(hon.loc["b", "converged"], 2)
         self.assertEqual(hon.loc["b", "confirmed"], 1)
@@ -284,22 +294,73 @@ class TestProfiles(TempDirCase):
         for stem in ("profiles_performance", "profiles_data"):
             self.assertTrue(os.path.isfile(os.path.join(folder, "figures", stem + ".pdf")))
 
+    def test_two_runs_of_one_solver_under_one_label_stay_apart(self):
+        # the stress table writes label "cg" for both cg and cg:precond=ichol; the file names differ
+        folder = mf.write_results(self.tmp, [mf.make_run("p0", "cg", solve_s=1.0, history=False)])
+        ichol = mf.make_run("p0", "cg", solve_s=3.0, history=False)
+        with open(os.path.join(folder, "runs", "p0__cg:precond=ichol.json"), "w", encoding="utf-8") as f:
+            json.dump(ichol, f)
+        os.remove(os.path.join(folder, "summary.csv"))
+        res = loader.load_results(folder)
+        self.assertEqual(sorted(res.runs["label"]), ["cg", "cg:precond=ichol"])
+        numbers = profiles.compute(res, shift=1)
+        self.assertEqual(list(numbers["success"]["judged"]), [1, 1])
+
+    def test_solvers_with_uncounted_work_leave_the_data_profiles(self):
+        recs = [mf.make_run("p0", "a", solver="mprgp"), mf.make_run("p0", "ip", solver="ipopt")]
+        folder = mf.write_results(self.tmp, recs)
+        with redirect_stdout(io.StringIO()):
+            self.assertEqual(profiles.main([folder]), 0)
+        with open(os.path.join(folder, "profiles.md"), encoding="utf-8") as f:
+            md = f.read()
+        self.assertIn("Left out of the data profiles (work not counted in full): `ip`: Ipopt's MUMPS "
+                      "factorisations and solves are not counted.", md)
+        self.assertIn("| ip | 100% |", md)  # still in the success table and the time profiles
+
+
+def _lab(hex_colour):
+    """CIELAB (D65) of an sRGB colour, for colour distances."""
+    lin = [c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4
+           for c in (int(hex_colour[i:i + 2], 16) / 255 for i in (1, 3, 5))]
+    x = (0.4124 * lin[0] + 0.3576 * lin[1] + 0.1805 * lin[2]) / 0.95047
+    y = 0.2126 * lin[0] + 0.7152 * lin[1] + 0.0722 * lin[2]
+    z = (0.0193 * lin[0] + 0.1192 * lin[1] + 0.9505 * lin[2]) / 1.08883
+    f = lambda v: v ** (1 / 3) if v > 0.008856 else 7.787 * v + 16 / 116  # noqa: E731
+    return (116 * f(y) - 16, 500 * (f(x) - f(y)), 200 * (f(y) - f(z)))
+
 
 class TestFigureRules(unittest.TestCase):
     def test_one_colour_and_marker_per_solver(self):
         from plots import figutil
-        self.assertEqual(figutil.solver_style("pgs"), {"color": "#9467bd", "marker": "D", "linestyle": "-"})
-        self.assertEqual(figutil.solver_style("mprgp")["color"], "#1f77b4")
+        self.assertEqual(figutil.solver_style("pgs"), {"color": "#CC79A7", "marker": "D", "linestyle": "-"})
         colours = [figutil.SOLVER_STYLES[s][0] for s in figutil.SOLVER_STYLES]
         markers = [figutil.SOLVER_STYLES[s][1] for s in figutil.SOLVER_STYLES]
         self.assertEqual(len(set(colours)), len(colours))
         self.assertEqual(len(set(markers)), len(markers))
+        self.assertNotIn("x", markers)  # the not-converged mark
+        # colours apart: CIELAB distance >= 15 between any two fixed styles (bullet-dantzig's old
+        # hashed colour was within 10 of mprgp's blue)
+        for (a, ca), (b, cb) in itertools.combinations([(s, figutil.SOLVER_STYLES[s][0]) for s in figutil.SOLVER_STYLES], 2):
+            self.assertGreater(math.dist(_lab(ca), _lab(cb)), 15.0, (a, b))
         # a label of a known solver keeps the solver's colour and marker, with a dashed style
         variant = figutil.solver_style("mprgp-ichol", "mprgp")
-        self.assertEqual((variant["color"], variant["marker"]), ("#1f77b4", "o"))
+        self.assertEqual((variant["color"], variant["marker"]), figutil.SOLVER_STYLES["mprgp"])
         self.assertNotEqual(variant["linestyle"], "-")
-        # unknown names: the same style every time, whatever else is drawn
-        self.assertEqual(figutil.solver_style("my-solver"), figutil.solver_style("my-solver"))
+        # a new solver: the same style every time, with a marker no registered solver has
+        for name in ("my-solver", "another-qp", "x"):
+            style = figutil.solver_style(name)
+            self.assertEqual(style, figutil.solver_style(name))
+            self.assertNotIn(style["marker"], markers)
+
+    def test_every_registered_solver_has_a_fixed_style(self):
+        cb = os.environ.get("CB_CONTACTBENCH")
+        if not cb or not os.path.isfile(cb):
+            self.skipTest("CB_CONTACTBENCH (the contactbench binary) not set: ctest sets it")
+        import subprocess
+        from plots import figutil
+        listed = json.loads(subprocess.run([cb, "solvers", "--json"], capture_output=True, text=True, check=True).stdout)
+        missing = [s["name"] for s in listed if s["name"] not in figutil.SOLVER_STYLES]
+        self.assertEqual(missing, [], "add a fixed style to plots/figutil.py SOLVER_STYLES")
 
     def test_titles_and_relaxation_labels(self):
         import pandas as pd
@@ -454,6 +515,19 @@ class TestReproduce(TempDirCase):
         # the fake's ICA is ~17x slower than its MPRGP at the smallest size: computed, not typed in
         low_res = next(c for c in saved if c["key"] == "fig11-ica-low-res")
         self.assertEqual(low_res["verdict"], claims.DOES_NOT_HOLD)
+        # every row says the problem it is judged on; timed rows carry the rounds' interval
+        for c in saved:
+            self.assertTrue(c["judged_on"], c["key"])
+            self.assertIn(c["verdict"], claims.VERDICTS)
+        for key in ("fig6-decoupling", "fig10-ica-10x", "fig11-ica-low-res"):
+            c = next(c for c in saved if c["key"] == key)
+            self.assertEqual(c["samples"], reproduce.TIMED_SUITES[key.split("-")[0]], key)
+            self.assertLessEqual(c["interval"][0], c["estimate"])
+            self.assertLessEqual(c["estimate"], c["interval"][1])
+        # the fake's long cube has contact from frame 3: Table 1 judges only those frames
+        dominates = next(c for c in saved if c["key"] == "table1-cg-dominates")
+        self.assertIn("frames with contact rows", dominates["judged_on"])
+        self.assertEqual(len(os.listdir(os.path.join(out, "rounds", "fig6"))), reproduce.TIMED_SUITES["fig6"] - 1)
         self.assertIn("not simulated: dragon_stair", text)
         # the fake's ica-published runs (stop=native) are `unconfirmed`: the report says what that means
         self.assertIn(loader.UNCONFIRMED_MEANING, text)
@@ -483,10 +557,20 @@ class TestReproduce(TempDirCase):
             reproduce.run_suite(runner, ctx, "fig11", tpl, reproduce.pick_frame(snaps, 11), False)
             reproduce.run_suite(runner, ctx, "fig11", tpl, reproduce.pick_frame(snaps, 11), False)
         self.assertEqual(runner.steps[1], "simulate two_dinos_1303: cached (12 frames)")
+        rounds = reproduce.TIMED_SUITES["fig11"]
+        self.assertEqual(rounds, 8)
         self.assertTrue(runner.steps[2].startswith("run fig11: exit 0"))
-        self.assertEqual(runner.steps[3], "run fig11: cached")
+        for k in range(2, rounds + 1):  # a timed suite runs in rounds, each cached like the first
+            self.assertTrue(runner.steps[1 + k].startswith(f"run fig11 round {k}/{rounds}: exit 0"), runner.steps)
+            self.assertEqual(runner.steps[2 + rounds + k - 1], f"run fig11 round {k}/{rounds}: cached")
+        self.assertEqual(runner.steps[2 + rounds], "run fig11: cached")
+        self.assertEqual(ctx.rounds["fig11"][0], os.path.join(out, "runs", "fig11"))
+        self.assertEqual(ctx.rounds["fig11"][1:], [os.path.join(out, "rounds", "fig11", str(k)) for k in range(2, 9)])
         with open(os.path.join(out, "suites", "fig11.json"), encoding="utf-8") as f:
             suite = json.load(f)
+        with open(os.path.join(out, "suites", "fig11.round2.json"), encoding="utf-8") as f:
+            second = json.load(f)
+        self.assertEqual(second["solvers"], suite["solvers"][::-1])  # the order alternates between rounds
         self.assertEqual(suite["time_limit_s"], reproduce.QUICK_TIME_LIMIT_S)
         self.assertTrue(os.path.isabs(suite["snapshots"][0]))
 
@@ -543,8 +627,10 @@ class TestReproduce(TempDirCase):
             with open(cb, "a") as f:
                 f.write("# rebuilt\n")
             reproduce.run_suite(runner, ctx, "fig11", tpl, snaps, False)
-        self.assertEqual(runner.steps[2], "run fig11: cached")
-        self.assertTrue(runner.steps[3].startswith("run fig11: exit 0"), runner.steps[3])
+        rounds = reproduce.TIMED_SUITES["fig11"]
+        self.assertEqual(runner.steps[1 + rounds], "run fig11: cached")
+        self.assertTrue(runner.steps[1 + 2 * rounds].startswith("run fig11: exit 0"), runner.steps)
+        self.assertTrue(runner.steps[2 + 2 * rounds].startswith(f"run fig11 round 2/{rounds}: exit 0"), runner.steps)
 
 
 class TestSuiteTemplates(unittest.TestCase):
