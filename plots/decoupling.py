@@ -45,6 +45,8 @@ NOISE = "exact-tol1e-6"
 ORDERS = ("authors", "random", "depth")
 STEPS = {"h": "the scene's step", "h2": "half the scene's step"}
 
+REPORT_STEM = "decoupling"  #: the table and claims page: OUT/decoupling.md
+
 HOLDS, DOES_NOT_HOLD, INCONCLUSIVE, NOT_MEASURED = "holds", "does not hold", "inconclusive", "not measured"
 
 
@@ -313,7 +315,7 @@ def table(summaries: Dict[str, Dict[str, dict]]) -> str:
 
 
 def report(out: str) -> List[dict]:
-    """Figures, decoupling.md and decoupling_claims.json from every chains folder under out."""
+    """Figures, OUT/decoupling.md and OUT/decoupling_claims.json from every chains folder under out."""
     root = os.path.join(out, "chains")
     summaries: Dict[str, Dict[str, dict]] = {}
     for scene in sorted(os.listdir(root)) if os.path.isdir(root) else []:
@@ -339,10 +341,10 @@ def report(out: str) -> List[dict]:
                for runs in summaries.values() for s in runs.values()]
     text.append("\nRenders (exact, exact-tol1e-6, authors, random, depth, left to right, at the frame where the "
                 "authors' chain is farthest from the exact one): " + ", ".join(r for r in renders if r) + "\n")
-    tmp = os.path.join(out, "decoupling.md.partial")
-    with open(tmp, "w", encoding="utf-8") as f:
+    page = os.path.join(out, REPORT_STEM + ".md")
+    with open(page + ".partial", "w", encoding="utf-8") as f:
         f.write("\n".join(text))
-    os.replace(tmp, os.path.join(out, "decoupling.md"))
+    os.replace(page + ".partial", page)
     tmp = os.path.join(out, "decoupling_claims.json.partial")
     with open(tmp, "w", encoding="utf-8") as f:
         json.dump({"claims": claims, "summaries": summaries}, f, indent=1, default=str)
