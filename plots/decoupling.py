@@ -31,7 +31,7 @@ import figutil  # noqa: E402
 from figutil import plt  # noqa: E402
 
 #: problems/sim/chains.hpp kChainsVersion: a cached folder of another version is run again
-CHAINS_VERSION = 1
+CHAINS_VERSION = 2
 
 # The rule for "noticeable" (docs/simulator.md). p: the deepest vertex inside a body or obstacle
 # at a frame's end, relative to L (the smallest body's largest extent at rest).
@@ -337,10 +337,11 @@ def report(out: str) -> List[dict]:
     for c in claims:
         text.append(f"- **{c['source']}** {c['claim']}: **{c['verdict']}**. {c['ours']}. Judged on {c['problem']}. "
                     f"Rule: {c['rule']}.")
-    renders = [s["render"].get("file") and os.path.join(s["folder"], s["render"]["file"])
-               for runs in summaries.values() for s in runs.values()]
+    renders = [os.path.join(s["folder"], s["render"][key]) for runs in summaries.values() for s in runs.values()
+               for key in ("file", "penetration_file") if s["render"].get(key)]
     text.append("\nRenders (exact, exact-tol1e-6, authors, random, depth, left to right, at the frame where the "
-                "authors' chain is farthest from the exact one): " + ", ".join(r for r in renders if r) + "\n")
+                "authors' chain is farthest from the exact one, and where it penetrates deepest): "
+                + ", ".join(renders) + "\n")
     page = os.path.join(out, REPORT_STEM + ".md")
     with open(page + ".partial", "w", encoding="utf-8") as f:
         f.write("\n".join(text))

@@ -74,6 +74,21 @@ void render_side_by_side(const std::string& path, const Scene& scene,
     std::filesystem::rename(partial, path);
 }
 
+/// Every chain's surfaces at the frame where a figure of the shown chain is largest so far.
+struct PictureAtMax {
+    long frame = -1;
+    double value = -1;
+    std::vector<std::vector<SurfaceMesh>> surfaces;
+    void offer(double v, long f, const std::vector<std::unique_ptr<Simulator>>& sims)
+    {
+        if (!std::isfinite(v) || v <= value) return;
+        value = v;
+        frame = f;
+        surfaces.clear();
+        for (const auto& sim : sims) surfaces.push_back(sim->body_surfaces());
+    }
+};
+
 }  // namespace
 
 bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& opt)
@@ -111,7 +126,8 @@ bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& op
         throw_input_error(opt.out_dir, "--out", "cannot create the output folder: " + ec.message());
     const std::string csv_path = opt.out_dir + "/chains.csv", json_path = opt.out_dir + "/chains.json";
     const std::string png_path = opt.out_dir + "/" + scene.name + "_largest_difference.png";
-    for (const std::string& p : {json_path, csv_path, png_path}) fs::remove(p, ec);  // never mix two runs
+    const std::string pen_png_path = opt.out_dir + "/" + scene.name + "_largest_penetration.png";
+    for (const std::string& p : {json_path, csv_path, png_path, pen_png_path}) fs::remove(p, ec);  // never mix runs
     std::ofstream csv(csv_path + ".partial");
     if (!csv) throw_input_error(csv_path + ".partial", "", "cannot write");
     csv << "frame,time_s,chain,solver,decouple,status,steps_not_solved,accuracy,rows,rows_solved,rows_dropped,"
@@ -119,9 +135,8 @@ bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& op
            "elastic_energy,blow_up\n";
 
     std::vector<bool> stopped(sims.size(), false);
-    long largest_frame = -1;
-    double largest = -1;
-    std::vector<std::vector<SurfaceMesh>> largest_surfaces;
+    PictureAtMax difference, penetration;  // of the shown chain against the reference
+    std::vector<double> pen_of(sims.size(), 0.0);
     bool ok = true;
     for (long f = 0; f < frames; ++f) {
         std::ostringstream rows;
@@ -146,6 +161,7 @@ bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& op
                 ok = false;
             }
             const double pen = sim.penetration_now();
+            pen_of[c] = pen;
             const ChainDistance d = chain_distance(sim.positions(), sims[ref]->positions());
             const ChainSpec& spec = opt.chains[c];
             rows << f << ',' << number(static_cast<double>(f + 1) * sim.step_h() * sim.steps_per_frame()) << ','
@@ -166,12 +182,9 @@ bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& op
             }
         }
         // Every chain has stepped this frame: keep the pictures when the shown chain is farthest yet.
-        const double d_shown = chain_distance(sims[shown]->positions(), sims[ref]->positions()).max;
-        if (shown != ref && !stopped[shown] && std::isfinite(d_shown) && d_shown > largest) {
-            largest = d_shown;
-            largest_frame = f;
-            largest_surfaces.clear();
-            for (const auto& other : sims) largest_surfaces.push_back(other->body_surfaces());
+        if (shown != ref && !stopped[shown]) {
+            difference.offer(chain_distance(sims[shown]->positions(), sims[ref]->positions()).max, f, sims);
+            penetration.offer(pen_of[shown], f, sims);
         }
         csv << rows.str() << std::flush;
         if (!csv) throw_input_error(csv_path + ".partial", "", "write failed (disk full?)");
@@ -179,7 +192,8 @@ bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& op
     csv.close();
     if (!csv) throw_input_error(csv_path + ".partial", "", "write failed (disk full?)");
     fs::rename(csv_path + ".partial", csv_path);
-    if (!largest_surfaces.empty()) render_side_by_side(png_path, scene, largest_surfaces);
+    if (!difference.surfaces.empty()) render_side_by_side(png_path, scene, difference.surfaces);
+    if (!penetration.surfaces.empty()) render_side_by_side(pen_png_path, scene, penetration.surfaces);
 
     nlohmann::json chains = nlohmann::json::array();
     for (const ChainSpec& spec : opt.chains)
@@ -198,9 +212,13 @@ bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& op
         {"reference", opt.chains[ref].label},
         {"render",
          {{"chain", opt.chains[shown].label},
-          {"frame", largest_frame},
-          {"max_distance_rel", largest >= 0 ? nlohmann::json(largest / size) : nlohmann::json()},
-          {"file", largest_surfaces.empty() ? nlohmann::json() : nlohmann::json(fs::path(png_path).filename())}}},
+          {"frame", difference.frame},
+          {"max_distance_rel", difference.value >= 0 ? nlohmann::json(difference.value / size) : nlohmann::json()},
+          {"file", difference.surfaces.empty() ? nlohmann::json() : nlohmann::json(fs::path(png_path).filename())},
+          {"penetration_frame", penetration.frame},
+          {"penetration_rel", penetration.value >= 0 ? nlohmann::json(penetration.value / size) : nlohmann::json()},
+          {"penetration_file",
+           penetration.surfaces.empty() ? nlohmann::json() : nlohmann::json(fs::path(pen_png_path).filename())}}},
         {"blow_up", !ok},
         {"chains_version", kChainsVersion},
         {"simulator_version", kSimulatorVersion}};

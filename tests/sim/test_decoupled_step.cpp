@@ -210,5 +210,7 @@ TEST(Chains, DemoDecoupledChainsPenetrateWhereTheExactOneDoesNot)
     EXPECT_EQ(record["chains"].size(), 3u);
     EXPECT_GE(record["render"]["frame"].get<long>(), 0);
     EXPECT_TRUE(fs::exists(out / "demo_largest_difference.png"));
+    EXPECT_TRUE(fs::exists(out / "demo_largest_penetration.png"));
+    EXPECT_NEAR(record["render"]["penetration_rel"].get<double>(), authors_pen, 1e-6 * authors_pen);
     EXPECT_FALSE(fs::exists(out / "chains.csv.partial"));
 }
