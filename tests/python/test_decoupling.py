@@ -3,6 +3,7 @@ the summary numbers, and (with CB_CONTACTBENCH) a cached `chains` run of the dem
 import json
 import math
 import os
+import subprocess
 import sys
 import tempfile
 import unittest
@@ -80,6 +81,32 @@ class Rule(unittest.TestCase):
         self.assertEqual(rows["sec6-decoupling-no-visual-artifacts"]["verdict"], decoupling.NOT_MEASURED)
         self.assertEqual(rows["sec7-decoupling-no-noticeable-artifacts"]["verdict"], decoupling.HOLDS)
         self.assertEqual(rows["sec5-depth-sorted-selection"]["verdict"], decoupling.INCONCLUSIVE)
+
+
+@unittest.skipUnless(os.environ.get("CB_CONTACTBENCH"), "needs CB_CONTACTBENCH (set by ctest)")
+class BadOptions(unittest.TestCase):
+    """Exit status 2, the option and what is wrong named, nothing written."""
+
+    def check(self, args, message):
+        with tempfile.TemporaryDirectory() as tmp:
+            out = os.path.join(tmp, "out")
+            done = subprocess.run([os.environ["CB_CONTACTBENCH"]] + args + ["--out", out],
+                                  capture_output=True, text=True)
+            self.assertEqual(done.returncode, 2, done.stderr)
+            self.assertIn(message, done.stderr)
+            self.assertFalse(os.path.exists(out))
+
+    def test_messages(self):
+        demo = os.path.join(ROOT, "scenes", "demo.json")
+        self.check(["simulate", demo, "--decouple", "sideways"],
+                   "simulate: error: --decouple: expected auto, none, authors, random or depth, got 'sideways'")
+        self.check(["simulate", demo, "--h", "0.003"],
+                   "--h: the frame's duration 0.010000 s (scene step x steps per frame) is not a whole number of "
+                   "steps of 0.003000 s")
+        self.check(["simulate", demo, "--h", "-1"], "simulate: error: --h: must be > 0 seconds")
+        self.check(["chains", demo, "--orders", "authors,deep"],
+                   "chains: error: --orders: expected a comma-separated list of authors, random, depth; got 'deep'")
+        self.check(["chains", demo, "--exact", "nosuch"], "chains: error: --exact: no solver named 'nosuch'")
 
 
 @unittest.skipUnless(os.environ.get("CB_CONTACTBENCH"), "needs CB_CONTACTBENCH (set by ctest)")
