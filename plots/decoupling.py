@@ -314,8 +314,9 @@ def table(summaries: Dict[str, Dict[str, dict]]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def report(out: str) -> List[dict]:
-    """Figures, OUT/decoupling.md and OUT/decoupling_claims.json from every chains folder under out."""
+def summaries_of(out: str, figures: bool = False) -> Dict[str, Dict[str, dict]]:
+    """summaries[scene][h | h2] of every finished chains folder under OUT/chains (reads only;
+    with figures, also draws OUT/figures/decoupling_<scene>_<step>.png)."""
     root = os.path.join(out, "chains")
     summaries: Dict[str, Dict[str, dict]] = {}
     for scene in sorted(os.listdir(root)) if os.path.isdir(root) else []:
@@ -327,7 +328,14 @@ def report(out: str) -> List[dict]:
             s = summarize(df, record)
             s["folder"] = folder
             summaries.setdefault(scene, {})[step] = s
-            plot_run(df, s, os.path.join(out, "figures"), f"decoupling_{scene}_{step}")
+            if figures:
+                plot_run(df, s, os.path.join(out, "figures"), f"decoupling_{scene}_{step}")
+    return summaries
+
+
+def report(out: str) -> List[dict]:
+    """Figures, OUT/decoupling.md and OUT/decoupling_claims.json from every chains folder under out."""
+    summaries = summaries_of(out, figures=True)
     claims = claim_rows(summaries)
     text = ["# The price of decoupling\n",
             "Chains of `contactbench chains` (docs/simulator.md \"The price of decoupling\"): penetration "
