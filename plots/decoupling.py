@@ -318,6 +318,31 @@ def table(summaries: Dict[str, Dict[str, dict]]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def compact_table(summaries: Dict[str, Dict[str, dict]]) -> str:
+    """Markdown, one row per scene and step: max / mean penetration of every chain, the decoupled
+    chains' max distance to the exact one, the noise floor and the authors' order's price (all % of L)."""
+    def cell(c: Optional[dict], dist: bool) -> str:
+        if not c:
+            return "—"
+        text = f"{100 * c['max_penetration_rel']:.2g} / {100 * c['mean_penetration_rel']:.2g}"
+        return text + (f" / {100 * c['max_distance_rel']:.2g}" if dist else "")
+
+    lines = ["| scene | h (s) | frames | rows dropped (authors) | exact pen. max / mean | authors max / mean / dist. | "
+             "random | depth | noise floor | price (authors) |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for scene in sorted(summaries):
+        for step in ("h", "h2"):
+            s = summaries[scene].get(step)
+            if not s:
+                continue
+            ch = s["chains"]
+            a = ch.get("authors", {})
+            lines.append(f"| {scene} | {s['h']} | {s['frames']} | {100 * a.get('rows_dropped_fraction', math.nan):.0f}% | "
+                         f"{cell(ch.get(EXACT), False)} | {cell(a, True)} | {cell(ch.get('random'), True)} | "
+                         f"{cell(ch.get('depth'), True)} | {100 * s['noise_floor_rel']:.2g} | {price(s)} |")
+    return "\n".join(lines) + "\n"
+
+
 def summaries_of(out: str, figures: bool = False) -> Dict[str, Dict[str, dict]]:
     """summaries[scene][h | h2] of every finished chains folder under OUT/chains (reads only;
     with figures, also draws OUT/figures/decoupling_<scene>_<step>.png)."""
@@ -345,7 +370,9 @@ def report(out: str) -> List[dict]:
             "Chains of `contactbench chains` (docs/simulator.md \"The price of decoupling\"): penetration "
             "of the frame's end positions and the largest vertex distance to the exact chain, relative to "
             "the body size L. Price: the rule for \"noticeable\" applied to each decoupled chain.\n",
-            table(summaries), "\n## Claims\n"]
+            compact_table(summaries),
+            "\nCells: max / mean penetration (and max distance to the exact chain) in % of L; the mean is over "
+            "the frames where the exact chain has contact rows.\n\n", table(summaries), "\n## Claims\n"]
     for c in claims:
         text.append(f"- **{c['source']}** {c['claim']}: **{c['verdict']}**. {c['ours']}. Judged on {c['problem']}. "
                     f"Rule: {c['rule']}.")
