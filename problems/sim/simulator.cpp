@@ -19,7 +19,6 @@
 #include <limits>
 #include <ostream>
 #include <sstream>
-#include <stdexcept>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -112,6 +111,45 @@ void remove_old_output(const std::string& dir, const std::string& scene_name)
             if (entry.path().extension() == ext) fs::remove(entry.path(), ec);
     }
 }
+/// The step solver of callers outside the harness (the stress families, solver tests), which
+/// need the chain and its snapshots, not a verdict: the solver's own status; e measured with the
+/// solver's multipliers (0 on dropped rows). `simulate` and `chains` use harness_step_solver().
+StepSolveOutcome solve_without_verdict(const StepSolveRequest& request)
+{
+    const Qp& qp = *request.qp;
+    const std::unique_ptr<Solver> solver = builtin_registry().create(request.solver, request.settings);
+    std::vector<int> kept;
+    const bool decouple = request.decouple == "auto" ? solver->requires_decoupled() : request.decouple != "none";
+    if (decouple && qp.m() > 0 && !is_decoupled(qp.J)) {
+        const DecoupleOrder order =
+            request.decouple == "auto" ? DecoupleOrder::AUTHORS : decouple_order_from_string(request.decouple);
+        kept = decouple_rows(qp.view(), qp.contacts, order, request.decouple_seed).kept_rows;
+    }
+    Qp decoupled;
+    if (!kept.empty() && static_cast<long>(kept.size()) < qp.m()) decoupled = select_rows(qp, kept);
+    const Qp& solved = decoupled.A.size() > 0 ? decoupled : qp;
+    SolveContext ctx;
+    ctx.eigenvector = request.eigenvector;
+    SolverResult res = solver->solve(solved.view(), ctx);
+    StepSolveOutcome out;
+    out.status = out.solver_status = to_string(res.status);
+    out.iterations = res.iterations;
+    out.rows_solved = solved.m();
+    out.solve_s = res.setup_s + res.solve_s;
+    if (res.x.size() == qp.n() && res.x.allFinite()) {
+        const Vec lambda = res.lambda.size() == solved.m() ? res.lambda : Vec::Zero(solved.m());
+        out.accuracy_solved = accuracy(solved.view(), res.x, lambda).max();
+        Vec full = lambda;
+        if (&solved != &qp) {
+            full = Vec::Zero(qp.m());
+            for (size_t k = 0; k < kept.size(); ++k) full[kept[k]] = lambda[static_cast<Eigen::Index>(k)];
+        }
+        out.accuracy = accuracy(qp.view(), res.x, full).max();
+    }
+    out.x = std::move(res.x);
+    return out;
+}
+
 }  // namespace
 
 Simulator::Simulator(Scene scene, SimulatorOptions options) : m_scene(std::move(scene)), m_opt(std::move(options))
@@ -170,7 +208,7 @@ Simulator::Simulator(Scene scene, SimulatorOptions options) : m_scene(std::move(
     }
     reg.create(m_solver_name, m_scene.solver_settings);  // validates the name and settings now
     if (m_opt.decouple != "auto" && m_opt.decouple != "none") decouple_order_from_string(m_opt.decouple);
-    if (!m_opt.solve_step) throw std::invalid_argument("Simulator: SimulatorOptions::solve_step is not set");
+    if (!m_opt.solve_step) m_opt.solve_step = solve_without_verdict;
 
     // --h: a smaller step keeps the frame's duration, so frames of both runs are the same instants.
     if (m_opt.h > 0) {

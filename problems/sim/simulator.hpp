@@ -43,7 +43,8 @@ struct StepSolveOutcome {
 };
 
 /// Solves and judges one step. The harness supplies one built on run_solver
-/// (harness/sim_step_solver.hpp), so that the simulator judges steps exactly as the harness does.
+/// (harness/sim_step_solver.hpp), so that `simulate` judges steps exactly as `solve` does; left
+/// unset (stress families, solver tests), the step gets the solver's own status and no verdict.
 using StepSolver = std::function<StepSolveOutcome(const StepSolveRequest&)>;
 
 struct SimulatorOptions {
@@ -53,7 +54,7 @@ struct SimulatorOptions {
     long frames = -1;                  ///< overrides the scene's frame count when >= 0
     std::ostream* progress = nullptr;  ///< one line per frame
     std::string data_dir;              ///< --data (recorded in simulation.json)
-    StepSolver solve_step;             ///< required: solves and judges each step's QP
+    StepSolver solve_step;             ///< solves and judges each step's QP; unset: the solver's own status, no verdict
     std::string decouple =
         "auto";  ///< --decouple: auto (authors' order when the solver needs it) | none | authors | random | depth
     std::uint64_t decouple_seed = 0;  ///< --decouple-seed; step s uses seed + s

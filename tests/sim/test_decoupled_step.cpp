@@ -139,6 +139,24 @@ TEST(DecoupledStep, OrdersKeepDifferentRowsAndAuthorsIsTheDefault)
     EXPECT_GT(kept["random"], 0);
 }
 
+TEST(DecoupledStep, WithoutTheHarnessTheChainIsTheSameAndTheStatusTheSolvers)
+{
+    // Callers outside the harness (stress families) leave solve_step unset: same chain, the
+    // solver's own word as the status.
+    Simulator judged(demo(), options()), plain(demo(), SimulatorOptions{});
+    for (int s = 0; s < 8; ++s) {
+        const StepRecord a = judged.step().back(), b = plain.step().back();
+        EXPECT_EQ(b.status, b.solver_status);
+        EXPECT_EQ(a.solver_status, b.solver_status) << "step " << s;
+        EXPECT_EQ(a.rows_solved, b.rows_solved);
+        if (s == 6) {
+            EXPECT_EQ(a.status, "solved_relaxation");
+            EXPECT_EQ(b.status, "converged");
+        }
+    }
+    EXPECT_EQ((judged.positions() - plain.positions()).cwiseAbs().maxCoeff(), 0.0);
+}
+
 TEST(DecoupledStep, HalfTheStepKeepsTheFrameDuration)
 {
     SimulatorOptions half = options();
