@@ -241,7 +241,7 @@ def claim_rows(summaries: Dict[str, Dict[str, dict]]) -> List[dict]:
     with_price = []
     for scene, s in at_h.items():
         xa, xd = excess(s, "authors"), excess(s, "depth")
-        if not (math.isfinite(xa) and math.isfinite(xd)) or xa <= PRICE_TO_REDUCE:
+        if price(s) == NOT_EXERCISED or not (math.isfinite(xa) and math.isfinite(xd)) or xa <= PRICE_TO_REDUCE:
             continue
         with_price.append(f"{scene}: excess authors {_pct(xa)}, depth {_pct(xd)} of L")
         reduced += xd <= xa / 2
