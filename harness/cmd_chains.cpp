@@ -23,10 +23,11 @@ constexpr double kReferenceTol = 1e-8, kNoiseTol = 1e-6;
 int cmd_chains(const Args& args)
 {
     const CommandLine cl("chains", args,
-                         {"--frames", "--out", "--data", "--exact", "--orders", "--h", "--decouple-seed"}, {});
+                         {"--frames", "--out", "--data", "--exact", "--orders", "--h", "--decouple-seed"},
+                         {"--control"});
     const std::string usage =
         "usage: contactbench chains SCENE.json [--frames N] [--out DIR] [--data DIR] [--exact NAME]\n"
-        "       [--orders LIST] [--h SECONDS] [--decouple-seed S]\n"
+        "       [--orders LIST] [--h SECONDS] [--decouple-seed S] [--control]\n"
         "Steps the scene from the same start with several chains at once and compares them frame by frame:\n"
         "  exact          the exact solver on every detected row, tol 1e-8 (the reference)\n"
         "  exact-tol1e-6  the same at tol 1e-6: its distance to the reference is the noise floor\n"
@@ -43,7 +44,10 @@ int cmd_chains(const Args& args)
         "                 up to 2000 rows; its tol acts on e, so the noise floor means something; the\n"
         "                 direct active-set gives the same chain at both tolerances)\n"
         "  --h SECONDS    time step instead of the scene's (a frame keeps its duration)\n"
-        "  --decouple-seed S  seed of the random order (step s uses S + s; default 0)\n";
+        "  --decouple-seed S  seed of the random order (step s uses S + s; default 0)\n"
+        "  --control      one more chain, authors-exact: the exact solver (tol 1e-8) on the rows the\n"
+        "                 authors' order keeps, which separates the price of the dropped rows from the\n"
+        "                 decoupled solver's own error\n";
     if (cl.help()) {
         std::cout << usage;
         return 0;
@@ -86,6 +90,7 @@ int cmd_chains(const Args& args)
         opt.chains.push_back({order, scene.solver, scene.solver_settings, order});
         if (opt.render_chain.empty() || order == "authors") opt.render_chain = order;
     }
+    if (cl.has("--control")) opt.chains.push_back({"authors-exact", exact, {{"tol", kReferenceTol}}, "authors"});
     std::cerr << scene.name << ": chains exact (" << exact << ", tol 1e-8), exact-tol1e-6 (" << exact << ")";
     for (size_t c = 2; c < opt.chains.size(); ++c)
         std::cerr << ", " << opt.chains[c].label << " (" << opt.chains[c].solver << ")";

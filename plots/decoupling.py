@@ -42,6 +42,7 @@ PRICE_TO_REDUCE = 0.005  #: Sec. 5: a scene has a price to reduce when the exces
 
 EXACT = "exact"
 NOISE = "exact-tol1e-6"
+CONTROL = "authors-exact"  #: the exact solver on the authors' kept rows (`chains --control`)
 ORDERS = ("authors", "random", "depth")
 STEPS = {"h": "the scene's step", "h2": "half the scene's step"}
 
@@ -86,10 +87,13 @@ def read_json(path: str) -> dict:
 
 
 def run_chains(cb: str, scene: str, folder: str, frames: int, h: Optional[float] = None,
-               data: Optional[str] = None, force: bool = False) -> Tuple[bool, str]:
+               data: Optional[str] = None, force: bool = False, control: bool = False) -> Tuple[bool, str]:
     """Runs `contactbench chains` into folder unless a finished run of the same inputs is there
-    (its key.json, written after chains.json). Returns (ok, what happened)."""
+    (its key.json, written after chains.json). control adds the authors-exact chain. Returns (ok,
+    what happened)."""
     key = chains_key(cb, scene, frames, h, data)
+    if control:
+        key["control"] = True
     if not force and read_json(os.path.join(folder, "key.json")) == key and \
             os.path.isfile(os.path.join(folder, "chains.json")):
         return True, f"cached ({folder})"
@@ -101,6 +105,8 @@ def run_chains(cb: str, scene: str, folder: str, frames: int, h: Optional[float]
         args += ["--h", repr(h)]
     if data:
         args += ["--data", data]
+    if control:
+        args.append("--control")
     with open(os.path.join(folder, "chains.log"), "w", encoding="utf-8") as log:
         rc = subprocess.run(args, stdout=log, stderr=subprocess.STDOUT).returncode
     if rc != 0 or not os.path.isfile(os.path.join(folder, "chains.json")):
@@ -265,7 +271,7 @@ def claim_rows(summaries: Dict[str, Dict[str, dict]]) -> List[dict]:
 
 # ----------------------------------------------------------------------------- figures, table
 
-CHAIN_STYLE = {EXACT: ("black", "-"), NOISE: ("grey", ":"), "authors": ("tab:red", "-"),
+CHAIN_STYLE = {EXACT: ("black", "-"), NOISE: ("grey", ":"), CONTROL: ("tab:purple", ":"), "authors": ("tab:red", "-"),
                "random": ("tab:orange", "--"), "depth": ("tab:blue", "-.")}
 
 
@@ -307,11 +313,11 @@ def table(summaries: Dict[str, Dict[str, dict]]) -> str:
             s = summaries[scene].get(step)
             if not s:
                 continue
-            for label in (EXACT, NOISE) + ORDERS:
+            for label in (EXACT, NOISE) + ORDERS + (CONTROL,):
                 c = s["chains"].get(label)
                 if not c:
                     continue
-                verdict = price(s, label) if label in ORDERS else ("noise floor" if label == NOISE else "reference")
+                verdict = price(s, label) if label in ORDERS + (CONTROL,) else ("noise floor" if label == NOISE else "reference")
                 lines.append(f"| {scene} | {s['h']} s | {c['frames']} | {label} | {100 * c['max_penetration_rel']:.3g} | "
                              f"{100 * c['mean_penetration_rel']:.3g} | {100 * c['max_distance_rel']:.3g} | "
                              f"{100 * c['rows_dropped_fraction']:.0f}% | {verdict} |")
@@ -402,6 +408,8 @@ def main(argv: Optional[List[str]] = None) -> int:
     parser.add_argument("--cb", default=os.environ.get("CB_CONTACTBENCH", "build/bin/contactbench"))
     parser.add_argument("--data", help="the authors' data folder (default: as contactbench chooses)")
     parser.add_argument("--force", action="store_true", help="run again even when cached")
+    parser.add_argument("--control", action="store_true",
+                        help="add the authors-exact chain (the exact solver on the authors' kept rows)")
     args = parser.parse_args(argv)
     if args.report:
         for c in report(args.report):
@@ -418,14 +426,14 @@ def main(argv: Optional[List[str]] = None) -> int:
         with open(scene, encoding="utf-8") as f:
             frames = args.frames if args.frames is not None else int(json.load(f).get("frames", 100))
         full = os.path.join(args.out, "chains", name, "h")
-        done, what = run_chains(args.cb, scene, full, frames, None, args.data, args.force)
+        done, what = run_chains(args.cb, scene, full, frames, None, args.data, args.force, args.control)
         print(f"chains {name} h: {what}", file=sys.stderr)
         ok = ok and done
         if done and not args.no_half_step:
             record = read_json(os.path.join(full, "chains.json"))
             half = record["h"] / 2
             done, what = run_chains(args.cb, scene, os.path.join(args.out, "chains", name, "h2"), frames, half,
-                                    args.data, args.force)
+                                    args.data, args.force, args.control)
             print(f"chains {name} h/2: {what}", file=sys.stderr)
             ok = ok and done
     for c in report(args.out):
