@@ -302,8 +302,8 @@ std::vector<StepRecord> Simulator::step()
             rec.snapshot = snapshot_path(frame, k);
             write_qpsnap(rec.snapshot, qp);
         }
-        // Solved and judged by the harness's rule: decoupling (when asked or needed) happens there,
-        // and e is measured on this QP with every detected row (the snapshot keeps them all too).
+        // Solved and judged by solve_step (in `simulate`, the harness's rule): decoupling, when asked
+        // or needed, happens there, and e is measured on this QP with every detected row.
         if (m_eigenvector.size() != dofs()) m_eigenvector.resize(0);
         StepSolveRequest request;
         request.qp = &qp;
