@@ -26,7 +26,7 @@ ifeq ($(PEERS),all)
 DEB_PACKAGES += petsc-dev
 endif
 
-.PHONY: help deps build test demo bench timing baseline reproduce stress fuzz clean meshes paper-data docs-check tidy \
+.PHONY: help deps build test demo bench timing baseline reproduce decoupling stress fuzz clean meshes paper-data docs-check tidy \
   ci-perf perf-gate perf-gate-selftest contactbench-binary
 
 help:
@@ -42,6 +42,7 @@ help:
 	@echo "make paper-data fetch the authors' repository (simba518/MPRGP at 57fdd2c), verify it, extract"
 	@echo "                meshes, scenes and figure tables into DATA=$(DATA) (PAPER_DATA_SOURCE=URL|DIR|.tar.gz)"
 	@echo "make reproduce  the paper's figures and report in results/paper/ (QUICK=1: about a minute on 2 cores)"
+	@echo "make decoupling the price of collision decoupling along chains (results/decoupling/)"
 	@echo "make docs-check fail on a cited document or section that is not in the repository"
 	@echo "make tidy       clang-tidy on the C++ files changed against main (TIDY_BASE=main)"
 	@echo "make stress     the stress suite and its stability table in results/stress/"
@@ -134,6 +135,14 @@ bench: build
 
 reproduce: deps build
 	$(PY) -m plots.reproduce --contactbench $(CB) --data $(DATA) --out results/paper $(if $(QUICK),--quick,)
+
+# The price of decoupling along chains (docs/simulator.md "The price of decoupling"), each scene at
+# its step and half of it, cached per scene and step under results/decoupling/chains.
+DECOUPLING_SCENES ?= two_dinos_1303 two_dinos_1493 two_dinos_5910 two_dinos_9381 two_dinos_20044 long_cube \
+  bunny_glass dragon_stair
+decoupling: build
+	$(PY) plots/decoupling.py $(foreach s,$(DECOUPLING_SCENES),scenes/$(s).json) --cb $(CB) --out results/decoupling
+	$(PY) plots/decoupling.py scenes/dino_eight.json --frames 160 --cb $(CB) --out results/decoupling
 
 stress: build
 	$(CB) stress --out results/stress
