@@ -29,7 +29,7 @@ ifeq ($(PEERS),all)
 DEB_PACKAGES += petsc-dev
 endif
 
-.PHONY: help deps build test demo bench timing baseline reproduce stress fuzz clean meshes paper-data docs-check tidy lint ladder \
+.PHONY: help deps build test demo bench timing baseline reproduce decoupling stress fuzz clean meshes paper-data docs-check tidy lint ladder \
   ci-perf perf-gate perf-gate-selftest contactbench-binary
 
 help:
@@ -45,6 +45,7 @@ help:
 	@echo "make paper-data fetch the authors' repository (simba518/MPRGP at 57fdd2c), verify it, extract"
 	@echo "                meshes, scenes and figure tables into DATA=$(DATA) (PAPER_DATA_SOURCE=URL|DIR|.tar.gz)"
 	@echo "make reproduce  the paper's figures and report in results/paper/ (QUICK=1: about 2-4 minutes on 2 cores)"
+	@echo "make decoupling the price of collision decoupling along chains (results/decoupling/)"
 	@echo "make docs-check fail on a cited document or section that is not in the repository"
 	@echo "make tidy       clang-tidy on the C++ files changed against main (TIDY_BASE=main)"
 	@echo "make lint       pyflakes on every Python file, clang-format on C++ lines changed against main (LINT_BASE=main)"
@@ -148,6 +149,14 @@ reproduce: deps build
 LADDER ?= resolution
 ladder: build
 	tools/ladder.sh $(LADDER) $(CB)
+
+# The price of decoupling along chains (docs/simulator.md "The price of decoupling"), each scene at
+# its step and half of it, cached per scene and step under results/decoupling/chains.
+DECOUPLING_SCENES ?= two_dinos_1303 two_dinos_1493 two_dinos_5910 two_dinos_9381 two_dinos_20044 long_cube \
+  bunny_glass dragon_stair
+decoupling: build
+	$(PY) plots/decoupling.py $(foreach s,$(DECOUPLING_SCENES),scenes/$(s).json) --cb $(CB) --out results/decoupling
+	$(PY) plots/decoupling.py scenes/dino_eight.json --frames 160 --cb $(CB) --out results/decoupling
 
 stress: build
 	$(CB) stress --out results/stress

@@ -1,6 +1,8 @@
-// contactbench simulate SCENE.json [--frames N] [--out DIR] [--data DIR] [--solver NAME] [--no-snapshots]
+// contactbench simulate SCENE.json [--frames N] [--out DIR] [--data DIR] [--solver NAME] [--decouple ORDER]
+//                       [--decouple-seed S] [--h SECONDS] [--no-snapshots]
 #include "harness/cli.hpp"
 #include "harness/commands.hpp"
+#include "harness/sim_step_solver.hpp"
 #include "harness/suite.hpp"
 #include "problems/sim/simulator.hpp"
 
@@ -11,11 +13,12 @@ namespace cb {
 
 int cmd_simulate(const Args& args)
 {
-    const CommandLine cl("simulate", args, {"--frames", "--out", "--data", "--solver"},
+    const CommandLine cl("simulate", args,
+                         {"--frames", "--out", "--data", "--solver", "--decouple", "--decouple-seed", "--h"},
                          {"--no-snapshots", "--version"});
     const std::string usage =
-        "usage: contactbench simulate SCENE.json [--frames N] [--out DIR] [--data DIR] [--solver NAME] "
-        "[--no-snapshots]\n"
+        "usage: contactbench simulate SCENE.json [--frames N] [--out DIR] [--data DIR] [--solver NAME]\n"
+        "       [--decouple ORDER] [--decouple-seed S] [--h SECONDS] [--no-snapshots]\n"
         "  SCENE.json     a scene (keys: scenes/README.md), or one of the authors' .ini scene files\n"
         "  --frames N     simulate N frames instead of the scene's \"frames\"\n"
         "  --out DIR      output folder (default results/sim/<scene name>): snapshots/*.qpsnap (one per\n"
@@ -24,11 +27,18 @@ int cmd_simulate(const Args& args)
         "                 $CB_CACHE/paper-data when `make paper-data` has written it, else none, so\n"
         "                 scenes use their CGAL-data stand-ins)\n"
         "  --solver NAME  stepping solver (default: the scene's, else mprgp)\n"
+        "  --decouple ORDER  which rows a step keeps: auto (default: the authors' order when the solver\n"
+        "                 needs decoupled rows, else all), none, authors, random, depth (deepest first)\n"
+        "  --decouple-seed S  seed of the random order (step s uses S + s; default 0)\n"
+        "  --h SECONDS    time step instead of the scene's; a frame keeps its duration, so it must be a\n"
+        "                 whole number of steps (e.g. half the scene's step: two steps per frame)\n"
         "  --no-snapshots write no .qpsnap files\n"
         "  --version      print the simulator version (the key of cached simulations) and exit\n"
         "A simulation into an existing DIR replaces the earlier one's files. While it runs the tables are\n"
         "steps.csv.partial and frames.csv.partial (rows appended a whole frame at a time); at the end they\n"
-        "are renamed and simulation.json (scene, mesh files, data folder, frames, version) is written last.\n";
+        "are renamed and simulation.json (scene, mesh files, data folder, frames, version) is written last.\n"
+        "Each step is judged as `solve` judges a snapshot: status converged only when the error e on the\n"
+        "QP with every detected row meets the tolerance, solved_relaxation when only the kept rows do.\n";
     if (cl.has("--version")) {
         std::cout << "simulator " << sim::kSimulatorVersion << "\n";
         return 0;
@@ -56,6 +66,18 @@ int cmd_simulate(const Args& args)
     opt.frames = cl.integer("--frames", -1);
     if (cl.has("--frames") && opt.frames < 0) throw_input_error("--frames", "", "must be >= 0");
     opt.progress = &std::cerr;
+    opt.solve_step = harness_step_solver();
+    opt.decouple = cl.value("--decouple", "auto");
+    opt.decouple_seed = static_cast<std::uint64_t>(cl.integer("--decouple-seed", 0));
+    if (cl.integer("--decouple-seed", 0) < 0) throw_input_error("--decouple-seed", "", "must be >= 0");
+    if (opt.decouple != "auto" && opt.decouple != "none" && opt.decouple != "authors" && opt.decouple != "random" &&
+        opt.decouple != "depth")
+        throw_input_error("--decouple", "",
+                          "expected auto, none, authors, random or depth, got '" + opt.decouple + "'");
+    if (cl.has("--h")) {
+        opt.h = cl.number("--h", 0.0);
+        if (!(opt.h > 0)) throw_input_error("--h", "", "must be > 0 seconds");
+    }
     for (const auto& b : scene.bodies)
         std::cerr << scene.name << ": body " << b.name << ": " << b.mesh.vertices() << " vertices, "
                   << b.mesh.tet_count() << " tets from " << b.source << (b.quality.empty() ? "" : "; " + b.quality)

@@ -15,6 +15,7 @@ int cmd_judge(const Args& args);
 int cmd_run(const Args& args);
 int cmd_merge(const Args& args);
 int cmd_simulate(const Args& args);
+int cmd_chains(const Args& args);  // issue 25: the price of decoupling along chains
 int cmd_stress(const Args& args);
 int cmd_compare(const Args& args);
 int cmd_generate(const Args& args);

@@ -29,6 +29,8 @@ const std::map<std::string, Command>& commands()
         {"generate", {cb::cmd_generate, "generate FAMILY --out FILE [--seed S ...]: write a synthetic snapshot"}},
         {"simulate",
          {cb::cmd_simulate, "simulate SCENE.json [--frames N] [--out DIR] [--data DIR]: snapshots of a scene"}},
+        {"chains",
+         {cb::cmd_chains, "chains SCENE.json [--frames N] [--out DIR]: decoupled vs exact chains of a scene"}},
         {"solvers",
          {cb::cmd_solvers, "solvers [--json]: every registered solver, one line each, with what it applies to"}},
         {"stress", {cb::cmd_stress, "stress [--out DIR]: the stress suite and its stability table"}},

@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <ostream>
 #include <sstream>
 #include <sys/stat.h>
@@ -118,6 +119,45 @@ void remove_old_output(const std::string& dir, const std::string& scene_name)
             if (entry.path().extension() == ext) fs::remove(entry.path(), ec);
     }
 }
+/// The step solver of callers outside the harness (the stress families, solver tests), which
+/// need the chain and its snapshots, not a verdict: the solver's own status; e measured with the
+/// solver's multipliers (0 on dropped rows). `simulate` and `chains` use harness_step_solver().
+StepSolveOutcome solve_without_verdict(const StepSolveRequest& request)
+{
+    const Qp& qp = *request.qp;
+    const std::unique_ptr<Solver> solver = builtin_registry().create(request.solver, request.settings);
+    std::vector<int> kept;
+    const bool decouple = request.decouple == "auto" ? solver->requires_decoupled() : request.decouple != "none";
+    if (decouple && qp.m() > 0 && !is_decoupled(qp.J)) {
+        const DecoupleOrder order =
+            request.decouple == "auto" ? DecoupleOrder::AUTHORS : decouple_order_from_string(request.decouple);
+        kept = decouple_rows(qp.view(), qp.contacts, order, request.decouple_seed).kept_rows;
+    }
+    Qp decoupled;
+    if (!kept.empty() && static_cast<long>(kept.size()) < qp.m()) decoupled = select_rows(qp, kept);
+    const Qp& solved = decoupled.A.size() > 0 ? decoupled : qp;
+    SolveContext ctx;
+    ctx.eigenvector = request.eigenvector;
+    SolverResult res = solver->solve(solved.view(), ctx);
+    StepSolveOutcome out;
+    out.status = out.solver_status = to_string(res.status);
+    out.iterations = res.iterations;
+    out.rows_solved = solved.m();
+    out.solve_s = res.setup_s + res.solve_s;
+    if (res.x.size() == qp.n() && res.x.allFinite()) {
+        const Vec lambda = res.lambda.size() == solved.m() ? res.lambda : Vec::Zero(solved.m());
+        out.accuracy_solved = accuracy(solved.view(), res.x, lambda).max();
+        Vec full = lambda;
+        if (&solved != &qp) {
+            full = Vec::Zero(qp.m());
+            for (size_t k = 0; k < kept.size(); ++k) full[kept[k]] = lambda[static_cast<Eigen::Index>(k)];
+        }
+        out.accuracy = accuracy(qp.view(), res.x, full).max();
+    }
+    out.x = std::move(res.x);
+    return out;
+}
+
 }  // namespace
 
 Simulator::Simulator(Scene scene, SimulatorOptions options) : m_scene(std::move(scene)), m_opt(std::move(options))
@@ -174,7 +214,30 @@ Simulator::Simulator(Scene scene, SimulatorOptions options) : m_scene(std::move(
             *m_opt.progress << "simulate: solver 'mprgp' is not registered; stepping with 'active-set'\n";
         m_solver_name = "active-set";
     }
-    m_solver = reg.create(m_solver_name, m_scene.solver_settings);
+    reg.create(m_solver_name, m_scene.solver_settings);  // validates the name and settings now
+    if (m_opt.decouple != "auto" && m_opt.decouple != "none") decouple_order_from_string(m_opt.decouple);
+    if (!m_opt.solve_step) m_opt.solve_step = solve_without_verdict;
+
+    // --h: a smaller step keeps the frame's duration, so frames of both runs are the same instants.
+    if (m_opt.h > 0) {
+        const double frame_s = m_scene.step.h * m_scene.steps_per_frame;
+        const double k = std::round(frame_s / m_opt.h);
+        if (!(k >= 1) || std::abs(k * m_opt.h - frame_s) > 1e-9 * frame_s)
+            throw_input_error("--h", "",
+                              "the frame's duration " + std::to_string(frame_s) +
+                                  " s (scene step x steps per frame) "
+                                  "is not a whole number of steps of " +
+                                  std::to_string(m_opt.h) + " s");
+        m_scene.step.h = m_opt.h;
+        m_scene.steps_per_frame = static_cast<int>(k);
+    }
+    m_body_size = std::numeric_limits<double>::infinity();
+    for (const Body& b : m_scene.bodies) {
+        const Positions& p = b.mesh.positions;
+        if (p.rows() > 0)
+            m_body_size = std::min(m_body_size, (p.colwise().maxCoeff() - p.colwise().minCoeff()).maxCoeff());
+    }
+    if (!(m_body_size > 0) || !std::isfinite(m_body_size)) m_body_size = 1.0;  // no body (or a flat one): metres
 }
 
 Simulator::~Simulator() = default;
@@ -247,35 +310,30 @@ std::vector<StepRecord> Simulator::step()
             rec.snapshot = snapshot_path(frame, k);
             write_qpsnap(rec.snapshot, qp);
         }
-        // Decouple for solvers that need it (the snapshot keeps every row).
-        const Qp* solve_qp = &qp;
-        Qp decoupled;
-        if (m_solver->requires_decoupled() && qp.m() > 0 && !is_decoupled(qp.J)) {
-            const DecoupleReport rep = decouple_rows(qp.view(), qp.contacts, DecoupleOrder::AUTHORS, 0);
-            decoupled = select_rows(qp, rep.kept_rows);
-            solve_qp = &decoupled;
-        }
-        rec.rows_solved = solve_qp->m();
-        SolveContext ctx;
-        if (m_eigenvector.size() == dofs())
-            ctx.eigenvector = &m_eigenvector;
-        else {
-            m_eigenvector.resize(0);
-            ctx.eigenvector = &m_eigenvector;
-        }
-        const double ts0 = now_s();
-        const SolverResult res = m_solver->solve(solve_qp->view(), ctx);
-        rec.time_solve_s = now_s() - ts0;
-        rec.status = to_string(res.status);
-        rec.iterations = res.iterations;
-        if (res.x.size() == dofs() && res.x.allFinite()) {
-            const Vec lambda = res.lambda.size() == solve_qp->m() ? res.lambda : Vec::Zero(solve_qp->m());
-            rec.kkt_rel = accuracy(solve_qp->view(), res.x, lambda).max();  // the accuracy error e
-            x_k = res.x;
+        // Solved and judged by solve_step (in `simulate`, the harness's rule): decoupling, when asked
+        // or needed, happens there, and e is measured on this QP with every detected row.
+        if (m_eigenvector.size() != dofs()) m_eigenvector.resize(0);
+        StepSolveRequest request;
+        request.qp = &qp;
+        request.solver = m_solver_name;
+        request.settings = m_scene.solver_settings;
+        request.decouple = m_opt.decouple;
+        request.decouple_seed = m_opt.decouple_seed + static_cast<std::uint64_t>(m_step);
+        request.eigenvector = &m_eigenvector;
+        const StepSolveOutcome out = m_opt.solve_step(request);
+        rec.time_solve_s = out.solve_s;
+        rec.status = out.status;
+        rec.solver_status = out.solver_status;
+        rec.iterations = out.iterations;
+        rec.rows_solved = out.rows_solved;
+        rec.accuracy = out.accuracy;
+        rec.accuracy_solved = out.accuracy_solved;
+        if (out.x.size() == dofs() && out.x.allFinite()) {
+            x_k = out.x;
         } else {
             m_nonfinite = true;
-            rec.kkt_rel = std::numeric_limits<double>::quiet_NaN();
-            if (res.x.size() == dofs()) x_k = res.x;
+            rec.accuracy = rec.accuracy_solved = std::numeric_limits<double>::quiet_NaN();
+            if (out.x.size() == dofs()) x_k = out.x;
         }
         m_last_violation = qp.m() > 0 && x_k.allFinite() ? max_violation(qp.view(), x_k) : 0.0;
         m_A = std::move(qp.A);
@@ -295,12 +353,22 @@ FrameRecord Simulator::frame_record() const
     r.time_s = m_step * m_scene.step.h;
     r.max_penetration = m_last_violation;
     r.max_detected_depth = m_last_depth;
+    r.max_penetration_rel = m_last_violation / m_body_size;
+    r.max_detected_depth_rel = m_last_depth / m_body_size;
     r.rows = static_cast<long>(m_rows.size());
     r.kinetic_energy = kinetic_energy(*m_fem, m_v);
     r.elastic_energy = m_x.allFinite() ? m_fem->energy(m_x) : std::numeric_limits<double>::quiet_NaN();
     for (long i = 0; i < vertices(); ++i) r.max_speed = std::max(r.max_speed, m_v.segment<3>(3 * i).norm());
     r.blow_up = m_nonfinite || !m_v.allFinite() || !(r.max_speed <= m_scene.blowup_speed);
     return r;
+}
+
+double Simulator::penetration_now() const
+{
+    if (!m_x.allFinite()) return std::numeric_limits<double>::quiet_NaN();
+    double depth = 0;
+    for (const ContactRow& r : m_detector->detect(m_x)) depth = std::max(depth, r.depth);
+    return depth;
 }
 
 std::vector<SurfaceMesh> Simulator::body_surfaces() const
@@ -327,11 +395,11 @@ bool Simulator::run()
         remove_old_output(m_opt.out_dir, m_scene.name);
         if (m_opt.snapshots && m_scene.output.snapshots) make_dirs(m_opt.out_dir + "/snapshots");
         steps_csv.open(m_opt.out_dir + "/steps.csv",
-                       "frame,step,newton_iteration,solver,status,iterations,kkt_rel,time_assembly_s,time_detection_s,"
-                       "time_solve_s,rows,rows_solved,snapshot\n");
-        frames_csv.open(
-            m_opt.out_dir + "/frames.csv",
-            "frame,time_s,max_penetration,max_detected_depth,kinetic_energy,elastic_energy,max_speed,rows,blow_up\n");
+                       "frame,step,newton_iteration,solver,status,solver_status,iterations,accuracy,accuracy_solved,"
+                       "time_assembly_s,time_detection_s,time_solve_s,rows,rows_solved,snapshot\n");
+        frames_csv.open(m_opt.out_dir + "/frames.csv",
+                        "frame,time_s,max_penetration,max_penetration_rel,max_detected_depth,max_detected_depth_rel,"
+                        "kinetic_energy,elastic_energy,max_speed,rows,rows_solved,blow_up\n");
     }
     try {
         const bool ok = run_frames(frames, write, steps_csv, frames_csv);
@@ -343,10 +411,20 @@ bool Simulator::run()
             for (const auto& b : m_scene.bodies)
                 if (!b.mesh_file.empty() && std::find(meshes.begin(), meshes.end(), b.mesh_file) == meshes.end())
                     meshes.push_back(b.mesh_file);
-            const nlohmann::json record = {
-                {"scene", m_scene.name},  {"scene_file", m_scene.file}, {"meshes", meshes},
-                {"data", m_opt.data_dir}, {"frames", frames},           {"frames_done", m_frame},
-                {"blow_up", !ok},         {"solver", m_solver_name},    {"simulator_version", kSimulatorVersion}};
+            const nlohmann::json record = {{"scene", m_scene.name},
+                                           {"scene_file", m_scene.file},
+                                           {"meshes", meshes},
+                                           {"data", m_opt.data_dir},
+                                           {"frames", frames},
+                                           {"frames_done", m_frame},
+                                           {"blow_up", !ok},
+                                           {"solver", m_solver_name},
+                                           {"simulator_version", kSimulatorVersion},
+                                           {"decouple", m_opt.decouple},
+                                           {"decouple_seed", m_opt.decouple_seed},
+                                           {"h", m_scene.step.h},
+                                           {"steps_per_frame", m_scene.steps_per_frame},
+                                           {"body_size", m_body_size}};
             write_file_atomic(m_opt.out_dir + "/simulation.json", record.dump(1) + "\n");
         }
         return ok;
@@ -381,7 +459,8 @@ bool Simulator::run_frames(long frames, bool write, PartialTable& steps_csv, Par
         }
         const FrameRecord fr = frame_record();
         long iters = 0;
-        double ta = 0, td = 0, tsv = 0, kkt = 0;
+        double ta = 0, td = 0, tsv = 0, e = 0, e_solved = 0;
+        long rows_solved = 0;
         std::string status;
         std::ostringstream step_rows, frame_row;  // appended together once the frame is whole
         step_rows << std::setprecision(9);
@@ -391,34 +470,42 @@ bool Simulator::run_frames(long frames, bool write, PartialTable& steps_csv, Par
             ta += r.time_assembly_s;
             td += r.time_detection_s;
             tsv += r.time_solve_s;
-            kkt = r.kkt_rel;
+            e = r.accuracy;
+            e_solved = r.accuracy_solved;
+            rows_solved = r.rows_solved;
             status = r.status;
             if (write)
                 step_rows << r.frame << ',' << r.step << ',' << r.newton << ',' << r.solver << ',' << r.status << ','
-                          << r.iterations << ',' << r.kkt_rel << ',' << r.time_assembly_s << ',' << r.time_detection_s
-                          << ',' << r.time_solve_s << ',' << r.rows << ',' << r.rows_solved << ',' << r.snapshot
-                          << '\n';
+                          << r.solver_status << ',' << r.iterations << ',' << r.accuracy << ',' << r.accuracy_solved
+                          << ',' << r.time_assembly_s << ',' << r.time_detection_s << ',' << r.time_solve_s << ','
+                          << r.rows << ',' << r.rows_solved << ',' << r.snapshot << '\n';
         }
         sum_asm += ta;
         sum_det += td;
         sum_solve += tsv;
         nsteps += static_cast<long>(recs.size());
         if (write)
-            frame_row << fr.frame << ',' << fr.time_s << ',' << fr.max_penetration << ',' << fr.max_detected_depth
-                      << ',' << fr.kinetic_energy << ',' << fr.elastic_energy << ',' << fr.max_speed << ',' << fr.rows
-                      << ',' << (fr.blow_up ? 1 : 0) << '\n';
+            frame_row << fr.frame << ',' << fr.time_s << ',' << fr.max_penetration << ',' << fr.max_penetration_rel
+                      << ',' << fr.max_detected_depth << ',' << fr.max_detected_depth_rel << ',' << fr.kinetic_energy
+                      << ',' << fr.elastic_energy << ',' << fr.max_speed << ',' << fr.rows << ',' << rows_solved << ','
+                      << (fr.blow_up ? 1 : 0) << '\n';
         if (write) {
             // steps first: a frame is recorded when its frames.csv row is there.
             steps_csv.append(step_rows.str());
             frames_csv.append(frame_row.str());
         }
         if (m_opt.progress) {
-            char line[256];
+            // The last step's verdict, as `solve` would print it: e on the original QP, and on the
+            // kept rows when rows were dropped.
+            char solved[48] = "";
+            if (rows_solved < fr.rows) std::snprintf(solved, sizeof solved, " (kept rows %.1e)", e_solved);
+            char line[320];
             std::snprintf(line, sizeof line,
-                          "%s frame %04ld (%ld of %ld)  rows %ld  %s %s  it %ld  kkt %.1e  pen %.2e  asm %.3fs det "
-                          "%.3fs solve %.3fs%s\n",
-                          m_scene.name.c_str(), m_frame, m_frame + 1, frames, fr.rows, m_solver_name.c_str(),
-                          status.c_str(), iters, kkt, fr.max_penetration, ta, td, tsv, fr.blow_up ? "  BLOW-UP" : "");
+                          "%s frame %04ld (%ld of %ld)  rows %ld solved %ld  %s %s  it %ld  e %.1e%s  pen %.2e "
+                          "(%.2g%% of body)  asm %.3fs det %.3fs solve %.3fs%s\n",
+                          m_scene.name.c_str(), m_frame, m_frame + 1, frames, fr.rows, rows_solved,
+                          m_solver_name.c_str(), status.c_str(), iters, e, solved, fr.max_penetration,
+                          100.0 * fr.max_penetration_rel, ta, td, tsv, fr.blow_up ? "  BLOW-UP" : "");
             *m_opt.progress << line << std::flush;
         }
         if (write) {

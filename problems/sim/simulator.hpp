@@ -12,11 +12,40 @@
 #include "problems/sim/scene.hpp"
 #include "solvers/solver.hpp"
 
+#include <cstdint>
+#include <functional>
 #include <iosfwd>
 #include <memory>
 #include <string>
 
 namespace cb::sim {
+
+/// One step's QP, to be solved and judged as `contactbench solve` judges a snapshot.
+struct StepSolveRequest {
+    const Qp* qp = nullptr;         ///< every detected row
+    std::string solver;             ///< registry name
+    nlohmann::json settings;        ///< the solver's settings
+    std::string decouple = "auto";  ///< auto | none | authors | random | depth (harness/runner.hpp RunOptions)
+    std::uint64_t decouple_seed = 0;
+    Vec* eigenvector = nullptr;  ///< warm state carried from step to step
+};
+
+/// The step's result and its verdict on the ORIGINAL QP (all detected rows).
+struct StepSolveOutcome {
+    Vec x;
+    std::string status;         ///< the run's status: converged, solved_relaxation, unconfirmed, or the solver's
+    std::string solver_status;  ///< the solver's own word
+    long iterations = 0;
+    double accuracy = 0;         ///< the accuracy error e on the original QP
+    double accuracy_solved = 0;  ///< e on the QP the solver solved (== accuracy when no row was dropped)
+    long rows_solved = 0;
+    double solve_s = 0;  ///< the solver's setup + solve
+};
+
+/// Solves and judges one step. The harness supplies one built on run_solver
+/// (harness/sim_step_solver.hpp), so that `simulate` judges steps exactly as `solve` does; left
+/// unset (stress families, solver tests), the step gets the solver's own status and no verdict.
+using StepSolver = std::function<StepSolveOutcome(const StepSolveRequest&)>;
 
 struct SimulatorOptions {
     std::string out_dir;               ///< empty: write nothing (tests)
@@ -25,11 +54,16 @@ struct SimulatorOptions {
     long frames = -1;                  ///< overrides the scene's frame count when >= 0
     std::ostream* progress = nullptr;  ///< one line per frame
     std::string data_dir;              ///< --data (recorded in simulation.json)
+    StepSolver solve_step;             ///< solves and judges each step's QP; unset: the solver's own status, no verdict
+    std::string decouple =
+        "auto";  ///< --decouple: auto (authors' order when the solver needs it) | none | authors | random | depth
+    std::uint64_t decouple_seed = 0;  ///< --decouple-seed; step s uses seed + s
+    double h = 0;  ///< --h: time step (s) when > 0; the frame keeps its duration (steps per frame scaled)
 };
 
 /// Bump when a change alters what a simulation of the same scene writes (physics, detection,
 /// snapshot content): caches keyed on it (plots/reproduce.py) then simulate again.
-constexpr int kSimulatorVersion = 1;
+constexpr int kSimulatorVersion = 2;  // 2: steps.csv judges steps like `solve`; *_rel columns
 
 /// What one QP solve of a step produced.
 struct StepRecord {
@@ -37,7 +71,9 @@ struct StepRecord {
     int newton = 0;
     std::string solver, status;
     long iterations = 0;
-    double kkt_rel = 0;
+    std::string solver_status;   ///< the solver's own word (status is the harness's verdict)
+    double accuracy = 0;         ///< the accuracy error e on the original QP (every detected row)
+    double accuracy_solved = 0;  ///< e on the QP solved (the kept rows)
     double time_assembly_s = 0, time_detection_s = 0, time_solve_s = 0;
     long rows = 0, rows_solved = 0;
     std::string snapshot;  ///< path written, or empty
@@ -49,6 +85,7 @@ struct FrameRecord {
     double time_s = 0;
     double max_penetration = 0;     ///< max violation of the step's rows after the solve (m)
     double max_detected_depth = 0;  ///< deepest penetration found by detection at the step's start (m)
+    double max_penetration_rel = 0, max_detected_depth_rel = 0;  ///< the two above / body_size()
     double kinetic_energy = 0, elastic_energy = 0, max_speed = 0;
     long rows = 0;
     bool blow_up = false;
@@ -80,6 +117,13 @@ public:
     const std::string& solver_name() const { return m_solver_name; }
     /// The rows of the last detection.
     const std::vector<ContactRow>& last_rows() const { return m_rows; }
+    /// The length penetrations are compared with: the smallest body's largest rest extent (m).
+    double body_size() const { return m_body_size; }
+    /// Deepest penetration at the current positions (a detection run now; m).
+    double penetration_now() const;
+    /// The time step used (s, after --h) and the steps per frame.
+    double step_h() const { return m_scene.step.h; }
+    int steps_per_frame() const { return m_scene.steps_per_frame; }
 
 private:
     bool run_frames(long frames, bool write, PartialTable& steps_csv, PartialTable& frames_csv);
@@ -92,12 +136,12 @@ private:
     std::vector<Faces> m_body_faces;  ///< per body, local vertex ids
     Vec m_x, m_v;
     SpMat m_A;
-    std::unique_ptr<Solver> m_solver;
     std::string m_solver_name;
     Vec m_eigenvector;
     std::vector<ContactRow> m_rows;
     long m_frame = 0, m_step = 0;
     double m_last_violation = 0, m_last_depth = 0;
+    double m_body_size = 1;
     bool m_nonfinite = false;
     nlohmann::json m_material;
 };

@@ -4,6 +4,7 @@
 // declared sizes under a memory limit) that must end in exit 2 with the file and field named.
 #include "harness/results.hpp"
 #include "problems/qpsnap.hpp"
+#include "problems/sim/simulator.hpp"
 #include "problems/synthetic.hpp"
 
 #include "tests/harness/cli_test_util.hpp"
@@ -421,9 +422,9 @@ TEST(Writes, SimulateReplacesAnOldOutAndFinishesItsTables)
     EXPECT_EQ(count_matching(out, ".partial"), 0u);
     const nlohmann::json record = read_json_file((out / "simulation.json").string());
     EXPECT_EQ(record["frames_done"], 2);
-    EXPECT_EQ(record["simulator_version"], 1);
+    EXPECT_EQ(record["simulator_version"], sim::kSimulatorVersion);
     const Output version = run("simulate --version");
-    EXPECT_EQ(version.out, "simulator 1\n");
+    EXPECT_EQ(version.out, "simulator " + std::to_string(sim::kSimulatorVersion) + "\n");
 }
 
 TEST(Writes, FileSizeLimitIsAClearErrorWithNoPartialOutput)

@@ -1,5 +1,6 @@
 // The simulator end to end: scene validation, paper sizes, resting contact, momentum, the
 // authors' two-dinosaur QP of frame 11 (when their data is present), and the outputs.
+#include "harness/sim_step_solver.hpp"
 #include "problems/qpsnap.hpp"
 #include "problems/sim/simulator.hpp"
 #include "solvers/registry.hpp"
@@ -38,6 +39,13 @@ std::string error_of(const std::function<void()>& f)
     }
     return "(no error)";
 }
+/// Options with the harness's step solver (the simulator needs one).
+SimulatorOptions options()
+{
+    SimulatorOptions opt;
+    opt.solve_step = harness_step_solver();
+    return opt;
+}
 std::string reference_solver() { return builtin_registry().contains("active-set") ? "active-set" : "mprgp"; }
 
 json box_body(const Vec3& translate, const Vec3& velocity)
@@ -62,7 +70,7 @@ TEST(Simulator, LongCubeHasThePapersSize)
     ASSERT_EQ(scene.bodies.size(), 1u);
     EXPECT_EQ(scene.bodies[0].mesh.vertices(), 9537);
     EXPECT_EQ(scene.bodies[0].mesh.tet_count(), 49152);
-    Simulator sim(std::move(scene), SimulatorOptions{});
+    Simulator sim(std::move(scene), options());
     EXPECT_EQ(sim.dofs(), 28611);
     EXPECT_EQ(sim.tets(), 49152);
     // Scaled by 0.5: 0.5 x 0.5 x 1 m of density 1000.
@@ -80,7 +88,7 @@ TEST(Simulator, BoxRestingOnPlaneStaysOnItFor100Steps)
                     {"detection", {{"margin", 0.005}}},
                     {"bodies", {box_body(Vec3(0, 0.15, 0), Vec3::Zero())}},
                     {"obstacles", {{{"type", "plane"}, {"normal", {0, 1, 0}}, {"point", {0, 0, 0}}}}}};
-    Simulator sim(load_scene_json(j, "rest.json", PathRoots{}), SimulatorOptions{});
+    Simulator sim(load_scene_json(j, "rest.json", PathRoots{}), options());
     double min_y = 1e300, max_y = -1e300;
     for (int s = 0; s < 100; ++s) {
         const auto recs = sim.step();
@@ -110,7 +118,7 @@ TEST(Simulator, TwoBodiesInFreeFlightConserveLinearMomentum)
               {"a_K", 0.02},
               {"bodies", {box_body(Vec3(0, 0, 0), Vec3(1, 0, 0)), box_body(Vec3(1, 0.1, 0), Vec3(-2, 0.5, 0.3))}}};
     j["bodies"][1]["rotate_deg"] = {10, 20, 30};
-    Simulator sim(load_scene_json(j, "flight.json", PathRoots{}), SimulatorOptions{});
+    Simulator sim(load_scene_json(j, "flight.json", PathRoots{}), options());
     // Spin the second body so that the elastic forces work during the flight.
     const long nv = sim.vertices();
     for (long i = nv / 2; i < nv; ++i) {
@@ -144,9 +152,7 @@ TEST(Simulator, MalformedScenesNameFileAndKey)
     EXPECT_EQ(error_of([&] { load_scene_json(m, "s.json", PathRoots{}); }),
               "s.json: /obstacles/0/type: must be one of plane, sphere, box, cylinder, mesh, stairs, got 'cone'");
     json n = {{"bodies", {box_body(Vec3::Zero(), Vec3::Zero())}}, {"solver", "no-such-solver"}};
-    EXPECT_NE(error_of([&] {
-                  Simulator(load_scene_json(n, "s.json", PathRoots{}), SimulatorOptions{});
-              }).find("no-such-solver"),
+    EXPECT_NE(error_of([&] { Simulator(load_scene_json(n, "s.json", PathRoots{}), options()); }).find("no-such-solver"),
               std::string::npos);
     // A malformed mesh file is reported with its file and line through the scene.
     const std::string dir = tmp_dir("badmesh");
@@ -180,7 +186,7 @@ TEST(Simulator, TwoDinosFrame11HasInterBodyRowsOf12Nonzeros)
 {
     if (!exists(kPaperData + "/meshes/dino_1303_4014.abq")) GTEST_SKIP() << "no authors' data at " << kPaperData;
     const std::string path = kSource + "/scenes/two_dinos_1303.json";
-    SimulatorOptions opt;
+    SimulatorOptions opt = options();
     opt.out_dir = tmp_dir("two_dinos");
     opt.frames = 12;
     Scene scene = load_scene(path, default_path_roots(path, kPaperData));
@@ -205,7 +211,7 @@ TEST(Simulator, TwoDinosFrame11HasInterBodyRowsOf12Nonzeros)
 TEST(Simulator, DemoWritesCsvPngAndObj)
 {
     const std::string path = kSource + "/scenes/demo.json";
-    SimulatorOptions opt;
+    SimulatorOptions opt = options();
     opt.out_dir = tmp_dir("demo");
     opt.frames = 20;
     Scene scene = load_scene(path, default_path_roots(path, ""));

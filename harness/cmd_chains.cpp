@@ -1,0 +1,102 @@
+// contactbench chains SCENE.json [--frames N] [--out DIR] [--data DIR] [--exact NAME] [--orders LIST]
+//                     [--h SECONDS] [--decouple-seed S]
+// The price of decoupling along whole chains (docs/simulator.md "The price of decoupling").
+#include "harness/cli.hpp"
+#include "harness/commands.hpp"
+#include "harness/sim_step_solver.hpp"
+#include "harness/suite.hpp"
+#include "problems/sim/chains.hpp"
+#include "solvers/registry.hpp"
+
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+
+namespace cb {
+
+namespace {
+/// The exact chains' tolerances on e: the reference, and the looser one whose distance to it is
+/// the noise floor (what a tolerance change alone does to a chaotic chain).
+constexpr double kReferenceTol = 1e-8, kNoiseTol = 1e-6;
+}  // namespace
+
+int cmd_chains(const Args& args)
+{
+    const CommandLine cl("chains", args,
+                         {"--frames", "--out", "--data", "--exact", "--orders", "--h", "--decouple-seed"},
+                         {"--control"});
+    const std::string usage =
+        "usage: contactbench chains SCENE.json [--frames N] [--out DIR] [--data DIR] [--exact NAME]\n"
+        "       [--orders LIST] [--h SECONDS] [--decouple-seed S] [--control]\n"
+        "Steps the scene from the same start with several chains at once and compares them frame by frame:\n"
+        "  exact          the exact solver on every detected row, tol 1e-8 (the reference)\n"
+        "  exact-tol1e-6  the same at tol 1e-6: its distance to the reference is the noise floor\n"
+        "  ORDER          the scene's solver (mprgp) with its settings on the rows the order keeps, for\n"
+        "                 each ORDER of --orders (default authors,random,depth)\n"
+        "  --frames N     frames (default: the scene's)\n"
+        "  --out DIR      output folder (default results/chains/<scene name>): chains.csv (one row per\n"
+        "                 frame and chain), chains.json (written last), <scene>_largest_difference.png\n"
+        "                 and <scene>_largest_penetration.png (every chain side by side, in the order\n"
+        "                 above, at the frame where the authors' chain is farthest from the reference,\n"
+        "                 and where it penetrates deepest)\n"
+        "  --data DIR     the authors' data folder (as for simulate)\n"
+        "  --exact NAME   the exact solver (default pgs: projected Gauss-Seidel on the exact dual, any J\n"
+        "                 up to 2000 rows; its tol acts on e, so the noise floor means something; the\n"
+        "                 direct active-set gives the same chain at both tolerances)\n"
+        "  --h SECONDS    time step instead of the scene's (a frame keeps its duration)\n"
+        "  --decouple-seed S  seed of the random order (step s uses S + s; default 0)\n"
+        "  --control      one more chain, authors-exact: the exact solver (tol 1e-8) on the rows the\n"
+        "                 authors' order keeps, which separates the price of the dropped rows from the\n"
+        "                 decoupled solver's own error\n";
+    if (cl.help()) {
+        std::cout << usage;
+        return 0;
+    }
+    cl.expect_positional(1, 1, usage);
+    const std::string scene_path = cl.positional()[0];
+    std::string data = cl.value("--data");
+    const std::string cached = cache_dir() + "/paper-data";
+    if (!cl.has("--data") && std::filesystem::is_directory(cached)) data = cached;
+    const sim::PathRoots roots = sim::default_path_roots(scene_path, data);
+    const sim::Scene scene = sim::load_scene(scene_path, roots);  // validated once, before any chain
+
+    sim::ChainOptions opt;
+    opt.out_dir = cl.value("--out", "results/chains/" + scene.name);
+    opt.frames = cl.integer("--frames", -1);
+    if (cl.has("--frames") && opt.frames < 0) throw_input_error("--frames", "", "must be >= 0");
+    if (cl.has("--h")) {
+        opt.h = cl.number("--h", 0.0);
+        if (!(opt.h > 0)) throw_input_error("--h", "", "must be > 0 seconds");
+    }
+    const long seed = cl.integer("--decouple-seed", 0);
+    if (seed < 0) throw_input_error("--decouple-seed", "", "must be >= 0");
+    opt.decouple_seed = static_cast<std::uint64_t>(seed);
+    opt.solve_step = harness_step_solver();
+    opt.progress = &std::cerr;
+    opt.data_dir = data;
+
+    const std::string exact = cl.value("--exact", "pgs");
+    if (!builtin_registry().contains(exact))
+        throw_input_error("--exact", "", "no solver named '" + exact + "' (contactbench solvers lists them)");
+    opt.chains.push_back({"exact", exact, {{"tol", kReferenceTol}}, "none"});
+    opt.chains.push_back({"exact-tol1e-6", exact, {{"tol", kNoiseTol}}, "none"});
+    opt.reference = "exact";
+    std::stringstream orders(cl.value("--orders", "authors,random,depth"));
+    std::string order;
+    while (std::getline(orders, order, ',')) {
+        if (order != "authors" && order != "random" && order != "depth")
+            throw_input_error("--orders", "",
+                              "expected a comma-separated list of authors, random, depth; got '" + order + "'");
+        opt.chains.push_back({order, scene.solver, scene.solver_settings, order});
+        if (opt.render_chain.empty() || order == "authors") opt.render_chain = order;
+    }
+    if (cl.has("--control")) opt.chains.push_back({"authors-exact", exact, {{"tol", kReferenceTol}}, "authors"});
+    std::cerr << scene.name << ": chains exact (" << exact << ", tol 1e-8), exact-tol1e-6 (" << exact << ")";
+    for (size_t c = 2; c < opt.chains.size(); ++c)
+        std::cerr << ", " << opt.chains[c].label << " (" << opt.chains[c].solver << ")";
+    std::cerr << "; output in " << opt.out_dir << "\n";
+    sim::run_chains([&] { return sim::load_scene(scene_path, roots); }, opt);
+    return 0;
+}
+
+}  // namespace cb

@@ -1,0 +1,229 @@
+#include "problems/sim/chains.hpp"
+
+#include "problems/io_util.hpp"
+#include "problems/sim/render.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <limits>
+#include <memory>
+#include <ostream>
+#include <sstream>
+
+namespace cb::sim {
+
+ChainDistance chain_distance(const Vec& a, const Vec& b)
+{
+    ChainDistance d;
+    if (a.size() != b.size() || a.size() % 3 != 0 || !a.allFinite() || !b.allFinite()) {
+        d.rms = d.max = std::numeric_limits<double>::quiet_NaN();
+        return d;
+    }
+    const Eigen::Index nv = a.size() / 3;
+    double sum = 0;
+    for (Eigen::Index i = 0; i < nv; ++i) {
+        const double s = (a.segment<3>(3 * i) - b.segment<3>(3 * i)).squaredNorm();
+        sum += s;
+        d.max = std::max(d.max, std::sqrt(s));
+    }
+    d.rms = nv > 0 ? std::sqrt(sum / static_cast<double>(nv)) : 0.0;
+    return d;
+}
+
+namespace {
+
+std::string number(double v)
+{
+    if (!std::isfinite(v)) return "nan";
+    std::ostringstream s;
+    s << std::setprecision(9) << v;
+    return s.str();
+}
+
+/// Side-by-side pictures of every chain at one frame, one tile each, in the chains' order.
+void render_side_by_side(const std::string& path, const Scene& scene,
+                         const std::vector<std::vector<SurfaceMesh>>& chain_surfaces)
+{
+    Box3 box;
+    for (const auto& chain : chain_surfaces)
+        for (const auto& s : chain)
+            for (Eigen::Index i = 0; i < s.positions.rows(); ++i) box.extend(Vec3(s.positions.row(i).transpose()));
+    if (box.isEmpty()) return;
+    const Vec3 lo = box.min(), hi = box.max();
+    const double extent = 2.0 * (hi - lo).norm();
+    std::vector<SurfaceMesh> obstacles;
+    for (const auto& o : scene.obstacles) obstacles.push_back(o->surface(0.5 * (lo + hi), extent));
+    const View view = make_view(scene.output.view_deg, lo, hi);
+    const int size = scene.output.image_size;
+    Image image(size * static_cast<int>(chain_surfaces.size()), size);
+    static const std::array<double, 3> palette[] = {{0.85, 0.35, 0.25}, {0.25, 0.55, 0.85}, {0.35, 0.7, 0.35},
+                                                    {0.85, 0.7, 0.25},  {0.6, 0.4, 0.8},    {0.3, 0.75, 0.75}};
+    for (size_t c = 0; c < chain_surfaces.size(); ++c) {
+        std::vector<ColoredSurface> surfaces;
+        for (const auto& s : obstacles) surfaces.push_back({&s, {0.75, 0.75, 0.75}});
+        for (size_t b = 0; b < chain_surfaces[c].size(); ++b)
+            surfaces.push_back({&chain_surfaces[c][b], palette[b % 6]});
+        render_tile(image, static_cast<int>(c) * size, size, view, surfaces);
+    }
+    const std::string partial = path + ".partial";
+    write_png(partial, image);
+    std::filesystem::rename(partial, path);
+}
+
+/// Every chain's surfaces at the frame where a figure of the shown chain is largest so far.
+struct PictureAtMax {
+    long frame = -1;
+    double value = -1;
+    std::vector<std::vector<SurfaceMesh>> surfaces;
+    void offer(double v, long f, const std::vector<std::unique_ptr<Simulator>>& sims)
+    {
+        if (!std::isfinite(v) || v <= value) return;
+        value = v;
+        frame = f;
+        surfaces.clear();
+        for (const auto& sim : sims) surfaces.push_back(sim->body_surfaces());
+    }
+};
+
+}  // namespace
+
+bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& opt)
+{
+    namespace fs = std::filesystem;
+    if (opt.chains.empty()) throw_input_error("chains", "", "no chain to run");
+    size_t ref = opt.chains.size(), shown = opt.chains.size();
+    for (size_t c = 0; c < opt.chains.size(); ++c) {
+        if (opt.chains[c].label == opt.reference) ref = c;
+        if (opt.chains[c].label == opt.render_chain) shown = c;
+    }
+    if (ref == opt.chains.size()) throw_input_error("chains", "reference", "no chain labelled '" + opt.reference + "'");
+    if (shown == opt.chains.size()) shown = ref;
+
+    std::vector<std::unique_ptr<Simulator>> sims;
+    for (const ChainSpec& spec : opt.chains) {
+        Scene s = load_scene();
+        s.solver = spec.solver;
+        s.solver_settings = spec.settings;
+        SimulatorOptions so;  // no out_dir: the chains write their own tables
+        so.solve_step = opt.solve_step;
+        so.decouple = spec.decouple;
+        so.decouple_seed = opt.decouple_seed;
+        so.h = opt.h;
+        sims.push_back(std::make_unique<Simulator>(std::move(s), so));
+    }
+    const Simulator& first = *sims[ref];
+    const Scene& scene = first.scene();
+    const long frames = opt.frames >= 0 ? opt.frames : scene.frames;
+    const double size = first.body_size();
+
+    std::error_code ec;
+    fs::create_directories(opt.out_dir, ec);
+    if (!fs::is_directory(opt.out_dir))
+        throw_input_error(opt.out_dir, "--out", "cannot create the output folder: " + ec.message());
+    const std::string csv_path = opt.out_dir + "/chains.csv", json_path = opt.out_dir + "/chains.json";
+    const std::string png_path = opt.out_dir + "/" + scene.name + "_largest_difference.png";
+    const std::string pen_png_path = opt.out_dir + "/" + scene.name + "_largest_penetration.png";
+    for (const std::string& p : {json_path, csv_path, png_path, pen_png_path}) fs::remove(p, ec);  // never mix runs
+    std::ofstream csv(csv_path + ".partial");
+    if (!csv) throw_input_error(csv_path + ".partial", "", "cannot write");
+    csv << "frame,time_s,chain,solver,decouple,status,steps_not_solved,accuracy,rows,rows_solved,rows_dropped,"
+           "penetration,penetration_rel,violation_rel,rms_distance_rel,max_distance_rel,kinetic_energy,"
+           "elastic_energy,blow_up\n";
+
+    std::vector<bool> stopped(sims.size(), false);
+    PictureAtMax difference, penetration;  // of the shown chain against the reference
+    std::vector<double> pen_of(sims.size(), 0.0);
+    bool ok = true;
+    for (long f = 0; f < frames; ++f) {
+        std::ostringstream rows;
+        for (size_t c = 0; c < sims.size(); ++c) {
+            if (stopped[c]) continue;
+            Simulator& sim = *sims[c];
+            std::string status;
+            double e = 0;
+            long not_solved = 0, nrows = 0, nsolved = 0;
+            for (int s = 0; s < sim.steps_per_frame(); ++s) {
+                for (const StepRecord& r : sim.step()) {
+                    status = r.status;
+                    e = std::max(e, std::isfinite(r.accuracy) ? r.accuracy : std::numeric_limits<double>::infinity());
+                    if (r.status != "converged" && r.status != "solved_relaxation") ++not_solved;
+                    nrows = r.rows;
+                    nsolved = r.rows_solved;
+                }
+            }
+            const FrameRecord fr = sim.frame_record();
+            if (fr.blow_up) {
+                stopped[c] = true;
+                ok = false;
+            }
+            const double pen = sim.penetration_now();
+            pen_of[c] = pen;
+            const ChainDistance d = chain_distance(sim.positions(), sims[ref]->positions());
+            const ChainSpec& spec = opt.chains[c];
+            rows << f << ',' << number(static_cast<double>(f + 1) * sim.step_h() * sim.steps_per_frame()) << ','
+                 << spec.label << ',' << spec.solver << ',' << spec.decouple << ',' << status << ',' << not_solved
+                 << ',' << number(e) << ',' << nrows << ',' << nsolved << ',' << (nrows - nsolved) << ',' << number(pen)
+                 << ',' << number(pen / size) << ',' << number(fr.max_penetration_rel) << ',' << number(d.rms / size)
+                 << ',' << number(d.max / size) << ',' << number(fr.kinetic_energy) << ',' << number(fr.elastic_energy)
+                 << ',' << (fr.blow_up ? 1 : 0) << '\n';
+            if (opt.progress) {
+                char line[256];
+                std::snprintf(line, sizeof line,
+                              "%s frame %04ld  %-14s rows %4ld kept %4ld  %s  e %.1e  pen %.2g%%  dist max %.2g%% "
+                              "rms %.2g%% of body%s\n",
+                              scene.name.c_str(), f, spec.label.c_str(), nrows, nsolved, status.c_str(), e,
+                              100 * pen / size, 100 * d.max / size, 100 * d.rms / size,
+                              fr.blow_up ? "  BLOW-UP (chain stopped)" : "");
+                *opt.progress << line << std::flush;
+            }
+        }
+        // Every chain has stepped this frame: keep the pictures when the shown chain is farthest yet.
+        if (shown != ref && !stopped[shown]) {
+            difference.offer(chain_distance(sims[shown]->positions(), sims[ref]->positions()).max, f, sims);
+            penetration.offer(pen_of[shown], f, sims);
+        }
+        csv << rows.str() << std::flush;
+        if (!csv) throw_input_error(csv_path + ".partial", "", "write failed (disk full?)");
+    }
+    csv.close();
+    if (!csv) throw_input_error(csv_path + ".partial", "", "write failed (disk full?)");
+    fs::rename(csv_path + ".partial", csv_path);
+    if (!difference.surfaces.empty()) render_side_by_side(png_path, scene, difference.surfaces);
+    if (!penetration.surfaces.empty()) render_side_by_side(pen_png_path, scene, penetration.surfaces);
+
+    nlohmann::json chains = nlohmann::json::array();
+    for (const ChainSpec& spec : opt.chains)
+        chains.push_back(
+            {{"label", spec.label}, {"solver", spec.solver}, {"settings", spec.settings}, {"decouple", spec.decouple}});
+    const nlohmann::json record = {
+        {"scene", scene.name},
+        {"scene_file", scene.file},
+        {"data", opt.data_dir},
+        {"frames", frames},
+        {"h", first.step_h()},
+        {"steps_per_frame", first.steps_per_frame()},
+        {"body_size", size},
+        {"decouple_seed", opt.decouple_seed},
+        {"chains", chains},
+        {"reference", opt.chains[ref].label},
+        {"render",
+         {{"chain", opt.chains[shown].label},
+          {"frame", difference.frame},
+          {"max_distance_rel", difference.value >= 0 ? nlohmann::json(difference.value / size) : nlohmann::json()},
+          {"file", difference.surfaces.empty() ? nlohmann::json() : nlohmann::json(fs::path(png_path).filename())},
+          {"penetration_frame", penetration.frame},
+          {"penetration_rel", penetration.value >= 0 ? nlohmann::json(penetration.value / size) : nlohmann::json()},
+          {"penetration_file",
+           penetration.surfaces.empty() ? nlohmann::json() : nlohmann::json(fs::path(pen_png_path).filename())}}},
+        {"blow_up", !ok},
+        {"chains_version", kChainsVersion},
+        {"simulator_version", kSimulatorVersion}};
+    write_file_atomic(json_path, record.dump(1) + "\n");
+    return ok;
+}
+
+}  // namespace cb::sim

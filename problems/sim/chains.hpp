@@ -1,0 +1,52 @@
+#pragma once
+/// Chain comparison (`contactbench chains`): the same scene stepped from the same start by several
+/// chains at once (each its own solver, settings and decoupling order), compared frame by frame
+/// with a reference chain: penetration, rows dropped, the distance between the chains' positions
+/// and the energies. docs/simulator.md "The price of decoupling" says what each figure means.
+#include "problems/sim/simulator.hpp"
+
+#include <functional>
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+namespace cb::sim {
+
+/// One chain: a stepping solver, its settings (merged over the scene's when the solver is the
+/// scene's) and the decoupling order (auto | none | authors | random | depth).
+struct ChainSpec {
+    std::string label, solver;
+    nlohmann::json settings = nlohmann::json::object();
+    std::string decouple = "auto";
+};
+
+struct ChainOptions {
+    std::string out_dir;  ///< chains.csv, chains.json, <scene>_largest_difference.png
+    long frames = -1;     ///< the scene's when < 0
+    double h = 0;         ///< time step override (SimulatorOptions::h)
+    std::uint64_t decouple_seed = 0;
+    std::vector<ChainSpec> chains;
+    std::string reference;     ///< label of the chain the others are measured against
+    std::string render_chain;  ///< the chain whose largest distance (and penetration) picks the pictured frames
+    StepSolver solve_step;
+    std::ostream* progress = nullptr;
+    std::string data_dir;  ///< recorded in chains.json
+};
+
+/// Bump when what `chains` writes for the same inputs changes (caches key on it with the
+/// simulator's version).
+constexpr int kChainsVersion = 2;  // 2: the picture at the largest penetration
+
+/// Per-vertex distance between two position vectors of the same mesh: RMS and max over vertices.
+struct ChainDistance {
+    double rms = 0, max = 0;
+};
+ChainDistance chain_distance(const Vec& a, const Vec& b);
+
+/// Runs every chain in lockstep, each on its own copy of the scene from `load_scene` (scenes own
+/// their obstacles, so they are loaded, not copied), and writes the outputs (tables as .partial
+/// until whole, then renamed; chains.json last). Returns false when some chain blew up (it stops;
+/// the rest go on).
+bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& options);
+
+}  // namespace cb::sim
