@@ -354,7 +354,7 @@ void write_fclib_global(const std::string& path, const Qp& qp, const SnapshotExt
     problem.info = &info;
 
     // A FIFO or device target is refused (HDF5 seeks); PATH.tmp.<pid> is removed on every error.
-    AtomicFile out(path, SpecialTarget::refuse);
+    AtomicFile out(path, SpecialTarget::REFUSE);
     const std::string tmp = out.hand_over_temporary();
     H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
     {

@@ -6,6 +6,7 @@
 
 #include <cerrno>
 #include <csignal>
+#include <cstdio>
 #include <cstring>
 #include <ctime>
 #include <fcntl.h>
@@ -25,6 +26,22 @@ namespace {
 
 /// A temporary of a gone process untouched for this long is a leftover (see remove_stale_temporaries).
 constexpr long kStaleAfterSeconds = 600;
+
+/// N for /dev/stdout (1), /dev/stderr (2), /dev/fd/N and /proc/self/fd/N; -1 for any other name.
+int own_descriptor(const std::string& absolute)
+{
+    if (absolute == "/dev/stdout") return 1;
+    if (absolute == "/dev/stderr") return 2;
+    for (const std::string& prefix :
+         {std::string("/dev/fd/"), std::string("/proc/self/fd/"), "/proc/" + std::to_string(::getpid()) + "/fd/"}) {
+        if (absolute.rfind(prefix, 0) != 0) continue;
+        const std::string digits = absolute.substr(prefix.size());
+        if (digits.empty() || digits.size() > 6 || digits.find_first_not_of("0123456789") != std::string::npos)
+            return -1;
+        return std::stoi(digits);
+    }
+    return -1;
+}
 
 std::string folder_of(const std::string& path)
 {
@@ -123,14 +140,37 @@ AtomicFile::AtomicFile(std::string path, SpecialTarget special) : m_path(std::mo
     if (target.filename().empty() || target.filename() == "." || target.filename() == "..")
         throw_input_error(m_path, "", "names a folder, not a file");
     std::error_code ec;
-    if (target.has_parent_path()) fs::create_directories(target.parent_path(), ec);
+    // /dev/stdout, /dev/fd/N, /proc/self/fd/N: links to whatever the shell opened. A rename would
+    // replace the system's link itself (as root), so nothing is created or renamed there.
+    const std::string absolute = fs::absolute(target, ec).lexically_normal().string();
+    const bool system_folder = absolute.rfind("/dev/", 0) == 0 || absolute.rfind("/proc/", 0) == 0;
+    if (!system_folder && target.has_parent_path()) fs::create_directories(target.parent_path(), ec);
     if (ec) throw_input_error(m_path, "", "cannot create the folder: " + ec.message());
 
     struct stat st {};
-    if (::stat(m_path.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+    const bool exists = ::stat(m_path.c_str(), &st) == 0;
+    if (system_folder && (!exists || S_ISREG(st.st_mode))) {
+        if (!exists || special == SpecialTarget::REFUSE)
+            throw_input_error(m_path, "",
+                              std::string("is under /dev or /proc: ") +
+                                  (exists ? "this output needs a regular file of its own"
+                                          : "only an existing device or stream is written there"));
+        // A regular file behind /dev/stdout (`> out.txt`): written through this process's own
+        // descriptor when the name is one (sharing its offset, after what the command printed),
+        // else appended to.
+        std::cout.flush();
+        std::cerr.flush();
+        std::fflush(nullptr);
+        const int own = own_descriptor(absolute);
+        m_fd = own >= 0 ? ::fcntl(own, F_DUPFD_CLOEXEC, 3)
+                        : ::open(m_path.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC | O_NOCTTY);
+        if (m_fd < 0) throw_input_error(m_path, "", std::string("cannot write: ") + std::strerror(errno));
+        return;
+    }
+    if (exists && !S_ISREG(st.st_mode)) {
         // Never replaced: a rename would turn the FIFO or device into a regular file.
         const bool streamable = S_ISFIFO(st.st_mode) || S_ISCHR(st.st_mode);
-        if (!streamable || special == SpecialTarget::refuse)
+        if (!streamable || special == SpecialTarget::REFUSE)
             throw_input_error(m_path, "",
                               "is " + kind_of(st.st_mode) + ": not replaced (" +
                                   (streamable ? "this output needs a regular file" : "name a file") + ")");
@@ -143,7 +183,7 @@ AtomicFile::AtomicFile(std::string path, SpecialTarget special) : m_path(std::mo
                                            : std::string("cannot write: ") + std::strerror(err));
         }
         struct stat opened {};
-        if (::fstat(m_fd, &opened) != 0 || S_ISREG(opened.st_mode)) {  // swapped since the stat: refuse
+        if (::fstat(m_fd, &opened) != 0 || (S_ISREG(opened.st_mode) && !system_folder)) {  // swapped: refuse
             ::close(m_fd);
             m_fd = -1;
             throw_input_error(m_path, "", "changed while being opened: nothing written");

@@ -8,8 +8,11 @@
 ///  - a target that exists and is not a regular file is never replaced: a FIFO (with a reader)
 ///    or a character device such as /dev/null or /dev/stdout is written to directly, a folder, a
 ///    block device or a socket is refused ("PATH: is a folder: not replaced"); a symlink counts as
-///    what it points to. SpecialTarget::refuse refuses FIFOs and devices too (for writers that
+///    what it points to. SpecialTarget::REFUSE refuses FIFOs and devices too (for writers that
 ///    need to seek, such as HDF5);
+///  - nothing is created or renamed under /dev or /proc: /dev/stdout, /dev/fd/N, /proc/self/fd/N
+///    are written to directly (a regular file behind them, as with `--json /dev/stdout > f`, is
+///    appended to), and a name there that does not exist is refused;
 ///  - the temporary is created fresh (an entry of that name is unlinked first, never followed);
 ///  - PATH.tmp.<pid> files left by an interrupted earlier run (that process is gone, and the file
 ///    untouched for 10 minutes) are removed, with a note on stderr naming each, before the new
@@ -23,15 +26,15 @@ namespace cb {
 
 /// What AtomicFile does with a target that exists and is a FIFO or a character device.
 enum class SpecialTarget {
-    write_through,  ///< write to it directly (no temporary, no rename): `--json /dev/stdout`
-    refuse,         ///< InputError: the writer needs a regular file
+    WRITE_THROUGH,  ///< write to it directly (no temporary, no rename): `--json /dev/stdout`
+    REFUSE,         ///< InputError: the writer needs a regular file
 };
 
 /// An output file written under a temporary name and renamed over PATH by commit() (see above).
 /// Destroyed uncommitted, it removes the temporary, so a failed writer leaves no partial output.
 class AtomicFile {
 public:
-    explicit AtomicFile(std::string path, SpecialTarget special = SpecialTarget::write_through);
+    explicit AtomicFile(std::string path, SpecialTarget special = SpecialTarget::WRITE_THROUGH);
     ~AtomicFile();
     AtomicFile(const AtomicFile&) = delete;
     AtomicFile& operator=(const AtomicFile&) = delete;
@@ -47,7 +50,7 @@ public:
     /// For a library that writes by file name (libfclib): closes this object's descriptor and
     /// returns the temporary's name, which the library may recreate. commit() then fsyncs and
     /// renames whatever is there; destruction without commit() removes it. Needs a regular
-    /// target (construct with SpecialTarget::refuse).
+    /// target (construct with SpecialTarget::REFUSE).
     const std::string& hand_over_temporary();
 
 private:

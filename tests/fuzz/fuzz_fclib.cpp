@@ -142,7 +142,12 @@ void apply_edit(cb::test::Hdf5Edit& f, FuzzedDataProvider& in)
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)
 {
-    static const std::string path = "/dev/shm/cb_fuzz_fclib_" + std::to_string(::getpid()) + ".hdf5";
+    // One scratch file per process, removed when libFuzzer exits.
+    static const struct Scratch {
+        std::string path = "/dev/shm/cb_fuzz_fclib_" + std::to_string(::getpid()) + ".hdf5";
+        ~Scratch() { ::unlink(path.c_str()); }
+    } scratch;
+    const std::string& path = scratch.path;
     FuzzedDataProvider in(data, size);
     {
         cb::test::Hdf5Edit file(path, true);

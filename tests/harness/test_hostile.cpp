@@ -560,6 +560,13 @@ TEST(Hostile, SpecialOutputTargetsAreNeverReplaced)
         ASSERT_EQ(::lstat(null_twin.c_str(), &st), 0);
         EXPECT_TRUE(S_ISCHR(st.st_mode)) << "the device was replaced by a regular file";
     }
+    // The shell's stdout as --json (a file here: run() redirects it): appended after the summary,
+    // and nothing is created or renamed under /proc (/dev/stdout as root was replaced).
+    const Output through = run(solve + " --json /proc/self/fd/1");
+    EXPECT_EQ(through.status, 0) << through.err;
+    const size_t brace = through.out.find("\n{");
+    ASSERT_NE(brace, std::string::npos) << through.out;
+    EXPECT_EQ(nlohmann::json::parse(through.out.substr(brace + 1)).value("status", ""), "converged");
     // A folder as --json; FIFOs as convert targets (a .qpsnap streams, an FCLIB file needs to seek).
     const Output folder = run(solve + " --json " + q(dir));
     EXPECT_EQ(folder.status, 2);

@@ -297,3 +297,12 @@ TEST(FclibHostile, ExportRefusesNoContactsAndSpecialTargetsLeavingNothing)
     fs::remove_all(dir);
 }
 #endif
+
+namespace {
+/// The scratch folder of this process (the hostile tests leave their edited file in it).
+class CleanUp : public ::testing::Environment {
+public:
+    void TearDown() override { fs::remove_all(scratch("x").parent_path()); }
+};
+const auto* const kCleanUp = ::testing::AddGlobalTestEnvironment(new CleanUp);
+}  // namespace

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <csignal>
+#include <fcntl.h>
 #include <filesystem>
 #include <fstream>
 #include <sys/resource.h>
@@ -114,7 +115,7 @@ TEST(IoUtil, SpecialTargetsAreWrittenThroughOrRefusedNeverReplaced)
     ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
     EXPECT_EQ(error_of([&] { write_file_atomic(fifo.string(), "x"); }),
               fifo.string() + ": is a FIFO with no reader: nothing written");
-    EXPECT_EQ(error_of([&] { AtomicFile f(fifo.string(), SpecialTarget::refuse); }),
+    EXPECT_EQ(error_of([&] { AtomicFile f(fifo.string(), SpecialTarget::REFUSE); }),
               fifo.string() + ": is a FIFO: not replaced (this output needs a regular file)");
     EXPECT_EQ(error_of([&] { write_file_atomic(scratch().string(), "x"); }),
               scratch().string() + ": is a folder: not replaced (name a file)");
@@ -135,6 +136,25 @@ TEST(IoUtil, SpecialTargetsAreWrittenThroughOrRefusedNeverReplaced)
     }
     ASSERT_EQ(::lstat(fifo.c_str(), &st), 0);
     EXPECT_TRUE(S_ISFIFO(st.st_mode));
+}
+
+// `--json /dev/stdout > f` as root replaced /dev/stdout (a link) by a regular file: nothing is
+// created or renamed under /dev or /proc; a file behind /proc/self/fd/N is appended to.
+TEST(IoUtil, DescriptorLinksAreWrittenThroughNeverReplaced)
+{
+    const fs::path behind = scratch() / "behind.txt";
+    const int fd = ::open(behind.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ASSERT_GE(fd, 0);
+    ASSERT_EQ(::write(fd, "summary\n", 8), 8);
+    const std::string link = "/proc/self/fd/" + std::to_string(fd);
+    write_file_atomic(link, "{\"json\": 1}\n");
+    EXPECT_EQ(error_of([&] { AtomicFile f(link, SpecialTarget::REFUSE); }),
+              link + ": is under /dev or /proc: this output needs a regular file of its own");
+    EXPECT_EQ(error_of([&] { write_file_atomic("/proc/self/cb-no-such-file", "x"); }),
+              "/proc/self/cb-no-such-file: is under /dev or /proc: only an existing device or stream is written there");
+    ::close(fd);
+    std::ifstream in(behind);
+    EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), {}), "summary\n{\"json\": 1}\n");
 }
 
 TEST(IoUtil, ReplaceDirLeavesNoOldFolder)
