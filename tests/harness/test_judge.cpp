@@ -31,6 +31,13 @@ const fs::path& work_dir()
     return dir;
 }
 
+/// The scratch folder goes when the tests end.
+class CleanUp : public ::testing::Environment {
+public:
+    void TearDown() override { fs::remove_all(work_dir()); }
+};
+const auto* const kCleanUp = ::testing::AddGlobalTestEnvironment(new CleanUp);
+
 /// Runs a subcommand in this process with its standard output captured.
 std::string run_command(int (*command)(const Args&), const Args& args)
 {
