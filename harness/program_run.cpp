@@ -46,6 +46,7 @@ ProgramOutcome run_program(const std::vector<std::string>& argv, const std::stri
     if (argv.empty() || argv[0].empty()) throw std::invalid_argument("run_program: empty argv");
     // Everything the child needs is prepared before fork: after it, only async-signal-safe calls.
     std::vector<char*> args;
+    args.reserve(argv.size() + 1);
     for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
     args.push_back(nullptr);
     const int out_fd = ::open(stdout_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);

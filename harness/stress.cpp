@@ -135,7 +135,11 @@ std::pair<std::string, json> parse_solver_spec(const std::string& spec)
         const std::string item = spec.substr(start + 1, end == std::string::npos ? std::string::npos : end - start - 1);
         const size_t eq = item.find('=');
         if (eq == std::string::npos || eq == 0)
-            throw InputError("stress: --solvers: '" + spec + "': expected NAME[:key=value...], got '" + item + "'");
+            throw InputError(std::string("stress: --solvers: '")
+                                 .append(spec)
+                                 .append("': expected NAME[:key=value...], got '")
+                                 .append(item)
+                                 .append("'"));
         const std::string key = item.substr(0, eq), value = item.substr(eq + 1);
         char* end_num = nullptr;
         const double number = std::strtod(value.c_str(), &end_num);
@@ -500,7 +504,7 @@ std::string stability_markdown(const StressReport& report)
             if (r.nonfinite) text += " NaN";
             if (!r.monotone) text += " nm";
             if (r.m_solved != r.m) text += " (" + std::to_string(r.m_solved) + " rows)";
-            if (!r.honest()) text = "**" + text + "!**";
+            if (!r.honest()) text = std::string("**").append(text).append("!**");
             s << ' ' << text << " |";
         }
         s << '\n';

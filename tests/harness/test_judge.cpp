@@ -31,6 +31,13 @@ const fs::path& work_dir()
     return dir;
 }
 
+/// The scratch folder goes when the tests end.
+class CleanUp : public ::testing::Environment {
+public:
+    void TearDown() override { fs::remove_all(work_dir()); }
+};
+const auto* const kCleanUp = ::testing::AddGlobalTestEnvironment(new CleanUp);
+
 /// Runs a subcommand in this process with its standard output captured.
 std::string run_command(int (*command)(const Args&), const Args& args)
 {
@@ -107,7 +114,7 @@ TEST(Judge, SameErrorVerdictAndStatusAsSolveForEveryRegistrySolver)
         for (const std::string& name : builtin_registry().names()) {
             if (builtin_registry().entry(name).needs_settings)
                 continue;  // command: tests/python/test_command_solver.py
-            SCOPED_TRACE(name + " on " + snap);
+            SCOPED_TRACE(std::string(name).append(" on ").append(snap));
             const fs::path dir = work_dir() / (fs::path(snap).stem().string() + "_" + name);
             const std::string record_path = (dir / "run.json").string();
             fs::create_directories(dir);
@@ -226,7 +233,7 @@ TEST(Judge, MalformedSolutionsNameTheFileAndTheField)
     EXPECT_EQ(error_for(dir / "garbage.txt"),
               (dir / "garbage.txt").string() + ": line 3: expected a number of x, got 'abc'");
     EXPECT_EQ(error_for(dir / "missing.npy"), (dir / "missing.npy").string() + ": x: no such file or folder");
-    write_text(dir / "header.npy", "\x93NUMPX\x01\x00");
+    write_text(dir / "header.npy", std::string("\x93NUMPX\x01", 7) + '\0');  // a wrong magic
     EXPECT_EQ(error_for(dir / "header.npy"),
               (dir / "header.npy").string() + ": header: not a .npy file (no \\x93NUMPY magic)");
     write_npy(dir / "int.npy", std::vector<double>(static_cast<size_t>(n), 0.0), "<i8");
