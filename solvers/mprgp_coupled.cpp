@@ -52,8 +52,9 @@ const SettingsTable<MprgpCoupledSettings>& mprgp_coupled_settings_table()
                     "the set from a feasible x, first the largest feasible step along p (Dostal), then paper's step")
             .choice(
                 "expansion_projection", &MprgpCoupledSettings::expansion_projection, {"face", "all"},
-                "the expansion's projection: face (onto the feasible points that keep the face rows active, as "
-                "decoupled MPRGP's projection does) | all (P of Alg. 1: coupled neighbours may lift face rows off)");
+                "the expansion's projections (of an infeasible chain iterate and of x - alpha_bar phi): face (onto "
+                "the feasible points that keep the face rows active, as decoupled MPRGP's projection does) | all (P "
+                "of Alg. 1: coupled neighbours may lift face rows off)");
     return table;
 }
 
@@ -227,7 +228,7 @@ private:
             for (int k = outer[j]; k < outer[j + 1]; ++k) g[inner[k]] += val[k] * m_d[j];
     }
     /// x = P(x) with g updated sparsely (g += A J'lam). @return whether x moved.
-    /// With keep_face, the projection keeps the face rows as equalities (the expansion's projection).
+    /// With keep_face, the projection keeps the face rows as equalities (the expansion's projections).
     bool project_x(bool strict, bool keep_face = false)
     {
         ++m_cnt.projections;
@@ -404,7 +405,9 @@ bool CoupledRun::expansion(double cg_alpha)
             ++m_feasible_half_steps;
         }
     }
-    if (!m_x_feasible) project_x(false);  // y = P(x), g(y) = g + A J'lam
+    // y = P(x) of the infeasible chain iterate, g(y) = g + A J'lam; with `face` the chain's frozen
+    // face stays active here too (the safeguard below keeps F(P(x)) as the bound).
+    if (!m_x_feasible) project_x(false, m_keep_face);
     const std::vector<char> face_before = m_active;
     restart();  // the face of P(x) and phi(P(x))
     double step = m_alpha_bar;

@@ -213,8 +213,9 @@ TEST(MprgpCoupled, FaceKeepingExpansionsOnCoupledRows)
         face_expansions += face.counters.expansion_steps;
         all_expansions += all.counters.expansion_steps;
     }
-    // Measured 10 against 224 over the three seeds (iterations 419 against 621).
-    EXPECT_LE(5 * face_expansions, all_expansions) << face_expansions << " against " << all_expansions;
+    // Measured 10 against 224 over the three seeds (iterations 419 against 621) before both of the
+    // expansion's projections kept the face, 5 since.
+    EXPECT_LE(10 * face_expansions, all_expansions) << face_expansions << " against " << all_expansions;
 }
 
 }  // namespace
