@@ -111,7 +111,8 @@ public:
     /// The projection LCP on all rows of the block (warm-started from the last projection).
     /// One warm start shared by every projection of the solve: measured on flank_press frame 0, a set
     /// per use (reduced gradient, CG trial, iterate) took 11553 pivots against 8450.
-    virtual bool block_lcp(const double* q, double* lam, Counters& cnt, LcpTally& tally) = 0;
+    /// `fixed` (per block row, or null): rows kept as equalities, their lam of either sign.
+    virtual bool block_lcp(const double* q, double* lam, const char* fixed, Counters& cnt, LcpTally& tally) = 0;
 
 protected:
     virtual void refactor(Counters& cnt) = 0;
@@ -166,11 +167,11 @@ public:
 
     bool face_lcp(const double* q, double* mu, Counters& cnt, LcpTally& tally) override
     {
-        return lcp(m_face.data(), static_cast<int>(m_face.size()), q, m_face_set, mu, cnt, tally);
+        return lcp(m_face.data(), static_cast<int>(m_face.size()), q, nullptr, m_face_set, mu, cnt, tally);
     }
-    bool block_lcp(const double* q, double* lam, Counters& cnt, LcpTally& tally) override
+    bool block_lcp(const double* q, double* lam, const char* fixed, Counters& cnt, LcpTally& tally) override
     {
-        return lcp(m_all.data(), m_k, q, m_proj_set, lam, cnt, tally);
+        return lcp(m_all.data(), m_k, q, fixed, m_proj_set, lam, cnt, tally);
     }
 
 private:
@@ -226,23 +227,27 @@ private:
         if (m_jacobi) m_fd_ok = factor(m_Gd, m_scale_d, m_face.data(), q, m_Lfd, cnt);
     }
 
-    /// 0 <= lam perp M(map, map) lam - q >= 0 (sizes kk), warm-started from `set` (in/out).
-    bool lcp(const int* map, int kk, const double* q, std::vector<char>& set, double* lam, Counters& cnt,
-             LcpTally& tally)
+    /// 0 <= lam perp M(map, map) lam - q >= 0 (sizes kk), warm-started from `set` (in/out); rows
+    /// flagged in `fixed` (may be null) are equalities M lam = q with lam of either sign.
+    bool lcp(const int* map, int kk, const double* q, const char* fixed, std::vector<char>& set, double* lam,
+             Counters& cnt, LcpTally& tally)
     {
         ++tally.solves;
         for (int r = 0; r < kk; ++r) lam[r] = 0.0;
         if (kk == 0) return true;
         if (static_cast<int>(set.size()) != kk) set.assign(static_cast<size_t>(kk), 0);
+        auto is_fixed = [&](int r) { return fixed != nullptr && fixed[r] != 0; };
+        for (int r = 0; r < kk; ++r)
+            if (is_fixed(r)) set[static_cast<size_t>(r)] = 1;
         double qinf = 0.0;
         for (int r = 0; r < kk; ++r) qinf = std::max(qinf, std::abs(q[r]));
         const double tol_w = 1e-12 * std::max(1.0, qinf);
         if (kk == 1) {
             // Closed form (the decoupled rows' lambda = max(0, q / s)), with the same shift.
             const double s = g(m_G, map[0], map[0]);
-            const double lam0 = q[0] > 0.0 && s > 0.0 ? q[0] / (s * (1.0 + GRAM_SHIFT)) : 0.0;
+            const double lam0 = (q[0] > 0.0 || is_fixed(0)) && s > 0.0 ? q[0] / (s * (1.0 + GRAM_SHIFT)) : 0.0;
             lam[0] = lam0;
-            set[0] = lam0 > 0.0;
+            set[0] = lam0 > 0.0 || is_fixed(0);
             ++cnt.lcp_iterations;
             return true;
         }
@@ -280,10 +285,12 @@ private:
             const double tol_l = 1e-12 * std::max(1e-300, laminf);
             m_bad.clear();
             for (int r = 0; r < kk; ++r)
-                if (set[static_cast<size_t>(r)] ? lam[r] < -tol_l : m_w[static_cast<size_t>(r)] < -tol_w)
+                if (!is_fixed(r) &&
+                    (set[static_cast<size_t>(r)] ? lam[r] < -tol_l : m_w[static_cast<size_t>(r)] < -tol_w))
                     m_bad.push_back(r);
             if (m_bad.empty()) {
-                for (int r = 0; r < kk; ++r) lam[r] = std::max(0.0, lam[r]);
+                for (int r = 0; r < kk; ++r)
+                    if (!is_fixed(r)) lam[r] = std::max(0.0, lam[r]);
                 return true;
             }
             const long count = static_cast<long>(m_bad.size());
@@ -300,7 +307,8 @@ private:
         }
         // Projected Gauss-Seidel fallback.
         ++tally.pgs_fallbacks;
-        for (int r = 0; r < kk; ++r) lam[r] = std::max(0.0, lam[r]);
+        for (int r = 0; r < kk; ++r)
+            if (!is_fixed(r)) lam[r] = std::max(0.0, lam[r]);
         for (long sweep = 0; sweep < m_max_sweeps; ++sweep) {
             double change = 0.0, laminf = 0.0;
             for (int r = 0; r < kk; ++r) {
@@ -308,10 +316,11 @@ private:
                 if (!(d > 0.0)) continue;
                 double mi = 0.0;
                 for (int t = 0; t < kk; ++t) mi += g(m_G, map[r], map[t]) * lam[t];
-                const double next = std::max(0.0, lam[r] - (mi - q[r]) / d);
+                const double step = lam[r] - (mi - q[r]) / d;
+                const double next = is_fixed(r) ? step : std::max(0.0, step);
                 change = std::max(change, std::abs(next - lam[r]));
                 lam[r] = next;
-                laminf = std::max(laminf, next);
+                laminf = std::max(laminf, std::abs(next));
             }
             ++cnt.pgs_sweeps;
             ++cnt.lcp_iterations;
@@ -322,8 +331,8 @@ private:
         for (int r = 0; r < kk; ++r) {
             double w = -q[r];
             for (int t = 0; t < kk; ++t) w += g(m_G, map[r], map[t]) * lam[t];
-            wmin = std::min(wmin, w);
-            set[static_cast<size_t>(r)] = lam[r] > 0.0;
+            wmin = std::min(wmin, is_fixed(r) ? -std::abs(w) : w);
+            set[static_cast<size_t>(r)] = lam[r] > 0.0 || is_fixed(r);
         }
         return wmin >= -1e-8 * std::max(1.0, qinf);
     }
@@ -420,13 +429,16 @@ struct SparseFactor {
 
 /// Solves 0 <= lambda  perp  M lambda - q >= 0 by block principal pivoting, warm-started from
 /// `set` (in/out); falls back to projected Gauss-Seidel. @return false when neither met the tolerance.
-bool sparse_lcp(const SpMatCol& M, const Vec& q, std::vector<char>& set, Vec& lambda, bool simplicial, Counters& cnt,
-                long max_pivots, long max_sweeps, long& pgs_fallbacks)
+bool sparse_lcp(const SpMatCol& M, const Vec& q, const char* fixed, std::vector<char>& set, Vec& lambda,
+                bool simplicial, Counters& cnt, long max_pivots, long max_sweeps, long& pgs_fallbacks)
 {
     const Eigen::Index k = q.size();
     lambda = Vec::Zero(k);
     if (k == 0) return true;
     if (static_cast<Eigen::Index>(set.size()) != k) set.assign(static_cast<size_t>(k), 0);
+    auto is_fixed = [&](Eigen::Index i) { return fixed != nullptr && fixed[i] != 0; };
+    for (Eigen::Index i = 0; i < k; ++i)
+        if (is_fixed(i)) set[static_cast<size_t>(i)] = 1;
     const double tol_w = 1e-12 * std::max(1.0, q.lpNorm<Eigen::Infinity>());
     long best = std::numeric_limits<long>::max();
     int chances = 3;
@@ -449,10 +461,12 @@ bool sparse_lcp(const SpMatCol& M, const Vec& q, std::vector<char>& set, Vec& la
         const double tol_l = 1e-12 * std::max(1e-300, lambda.lpNorm<Eigen::Infinity>());
         std::vector<int> bad;
         for (Eigen::Index i = 0; i < k; ++i) {
-            if (set[static_cast<size_t>(i)] ? lambda[i] < -tol_l : w[i] < -tol_w) bad.push_back(static_cast<int>(i));
+            if (!is_fixed(i) && (set[static_cast<size_t>(i)] ? lambda[i] < -tol_l : w[i] < -tol_w))
+                bad.push_back(static_cast<int>(i));
         }
         if (bad.empty()) {
-            for (Eigen::Index i = 0; i < k; ++i) lambda[i] = std::max(0.0, lambda[i]);
+            for (Eigen::Index i = 0; i < k; ++i)
+                if (!is_fixed(i)) lambda[i] = std::max(0.0, lambda[i]);
             return true;
         }
         const long count = static_cast<long>(bad.size());
@@ -468,7 +482,8 @@ bool sparse_lcp(const SpMatCol& M, const Vec& q, std::vector<char>& set, Vec& la
         }
     }
     ++pgs_fallbacks;
-    lambda = lambda.cwiseMax(0.0);
+    for (Eigen::Index i = 0; i < k; ++i)
+        if (!is_fixed(i)) lambda[i] = std::max(0.0, lambda[i]);
     const Vec diag = M.diagonal();
     for (long sweep = 0; sweep < max_sweeps; ++sweep) {
         double change = 0.0;
@@ -476,7 +491,8 @@ bool sparse_lcp(const SpMatCol& M, const Vec& q, std::vector<char>& set, Vec& la
             if (!(diag[i] > 0.0)) continue;
             double mi = 0.0;
             for (SpMatCol::InnerIterator it(M, i); it; ++it) mi += it.value() * lambda[it.row()];  // symmetric
-            const double next = std::max(0.0, lambda[i] - (mi - q[i]) / diag[i]);
+            const double step = lambda[i] - (mi - q[i]) / diag[i];
+            const double next = is_fixed(i) ? step : std::max(0.0, step);
             change = std::max(change, std::abs(next - lambda[i]));
             lambda[i] = next;
         }
@@ -485,8 +501,11 @@ bool sparse_lcp(const SpMatCol& M, const Vec& q, std::vector<char>& set, Vec& la
         cnt.work_flops += sparse_product_flops(static_cast<double>(M.nonZeros()));
         if (change <= 1e-14 * std::max(1.0, lambda.lpNorm<Eigen::Infinity>())) break;
     }
-    const Vec w = M * lambda - q;
-    for (Eigen::Index i = 0; i < k; ++i) set[static_cast<size_t>(i)] = lambda[i] > 0.0;
+    Vec w = M * lambda - q;
+    for (Eigen::Index i = 0; i < k; ++i) {
+        set[static_cast<size_t>(i)] = lambda[i] > 0.0 || is_fixed(i);
+        if (is_fixed(i)) w[i] = -std::abs(w[i]);
+    }
     return w.minCoeff() >= -1e-8 * std::max(1.0, q.lpNorm<Eigen::Infinity>());
 }
 
@@ -527,17 +546,17 @@ public:
         ++tally.solves;
         const Eigen::Index k = static_cast<Eigen::Index>(m_face.size());
         Vec sol;
-        const bool ok = sparse_lcp(m_face_gram, Eigen::Map<const Vec>(q, k), m_face_set, sol, m_simplicial, cnt,
-                                   m_max_pivots, m_max_sweeps, tally.pgs_fallbacks);
+        const bool ok = sparse_lcp(m_face_gram, Eigen::Map<const Vec>(q, k), nullptr, m_face_set, sol, m_simplicial,
+                                   cnt, m_max_pivots, m_max_sweeps, tally.pgs_fallbacks);
         Eigen::Map<Vec>(mu, k) = sol;
         return ok;
     }
-    bool block_lcp(const double* q, double* lam, Counters& cnt, LcpTally& tally) override
+    bool block_lcp(const double* q, double* lam, const char* fixed, Counters& cnt, LcpTally& tally) override
     {
         ++tally.solves;
         const Eigen::Index k = static_cast<Eigen::Index>(m_rows.size());
         Vec sol;
-        const bool ok = sparse_lcp(m_gram, Eigen::Map<const Vec>(q, k), m_proj_set, sol, m_simplicial, cnt,
+        const bool ok = sparse_lcp(m_gram, Eigen::Map<const Vec>(q, k), fixed, m_proj_set, sol, m_simplicial, cnt,
                                    m_max_pivots, m_max_sweeps, tally.pgs_fallbacks);
         Eigen::Map<Vec>(lam, k) = sol;
         return ok;
@@ -692,7 +711,8 @@ void CoupledFaceOperators::chopped_multipliers(const Vec& q, const Vec& nu, Vec&
     }
 }
 
-long CoupledFaceOperators::projection_multipliers(Vec& q, const std::vector<char>& violated, Vec& lam, Counters& cnt)
+long CoupledFaceOperators::projection_multipliers(Vec& q, const std::vector<char>& violated, Vec& lam, Counters& cnt,
+                                                  const std::vector<char>* keep)
 {
     lam.setZero();
     const Eigen::Index m = q.size();
@@ -724,7 +744,13 @@ long CoupledFaceOperators::projection_multipliers(Vec& q, const std::vector<char
         std::vector<double>& in = workspace(k, 0);
         std::vector<double>& out = workspace(k, 1);
         for (size_t r = 0; r < k; ++r) in[r] = q[b.rows()[r]];
-        if (!b.block_lcp(in.data(), out.data(), cnt, tally)) ++m_lcp_failures;
+        const char* fixed = nullptr;
+        if (keep != nullptr) {
+            m_fixed.resize(k);
+            for (size_t r = 0; r < k; ++r) m_fixed[r] = (*keep)[static_cast<size_t>(b.rows()[r])];
+            fixed = m_fixed.data();
+        }
+        if (!b.block_lcp(in.data(), out.data(), fixed, cnt, tally)) ++m_lcp_failures;
         for (size_t r = 0; r < k; ++r) lam[b.rows()[r]] = out[r];
     }
     return solved;

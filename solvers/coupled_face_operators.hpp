@@ -54,8 +54,11 @@ public:
     void chopped_multipliers(const Vec& q, const Vec& nu, Vec& mu, Counters& cnt);
     /// lam (all rows) of the projection for q = c - J v. Only components with a row flagged in
     /// `violated` are solved; the others get lam = 0 (q of their rows is overwritten).
-    /// @return the number of components solved (0: v is kept)
-    long projection_multipliers(Vec& q, const std::vector<char>& violated, Vec& lam, Counters& cnt);
+    /// With `keep`, the rows it flags stay equalities (J v' = c there, their lam of either sign): the
+    /// projection onto the feasible set's part that keeps the face, whose rows then cannot be lifted
+    /// off by a coupled neighbour's correction. @return the number of components solved (0: v is kept)
+    long projection_multipliers(Vec& q, const std::vector<char>& violated, Vec& lam, Counters& cnt,
+                                const std::vector<char>* keep = nullptr);
 
     /// {components, largest_component, singleton_components, dense_blocks, sparse_blocks,
     ///  face_refactorizations, dense_factorizations, chopped_fast_paths, lcp_solves, pgs_fallbacks, lcp_failures}
@@ -68,7 +71,7 @@ private:
     Vec m_s;
     std::vector<std::unique_ptr<RowBlock>> m_blocks;
     std::vector<int> m_block_of_component;  // global: all 0
-    std::vector<char> m_block_violated;
+    std::vector<char> m_block_violated, m_fixed;
     long m_face_refactorizations = 0, m_fast_paths = 0, m_lcp_solves = 0;
     long m_pgs_fallbacks = 0, m_lcp_failures = 0;
     int m_dense_blocks = 0, m_sparse_blocks = 0;

@@ -49,7 +49,12 @@ const SettingsTable<MprgpCoupledSettings>& mprgp_coupled_settings_table()
             .choice("expansion", &MprgpCoupledSettings::expansion, {"paper", "precond", "feasible_step"},
                     "paper: x = P(x - alpha_bar phi) (Alg. 1) | precond: x = P(x - a z) with z the preconditioned "
                     "face direction and a = z'g / z'Az (one more A-product) | feasible_step: after a CG trial left "
-                    "the set from a feasible x, first the largest feasible step along p (Dostal), then paper's step");
+                    "the set from a feasible x, first the largest feasible step along p (Dostal), then paper's step")
+            .choice(
+                "expansion_projection", &MprgpCoupledSettings::expansion_projection, {"face", "all"},
+                "the expansion's projections (of an infeasible chain iterate and of x - alpha_bar phi): face (onto "
+                "the feasible points that keep the face rows active, as decoupled MPRGP's projection does) | all (P "
+                "of Alg. 1: coupled neighbours may lift face rows off)");
     return table;
 }
 
@@ -223,13 +228,15 @@ private:
             for (int k = outer[j]; k < outer[j + 1]; ++k) g[inner[k]] += val[k] * m_d[j];
     }
     /// x = P(x) with g updated sparsely (g += A J'lam). @return whether x moved.
-    bool project_x(bool strict)
+    /// With keep_face, the projection keeps the face rows as equalities (the expansion's projections).
+    bool project_x(bool strict, bool keep_face = false)
     {
         ++m_cnt.projections;
         rows_times(m_x, m_jx);
         m_q = m_c - m_jx;
         if (flag_violated(m_q, strict) == 0) return false;
-        if (m_ops->projection_multipliers(m_q, m_violated, m_lam, m_cnt) == 0) return false;
+        if (m_ops->projection_multipliers(m_q, m_violated, m_lam, m_cnt, keep_face ? &m_active : nullptr) == 0)
+            return false;
         build_d(m_lam);
         for (int j : m_touched) m_x[j] += m_d[j];
         add_a_d(m_g);
@@ -305,6 +312,7 @@ private:
     long m_last_drift = 0;
     long m_feasible_half_steps = 0, m_projected_restarts = 0;
     bool m_project_trials = false;
+    bool m_keep_face = false;
     double m_f_x = 0.0, m_corr_x = 0.0, m_cg_alpha = 0.0;
     bool m_x_feasible = true;
     double m_native = 0.0, m_error = 0.0, m_face_error = 0.0, m_beta2 = 0.0, m_phi2 = 0.0;
@@ -397,7 +405,9 @@ bool CoupledRun::expansion(double cg_alpha)
             ++m_feasible_half_steps;
         }
     }
-    if (!m_x_feasible) project_x(false);  // y = P(x), g(y) = g + A J'lam
+    // y = P(x) of the infeasible chain iterate, g(y) = g + A J'lam; with `face` the chain's frozen
+    // face stays active here too (the safeguard below keeps F(P(x)) as the bound).
+    if (!m_x_feasible) project_x(false, m_keep_face);
     const std::vector<char> face_before = m_active;
     restart();  // the face of P(x) and phi(P(x))
     double step = m_alpha_bar;
@@ -415,7 +425,7 @@ bool CoupledRun::expansion(double cg_alpha)
         }
     }
     m_x -= step * *direction;
-    project_x(false);
+    project_x(false, m_keep_face);
     exact_gradient();
     double f_now = objective_from_gradient();
     ++m_cnt.expansion_steps;
@@ -451,6 +461,7 @@ SolverResult CoupledRun::run()
     result.lambda = Vec::Zero(m_m);
     m_jacobi = m_st.precond == "jacobi";
     m_project_trials = m_st.trial == "project";
+    m_keep_face = m_st.expansion_projection == "face";
     m_dinv = Vec::Ones(m_n);
     if (m_jacobi) {
         const Vec diag = m_A.diagonal();
