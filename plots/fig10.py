@@ -8,7 +8,6 @@ usage: fig10.py RESULTS_DIR [--data DIR] [--out DIR]
 """
 from __future__ import annotations
 
-import os
 import sys
 
 

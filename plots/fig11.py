@@ -12,7 +12,6 @@ usage: fig11.py RESULTS_DIR [--data DIR] [--out DIR]
 """
 from __future__ import annotations
 
-import os
 import sys
 
 

@@ -11,7 +11,6 @@ usage: fig6.py RESULTS_DIR [--data DIR] [--out DIR]
 """
 from __future__ import annotations
 
-import os
 import sys
 
 

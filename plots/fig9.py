@@ -6,7 +6,6 @@ usage: fig9.py RESULTS_DIR [--data DIR] [--out DIR]
 """
 from __future__ import annotations
 
-import os
 import sys
 
 

@@ -28,7 +28,6 @@ from typing import Dict, List
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 import figutil  # noqa: E402
