@@ -219,7 +219,7 @@ TEST(RunEnv, ClusterSlurmWritesFilesAndPrintsCommands)
     EXPECT_EQ(no_shards.status, 2);
     EXPECT_EQ(no_shards.err, "contactbench cluster: error: cluster: --shards: required: the number of array tasks\n");
     const Output zero = run("cluster slurm '" + suite + "' --out '" + out.string() + "' --shards 0");
-    EXPECT_EQ(zero.err, "contactbench cluster: error: cluster: --shards: must be >= 1, got 0\n");
+    EXPECT_EQ(zero.err, "contactbench cluster: error: cluster: --shards: must be in 1..10000, got 0\n");
     const Output huge = run("cluster slurm '" + suite + "' --out '" + out.string() + "' --shards 99999999999999999999");
     EXPECT_EQ(huge.status, 2);
     EXPECT_EQ(huge.err, "contactbench cluster: error: cluster: --shards: '99999999999999999999' is out of range (at "
@@ -230,7 +230,7 @@ TEST(RunEnv, ClusterSlurmWritesFilesAndPrintsCommands)
     const fs::path spaced = work_dir() / "with space";
     const Output space = run("cluster slurm '" + suite + "' --out '" + spaced.string() + "' --shards 2");
     EXPECT_EQ(space.status, 2);
-    EXPECT_NE(space.err.find("holds a space, quote or %, which #SBATCH lines cannot carry"), std::string::npos)
+    EXPECT_NE(space.err.find("holds a space, quote, backslash or %, which #SBATCH lines cannot carry"), std::string::npos)
         << space.err;
     EXPECT_FALSE(fs::exists(spaced));
 }

@@ -359,7 +359,10 @@ class TestFigureRules(unittest.TestCase):
         import subprocess
         from plots import figutil
         listed = json.loads(subprocess.run([cb, "solvers", "--json"], capture_output=True, text=True, check=True).stdout)
-        missing = [s["name"] for s in listed if s["name"] not in figutil.SOLVER_STYLES]
+        # `command` runs whatever program a suite names: each of its labels is a different solver
+        # and takes a spare style of its own (solver_style's rule for a new solver), not one fixed colour.
+        missing = [s["name"] for s in listed
+                   if s["name"] not in figutil.SOLVER_STYLES and not s.get("needs_settings", False)]
         self.assertEqual(missing, [], "add a fixed style to plots/figutil.py SOLVER_STYLES")
 
     def test_titles_and_relaxation_labels(self):
