@@ -3,7 +3,8 @@
 #include "harness/commands.hpp"
 #include "harness/provenance.hpp"
 #include "harness/results.hpp"
-#include "harness/suite.hpp"  // fnv1a_hex
+#include "harness/runner.hpp"  // the harness's own statuses
+#include "harness/suite.hpp"   // fnv1a_hex
 #include "harness/timing_hygiene.hpp"
 #include "problems/io_util.hpp"
 #include "solvers/solver.hpp"  // solve_status_from_string
@@ -43,7 +44,7 @@ struct Shard {
 /// Statuses a run file may hold: the solvers' (solvers/solver.hpp) and the harness's own.
 bool known_status(const std::string& status)
 {
-    if (status == "internal_error") return true;
+    if (status == "internal_error" || status == STATUS_SOLVED_RELAXATION || status == STATUS_UNCONFIRMED) return true;
     try {
         solve_status_from_string(status);
         return true;

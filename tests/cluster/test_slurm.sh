@@ -150,9 +150,9 @@ else
 EOF
 fi
 
-# Time columns differ between any two runs; everything else must be equal.
+# Time and memory columns differ between any two runs; everything else must be equal.
 strip_times() {
-    awk -F, 'NR == 1 { for (i = 1; i <= NF; ++i) if ($i != "setup_s" && $i != "solve_s" && $i != "time_s") keep[i] = 1 }
+    awk -F, 'NR == 1 { for (i = 1; i <= NF; ++i) if ($i != "setup_s" && $i != "solve_s" && $i != "time_s" && $i != "peak_rss_mb") keep[i] = 1 }
              { line = ""; for (i = 1; i <= NF; ++i) if (i in keep) line = line (line == "" ? "" : ",") $i; print line }' "$1"
 }
 

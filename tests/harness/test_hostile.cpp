@@ -358,6 +358,15 @@ TEST(Merge, EveryShardIsCheckedWholeBeforeAnythingIsWritten)
         j["status"] = "banana";
     });
     refused(victim.string() + ": status: not a known run status: \"banana\"", {s1, s2});
+    // The harness's own statuses are run statuses too (a decoupled relaxation, an unconfirmed claim):
+    // the real-Slurm test's merge refused a shard holding mprgp's solved_relaxation.
+    for (const char* status : {"solved_relaxation", "unconfirmed", "internal_error"}) {
+        edited(victim, [&](nlohmann::json& j) { j["status"] = status; });
+        const fs::path out = dir / (std::string("merged_") + status);
+        const Output r = run("merge " + q(out) + " " + q(s1) + " " + q(s2));
+        EXPECT_EQ(r.status, 0) << status << ": " << r.err;
+        EXPECT_NE(slurp(out / "summary.csv").find(std::string(",") + status + ","), std::string::npos) << status;
+    }
     std::ofstream(victim, std::ios::trunc) << original.substr(0, original.size() / 2);  // a torn run file
     refused(victim.string() + ": not valid JSON: ", {s1, s2}, true);
     std::ofstream(victim, std::ios::trunc) << original;
