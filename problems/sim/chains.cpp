@@ -1,6 +1,7 @@
 #include "problems/sim/chains.hpp"
 
 #include "problems/io_util.hpp"
+#include "problems/safe_output.hpp"
 #include "problems/sim/render.hpp"
 
 #include <algorithm>
@@ -69,9 +70,9 @@ void render_side_by_side(const std::string& path, const Scene& scene,
             surfaces.push_back({&chain_surfaces[c][b], palette[b % 6]});
         render_tile(image, static_cast<int>(c) * size, size, view, surfaces);
     }
-    const std::string partial = path + ".partial";
-    write_png(partial, image);
-    std::filesystem::rename(partial, path);
+    AtomicFile png(path, SpecialTarget::REFUSE);  // no link followed, no special file replaced
+    write_png(png.hand_over_temporary(), image);
+    png.commit();
 }
 
 /// Every chain's surfaces at the frame where a figure of the shown chain is largest so far.
@@ -128,11 +129,12 @@ bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& op
     const std::string png_path = opt.out_dir + "/" + scene.name + "_largest_difference.png";
     const std::string pen_png_path = opt.out_dir + "/" + scene.name + "_largest_penetration.png";
     for (const std::string& p : {json_path, csv_path, png_path, pen_png_path}) fs::remove(p, ec);  // never mix runs
-    std::ofstream csv(csv_path + ".partial");
-    if (!csv) throw_input_error(csv_path + ".partial", "", "cannot write");
-    csv << "frame,time_s,chain,solver,decouple,status,steps_not_solved,accuracy,rows,rows_solved,rows_dropped,"
-           "penetration,penetration_rel,violation_rel,rms_distance_rel,max_distance_rel,kinetic_energy,"
-           "elastic_energy,blow_up\n";
+    // Through the one output path (problems/safe_output.hpp): a fresh temporary (no planted link
+    // followed), appended frame by frame, renamed at the end; an interrupted run leaves no chains.csv.
+    AtomicFile csv(csv_path);
+    csv.write("frame,time_s,chain,solver,decouple,status,steps_not_solved,accuracy,rows,rows_solved,rows_dropped,"
+              "penetration,penetration_rel,violation_rel,rms_distance_rel,max_distance_rel,kinetic_energy,"
+              "elastic_energy,blow_up\n");
 
     std::vector<bool> stopped(sims.size(), false);
     PictureAtMax difference, penetration;  // of the shown chain against the reference
@@ -186,12 +188,9 @@ bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& op
             difference.offer(chain_distance(sims[shown]->positions(), sims[ref]->positions()).max, f, sims);
             penetration.offer(pen_of[shown], f, sims);
         }
-        csv << rows.str() << std::flush;
-        if (!csv) throw_input_error(csv_path + ".partial", "", "write failed (disk full?)");
+        csv.write(rows.str());  // fails with an InputError naming the file (disk full, ...)
     }
-    csv.close();
-    if (!csv) throw_input_error(csv_path + ".partial", "", "write failed (disk full?)");
-    fs::rename(csv_path + ".partial", csv_path);
+    csv.commit();
     if (!difference.surfaces.empty()) render_side_by_side(png_path, scene, difference.surfaces);
     if (!penetration.surfaces.empty()) render_side_by_side(pen_png_path, scene, penetration.surfaces);
 

@@ -44,7 +44,7 @@ struct ChainDistance {
 ChainDistance chain_distance(const Vec& a, const Vec& b);
 
 /// Runs every chain in lockstep, each on its own copy of the scene from `load_scene` (scenes own
-/// their obstacles, so they are loaded, not copied), and writes the outputs (tables as .partial
+/// their obstacles, so they are loaded, not copied), and writes the outputs (through AtomicFile: temporaries
 /// until whole, then renamed; chains.json last). Returns false when some chain blew up (it stops;
 /// the rest go on).
 bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& options);
