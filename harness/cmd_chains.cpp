@@ -5,7 +5,7 @@
 #include "harness/commands.hpp"
 #include "harness/sim_step_solver.hpp"
 #include "harness/suite.hpp"
-#include "problems/sim/chains.hpp"
+#include "sim/chains.hpp"
 #include "solvers/registry.hpp"
 
 #include <filesystem>

@@ -4,7 +4,7 @@
 #include "harness/commands.hpp"
 #include "harness/sim_step_solver.hpp"
 #include "harness/suite.hpp"
-#include "problems/sim/simulator.hpp"
+#include "sim/simulator.hpp"
 
 #include <filesystem>
 #include <iostream>

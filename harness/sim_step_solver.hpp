@@ -1,7 +1,7 @@
 #pragma once
 /// The simulator's step solver built on run_solver (harness/runner.hpp): decoupling, the accuracy
 /// error e on the original QP and the run's status are exactly those of `contactbench solve`.
-#include "problems/sim/simulator.hpp"
+#include "sim/simulator.hpp"
 
 namespace cb {
 

@@ -1,10 +1,10 @@
 #pragma once
-/// The stress suite (`contactbench stress`): every solver x every stress case (problems/stress.hpp)
+/// The stress suite (`contactbench stress`): every solver x every stress case (harness/stress_families.hpp)
 /// through run_solver with a time limit per run, each run in a forked child process by default so
 /// that a crash or a hang is recorded as an outcome instead of ending the suite.
 /// Output: DIR/stability.csv (one row per run), DIR/stability.md (a table and the wrong statuses),
 /// DIR/runs/<case>__<solver>.json (the per-run record, without history). All writes are atomic.
-#include "problems/stress.hpp"
+#include "harness/stress_families.hpp"
 
 #include <iosfwd>
 #include <string>

@@ -30,7 +30,7 @@ import pandas as pd  # noqa: E402
 import figutil  # noqa: E402
 from figutil import plt  # noqa: E402
 
-#: problems/sim/chains.hpp kChainsVersion: a cached folder of another version is run again
+#: sim/chains.hpp kChainsVersion: a cached folder of another version is run again
 CHAINS_VERSION = 2
 
 # The rule for "noticeable" (docs/simulator.md). p: the deepest vertex inside a body or obstacle

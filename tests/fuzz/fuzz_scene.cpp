@@ -1,11 +1,11 @@
-// libFuzzer entry point for the scene reader (problems/sim/scene.hpp) on in-memory bytes: a scene
+// libFuzzer entry point for the scene reader (sim/scene.hpp) on in-memory bytes: a scene
 // must either load (meshes built, bodies placed) or be rejected with an InputError. A crash, a
 // sanitizer report, a hang, an out-of-memory or any other exception is a bug in the reader.
 // Scenes are capped at 20000 tets here (PathRoots::max_tets) so that each input stays fast; the
 // bound itself is what keeps `box.cells` 3e9 from allocating.
 // Build: cmake -DCB_FUZZ=ON with CXX=clang++ (target fuzz_scene), see tests/fuzz/README.md.
 #include "problems/io_util.hpp"
-#include "problems/sim/scene.hpp"
+#include "sim/scene.hpp"
 #include "solvers/types.hpp"
 
 #include <cstdint>

@@ -4,7 +4,7 @@
 // declared sizes under a memory limit) that must end in exit 2 with the file and field named.
 #include "harness/results.hpp"
 #include "problems/qpsnap.hpp"
-#include "problems/sim/simulator.hpp"
+#include "sim/simulator.hpp"
 #include "problems/synthetic.hpp"
 
 #include "tests/harness/cli_test_util.hpp"

@@ -1,8 +1,8 @@
 // The BVH against brute force, and inter-body detection (eq. 8 rows) against a brute-force
 // search over every tet and triangle.
-#include "problems/sim/collision/bvh.hpp"
-#include "problems/sim/collision/dcd.hpp"
-#include "problems/sim/collision/obstacles.hpp"
+#include "sim/collision/bvh.hpp"
+#include "sim/collision/dcd.hpp"
+#include "sim/collision/obstacles.hpp"
 
 #include <gtest/gtest.h>
 #include <algorithm>

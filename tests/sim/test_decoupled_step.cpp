@@ -5,8 +5,8 @@
 #include "harness/runner.hpp"
 #include "harness/sim_step_solver.hpp"
 #include "problems/qpsnap.hpp"
-#include "problems/sim/chains.hpp"
-#include "problems/sim/simulator.hpp"
+#include "sim/chains.hpp"
+#include "sim/simulator.hpp"
 
 #include <gtest/gtest.h>
 #include <filesystem>

@@ -1,7 +1,7 @@
 // Finite-difference checks of the corotated FEM (forces, stiffness), rotation invariance,
 // lumped mass, and the backward-Euler QP of one Newton step.
-#include "problems/sim/fem_corotated.hpp"
-#include "problems/sim/integrator.hpp"
+#include "sim/fem_corotated.hpp"
+#include "sim/integrator.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/SparseCholesky>

@@ -1,8 +1,8 @@
 // Mesh readers (every format, one tet or a cube each) and their error messages; the
 // tetrahedraliser; the PNG writer.
-#include "problems/sim/mesh_io.hpp"
-#include "problems/sim/render.hpp"
-#include "problems/sim/tetrahedralize.hpp"
+#include "sim/mesh_io.hpp"
+#include "sim/render.hpp"
+#include "sim/tetrahedralize.hpp"
 
 #include <gtest/gtest.h>
 #include <cstdio>

@@ -3,7 +3,7 @@
 #include "harness/sim_step_solver.hpp"
 #include "harness/suite.hpp"  // cache_dir
 #include "problems/qpsnap.hpp"
-#include "problems/sim/simulator.hpp"
+#include "sim/simulator.hpp"
 #include "solvers/registry.hpp"
 
 #include <gtest/gtest.h>

@@ -9,7 +9,7 @@
 // the mapped problem. Solvers whose iteration counts change under a map are reported, not failed.
 // Plus the done-when checks: mprgp on coupled rows, infeasible sets, a start moved by 1 km.
 #include "harness/runner.hpp"
-#include "problems/stress.hpp"
+#include "harness/stress_families.hpp"
 #include "problems/synthetic.hpp"
 #include "solvers/accuracy.hpp"
 #include "solvers/registry.hpp"

@@ -1,6 +1,6 @@
 // Tests of precond = ichol (solvers/ichol.hpp): the face matrix and the face preconditioner on
 // decoupled rows, and cg / mprgp with it (counters, convergence on a stiff case).
-#include "problems/stress.hpp"
+#include "harness/stress_families.hpp"
 #include "problems/synthetic.hpp"
 #include "solvers/accuracy.hpp"
 #include "solvers/ichol.hpp"

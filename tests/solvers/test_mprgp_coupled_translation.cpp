@@ -1,6 +1,6 @@
 // Issue 17: mprgp-coupled on a problem moved by 100 m (x0 + t, b + A t, c + J t) behaves as on
 // the original one: same status, nearly the same iteration count, the solution moved by t.
-#include "problems/stress.hpp"
+#include "harness/stress_families.hpp"
 #include "solvers/accuracy.hpp"
 #include "solvers/registry.hpp"
 

@@ -4,7 +4,7 @@
 // frame 11 with the published Fig. 11 settings when their data is present.
 #include "harness/suite.hpp"
 #include "problems/qpsnap.hpp"
-#include "problems/sim/simulator.hpp"
+#include "sim/simulator.hpp"
 #include "problems/synthetic.hpp"
 #include "solvers/decouple.hpp"
 #include "solvers/registry.hpp"

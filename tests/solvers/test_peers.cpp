@@ -2,7 +2,7 @@
 // reference `active-set` on the CI suite's problems (suites/ci.json): same objective to 1e-6
 // relative, a feasible point, and the common KKT test met. A peer that is not built is skipped.
 #include "problems/fclib_io.hpp"
-#include "problems/stress.hpp"
+#include "harness/stress_families.hpp"
 #include "problems/synthetic.hpp"
 #include "solvers/accuracy.hpp"
 #include "solvers/registry.hpp"

@@ -1,4 +1,4 @@
-#include "problems/sim/collision/dcd.hpp"
+#include "sim/collision/dcd.hpp"
 
 #include <Eigen/LU>
 #include <algorithm>

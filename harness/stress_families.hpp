@@ -4,7 +4,7 @@
 /// make_synthetic where possible: stiffness, extreme units, tiny and huge time steps, badly
 /// scaled rows, degenerate J (duplicated, parallel, zero rows, many rows on one vertex),
 /// infeasible sets, empty J, nearly singular A, m close to n, ill-conditioned random SPD; and
-/// "fem-sim": QPs of our own simulator (problems/sim) on stiff and fast variants of the demo scene.
+/// "fem-sim": QPs of our own simulator (sim/) on stiff and fast variants of the demo scene.
 #include "solvers/qp.hpp"
 
 #include <nlohmann/json.hpp>

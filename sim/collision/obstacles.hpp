@@ -3,8 +3,8 @@
 /// A vertex closer than the detection margin (or inside) gets a tangent-plane row
 /// n'x_i >= n'q (q the closest surface point, n the outward normal there): 3 nonzeros.
 /// Ref: Li et al. 2015, Sec. 3.2 (the obstacle case of eq. 8: the triangle is fixed).
-#include "problems/sim/collision/bvh.hpp"
-#include "problems/sim/tet_mesh.hpp"
+#include "sim/collision/bvh.hpp"
+#include "sim/tet_mesh.hpp"
 #include "solvers/qp.hpp"
 
 #include <memory>

@@ -1,4 +1,4 @@
-#include "problems/sim/render.hpp"
+#include "sim/render.hpp"
 
 #include "problems/io_util.hpp"
 

@@ -2,11 +2,11 @@
 /// Scene files (JSON): bodies, materials, obstacles, time stepping, detection, output.
 /// Every key, its default and its unit are documented in scenes/README.md. Unknown keys are
 /// errors naming the file and the JSON pointer ("scenes/x.json: /bodies/0/materal: unknown key").
-#include "problems/sim/collision/dcd.hpp"
-#include "problems/sim/collision/obstacles.hpp"
-#include "problems/sim/fem_corotated.hpp"
-#include "problems/sim/integrator.hpp"
-#include "problems/sim/tet_mesh.hpp"
+#include "sim/collision/dcd.hpp"
+#include "sim/collision/obstacles.hpp"
+#include "sim/fem_corotated.hpp"
+#include "sim/integrator.hpp"
+#include "sim/tet_mesh.hpp"
 
 #include <nlohmann/json.hpp>
 #include <memory>

@@ -9,7 +9,7 @@
 /// Energy  Psi = vol * (mu |S - I|_F^2 + lambda/2 tr(S - I)^2);  its gradient (dR drops out)
 /// P = R (2 mu (S - I) + lambda tr(S - I) I) is the rotated linear stress, f_a = -vol P g_a.
 /// The stiffness holds R fixed: K_e = R K0_e R' with K0_e the linear-elastic 12x12 matrix.
-#include "problems/sim/tet_mesh.hpp"
+#include "sim/tet_mesh.hpp"
 #include "solvers/types.hpp"
 
 #include <Eigen/Core>

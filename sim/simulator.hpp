@@ -6,10 +6,10 @@
 /// Detection happens once per time step at the start positions x_n (the authors' DCD), or at
 /// the inertial prediction x_n + h v_n with "detection": {"at": "predicted"}; the rows found are
 /// used by every Newton step of that time step.
-#include "problems/sim/collision/dcd.hpp"
-#include "problems/sim/fem_corotated.hpp"
-#include "problems/sim/integrator.hpp"
-#include "problems/sim/scene.hpp"
+#include "sim/collision/dcd.hpp"
+#include "sim/fem_corotated.hpp"
+#include "sim/integrator.hpp"
+#include "sim/scene.hpp"
 #include "solvers/solver.hpp"
 
 #include <cstdint>

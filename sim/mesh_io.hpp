@@ -3,7 +3,7 @@
 /// (2.2 and 4.1 ASCII), Medit .mesh. Surfaces: OFF (also COFF with colour columns, polygons
 /// fan-triangulated) and OBJ. Every error names the file, the line and what is wrong:
 /// "dino.abq: line 1307: expected 5 integers 'id,n1,n2,n3,n4', got '12,4,5'".
-#include "problems/sim/tet_mesh.hpp"
+#include "sim/tet_mesh.hpp"
 
 #include <string>
 

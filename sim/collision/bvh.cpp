@@ -1,4 +1,4 @@
-#include "problems/sim/collision/bvh.hpp"
+#include "sim/collision/bvh.hpp"
 
 #include <algorithm>
 #include <limits>

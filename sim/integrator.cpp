@@ -1,4 +1,4 @@
-#include "problems/sim/integrator.hpp"
+#include "sim/integrator.hpp"
 
 namespace cb::sim {
 

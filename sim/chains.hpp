@@ -3,7 +3,7 @@
 /// chains at once (each its own solver, settings and decoupling order), compared frame by frame
 /// with a reference chain: penetration, rows dropped, the distance between the chains' positions
 /// and the energies. docs/simulator.md "The price of decoupling" says what each figure means.
-#include "problems/sim/simulator.hpp"
+#include "sim/simulator.hpp"
 
 #include <functional>
 #include <iosfwd>

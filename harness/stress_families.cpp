@@ -1,8 +1,8 @@
-#include "problems/stress.hpp"
+#include "harness/stress_families.hpp"
 
 #include "problems/qpsnap.hpp"
-#include "problems/sim/scene.hpp"
-#include "problems/sim/simulator.hpp"
+#include "sim/scene.hpp"
+#include "sim/simulator.hpp"
 #include "problems/synthetic.hpp"
 
 #include <algorithm>

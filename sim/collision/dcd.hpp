@@ -6,7 +6,7 @@
 ///     n'(x_i - w_j x_j - w_k x_k - w_l x_l) >= 0      (c = 0).
 /// Optional self-contact: the same test against non-incident tets/triangles of the own body.
 /// Ref: Li et al. 2015, Sec. 3.2, eq. (8); candidates from Bvh (AABB trees), rebuilt per call.
-#include "problems/sim/collision/obstacles.hpp"
+#include "sim/collision/obstacles.hpp"
 #include "solvers/qp.hpp"
 
 #include <memory>

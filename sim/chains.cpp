@@ -1,8 +1,8 @@
-#include "problems/sim/chains.hpp"
+#include "sim/chains.hpp"
 
 #include "problems/io_util.hpp"
 #include "problems/safe_output.hpp"
-#include "problems/sim/render.hpp"
+#include "sim/render.hpp"
 
 #include <algorithm>
 #include <cmath>

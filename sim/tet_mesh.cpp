@@ -1,4 +1,4 @@
-#include "problems/sim/tet_mesh.hpp"
+#include "sim/tet_mesh.hpp"
 
 #include <Eigen/Geometry>
 #include <algorithm>

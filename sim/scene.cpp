@@ -1,8 +1,8 @@
-#include "problems/sim/scene.hpp"
+#include "sim/scene.hpp"
 
 #include "problems/io_util.hpp"
-#include "problems/sim/mesh_io.hpp"
-#include "problems/sim/tetrahedralize.hpp"
+#include "sim/mesh_io.hpp"
+#include "sim/tetrahedralize.hpp"
 
 #include <cstdio>
 #include <cstdlib>

@@ -1,4 +1,4 @@
-#include "problems/sim/collision/obstacles.hpp"
+#include "sim/collision/obstacles.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,6 @@
-#include "problems/sim/tetrahedralize.hpp"
+#include "sim/tetrahedralize.hpp"
 
-#include "problems/sim/collision/bvh.hpp"
+#include "sim/collision/bvh.hpp"
 
 #include <cmath>
 #include <memory>

@@ -1,4 +1,4 @@
-#include "problems/sim/mesh_io.hpp"
+#include "sim/mesh_io.hpp"
 
 #include "problems/io_util.hpp"
 

@@ -4,7 +4,7 @@
 /// centroid is inside the surface (ray parity along +x, candidates from a BVH of the
 /// triangles). The result is a staircase approximation at the requested resolution;
 /// mesh_quality() reports its (grid-bounded: >= 45 degree) dihedral angles.
-#include "problems/sim/tet_mesh.hpp"
+#include "sim/tet_mesh.hpp"
 
 #include <memory>
 

@@ -1,4 +1,4 @@
-#include "problems/sim/fem_corotated.hpp"
+#include "sim/fem_corotated.hpp"
 
 #include <Eigen/LU>
 #include <Eigen/SVD>

@@ -14,7 +14,7 @@
 /// For the first (and, as the authors did, only) Newton step x_k = x_n, so
 ///     b = A x_n + h M v_n + h^2 (f_ext - grad E(x_n)).
 /// With contacts the step is the QP  min 1/2 x'Ax - b'x  s.t.  Jx >= c  (eq. 9).
-#include "problems/sim/fem_corotated.hpp"
+#include "sim/fem_corotated.hpp"
 
 namespace cb::sim {
 

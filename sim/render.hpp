@@ -1,7 +1,7 @@
 #pragma once
 /// A small software rasteriser (orthographic, flat shading, z-buffer) and a PNG writer (zlib),
 /// for the picture strips `contactbench simulate` writes.
-#include "problems/sim/tet_mesh.hpp"
+#include "sim/tet_mesh.hpp"
 
 #include <array>
 #include <cstdint>

@@ -1,9 +1,9 @@
-#include "problems/sim/simulator.hpp"
+#include "sim/simulator.hpp"
 
 #include "problems/io_util.hpp"
 #include "problems/qpsnap.hpp"
-#include "problems/sim/mesh_io.hpp"
-#include "problems/sim/render.hpp"
+#include "sim/mesh_io.hpp"
+#include "sim/render.hpp"
 #include "solvers/accuracy.hpp"
 #include "solvers/decouple.hpp"
 #include "solvers/registry.hpp"
