@@ -5,12 +5,13 @@
 // infeasible count stops dropping, warm-started from the last set; projected Gauss-Seidel fallback.
 #include "solvers/coupled_face_operators.hpp"
 
+#include "solvers/masked_gram_factor.hpp"
 #include "solvers/work_units.hpp"
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/OrderingMethods>
-#include <Eigen/SparseCholesky>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -109,10 +110,14 @@ public:
     /// The chopped LCP on the face rows (warm-started from the last chopped set of this face).
     virtual bool face_lcp(const double* q, double* mu, Counters& cnt, LcpTally& tally) = 0;
     /// The projection LCP on all rows of the block (warm-started from the last projection).
-    /// One warm start shared by every projection of the solve: measured on flank_press frame 0, a set
-    /// per use (reduced gradient, CG trial, iterate) took 11553 pivots against 8450.
     /// `fixed` (per block row, or null): rows kept as equalities, their lam of either sign.
-    virtual bool block_lcp(const double* q, double* lam, const char* fixed, Counters& cnt, LcpTally& tally) = 0;
+    /// `use` (ProjectionUse): large components keep a warm start and a factor per use (flank_press
+    /// frame 0: 6332 row modifications and 73 refactorisations against 6430 and 95 with one set, a
+    /// small gain); dense blocks share one (8450 pivots shared against 11553 per use).
+    virtual bool block_lcp(const double* q, double* lam, const char* fixed, int use, Counters& cnt,
+                           LcpTally& tally) = 0;
+    /// Adds the block's masked sparse factor counts (large components only).
+    virtual void add_tally(MaskedFactorTally& /*t*/) const {}
 
 protected:
     virtual void refactor(Counters& cnt) = 0;
@@ -169,7 +174,8 @@ public:
     {
         return lcp(m_face.data(), static_cast<int>(m_face.size()), q, nullptr, m_face_set, mu, cnt, tally);
     }
-    bool block_lcp(const double* q, double* lam, const char* fixed, Counters& cnt, LcpTally& tally) override
+    bool block_lcp(const double* q, double* lam, const char* fixed, int /*use*/, Counters& cnt,
+                   LcpTally& tally) override
     {
         return lcp(m_all.data(), m_k, q, fixed, m_proj_set, lam, cnt, tally);
     }
@@ -367,19 +373,25 @@ SpMatCol submatrix(const SpMatCol& M, const std::vector<int>& idx)
     return S;
 }
 
-using Simplicial = Eigen::SimplicialLLT<SpMatCol, Eigen::Lower, Eigen::NaturalOrdering<int>>;
+/// The rows `rows` of J, in that order.
+SpMat block_rows(const SpMat& J, const std::vector<int>& rows)
+{
+    std::vector<Triplet> t;
+    for (size_t r = 0; r < rows.size(); ++r)
+        for (SpMat::InnerIterator it(J, rows[r]); it; ++it)
+            t.emplace_back(static_cast<int>(r), static_cast<int>(it.col()), it.value());
+    SpMat JB(static_cast<Eigen::Index>(rows.size()), J.cols());
+    JB.setFromTriplets(t.begin(), t.end());
+    return JB;
+}
 
-/// A sparse factor of a Gram matrix scaled to unit diagonal and shifted by GRAM_SHIFT: CHOLMOD (the
-/// global oracle, as before issue 31) or, for a large component, Eigen's simplicial LL' in the
-/// block's own order. The block's rows are put in AMD order once, and a principal submatrix of
-/// an AMD-ordered matrix keeps a good order, so each LCP pivot skips the ordering and the
-/// symbolic analysis that dominated CHOLMOD's time on the 1152-row patch of flank_press.
+/// A CHOLMOD factor of a Gram matrix scaled to unit diagonal and shifted by GRAM_SHIFT (the global
+/// oracle's operators, as before issue 31: analysis and factorisation on every face and LCP set).
 struct SparseFactor {
     std::unique_ptr<Cholmod> chol;
-    std::unique_ptr<Simplicial> simp;
     Vec scale;  ///< 1 / sqrt(diag)
     bool ok = false;
-    bool compute(const SpMatCol& S, bool simplicial, Counters& cnt)
+    bool compute(const SpMatCol& S, Counters& cnt)
     {
         scale.resize(S.rows());
         for (Eigen::Index i = 0; i < S.rows(); ++i) {
@@ -387,25 +399,6 @@ struct SparseFactor {
             scale[i] = d > 0.0 ? 1.0 / std::sqrt(d) : 1.0;
         }
         const SpMatCol scaled = SpMatCol(scale.asDiagonal() * S * scale.asDiagonal());
-        if (simplicial) {
-            chol.reset();
-            if (!simp) simp = std::make_unique<Simplicial>();
-            simp->setShift(GRAM_SHIFT);
-            simp->compute(scaled);
-            ok = simp->info() == Eigen::Success;
-            if (ok) {
-                // LL' flops: sum over the columns of L of nnz(L(:, j))^2 (as the incomplete Cholesky count).
-                const SpMatCol& L = simp->matrixL();
-                double fl = 0.0;
-                for (Eigen::Index j = 0; j < L.outerSize(); ++j) {
-                    const double c = static_cast<double>(L.outerIndexPtr()[j + 1] - L.outerIndexPtr()[j]);
-                    fl += c * c;
-                }
-                cnt.work_flops += fl;
-            }
-            return ok;
-        }
-        simp.reset();
         chol = std::make_unique<Cholmod>();
         chol->setShift(GRAM_SHIFT);
         chol->compute(scaled);
@@ -417,71 +410,19 @@ struct SparseFactor {
     }
     Vec solve(const Vec& rhs, Counters& cnt)
     {
-        if (simp) {
-            cnt.work_flops += 4.0 * static_cast<double>(simp->matrixL().nestedExpression().nonZeros());
-            return scale.cwiseProduct(Vec(simp->solve(Vec(scale.cwiseProduct(rhs)))));
-        }
         ++cnt.cholmod_solves;
         cnt.work_flops += cholmod_solve_flops(chol->cholmod());
         return scale.cwiseProduct(Vec(chol->solve(Vec(scale.cwiseProduct(rhs)))));
     }
 };
 
-/// Solves 0 <= lambda  perp  M lambda - q >= 0 by block principal pivoting, warm-started from
-/// `set` (in/out); falls back to projected Gauss-Seidel. @return false when neither met the tolerance.
-bool sparse_lcp(const SpMatCol& M, const Vec& q, const char* fixed, std::vector<char>& set, Vec& lambda,
-                bool simplicial, Counters& cnt, long max_pivots, long max_sweeps, long& pgs_fallbacks)
+/// Projected Gauss-Seidel on 0 <= lambda perp M lambda - q >= 0 from lambda (clipped), the
+/// fallback of the principal pivoting; `set` becomes the rows with lambda > 0 (and the fixed ones).
+bool projected_gauss_seidel(const SpMatCol& M, const Vec& q, const char* fixed, std::vector<char>& set, Vec& lambda,
+                            Counters& cnt, long max_sweeps)
 {
     const Eigen::Index k = q.size();
-    lambda = Vec::Zero(k);
-    if (k == 0) return true;
-    if (static_cast<Eigen::Index>(set.size()) != k) set.assign(static_cast<size_t>(k), 0);
     auto is_fixed = [&](Eigen::Index i) { return fixed != nullptr && fixed[i] != 0; };
-    for (Eigen::Index i = 0; i < k; ++i)
-        if (is_fixed(i)) set[static_cast<size_t>(i)] = 1;
-    const double tol_w = 1e-12 * std::max(1.0, q.lpNorm<Eigen::Infinity>());
-    long best = std::numeric_limits<long>::max();
-    int chances = 3;
-    for (long it = 0; it < max_pivots; ++it) {
-        std::vector<int> idx;
-        for (Eigen::Index i = 0; i < k; ++i)
-            if (set[static_cast<size_t>(i)]) idx.push_back(static_cast<int>(i));
-        lambda.setZero();
-        if (!idx.empty()) {
-            SparseFactor f;
-            if (!f.compute(submatrix(M, idx), simplicial, cnt)) break;
-            Vec rhs(static_cast<Eigen::Index>(idx.size()));
-            for (size_t r = 0; r < idx.size(); ++r) rhs[static_cast<Eigen::Index>(r)] = q[idx[r]];
-            const Vec sol = f.solve(rhs, cnt);
-            for (size_t r = 0; r < idx.size(); ++r) lambda[idx[r]] = sol[static_cast<Eigen::Index>(r)];
-        }
-        ++cnt.lcp_iterations;
-        const Vec w = M * lambda - q;
-        cnt.work_flops += sparse_product_flops(static_cast<double>(M.nonZeros()));
-        const double tol_l = 1e-12 * std::max(1e-300, lambda.lpNorm<Eigen::Infinity>());
-        std::vector<int> bad;
-        for (Eigen::Index i = 0; i < k; ++i) {
-            if (!is_fixed(i) && (set[static_cast<size_t>(i)] ? lambda[i] < -tol_l : w[i] < -tol_w))
-                bad.push_back(static_cast<int>(i));
-        }
-        if (bad.empty()) {
-            for (Eigen::Index i = 0; i < k; ++i)
-                if (!is_fixed(i)) lambda[i] = std::max(0.0, lambda[i]);
-            return true;
-        }
-        const long count = static_cast<long>(bad.size());
-        if (count < best) {
-            best = count;
-            chances = 3;
-            for (int i : bad) set[static_cast<size_t>(i)] ^= 1;
-        } else if (chances > 0) {
-            --chances;
-            for (int i : bad) set[static_cast<size_t>(i)] ^= 1;
-        } else {
-            set[static_cast<size_t>(bad.back())] ^= 1;  // Murty: finite for P-matrices
-        }
-    }
-    ++pgs_fallbacks;
     for (Eigen::Index i = 0; i < k; ++i)
         if (!is_fixed(i)) lambda[i] = std::max(0.0, lambda[i]);
     const Vec diag = M.diagonal();
@@ -509,25 +450,82 @@ bool sparse_lcp(const SpMatCol& M, const Vec& q, const char* fixed, std::vector<
     return w.minCoeff() >= -1e-8 * std::max(1.0, q.lpNorm<Eigen::Infinity>());
 }
 
+/// The principal pivoting's set update (Judice and Pires 1994): flip every infeasible row while
+/// their count drops (three more chances otherwise), then Murty's single flip of the last one.
+void flip_infeasible(const std::vector<int>& bad, std::vector<char>& set, long& best, int& chances)
+{
+    const long count = static_cast<long>(bad.size());
+    if (count < best) {
+        best = count;
+        chances = 3;
+        for (int i : bad) set[static_cast<size_t>(i)] ^= 1;
+    } else if (chances > 0) {
+        --chances;
+        for (int i : bad) set[static_cast<size_t>(i)] ^= 1;
+    } else {
+        set[static_cast<size_t>(bad.back())] ^= 1;  // Murty: finite for P-matrices
+    }
+}
+
+/// Solves 0 <= lambda  perp  M lambda - q >= 0 by block principal pivoting, warm-started from
+/// `set` (in/out); falls back to projected Gauss-Seidel. @return false when neither met the tolerance.
+bool sparse_lcp(const SpMatCol& M, const Vec& q, const char* fixed, std::vector<char>& set, Vec& lambda, Counters& cnt,
+                long max_pivots, long max_sweeps, long& pgs_fallbacks)
+{
+    const Eigen::Index k = q.size();
+    lambda = Vec::Zero(k);
+    if (k == 0) return true;
+    if (static_cast<Eigen::Index>(set.size()) != k) set.assign(static_cast<size_t>(k), 0);
+    auto is_fixed = [&](Eigen::Index i) { return fixed != nullptr && fixed[i] != 0; };
+    for (Eigen::Index i = 0; i < k; ++i)
+        if (is_fixed(i)) set[static_cast<size_t>(i)] = 1;
+    const double tol_w = 1e-12 * std::max(1.0, q.lpNorm<Eigen::Infinity>());
+    long best = std::numeric_limits<long>::max();
+    int chances = 3;
+    for (long it = 0; it < max_pivots; ++it) {
+        std::vector<int> idx;
+        for (Eigen::Index i = 0; i < k; ++i)
+            if (set[static_cast<size_t>(i)]) idx.push_back(static_cast<int>(i));
+        lambda.setZero();
+        if (!idx.empty()) {
+            SparseFactor f;
+            if (!f.compute(submatrix(M, idx), cnt)) break;
+            Vec rhs(static_cast<Eigen::Index>(idx.size()));
+            for (size_t r = 0; r < idx.size(); ++r) rhs[static_cast<Eigen::Index>(r)] = q[idx[r]];
+            const Vec sol = f.solve(rhs, cnt);
+            for (size_t r = 0; r < idx.size(); ++r) lambda[idx[r]] = sol[static_cast<Eigen::Index>(r)];
+        }
+        ++cnt.lcp_iterations;
+        const Vec w = M * lambda - q;
+        cnt.work_flops += sparse_product_flops(static_cast<double>(M.nonZeros()));
+        const double tol_l = 1e-12 * std::max(1e-300, lambda.lpNorm<Eigen::Infinity>());
+        std::vector<int> bad;
+        for (Eigen::Index i = 0; i < k; ++i) {
+            if (!is_fixed(i) && (set[static_cast<size_t>(i)] ? lambda[i] < -tol_l : w[i] < -tol_w))
+                bad.push_back(static_cast<int>(i));
+        }
+        if (bad.empty()) {
+            for (Eigen::Index i = 0; i < k; ++i)
+                if (!is_fixed(i)) lambda[i] = std::max(0.0, lambda[i]);
+            return true;
+        }
+        flip_infeasible(bad, set, best, chances);
+    }
+    ++pgs_fallbacks;
+    return projected_gauss_seidel(M, q, fixed, set, lambda, cnt, max_sweeps);
+}
+
+/// All rows on CHOLMOD (operators=global, the test oracle): every face and LCP set analysed and
+/// factored afresh, as before issue 31.
 class SparseBlock final : public RowBlock {
 public:
-    /// @param simplicial  Eigen's LL' in AMD block order (a component) instead of CHOLMOD (the oracle)
-    SparseBlock(const SpMat& J, std::vector<int> rows, const Vec& dinv, const CoupledOperatorOptions& opt,
-                bool simplicial)
-        : RowBlock(std::move(rows)), m_jacobi(opt.jacobi), m_simplicial(simplicial), m_max_pivots(opt.lcp_max_pivots),
+    SparseBlock(const SpMat& J, std::vector<int> rows, const Vec& dinv, const CoupledOperatorOptions& opt)
+        : RowBlock(std::move(rows)), m_jacobi(opt.jacobi), m_max_pivots(opt.lcp_max_pivots),
           m_max_sweeps(opt.pgs_max_sweeps)
     {
-        form(J, dinv);
-        if (m_simplicial) {
-            Eigen::AMDOrdering<int> amd;
-            Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> order;  // order.indices()[new] = old
-            amd(m_gram, order);
-            std::vector<int> reordered(m_rows.size());
-            for (size_t k = 0; k < m_rows.size(); ++k)
-                reordered[k] = m_rows[static_cast<size_t>(order.indices()[static_cast<Eigen::Index>(k)])];
-            m_rows = std::move(reordered);
-            form(J, dinv);
-        }
+        const SpMat JB = block_rows(J, m_rows);
+        m_gram = SpMatCol(JB * JB.transpose());
+        if (m_jacobi) m_gram_d = SpMatCol(JB * dinv.asDiagonal() * JB.transpose());
     }
 
     void face_solve(const double* rhs, double* out, bool weighted, Counters& cnt) override
@@ -546,45 +544,307 @@ public:
         ++tally.solves;
         const Eigen::Index k = static_cast<Eigen::Index>(m_face.size());
         Vec sol;
-        const bool ok = sparse_lcp(m_face_gram, Eigen::Map<const Vec>(q, k), nullptr, m_face_set, sol, m_simplicial,
-                                   cnt, m_max_pivots, m_max_sweeps, tally.pgs_fallbacks);
+        const bool ok = sparse_lcp(m_face_gram, Eigen::Map<const Vec>(q, k), nullptr, m_face_set, sol, cnt,
+                                   m_max_pivots, m_max_sweeps, tally.pgs_fallbacks);
         Eigen::Map<Vec>(mu, k) = sol;
         return ok;
     }
-    bool block_lcp(const double* q, double* lam, const char* fixed, Counters& cnt, LcpTally& tally) override
+    bool block_lcp(const double* q, double* lam, const char* fixed, int /*use*/, Counters& cnt,
+                   LcpTally& tally) override
     {
         ++tally.solves;
         const Eigen::Index k = static_cast<Eigen::Index>(m_rows.size());
         Vec sol;
-        const bool ok = sparse_lcp(m_gram, Eigen::Map<const Vec>(q, k), fixed, m_proj_set, sol, m_simplicial, cnt,
-                                   m_max_pivots, m_max_sweeps, tally.pgs_fallbacks);
+        const bool ok = sparse_lcp(m_gram, Eigen::Map<const Vec>(q, k), fixed, m_proj_set, sol, cnt, m_max_pivots,
+                                   m_max_sweeps, tally.pgs_fallbacks);
         Eigen::Map<Vec>(lam, k) = sol;
         return ok;
     }
 
 private:
-    void form(const SpMat& J, const Vec& dinv)
-    {
-        std::vector<Triplet> t;
-        for (size_t r = 0; r < m_rows.size(); ++r)
-            for (SpMat::InnerIterator it(J, m_rows[r]); it; ++it)
-                t.emplace_back(static_cast<int>(r), static_cast<int>(it.col()), it.value());
-        SpMat JB(static_cast<Eigen::Index>(m_rows.size()), J.cols());
-        JB.setFromTriplets(t.begin(), t.end());
-        m_gram = SpMatCol(JB * JB.transpose());
-        if (m_jacobi) m_gram_d = SpMatCol(JB * dinv.asDiagonal() * JB.transpose());
-    }
     void refactor(Counters& cnt) override
     {
         m_face_gram = submatrix(m_gram, m_face);
-        m_face_factor.compute(m_face_gram, m_simplicial, cnt);
-        if (m_jacobi) m_face_factor_d.compute(submatrix(m_gram_d, m_face), m_simplicial, cnt);
+        m_face_factor.compute(m_face_gram, cnt);
+        if (m_jacobi) m_face_factor_d.compute(submatrix(m_gram_d, m_face), cnt);
     }
 
-    bool m_jacobi, m_simplicial;
+    bool m_jacobi;
     long m_max_pivots, m_max_sweeps;
     SpMatCol m_gram, m_gram_d, m_face_gram;
     SparseFactor m_face_factor, m_face_factor_d;
+};
+
+/// A component too large for dense factors: its rows in AMD order of J_B J_B' (once per solve),
+/// its Gram matrices scaled and shifted once, and one masked sparse factor per use (the face,
+/// the face's Jacobi Gram, the chopped LCP's set, the projection LCP's set), each modified by
+/// row additions and deletions as its set moves (solvers/masked_gram_factor.hpp). Measured on
+/// flank_press frame 0 (1152 rows, one component, 101 iterations): 994 LCP steps, 6332 row
+/// modifications, 73 refactorisations, 355 solves on an unchanged set; before (a fresh Eigen
+/// simplicial factor per face and per pivot) 945 factorisations with their symbolic analyses.
+class LargeBlock final : public RowBlock {
+public:
+    LargeBlock(const SpMat& J, std::vector<int> rows, const Vec& dinv, const CoupledOperatorOptions& opt)
+        : RowBlock(std::move(rows)), m_jacobi(opt.jacobi), m_max_pivots(opt.lcp_max_pivots),
+          m_max_sweeps(opt.pgs_max_sweeps)
+    {
+        {
+            const SpMat JB = block_rows(J, m_rows);
+            const SpMatCol pattern = SpMatCol(JB * JB.transpose());
+            Eigen::AMDOrdering<int> amd;
+            Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> order;  // order.indices()[new] = old
+            amd(pattern, order);
+            std::vector<int> reordered(m_rows.size());
+            for (size_t k = 0; k < m_rows.size(); ++k)
+                reordered[k] = m_rows[static_cast<size_t>(order.indices()[static_cast<Eigen::Index>(k)])];
+            m_rows = std::move(reordered);
+        }
+        const SpMat JB = block_rows(J, m_rows);
+        m_gram = SpMatCol(JB * JB.transpose());
+        m_gram.makeCompressed();
+        const long max_updates = std::max(1L, opt.sparse_max_updates);
+        m_scale = unit_diagonal_scale(m_gram);
+        m_face_factor = std::make_unique<MaskedGramFactor>(scaled_shifted(m_gram, m_scale), max_updates);
+        m_chopped_factor = std::make_unique<MaskedGramFactor>(scaled_shifted(m_gram, m_scale), max_updates);
+        for (auto& f : m_projection_factors)
+            f = std::make_unique<MaskedGramFactor>(scaled_shifted(m_gram, m_scale), max_updates);
+        for (auto& set : m_use_sets) set.assign(m_rows.size(), 0);
+        if (m_jacobi) {
+            const SpMatCol gram_d = SpMatCol(JB * dinv.asDiagonal() * JB.transpose());
+            m_scale_d = unit_diagonal_scale(gram_d);
+            m_face_factor_d = std::make_unique<MaskedGramFactor>(scaled_shifted(gram_d, m_scale_d), max_updates);
+        }
+        const size_t k = m_rows.size();
+        m_all.resize(k);
+        std::iota(m_all.begin(), m_all.end(), 0);
+        m_mask.assign(k, 0);
+        m_b.setZero(static_cast<Eigen::Index>(k));
+        m_z.setZero(static_cast<Eigen::Index>(k));
+        m_cur.setZero(static_cast<Eigen::Index>(k));
+        m_w.setZero(static_cast<Eigen::Index>(k));
+        m_bad.reserve(k);
+    }
+
+    void face_solve(const double* rhs, double* out, bool weighted, Counters& cnt) override
+    {
+        MaskedGramFactor& f = weighted ? *m_face_factor_d : *m_face_factor;
+        const Vec& sc = weighted ? m_scale_d : m_scale;
+        const size_t q = m_face.size();
+        if (!f.ok()) {
+            for (size_t r = 0; r < q; ++r) out[r] = 0.0;
+            return;
+        }
+        m_b.setZero();
+        for (size_t r = 0; r < q; ++r) m_b[m_face[r]] = sc[m_face[r]] * rhs[r];
+        f.solve(m_b.data(), cnt);
+        for (size_t r = 0; r < q; ++r) out[r] = sc[m_face[r]] * m_b[m_face[r]];
+    }
+    bool face_lcp(const double* q, double* mu, Counters& cnt, LcpTally& tally) override
+    {
+        return lcp(m_face, q, nullptr, m_face_set, *m_chopped_factor, mu, cnt, tally);
+    }
+    bool block_lcp(const double* q, double* lam, const char* fixed, int use, Counters& cnt, LcpTally& tally) override
+    {
+        const size_t u = static_cast<size_t>(use);
+        return lcp(m_all, q, fixed, m_use_sets[u], *m_projection_factors[u], lam, cnt, tally);
+    }
+    void add_tally(MaskedFactorTally& t) const override
+    {
+        for (const MaskedGramFactor* f :
+             {m_face_factor.get(), m_face_factor_d.get(), m_chopped_factor.get(), m_projection_factors[0].get(),
+              m_projection_factors[1].get(), m_projection_factors[2].get()}) {
+            if (f == nullptr) continue;
+            t.refactorizations += f->tally().refactorizations;
+            t.row_additions += f->tally().row_additions;
+            t.row_deletions += f->tally().row_deletions;
+            t.reuses += f->tally().reuses;
+        }
+    }
+
+private:
+    static Vec unit_diagonal_scale(const SpMatCol& G)
+    {
+        Vec sc(G.rows());
+        for (Eigen::Index i = 0; i < G.rows(); ++i) {
+            const double d = G.coeff(i, i);
+            sc[i] = d > 0.0 ? 1.0 / std::sqrt(d) : 1.0;
+        }
+        return sc;
+    }
+    static SpMatCol scaled_shifted(const SpMatCol& G, const Vec& sc)
+    {
+        SpMatCol S = SpMatCol(sc.asDiagonal() * G * sc.asDiagonal());
+        for (Eigen::Index i = 0; i < S.rows(); ++i) S.coeffRef(i, i) += GRAM_SHIFT;
+        return S;
+    }
+
+    void refactor(Counters& cnt) override
+    {
+        std::fill(m_mask.begin(), m_mask.end(), 0);
+        for (int r : m_face) m_mask[static_cast<size_t>(r)] = 1;
+        m_face_factor->set_mask(m_mask, cnt);
+        if (m_jacobi) m_face_factor_d->set_mask(m_mask, cnt);
+    }
+
+    /// m_z = G(S, S)^-1 q_S on the set S (zero off it), with the set's factor modified to S.
+    bool solve_on_set(const std::vector<int>& universe, const double* q, const std::vector<char>& set,
+                      MaskedGramFactor& f, Counters& cnt)
+    {
+        std::fill(m_mask.begin(), m_mask.end(), 0);
+        for (size_t r = 0; r < universe.size(); ++r)
+            if (set[r]) m_mask[static_cast<size_t>(universe[r])] = 1;
+        if (!f.set_mask(m_mask, cnt)) return false;
+        m_b.setZero();
+        for (size_t r = 0; r < universe.size(); ++r)
+            if (set[r]) m_b[universe[r]] = m_scale[universe[r]] * q[r];
+        f.solve(m_b.data(), cnt);
+        m_z = m_scale.cwiseProduct(m_b);
+        ++cnt.lcp_iterations;
+        return true;
+    }
+
+    /// 0 <= lam perp G(U, U) lam - q >= 0 over the block rows U = `universe`, warm-started from
+    /// `set` (per U row): a primal active-set method (Lawson and Hanson's NNLS loop on the convex
+    /// QP min 1/2 lam'G lam - q'lam, lam >= 0) that keeps lam feasible and F decreasing, so a
+    /// set moves by the rows that really enter or leave and each move is a row modification
+    /// of the set's factor. Block principal pivoting, which flips every infeasible row at once,
+    /// cycled here: on flank_press frame 0 it took 946 pivots and 8933 row flips (Murty's single
+    /// flips ran up to 71 pivots in one LCP). Rows flagged in `fixed` are equalities (lam of
+    /// either sign, never leave). At most lcp_max_pivots + 2 |U| steps, then PGS.
+    bool lcp(const std::vector<int>& universe, const double* q, const char* fixed, std::vector<char>& set,
+             MaskedGramFactor& f, double* lam, Counters& cnt, LcpTally& tally)
+    {
+        ++tally.solves;
+        const size_t ku = universe.size();
+        for (size_t r = 0; r < ku; ++r) lam[r] = 0.0;
+        if (ku == 0) return true;
+        if (set.size() != ku) set.assign(ku, 0);
+        auto is_fixed = [&](size_t r) { return fixed != nullptr && fixed[r] != 0; };
+        double qinf = 0.0;
+        for (size_t r = 0; r < ku; ++r) {
+            if (is_fixed(r)) set[r] = 1;
+            qinf = std::max(qinf, std::abs(q[r]));
+        }
+        const double tol_w = 1e-12 * std::max(1.0, qinf);
+        m_added.assign(ku, 0);
+        // A feasible start from the warm set: the set's solution with its negative rows dropped.
+        m_cur.setZero();
+        bool solved = solve_on_set(universe, q, set, f, cnt);
+        if (solved) {
+            for (size_t r = 0; r < ku; ++r) {
+                if (!set[r]) continue;
+                const int j = universe[r];
+                if (is_fixed(r) || m_z[j] > 0.0)
+                    m_cur[j] = m_z[j];
+                else
+                    set[r] = 0;
+            }
+        }
+        // Blocks of rows leave (every negative one) and enter (every one with w < 0) while the
+        // objective at the set minimisers decreases; after a step that did not, or an addition undone
+        // at once, the method goes careful: ratio tests and one entering row at a time (finite).
+        bool careful = false;
+        double best_f = std::numeric_limits<double>::infinity();
+        const long max_steps = m_max_pivots + 2 * static_cast<long>(ku);
+        for (long step = 0; solved && step < max_steps; ++step) {
+            if (!(solved = solve_on_set(universe, q, set, f, cnt))) break;
+            double zinf = 0.0;
+            for (size_t r = 0; r < ku; ++r)
+                if (set[r]) zinf = std::max(zinf, std::abs(m_z[universe[r]]));
+            const double tol_l = 1e-12 * std::max(1e-300, zinf);
+            // Ratio test: the longest step from m_cur towards z that keeps lam >= 0.
+            double alpha = 1.0;
+            bool blocked = false;
+            for (size_t r = 0; r < ku; ++r) {
+                const int j = universe[r];
+                if (!set[r] || is_fixed(r) || !(m_z[j] < -tol_l)) continue;
+                alpha = std::min(alpha, m_cur[j] / (m_cur[j] - m_z[j]));
+                blocked = true;
+            }
+            if (blocked && !careful) {
+                for (size_t r = 0; r < ku; ++r) {
+                    if (!set[r]) continue;
+                    const int j = universe[r];
+                    if (!is_fixed(r) && m_z[j] < -tol_l) {
+                        set[r] = 0;
+                        m_cur[j] = 0.0;
+                    } else {
+                        m_cur[j] = is_fixed(r) ? m_z[j] : std::max(0.0, m_z[j]);
+                    }
+                }
+                continue;
+            }
+            if (blocked) {
+                bool undid_addition = false;
+                for (size_t r = 0; r < ku; ++r) {
+                    if (!set[r]) continue;
+                    const int j = universe[r];
+                    m_cur[j] += alpha * (m_z[j] - m_cur[j]);
+                    if (!is_fixed(r) && m_z[j] < -tol_l && m_cur[j] <= tol_l) {
+                        set[r] = 0;
+                        m_cur[j] = 0.0;
+                        undid_addition = undid_addition || (m_added[r] && alpha == 0.0);
+                    }
+                }
+                careful = careful || undid_addition;
+                continue;
+            }
+            // z >= 0 on the set: the minimiser there. Rows off the set with w < 0 enter.
+            for (size_t r = 0; r < ku; ++r)
+                if (set[r]) m_cur[universe[r]] = is_fixed(r) ? m_z[universe[r]] : std::max(0.0, m_z[universe[r]]);
+            m_w.noalias() = m_gram * m_cur;
+            cnt.work_flops += sparse_product_flops(static_cast<double>(m_gram.nonZeros()));
+            double f_set = 0.0;  // 1/2 lam'G lam - q'lam
+            for (size_t r = 0; r < ku; ++r)
+                if (set[r]) f_set += m_cur[universe[r]] * (0.5 * m_w[universe[r]] - q[r]);
+            careful = careful || !(f_set < best_f);
+            best_f = std::min(best_f, f_set);
+            const bool single = careful;
+            std::fill(m_added.begin(), m_added.end(), 0);
+            size_t worst = ku;
+            double worst_w = -tol_w;
+            bool entered = false;
+            for (size_t r = 0; r < ku; ++r) {
+                if (set[r]) continue;
+                const double w = m_w[universe[r]] - q[r];
+                if (!(w < -tol_w)) continue;
+                if (!single) {
+                    set[r] = m_added[r] = 1;
+                    entered = true;
+                } else if (w < worst_w) {
+                    worst_w = w;
+                    worst = r;
+                }
+            }
+            if (single && worst < ku) {
+                set[worst] = m_added[worst] = 1;
+                entered = true;
+            }
+            if (!entered) {
+                for (size_t r = 0; r < ku; ++r) lam[r] = m_cur[universe[r]];
+                return true;
+            }
+        }
+        ++tally.pgs_fallbacks;
+        const SpMatCol M = submatrix(m_gram, universe);
+        Vec lambda(static_cast<Eigen::Index>(ku));
+        for (size_t r = 0; r < ku; ++r) lambda[static_cast<Eigen::Index>(r)] = m_cur[universe[r]];
+        const bool ok = projected_gauss_seidel(M, Eigen::Map<const Vec>(q, static_cast<Eigen::Index>(ku)), fixed, set,
+                                               lambda, cnt, m_max_sweeps);
+        Eigen::Map<Vec>(lam, static_cast<Eigen::Index>(ku)) = lambda;
+        return ok;
+    }
+
+    bool m_jacobi;
+    long m_max_pivots, m_max_sweeps;
+    SpMatCol m_gram;  // J_B J_B' in block order, unscaled
+    Vec m_scale, m_scale_d;
+    std::unique_ptr<MaskedGramFactor> m_face_factor, m_face_factor_d, m_chopped_factor;
+    std::array<std::unique_ptr<MaskedGramFactor>, PROJECTION_USES> m_projection_factors;
+    std::array<std::vector<char>, PROJECTION_USES> m_use_sets;
+    std::vector<int> m_all, m_bad;
+    std::vector<char> m_mask, m_added;
+    Vec m_b, m_z, m_cur, m_w;
 };
 
 }  // namespace
@@ -604,7 +864,7 @@ CoupledFaceOperators::CoupledFaceOperators(const SpMat& J, const Vec& dinv, cons
         std::vector<int> all(static_cast<size_t>(m));
         std::iota(all.begin(), all.end(), 0);
         if (m > 0) {
-            m_blocks.push_back(std::make_unique<SparseBlock>(J, std::move(all), dinv, m_opt, false));
+            m_blocks.push_back(std::make_unique<SparseBlock>(J, std::move(all), dinv, m_opt));
             ++m_sparse_blocks;
         }
     } else {
@@ -617,7 +877,7 @@ CoupledFaceOperators::CoupledFaceOperators(const SpMat& J, const Vec& dinv, cons
                 m_blocks.push_back(std::make_unique<DenseBlock>(J, std::move(rows), dinv, m_opt, scatter));
                 ++m_dense_blocks;
             } else {
-                m_blocks.push_back(std::make_unique<SparseBlock>(J, std::move(rows), dinv, m_opt, true));
+                m_blocks.push_back(std::make_unique<LargeBlock>(J, std::move(rows), dinv, m_opt));
                 ++m_sparse_blocks;
             }
         }
@@ -712,7 +972,7 @@ void CoupledFaceOperators::chopped_multipliers(const Vec& q, const Vec& nu, Vec&
 }
 
 long CoupledFaceOperators::projection_multipliers(Vec& q, const std::vector<char>& violated, Vec& lam, Counters& cnt,
-                                                  const std::vector<char>* keep)
+                                                  const std::vector<char>* keep, ProjectionUse use)
 {
     lam.setZero();
     const Eigen::Index m = q.size();
@@ -750,7 +1010,7 @@ long CoupledFaceOperators::projection_multipliers(Vec& q, const std::vector<char
             for (size_t r = 0; r < k; ++r) m_fixed[r] = (*keep)[static_cast<size_t>(b.rows()[r])];
             fixed = m_fixed.data();
         }
-        if (!b.block_lcp(in.data(), out.data(), fixed, cnt, tally)) ++m_lcp_failures;
+        if (!b.block_lcp(in.data(), out.data(), fixed, static_cast<int>(use), cnt, tally)) ++m_lcp_failures;
         for (size_t r = 0; r < k; ++r) lam[b.rows()[r]] = out[r];
     }
     return solved;
@@ -758,6 +1018,8 @@ long CoupledFaceOperators::projection_multipliers(Vec& q, const std::vector<char
 
 nlohmann::json CoupledFaceOperators::stats() const
 {
+    MaskedFactorTally t;
+    for (const auto& b : m_blocks) b->add_tally(t);
     return {{"operators", m_opt.global ? "global" : "components"},
             {"components", m_comp.count()},
             {"largest_component", m_comp.largest()},
@@ -769,7 +1031,11 @@ nlohmann::json CoupledFaceOperators::stats() const
             {"chopped_fast_paths", m_fast_paths},
             {"lcp_solves", m_lcp_solves},
             {"pgs_fallbacks", m_pgs_fallbacks},
-            {"lcp_failures", m_lcp_failures}};
+            {"lcp_failures", m_lcp_failures},
+            {"sparse_refactorizations", t.refactorizations},
+            {"sparse_row_additions", t.row_additions},
+            {"sparse_row_deletions", t.row_deletions},
+            {"sparse_factor_reuses", t.reuses}};
 }
 
 }  // namespace cb

@@ -28,9 +28,15 @@ struct CoupledOperatorOptions {
     long dense_max_rows = 400;  ///< largest component done with dense factors
     long lcp_max_pivots = 200;  ///< block principal pivoting iterations before the PGS fallback
     long pgs_max_sweeps = 10000;
+    long sparse_max_updates = 64;  ///< large components: a set change of more rows refactors instead of modifying
 };
 
 class RowBlock;
+
+/// Which point a projection is of: large components keep one warm-start set and one factor per
+/// use, since the three sets differ (the trial's y is past x, the reduced gradient's point short of it).
+enum class ProjectionUse { ITERATE = 0, REDUCED_GRADIENT = 1, TRIAL = 2 };
+constexpr int PROJECTION_USES = 3;
 
 class CoupledFaceOperators {
 public:
@@ -58,7 +64,7 @@ public:
     /// projection onto the feasible set's part that keeps the face, whose rows then cannot be lifted
     /// off by a coupled neighbour's correction. @return the number of components solved (0: v is kept)
     long projection_multipliers(Vec& q, const std::vector<char>& violated, Vec& lam, Counters& cnt,
-                                const std::vector<char>* keep = nullptr);
+                                const std::vector<char>* keep = nullptr, ProjectionUse use = ProjectionUse::ITERATE);
 
     /// {components, largest_component, singleton_components, dense_blocks, sparse_blocks,
     ///  face_refactorizations, dense_factorizations, chopped_fast_paths, lcp_solves, pgs_fallbacks, lcp_failures}

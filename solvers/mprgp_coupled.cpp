@@ -43,6 +43,9 @@ const SettingsTable<MprgpCoupledSettings>& mprgp_coupled_settings_table()
                     "global: one CHOLMOD problem over all rows (the reference)")
             .integer("dense_max_rows", &MprgpCoupledSettings::dense_max_rows, 1, 100000000,
                      "operators = components: largest component with dense factors; larger ones use CHOLMOD")
+            .integer("sparse_max_updates", &MprgpCoupledSettings::sparse_max_updates, 1, 100000000,
+                     "operators = components, components above dense_max_rows: a face or LCP set that changes in "
+                     "more rows than this is refactored; fewer are CHOLMOD row additions / deletions")
             .choice("trial", &MprgpCoupledSettings::trial, {"chain", "project"},
                     "a CG trial y that left the set with F(P(y)) < F(P(x)): chain (Alg. 2: the chain goes on from the "
                     "infeasible y) | project: x = P(y) and the chain restarts on its face")
@@ -126,6 +129,18 @@ struct ChainCounts {
                 {"violated_rows_accepted", violated_rows_accepted},
                 {"violated_rows_rejected", violated_rows_rejected},
                 {"rejected_cost_over_gain", rejected_gain > 0.0 ? rejected_cost / rejected_gain : 0.0}};
+    }
+};
+
+/// LCP pivots (Counters::lcp_iterations) by the operator that asked for them.
+struct LcpPivotsByUse {
+    long chopped = 0;           ///< the chopped gradient's LCP on the face (evaluate)
+    long reduced_gradient = 0;  ///< P(x - alpha_bar phi) of the proportioning test
+    long trial = 0;             ///< P(y) of a CG trial
+    long iterate = 0;           ///< P(x) of an expansion, proportioning or safeguard step, and the returned point
+    nlohmann::json to_json() const
+    {
+        return {{"chopped", chopped}, {"reduced_gradient", reduced_gradient}, {"trial", trial}, {"iterate", iterate}};
     }
 };
 
@@ -235,8 +250,11 @@ private:
         rows_times(m_x, m_jx);
         m_q = m_c - m_jx;
         if (flag_violated(m_q, strict) == 0) return false;
-        if (m_ops->projection_multipliers(m_q, m_violated, m_lam, m_cnt, keep_face ? &m_active : nullptr) == 0)
-            return false;
+        const long pivots_before = m_cnt.lcp_iterations;
+        const long solved =
+            m_ops->projection_multipliers(m_q, m_violated, m_lam, m_cnt, keep_face ? &m_active : nullptr);
+        m_lcp_by_use.iterate += m_cnt.lcp_iterations - pivots_before;
+        if (solved == 0) return false;
         build_d(m_lam);
         for (int j : m_touched) m_x[j] += m_d[j];
         add_a_d(m_g);
@@ -300,6 +318,7 @@ private:
     SolveLoop m_loop;
     Counters m_cnt;
     ChainCounts m_chain;
+    LcpPivotsByUse m_lcp_by_use;
     std::unique_ptr<CoupledFaceOperators> m_ops;
     bool m_jacobi = false;
     double m_alpha_bar = 1.0;
@@ -323,7 +342,9 @@ void CoupledRun::evaluate()
     // q_A = J_A (g - phi) on the face rows for the chopped LCP; beta = J_A'(nu - mu).
     rows_times(m_phi, m_jphi);
     for (Eigen::Index i = 0; i < m_m; ++i) m_q[i] = m_active[static_cast<size_t>(i)] ? m_jg[i] - m_jphi[i] : 0.0;
+    const long pivots_before = m_cnt.lcp_iterations;
     m_ops->chopped_multipliers(m_q, m_nu, m_mu, m_cnt);
+    m_lcp_by_use.chopped += m_cnt.lcp_iterations - pivots_before;
     m_beta.setZero();
     for (Eigen::Index i = 0; i < m_m; ++i)
         if (m_nu[i] != m_mu[i]) row_axpy(m_J, i, m_nu[i] - m_mu[i], m_beta);
@@ -364,8 +385,12 @@ double CoupledRun::reduced_free_gradient_dot()
 {
     ++m_cnt.projections;
     for (Eigen::Index i = 0; i < m_m; ++i) m_q[i] = m_c[i] - m_jx[i] + m_alpha_bar * m_jphi[i];
-    if (flag_violated(m_q, false) == 0 || m_ops->projection_multipliers(m_q, m_violated, m_lam, m_cnt) == 0)
-        return m_phi2;
+    if (flag_violated(m_q, false) == 0) return m_phi2;
+    const long pivots_before = m_cnt.lcp_iterations;
+    const long solved =
+        m_ops->projection_multipliers(m_q, m_violated, m_lam, m_cnt, nullptr, ProjectionUse::REDUCED_GRADIENT);
+    m_lcp_by_use.reduced_gradient += m_cnt.lcp_iterations - pivots_before;
+    if (solved == 0) return m_phi2;
     double lj = 0.0;
     for (Eigen::Index i = 0; i < m_m; ++i) lj += m_lam[i] * m_jphi[i];
     return m_phi2 - lj / m_alpha_bar;
@@ -476,6 +501,7 @@ SolverResult CoupledRun::run()
     opt.global = m_st.operators == "global";
     opt.jacobi = m_jacobi;
     opt.dense_max_rows = m_st.dense_max_rows;
+    opt.sparse_max_updates = m_st.sparse_max_updates;
     opt.lcp_max_pivots = m_st.lcp_max_pivots;
     opt.pgs_max_sweeps = m_st.pgs_max_sweeps;
     m_ops = std::make_unique<CoupledFaceOperators>(m_J, m_dinv, opt);
@@ -583,7 +609,11 @@ SolverResult CoupledRun::run()
             bool moved = violated_rows > 0;
             if (!moved && m_last_drift > 0) ++m_chain.drift_only_trials;
             double corr_y = 0.0;
-            if (moved) moved = m_ops->projection_multipliers(m_q, m_violated, m_lam, m_cnt) > 0;
+            if (moved) {
+                const long pivots_before = m_cnt.lcp_iterations;
+                moved = m_ops->projection_multipliers(m_q, m_violated, m_lam, m_cnt, nullptr, ProjectionUse::TRIAL) > 0;
+                m_lcp_by_use.trial += m_cnt.lcp_iterations - pivots_before;
+            }
             if (moved) {
                 // F(y + d) - F(y) = d'(g - alpha Ap) + 1/2 d'Ad, d = J' lam sparse.
                 build_d(m_lam);
@@ -675,6 +705,7 @@ SolverResult CoupledRun::run()
                    {"precond", m_st.precond},
                    {"components", m_ops->stats()},
                    {"chain", m_chain.to_json()},
+                   {"lcp_pivots_by_use", m_lcp_by_use.to_json()},
                    {"feasible_half_steps", m_feasible_half_steps},
                    {"projected_restarts", m_projected_restarts},
                    {"lcp_failures", m_ops->lcp_failures()},
