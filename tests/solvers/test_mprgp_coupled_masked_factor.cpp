@@ -22,7 +22,7 @@ SpMatCol random_gram(int k, std::mt19937& rng)
         t.emplace_back(i, 2 * i, 1.0);  // full row rank
         for (int e = 0; e < 3; ++e) t.emplace_back(i, col(rng), val(rng));
     }
-    cb::SpMat B(k, 2 * k);
+    cb::SpMat B(k, 2 * static_cast<Eigen::Index>(k));
     B.setFromTriplets(t.begin(), t.end());
     SpMatCol G = SpMatCol(B * B.transpose());
     Vec sc = G.diagonal().cwiseSqrt().cwiseInverse();
