@@ -77,7 +77,9 @@ def cell(r) -> str:
 
 
 def markdown(rows, fits, axis: str, source: str) -> str:
-    snapshots = sorted({(r["n"] or 0, r["m"] or 0, r["snapshot"]) for r in rows})
+    # Rungs in the ladder's order: by its variable first (the density ladder's n varies a little).
+    key = (lambda t: (t[1], t[0], t[2])) if axis == "m" else None
+    snapshots = sorted({(r["n"] or 0, r["m"] or 0, r["snapshot"]) for r in rows}, key=key)
     labels = sorted({r["label"] for r in rows})
     at = {(r["snapshot"], r["label"]): r for r in rows}
     lines = ["# Which solver when: %s" % source, "",
