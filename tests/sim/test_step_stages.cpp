@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -113,6 +114,7 @@ TEST(StepStages, StepsCsvHasEveryStageFiniteAndNonNegative)
     }
     std::ifstream record(opt.out_dir + "/simulation.json");
     EXPECT_EQ(json::parse(record).at("stage_peak_reset"), true);
+    std::filesystem::remove_all(opt.out_dir);
 }
 
 TEST(StepStages, AStagePeakIsItsOwn)
