@@ -50,7 +50,11 @@ void make_dirs(const std::string& path)
 /// in a child) add their largest peak, as in a run record.
 class StageMeter {
 public:
-    StageMeter() { reset_peak_memory(), m_start = now_s(); }
+    StageMeter()
+    {
+        reset_peak_memory();
+        m_start = now_s();
+    }
     /// Ends the stage. `reset_worked` is cleared when the kernel refused the reset.
     void stop(double& seconds, double& peak_mb, bool& reset_worked) const
     {
