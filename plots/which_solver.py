@@ -37,7 +37,10 @@ def ladder_table(results) -> list:
         memory = (record.get("memory") or {}).get("peak_rss_mb")
         cap = (record.get("settings") or {}).get("time_limit_s")
         row_cap = ROW_CAP.search(record.get("message") or "") if status == "not_applicable" else None
+        prov = record.get("provenance") or {}
+        load = prov.get("load_average") or [None]
         rows.append({"snapshot": snapshot, "label": label, "solver": record.get("solver", label),
+                     "cpu": prov.get("cpu"), "cores": prov.get("cores"), "load": load[0],
                      "n": snap.get("n"), "m": snap.get("m"), "status": status,
                      "time_s": total if status == CONVERGED else None, "elapsed_s": total,
                      "peak_rss_mb": memory, "cap_s": cap,
@@ -76,6 +79,15 @@ def cell(r) -> str:
     return "%s%s%s" % (r["status"] or "missing", elapsed, mem)
 
 
+def machine_line(rows) -> str:
+    """The machine and the 1-minute load average at the runs' starts: timings mean little without them."""
+    cpus = sorted({"%s, %s cores" % (r["cpu"], r["cores"]) for r in rows if r["cpu"]})
+    loads = [r["load"] for r in rows if isinstance(r["load"], (int, float))]
+    machine = "; ".join(cpus) if cpus else "not recorded"
+    load = "%.1f to %.1f" % (min(loads), max(loads)) if loads else "not recorded"
+    return "Machine: %s; load average (1 min) when the runs started: %s." % (machine, load)
+
+
 def markdown(rows, fits, axis: str, source: str) -> str:
     # Rungs in the ladder's order: by its variable first (the density ladder's n varies a little).
     key = (lambda t: (t[1], t[0], t[2])) if axis == "m" else None
@@ -87,7 +99,7 @@ def markdown(rows, fits, axis: str, source: str) -> str:
              "run's process plus its largest child). A cell without a time did not reach tol: its status",
              "and the time it ran are shown (time_limit: the suite's cap; row cap: the solver refuses a QP",
              "with more rows than its max_rows; solved_relaxation: decoupled mprgp solved a relaxation,",
-             "not the QP in the file).", "",
+             "not the QP in the file).", "", machine_line(rows), "",
              "| snapshot | n | m | " + " | ".join(labels) + " |",
              "|---|---|---|" + "---|" * len(labels)]
     for n, m, snap in snapshots:

@@ -15,7 +15,7 @@ from plots import which_solver  # noqa: E402
 
 def record(snapshot, label, n, m, status, total_s, peak_mb, message=""):
     return {"snapshot": {"id": snapshot, "n": n, "m": m}, "label": label, "solver": label, "status": status,
-            "message": message,
+            "message": message, "provenance": {"cpu": "AMD EPYC", "cores": 2, "load_average": [m / 10.0, 0, 0]},
             "time": {"setup_s": 0.0, "solve_s": total_s, "total_s": total_s},
             "memory": {"peak_rss_mb": peak_mb}, "settings": {"time_limit_s": 300},
             "accuracy": {"max": 1e-7 if status == "converged" else 1e-2}}
@@ -81,6 +81,7 @@ class WhichSolverTest(unittest.TestCase):
         self.assertIn("which_solver: dual: time ~ m^p, p = 1.50 (3 of 4 runs converged)", result.stdout)
         self.assertIn("time ~ m^p", text)
         self.assertIn("| dual | 1.50 | 3 of 4 |", text)
+        self.assertIn("Machine: AMD EPYC, 2 cores; load average (1 min) when the runs started: 1.0 to 1000.0.", text)
         self.assertIn("| density_10000 | 98304 | 10000 | row cap (m > 2000) | 10 s / 500 MiB |", text)
         order = [text.index("| density_%d |" % m) for m in (10, 100, 1000, 10000)]
         self.assertEqual(order, sorted(order))
