@@ -646,10 +646,10 @@ OutArray out_array(const std::string& name, const char* dtype, std::vector<std::
         if constexpr (std::is_same_v<T, S>) {
             if (count > 0) sink(reinterpret_cast<const unsigned char*>(src), count * 8);
         } else {
-            constexpr size_t kChunk = size_t(1) << 16;  // values converted per chunk (512 KiB)
-            std::vector<unsigned char> buf(std::min(count, kChunk) * 8);
-            for (size_t first = 0; first < count; first += kChunk) {
-                const size_t k = std::min(kChunk, count - first);
+            constexpr size_t CHUNK_VALUES = size_t(1) << 16;  // values converted per chunk (512 KiB)
+            std::vector<unsigned char> buf(std::min(count, CHUNK_VALUES) * 8);
+            for (size_t first = 0; first < count; first += CHUNK_VALUES) {
+                const size_t k = std::min(CHUNK_VALUES, count - first);
                 for (size_t i = 0; i < k; ++i) {
                     const T v = T(src[first + i]);
                     std::memcpy(buf.data() + 8 * i, &v, 8);

@@ -330,7 +330,7 @@ std::vector<StepRecord> Simulator::step()
         const StageMeter assembly;
         assemble_newton_qp(*m_fem, m_scene.step, x_n, v_n, x_k, m_A, qp.b);
         assembly.stop(rec.time_assembly_s, rec.peak_assembly_mb, m_peak_reset);
-        qp.A = std::move(m_A);
+        qp.A.swap(m_A);  // Eigen 3.4's SparseMatrix has no move assignment: std::move would copy A
         // Start point: the inertial prediction for the first Newton step, the iterate after.
         qp.x0 = k == 0 ? Vec(x_n + h * v_n) : x_k;
         rec.rows = qp.m();
@@ -393,7 +393,7 @@ std::vector<StepRecord> Simulator::step()
             if (out.x.size() == dofs()) x_k = out.x;
         }
         m_last_violation = qp.m() > 0 && x_k.allFinite() ? max_violation(qp.view(), x_k) : 0.0;
-        m_A = std::move(qp.A);
+        m_A.swap(qp.A);
         records.push_back(rec);
         if (m_nonfinite) break;
     }
