@@ -37,6 +37,8 @@ int cmd_simulate(const Args& args)
         "A simulation into an existing DIR replaces the earlier one's files. While it runs the tables are\n"
         "steps.csv.partial and frames.csv.partial (rows appended a whole frame at a time); at the end they\n"
         "are renamed and simulation.json (scene, mesh files, data folder, frames, version) is written last.\n"
+        "The progress line of a frame gives each stage's time and peak resident memory (detection,\n"
+        "assembly, snapshot writing, solve; steps.csv has them per Newton step: docs/INTERFACES.md).\n"
         "Each step is judged as `solve` judges a snapshot: status converged only when the error e on the\n"
         "QP with every detected row meets the tolerance, solved_relaxation when only the kept rows do.\n";
     if (cl.has("--version")) {

@@ -5,14 +5,17 @@ solver along a ladder of snapshots, with the growth exponent of each solver's ti
 
 RESULTS_DIR is a folder written by `contactbench run` on a ladder suite (suites/ladder_*.json).
 `--axis n` (the resolution ladder) fits time ~ n^p, `--axis m` (the contact-density ladder)
-time ~ m^p, by least squares on log-log over the solver's converged runs (two or more). A run that
-did not reach e <= tol on the original QP is not a time: it is shown at the cap with its status
-(time_limit, not_applicable for a row cap, solved_relaxation for decoupled mprgp, ...), never
-dropped. Writes DIR/which_solver.{png,md} (DIR defaults to RESULTS_DIR/figures).
+time ~ m^p, by least squares on log-log over the solver's converged runs (two or more), and prints
+the exponents. A run that did not reach e <= tol on the original QP is not a time: it is shown at
+the cap with its status (time_limit, solved_relaxation for decoupled mprgp, ...), never dropped; a
+solver that refused the QP at its row cap (pgs, the dense-dual peers: not_applicable, "exceeds
+max_rows") is marked as such in the table and the figure. Writes DIR/which_solver.{png,md} (DIR
+defaults to RESULTS_DIR/figures).
 """
 import argparse
 import math
 import os
+import re
 import sys
 
 import numpy as np
@@ -21,6 +24,7 @@ from plots import figutil, loader
 
 CONVERGED = "converged"
 STEM = "which_solver"  # the figure's and the table's file name
+ROW_CAP = re.compile(r"exceeds max_rows = (\d+)")  # pgs's and the dense-dual peers' refusal (not_applicable)
 
 
 def ladder_table(results) -> list:
@@ -32,10 +36,15 @@ def ladder_table(results) -> list:
         total = (record.get("time") or {}).get("total_s")
         memory = (record.get("memory") or {}).get("peak_rss_mb")
         cap = (record.get("settings") or {}).get("time_limit_s")
+        row_cap = ROW_CAP.search(record.get("message") or "") if status == "not_applicable" else None
+        prov = record.get("provenance") or {}
+        load = prov.get("load_average") or [None]
         rows.append({"snapshot": snapshot, "label": label, "solver": record.get("solver", label),
+                     "cpu": prov.get("cpu"), "cores": prov.get("cores"), "load": load[0],
                      "n": snap.get("n"), "m": snap.get("m"), "status": status,
                      "time_s": total if status == CONVERGED else None, "elapsed_s": total,
-                     "peak_rss_mb": memory, "cap_s": cap})
+                     "peak_rss_mb": memory, "cap_s": cap,
+                     "row_cap": int(row_cap.group(1)) if row_cap else None})
     return rows
 
 
@@ -61,6 +70,8 @@ def exponents(rows, axis: str) -> dict:
 
 
 def cell(r) -> str:
+    if r["row_cap"] is not None:  # refused before any work: its time and memory say nothing
+        return "row cap (m > %d)" % r["row_cap"]
     mem = "" if r["peak_rss_mb"] is None else " / %s MiB" % figutil.fmt(r["peak_rss_mb"])
     if r["time_s"] is not None:
         return "%s s%s" % (figutil.fmt(r["time_s"]), mem)
@@ -68,15 +79,27 @@ def cell(r) -> str:
     return "%s%s%s" % (r["status"] or "missing", elapsed, mem)
 
 
+def machine_line(rows) -> str:
+    """The machine and the 1-minute load average at the runs' starts: timings mean little without them."""
+    cpus = sorted({"%s, %s cores" % (r["cpu"], r["cores"]) for r in rows if r["cpu"]})
+    loads = [r["load"] for r in rows if isinstance(r["load"], (int, float))]
+    machine = "; ".join(cpus) if cpus else "not recorded"
+    load = "%.1f to %.1f" % (min(loads), max(loads)) if loads else "not recorded"
+    return "Machine: %s; load average (1 min) when the runs started: %s." % (machine, load)
+
+
 def markdown(rows, fits, axis: str, source: str) -> str:
-    snapshots = sorted({(r["n"] or 0, r["m"] or 0, r["snapshot"]) for r in rows})
+    # Rungs in the ladder's order: by its variable first (the density ladder's n varies a little).
+    key = (lambda t: (t[1], t[0], t[2])) if axis == "m" else None
+    snapshots = sorted({(r["n"] or 0, r["m"] or 0, r["snapshot"]) for r in rows}, key=key)
     labels = sorted({r["label"] for r in rows})
     at = {(r["snapshot"], r["label"]): r for r in rows}
     lines = ["# Which solver when: %s" % source, "",
              "Time to e <= tol on the original QP, setup included, and peak resident memory (MiB, the",
              "run's process plus its largest child). A cell without a time did not reach tol: its status",
-             "and the time it ran are shown (time_limit: the suite's cap; not_applicable: a row cap;",
-             "solved_relaxation: decoupled mprgp solved a relaxation, not the QP in the file).", "",
+             "and the time it ran are shown (time_limit: the suite's cap; row cap: the solver refuses a QP",
+             "with more rows than its max_rows; solved_relaxation: decoupled mprgp solved a relaxation,",
+             "not the QP in the file).", "", machine_line(rows), "",
              "| snapshot | n | m | " + " | ".join(labels) + " |",
              "|---|---|---|" + "---|" * len(labels)]
     for n, m, snap in snapshots:
@@ -104,11 +127,15 @@ def figure(rows, fits, axis: str, folder: str, title: str):
         done = [r for r in rs if r["time_s"] is not None]
         if done:
             ax_t.plot([r[axis] for r in done], [r["time_s"] for r in done], label=name, **style)
-        failed = [r for r in rs if r["time_s"] is None and cap]
+        failed = [r for r in rs if r["time_s"] is None and r["row_cap"] is None and cap]
         if failed:
             ax_t.scatter([r[axis] for r in failed], [cap] * len(failed), marker="x", s=40, color=style.get("color"),
                          label=None if done else name)
-        mem = [r for r in rs if r["peak_rss_mb"]]
+        capped = [r for r in rs if r["row_cap"] is not None and cap]
+        if capped:
+            ax_t.scatter([r[axis] for r in capped], [cap] * len(capped), marker="s", s=40, facecolors="none",
+                         edgecolors=style.get("color"), label=None if done or failed else name)
+        mem = [r for r in rs if r["peak_rss_mb"] and r["row_cap"] is None]
         if mem:
             ax_m.plot([r[axis] for r in mem], [r["peak_rss_mb"] for r in mem], **style)
     if cap:
@@ -125,12 +152,14 @@ def figure(rows, fits, axis: str, folder: str, title: str):
                     transform=ax.transAxes, fontsize=9)
     ax_t.set_ylabel("time to e <= tol, setup included (s)")
     ax_m.set_ylabel("peak resident memory (MiB)")
-    ax_t.set_title("time (x at the cap: did not reach tol)", fontsize=9)
-    ax_m.set_title("peak memory, every run", fontsize=9)
+    ax_t.set_title("time (at the cap: x did not reach tol, square refused at its row cap)", fontsize=9)
+    ax_m.set_title("peak memory, every run that started", fontsize=9)
     fig.suptitle(title, fontsize=10)
     from matplotlib.lines import Line2D
     not_reached = Line2D([], [], color="black", marker="x", ls="none", label="did not reach tol (at the cap)")
-    figutil.legend_outside(fig, [ax_t], notes=[not_reached])
+    row_capped = Line2D([], [], color="black", marker="s", markerfacecolor="none", ls="none",
+                        label="refused: more rows than its max_rows")
+    figutil.legend_outside(fig, [ax_t], notes=[not_reached, row_capped])
     return figutil.save_figure_outside(fig, folder, STEM)
 
 
@@ -158,6 +187,11 @@ def main(argv=None) -> int:
     with open(md + ".tmp", "w", encoding="utf-8") as f:
         f.write(markdown(rows, fits, args.axis, source))
     os.replace(md + ".tmp", md)
+    for label in sorted(fits):
+        f = fits[label]
+        p = "-" if f["exponent"] is None else "%.2f" % f["exponent"]
+        print("which_solver: %s: time ~ %s^p, p = %s (%d of %d runs converged)" % (label, args.axis, p, f["points"],
+                                                                                 f["runs"]))
     print("which_solver: wrote %s and %s" % (md, ", ".join(paths)))
     return 0
 

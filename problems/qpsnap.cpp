@@ -15,10 +15,12 @@
 #include <cstdio>
 #include <cstring>
 #include <fcntl.h>
+#include <functional>
 #include <memory>
 #include <sys/mman.h>
 #include <sys/stat.h>
 #include <thread>
+#include <type_traits>
 #include <unistd.h>
 
 namespace cb {
@@ -621,33 +623,53 @@ Qp read_qpsnap_bytes(const std::string& path, const unsigned char* bytes, std::u
 
 namespace {
 
+using ByteSink = std::function<void(const unsigned char*, size_t)>;
+
+/// One array of the file, streamed from its source rather than copied: `emit` hands its bytes to a
+/// sink in chunks, once for the checksum and once for the write. A 1M-DOF snapshot is 760 MB;
+/// a copy of it doubled the writer's memory.
 struct OutArray {
     std::string name, dtype;
     std::vector<std::uint64_t> shape;
-    std::vector<unsigned char> bytes;
+    std::uint64_t nbytes = 0;
+    std::function<void(const ByteSink&)> emit;
 };
 
 template <typename T, typename S>
 OutArray out_array(const std::string& name, const char* dtype, std::vector<std::uint64_t> shape, const S* src,
                    size_t count)
 {
-    OutArray o{name, dtype, std::move(shape), {}};
-    o.bytes.resize(count * 8);
-    for (size_t i = 0; i < count; ++i) {
-        const T v = T(src[i]);
-        std::memcpy(o.bytes.data() + 8 * i, &v, 8);  // little-endian hosts only (x86-64, arm64)
-    }
+    static_assert(sizeof(T) == 8, "qpsnap arrays hold 8-byte elements");
+    OutArray o{name, dtype, std::move(shape), count * 8, {}};
+    o.emit = [src, count](const ByteSink& sink) {
+        // little-endian hosts only (x86-64, arm64): the file's bytes are the values' bytes
+        if constexpr (std::is_same_v<T, S>) {
+            if (count > 0) sink(reinterpret_cast<const unsigned char*>(src), count * 8);
+        } else {
+            constexpr size_t CHUNK_VALUES = size_t(1) << 16;  // values converted per chunk (512 KiB)
+            std::vector<unsigned char> buf(std::min(count, CHUNK_VALUES) * 8);
+            for (size_t first = 0; first < count; first += CHUNK_VALUES) {
+                const size_t k = std::min(CHUNK_VALUES, count - first);
+                for (size_t i = 0; i < k; ++i) {
+                    const T v = T(src[first + i]);
+                    std::memcpy(buf.data() + 8 * i, &v, 8);
+                }
+                sink(buf.data(), 8 * k);
+            }
+        }
+    };
     return o;
 }
 
-void csr_arrays(std::vector<OutArray>& out, const std::string& prefix, const SpMat& M0)
+/// `keep` holds a compressed copy of an uncompressed matrix for as long as its arrays are emitted.
+void csr_arrays(std::vector<OutArray>& out, const std::string& prefix, const SpMat& M0,
+                std::vector<std::unique_ptr<SpMat>>& keep)
 {
-    SpMat copy;
     const SpMat* M = &M0;
     if (!M0.isCompressed()) {
-        copy = M0;
-        copy.makeCompressed();
-        M = &copy;
+        keep.push_back(std::make_unique<SpMat>(M0));
+        keep.back()->makeCompressed();
+        M = keep.back().get();
     }
     const size_t rows = size_t(M->rows()), nnz = size_t(M->nonZeros());
     out.push_back(out_array<std::int64_t>(prefix + ".indptr", "int64", {rows + 1}, M->outerIndexPtr(), rows + 1));
@@ -676,16 +698,17 @@ void write_qpsnap(const std::string& path, const Qp& qp, const SnapshotExtras* e
     if (!qp.meta.is_object()) bad("meta", "must be a JSON object");
 
     std::vector<OutArray> arrays;
-    csr_arrays(arrays, "A", qp.A);
+    std::vector<std::unique_ptr<SpMat>> compressed;
+    const std::int64_t zero[1] = {0};
+    csr_arrays(arrays, "A", qp.A, compressed);
     arrays.push_back(out_array<double>("b", "float64", {n}, qp.b.data(), n));
     arrays.push_back(out_array<double>("x0", "float64", {n}, qp.x0.data(), n));
     if (m == 0 && qp.J.cols() == 0) {
-        std::vector<std::int64_t> zero{0};
-        arrays.push_back(out_array<std::int64_t>("J.indptr", "int64", {1}, zero.data(), 1));
-        arrays.push_back(out_array<std::int64_t>("J.indices", "int64", {0}, zero.data(), 0));
+        arrays.push_back(out_array<std::int64_t>("J.indptr", "int64", {1}, zero, 1));
+        arrays.push_back(out_array<std::int64_t>("J.indices", "int64", {0}, zero, 0));
         arrays.push_back(out_array<double>("J.data", "float64", {0}, qp.c.data(), 0));
     } else {
-        csr_arrays(arrays, "J", qp.J);
+        csr_arrays(arrays, "J", qp.J, compressed);
     }
     arrays.push_back(out_array<double>("c", "float64", {m}, qp.c.data(), m));
     if (!ct.kind.empty()) arrays.push_back(out_array<std::int64_t>("contact.kind", "int64", {m}, ct.kind.data(), m));
@@ -705,10 +728,11 @@ void write_qpsnap(const std::string& path, const Qp& qp, const SnapshotExtras* e
     nlohmann::json entries = nlohmann::json::object();
     std::uint64_t offset = 0;
     for (const auto& a : arrays) {
-        const std::uint64_t crc = crc32_z(crc32_z(0L, Z_NULL, 0), a.bytes.data(), a.bytes.size());
+        std::uint64_t crc = crc32_z(0L, Z_NULL, 0);
+        a.emit([&](const unsigned char* p, size_t n) { crc = crc32_z(crc, p, n); });
         entries[a.name] = {
-            {"dtype", a.dtype}, {"shape", a.shape}, {"offset", offset}, {"nbytes", a.bytes.size()}, {"crc32", crc}};
-        offset += a.bytes.size();  // multiples of 8: every array stays aligned
+            {"dtype", a.dtype}, {"shape", a.shape}, {"offset", offset}, {"nbytes", a.nbytes}, {"crc32", crc}};
+        offset += a.nbytes;  // multiples of 8: every array stays aligned
     }
     header["arrays"] = entries;
     header["meta"] = qp.meta;
@@ -720,8 +744,7 @@ void write_qpsnap(const std::string& path, const Qp& qp, const SnapshotExtras* e
     AtomicFile out(path);  // checked writes, fsync, rename: no partial snapshot on a full disk
     out.write(len, 8);
     out.write(text);
-    for (const auto& a : arrays)
-        if (!a.bytes.empty()) out.write(a.bytes.data(), a.bytes.size());
+    for (const auto& a : arrays) a.emit([&](const unsigned char* p, size_t n) { out.write(p, n); });
     out.commit();
 }
 

@@ -6,8 +6,10 @@
 #include "sim/render.hpp"
 #include "solvers/accuracy.hpp"
 #include "solvers/decouple.hpp"
+#include "solvers/peak_memory.hpp"
 #include "solvers/registry.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -41,6 +43,55 @@ void make_dirs(const std::string& path)
     if (::stat(path.c_str(), &st) != 0 || !S_ISDIR(st.st_mode))
         throw_input_error(path, "--out", "cannot create the output folder: " + std::string(std::strerror(errno)));
 }
+
+/// One stage of a step, measured: its wall time and the process's peak resident memory while it
+/// ran. The high-water mark is reset when the stage starts, so that a stage's peak is its own and
+/// not that of an earlier, larger stage (solvers/peak_memory.hpp); forked children (peers solving
+/// in a child) add their largest peak, as in a run record.
+class StageMeter {
+public:
+    StageMeter()
+    {
+        reset_peak_memory();
+        m_start = now_s();
+    }
+    /// Ends the stage. `reset_worked` is cleared when the kernel refused the reset.
+    void stop(double& seconds, double& peak_mb, bool& reset_worked) const
+    {
+        seconds = now_s() - m_start;
+        const PeakMemory peak = read_peak_memory();
+        peak_mb = peak.process_bytes < 0 ? -1.0 : double(peak.process_bytes + peak.children_bytes) / (1024.0 * 1024.0);
+        reset_worked = reset_worked && peak.reset;
+    }
+
+private:
+    double m_start = 0;
+};
+
+/// The largest peak of each stage over some steps, for the progress log.
+struct StagePeaks {
+    double detection = 0, assembly = 0, snapshot = 0, solve = 0;
+    void add(const StepRecord& r)
+    {
+        detection = std::max(detection, r.peak_detection_mb);
+        assembly = std::max(assembly, r.peak_assembly_mb);
+        snapshot = std::max(snapshot, r.peak_snapshot_mb);
+        solve = std::max(solve, r.peak_solve_mb);
+    }
+    void add(const StagePeaks& p)
+    {
+        detection = std::max(detection, p.detection);
+        assembly = std::max(assembly, p.assembly);
+        snapshot = std::max(snapshot, p.snapshot);
+        solve = std::max(solve, p.solve);
+    }
+    std::string text() const
+    {
+        char out[128];
+        std::snprintf(out, sizeof out, "det %.0f asm %.0f snap %.0f solve %.0f", detection, assembly, snapshot, solve);
+        return out;
+    }
+};
 
 }  // namespace
 
@@ -256,13 +307,14 @@ std::vector<StepRecord> Simulator::step()
     const Vec x_n = m_x, v_n = m_v;
     const long frame = m_frame;
 
-    const double td0 = now_s();
+    const StageMeter detection;
     const Vec x_detect = m_scene.detect_at == "predicted" ? Vec(x_n + h * v_n) : x_n;
     DetectionStats dstats;
     m_rows = m_detector->detect(x_detect, &dstats);
     Qp qp;
     assemble_constraints(m_rows, dofs(), qp.J, qp.c, qp.contacts);
-    const double time_detection = now_s() - td0;
+    double time_detection = 0, peak_detection = 0;
+    detection.stop(time_detection, peak_detection, m_peak_reset);
     m_last_depth = 0;
     for (const ContactRow& r : m_rows) m_last_depth = std::max(m_last_depth, r.depth);
 
@@ -274,10 +326,11 @@ std::vector<StepRecord> Simulator::step()
         rec.newton = k;
         rec.solver = m_solver_name;
         rec.time_detection_s = k == 0 ? time_detection : 0.0;
-        const double ta0 = now_s();
+        rec.peak_detection_mb = k == 0 ? peak_detection : 0.0;
+        const StageMeter assembly;
         assemble_newton_qp(*m_fem, m_scene.step, x_n, v_n, x_k, m_A, qp.b);
-        rec.time_assembly_s = now_s() - ta0;
-        qp.A = std::move(m_A);
+        assembly.stop(rec.time_assembly_s, rec.peak_assembly_mb, m_peak_reset);
+        qp.A.swap(m_A);  // Eigen 3.4's SparseMatrix has no move assignment: std::move would copy A
         // Start point: the inertial prediction for the first Newton step, the iterate after.
         qp.x0 = k == 0 ? Vec(x_n + h * v_n) : x_k;
         rec.rows = qp.m();
@@ -285,6 +338,7 @@ std::vector<StepRecord> Simulator::step()
                               (m_scene.output.snapshot_last < 0 || frame <= m_scene.output.snapshot_last);
         if (!m_opt.out_dir.empty() && m_opt.snapshots && m_scene.output.snapshots && in_range &&
             m_scene.steps_per_frame == 1) {
+            const StageMeter snapshot;
             qp.meta = {
                 {"scene", m_scene.name},
                 {"frame", frame},
@@ -309,6 +363,7 @@ std::vector<StepRecord> Simulator::step()
                 {"generator", {{"command", "simulate"}, {"scene_file", m_scene.file}, {"solver", m_solver_name}}}};
             rec.snapshot = snapshot_path(frame, k);
             write_qpsnap(rec.snapshot, qp);
+            snapshot.stop(rec.time_snapshot_s, rec.peak_snapshot_mb, m_peak_reset);
         }
         // Solved and judged by solve_step (in `simulate`, the harness's rule): decoupling, when asked
         // or needed, happens there, and e is measured on this QP with every detected row.
@@ -320,7 +375,9 @@ std::vector<StepRecord> Simulator::step()
         request.decouple = m_opt.decouple;
         request.decouple_seed = m_opt.decouple_seed + static_cast<std::uint64_t>(m_step);
         request.eigenvector = &m_eigenvector;
+        const StageMeter solve;
         const StepSolveOutcome out = m_opt.solve_step(request);
+        solve.stop(rec.time_solve_stage_s, rec.peak_solve_mb, m_peak_reset);
         rec.time_solve_s = out.solve_s;
         rec.status = out.status;
         rec.solver_status = out.solver_status;
@@ -336,7 +393,7 @@ std::vector<StepRecord> Simulator::step()
             if (out.x.size() == dofs()) x_k = out.x;
         }
         m_last_violation = qp.m() > 0 && x_k.allFinite() ? max_violation(qp.view(), x_k) : 0.0;
-        m_A = std::move(qp.A);
+        m_A.swap(qp.A);
         records.push_back(rec);
         if (m_nonfinite) break;
     }
@@ -396,7 +453,8 @@ bool Simulator::run()
         if (m_opt.snapshots && m_scene.output.snapshots) make_dirs(m_opt.out_dir + "/snapshots");
         steps_csv.open(m_opt.out_dir + "/steps.csv",
                        "frame,step,newton_iteration,solver,status,solver_status,iterations,accuracy,accuracy_solved,"
-                       "time_assembly_s,time_detection_s,time_solve_s,rows,rows_solved,snapshot\n");
+                       "time_assembly_s,time_detection_s,time_solve_s,rows,rows_solved,snapshot,time_snapshot_s,"
+                       "time_solve_stage_s,peak_detection_mb,peak_assembly_mb,peak_snapshot_mb,peak_solve_mb\n");
         frames_csv.open(m_opt.out_dir + "/frames.csv",
                         "frame,time_s,max_penetration,max_penetration_rel,max_detected_depth,max_detected_depth_rel,"
                         "kinetic_energy,elastic_energy,max_speed,rows,rows_solved,blow_up\n");
@@ -424,7 +482,8 @@ bool Simulator::run()
                                            {"decouple_seed", m_opt.decouple_seed},
                                            {"h", m_scene.step.h},
                                            {"steps_per_frame", m_scene.steps_per_frame},
-                                           {"body_size", m_body_size}};
+                                           {"body_size", m_body_size},
+                                           {"stage_peak_reset", m_peak_reset}};
             write_file_atomic(m_opt.out_dir + "/simulation.json", record.dump(1) + "\n");
         }
         return ok;
@@ -447,7 +506,8 @@ bool Simulator::run_frames(long frames, bool write, PartialTable& steps_csv, Par
     }
     std::vector<std::vector<SurfaceMesh>> strip_meshes;
     std::vector<long> strip_done;
-    double sum_asm = 0, sum_det = 0, sum_solve = 0;
+    double sum_asm = 0, sum_det = 0, sum_snap = 0, sum_solve = 0;
+    StagePeaks run_peaks;  // the largest peak of each stage over the run
     long nsteps = 0;
     bool ok = true;
     for (m_frame = 0; m_frame < frames; ++m_frame) {
@@ -459,7 +519,8 @@ bool Simulator::run_frames(long frames, bool write, PartialTable& steps_csv, Par
         }
         const FrameRecord fr = frame_record();
         long iters = 0;
-        double ta = 0, td = 0, tsv = 0, e = 0, e_solved = 0;
+        double ta = 0, td = 0, tsn = 0, tsv = 0, e = 0, e_solved = 0;
+        StagePeaks peaks;  // the largest peak of each stage over the frame's steps
         long rows_solved = 0;
         std::string status;
         std::ostringstream step_rows, frame_row;  // appended together once the frame is whole
@@ -469,7 +530,9 @@ bool Simulator::run_frames(long frames, bool write, PartialTable& steps_csv, Par
             iters += r.iterations;
             ta += r.time_assembly_s;
             td += r.time_detection_s;
+            tsn += r.time_snapshot_s;
             tsv += r.time_solve_s;
+            peaks.add(r);
             e = r.accuracy;
             e_solved = r.accuracy_solved;
             rows_solved = r.rows_solved;
@@ -478,11 +541,15 @@ bool Simulator::run_frames(long frames, bool write, PartialTable& steps_csv, Par
                 step_rows << r.frame << ',' << r.step << ',' << r.newton << ',' << r.solver << ',' << r.status << ','
                           << r.solver_status << ',' << r.iterations << ',' << r.accuracy << ',' << r.accuracy_solved
                           << ',' << r.time_assembly_s << ',' << r.time_detection_s << ',' << r.time_solve_s << ','
-                          << r.rows << ',' << r.rows_solved << ',' << r.snapshot << '\n';
+                          << r.rows << ',' << r.rows_solved << ',' << r.snapshot << ',' << r.time_snapshot_s << ','
+                          << r.time_solve_stage_s << ',' << r.peak_detection_mb << ',' << r.peak_assembly_mb << ','
+                          << r.peak_snapshot_mb << ',' << r.peak_solve_mb << '\n';
         }
         sum_asm += ta;
         sum_det += td;
+        sum_snap += tsn;
         sum_solve += tsv;
+        run_peaks.add(peaks);
         nsteps += static_cast<long>(recs.size());
         if (write)
             frame_row << fr.frame << ',' << fr.time_s << ',' << fr.max_penetration << ',' << fr.max_penetration_rel
@@ -499,13 +566,14 @@ bool Simulator::run_frames(long frames, bool write, PartialTable& steps_csv, Par
             // kept rows when rows were dropped.
             char solved[48] = "";
             if (rows_solved < fr.rows) std::snprintf(solved, sizeof solved, " (kept rows %.1e)", e_solved);
-            char line[320];
+            char line[400];
             std::snprintf(line, sizeof line,
                           "%s frame %04ld (%ld of %ld)  rows %ld solved %ld  %s %s  it %ld  e %.1e%s  pen %.2e "
-                          "(%.2g%% of body)  asm %.3fs det %.3fs solve %.3fs%s\n",
+                          "(%.2g%% of body)  asm %.3fs det %.3fs snap %.3fs solve %.3fs  peak MiB %s%s\n",
                           m_scene.name.c_str(), m_frame, m_frame + 1, frames, fr.rows, rows_solved,
                           m_solver_name.c_str(), status.c_str(), iters, e, solved, fr.max_penetration,
-                          100.0 * fr.max_penetration_rel, ta, td, tsv, fr.blow_up ? "  BLOW-UP" : "");
+                          100.0 * fr.max_penetration_rel, ta, td, tsn, tsv, peaks.text().c_str(),
+                          fr.blow_up ? "  BLOW-UP" : "");
             *m_opt.progress << line << std::flush;
         }
         if (write) {
@@ -531,9 +599,13 @@ bool Simulator::run_frames(long frames, bool write, PartialTable& steps_csv, Par
         }
     }
     if (m_opt.progress && nsteps > 0) {
-        char line[256];
-        std::snprintf(line, sizeof line, "%s: %ld steps, mean per step: assembly %.4fs detection %.4fs solve %.4fs%s\n",
-                      m_scene.name.c_str(), nsteps, sum_asm / nsteps, sum_det / nsteps, sum_solve / nsteps,
+        char line[400];
+        std::snprintf(line, sizeof line,
+                      "%s: %ld steps, mean per step: assembly %.4fs detection %.4fs snapshot %.4fs solve %.4fs; "
+                      "largest peak MiB %s%s%s\n",
+                      m_scene.name.c_str(), nsteps, sum_asm / nsteps, sum_det / nsteps, sum_snap / nsteps,
+                      sum_solve / nsteps, run_peaks.text().c_str(),
+                      m_peak_reset ? "" : " (the kernel refused the reset: peaks are cumulative)",
                       ok ? "" : " (stopped: blow-up)");
         *m_opt.progress << line;
     }

@@ -1,7 +1,8 @@
 #pragma once
 /// The simulator behind `contactbench simulate`: steps a scene with backward Euler (one QP per
 /// Newton step), detects collisions once per step, solves each QP with a registry solver, and
-/// writes snapshots (.qpsnap), steps.csv, frames.csv, a PNG strip and OBJ frames.
+/// writes snapshots (.qpsnap), steps.csv, frames.csv, a PNG strip and OBJ frames. Each stage of a
+/// step (detection, assembly, snapshot writing, solve) is timed and its peak resident memory read.
 ///
 /// Detection happens once per time step at the start positions x_n (the authors' DCD), or at
 /// the inertial prediction x_n + h v_n with "detection": {"at": "predicted"}; the rows found are
@@ -63,7 +64,7 @@ struct SimulatorOptions {
 
 /// Bump when a change alters what a simulation of the same scene writes (physics, detection,
 /// snapshot content): caches keyed on it (plots/reproduce.py) then simulate again.
-constexpr int kSimulatorVersion = 2;  // 2: steps.csv judges steps like `solve`; *_rel columns
+constexpr int kSimulatorVersion = 3;  // 2: steps.csv judges steps like `solve`; *_rel columns; 3: stage columns
 
 /// What one QP solve of a step produced.
 struct StepRecord {
@@ -75,6 +76,12 @@ struct StepRecord {
     double accuracy = 0;         ///< the accuracy error e on the original QP (every detected row)
     double accuracy_solved = 0;  ///< e on the QP solved (the kept rows)
     double time_assembly_s = 0, time_detection_s = 0, time_solve_s = 0;
+    double time_snapshot_s = 0;     ///< writing the .qpsnap (0: none written)
+    double time_solve_stage_s = 0;  ///< the solve stage's wall time: time_solve_s plus decoupling and judging
+    /// The process's peak resident memory during each stage (MiB): the high-water mark is reset
+    /// when the stage starts and read when it ends (plus the largest forked child's). 0: the stage
+    /// did not run in this Newton step; -1: /proc unreadable.
+    double peak_detection_mb = 0, peak_assembly_mb = 0, peak_snapshot_mb = 0, peak_solve_mb = 0;
     long rows = 0, rows_solved = 0;
     std::string snapshot;  ///< path written, or empty
 };
@@ -144,6 +151,8 @@ private:
     double m_body_size = 1;
     bool m_nonfinite = false;
     nlohmann::json m_material;
+    bool m_peak_reset =
+        true;  ///< false once the kernel refused a high-water mark reset (stage peaks are then cumulative)
 };
 
 }  // namespace cb::sim

@@ -25,7 +25,7 @@ for s in "${scenes[@]}"; do
     # The stepping solver only moves frame 0 (no contact yet); frame 1's snapshot is the QP.
     start=$SECONDS
     "$cb" simulate "scenes/ladder/$s.json" --frames 2 --out "$dir" --solver mprgp
-    echo "ladder: $s: simulated in $((SECONDS - start)) s (stage times per step in $dir/steps.csv)"
+    echo "ladder: $s: simulated in $((SECONDS - start)) s (time and peak memory of each stage per step in $dir/steps.csv)"
 done
 "$cb" run "suites/ladder_$ladder.json" --out "$out/$ladder"
 /usr/bin/python3 -m plots.which_solver "$out/$ladder" --axis "$axis"
