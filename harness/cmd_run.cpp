@@ -75,11 +75,8 @@ Shard parse_shard(const std::string& text)
 nlohmann::json failed_record(const SuiteSolver& sv, const nlohmann::json& settings, const nlohmann::json& snapshot,
                              const std::string& status, const std::string& message, double tol)
 {
-    const nlohmann::json null_kkt = {{"stationarity", nullptr},
-                                     {"primal", nullptr},
-                                     {"dual", nullptr},
-                                     {"complementarity", nullptr},
-                                     {"max", nullptr}};
+    const nlohmann::json no_accuracy = {{"stationarity", nullptr},    {"primal", nullptr}, {"dual", nullptr},
+                                        {"complementarity", nullptr}, {"gap", nullptr},    {"max", nullptr}};
     return {{"solver", sv.solver},
             {"label", sv.label},
             {"settings", settings},
@@ -90,8 +87,7 @@ nlohmann::json failed_record(const SuiteSolver& sv, const nlohmann::json& settin
             {"message", message},
             {"iterations", 0},
             {"objective", nullptr},
-            {"kkt", null_kkt},
-            {"kkt_relative", null_kkt},
+            {"accuracy", no_accuracy},
             {"violation", nullptr},
             {"native_residual", nullptr},
             {"lambda_fitted", false},
@@ -429,9 +425,9 @@ int cmd_run(const Args& args)
             write_json_atomic(run_path(s, v), record);
             ++ran;
             std::string line = prefix + record["status"].get<std::string>();
-            if (record["kkt_relative"]["max"].is_number()) {
-                line += " in " + record["iterations"].dump() + " it, kkt_rel " +
-                        sci(record["kkt_relative"]["max"].get<double>()) + ", " +
+            if (record["accuracy"]["max"].is_number()) {
+                line += " in " + record["iterations"].dump() + " it, accuracy " +
+                        sci(record["accuracy"]["max"].get<double>()) + ", " +
                         sci(record["time"]["total_s"].get<double>()) + " s";
                 if (!record.value("status_confirmed", true)) line += " (NOT CONFIRMED)";
             } else {

@@ -258,8 +258,6 @@ RunOutcome run_solver(const SolverRegistry& registry, const Qp& original, const 
     rec["objective"] = finite_or_null(out.objective);
     rec["objective_x0"] = finite_or_null(objective(original_view, original.x0));
     rec["accuracy"] = out.accuracy.to_json();
-    // The same object under its former name, read by `compare` and `run`'s progress line.
-    rec["kkt_relative"] = rec["accuracy"];
     rec["accuracy_tol"] = accuracy_tol;
     rec["length_scale"] = finite_or_null(scale.length);
     rec["length_scale_source"] = scale.length_source;
