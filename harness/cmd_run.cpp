@@ -286,6 +286,8 @@ size_t run_jobs(const RunPlan& plan, ProcessPool& pool, long jobs)
     context.options.decouple = suite.decouple;
     context.options.decouple_seed = suite.decouple_seed;
     context.options.repeat = suite.repeat;
+    context.options.defaults.tol = suite.tol;  // a solver's own setting wins
+    context.options.defaults.time_limit_s = suite.time_limit_s;
     size_t done = 0, ran = 0;
     for (size_t s = 0; s < plan.snapshots().size(); ++s) {
         const SuiteSnapshot& snap = plan.snapshots()[s];

@@ -67,15 +67,6 @@ std::set<std::string> RunPlan::job_files() const
     return files;
 }
 
-nlohmann::json RunPlan::settings_of(size_t v) const
-{
-    nlohmann::json settings = m_suite.solvers[v].settings;
-    // Suite-wide tol and time limit are defaults: a solver's own setting wins.
-    if (!settings.contains("tol")) settings["tol"] = m_suite.tol;
-    if (!settings.contains("time_limit_s")) settings["time_limit_s"] = m_suite.time_limit_s;
-    return settings;
-}
-
 nlohmann::json RunPlan::identity_of(size_t s, size_t v) const
 {
     const nlohmann::json entry = {{"snapshot", m_snapshots[s].id},

@@ -36,8 +36,9 @@ public:
     std::string run_path(size_t s, size_t v) const;
     /// The run file names of this shard's jobs.
     std::set<std::string> job_files() const;
-    /// The settings a job's solver gets: the suite's tol and time limit are defaults, a solver's own setting wins.
-    nlohmann::json settings_of(size_t v) const;
+    /// The settings of label v as the suite gives them (the suite's tol and time limit are
+    /// defaults that the runner applies: RunOptions::defaults).
+    const nlohmann::json& settings_of(size_t v) const { return m_suite.solvers[v].settings; }
     /// What a job's result depends on (runner.hpp run_identity); needs hash_snapshots().
     nlohmann::json identity_of(size_t s, size_t v) const;
     /// The content hash of every snapshot this shard needs (null when it cannot be read: its runs

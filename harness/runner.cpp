@@ -52,13 +52,17 @@ RunOutcome run_solver(const Qp& qp, const std::string& solver_name, const nlohma
 
 namespace {
 
-/// The settings a run gives its solver: the caller's object, with the run's time limit.
+/// The settings a run gives its solver: the caller's object, the run's defaults for the keys it
+/// does not set, and the run's time limit. The one place where the harness adds settings.
 nlohmann::json run_settings(const std::string& solver_name, const nlohmann::json& settings_in,
                             const RunOptions& options)
 {
     nlohmann::json settings = settings_in.is_object() ? settings_in : nlohmann::json::object();
     if (!settings_in.is_null() && !settings_in.is_object())
         throw_input_error(solver_name, "settings", "expected a JSON object, got " + settings_in.dump());
+    if (options.defaults.tol && !settings.contains("tol")) settings["tol"] = *options.defaults.tol;
+    if (options.defaults.time_limit_s && !settings.contains("time_limit_s"))
+        settings["time_limit_s"] = *options.defaults.time_limit_s;
     if (options.time_limit_s > 0.0) settings["time_limit_s"] = options.time_limit_s;
     if (options.repeat < 1)
         throw_input_error(solver_name, "repeat", "must be >= 1, got " + std::to_string(options.repeat));
@@ -142,8 +146,8 @@ void judge_status(RunOutcome& out, bool changed, double accuracy_tol)
 /// best multipliers at hand), e on the QP the solver solved when it changed it (out.accuracy_solved),
 /// F, the violation, and the history's last row, NaN and monotonicity verdicts. Sets the facts the
 /// measure decides (tol, accuracy_tol, the note on a wrong-sized x, changed, lambda_fitted).
-void measure_outcome(RunOutcome& out, RunFacts& facts, const Qp& original, const SolverProblem& problem,
-                     HistoryMonitor& history)
+void measure_outcome(RunOutcome& out, RunFacts& facts, const CommonSettings& common, const Qp& original,
+                     const SolverProblem& problem, HistoryMonitor& history)
 {
     const SolverResult& result = out.result;
     const QpView original_view = original.view();
@@ -155,7 +159,7 @@ void measure_outcome(RunOutcome& out, RunFacts& facts, const Qp& original, const
         x = problem.qp->x0;
     }
     const Vec g = original.A * x - original.b;  // decoupling keeps A and b
-    facts.tol = facts.settings.value("tol", DEFAULT_ACCURACY_TOL);
+    facts.tol = common.tol;
     facts.native = result.criterion == "native";
     facts.accuracy_tol = facts.native ? DEFAULT_ACCURACY_TOL : facts.tol;
     const bool own_valid = !result.lambda_fitted && result.lambda.size() == problem.qp->m();
@@ -206,6 +210,9 @@ RunOutcome run_solver(const SolverRegistry& registry, const Qp& original, const 
     RunFacts facts;
     facts.solver = solver_name;
     facts.settings = solver->settings();
+    // The solver's effective common block, typed by the one reader of solvers/settings.hpp (its
+    // defaults, not the harness's: active-set's tol defaults to 1e-10).
+    const CommonSettings common = SettingsReader(facts.settings, solver_name).common();
 
     // Decoupling: a problem transform applied before the solver sees the QP.
     SolverProblem problem;
@@ -226,7 +233,7 @@ RunOutcome run_solver(const SolverRegistry& registry, const Qp& original, const 
     out.result = std::move(repeats.first);
     const SolverResult& result = out.result;
 
-    measure_outcome(out, facts, original, problem, history);
+    measure_outcome(out, facts, common, original, problem, history);
     judge_status(out, facts.changed, facts.accuracy_tol);
 
     facts.snapshot = snapshot_info.is_object() ? snapshot_info : nlohmann::json::object();

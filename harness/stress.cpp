@@ -2,6 +2,7 @@
 
 #include "harness/results.hpp"
 #include "harness/runner.hpp"
+#include "harness/set_arguments.hpp"
 #include "solvers/registry.hpp"
 
 #include <algorithm>
@@ -124,7 +125,8 @@ StressRow blank_row(const StressCase& c, const std::string& solver, const Stress
 
 /// The reference of every case: F* of the ORIGINAL QP for the energy gap.
 /// A stress solver spec: a registry name, optionally followed by settings, "mprgp:precond=ichol"
-/// (several separated by ':'); values that parse as numbers become numbers. The whole spec is
+/// (several separated by ':'); values are typed as `solve --set` types them (harness/set_arguments.hpp), and
+/// the stress tol is a default that a spec's own `tol` overrides. The whole spec is
 /// the run's label (the column of the tables).
 std::pair<std::string, json> parse_solver_spec(const std::string& spec)
 {
@@ -140,13 +142,7 @@ std::pair<std::string, json> parse_solver_spec(const std::string& spec)
                                  .append("': expected NAME[:key=value...], got '")
                                  .append(item)
                                  .append("'"));
-        const std::string key = item.substr(0, eq), value = item.substr(eq + 1);
-        char* end_num = nullptr;
-        const double number = std::strtod(value.c_str(), &end_num);
-        if (!value.empty() && end_num && *end_num == '\0')
-            out.second[key] = number;
-        else
-            out.second[key] = value;
+        out.second[item.substr(0, eq)] = setting_from_text(item.substr(eq + 1));  // the --set rule
         start = end;
     }
     return out;
@@ -169,7 +165,7 @@ std::pair<StressRow, json> run_one(const Qp& qp, const StressCase& c, const std:
     try {
         const auto spec = parse_solver_spec(solver);
         json settings = spec.second;
-        settings["tol"] = options.tol;
+        ro.defaults.tol = options.tol;  // a spec's own tol wins
         if (solver == REFERENCE_SOLVER && options.tol <= REFERENCE_TOL) settings["max_iterations"] = 100000;
         const RunOutcome out = run_solver(qp, spec.first, settings, ro, info);
         row.status = out.status;
