@@ -1,16 +1,23 @@
 // The record schema's one name for the accuracy error (harness/record_schema.hpp): every writer
 // uses "accuracy"; files of the previous release (JSON "kkt_relative", CSV "kkt_rel" and
-// "kkt_rel_solved") are still read, with one notice per file and name on stderr.
+// "kkt_rel_solved") are still read, with one notice per file and name on stderr. docs/INTERFACES.md
+// names every key and column the code writes.
 #include "harness/compare.hpp"
 #include "harness/history.hpp"
 #include "harness/perf_record.hpp"
 #include "harness/record_schema.hpp"
 #include "harness/results.hpp"
+#include "harness/run_record.hpp"
+#include "harness/runner.hpp"
+#include "problems/qpsnap.hpp"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
 #include <unistd.h>
 
 using namespace cb;
@@ -145,4 +152,75 @@ TEST(RecordSchema, NewNameWinsOverTheOldOne)
     EXPECT_DOUBLE_EQ(accuracy_max(both, "both.json").get<double>(), 1e-8);
     EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
     EXPECT_TRUE(accuracy_max(nlohmann::json::object(), "none.json").is_null());
+}
+
+namespace {
+
+/// The text of one "## ..." or "### ..." section of docs/INTERFACES.md (up to the next heading).
+std::string interfaces_section(const std::string& heading)
+{
+    std::ifstream in(std::string(CB_SOURCE_DIR) + "/docs/INTERFACES.md");
+    std::string line, text;
+    bool inside = false;
+    while (std::getline(in, line)) {
+        if (line.rfind("#", 0) == 0) {
+            if (inside) break;
+            inside = line.find(heading) != std::string::npos;
+            continue;
+        }
+        if (inside) text += line + "\n";
+    }
+    return text;
+}
+
+/// The names a section documents: the first cell of each table row (comma-separated names) and
+/// every `backticked` word.
+std::set<std::string> documented_names(const std::string& section)
+{
+    std::set<std::string> names;
+    std::istringstream in(section);
+    std::string line;
+    while (std::getline(in, line)) {
+        if (line.rfind("| ", 0) == 0) {
+            std::string cell = line.substr(2, line.find(" |", 2) - 2);
+            std::replace(cell.begin(), cell.end(), ',', ' ');
+            std::istringstream words(cell);
+            for (std::string w; words >> w;) names.insert(w);
+        }
+        for (size_t a = line.find('`'); a != std::string::npos; a = line.find('`', a + 1)) {
+            const size_t b = line.find('`', a + 1);
+            if (b == std::string::npos) break;
+            names.insert(line.substr(a + 1, b - a - 1));
+            a = b;
+        }
+    }
+    return names;
+}
+
+}  // namespace
+
+TEST(RecordSchema, InterfacesDocumentsEveryKeyAndColumn)
+{
+    const std::set<std::string> summary = documented_names(interfaces_section("summary.csv columns"));
+    for (const auto& column : summary_columns()) EXPECT_TRUE(summary.count(column)) << "summary.csv: " << column;
+    const std::set<std::string> perf = documented_names(interfaces_section("Performance record columns"));
+    for (const auto& column : perf_record_columns()) EXPECT_TRUE(perf.count(column)) << "perf record: " << column;
+    const std::set<std::string> history = documented_names(interfaces_section("History columns"));
+    for (const auto& column : HistoryMonitor::columns()) EXPECT_TRUE(history.count(column)) << "history: " << column;
+    // Every key of a real run record (with its history and the keys `run` adds) and of a failed one.
+    const std::set<std::string> record = documented_names(interfaces_section("Run record"));
+    const Qp qp = read_qpsnap(std::string(CB_TEST_DATA_DIR) + "/plane_2x2x2.qpsnap");
+    RunOptions options;
+    options.repeat = 2;
+    nlohmann::json run = run_solver(qp, "cg", {}, options).record;  // cg changes the QP: accuracy_solved
+    for (const char* key :
+         {"suite", "mode", "concurrent_jobs", "final", "identity", "reference", "reference_note", "energy_gap"})
+        run[key] = nullptr;
+    for (const auto& item : run.items()) EXPECT_TRUE(record.count(item.key())) << "run record: " << item.key();
+    for (const auto& item : run["time"].items()) EXPECT_TRUE(record.count(item.key())) << "time: " << item.key();
+    for (const auto& item : run["memory"].items()) EXPECT_TRUE(record.count(item.key())) << "memory: " << item.key();
+    for (const auto& item : run["accuracy"].items())
+        EXPECT_TRUE(record.count(item.key())) << "accuracy: " << item.key();
+    const nlohmann::json failed = failed_record("cg", "cg", {}, {}, "invalid_input", "m", 1e-6);
+    for (const auto& item : failed.items()) EXPECT_TRUE(record.count(item.key())) << "failed record: " << item.key();
 }
