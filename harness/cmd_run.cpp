@@ -286,8 +286,6 @@ size_t run_jobs(const RunPlan& plan, ProcessPool& pool, long jobs)
     context.options.decouple = suite.decouple;
     context.options.decouple_seed = suite.decouple_seed;
     context.options.repeat = suite.repeat;
-    context.options.defaults.tol = suite.tol;  // a solver's own setting wins
-    context.options.defaults.time_limit_s = suite.time_limit_s;
     size_t done = 0, ran = 0;
     for (size_t s = 0; s < plan.snapshots().size(); ++s) {
         const SuiteSnapshot& snap = plan.snapshots()[s];
@@ -308,6 +306,7 @@ size_t run_jobs(const RunPlan& plan, ProcessPool& pool, long jobs)
                 ++ran;
                 continue;
             }
+            // The suite's tol and time limit are in (settings_with_defaults), as the identity records them.
             nlohmann::json record = run_job(suite, sv, plan.settings_of(v), snapshot, context);
             record["label"] = sv.label;
             record["suite"] = suite.name;

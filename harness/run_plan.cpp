@@ -67,6 +67,19 @@ std::set<std::string> RunPlan::job_files() const
     return files;
 }
 
+SettingDefaults RunPlan::defaults() const
+{
+    SettingDefaults defaults;
+    defaults.tol = m_suite.tol;
+    defaults.time_limit_s = m_suite.time_limit_s;
+    return defaults;
+}
+
+nlohmann::json RunPlan::settings_of(size_t v) const
+{
+    return settings_with_defaults(m_suite.solvers[v].settings, defaults());
+}
+
 nlohmann::json RunPlan::identity_of(size_t s, size_t v) const
 {
     const nlohmann::json entry = {{"snapshot", m_snapshots[s].id},

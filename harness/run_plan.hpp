@@ -2,6 +2,7 @@
 /// Which jobs of a suite `contactbench run` does (harness/cmd_run.cpp): the jobs of this shard,
 /// the identity each result depends on, why each stored result cannot be reused, and so which
 /// jobs run (a chain's label runs whole unless every one of its runs is reusable).
+#include "harness/runner.hpp"
 #include "harness/suite.hpp"
 
 #include <nlohmann/json.hpp>
@@ -36,9 +37,11 @@ public:
     std::string run_path(size_t s, size_t v) const;
     /// The run file names of this shard's jobs.
     std::set<std::string> job_files() const;
-    /// The settings of label v as the suite gives them (the suite's tol and time limit are
-    /// defaults that the runner applies: RunOptions::defaults).
-    const nlohmann::json& settings_of(size_t v) const { return m_suite.solvers[v].settings; }
+    /// The suite's defaults of every solver's settings (its tol and time limit; a solver's own wins).
+    SettingDefaults defaults() const;
+    /// The settings label v runs with: the suite's entry with the defaults added
+    /// (settings_with_defaults, the runner's rule); recorded in the run's identity.
+    nlohmann::json settings_of(size_t v) const;
     /// What a job's result depends on (runner.hpp run_identity); needs hash_snapshots().
     nlohmann::json identity_of(size_t s, size_t v) const;
     /// The content hash of every snapshot this shard needs (null when it cannot be read: its runs

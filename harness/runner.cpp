@@ -57,12 +57,9 @@ namespace {
 nlohmann::json run_settings(const std::string& solver_name, const nlohmann::json& settings_in,
                             const RunOptions& options)
 {
-    nlohmann::json settings = settings_in.is_object() ? settings_in : nlohmann::json::object();
     if (!settings_in.is_null() && !settings_in.is_object())
         throw_input_error(solver_name, "settings", "expected a JSON object, got " + settings_in.dump());
-    if (options.defaults.tol && !settings.contains("tol")) settings["tol"] = *options.defaults.tol;
-    if (options.defaults.time_limit_s && !settings.contains("time_limit_s"))
-        settings["time_limit_s"] = *options.defaults.time_limit_s;
+    nlohmann::json settings = settings_with_defaults(settings_in, options.defaults);
     if (options.time_limit_s > 0.0) settings["time_limit_s"] = options.time_limit_s;
     if (options.repeat < 1)
         throw_input_error(solver_name, "repeat", "must be >= 1, got " + std::to_string(options.repeat));
@@ -199,6 +196,14 @@ void measure_outcome(RunOutcome& out, RunFacts& facts, const CommonSettings& com
 }
 
 }  // namespace
+
+nlohmann::json settings_with_defaults(const nlohmann::json& settings_in, const SettingDefaults& defaults)
+{
+    nlohmann::json settings = settings_in.is_object() ? settings_in : nlohmann::json::object();
+    if (defaults.tol && !settings.contains("tol")) settings["tol"] = *defaults.tol;
+    if (defaults.time_limit_s && !settings.contains("time_limit_s")) settings["time_limit_s"] = *defaults.time_limit_s;
+    return settings;
+}
 
 RunOutcome run_solver(const SolverRegistry& registry, const Qp& original, const std::string& solver_name,
                       const nlohmann::json& settings_in, const RunOptions& options, const nlohmann::json& snapshot_info,

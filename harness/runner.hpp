@@ -29,6 +29,10 @@ struct SettingDefaults {
     std::optional<double> time_limit_s;  ///< the suite's `time_limit_s` (0 disables)
 };
 
+/// `settings` with the defaults added for the keys it does not set: what the solver of a run with
+/// these defaults is given (run_solver applies it; a run's identity records it).
+nlohmann::json settings_with_defaults(const nlohmann::json& settings, const SettingDefaults& defaults);
+
 struct RunOptions {
     SettingDefaults defaults;
     double time_limit_s = 0.0;  ///< overrides the solver's time_limit_s when > 0

@@ -97,7 +97,7 @@ def produce(ctx: PaperContext) -> FigureOutcome:
         return judge_rounds([g[0] for g in got], FACTOR, lower_bounds=[g[1] for g in got]), got
 
     nat, nat_runs = over_rounds("native_residual", False)
-    kkt, kkt_runs = over_rounds("accuracy", False)
+    accuracy, accuracy_runs = over_rounds("accuracy", False)
     fair, fair_runs = over_rounds("accuracy", True)
     lb = lambda got: "> " if any(g[1] for g in got) else ""  # noqa: E731
     verdict = combine_published_fair(nat.verdict, fair.verdict, HOLDS_NATIVE_ONLY)
@@ -118,7 +118,7 @@ def produce(ctx: PaperContext) -> FigureOutcome:
         authors=a_text,
         ours=(f"{ica}/mprgp time to 1e-2, median [interval] of {fair.samples or len(rounds)} rounds: native "
               f"{lb(nat_runs)}{nat.text()}x (mprgp {t(nat_runs, 2)} s, ica {t(nat_runs, 3)} s, solve only); accuracy "
-              f"error e {lb(kkt_runs)}{kkt.text()}x (solve only); accuracy error e, setup + solve "
+              f"error e {lb(accuracy_runs)}{accuracy.text()}x (solve only); accuracy error e, setup + solve "
               f"{lb(fair_runs)}{fair.text()}x (mprgp {t(fair_runs, 2)} s, ica {t(fair_runs, 3)} s)"),
         verdict=verdict,
         judged_on=(f"one QP, {snap} (n = {fmt(run0['n'])}, m = {fmt(run0['m'])}): each solver's native residual "
@@ -144,7 +144,7 @@ def produce(ctx: PaperContext) -> FigureOutcome:
 
     for lab in labels:
         r = res.runs[(res.runs["snapshot"] == snap) & (res.runs["label"] == lab)].iloc[0]
-        native, kkt, solve, setup = [], [], [], []
+        native, accuracy, solve, setup = [], [], [], []
         for rr in rounds:
             sel = rr.runs[(rr.runs["snapshot"] == snap) & (rr.runs["label"] == lab)]
             if sel.empty:
@@ -153,10 +153,10 @@ def produce(ctx: PaperContext) -> FigureOutcome:
             h = rr.history(snap, lab)
             native.append(figutil.settle_time(h.assign(time_s=history_time(h, run, include_setup=False)),
                                               "native_residual", LEVEL))
-            kkt.append(figutil.settle_time(h.assign(time_s=history_time(h, run, include_setup=True)), "accuracy", LEVEL))
+            accuracy.append(figutil.settle_time(h.assign(time_s=history_time(h, run, include_setup=True)), "accuracy", LEVEL))
             solve.append(float(run["solve_s"]))
             setup.append(float(run["setup_s"]))
-        rows.append(f"| {lab} | {r['status']} | {fmt(median_of(native))} | {fmt(median_of(kkt))} | {fmt(r['accuracy'])} | "
+        rows.append(f"| {lab} | {r['status']} | {fmt(median_of(native))} | {fmt(median_of(accuracy))} | {fmt(r['accuracy'])} | "
                     f"{fmt(median_of(solve))} | {fmt(median_of(setup))} |")
     out.tables.append("\n".join(rows))
     return out
