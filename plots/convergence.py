@@ -21,6 +21,7 @@ import numpy as np  # noqa: E402
 from plots import figutil  # noqa: E402
 from plots.figutil import plt  # noqa: E402
 from plots.loader import UNMEASURED_STATUSES, Results, history_time, load_results  # noqa: E402
+from plots.record_schema import current_column_names  # noqa: E402
 
 AXES = (("time_s", "time [s] (setup + solve)", "time"),
         ("iteration", "iterations", "iterations"),
@@ -124,7 +125,8 @@ def main(argv=None) -> int:
         print(f"convergence.py: {args.results}: no runs", file=sys.stderr)
         return 2
     out = args.out or os.path.join(args.results, "figures")
-    for path in plot_convergence(results, out, args.column, args.max_panels, not args.solve_only):
+    column = current_column_names([args.column], "--column")[0]  # an old column name, with a warning
+    for path in plot_convergence(results, out, column, args.max_panels, not args.solve_only):
         print(path)
     return 0
 

@@ -82,6 +82,16 @@ class OldNames(unittest.TestCase):
                          [expected(path, "kkt", "accuracy"), expected(path, "kkt_solved", "accuracy_solved")])
         self.assertEqual(stability.find_column(df, "error"), "accuracy")
 
+    def test_convergence_column_old_name(self):
+        from plots import convergence
+        mf.write_results(self.tmp, [mf.make_run("p", "a")])
+        out = io.StringIO()
+        with warnings.catch_warnings(record=True) as caught, contextlib.redirect_stdout(out):
+            warnings.simplefilter("always")
+            self.assertEqual(convergence.main([self.tmp, "--column", "kkt_rel"]), 0)
+        self.assertEqual([str(w.message) for w in caught], [expected("--column", "kkt_rel", "accuracy")])
+        self.assertIn("convergence_", out.getvalue())
+
     def test_current_name_wins_and_is_silent(self):
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
