@@ -46,7 +46,7 @@ help:
 	@echo "                meshes, scenes and figure tables into DATA=$(DATA) (PAPER_DATA_SOURCE=URL|DIR|.tar.gz)"
 	@echo "make reproduce  the paper's figures and report in results/paper/ (QUICK=1: about 2-4 minutes on 2 cores)"
 	@echo "make decoupling the price of collision decoupling along chains (results/decoupling/)"
-	@echo "make docs-check fail on a cited document or section that is not in the repository"
+	@echo "make docs-check fail on a cited document, section or path that is not in the repository, or a stale count"
 	@echo "make tidy       clang-tidy on the C++ files changed against main (TIDY_BASE=main)"
 	@echo "make lint       pyflakes on every Python file, clang-format on C++ lines changed against main (LINT_BASE=main)"
 	@echo "make stress     the stress suite and its stability table in results/stress/"

@@ -18,6 +18,8 @@
 #include "harness/reference.hpp"
 #include "harness/reference_prefetch.hpp"
 #include "harness/results.hpp"
+#include "harness/run_plan.hpp"
+#include "harness/run_record.hpp"
 #include "harness/runner.hpp"
 #include "harness/slurm.hpp"
 #include "harness/suite.hpp"
@@ -48,62 +50,18 @@ namespace {
 const char* const kUsage =
     "contactbench run SUITE.json [--out DIR] [--shard i/N] [--force] [--fresh] [--jobs N [--jobs-timed]]";
 
-struct Shard {
-    long index = 1, count = 1;  ///< 1-based index of count
-};
-
-Shard parse_shard(const std::string& text)
-{
-    Shard s;
-    const auto slash = text.find('/');
-    char* end = nullptr;
-    bool ok = slash != std::string::npos && slash > 0;
-    if (ok) {
-        // Keep the substrings alive while `end` points into them (ASan: stack-use-after-scope).
-        const std::string index_text = text.substr(0, slash), count_text = text.substr(slash + 1);
-        s.index = std::strtol(index_text.c_str(), &end, 10);
-        ok = *end == '\0';
-        s.count = std::strtol(count_text.c_str(), &end, 10);
-        ok = ok && *end == '\0' && !count_text.empty();
-    }
-    if (!ok || s.count < 1 || s.index < 1 || s.index > s.count)
-        throw_input_error("run", "--shard", "expected i/N with 1 <= i <= N, got '" + text + "'");
-    return s;
-}
-
-/// A record with every schema key for a run that could not happen (unknown solver, bad settings).
-nlohmann::json failed_record(const SuiteSolver& sv, const nlohmann::json& settings, const nlohmann::json& snapshot,
-                             const std::string& status, const std::string& message, double tol)
-{
-    const nlohmann::json null_kkt = {{"stationarity", nullptr},
-                                     {"primal", nullptr},
-                                     {"dual", nullptr},
-                                     {"complementarity", nullptr},
-                                     {"max", nullptr}};
-    return {{"solver", sv.solver},
-            {"label", sv.label},
-            {"settings", settings},
-            {"snapshot", snapshot},
-            {"decouple", {{"applied", false}}},
-            {"status", status},
-            {"criterion", ""},
-            {"message", message},
-            {"iterations", 0},
-            {"objective", nullptr},
-            {"kkt", null_kkt},
-            {"kkt_relative", null_kkt},
-            {"violation", nullptr},
-            {"native_residual", nullptr},
-            {"lambda_fitted", false},
-            {"nonfinite", false},
-            {"monotone", true},
-            {"status_confirmed", true},
-            {"tol", tol},
-            {"counters", Counters{}.to_json()},
-            {"time", {{"setup_s", 0.0}, {"solve_s", 0.0}, {"total_s", 0.0}, {"repeat", 0}}},
-            {"info", nlohmann::json::object()},
-            {"provenance", provenance()}};
-}
+const char* const kHelp = "\n\nRuns every (snapshot, solver label) of a suite; writes DIR/runs/<id>__<label>.json,\n"
+                          "DIR/summary.csv, DIR/suite.json and DIR/provenance.json (DIR defaults to\n"
+                          "results/<suite name>). A finished run is reused only when its snapshot content,\n"
+                          "solver, settings, suite entry and build are unchanged; --force reruns every job,\n"
+                          "--fresh first discards every result in DIR (needed when DIR holds another suite\n"
+                          "or shard). --shard i/N runs job j iff j % N == i-1; `contactbench merge` joins\n"
+                          "the shard folders. In a Slurm array task without --shard, the shard comes from\n"
+                          "SLURM_ARRAY_TASK_ID/MIN/COUNT and the runs go to DIR/shard-<i>-of-<N> (see\n"
+                          "`contactbench cluster --help`).\n"
+                          "--jobs N runs N jobs at a time in child processes when the suite's times are not judged\n"
+                          "(\"timed\": false); timed suites still run one at a time unless --jobs-timed. With\n"
+                          "\"reference\": true, the reference solutions are computed N snapshots at a time first.\n";
 
 /// Holds an exclusive flock on DIR/.lock for the life of the process (released by the kernel
 /// when the process ends, however it ends).
@@ -172,252 +130,184 @@ struct WarmState {
     bool has_lambda = false;
 };
 
-}  // namespace
-
-int cmd_run(const Args& args)
+/// Where the results go and which shard this is: --out and --shard, or a Slurm array task's
+/// shard (its own folder inside --out).
+void choose_out_and_shard(const CommandLine& cl, const Suite& suite, std::string& out, Shard& shard)
 {
-    const CommandLine cl("run", args, {"--out", "--shard", "--jobs"}, {"--force", "--fresh", "--jobs-timed"});
-    if (cl.help()) {
-        std::cout << "usage: " << kUsage
-                  << "\n\nRuns every (snapshot, solver label) of a suite; writes DIR/runs/<id>__<label>.json,\n"
-                     "DIR/summary.csv, DIR/suite.json and DIR/provenance.json (DIR defaults to\n"
-                     "results/<suite name>). A finished run is reused only when its snapshot content,\n"
-                     "solver, settings, suite entry and build are unchanged; --force reruns every job,\n"
-                     "--fresh first discards every result in DIR (needed when DIR holds another suite\n"
-                     "or shard). --shard i/N runs job j iff j % N == i-1; `contactbench merge` joins\n"
-                     "the shard folders. In a Slurm array task without --shard, the shard comes from\n"
-                     "SLURM_ARRAY_TASK_ID/MIN/COUNT and the runs go to DIR/shard-<i>-of-<N> (see\n"
-                     "`contactbench cluster --help`).\n"
-                     "--jobs N runs N jobs at a time in child processes when the suite's times are not judged\n"
-                     "(\"timed\": false); timed suites still run one at a time unless --jobs-timed. With\n"
-                     "\"reference\": true, the reference solutions are computed N snapshots at a time first.\n";
-        return 0;
+    out = cl.path("--out", "results/" + suite.name);
+    shard = cl.has("--shard") ? parse_shard(cl.value("--shard")) : Shard{};
+    if (cl.has("--shard")) return;
+    if (const std::optional<ArrayShard> task = shard_from_slurm(slurm_environment())) {
+        shard = {task->index, task->count};
+        out = (fs::path(out) / shard_folder_name(task->index, task->count)).string();
+        std::cerr << "run: Slurm array task " << slurm_environment()["SLURM_ARRAY_TASK_ID"] << ": shard " << shard.index
+                  << "/" << shard.count << " -> " << out << "\n";
     }
-    cl.expect_positional(1, 1, kUsage);
-    Suite suite = load_suite(cl.positional()[0]);
-    for (const std::string& notice : drop_unbuilt_optional_solvers(suite, builtin_registry().names()))
-        std::cerr << "run: " << notice << "\n";
-    std::string out = cl.path("--out", "results/" + suite.name);
-    Shard shard = cl.has("--shard") ? parse_shard(cl.value("--shard")) : Shard{};
-    if (!cl.has("--shard")) {
-        // A Slurm array task: its shard from the array variables, its own folder inside --out.
-        if (const std::optional<ArrayShard> task = shard_from_slurm(slurm_environment())) {
-            shard = {task->index, task->count};
-            out = (fs::path(out) / shard_folder_name(task->index, task->count)).string();
-            std::cerr << "run: Slurm array task " << slurm_environment()["SLURM_ARRAY_TASK_ID"] << ": shard "
-                      << shard.index << "/" << shard.count << " -> " << out << "\n";
-        }
-    }
-    const bool force = cl.has("--force");
-    const long jobs = cl.integer("--jobs", 1);
-    if (jobs < 1) throw_input_error("run", "--jobs", "must be >= 1, got " + std::to_string(jobs));
-    std::string jobs_note;
-    ProcessPool pool(concurrent_jobs(jobs, suite.timed, suite.chain, cl.has("--jobs-timed"), jobs_note));
-    if (!jobs_note.empty()) std::cerr << "run: " << jobs_note << "\n";
-    const std::vector<SuiteSnapshot> snapshots = resolve_snapshots(suite);
-    const auto& registry = builtin_registry();
-    {
-        std::error_code ec;
-        fs::create_directories(fs::path(out) / "runs", ec);
-        if (ec) throw_input_error(out, "--out", "cannot create the results folder: " + ec.message());
-    }
-    lock_out_dir(out);
-    if (cl.has("--fresh")) clear_out_dir(out);
+}
 
-    const size_t labels = suite.solvers.size();
-    auto in_shard = [&](size_t s, size_t v) {
-        const size_t key = suite.chain ? v : s * labels + v;
-        return static_cast<long>(key % static_cast<size_t>(shard.count)) == shard.index - 1 &&
-               solver_applies(suite.solvers[v], snapshots[s].id);  // a job that does not apply is none
-    };
-    auto run_path = [&](size_t s, size_t v) {
-        return (fs::path(out) / "runs" / run_file_name(snapshots[s].id, suite.solvers[v].label)).string();
-    };
+/// Creates DIR/runs, locks DIR, and with --fresh clears what an earlier run wrote.
+void open_out_dir(const std::string& out, bool fresh)
+{
+    std::error_code ec;
+    fs::create_directories(fs::path(out) / "runs", ec);
+    if (ec) throw_input_error(out, "--out", "cannot create the results folder: " + ec.message());
+    lock_out_dir(out);
+    if (fresh) clear_out_dir(out);
+}
+
+/// One DIR holds one suite (or shard): another suite's results, or run files that are no job of
+/// this one, are never mixed into this summary (InputError, with how to force).
+void refuse_foreign_results(const RunPlan& plan, const std::string& out, const std::string& shard_text)
+{
+    const Suite& suite = plan.suite();
     const std::string how_to_force = "use another --out, or --fresh to discard the results in " + out;
-    // One DIR holds one suite: another suite's results are never mixed into this summary.
     const nlohmann::json held = suite_in(out);
     if (held.is_object() && held.value("name", std::string()) != suite.name)
         throw_input_error(out, "suite.json",
                           "holds results of suite '" + held.value("name", std::string("?")) + "', not '" + suite.name +
                               "'; " + how_to_force);
-    std::set<std::string> job_files;
-    for (size_t s = 0; s < snapshots.size(); ++s)
-        for (size_t v = 0; v < labels; ++v)
-            if (in_shard(s, v)) job_files.insert(run_file_name(snapshots[s].id, suite.solvers[v].label));
+    const std::set<std::string> job_files = plan.job_files();
     std::vector<std::string> foreign;
     for (const auto& entry : fs::directory_iterator(fs::path(out) / "runs"))
         if (entry.path().extension() == ".json" && !job_files.count(entry.path().filename().string()))
             foreign.push_back(entry.path().string());
     std::sort(foreign.begin(), foreign.end());
     if (!foreign.empty())
-        throw_input_error(foreign.front(), "",
-                          "not a job of suite '" + suite.name + "'" +
-                              (shard.count > 1 ? " shard " + cl.value("--shard") : "") + " (" +
-                              std::to_string(foreign.size()) + " such run files: an earlier suite or shard?); " +
-                              how_to_force);
+        throw_input_error(
+            foreign.front(), "",
+            "not a job of suite '" + suite.name + "'" + (plan.shard().count > 1 ? " shard " + shard_text : "") + " (" +
+                std::to_string(foreign.size()) + " such run files: an earlier suite or shard?); " + how_to_force);
+}
 
-    // Identities: what each job's result depends on (the snapshot by content).
-    std::vector<nlohmann::json> hashes(snapshots.size());
-    for (size_t s = 0; s < snapshots.size(); ++s) {
-        bool needed = false;
-        for (size_t v = 0; v < labels; ++v) needed = needed || in_shard(s, v);
-        if (!needed) continue;
-        try {
-            hashes[s] = qpsnap_content_hash(snapshots[s].path);
-        } catch (const InputError&) {
-            hashes[s] = nullptr;  // the run fails on loading and is retried next time
-        }
-    }
-    const nlohmann::json options_entry = {{"tol", suite.tol},
-                                          {"time_limit_s", suite.time_limit_s},
-                                          {"repeat", suite.repeat},
-                                          {"history_max", suite.history_max},
-                                          {"reference", suite.reference},
-                                          {"decouple", suite.decouple},
-                                          {"decouple_seed", suite.decouple_seed},
-                                          {"chain", suite.chain}};
-    auto settings_of = [&](size_t v) {
-        nlohmann::json settings = suite.solvers[v].settings;
-        // Suite-wide tol and time limit are defaults: a solver's own setting wins.
-        if (!settings.contains("tol")) settings["tol"] = suite.tol;
-        if (!settings.contains("time_limit_s")) settings["time_limit_s"] = suite.time_limit_s;
-        return settings;
-    };
-    auto identity_of = [&](size_t s, size_t v) {
-        const nlohmann::json entry = {{"snapshot", snapshots[s].id},
-                                      {"path", snapshots[s].path},
-                                      {"generated", snapshots[s].generated},
-                                      {"label", suite.solvers[v].label},
-                                      {"options", options_entry}};
-        return run_identity(hashes[s], suite.solvers[v].solver, settings_of(v), entry);
-    };
-    // Why each stored run cannot be reused ("" = reusable; "missing" = not run yet).
-    std::vector<std::vector<std::string>> stale(snapshots.size(), std::vector<std::string>(labels));
-    for (size_t s = 0; s < snapshots.size(); ++s)
-        for (size_t v = 0; v < labels; ++v) {
-            if (!in_shard(s, v)) continue;
-            const std::string path = run_path(s, v);
-            if (!fs::exists(fs::symlink_status(path))) {
-                stale[s][v] = "missing";
-                continue;
-            }
-            try {
-                stale[s][v] = stale_reason(read_json_file(path), identity_of(s, v));
-            } catch (const InputError&) {
-                stale[s][v] = "the run file is damaged";
-            }
-        }
-    // Which jobs run: chains whole per label, others one by one.
-    std::vector<std::vector<bool>> todo(snapshots.size(), std::vector<bool>(labels, false));
-    size_t total = 0;
-    for (size_t v = 0; v < labels; ++v) {
-        bool chain_complete = true;
-        for (size_t s = 0; s < snapshots.size(); ++s)
-            if (in_shard(s, v) && !stale[s][v].empty()) chain_complete = false;
-        for (size_t s = 0; s < snapshots.size(); ++s) {
-            if (!in_shard(s, v)) continue;
-            ++total;
-            todo[s][v] = force || (suite.chain ? !chain_complete : !stale[s][v].empty());
-        }
-    }
-    // suite.json describes what DIR holds: while jobs of this suite run, it is suite.pending.json.
-    bool any_todo = false;
-    for (const auto& row : todo)
-        for (bool t : row) any_todo = any_todo || t;
-    if (any_todo) {
-        write_json_atomic((fs::path(out) / "suite.pending.json").string(), suite.raw);
-        std::error_code ec;
-        fs::remove(fs::path(out) / "suite.json", ec);
-    }
+/// A snapshot loaded for its jobs: the QP and the record's "snapshot" object, or the error that
+/// fails its runs (a bad snapshot fails its runs, not the suite).
+struct LoadedSnapshot {
+    std::unique_ptr<Qp> qp;
+    nlohmann::json info;
+    std::string error;
+};
 
-    if (suite.reference && jobs > 1) {  // untimed work: N snapshots at a time, before the runs
-        const size_t prefetched = prefetch_references(suite, snapshots, todo, jobs);
-        std::cerr << "run: --jobs " << jobs << ": reference solutions of " << prefetched << " snapshot(s) computed "
-                  << jobs << " at a time before the runs\n";
+LoadedSnapshot load_snapshot(const SuiteSnapshot& snap, const nlohmann::json& hash)
+{
+    LoadedSnapshot loaded;
+    try {
+        loaded.qp = std::make_unique<Qp>(read_qpsnap(snap.path));
+        loaded.info = {{"id", snap.id},
+                       {"path", snap.path},
+                       {"hash", hash.is_string() ? hash : nlohmann::json(qpsnap_content_hash(snap.path))},
+                       {"n", loaded.qp->n()},
+                       {"m", loaded.qp->m()},
+                       {"meta", loaded.qp->meta},
+                       {"generated", snap.generated}};
+    } catch (const InputError& e) {
+        loaded.error = e.what();
+        loaded.info = {{"id", snap.id}, {"path", snap.path}, {"generated", snap.generated}};
     }
+    return loaded;
+}
+
+/// What the jobs of one process share: the run options, the references computed so far (by
+/// snapshot hash) and the warm state of each label along a chain.
+struct JobContext {
     RunOptions options;
-    options.history_max = suite.history_max;
-    options.decouple = suite.decouple;
-    options.decouple_seed = suite.decouple_seed;
-    options.repeat = suite.repeat;
-    std::map<std::string, nlohmann::json> references;  // by key, within this process
-    std::map<std::string, WarmState> warm;             // by label
-    size_t done = 0, ran = 0;
-    for (size_t s = 0; s < snapshots.size(); ++s) {
-        bool any = false;
-        for (size_t v = 0; v < labels; ++v) any = any || todo[s][v];
-        std::unique_ptr<Qp> qp;
-        nlohmann::json info;
-        const SuiteSnapshot& snap = snapshots[s];
-        std::string load_error;  // a bad snapshot fails its runs, not the suite
-        if (any) {
-            try {
-                qp = std::make_unique<Qp>(read_qpsnap(snap.path));
-                info = {{"id", snap.id},
-                        {"path", snap.path},
-                        {"hash", hashes[s].is_string() ? hashes[s] : nlohmann::json(qpsnap_content_hash(snap.path))},
-                        {"n", qp->n()},
-                        {"m", qp->m()},
-                        {"meta", qp->meta},
-                        {"generated", snap.generated}};
-            } catch (const InputError& e) {
-                load_error = e.what();
-                info = {{"id", snap.id}, {"path", snap.path}, {"generated", snap.generated}};
-            }
+    std::map<std::string, nlohmann::json> references;
+    std::map<std::string, WarmState> warm;
+};
+
+/// The record of one job: the run, or the record of a run that could not happen.
+nlohmann::json run_job(const Suite& suite, const SuiteSolver& sv, const nlohmann::json& settings,
+                       const LoadedSnapshot& snapshot, JobContext& jobs)
+{
+    const auto& registry = builtin_registry();
+    const nlohmann::json& info = snapshot.info;
+    if (!snapshot.error.empty()) {
+        nlohmann::json record =
+            failed_record(sv.solver, sv.label, settings, info, "invalid_input", snapshot.error, suite.tol);
+        record["final"] = false;  // the snapshot could not be read: retried on resume
+        return record;
+    }
+    if (!registry.contains(sv.solver)) {
+        std::string known;
+        for (const auto& n : registry.names()) known += (known.empty() ? "" : ", ") + n;
+        return failed_record(sv.solver, sv.label, settings, info, "invalid_input",
+                             "solver '" + sv.solver + "' is not registered; known: " + known, suite.tol);
+    }
+    try {
+        SolveContext context;
+        WarmState& state = jobs.warm[sv.label];
+        if (suite.chain) {
+            context.eigenvector = &state.eigenvector;
+            if (state.has_lambda) context.lambda0 = &state.lambda;
         }
-        for (size_t v = 0; v < labels; ++v) {
-            if (!in_shard(s, v)) continue;
+        RunOutcome run = run_solver(*snapshot.qp, sv.solver, settings, jobs.options, info, context);
+        if (suite.chain) {
+            state.lambda = run.lambda_full;  // original rows: matched by index next step
+            state.has_lambda = run.lambda_full.size() > 0;
+        }
+        nlohmann::json record = std::move(run.record);
+        if (suite.reference) {
+            // F* of the QP in the file (docs/accuracy.md), whatever rows the solver kept.
+            const std::string key = info["hash"].get<std::string>();
+            if (!jobs.references.count(key)) jobs.references[key] = reference_solution(*snapshot.qp, key);
+            attach_reference(record, jobs.references[key]);
+        }
+        return record;
+    } catch (const InputError& e) {
+        return failed_record(sv.solver, sv.label, settings, info, "invalid_input", e.what(), suite.tol);
+    } catch (const std::exception& e) {
+        nlohmann::json record =
+            failed_record(sv.solver, sv.label, settings, info, "internal_error", e.what(), suite.tol);
+        record["final"] = false;  // a harness failure (out of memory, ...): retried on resume
+        return record;
+    }
+}
+
+/// The progress line of a finished job.
+std::string progress_line(const std::string& prefix, const nlohmann::json& record)
+{
+    std::string line = prefix + record["status"].get<std::string>();
+    if (record["accuracy"]["max"].is_number()) {
+        line += " in " + record["iterations"].dump() + " it, accuracy " + sci(record["accuracy"]["max"].get<double>()) +
+                ", " + sci(record["time"]["total_s"].get<double>()) + " s";
+        if (!record.value("status_confirmed", true)) line += " (NOT CONFIRMED)";
+    } else {
+        line += ": " + record["message"].get<std::string>();
+    }
+    return line;
+}
+
+/// Runs (or hands to a child) every job of the plan that needs running, snapshot by snapshot;
+/// returns the number run.
+size_t run_jobs(const RunPlan& plan, ProcessPool& pool, long jobs)
+{
+    const Suite& suite = plan.suite();
+    JobContext context;
+    context.options.history_max = suite.history_max;
+    context.options.decouple = suite.decouple;
+    context.options.decouple_seed = suite.decouple_seed;
+    context.options.repeat = suite.repeat;
+    size_t done = 0, ran = 0;
+    for (size_t s = 0; s < plan.snapshots().size(); ++s) {
+        const SuiteSnapshot& snap = plan.snapshots()[s];
+        const LoadedSnapshot snapshot = plan.any_todo(s) ? load_snapshot(snap, plan.hash(s)) : LoadedSnapshot{};
+        for (size_t v = 0; v < plan.labels(); ++v) {
+            if (!plan.in_shard(s, v)) continue;
             ++done;
             const SuiteSolver& sv = suite.solvers[v];
-            const std::string prefix =
-                "[" + std::to_string(done) + "/" + std::to_string(total) + "] " + snap.id + " x " + sv.label + ": ";
-            if (!todo[s][v]) {
+            const std::string prefix = "[" + std::to_string(done) + "/" + std::to_string(plan.total()) + "] " +
+                                       snap.id + " x " + sv.label + ": ";
+            if (!plan.todo(s, v)) {
                 std::cerr << prefix << "done before, skipped\n";
                 continue;
             }
-            if (!stale[s][v].empty() && stale[s][v] != "missing")
-                std::cerr << prefix << "stored run not reused: " << stale[s][v] << "\n";
+            if (!plan.stale(s, v).empty() && plan.stale(s, v) != "missing")
+                std::cerr << prefix << "stored run not reused: " << plan.stale(s, v) << "\n";
             if (pool.delegate()) {  // --jobs: a child process does this job
                 ++ran;
                 continue;
             }
-            const nlohmann::json settings = settings_of(v);
-            nlohmann::json record;
-            if (!load_error.empty()) {
-                record = failed_record(sv, settings, info, "invalid_input", load_error, suite.tol);
-                record["final"] = false;  // the snapshot could not be read: retried on resume
-            } else if (!registry.contains(sv.solver)) {
-                std::string known;
-                for (const auto& n : registry.names()) known += (known.empty() ? "" : ", ") + n;
-                record = failed_record(sv, settings, info, "invalid_input",
-                                       "solver '" + sv.solver + "' is not registered; known: " + known, suite.tol);
-            } else {
-                try {
-                    SolveContext context;
-                    WarmState& state = warm[sv.label];
-                    if (suite.chain) {
-                        context.eigenvector = &state.eigenvector;
-                        if (state.has_lambda) context.lambda0 = &state.lambda;
-                    }
-                    RunOutcome run = run_solver(*qp, sv.solver, settings, options, info, context);
-                    if (suite.chain) {
-                        state.lambda = run.lambda_full;  // original rows: matched by index next step
-                        state.has_lambda = run.lambda_full.size() > 0;
-                    }
-                    record = std::move(run.record);
-                    if (suite.reference) {
-                        // F* of the QP in the file (docs/accuracy.md), whatever rows the solver kept.
-                        const std::string key = info["hash"].get<std::string>();
-                        if (!references.count(key)) references[key] = reference_solution(*qp, key);
-                        attach_reference(record, references[key]);
-                    }
-                } catch (const InputError& e) {
-                    record = failed_record(sv, settings, info, "invalid_input", e.what(), suite.tol);
-                } catch (const std::exception& e) {
-                    record = failed_record(sv, settings, info, "internal_error", e.what(), suite.tol);
-                    record["final"] = false;  // a harness failure (out of memory, ...): retried on resume
-                }
-            }
+            // The suite's tol and time limit are in (settings_with_defaults), as the identity records them.
+            nlohmann::json record = run_job(suite, sv, plan.settings_of(v), snapshot, context);
             record["label"] = sv.label;
             record["suite"] = suite.name;
             record["mode"] = suite.chain ? "chain" : "cold";
@@ -425,54 +315,96 @@ int cmd_run(const Args& args)
             // Final: the solver's outcome, or a refusal that the identity fully determines (an
             // unregistered solver, bad settings: a rebuild or an edit changes the identity).
             if (!record.contains("final")) record["final"] = true;
-            record["identity"] = identity_of(s, v);
-            write_json_atomic(run_path(s, v), record);
+            record["identity"] = plan.identity_of(s, v);
+            write_json_atomic(plan.run_path(s, v), record);
             ++ran;
-            std::string line = prefix + record["status"].get<std::string>();
-            if (record["kkt_relative"]["max"].is_number()) {
-                line += " in " + record["iterations"].dump() + " it, kkt_rel " +
-                        sci(record["kkt_relative"]["max"].get<double>()) + ", " +
-                        sci(record["time"]["total_s"].get<double>()) + " s";
-                if (!record.value("status_confirmed", true)) line += " (NOT CONFIRMED)";
-            } else {
-                line += ": " + record["message"].get<std::string>();
-            }
-            std::cerr << line << "\n";
+            std::cerr << progress_line(prefix, record) << "\n";
             pool.job_done();  // a child ends here
         }
     }
-    if (const size_t failed = pool.wait_all())
-        throw std::runtime_error(std::to_string(failed) +
-                                 " parallel job(s) failed; rerun to redo them (finished runs are kept)");
-    const size_t runs = write_summary(out, suite.name);
-    // Which jobs this folder holds, for `merge` to check that the shards are complete and of one suite.
+    return ran;
+}
+
+/// DIR/jobs.json: which jobs this folder holds, for `merge` to check that the shards are complete
+/// and of one suite.
+void write_jobs_file(const RunPlan& plan, const std::string& out)
+{
+    const Suite& suite = plan.suite();
     size_t all_jobs = 0, done_jobs = 0, final_jobs = 0;
-    for (size_t s = 0; s < snapshots.size(); ++s)
-        for (size_t v = 0; v < labels; ++v) all_jobs += solver_applies(suite.solvers[v], snapshots[s].id) ? 1 : 0;
+    for (size_t s = 0; s < plan.snapshots().size(); ++s)
+        for (size_t v = 0; v < plan.labels(); ++v)
+            all_jobs += solver_applies(suite.solvers[v], plan.snapshots()[s].id) ? 1 : 0;
     nlohmann::json shard_jobs = nlohmann::json::array();
-    for (size_t s = 0; s < snapshots.size(); ++s)
-        for (size_t v = 0; v < labels; ++v)
-            if (in_shard(s, v)) {
-                shard_jobs.push_back(run_file_name(snapshots[s].id, suite.solvers[v].label));
-                if (fs::exists(run_path(s, v))) ++done_jobs;
+    for (size_t s = 0; s < plan.snapshots().size(); ++s)
+        for (size_t v = 0; v < plan.labels(); ++v)
+            if (plan.in_shard(s, v)) {
+                shard_jobs.push_back(run_file_name(plan.snapshots()[s].id, suite.solvers[v].label));
+                if (fs::exists(plan.run_path(s, v))) ++done_jobs;
                 try {
-                    if (read_json_file(run_path(s, v)).value("final", true)) ++final_jobs;
+                    if (read_json_file(plan.run_path(s, v)).value("final", true)) ++final_jobs;
                 } catch (const InputError&) {
                 }
             }
     write_json_atomic((fs::path(out) / "jobs.json").string(),
                       {{"suite", suite.name},
                        {"suite_hash", fnv1a_hex(suite.raw.dump())},
-                       {"shard", {{"index", shard.index}, {"count", shard.count}}},
+                       {"shard", {{"index", plan.shard().index}, {"count", plan.shard().count}}},
                        {"all_jobs", all_jobs},
                        {"jobs", shard_jobs},
                        {"complete", done_jobs == shard_jobs.size()},
                        {"retry", shard_jobs.size() - final_jobs}});
+}
+
+}  // namespace
+
+int cmd_run(const Args& args)
+{
+    const CommandLine cl("run", args, {"--out", "--shard", "--jobs"}, {"--force", "--fresh", "--jobs-timed"});
+    if (cl.help()) {
+        std::cout << "usage: " << kUsage << kHelp;
+        return 0;
+    }
+    cl.expect_positional(1, 1, kUsage);
+    Suite suite = load_suite(cl.positional()[0]);
+    for (const std::string& notice : drop_unbuilt_optional_solvers(suite, builtin_registry().names()))
+        std::cerr << "run: " << notice << "\n";
+    std::string out;
+    Shard shard;
+    choose_out_and_shard(cl, suite, out, shard);
+    const long jobs = cl.integer("--jobs", 1);
+    if (jobs < 1) throw_input_error("run", "--jobs", "must be >= 1, got " + std::to_string(jobs));
+    std::string jobs_note;
+    ProcessPool pool(concurrent_jobs(jobs, suite.timed, suite.chain, cl.has("--jobs-timed"), jobs_note));
+    if (!jobs_note.empty()) std::cerr << "run: " << jobs_note << "\n";
+    RunPlan plan(suite, resolve_snapshots(suite), shard, out);
+    open_out_dir(out, cl.has("--fresh"));
+    refuse_foreign_results(plan, out, cl.value("--shard"));
+
+    plan.hash_snapshots();
+    plan.find_stale();
+    plan.choose(cl.has("--force"));
+    // suite.json describes what DIR holds: while jobs of this suite run, it is suite.pending.json.
+    if (plan.any_todo()) {
+        write_json_atomic((fs::path(out) / "suite.pending.json").string(), suite.raw);
+        std::error_code ec;
+        fs::remove(fs::path(out) / "suite.json", ec);
+    }
+    if (suite.reference && jobs > 1) {  // untimed work: N snapshots at a time, before the runs
+        const size_t prefetched = prefetch_references(suite, plan.snapshots(), plan.todo_table(), jobs);
+        std::cerr << "run: --jobs " << jobs << ": reference solutions of " << prefetched << " snapshot(s) computed "
+                  << jobs << " at a time before the runs\n";
+    }
+    const size_t ran = run_jobs(plan, pool, jobs);
+    if (const size_t failed = pool.wait_all())
+        throw std::runtime_error(std::to_string(failed) +
+                                 " parallel job(s) failed; rerun to redo them (finished runs are kept)");
+    const size_t runs = write_summary(out, suite.name);
+    write_jobs_file(plan, out);
     write_json_atomic((fs::path(out) / "provenance.json").string(), provenance());
     write_json_atomic((fs::path(out) / "suite.json").string(), suite.raw);
     std::error_code ec;
     fs::remove(fs::path(out) / "suite.pending.json", ec);
-    std::cerr << "ran " << ran << " of " << total << " jobs; " << runs << " runs in " << out << "/summary.csv\n";
+    std::cerr << "ran " << ran << " of " << plan.total() << " jobs; " << runs << " runs in " << out << "/summary.csv\n";
     return 0;
 }
 

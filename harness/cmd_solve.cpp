@@ -4,6 +4,7 @@
 #include "harness/commands.hpp"
 #include "harness/results.hpp"
 #include "harness/runner.hpp"
+#include "harness/set_arguments.hpp"
 #include "problems/qpsnap.hpp"
 #include "solvers/registry.hpp"
 
@@ -109,7 +110,7 @@ int cmd_solve(const Args& args)
     options.repeat = static_cast<int>(repeat);
     options.time_limit_s = cl.number("--time-limit", 0.0);
     if (options.time_limit_s < 0) throw_input_error("solve", "--time-limit", "must be >= 0");
-    const nlohmann::json settings = parse_set_arguments(cl.values("--set"));
+    const nlohmann::json settings = settings_from_assignments(cl.values("--set"));
 
     const Qp qp = read_qpsnap(snap);
     const nlohmann::json info = {{"id", std::filesystem::path(snap).stem().string()},

@@ -1,6 +1,7 @@
 #include "harness/compare.hpp"
 
 #include "harness/perf_record.hpp"
+#include "harness/record_schema.hpp"
 #include "harness/results.hpp"
 #include "solvers/types.hpp"
 
@@ -35,12 +36,8 @@ nlohmann::json counter(const nlohmann::json& run, const std::string& name)
     return nullptr;
 }
 
-nlohmann::json kkt_rel(const nlohmann::json& run)
-{
-    if (run.contains("kkt_relative") && run["kkt_relative"].is_object() && run["kkt_relative"].contains("max"))
-        return run["kkt_relative"]["max"];
-    return nullptr;
-}
+/// The accuracy error e of a run (docs/accuracy.md); old names read through harness/record_schema.hpp.
+nlohmann::json accuracy_of(const nlohmann::json& run, const std::string& source) { return accuracy_max(run, source); }
 
 nlohmann::json instructions(const nlohmann::json& run)
 {
@@ -131,7 +128,7 @@ std::string instructions_text(const nlohmann::json& b, const nlohmann::json& n)
 /// NaN compares false both ways, so a NaN counter would pass as "equal": refused instead.
 void require_finite(const std::string& source, const Key& key, const nlohmann::json& run)
 {
-    std::vector<std::pair<std::string, nlohmann::json>> values = {{"kkt_rel", kkt_rel(run)}};
+    std::vector<std::pair<std::string, nlohmann::json>> values = {{"accuracy", accuracy_of(run, source)}};
     for (const auto& c : compared_counters()) values.emplace_back(c, counter(run, c));
     for (const auto& [name, value] : values)
         if (value.is_number_float() && !std::isfinite(value.get<double>()))
@@ -257,7 +254,7 @@ CompareReport compare_inputs(const CompareInput& base_input, const CompareInput&
         row.base_status = b->value("status", "");
         const auto it = new_by_key.find(key);
         for (const auto& c : compared_counters()) row.base[c] = counter(*b, c);
-        row.base["kkt_rel"] = kkt_rel(*b);
+        row.base["accuracy"] = accuracy_of(*b, base_input.source);
         row.base["instructions"] = instructions(*b);
         const TimeStats bt = time_stats(*b);
         row.base["time_min_s"] = bt.min;
@@ -272,7 +269,7 @@ CompareReport compare_inputs(const CompareInput& base_input, const CompareInput&
         require_finite(next_input.source, key, n);
         row.new_status = n.value("status", "");
         for (const auto& c : compared_counters()) row.next[c] = counter(n, c);
-        row.next["kkt_rel"] = kkt_rel(n);
+        row.next["accuracy"] = accuracy_of(n, next_input.source);
         row.next["instructions"] = instructions(n);
         const TimeStats nt = time_stats(n);
         row.next["time_min_s"] = nt.min;
@@ -298,19 +295,19 @@ CompareReport compare_inputs(const CompareInput& base_input, const CompareInput&
             else if (y < better)
                 row.improved.push_back(c);
         }
-        if (base_input.compact && row.base["kkt_rel"].is_null() && row.next["kkt_rel"].is_number())
-            unjudged(base_input.source, key, "kkt_rel");
+        if (base_input.compact && row.base["accuracy"].is_null() && row.next["accuracy"].is_number())
+            unjudged(base_input.source, key, "accuracy");
         const double tol = n.value("tol", b->value("tol", 0.0));
-        const auto& bk = row.base["kkt_rel"];
-        const auto& nk = row.next["kkt_rel"];
+        const auto& bk = row.base["accuracy"];
+        const auto& nk = row.next["accuracy"];
         if (nk.is_number() && bk.is_number()) {
             const double bkv = bk.get<double>(), nkv = nk.get<double>();
-            if (nkv > bkv * (1.0 + options.kkt_rtol) && nkv > tol)
-                row.regressed.push_back("kkt_rel");
-            else if (nkv * (1.0 + options.kkt_rtol) < bkv && bkv > tol)
-                row.improved.push_back("kkt_rel");
+            if (nkv > bkv * (1.0 + options.accuracy_rtol) && nkv > tol)
+                row.regressed.push_back("accuracy");
+            else if (nkv * (1.0 + options.accuracy_rtol) < bkv && bkv > tol)
+                row.improved.push_back("accuracy");
         } else if (bk.is_number() && !nk.is_number()) {
-            row.regressed.push_back("kkt_rel");  // NaN or absent now
+            row.regressed.push_back("accuracy");  // NaN or absent now
         }
         const auto& bi = row.base["instructions"];
         const auto& ni = row.next["instructions"];
@@ -381,8 +378,8 @@ std::string CompareReport::header() const
     if (same) {
         out << "rules (same machine): statuses equal; work counters exact (" << compared_counters().size()
             << " counters, lower is better); instructions in the solve within +"
-            << format_g(100.0 * options.instructions_rtol, 3) << "%; kkt_rel within +"
-            << format_g(100.0 * options.kkt_rtol, 3) << "% above tol; wall time (min of the samples, NEW/BASE "
+            << format_g(100.0 * options.instructions_rtol, 3) << "%; accuracy within +"
+            << format_g(100.0 * options.accuracy_rtol, 3) << "% above tol; wall time (min of the samples, NEW/BASE "
             << "with its noise band) ";
         if (options.time_ratio_max > 0.0)
             out << "judged beyond " << format_g(options.time_ratio_max, 3) << "x (1 + band)\n";
@@ -393,7 +390,7 @@ std::string CompareReport::header() const
         out << (differ ? "machines DIFFER: " : "") << "across-machines rules"
             << (differ ? "" : " (asked for: the sides may come from different machines)")
             << ": statuses equal; work counters within +" << format_g(100.0 * options.counter_rtol, 3) << "% + "
-            << options.counter_atol << "; kkt_rel within +" << format_g(100.0 * options.kkt_rtol, 3)
+            << options.counter_atol << "; accuracy within +" << format_g(100.0 * options.accuracy_rtol, 3)
             << "% above tol; instructions and wall time shown, not judged\n";
     }
     return out.str();
@@ -403,7 +400,7 @@ std::string CompareReport::table(bool only_changes) const
 {
     std::vector<std::vector<std::string>> cells;
     cells.push_back({"snapshot", "label", "status", "iterations", "a_products", "a_products_harness", "factorizations",
-                     "precond", "kkt_rel", "instructions", "time new/base", "verdict"});
+                     "precond", "accuracy", "instructions", "time new/base", "verdict"});
     const size_t columns = cells[0].size();
     for (const auto& r : rows) {
         if (only_changes && !r.changed()) continue;
@@ -417,7 +414,7 @@ std::string CompareReport::table(bool only_changes) const
         }
         line.push_back(r.base_status == r.new_status ? r.new_status : r.base_status + " -> " + r.new_status);
         for (const auto& c : compared_counters()) line.push_back(change_text(r.base[c], r.next[c]));
-        line.push_back(change_text(r.base["kkt_rel"], r.next["kkt_rel"]));
+        line.push_back(change_text(r.base["accuracy"], r.next["accuracy"]));
         line.push_back(instructions_text(r.base["instructions"], r.next["instructions"]));
         std::string time = r.time_ratio > 0.0 ? format_fixed(r.time_ratio, 2) + "x" : "-";
         if (r.time_ratio > 0.0 && r.time_band >= 0.0) time += " ±" + format_fixed(r.time_band, 2);
@@ -494,7 +491,7 @@ nlohmann::json CompareReport::to_json() const
             {"next", {{"source", new_source}, {"machine", new_machine}}},
             {"cross_machine", cross_machine},
             {"rules",
-             {{"kkt_rtol", options.kkt_rtol},
+             {{"accuracy_rtol", options.accuracy_rtol},
               {"instructions_rtol", options.instructions_rtol},
               {"time_ratio_max", options.time_ratio_max},
               {"counter_rtol", cross_machine ? options.counter_rtol : 0.0},

@@ -10,14 +10,16 @@
 ///    (they are deterministic); across machines growth beyond counter_rtol * BASE + counter_atol;
 ///  - a_products_harness counts the products made through solvers/a_product, whoever asked for
 ///    them: growth that the solver's own a_products does not show is named "uncounted";
-///  - KKT: regressed when kkt_rel(NEW) > kkt_rel(BASE) * (1 + kkt_rtol) and above the run's tol;
+///  - accuracy (the error e, docs/accuracy.md): regressed when accuracy(NEW) > accuracy(BASE) *
+///    (1 + accuracy_rtol) and above the run's tol (files of an older version use old names, read
+///    with a notice: harness/record_schema.hpp);
 ///  - instructions executed in the solve (callgrind, deterministic on one machine): regressed
 ///    when NEW > BASE * (1 + instructions_rtol); not judged across machines;
 ///  - wall time: the ratio of the minimum times NEW/BASE with a noise band (the sum of both
 ///    sides' relative spreads, median/min - 1); regressed only when the ratio exceeds
 ///    time_ratio_max and 1 + band, and never from a single sample per side.
 /// A counter or measure absent on either side is shown and not judged, except in a compact BASE
-/// (InputError: the baseline must record what it judges); a counter or kkt_rel that is NaN or
+/// (InputError: the baseline must record what it judges); a counter or the accuracy that is NaN or
 /// infinite on either side is an InputError naming the side, the run and the quantity. Runs only in NEW are
 /// listed as "new" and are not failures.
 #include <nlohmann/json.hpp>
@@ -27,7 +29,7 @@
 namespace cb {
 
 struct CompareOptions {
-    double kkt_rtol = 0.1;
+    double accuracy_rtol = 0.1;       ///< relative growth of the accuracy error e judged a regression (above tol)
     double instructions_rtol = 0.03;  ///< relative growth of instructions judged a regression
     double time_ratio_max = 1.5;      ///< NEW/BASE min-time ratio judged a regression (0: never judged)
     double counter_rtol = 0.25;       ///< across machines: allowed relative growth of a counter ...
@@ -59,7 +61,7 @@ struct CompareRow {
     std::string verdict;                 ///< "equal", "improved", "regressed", "status-changed", "missing", "new"
     std::vector<std::string> regressed;  ///< names of regressed quantities ("a_products", "instructions" ...)
     std::vector<std::string> improved;
-    nlohmann::json base, next;  ///< compared values (counters, kkt_rel, instructions, time)
+    nlohmann::json base, next;  ///< compared values (counters, accuracy, instructions, time)
     double time_ratio = 0.0;    ///< NEW/BASE minimum time (0 when unknown)
     double time_band = -1.0;    ///< relative noise band of the ratio (< 0: unknown, not judged)
     bool failure() const { return verdict == "regressed" || verdict == "status-changed" || verdict == "missing"; }

@@ -25,8 +25,8 @@ HistoryMonitor::HistoryMonitor(const QpView& qp, const AccuracyScale& scale, lon
 
 std::vector<std::string> HistoryMonitor::columns()
 {
-    return {"iteration",       "time_s",  "a_products", "step",      "stationarity",    "primal",     "dual",
-            "complementarity", "gap",     "kkt_rel",    "objective", "native_residual", "active_set", "work",
+    return {"iteration",       "time_s", "a_products", "step",      "stationarity",    "primal",     "dual",
+            "complementarity", "gap",    "accuracy",   "objective", "native_residual", "active_set", "work",
             "solve_time_s"};
 }
 

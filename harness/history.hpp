@@ -32,7 +32,7 @@ struct HistoryRow {
     double solve_time_s = 0.0;  ///< time_s - setup_s: the iterations only
     long a_products = 0;
     StepKind step = StepKind::START;
-    AccuracyParts accuracy;  ///< the measure's parts; accuracy.max() is the error e (column kkt_rel)
+    AccuracyParts accuracy;  ///< the measure's parts; accuracy.max() is the error e (column accuracy)
     double objective = 0.0;
     double objective_change = 0.0;        ///< F(x) - F(x0) in difference form (the monotonicity check)
     double objective_change_terms = 0.0;  ///< sum of |terms| of that difference (its rounding scale)

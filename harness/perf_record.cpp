@@ -1,5 +1,6 @@
 #include "harness/perf_record.hpp"
 
+#include "harness/record_schema.hpp"
 #include "harness/results.hpp"
 #include "problems/io_util.hpp"
 #include "solvers/types.hpp"
@@ -30,7 +31,7 @@ const std::map<std::string, Kind>& column_kinds()
                                                       {"cholmod_factorizations", Kind::INTEGER},
                                                       {"precond_applications", Kind::INTEGER},
                                                       {"work", Kind::REAL},
-                                                      {"kkt_rel", Kind::REAL},
+                                                      {"accuracy", Kind::REAL},
                                                       {"tol", Kind::REAL},
                                                       {"instructions", Kind::INTEGER},
                                                       {"time_min_s", Kind::REAL},
@@ -82,7 +83,7 @@ const std::vector<std::string>& perf_record_columns()
                                                      "cholmod_factorizations",
                                                      "precond_applications",
                                                      "work",
-                                                     "kkt_rel",
+                                                     "accuracy",
                                                      "tol",
                                                      "instructions",
                                                      "time_min_s",
@@ -99,7 +100,9 @@ std::vector<nlohmann::json> read_perf_record(const std::string& csv_path)
     std::string line;
     if (!std::getline(in, line) || line.empty()) throw_input_error(csv_path, "line 1", "empty; expected a CSV header");
     if (line.back() == '\r') line.pop_back();
-    const std::vector<std::string> header = split_csv_line(line);
+    const std::vector<std::string> written = split_csv_line(line);  // as in the file, for the messages
+    std::vector<std::string> header;                                // current names (old ones with a notice)
+    for (const auto& column : written) header.push_back(current_column_name(column, csv_path));
     std::set<std::string> seen;
     for (const auto& column : header) {
         if (!column_kinds().count(column)) throw_input_error(csv_path, "line 1", "unknown column '" + column + "'");
@@ -126,7 +129,7 @@ std::vector<nlohmann::json> read_perf_record(const std::string& csv_path)
                 where, "", "expected " + std::to_string(header.size()) + " cells, got " + std::to_string(cells.size()));
         std::map<std::string, nlohmann::json> row;
         for (size_t i = 0; i < header.size(); ++i)
-            row[header[i]] = parse_cell(cells[i], column_kinds().at(header[i]), where, header[i]);
+            row[header[i]] = parse_cell(cells[i], column_kinds().at(header[i]), where, written[i]);
         for (const char* required : {"snapshot", "label", "status"})
             if (row[required].is_null()) throw_input_error(where, std::string("column ") + required, "empty");
         const std::string snapshot = row["snapshot"], label = row["label"];
@@ -141,7 +144,7 @@ std::vector<nlohmann::json> read_perf_record(const std::string& csv_path)
             if (row.count(c) && !row[c].is_null()) counters[c] = row[c];
         run["counters"] = counters;
         if (row.count("iterations") && !row["iterations"].is_null()) run["iterations"] = row["iterations"];
-        if (row.count("kkt_rel") && !row["kkt_rel"].is_null()) run["kkt_relative"] = {{"max", row["kkt_rel"]}};
+        if (row.count("accuracy") && !row["accuracy"].is_null()) run["accuracy"] = {{"max", row["accuracy"]}};
         if (row.count("tol") && !row["tol"].is_null()) run["tol"] = row["tol"];
         if (row.count("instructions") && !row["instructions"].is_null()) run["instructions"] = row["instructions"];
         if (row.count("time_min_s") && !row["time_min_s"].is_null()) {

@@ -10,7 +10,8 @@
 
 namespace cb {
 
-/// Every column a record may have, in file order. snapshot, label and status are required; an
+/// Every column a record may have, in file order (old column names are read through
+/// harness/record_schema.hpp). snapshot, label and status are required; an
 /// empty cell means "not measured".
 const std::vector<std::string>& perf_record_columns();
 
@@ -20,7 +21,7 @@ constexpr std::size_t kMaxPerfRecordRuns = 100000;
 constexpr std::size_t kMaxPerfRecordLine = 4096;
 
 /// Reads a compact CSV into run records shaped like results JSON (label, snapshot.id, status,
-/// iterations, counters{...}, kkt_relative.max, tol, instructions, time{min_total_s, noise,
+/// iterations, counters{...}, accuracy.max, tol, instructions, time{min_total_s, noise,
 /// samples}). InputError naming the file, line and column on anything malformed: an unknown or
 /// repeated column, a cell that is not a count or a finite number, too many runs or a long line.
 std::vector<nlohmann::json> read_perf_record(const std::string& csv_path);

@@ -14,7 +14,7 @@ namespace cb {
 constexpr int kReferenceVersion = 2;
 
 /// {"objective": F*, "objective_x0": F(x0), "source": "active-set", "status", "accuracy": {...},
-///  "kkt_rel" (= accuracy.max), "key", "cached": bool}. `key` is the snapshot hash. Pass the QP in
+///  "key", "cached": bool}. `key` is the snapshot hash. Pass the QP in
 /// the file, never a decoupled one: F* is the original problem's optimum for every solver.
 /// A failed reference solve is still cached, with its status, and "objective" null.
 nlohmann::json reference_solution(const Qp& qp, const std::string& key, const std::string& cache = "");

@@ -11,16 +11,30 @@
 /// converged and the measure disagrees on the problem it solved; otherwise the solver's status.
 #include "solvers/accuracy.hpp"
 #include "solvers/qp.hpp"
+#include "solvers/settings.hpp"
 #include "solvers/solver.hpp"
 
 #include <nlohmann/json.hpp>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 namespace cb {
 
+/// Defaults of common settings for every solver of a suite or stress run: given to a solver whose
+/// settings do not set the key (its own setting wins).
+struct SettingDefaults {
+    std::optional<double> tol;           ///< the suite's `tol`
+    std::optional<double> time_limit_s;  ///< the suite's `time_limit_s` (0 disables)
+};
+
+/// `settings` with the defaults added for the keys it does not set: what the solver of a run with
+/// these defaults is given (run_solver applies it; a run's identity records it).
+nlohmann::json settings_with_defaults(const nlohmann::json& settings, const SettingDefaults& defaults);
+
 struct RunOptions {
+    SettingDefaults defaults;
     double time_limit_s = 0.0;  ///< overrides the solver's time_limit_s when > 0
     long history_max = 2000;    ///< records kept (stride chosen to stay under it)
     bool record_history = true;
@@ -32,8 +46,9 @@ struct RunOptions {
 /// Run statuses beside the solver's own (SolveStatus names).
 inline constexpr const char* STATUS_SOLVED_RELAXATION = "solved_relaxation";
 inline constexpr const char* STATUS_UNCONFIRMED = "unconfirmed";
-/// The accuracy a `stop=native` run must reach on e to count as converged.
-inline constexpr double DEFAULT_ACCURACY_TOL = 1e-6;
+/// The accuracy a `stop=native` run must reach on e to count as converged: the default tol of
+/// the common settings (solvers/settings.hpp), declared there once.
+inline constexpr double DEFAULT_ACCURACY_TOL = CommonSettings{}.tol;
 
 struct RunOutcome {
     SolverResult result;                  ///< as the solver returned it (result.status: the solver's word)

@@ -2,6 +2,7 @@
 
 #include "harness/results.hpp"
 #include "harness/runner.hpp"
+#include "harness/set_arguments.hpp"
 #include "solvers/registry.hpp"
 
 #include <algorithm>
@@ -57,7 +58,7 @@ json row_to_json(const StressRow& r)
             {"family", r.family},
             {"severity", r.severity},
             {"status", r.status},
-            {"kkt", number_json(r.kkt)},
+            {"accuracy", number_json(r.accuracy)},
             {"tol", r.tol},
             {"violation", number_json(r.violation)},
             {"nonfinite", r.nonfinite},
@@ -71,7 +72,7 @@ json row_to_json(const StressRow& r)
             {"criterion", r.criterion},
             {"m_solved", r.m_solved},
             {"solver_status", r.solver_status},
-            {"kkt_solved", number_json(r.kkt_solved)},
+            {"accuracy_solved", number_json(r.accuracy_solved)},
             {"primal", number_json(r.primal)},
             {"energy_gap", number_json(r.energy_gap)}};
 }
@@ -83,7 +84,7 @@ StressRow row_from_json(const json& j)
     r.family = j.at("family");
     r.severity = j.at("severity");
     r.status = j.at("status");
-    r.kkt = json_number(j.at("kkt"));
+    r.accuracy = json_number(j.at("accuracy"));
     r.tol = j.at("tol");
     r.violation = json_number(j.at("violation"));
     r.nonfinite = j.at("nonfinite");
@@ -97,7 +98,7 @@ StressRow row_from_json(const json& j)
     r.criterion = j.at("criterion");
     r.m_solved = j.at("m_solved");
     r.solver_status = j.at("solver_status");
-    r.kkt_solved = json_number(j.at("kkt_solved"));
+    r.accuracy_solved = json_number(j.at("accuracy_solved"));
     r.primal = json_number(j.at("primal"));
     r.energy_gap = json_number(j.at("energy_gap"));
     return r;
@@ -114,8 +115,8 @@ StressRow blank_row(const StressCase& c, const std::string& solver, const Stress
     r.n = n;
     r.m = m;
     r.m_solved = m;
-    r.kkt = NAN;
-    r.kkt_solved = NAN;
+    r.accuracy = NAN;
+    r.accuracy_solved = NAN;
     r.violation = NAN;
     r.primal = NAN;
     r.energy_gap = NAN;
@@ -124,7 +125,8 @@ StressRow blank_row(const StressCase& c, const std::string& solver, const Stress
 
 /// The reference of every case: F* of the ORIGINAL QP for the energy gap.
 /// A stress solver spec: a registry name, optionally followed by settings, "mprgp:precond=ichol"
-/// (several separated by ':'); values that parse as numbers become numbers. The whole spec is
+/// (several separated by ':'); values are typed as `solve --set` types them (harness/set_arguments.hpp), and
+/// the stress tol is a default that a spec's own `tol` overrides. The whole spec is
 /// the run's label (the column of the tables).
 std::pair<std::string, json> parse_solver_spec(const std::string& spec)
 {
@@ -140,13 +142,7 @@ std::pair<std::string, json> parse_solver_spec(const std::string& spec)
                                  .append("': expected NAME[:key=value...], got '")
                                  .append(item)
                                  .append("'"));
-        const std::string key = item.substr(0, eq), value = item.substr(eq + 1);
-        char* end_num = nullptr;
-        const double number = std::strtod(value.c_str(), &end_num);
-        if (!value.empty() && end_num && *end_num == '\0')
-            out.second[key] = number;
-        else
-            out.second[key] = value;
+        out.second[item.substr(0, eq)] = setting_from_text(item.substr(eq + 1));  // the --set rule
         start = end;
     }
     return out;
@@ -169,14 +165,14 @@ std::pair<StressRow, json> run_one(const Qp& qp, const StressCase& c, const std:
     try {
         const auto spec = parse_solver_spec(solver);
         json settings = spec.second;
-        settings["tol"] = options.tol;
+        ro.defaults.tol = options.tol;  // a spec's own tol wins
         if (solver == REFERENCE_SOLVER && options.tol <= REFERENCE_TOL) settings["max_iterations"] = 100000;
         const RunOutcome out = run_solver(qp, spec.first, settings, ro, info);
         row.status = out.status;
         row.solver_status = to_string(out.result.status);
         row.criterion = out.result.criterion;
-        row.kkt = out.accuracy.max();
-        row.kkt_solved = out.accuracy_solved.max();
+        row.accuracy = out.accuracy.max();
+        row.accuracy_solved = out.accuracy_solved.max();
         row.violation = out.violation;
         row.primal = out.accuracy.primal;
         row.nonfinite = out.nonfinite;
@@ -397,7 +393,7 @@ StressReport run_stress(const StressOptions& options)
             const auto ref = options.isolate ? run_isolated(qp, c, REFERENCE_SOLVER, ref_options)
                                              : run_one(qp, c, REFERENCE_SOLVER, ref_options);
             const bool usable =
-                ref.first.status == "converged" || (ref.first.solver_status == "stalled" && ref.first.kkt <= 1e-7);
+                ref.first.status == "converged" || (ref.first.solver_status == "stalled" && ref.first.accuracy <= 1e-7);
             if (usable && ref.second.value("objective", json()).is_number()) {
                 f_star = ref.second["objective"].get<double>();
                 const double l = ref.second.value("length_scale", NAN);
@@ -423,7 +419,7 @@ StressReport run_stress(const StressOptions& options)
             }
             if (options.progress) {
                 *options.progress << "[" << done << "/" << total << "] " << solver << " x " << c.id << ": "
-                                  << row.status << (row.honest() ? "" : " (WRONG)") << " kkt=" << sci(row.kkt)
+                                  << row.status << (row.honest() ? "" : " (WRONG)") << " accuracy=" << sci(row.accuracy)
                                   << " viol=" << sci(row.violation) << " t=" << std::fixed << std::setprecision(2)
                                   << row.time_s << "s" << std::defaultfloat << "\n";
                 options.progress->flush();
@@ -444,16 +440,16 @@ StressReport run_stress(const StressOptions& options)
 std::string stability_csv(const std::vector<StressRow>& rows)
 {
     std::ostringstream s;
-    s << "solver,case,severity,status,kkt,tol,violation,nonfinite,monotone,time_s,iterations,status_confirmed,"
-         "message,family,n,m,criterion,m_solved,solver_status,kkt_solved,primal,energy_gap\n";
+    s << "solver,case,severity,status,accuracy,tol,violation,nonfinite,monotone,time_s,iterations,status_confirmed,"
+         "message,family,n,m,criterion,m_solved,solver_status,accuracy_solved,primal,energy_gap\n";
     for (const StressRow& r : rows) {
         s << csv_field(r.solver) << ',' << csv_field(r.case_id) << ',' << r.severity << ',' << r.status << ','
-          << format_number(r.kkt) << ',' << format_number(r.tol) << ',' << format_number(r.violation) << ','
+          << format_number(r.accuracy) << ',' << format_number(r.tol) << ',' << format_number(r.violation) << ','
           << (r.nonfinite ? "true" : "false") << ',' << (r.monotone ? "true" : "false") << ','
           << format_number(r.time_s) << ',' << r.iterations << ',' << (r.status_confirmed ? "true" : "false") << ','
           << csv_field(r.message) << ',' << csv_field(r.family) << ',' << r.n << ',' << r.m << ','
           << csv_field(r.criterion) << ',' << r.m_solved << ',' << csv_field(r.solver_status) << ','
-          << format_number(r.kkt_solved) << ',' << format_number(r.primal) << ',' << format_number(r.energy_gap)
+          << format_number(r.accuracy_solved) << ',' << format_number(r.primal) << ',' << format_number(r.energy_gap)
           << '\n';
     }
     return s.str();
@@ -500,7 +496,7 @@ std::string stability_markdown(const StressReport& report)
                 continue;
             }
             const StressRow& r = *it->second;
-            std::string text = short_status(r) + " " + sci(r.kkt);
+            std::string text = short_status(r) + " " + sci(r.accuracy);
             if (r.nonfinite) text += " NaN";
             if (!r.monotone) text += " nm";
             if (r.m_solved != r.m) text += " (" + std::to_string(r.m_solved) + " rows)";
@@ -579,8 +575,8 @@ std::string stability_markdown(const StressReport& report)
         if (r.honest()) continue;
         ++wrong;
         s << "- " << r.solver << " on " << r.case_id << ": status " << r.status
-          << (r.criterion.empty() ? "" : " (criterion " + r.criterion + ")") << ", error " << sci(r.kkt)
-          << " (on the problem it solved " << sci(r.kkt_solved) << ")"
+          << (r.criterion.empty() ? "" : " (criterion " + r.criterion + ")") << ", error " << sci(r.accuracy)
+          << " (on the problem it solved " << sci(r.accuracy_solved) << ")"
           << " vs tol " << sci(r.tol) << ", violation " << sci(r.violation) << ": " << md_cell(r.message) << "\n";
     }
     if (wrong == 0)
@@ -596,7 +592,7 @@ std::string stability_markdown(const StressReport& report)
         for (const StressRow& r : report.rows) {
             if (r.solver != sv || r.status != "converged") continue;
             ++count;
-            e_max = std::max(e_max, r.kkt);
+            e_max = std::max(e_max, r.accuracy);
             v_min = std::min(v_min, r.primal);
             v_max = std::max(v_max, r.primal);
             if (std::isfinite(r.energy_gap)) {

@@ -28,10 +28,10 @@ struct StressOptions {
 struct StressRow {
     std::string solver, case_id, family;
     int severity = 0;
-    std::string status;         ///< the run's status (harness/runner.hpp), or "crashed" / "hung" / "error"
-    std::string solver_status;  ///< the solver's own word (a SolveStatus name), "" when it gave none
-    double kkt = 0.0;           ///< the accuracy error e on the original QP at the returned point
-    double kkt_solved = 0.0;    ///< e on the QP the solver solved (decoupled / unconstrained)
+    std::string status;            ///< the run's status (harness/runner.hpp), or "crashed" / "hung" / "error"
+    std::string solver_status;     ///< the solver's own word (a SolveStatus name), "" when it gave none
+    double accuracy = 0.0;         ///< the accuracy error e on the original QP at the returned point
+    double accuracy_solved = 0.0;  ///< e on the QP the solver solved (decoupled / unconstrained)
     double tol = 0.0;
     double violation = 0.0;   ///< max(0, c - Jx) on the original rows, length units
     double primal = 0.0;      ///< the same as a fraction of the scene size (e's primal part)
@@ -61,9 +61,9 @@ struct StressReport {
 /// Runs the suite (throws InputError on an unknown solver or case name).
 StressReport run_stress(const StressOptions& options);
 
-/// Columns: solver, case, severity, status, kkt, tol, violation, nonfinite, monotone, time_s,
+/// Columns: solver, case, severity, status, accuracy, tol, violation, nonfinite, monotone, time_s,
 /// iterations, status_confirmed, message, family, n, m, criterion, m_solved, solver_status,
-/// kkt_solved, primal, energy_gap.  (kkt = the accuracy error e on the original QP.)
+/// accuracy_solved, primal, energy_gap.  (accuracy = the error e on the original QP.)
 std::string stability_csv(const std::vector<StressRow>& rows);
 /// A case x solver table (status and KKT reached) and a summary of wrong statuses.
 std::string stability_markdown(const StressReport& report);

@@ -4,7 +4,7 @@ iterations, A-products and work units; one panel per snapshot (n and m in its ti
 per solver label in the solver's fixed colour and marker (plots/figutil.py), one legend outside
 the panels, the runs' tol drawn, and an x on the final point of every run that did not converge.
 
-usage: convergence.py RESULTS_DIR [--out FIGDIR] [--max-panels N] [--column kkt_rel] [--solve-only]
+usage: convergence.py RESULTS_DIR [--out FIGDIR] [--max-panels N] [--column accuracy] [--solve-only]
 Writes FIGDIR (default RESULTS_DIR/figures)/convergence_{time,iterations,a_products,work}.{png,pdf}
 (work only when the runs record work units).
 """
@@ -21,6 +21,7 @@ import numpy as np  # noqa: E402
 from plots import figutil  # noqa: E402
 from plots.figutil import plt  # noqa: E402
 from plots.loader import UNMEASURED_STATUSES, Results, history_time, load_results  # noqa: E402
+from plots.record_schema import current_column_names  # noqa: E402
 
 AXES = (("time_s", "time [s] (setup + solve)", "time"),
         ("iteration", "iterations", "iterations"),
@@ -35,7 +36,7 @@ def _converged(run) -> bool:
     return str(run.get("status", "")) == "converged"
 
 
-def plot_convergence(results: Results, out_dir: str, column: str = "kkt_rel",
+def plot_convergence(results: Results, out_dir: str, column: str = "accuracy",
                      max_panels: int = 12, include_setup: bool = True) -> List[str]:
     """Writes the convergence figures; returns the paths written."""
     snapshots = results.snapshots()
@@ -88,11 +89,11 @@ def plot_convergence(results: Results, out_dir: str, column: str = "kkt_rel",
             if x == "time_s":
                 ax.set_xscale("symlog", linthresh=1e-4)
                 ax.set_xlim(left=0)
-            if column == "kkt_rel":
+            if column == "accuracy":
                 figutil.draw_tol(ax, tol)
             ax.set_title(figutil.panel_title(snap, n, m), fontsize=8)
             ax.set_xlabel(xlabel)
-            ax.set_ylabel("error e on the original QP" if column == "kkt_rel" else column)
+            ax.set_ylabel("error e on the original QP" if column == "accuracy" else column)
             ax.grid(True, which="both", alpha=0.3)
         title = f"{results.suite.get('name', os.path.basename(os.path.normpath(results.path)))}: {column} vs {xlabel}"
         if len(snapshots) > len(shown):
@@ -112,7 +113,7 @@ def main(argv=None) -> int:
     parser.add_argument("results", help="a results folder (contactbench run --out DIR)")
     parser.add_argument("--out", help="figure folder (default RESULTS/figures)")
     parser.add_argument("--max-panels", type=int, default=12)
-    parser.add_argument("--column", default="kkt_rel", help="history column on the y axis")
+    parser.add_argument("--column", default="accuracy", help="history column on the y axis")
     parser.add_argument("--solve-only", action="store_true", help="time axis without setup")
     args = parser.parse_args(argv)
     try:
@@ -124,7 +125,8 @@ def main(argv=None) -> int:
         print(f"convergence.py: {args.results}: no runs", file=sys.stderr)
         return 2
     out = args.out or os.path.join(args.results, "figures")
-    for path in plot_convergence(results, out, args.column, args.max_panels, not args.solve_only):
+    column = current_column_names([args.column], "--column")[0]  # an old column name, with a warning
+    for path in plot_convergence(results, out, column, args.max_panels, not args.solve_only):
         print(path)
     return 0
 

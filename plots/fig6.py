@@ -124,7 +124,7 @@ def produce(ctx: PaperContext) -> FigureOutcome:
     out.notes += unmeasured_notes(runs)
     pub, fair = judge(rounds, PUBLISHED), judge(rounds, FAIR)
     frames, with_contact, left_out = judged_frames(runs, FAIR)
-    e_dec = frames["kkt_rel_d"].max() if not frames.empty else float("nan")
+    e_dec = frames["accuracy_d"].max() if not frames.empty else float("nan")
     solved = runs[runs["label"] == DECOUPLED]
     if with_contact == 0:
         reason = (f"none of the {len(solved)} frames run has contact rows"

@@ -144,9 +144,9 @@ def produce(ctx: PaperContext) -> FigureOutcome:
     axes.flat[0].set_ylabel("|F_k - F*| / |F_0 - F*|, F* of the run's own problem")
     ax = axes.flat[3]
     for lab, c in curves.items():
-        if c is not None and "kkt_rel" in c[0]:
+        if c is not None and "accuracy" in c[0]:
             colour, ls = styles[lab]
-            ax.plot(c[0]["iteration"], figutil.positive(c[0]["kkt_rel"]), ls, color=colour, lw=1.3)
+            ax.plot(c[0]["iteration"], figutil.positive(c[0]["accuracy"]), ls, color=colour, lw=1.3)
     ax.set_yscale("log")
     ax.set_xlabel("iterations")
     ax.set_ylabel("accuracy error e on the original QP")
@@ -164,10 +164,10 @@ def produce(ctx: PaperContext) -> FigureOutcome:
     its, e_its, final_e, status = {}, {}, {}, {}
     for lab, c in curves.items():
         its[lab] = iterations_to(c[1], c[0]["iteration"]) if c is not None else float("nan")
-        e_its[lab] = iterations_to(pd.to_numeric(c[0]["kkt_rel"], errors="coerce").to_numpy(), c[0]["iteration"]) \
-            if c is not None and "kkt_rel" in c[0] else float("nan")
+        e_its[lab] = iterations_to(pd.to_numeric(c[0]["accuracy"], errors="coerce").to_numpy(), c[0]["iteration"]) \
+            if c is not None and "accuracy" in c[0] else float("nan")
         sel = res.runs[(res.runs["snapshot"] == snap) & (res.runs["label"] == lab)]
-        final_e[lab] = float(sel.iloc[0]["kkt_rel"]) if not sel.empty else float("nan")
+        final_e[lab] = float(sel.iloc[0]["accuracy"]) if not sel.empty else float("nan")
         status[lab] = str(sel.iloc[0]["status"]) if not sel.empty else "not run"
     a_its = {name: iterations_to(err, it) for name, (it, err) in a_curves.items()}
     r_pub = its[MPRGP] / its[CG_NONE] if its[CG_NONE] else float("nan")

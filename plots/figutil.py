@@ -17,7 +17,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-#: accuracy tiers on the common relative KKT error (DESIGN.md "Metrics")
+#: tiers of the accuracy error e, the common measure (docs/accuracy.md; DESIGN.md "Metrics")
 TIERS = (1e-2, 1e-4, 1e-6, 1e-8)
 
 

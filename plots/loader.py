@@ -25,15 +25,17 @@ from typing import Dict, List, Optional
 import numpy as np
 import pandas as pd
 
-#: history columns (harness/history.cpp); used when a record omits "columns". kkt_rel is the
-#: accuracy error e of docs/accuracy.md on the original QP (the name is kept for old files).
+from plots.record_schema import accuracy_of, current_column_names, with_current_columns
+
+#: history columns (harness/history.cpp); used when a record omits "columns". `accuracy` is the
+#: error e of docs/accuracy.md on the original QP (old files' names are read by record_schema).
 HISTORY_COLUMNS = ["iteration", "time_s", "a_products", "step", "stationarity", "primal", "dual",
-                   "complementarity", "gap", "kkt_rel", "objective", "native_residual", "active_set", "work"]
+                   "complementarity", "gap", "accuracy", "objective", "native_residual", "active_set", "work"]
 
 #: summary.csv columns (harness/results.cpp)
 SUMMARY_COLUMNS = ["suite", "snapshot", "label", "solver", "status", "solver_status", "criterion",
-                   "status_confirmed", "iterations", "a_products", "work", "cholmod_factorizations", "kkt_rel",
-                   "stationarity", "primal", "dual", "complementarity", "gap", "kkt_rel_solved", "m_solved",
+                   "status_confirmed", "iterations", "a_products", "work", "cholmod_factorizations", "accuracy",
+                   "stationarity", "primal", "dual", "complementarity", "gap", "accuracy_solved", "m_solved",
                    "objective", "energy_gap", "violation", "native_residual", "nonfinite", "monotone",
                    "setup_s", "solve_s", "time_s", "n", "m", "tol", "length_scale", "length_scale_source"]
 
@@ -123,14 +125,13 @@ class Results:
         return list(dict.fromkeys(self.runs["snapshot"])) if not self.runs.empty else []
 
 
-def flatten_run(record: dict) -> dict:
-    """The scalar facts of one run record, as one flat row."""
+def flatten_run(record: dict, source: str = "run record") -> dict:
+    """The scalar facts of one run record, as one flat row (`source` names it in warnings)."""
     snap = record.get("snapshot", {}) or {}
     meta = snap.get("meta", {}) or {}
     counters = record.get("counters", {}) or {}
     times = record.get("time", {}) or {}
-    # "accuracy" (e on the original QP); older files only have "kkt_relative".
-    accuracy = record.get("accuracy") or record.get("kkt_relative") or {}
+    accuracy = accuracy_of(record, source)  # e on the original QP (old names with a warning)
     solved = record.get("accuracy_solved") or accuracy
     ref = record.get("reference") or {}
     dec = record.get("decouple") or {}
@@ -146,8 +147,8 @@ def flatten_run(record: dict) -> dict:
         "status_confirmed": _to_bool(record.get("status_confirmed", True)),
         "iterations": _number(record.get("iterations")),
         "objective": _number(record.get("objective")),
-        "kkt_rel": _number(accuracy.get("max")),
-        "kkt_rel_solved": _number(solved.get("max")),
+        "accuracy": _number(accuracy.get("max")),
+        "accuracy_solved": _number(solved.get("max")),
         "m_solved": _number(record.get("m_solved", snap.get("m"))),
         "energy_gap": _number(record.get("energy_gap")),
         "length_scale": _number(record.get("length_scale")),
@@ -243,12 +244,12 @@ def status_notes(runs: pd.DataFrame) -> list:
     return [f"{count} run(s) {UNCONFIRMED_MEANING}"] if count else []
 
 
-def history_frame(record: dict) -> pd.DataFrame:
+def history_frame(record: dict, source: str = "run record") -> pd.DataFrame:
     """The history of one run record as a DataFrame (empty when not recorded)."""
     hist = record.get("history")
     if not hist:
         return pd.DataFrame(columns=HISTORY_COLUMNS)
-    columns = hist.get("columns") or HISTORY_COLUMNS
+    columns = current_column_names(hist.get("columns") or HISTORY_COLUMNS, source)
     rows = hist.get("rows") or []
     df = pd.DataFrame(rows, columns=columns)
     for col in df.columns:
@@ -275,7 +276,7 @@ def load_results(path: str, with_history: bool = True) -> Results:
                     record = json.load(f)
                 except json.JSONDecodeError as err:
                     raise ValueError(f"{file}: not valid JSON: {err}") from err
-            row = flatten_run(record)
+            row = flatten_run(record, file)
             row["file"] = name
             stem_label = os.path.splitext(name)[0].partition("__")[2]
             if (row["snapshot"], row["label"]) in records and stem_label and stem_label != row["label"]:
@@ -285,14 +286,14 @@ def load_results(path: str, with_history: bool = True) -> Results:
             rows.append(row)
             records[(row["snapshot"], row["label"])] = record
             if with_history:
-                h = history_frame(record)
+                h = history_frame(record, file)
                 if not h.empty:
                     h.insert(0, "label", row["label"])
                     h.insert(0, "snapshot", row["snapshot"])
                     hists.append(h)
     runs = pd.DataFrame(rows)
     if os.path.isfile(summary_path):
-        summary = pd.read_csv(summary_path)
+        summary = with_current_columns(pd.read_csv(summary_path), summary_path)
         for col in _BOOL_COLUMNS:
             if col in summary.columns:
                 summary[col] = summary[col].map(_to_bool)
@@ -361,7 +362,7 @@ def load_simulation(folder: str) -> dict:
     for key in ("steps", "frames"):
         file = os.path.join(folder, key + ".csv")
         if os.path.isfile(file):
-            out[key] = pd.read_csv(file)
+            out[key] = with_current_columns(pd.read_csv(file), file)
     snaps = os.path.join(folder, "snapshots")
     out["snapshots"] = snapshot_table(snaps) if os.path.isdir(snaps) else snapshot_table(folder) \
         if os.path.isdir(folder) else pd.DataFrame()

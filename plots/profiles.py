@@ -100,17 +100,17 @@ def tier_table(results: Results, tiers=TIERS, include_setup: bool = True) -> pd.
         relaxation = status == RELAXATION_STATUS
         na = status == NOT_APPLICABLE_STATUS
         h = results.history(snap, label)
-        final_ok = bool(np.isfinite(run.get("kkt_rel", np.nan))) and not bool(run.get("nonfinite", False))
+        final_ok = bool(np.isfinite(run.get("accuracy", np.nan))) and not bool(run.get("nonfinite", False))
         if not h.empty and "time_s" in h:
             h = h.assign(time_s=history_time(h, run, include_setup))
         final_time = float(run.get("time_s", np.nan)) if include_setup else float(run.get("solve_s", np.nan))
         for tier in tiers:
             t = a = w = float("nan")
-            if not h.empty and "kkt_rel" in h:
-                t = figutil.first_reach(h, "kkt_rel", tier, "time_s")
-                a = figutil.first_reach(h, "kkt_rel", tier, "a_products")
-                w = figutil.first_reach(h, "kkt_rel", tier, "work")
-            if math.isnan(t) and final_ok and run.get("kkt_rel", np.inf) <= tier:
+            if not h.empty and "accuracy" in h:
+                t = figutil.first_reach(h, "accuracy", tier, "time_s")
+                a = figutil.first_reach(h, "accuracy", tier, "a_products")
+                w = figutil.first_reach(h, "accuracy", tier, "work")
+            if math.isnan(t) and final_ok and run.get("accuracy", np.inf) <= tier:
                 # no history, or the history's stride skipped the point: the final point counts
                 t = final_time
                 a = float(run.get("a_products", np.nan))
@@ -118,7 +118,7 @@ def tier_table(results: Results, tiers=TIERS, include_setup: bool = True) -> pd.
             if na:  # the solver does not take this problem class: not judged on it
                 t = a = w = float("nan")
             # a relaxation is judged like every run, on e of the ORIGINAL QP (the history's and the
-            # final point's kkt_rel): it reaches a tier only if it brought e there
+            # final point's accuracy): it reaches a tier only if it brought e there
             rows.append({"snapshot": snap, "label": label, "tier": tier, "reached": not math.isnan(t),
                          "time_s": t, "a_products": a, "work": w, "relaxation": relaxation, "na": na})
     return pd.DataFrame(rows, columns=["snapshot", "label", "tier", "reached", "time_s", "a_products", "work",
@@ -360,7 +360,7 @@ def write_markdown(results: Results, numbers: dict, path: str, figures: List[str
         if not unconfirmed.empty:
             parts += ["", "Unconfirmed `converged` claims:", ""]
             for _, r in unconfirmed.iterrows():
-                parts.append(f"- {r['snapshot']} / {r['label']}: error {fmt(r.get('kkt_rel'))} (tol {fmt(r.get('tol'))})")
+                parts.append(f"- {r['snapshot']} / {r['label']}: error {fmt(r.get('accuracy'))} (tol {fmt(r.get('tol'))})")
     no_work = figutil.work_left_out(numbers["labels"], figutil.label_solvers(results.runs))
     if no_work:
         parts += ["", "Left out of the data profiles (work not counted in full): "

@@ -11,7 +11,8 @@ stiff_family.png: the error e against time (setup included) per stiff case, one 
 usage: stability.py STRESS_DIR_OR_CSV [--out FIGDIR]
 Reads STRESS_DIR/stability.csv (or the CSV given; a results folder's summary.csv also works).
 Columns are found by name: solver (label | solver), case (case | snapshot | family), error
-(kkt_rel | kkt_rel_reached | kkt_relative), status, status_confirmed, nonfinite, monotone.
+(accuracy; older files' names are read by plots/record_schema.py), status, status_confirmed, nonfinite,
+monotone.
 """
 from __future__ import annotations
 
@@ -29,11 +30,12 @@ import pandas as pd  # noqa: E402
 from plots import figutil  # noqa: E402
 from plots.figutil import plt  # noqa: E402
 from plots.loader import _to_bool  # noqa: E402
+from plots.record_schema import OLD_COLUMNS, OLD_STABILITY_COLUMNS, current_column_names, with_current_columns  # noqa: E402
 
 CANDIDATES = {
     "solver": ("label", "solver"),
     "case": ("case", "snapshot", "family", "problem"),
-    "error": ("kkt_rel", "kkt_rel_reached", "kkt_relative", "kkt_rel_max", "kkt"),
+    "error": ("accuracy",),
     "status": ("status",),
     "confirmed": ("status_confirmed", "confirmed"),
     "nonfinite": ("nonfinite", "nan_inf", "nonfinite_seen"),
@@ -54,7 +56,7 @@ def read_table(path: str) -> pd.DataFrame:
         file = os.path.join(path, "summary.csv")
     if not os.path.isfile(file):
         raise FileNotFoundError(f"{path}: no stability.csv (nor summary.csv)")
-    return pd.read_csv(file)
+    return with_current_columns(pd.read_csv(file), file, {**OLD_COLUMNS, **OLD_STABILITY_COLUMNS})
 
 
 def cell_marks(row: pd.Series, cols: dict) -> str:
@@ -128,14 +130,14 @@ def stiff_histories(stress_dir: str, df: pd.DataFrame) -> dict:
         with open(path) as f:
             run = json.load(f)
         hist = run.get("history") or {}
-        rows, cols = hist.get("rows") or [], hist.get("columns") or []
-        if not rows or "time_s" not in cols or "kkt_rel" not in cols:
+        rows, cols = hist.get("rows") or [], current_column_names(hist.get("columns") or [], path)
+        if not rows or "time_s" not in cols or "accuracy" not in cols:
             continue
         h = pd.DataFrame(rows, columns=cols)
         # Histories with solve_time_s are stamped from the start of setup (older ones: solve only).
         setup = 0.0 if "solve_time_s" in cols else float((run.get("time") or {}).get("setup_s") or 0.0)
         curve = pd.DataFrame({"time_s": pd.to_numeric(h["time_s"], errors="coerce") + setup,
-                              "error": pd.to_numeric(h["kkt_rel"], errors="coerce")}).dropna()
+                              "error": pd.to_numeric(h["accuracy"], errors="coerce")}).dropna()
         if len(curve):
             out.setdefault(str(case), {})[str(label)] = curve
     return out

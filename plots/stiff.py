@@ -11,7 +11,7 @@ scene at Young's moduli 1e4..1e12 Pa.
 `run` simulates one step of scenes/stiff_slab.json per modulus (the stress cases slab-stiff-*),
 solves the snapshot with each configuration (tol 1e-8, history on) and writes
 runs/<E>__<config>.json, stiff.csv (one line per run) and stiff.png/pdf.
-Error: mprgp's relative KKT error (the harness's common measure); cg ignores J, so its error is
+Error: mprgp's accuracy error e (docs/accuracy.md, the harness's common measure); cg ignores J, so its error is
 its own: the unconstrained residual |b - Ax|_inf relative to its start, from x = 0 (start=zero).
 """
 from __future__ import annotations
@@ -32,6 +32,7 @@ import pandas as pd  # noqa: E402
 
 import figutil  # noqa: E402
 from figutil import plt  # noqa: E402
+from record_schema import current_column_names  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SCENE = os.path.join(HERE, "..", "scenes", "stiff_slab.json")
@@ -53,7 +54,7 @@ STYLE = {"cg-jacobi": (figutil.solver_colour("cg"), "--"), "cg-ichol": (figutil.
 def error_curve(run: dict) -> pd.DataFrame:
     """time_s, iteration and error of one run's history (see the module doc for the error)."""
     hist = run.get("history") or {}
-    cols = hist.get("columns") or []
+    cols = current_column_names(hist.get("columns") or [], "run of " + str(run.get("label", run.get("solver"))))
     rows = hist.get("rows") or []
     df = pd.DataFrame(rows, columns=cols) if rows else pd.DataFrame(columns=["iteration", "time_s", "error"])
     if df.empty:
@@ -68,7 +69,7 @@ def error_curve(run: dict) -> pd.DataFrame:
         start = float(stat.iloc[0]) if len(stat) and stat.iloc[0] > 0 else float("nan")
         df["error"] = stat / start
     else:
-        df["error"] = pd.to_numeric(df["kkt_rel"], errors="coerce")
+        df["error"] = pd.to_numeric(df["accuracy"], errors="coerce")
     return df
 
 

@@ -4,7 +4,7 @@
 ///
 /// Dual:  min 1/2 lambda' S lambda - lambda' q,  lambda >= 0,  S = J A^-1 J',  q = c - J A^-1 b.
 /// A is factored once with CHOLMOD; S is formed column by column (m solves, in blocks of
-/// right-hand sides), so the solver refuses (INVALID_INPUT) problems with more than `max_rows`
+/// right-hand sides), so the solver answers NOT_APPLICABLE for problems with more than `max_rows`
 /// rows (default 2000: S is dense, m^2 doubles). One iteration = one ascending sweep
 ///   lambda_i = max(0, lambda_i - (S lambda - q)_i / S_ii),
 /// and the primal point is x = A^-1 (b + J' lambda) (exact stationarity up to the solve's error).

@@ -39,7 +39,7 @@ SOURCE_PATHS = ["solvers", "problems", "harness", "cmake", "CMakeLists.txt"]
 # match whole demangled names: not the lambdas inside solve ("...) const") nor "[clone .cold]".
 TOGGLES = ["cb::*Solver::solve(cb::QpView const&, cb::SolveContext const&)", "cb::notify_monitor(*)"]
 COLUMNS = ["snapshot", "label", "status", "iterations", "a_products", "a_products_harness",
-           "cholmod_factorizations", "precond_applications", "work", "kkt_rel", "tol", "instructions",
+           "cholmod_factorizations", "precond_applications", "work", "accuracy", "tol", "instructions",
            "time_min_s", "time_noise", "time_samples"]
 # work: A-product equivalents counting factorisations and triangular solves (docs/work.md), the
 # one counter in which pgs's and active-set's CHOLMOD work shows.
@@ -173,14 +173,30 @@ def solve_callgrind(binary, job, out_file):
     return total
 
 
+_OLD_KEY_TOLD = set()
+
+
+def accuracy_object(rec, source):
+    """The run's "accuracy" object. A BASE binary of the previous release may write it only under
+    its old name "kkt_relative": read with a notice (harness/record_schema.hpp; one release)."""
+    if rec.get("accuracy") is not None:
+        return rec["accuracy"]
+    old = rec.get("kkt_relative")
+    if old is not None and source not in _OLD_KEY_TOLD:
+        _OLD_KEY_TOLD.add(source)
+        print("notice: %s: read the old name 'kkt_relative' as 'accuracy' (accepted until the next release)"
+              % source, file=sys.stderr)
+    return old
+
+
 def row_from_record(job, rec, samples):
     counters = rec.get("counters", {})
     row = {"snapshot": job.snapshot, "label": job.label, "status": rec.get("status", ""),
            "iterations": rec.get("iterations")}
     for c in COUNTERS:
         row[c] = counters.get(c)
-    kkt = (rec.get("kkt_relative") or {}).get("max")
-    row["kkt_rel"] = "%.3g" % kkt if isinstance(kkt, (int, float)) else None
+    accuracy = (accuracy_object(rec, job.key()) or {}).get("max")
+    row["accuracy"] = "%.3g" % accuracy if isinstance(accuracy, (int, float)) else None
     row["tol"] = "%g" % rec["tol"] if isinstance(rec.get("tol"), (int, float)) else None
     if samples:
         ordered = sorted(samples)

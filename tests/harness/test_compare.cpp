@@ -27,7 +27,7 @@ using namespace cb;
 namespace {
 
 nlohmann::json record(const std::string& snapshot, const std::string& label, long iterations, long a_products,
-                      double kkt_rel, const std::string& status = "converged")
+                      double accuracy, const std::string& status = "converged")
 {
     return {
         {"label", label},
@@ -36,7 +36,7 @@ nlohmann::json record(const std::string& snapshot, const std::string& label, lon
         {"status", status},
         {"iterations", iterations},
         {"tol", 1e-6},
-        {"kkt_relative", {{"max", kkt_rel}}},
+        {"accuracy", {{"max", accuracy}}},
         {"counters", {{"a_products", a_products}, {"cholmod_factorizations", 0}, {"precond_applications", iterations}}},
         {"time", {{"total_s", 0.01}, {"repeat", 1}}}};
 }
@@ -63,7 +63,7 @@ TEST(Compare, CountersKktStatusAndMissing)
         record("a", "mprgp", 10, 21, 5e-7),                    // one more A-product: regressed
         record("b", "mprgp", 11, 24, 8e-7),                    // fewer: improved
         record("c", "mprgp", 12, 25, 8e-7, "max_iterations"),  // status change
-        record("e", "mprgp", 12, 25, 9.5e-7),                  // kkt worse by 19% but below tol: fine
+        record("e", "mprgp", 12, 25, 9.5e-7),                  // accuracy worse by 19% but below tol: fine
         record("f", "mprgp", 1, 1, 1e-7)};                     // new
     const CompareReport r = compare_runs(base, next);
     EXPECT_TRUE(r.failed());
@@ -80,13 +80,13 @@ TEST(Compare, CountersKktStatusAndMissing)
     EXPECT_NE(table.find("FAIL status changed"), std::string::npos) << table;
     EXPECT_NE(table.find("FAIL missing in NEW"), std::string::npos) << table;
 
-    // KKT above tol and more than 10% worse: regressed; within --kkt-rtol: not.
+    // accuracy above tol and more than 10% worse: regressed; within --accuracy-rtol: not.
     const std::vector<nlohmann::json> b2 = {record("a", "ica", 10, 20, 1e-5)};
     EXPECT_EQ(compare_runs(b2, {record("a", "ica", 10, 20, 1.2e-5)}).rows[0].regressed,
-              std::vector<std::string>{"kkt_rel"});
+              std::vector<std::string>{"accuracy"});
     EXPECT_FALSE(compare_runs(b2, {record("a", "ica", 10, 20, 1.05e-5)}).failed());
     CompareOptions loose;
-    loose.kkt_rtol = 0.5;
+    loose.accuracy_rtol = 0.5;
     EXPECT_FALSE(compare_runs(b2, {record("a", "ica", 10, 20, 1.2e-5)}, loose).failed());
 }
 
@@ -148,25 +148,25 @@ TEST(Compare, BinaryExitCodesOnFolders)
 namespace {
 
 /// A compact record row (harness/perf_record.hpp): snapshot,label,status,iterations,a_products,
-/// a_products_harness,kkt_rel,tol,instructions,time_min_s,time_noise,time_samples.
+/// a_products_harness,accuracy,tol,instructions,time_min_s,time_noise,time_samples.
 struct PerfRow {
     std::string snapshot, label, status = "converged";
     long iterations = 10, a_products = 20, a_products_harness = 18;
-    double kkt_rel = 5e-7;
+    double accuracy = 5e-7;
     long instructions = 1000000;
     double time_min_s = 0.01, time_noise = 0.05;
     long time_samples = 5;
 };
 
 const char* const kPerfHeader =
-    "snapshot,label,status,iterations,a_products,a_products_harness,kkt_rel,tol,instructions,time_min_s,time_noise,"
+    "snapshot,label,status,iterations,a_products,a_products_harness,accuracy,tol,instructions,time_min_s,time_noise,"
     "time_samples\n";
 
 std::string perf_line(const PerfRow& r)
 {
     std::ostringstream out;
     out << r.snapshot << "," << r.label << "," << r.status << "," << r.iterations << "," << r.a_products << ","
-        << r.a_products_harness << "," << r.kkt_rel << ",1e-06," << r.instructions << "," << r.time_min_s << ","
+        << r.a_products_harness << "," << r.accuracy << ",1e-06," << r.instructions << "," << r.time_min_s << ","
         << r.time_noise << "," << r.time_samples << "\n";
     return out.str();
 }
@@ -363,12 +363,12 @@ TEST(ComparePerfRecord, NanCountersMissingJudgedColumnsAndHugeRecordsAreRefused)
         write_file_atomic(path, text);
         return path;
     };
-    const std::string nan_csv = record("nan.csv", "snapshot,label,status,work,kkt_rel\na,cg,converged,nan,1e-9\n");
+    const std::string nan_csv = record("nan.csv", "snapshot,label,status,work,accuracy\na,cg,converged,nan,1e-9\n");
     EXPECT_EQ(error_of([&] { read_perf_record(nan_csv); }),
               nan_csv + ": line 2: column work: expected a finite number, got 'nan'");
-    const std::string inf_csv = record("inf.csv", "snapshot,label,status,kkt_rel\na,cg,converged,-inf\n");
+    const std::string inf_csv = record("inf.csv", "snapshot,label,status,accuracy\na,cg,converged,-inf\n");
     EXPECT_EQ(error_of([&] { read_perf_record(inf_csv); }),
-              inf_csv + ": line 2: column kkt_rel: expected a finite number, got '-inf'");
+              inf_csv + ": line 2: column accuracy: expected a finite number, got '-inf'");
     // NaN through the API (a record built in memory): NaN > x and NaN < x are both false.
     nlohmann::json run = {
         {"snapshot", {{"id", "a"}}}, {"label", "cg"}, {"status", "converged"}, {"counters", {{"work", 10.0}}}};
@@ -389,10 +389,11 @@ TEST(ComparePerfRecord, NanCountersMissingJudgedColumnsAndHugeRecordsAreRefused)
               no_column + ": a/cg: a_products: not recorded in BASE but recorded in NEW, so it would not be judged "
                           "(a baseline must record every judged quantity: regenerate it)");
     const std::string empty_cell =
-        record("empty_cell.csv", "snapshot,label,status,iterations,kkt_rel\na,cg,converged,5,\n");
-    const std::string kkt = record("kkt.csv", "snapshot,label,status,iterations,kkt_rel\na,cg,converged,5,1e-3\n");
-    EXPECT_EQ(error_of([&] { compare_inputs(read_compare_input(empty_cell), read_compare_input(kkt)); }),
-              empty_cell + ": a/cg: kkt_rel: not recorded in BASE but recorded in NEW, so it would not be judged "
+        record("empty_cell.csv", "snapshot,label,status,iterations,accuracy\na,cg,converged,5,\n");
+    const std::string accuracy =
+        record("accuracy.csv", "snapshot,label,status,iterations,accuracy\na,cg,converged,5,1e-3\n");
+    EXPECT_EQ(error_of([&] { compare_inputs(read_compare_input(empty_cell), read_compare_input(accuracy)); }),
+              empty_cell + ": a/cg: accuracy: not recorded in BASE but recorded in NEW, so it would not be judged "
                            "(a baseline must record every judged quantity: regenerate it)");
     // Bounded memory: at most 100000 runs and 4096 characters a line; a FIFO is not waited on.
     std::string huge = "snapshot,label,status\n";

@@ -84,7 +84,7 @@ TEST(Results, SummaryColumnsAndRow)
 {
     const std::string expected =
         "suite,snapshot,label,solver,status,solver_status,criterion,status_confirmed,iterations,a_products,"
-        "work,cholmod_factorizations,kkt_rel,stationarity,primal,dual,complementarity,gap,kkt_rel_solved,m_solved,"
+        "work,cholmod_factorizations,accuracy,stationarity,primal,dual,complementarity,gap,accuracy_solved,m_solved,"
         "objective,energy_gap,violation,native_residual,nonfinite,monotone,setup_s,solve_s,time_s,peak_rss_mb,n,m,tol,"
         "length_scale,length_scale_source";
     std::string header;

@@ -71,7 +71,7 @@ TEST(StressRun, QuickRunGivesHonestOutcomesAndWritesTheTable)
         EXPECT_NE(r.status, "error");
         if (r.status == "converged") {
             EXPECT_TRUE(r.status_confirmed);
-            EXPECT_LE(r.kkt, r.tol * (1 + 1e-9));
+            EXPECT_LE(r.accuracy, r.tol * (1 + 1e-9));
         } else {
             EXPECT_FALSE(r.message.empty());
         }
@@ -90,8 +90,8 @@ TEST(StressRun, QuickRunGivesHonestOutcomesAndWritesTheTable)
     std::string header;
     std::getline(csv, header);
     EXPECT_EQ(header,
-              "solver,case,severity,status,kkt,tol,violation,nonfinite,monotone,time_s,iterations,"
-              "status_confirmed,message,family,n,m,criterion,m_solved,solver_status,kkt_solved,primal,energy_gap");
+              "solver,case,severity,status,accuracy,tol,violation,nonfinite,monotone,time_s,iterations,"
+              "status_confirmed,message,family,n,m,criterion,m_solved,solver_status,accuracy_solved,primal,energy_gap");
     long lines = 0;
     for (std::string line; std::getline(csv, line);) ++lines;
     EXPECT_EQ(lines, 8);
@@ -131,8 +131,8 @@ TEST(StressRun, RecordsRowsDroppedByDecoupling)
     EXPECT_NE(r.status, "converged") << r.message;
     if (r.solver_status == "converged") {
         EXPECT_EQ(r.status, "solved_relaxation");
-        EXPECT_LE(r.kkt_solved, r.tol * (1 + 1e-9));
-        EXPECT_GT(r.kkt, r.tol);
+        EXPECT_LE(r.accuracy_solved, r.tol * (1 + 1e-9));
+        EXPECT_GT(r.accuracy, r.tol);
         EXPECT_TRUE(r.honest());
     }
     EXPECT_NE(stability_markdown(report).find(" (" + std::to_string(r.m_solved) + " rows) |"), std::string::npos);
@@ -175,7 +175,7 @@ TEST(StressCases, FemSimSnapshotsHaveContactsAndActiveSetConverges)
         EXPECT_EQ(r.status, "converged");
         EXPECT_TRUE(r.status_confirmed);
         EXPECT_TRUE(r.honest());
-        EXPECT_LE(r.kkt, r.tol * (1 + 1e-9));
+        EXPECT_LE(r.accuracy, r.tol * (1 + 1e-9));
         EXPECT_GT(r.iterations, 0);  // working-set additions: rows active at the solution
         EXPECT_FALSE(r.nonfinite);
     }
@@ -255,8 +255,8 @@ TEST(StressReportText, ListsAWrongStatus)
     r.status = "unconfirmed";
     r.solver_status = "converged";
     r.criterion = "native";
-    r.kkt = 0.25;
-    r.kkt_solved = 0.25;
+    r.accuracy = 0.25;
+    r.accuracy_solved = 0.25;
     r.primal = 0.125;
     r.energy_gap = NAN;
     r.tol = 1e-6;

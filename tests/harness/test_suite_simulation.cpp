@@ -23,7 +23,7 @@ protected:
         fs::remove_all(root);
         fs::create_directories(root / "sim" / "x" / "snapshots");
         std::ofstream steps(root / "sim" / "x" / "steps.csv");
-        steps << "frame,step,newton_iteration,solver,status,iterations,kkt_rel,time_assembly_s,time_detection_s,"
+        steps << "frame,step,newton_iteration,solver,status,iterations,accuracy,time_assembly_s,time_detection_s,"
                  "time_solve_s,rows,rows_solved,snapshot\n";
         for (int f = 0; f < 6; ++f) {
             char name[64];

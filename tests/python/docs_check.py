@@ -12,11 +12,17 @@ What counts as a citation, in any text file git knows (tracked or untracked, not
 Resolution: a name with a folder is relative to the citing file, then to the repository root; a bare
 name is looked up beside the citing file, at the root, then in docs/. `§n` resolves to a heading
 numbered n (a heading "3. ..."); a quoted name to a heading that contains it.
+Also checked: every repository path a document or a comment cites (`harness/runner.cpp`,
+`solvers/template_solver.{hpp,cpp}`, `harness/cmd_*.cpp`: a path under a top-level source folder,
+braces expanded, globs matching at least one file) exists, relative to the root or to the citing
+file; and, when a built contactbench is at hand ($CB_CONTACTBENCH or build/bin/contactbench),
+the counts the code prints match what the documents say (check_counts below).
 Also reported: any file outside .ci/ that mentions the shared folder beside the checkout (the
 string is assembled below so that this file does not mention it itself).
 
 Exit status 0 when clean, 1 with one line per problem: FILE:LINE: what is wrong.
 """
+import glob
 import os
 import re
 import subprocess
@@ -40,6 +46,21 @@ QUOTED_RE = re.compile(r'"([^"\n]{1,60})"')
 BARE_SECTION_RE = re.compile(r"(?<![\w.])§(\d+)")
 LINK_RE = re.compile(r"\]\(([^)\s]+)\)")
 HEADING_RE = re.compile(r"^#{1,6}\s+(.*?)\s*#*\s*$")
+#: the repository's top-level folders: a path that starts with one of them is a file citation
+SOURCE_FOLDERS = ("solvers", "problems", "harness", "sim", "plots", "tools", "tests", "scenes", "suites",
+                  "examples", "cmake", "docs")
+# A repository path (`harness/runner.cpp`, `solvers/template_solver.{hpp,cpp}`, `harness/cmd_*.cpp`,
+# `solvers/mprgp.*`, `solvers/a_product` for the pair); not inside a longer path or a URL, not a
+# placeholder filled in later (`cmd_<name>.cpp`, `corpus_$t`).
+PATH_RE = re.compile(r"(?<![\w/.$~-])((?:" + "|".join(SOURCE_FOLDERS) + r")/[\w./*{},+-]*[\w*}])(?![<$\w])")
+
+
+def is_placeholder(path: str) -> bool:
+    """A name made up for an example: `scenes/x.json`, `scenes/SCENE.json`, `two_dinos_K.json`,
+    `solvers/my_solver.hpp` (a one-letter stem, an upper-case word, or my_...)."""
+    stem = os.path.basename(path).split(".")[0]
+    return (len(stem) == 1 and stem.islower()) or stem.startswith("my_") or \
+        any(word.isupper() for word in stem.split("_"))
 
 
 def repo_files(repo: str) -> List[str]:
@@ -96,6 +117,63 @@ def skip_reference(ref: str) -> bool:
             or ref.startswith(("http:", "https:")))
 
 
+def expand_braces(path: str) -> List[str]:
+    """`a.{hpp,cpp}` -> [`a.hpp`, `a.cpp`] (one level of braces, as the documents write them)."""
+    m = re.search(r"\{([^{}]*)\}", path)
+    if not m:
+        return [path]
+    return [x for alt in m.group(1).split(",") for x in expand_braces(path[:m.start()] + alt + path[m.end():])]
+
+
+def path_exists(repo: str, citing: str, path: str) -> bool:
+    """PATH (braces expanded, globs matching something) exists at the root or beside CITING."""
+    for candidate in expand_braces(path):
+        found = False
+        for base in (repo, os.path.join(repo, os.path.dirname(citing))):
+            full = os.path.normpath(os.path.join(base, candidate))
+            # a stem names its file pair: `solvers/a_product` -> a_product.hpp, a_product.cpp
+            if ("*" in candidate and glob.glob(full)) or os.path.exists(full) or glob.glob(glob.escape(full) + ".*"):
+                found = True
+                break
+        if not found:
+            return False
+    return True
+
+
+def prose_lines(rel: str, lines: List[str]) -> List[bool]:
+    """Which lines of a file are prose: every line of a document; in code, comment lines (C++ //,
+    shell/CMake/Python #) and the lines of Python docstrings (string data is not a citation)."""
+    if rel.endswith(".md") or os.path.basename(rel) in TEXT_NAMES:
+        return [True] * len(lines)
+    out, in_docstring = [], False
+    for line in lines:
+        stripped = line.strip()
+        if rel.endswith((".cpp", ".hpp", ".h")):
+            out.append(stripped.startswith(("//", "*", "/*")))
+            continue
+        quotes = stripped.count('"' * 3) + stripped.count("'" * 3)
+        out.append(in_docstring or quotes > 0 or stripped.startswith("#"))
+        if quotes % 2 == 1:
+            in_docstring = not in_docstring
+    return out
+
+
+def check_paths(repo: str, rel: str, lines: List[str]) -> List[str]:
+    """Every repository path cited in a document, or in a comment of a code file, exists."""
+    problems: List[str] = []
+    marker = " //" if rel.endswith((".cpp", ".hpp", ".h")) else " #"
+    for i, (line, prose) in enumerate(zip(lines, prose_lines(rel, lines)), 1):
+        if not prose:  # code: only its trailing comment is prose
+            line = line[line.index(marker):] if marker in line else ""
+        for m in PATH_RE.finditer(line):
+            path = m.group(1).rstrip(".,")
+            if path.endswith(".md") or is_placeholder(path):
+                continue  # documents and their sections: checked above; examples' placeholders
+            if not path_exists(repo, rel, path):
+                problems.append(f"{rel}:{i}: cites {path}, which is not in the repository")
+    return problems
+
+
 def check_file(repo: str, rel: str, cache: Dict[str, List[str]]) -> List[str]:
     problems: List[str] = []
     with open(os.path.join(repo, rel), encoding="utf-8", errors="replace") as f:
@@ -139,21 +217,86 @@ def check_file(repo: str, rel: str, cache: Dict[str, List[str]]) -> List[str]:
                     continue
                 if not os.path.exists(os.path.normpath(os.path.join(repo, os.path.dirname(rel), target))):
                     problems.append(f"{rel}:{i}: links to {target}, which is not in the repository")
+    return problems + check_paths(repo, rel, lines)
+
+
+#: "42 seeded cases in 15 families": the stress suite as `contactbench stress --list` prints it
+STRESS_CLAIM_RE = re.compile(r"\b(\d+) seeded\s+cases\s+in\s+(\d+)\s+families")
+#: a row of README.md's solver table: | `name` | what | spec |
+SOLVER_ROW_RE = re.compile(r"^\|\s*`([a-z0-9-]+)`\s*\|(.*)$")
+
+
+def find_binary(repo: str) -> Optional[str]:
+    """$CB_CONTACTBENCH, else REPO/build/bin/contactbench, when it exists."""
+    for candidate in (os.environ.get("CB_CONTACTBENCH"), os.path.join(repo, "build", "bin", "contactbench")):
+        if candidate and os.path.isfile(candidate) and os.access(candidate, os.X_OK):
+            return candidate
+    return None
+
+
+def printed(binary: str, *args: str) -> List[str]:
+    """The lines `binary args...` prints (RuntimeError naming the command when it fails)."""
+    result = subprocess.run([binary, *args], capture_output=True, text=True, timeout=120)
+    if result.returncode != 0:
+        raise RuntimeError(f"{binary} {' '.join(args)} failed (exit {result.returncode}): {result.stderr.strip()}")
+    return [line for line in result.stdout.split("\n") if line.strip()]
+
+
+def check_counts(repo: str, binary: str) -> List[str]:
+    """The counts the code prints, against what the documents claim: the stress suite's cases and
+    families (`stress --list`: one tab-separated line per case, family second), and the solvers
+    (`solvers`: one line per registered solver, name first) against README.md's solver table
+    (every registered solver is named in README.md; every row of the table is a registered solver
+    or marked optional, a peer this build may lack)."""
+    problems: List[str] = []
+    cases = [line.split("\t") for line in printed(binary, "stress", "--list")]
+    n_cases, n_families = len(cases), len({c[1] for c in cases if len(c) > 1})
+    solvers = [line.split()[0] for line in printed(binary, "solvers")]
+    for rel in repo_files(repo):
+        if not rel.endswith(".md") or rel in EXAMPLES:
+            continue
+        with open(os.path.join(repo, rel), encoding="utf-8", errors="replace") as f:
+            text = f.read()
+        for m in STRESS_CLAIM_RE.finditer(text):
+            line = text.count("\n", 0, m.start()) + 1
+            if (int(m.group(1)), int(m.group(2))) != (n_cases, n_families):
+                problems.append(f"{rel}:{line}: says {m.group(1)} seeded cases in {m.group(2)} families; "
+                                f"`contactbench stress --list` prints {n_cases} cases in {n_families} families")
+    readme = os.path.join(repo, "README.md")
+    if os.path.isfile(readme):
+        with open(readme, encoding="utf-8") as f:
+            lines = f.read().split("\n")
+        text = "\n".join(lines)
+        for name in solvers:
+            if "`" + name + "`" not in text:
+                problems.append(f"README.md: does not name the registered solver `{name}`")
+        for i, line in enumerate(lines, 1):
+            m = SOLVER_ROW_RE.match(line)
+            if m and m.group(1) not in solvers and "optional" not in m.group(2):
+                problems.append(f"README.md:{i}: the solver table lists `{m.group(1)}`, which is not registered "
+                                f"(`contactbench solvers`) and not marked optional")
     return problems
 
 
-def check(repo: str) -> List[str]:
+def check(repo: str, binary: Optional[str] = None) -> List[str]:
+    """Every problem found in REPO; the counts only with a contactbench binary (find_binary)."""
     cache: Dict[str, List[str]] = {}
     problems: List[str] = []
     for rel in repo_files(repo):
         if is_text(rel) and rel not in EXAMPLES:
             problems += check_file(repo, rel, cache)
+    if binary:
+        problems += check_counts(repo, binary)
     return problems
 
 
 def main(argv: List[str]) -> int:
     repo = os.path.abspath(argv[1] if len(argv) > 1 else os.path.join(os.path.dirname(__file__), "..", ".."))
-    problems = check(repo)
+    binary = find_binary(repo)
+    if binary is None:
+        print("docs-check: no contactbench binary ($CB_CONTACTBENCH or build/bin/contactbench): the counts the "
+              "code prints are not checked", file=sys.stderr)
+    problems = check(repo, binary)
     for p in problems:
         print(p)
     print(f"docs-check: {len(problems)} problem(s) in {repo}", file=sys.stderr)

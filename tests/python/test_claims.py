@@ -183,7 +183,7 @@ class TestClaimRulesOnConstructedRuns(unittest.TestCase):
             for label, t, status in (("mprgp", 1.0, "converged" if m == 0 else "solved_relaxation"),
                                      ("coupled-fair", 3.0, "converged" if frame != 3 else "max_iterations")):
                 rows.append({"snapshot": f"f{frame}", "label": label, "frame": frame, "m": m, "time_s": t,
-                             "status": status, "kkt_rel": 0.01 if m else 1e-7})
+                             "status": status, "accuracy": 0.01 if m else 1e-7})
         runs = pd.DataFrame(rows)
         frames, with_contact, left_out = fig6.judged_frames(runs, "coupled-fair")
         self.assertEqual((list(frames["snapshot"]), with_contact, left_out), (["f2"], 2, 1))

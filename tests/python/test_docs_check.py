@@ -20,8 +20,14 @@ def write(root, rel, text):
 
 
 class RepositoryIsClean(unittest.TestCase):
-    def test_every_cited_document_and_section_exists(self):
+    def test_every_cited_document_section_and_path_exists(self):
         self.assertEqual(docs_check.check(ROOT), [])
+
+    def test_the_counts_the_code_prints_match_the_documents(self):
+        binary = docs_check.find_binary(ROOT)
+        if binary is None:
+            self.skipTest("no contactbench built (ctest sets CB_CONTACTBENCH)")
+        self.assertEqual(docs_check.check_counts(ROOT, binary), [])
 
 
 class ReportsDanglingReferences(unittest.TestCase):
@@ -72,6 +78,52 @@ class ReportsDanglingReferences(unittest.TestCase):
         write(self.root, ".ci/run", f"export PAPER_DATA_SOURCE={SHARED}/authors/x.tar.gz\n")
         self.assertEqual(self.problems(),
                          [f"Makefile:1: mentions {SHARED} (only .ci/ may: nothing may depend on it)"])
+
+    def test_missing_source_paths(self):
+        write(self.root, "harness/runner.cpp", "")
+        write(self.root, "harness/runner.hpp", "")
+        write(self.root, "harness/cmd_run.cpp", "")
+        write(self.root, "docs/NOTES.md",
+              "harness/runner.cpp, harness/runner.{hpp,cpp}, harness/runner, harness/cmd_*.cpp, harness/runner.*\n"
+              "harness/kkt.*, harness/cmd_<name>.cpp, scenes/x.json, solvers/my_solver.{hpp,cpp}\n"
+              "harness/runner.{hpp,py} and harness/cmd_*.py; see https://example.org/harness/gone.cpp\n")
+        write(self.root, "CMakeLists.txt", "# runs tests/build/no_peers.sh\nadd_test(tests/gone.sh)\n")
+        write(self.root, "harness/a.cpp", '// as harness/gone.hpp says\nconst char* p = "harness/data.txt";\n')
+        write(self.root, "plots/b.py", '"""Reads harness/gone.csv."""\nPATH = "harness/data.txt"  # harness/none.txt\n')
+        self.assertEqual(self.problems(), [
+            "CMakeLists.txt:1: cites tests/build/no_peers.sh, which is not in the repository",
+            "CMakeLists.txt:2: cites tests/gone.sh, which is not in the repository",
+            "docs/NOTES.md:2: cites harness/kkt.*, which is not in the repository",
+            "docs/NOTES.md:3: cites harness/runner.{hpp,py}, which is not in the repository",
+            "docs/NOTES.md:3: cites harness/cmd_*.py, which is not in the repository",
+            "harness/a.cpp:1: cites harness/gone.hpp, which is not in the repository",
+            "plots/b.py:1: cites harness/gone.csv, which is not in the repository",
+            "plots/b.py:2: cites harness/none.txt, which is not in the repository"])
+
+    def fake_binary(self, cases, solvers):
+        """A stand-in contactbench printing `stress --list` and `solvers` as the real one does."""
+        path = os.path.join(self.root, "fake-contactbench")
+        with open(path, "w") as f:
+            f.write("#!/bin/sh\nif [ \"$1\" = stress ]; then printf '%s' '" +
+                    "".join(f"{case}\t{family}\tseverity 0\tx\n" for case, family in cases) +
+                    "'; else printf '%s' '" + "".join(f"{name}  [any J] x\n" for name in solvers) + "'; fi\n")
+        os.chmod(path, 0o755)
+        return path
+
+    def test_counts_the_code_prints(self):
+        binary = self.fake_binary([("a-1", "a"), ("a-2", "a"), ("b-1", "b")], ["mprgp", "command"])
+        write(self.root, "docs/DESIGN.md", "# Design\n\nruns on 3 seeded\ncases in 2 families\n")
+        write(self.root, "README.md", "| name | what |\n|---|---|\n| `mprgp` | ours |\n| `ipopt` | peer (optional) |\n"
+                                      "| `pgs` | gone |\n\nThe `command` entry runs a program.\n")
+        self.assertEqual(docs_check.check_counts(self.root, binary),
+                         ["README.md:5: the solver table lists `pgs`, which is not registered (`contactbench "
+                          "solvers`) and not marked optional"])
+        write(self.root, "docs/DESIGN.md", "# Design\n\nruns on 33 seeded cases in 12 families\n")
+        write(self.root, "README.md", "| `mprgp` | ours |\n")
+        self.assertEqual(docs_check.check_counts(self.root, binary), [
+            "docs/DESIGN.md:3: says 33 seeded cases in 12 families; `contactbench stress --list` prints 3 cases "
+            "in 2 families",
+            "README.md: does not name the registered solver `command`"])
 
     def test_command_line_exit_status(self):
         write(self.root, "a.md", "ALGORITHMS.md §7\n")

@@ -115,7 +115,7 @@ class TestProfiles(TempDirCase):
         recs = [mf.make_run("p0", "a", solve_s=1.0, history=False), mf.make_run("p0", "b", solve_s=2.0, history=False),
                 mf.make_run("p1", "a", solve_s=4.0, history=False), mf.make_run("p1", "b", solve_s=2.0, history=False),
                 mf.make_run("p2", "a", solve_s=1.0, history=False),
-                mf.make_run("p2", "b", solve_s=3.0, final_kkt_rel=1e-1, status="max_iterations", history=False)]
+                mf.make_run("p2", "b", solve_s=3.0, final_accuracy=1e-1, status="max_iterations", history=False)]
         return loader.load_results(mf.write_results(self.tmp, recs))
 
     def test_shifted_geomean_by_hand(self):
@@ -153,11 +153,11 @@ class TestProfiles(TempDirCase):
 
     def test_not_applicable_runs_leave_the_denominators(self):
         # p0: a 1 s, b 2 s; p1: a 4 s, b n/a (a problem class b does not take); p2: a 1 s, b fails
-        na = mf.make_run("p1", "b", solve_s=0.0, final_kkt_rel=float("nan"), status="not_applicable", history=False)
+        na = mf.make_run("p1", "b", solve_s=0.0, final_accuracy=float("nan"), status="not_applicable", history=False)
         recs = [mf.make_run("p0", "a", solve_s=1.0, history=False), mf.make_run("p0", "b", solve_s=2.0, history=False),
                 mf.make_run("p1", "a", solve_s=4.0, history=False), na,
                 mf.make_run("p2", "a", solve_s=1.0, history=False),
-                mf.make_run("p2", "b", solve_s=3.0, final_kkt_rel=1e-1, status="max_iterations", history=False)]
+                mf.make_run("p2", "b", solve_s=3.0, final_accuracy=1e-1, status="max_iterations", history=False)]
         res = loader.load_results(mf.write_results(self.tmp, recs))
         numbers = profiles.compute(res, shift=10)
         self.assertAlmostEqual(numbers["success"].loc["b", 1e-6], 0.5)  # 1 of 2 judged runs, not 1 of 3
@@ -201,7 +201,7 @@ class TestProfiles(TempDirCase):
 
     def test_time_to_tier_counts_setup(self):
         # the history is solve-only (8 iterations over 8 s); setup took 0.5 s
-        rec = mf.make_run("p", "a", iterations=8, solve_s=8.0, setup_s=0.5, final_kkt_rel=10 ** -8.5)
+        rec = mf.make_run("p", "a", iterations=8, solve_s=8.0, setup_s=0.5, final_accuracy=10 ** -8.5)
         res = loader.load_results(mf.write_results(self.tmp, [rec]))
         with_setup = profiles.tier_table(res, [1e-2])
         self.assertAlmostEqual(with_setup.iloc[0]["time_s"], 2.5, places=9)
@@ -232,7 +232,7 @@ class TestProfiles(TempDirCase):
     def test_time_to_tier_from_history(self):
         # KKT decays by 10^-1.0625 per iteration over 8 iterations spread on 8 s: below 1e-2 first at
         # iteration 2 (t = 2 s), below 1e-8 first at iteration 8
-        rec = mf.make_run("p", "a", iterations=8, solve_s=8.0, final_kkt_rel=10 ** -8.5)
+        rec = mf.make_run("p", "a", iterations=8, solve_s=8.0, final_accuracy=10 ** -8.5)
         res = loader.load_results(mf.write_results(self.tmp, [rec]))
         tt = profiles.tier_table(res)
         row = tt[tt["tier"] == 1e-2].iloc[0]
@@ -244,7 +244,7 @@ class TestProfiles(TempDirCase):
         # b met tol only on a problem it changed (decoupled rows) on p1; its error e on the original
         # QP is 1e-3: it reaches the 1e-2 tier but fails 1e-4 and 1e-6, and both solvers are judged on
         # the same two problems (issue 24: no solver ranked on a subset of its own choosing).
-        relax = mf.make_run("p1", "b", solve_s=2.0, final_kkt_rel=1e-3, history=False)
+        relax = mf.make_run("p1", "b", solve_s=2.0, final_accuracy=1e-3, history=False)
         relax["status"], relax["solver_status"] = "solved_relaxation", "converged"
         recs = [mf.make_run("p0", "a", solve_s=1.0, history=False), mf.make_run("p0", "b", solve_s=2.0, history=False),
                 mf.make_run("p1", "a", solve_s=4.0, history=False), relax]
@@ -274,8 +274,8 @@ class TestProfiles(TempDirCase):
 
     def test_status_honesty_and_markdown(self):
         recs = [mf.make_run("p0", "a"), mf.make_run("p1", "a"),
-                mf.make_run("p2", "a", confirmed=False, final_kkt_rel=3e-6),
-                mf.make_run("p0", "b", status="max_iterations", final_kkt_rel=1e-3)]
+                mf.make_run("p2", "a", confirmed=False, final_accuracy=3e-6),
+                mf.make_run("p0", "b", status="max_iterations", final_accuracy=1e-3)]
         folder = mf.write_results(self.tmp, recs)
         res = loader.load_results(folder)
         hon = profiles.status_honesty(res.runs).set_index("label")
@@ -381,7 +381,7 @@ class TestStability(TempDirCase):
         path = os.path.join(self.tmp, "stability.csv")
         with open(path, "w") as f:
             # the header harness/stress.cpp writes
-            f.write("solver,case,severity,status,kkt,tol,violation,nonfinite,monotone,time_s,iterations,"
+            f.write("solver,case,severity,status,accuracy,tol,violation,nonfinite,monotone,time_s,iterations,"
                     "status_confirmed,message,family,n,m,criterion,m_solved\n"
                     "mprgp,stiff,2,converged,1e-7,1e-6,0,false,true,0.1,10,true,,plane,30,4,kkt,4\n"
                     "ica,stiff,2,converged,1e-3,1e-6,0,false,false,0.1,10,false,\"x, y\",plane,30,4,native,4\n"
@@ -394,12 +394,12 @@ class TestStability(TempDirCase):
         self.assertEqual(stability.cell_marks(df.iloc[1], cols), "!~")
         self.assertEqual(stability.cell_marks(df.iloc[2], cols), "N~")
         self.assertEqual(stability.cell_marks(df.iloc[0], cols), "")
-        self.assertEqual(cols["error"], "kkt")
+        self.assertEqual(cols["error"], "accuracy")
 
     def test_stiff_family_figure_from_kept_histories(self):
         # Two stiff cases (family "stiff-slab") and one other; runs/ holds the stiff runs' records.
         with open(os.path.join(self.tmp, "stability.csv"), "w") as f:
-            f.write("solver,case,severity,status,kkt,tol,violation,nonfinite,monotone,time_s,iterations,"
+            f.write("solver,case,severity,status,accuracy,tol,violation,nonfinite,monotone,time_s,iterations,"
                     "status_confirmed,message,family,n,m,criterion,m_solved\n"
                     "mprgp,slab-stiff-1e12,3,converged,1e-9,1e-8,0,false,true,0.3,2,true,,stiff-slab,9,2,kkt,2\n"
                     "mprgp:precond=ichol,slab-stiff-1e4,1,converged,1e-9,1e-8,0,false,true,0.3,2,true,,stiff-slab,"
@@ -407,7 +407,7 @@ class TestStability(TempDirCase):
                     "mprgp,baseline-plane,0,converged,1e-9,1e-8,0,false,true,0.3,2,true,,baseline,9,2,kkt,2\n")
         os.makedirs(os.path.join(self.tmp, "runs"))
         cols = ["iteration", "time_s", "a_products", "step", "stationarity", "primal", "dual", "complementarity",
-                "gap", "kkt_rel", "objective", "native_residual", "active_set"]
+                "gap", "accuracy", "objective", "native_residual", "active_set"]
         for case, label in (("slab-stiff-1e12", "mprgp"), ("slab-stiff-1e4", "mprgp:precond=ichol"),
                             ("baseline-plane", "mprgp")):
             rows = [[k, 0.1 * (k + 1), k, "cg", 0, 0, 0, 0, 0, 10.0 ** -(3 * k), 0, 0, 1] for k in range(3)]

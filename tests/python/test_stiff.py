@@ -21,7 +21,7 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 import stiff  # noqa: E402
 
 COLUMNS = ["iteration", "time_s", "a_products", "step", "stationarity", "primal", "dual", "complementarity",
-           "kkt", "kkt_rel", "objective", "native_residual", "active_set"]
+           "gap", "accuracy", "objective", "native_residual", "active_set"]
 
 
 def run_json(solver, errors, setup_s=0.5):

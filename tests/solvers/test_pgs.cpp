@@ -174,7 +174,7 @@ TEST_P(SyntheticFamilies, PgsAndIcaMeetTheirToleranceAndAgreeWithActiveSet)
     else
         EXPECT_GT(kkt_i, 1e-6) << i.message;  // an honest "not converged"
     std::cout << GetParam() << ": n=" << qp.n() << " m=" << qp.m() << " |F_pgs-F*|/max(1,|F*|)=" << gap
-              << " pgs sweeps=" << p.iterations << "; ica " << to_string(i.status) << " kkt_rel=" << kkt_i
+              << " pgs sweeps=" << p.iterations << "; ica " << to_string(i.status) << " accuracy=" << kkt_i
               << " iterations=" << i.iterations
               << " |F_ica-F*|/max(1,|F*|)=" << relative_gap(objective(qp.view(), i.x), f_ref) << "\n";
 }

@@ -1,0 +1,34 @@
+#pragma once
+/// The problem a solver is given in a run (harness/runner.hpp): the QP in the file, or its
+/// decoupled rows when the run asks for it or the solver requires it, and the warm-start
+/// multipliers restricted to the rows it sees.
+#include "harness/runner.hpp"
+#include "solvers/qp.hpp"
+
+#include <nlohmann/json.hpp>
+#include <vector>
+
+namespace cb {
+
+/// The QP a solver sees. `qp` points at the original or at `decoupled`, so a SolverProblem is
+/// filled in place and never copied.
+struct SolverProblem {
+    const Qp* qp = nullptr;
+    Qp decoupled;                ///< the kept rows, when decoupling applied
+    std::vector<int> kept_rows;  ///< rows of the original J the solver sees (empty: all of them)
+    bool applied = false;        ///< decoupling removed rows: qp == &decoupled
+    nlohmann::json decouple;     ///< the record's "decouple" object
+    bool is_original() const { return !applied; }
+};
+
+/// Decoupling as RunOptions::decouple asks: "auto" when the solver requires a decoupled J that the
+/// QP does not have, "none" never, an order name always (when there are rows).
+void choose_solver_problem(const Qp& original, bool requires_decoupled, const RunOptions& options,
+                           SolverProblem& problem);
+
+/// Warm-start multipliers that fit the rows the solver sees (matched by row index), or nullptr:
+/// `lambda0` of the original m (restricted to the kept rows) or of the solved QP's m. `storage`
+/// holds the restricted copy.
+const Vec* warm_multipliers(const Vec* lambda0, const Qp& original, const SolverProblem& problem, Vec& storage);
+
+}  // namespace cb
