@@ -16,7 +16,7 @@ from typing import Dict, List, Optional
 
 from plots.claims import ABOVE, INCONCLUSIVE, NOT_MEASURED, Claim  # noqa: E402
 from plots.loader import STATUS_MEANINGS  # noqa: E402
-from plots.paper_context import FigureOutcome, NotProduced, PaperContext  # noqa: E402
+from plots.paper_context import FigureOutcome, NotProduced, PaperContext, round_folders  # noqa: E402
 
 #: the claims every report has a row for, in order, with the figure that measures each
 EXPECTED_CLAIMS = [
@@ -189,12 +189,10 @@ def context_from_out(out: str, data: Optional[str], quick: bool = False) -> Pape
     if os.path.isdir(runs):
         for name in sorted(os.listdir(runs)):
             ctx.results[name] = os.path.join(runs, name)
-    rounds = os.path.join(out, "rounds")
-    if os.path.isdir(rounds):
-        for name in sorted(os.listdir(rounds)):
-            extra = sorted((d for d in os.listdir(os.path.join(rounds, name)) if d.isdigit()), key=int)
-            if name in ctx.results and extra:
-                ctx.rounds[name] = [ctx.results[name]] + [os.path.join(rounds, name, d) for d in extra]
+    for name in list(ctx.results):
+        extra = round_folders(out, name)
+        if extra:
+            ctx.rounds[name] = [ctx.results[name]] + extra
     sims = os.path.join(out, "sim")
     if os.path.isdir(sims):
         for name in sorted(os.listdir(sims)):
