@@ -169,8 +169,8 @@ def run_standalone(produce, argv, suite: str, description: str) -> int:
         print(f"not produced: {err}")
         return 1
     used = ctx.rounds.get(suite)
-    print(f"{suite}: timed claims from {len(used)} rounds: {', '.join(used)}" if used else
-          f"{suite}: one round ({ctx.results[suite]}); timed claims need {min_rounds()} (--round DIR)")
+    print(f"{suite}: {len(used)} rounds: {', '.join(used)}" if used else
+          f"{suite}: one round ({ctx.results[suite]}; a timed claim needs {min_rounds()}: --round DIR)")
     for f in outcome.files:
         print(f)
     for c in outcome.claims:
