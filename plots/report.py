@@ -108,7 +108,8 @@ def render(ctx: PaperContext, outcomes: List[FigureOutcome], meta: Optional[dict
     claims = collect_claims(outcomes)
     lines = ["# Reproduction of Li et al. 2015, \"Deformable Objects Collision Handling with Fast Convergence\"", ""]
     mode = "quick (coarse meshes, few frames)" if ctx.quick else "full"
-    lines.append(f"Mode: {mode}. " + (f"Run time of this reproduction: {meta['elapsed_s']:.0f} s. " if "elapsed_s" in meta else "")
+    cpu = f" wall, {meta['cpu_s']:.0f} s CPU (this script and contactbench)" if "cpu_s" in meta else ""
+    lines.append(f"Mode: {mode}. " + (f"Run time of this reproduction: {meta['elapsed_s']:.0f} s{cpu}. " if "elapsed_s" in meta else "")
                  + (f"Authors' data: `{ctx.data}`." if ctx.data else "Authors' data: not given (--data)."))
     if meta.get("provenance"):
         p = meta["provenance"]
@@ -117,7 +118,8 @@ def render(ctx: PaperContext, outcomes: List[FigureOutcome], meta: Optional[dict
                                                       ("cpu", "cores", "compiler", "build_type", "git_commit", "git_dirty", "blas")
                                                       if k in p) + ".")
     if meta.get("full_run_s") is not None:
-        lines.append(f"The last full run took {meta['full_run_s']:.0f} s.")
+        cpu = meta.get("full_run_cpu_s")
+        lines.append(f"The last full run took {meta['full_run_s']:.0f} s" + (f" ({cpu:.0f} s CPU)." if cpu else "."))
     lines += ["", "Every number below is computed from this run's results and the authors' CSV files; the "
               "paper's numbers are quoted from paper.txt with their section. Verdicts are computed by rules "
               "stated per row.", "", "## Claims", "",

@@ -66,6 +66,9 @@ class TestStandaloneRounds(unittest.TestCase):
             snaps = reproduce.pick_frame(reproduce.snapshots_of(ctx, "two_dinos_1303"), 11)
             reproduce.run_suite(runner, ctx, "fig11", os.path.join(ROOT, "suites", "paper", "fig11.json"), snaps, False)
         rounds = reproduce.TIMED_SUITES["fig11"]
+        # every contactbench step says its wall and CPU time (CPU: the child's, from os.times)
+        first = next(s for s in runner.steps if s.startswith("run fig11:"))
+        self.assertRegex(first, r"^run fig11: exit 0 in \d+\.\d s \(CPU \d+\.\d s\)$")
         from_report = report.context_from_out(out, None, quick=True)
         self.assertEqual(len(from_report.rounds["fig11"]), rounds)
         alone = standalone_context([os.path.join(out, "runs", "fig11"), "--out", os.path.join(self.tmp, "alone")],
