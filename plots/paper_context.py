@@ -14,6 +14,7 @@ from typing import Dict, List, Optional
 import pandas as pd
 
 from plots.claims import Claim
+from plots.intervals import min_rounds
 from plots.loader import Results, load_results, load_simulation
 
 
@@ -113,10 +114,37 @@ class PaperContext:
         return pd.read_csv(path) if os.path.isfile(path) else None
 
 
+def round_folders(out: str, name: str) -> List[str]:
+    """The repeat rounds reproduce.py wrote for suite `name` under OUT: OUT/rounds/<name>/<k> for
+    k = 2, 3, ... (numeric order), those holding a summary.csv; [] when it ran once."""
+    base = os.path.join(out, "rounds", name)
+    if not os.path.isdir(base):
+        return []
+    ks = sorted((d for d in os.listdir(base) if d.isdigit()), key=int)
+    return [os.path.join(base, d) for d in ks if os.path.isfile(os.path.join(base, d, "summary.csv"))]
+
+
+def standalone_rounds(results: str, explicit: List[str]) -> List[str]:
+    """Every round of a suite for a figure script run on its own, round 1 (RESULTS) first: the
+    --round folders when given, else the rounds reproduce.py laid out beside RESULTS (RESULTS =
+    OUT/runs/<suite>, rounds in OUT/rounds/<suite>/<k>), so that the script judges its timed claims
+    on the same rounds as the report."""
+    if explicit:
+        return [results] + list(explicit)
+    parent = os.path.dirname(os.path.abspath(results))
+    if os.path.basename(parent) != "runs":
+        return [results]
+    return [results] + round_folders(os.path.dirname(parent), os.path.basename(os.path.abspath(results)))
+
+
 def standalone_context(argv, suite: str, description: str) -> PaperContext:
-    """Command line of a figure script run on its own: RESULTS_DIR [--data DIR] [--out DIR]."""
+    """Command line of a figure script run on its own: RESULTS_DIR [--round DIR ...] [--data DIR]
+    [--out DIR]."""
     parser = argparse.ArgumentParser(description=description)
     parser.add_argument("results", help=f"results folder of the '{suite}' suite")
+    parser.add_argument("--round", action="append", default=[], metavar="DIR", dest="rounds",
+                        help="a repeat round's results folder, repeatable (default: OUT/rounds/<suite>/<k> "
+                             "when RESULTS is OUT/runs/<suite>, as `make reproduce` writes them)")
     parser.add_argument("--data", default=default_data_dir(),
                         help="the authors' data (default $CB_CACHE/paper-data, written by `make paper-data`)")
     parser.add_argument("--out", default=None, help="output folder (figures/ goes inside; default: RESULTS)")
@@ -124,6 +152,9 @@ def standalone_context(argv, suite: str, description: str) -> PaperContext:
                         help="simulation folders (table1: scene=DIR), repeatable")
     args = parser.parse_args(argv)
     ctx = PaperContext(out=args.out or args.results, data=args.data, results={suite: args.results})
+    rounds = standalone_rounds(args.results, args.rounds)
+    if len(rounds) > 1:
+        ctx.rounds[suite] = rounds
     for item in args.sim:
         key, _, folder = item.partition("=")
         ctx.sims[key] = folder
@@ -137,6 +168,9 @@ def run_standalone(produce, argv, suite: str, description: str) -> int:
     except NotProduced as err:
         print(f"not produced: {err}")
         return 1
+    used = ctx.rounds.get(suite)
+    print(f"{suite}: {len(used)} rounds: {', '.join(used)}" if used else
+          f"{suite}: one round ({ctx.results[suite]}; a timed claim needs {min_rounds()}: --round DIR)")
     for f in outcome.files:
         print(f)
     for c in outcome.claims:

@@ -16,7 +16,7 @@ from typing import Dict, List, Optional
 
 from plots.claims import ABOVE, INCONCLUSIVE, NOT_MEASURED, Claim  # noqa: E402
 from plots.loader import STATUS_MEANINGS  # noqa: E402
-from plots.paper_context import FigureOutcome, NotProduced, PaperContext  # noqa: E402
+from plots.paper_context import FigureOutcome, NotProduced, PaperContext, round_folders  # noqa: E402
 
 #: the claims every report has a row for, in order, with the figure that measures each
 EXPECTED_CLAIMS = [
@@ -108,7 +108,8 @@ def render(ctx: PaperContext, outcomes: List[FigureOutcome], meta: Optional[dict
     claims = collect_claims(outcomes)
     lines = ["# Reproduction of Li et al. 2015, \"Deformable Objects Collision Handling with Fast Convergence\"", ""]
     mode = "quick (coarse meshes, few frames)" if ctx.quick else "full"
-    lines.append(f"Mode: {mode}. " + (f"Run time of this reproduction: {meta['elapsed_s']:.0f} s. " if "elapsed_s" in meta else "")
+    cpu = f" wall, {meta['cpu_s']:.0f} s CPU (this script and contactbench)" if "cpu_s" in meta else ""
+    lines.append(f"Mode: {mode}. " + (f"Run time of this reproduction: {meta['elapsed_s']:.0f} s{cpu}. " if "elapsed_s" in meta else "")
                  + (f"Authors' data: `{ctx.data}`." if ctx.data else "Authors' data: not given (--data)."))
     if meta.get("provenance"):
         p = meta["provenance"]
@@ -117,7 +118,8 @@ def render(ctx: PaperContext, outcomes: List[FigureOutcome], meta: Optional[dict
                                                       ("cpu", "cores", "compiler", "build_type", "git_commit", "git_dirty", "blas")
                                                       if k in p) + ".")
     if meta.get("full_run_s") is not None:
-        lines.append(f"The last full run took {meta['full_run_s']:.0f} s.")
+        cpu = meta.get("full_run_cpu_s")
+        lines.append(f"The last full run took {meta['full_run_s']:.0f} s" + (f" ({cpu:.0f} s CPU)." if cpu else "."))
     lines += ["", "Every number below is computed from this run's results and the authors' CSV files; the "
               "paper's numbers are quoted from paper.txt with their section. Verdicts are computed by rules "
               "stated per row.", "", "## Claims", "",
@@ -189,12 +191,10 @@ def context_from_out(out: str, data: Optional[str], quick: bool = False) -> Pape
     if os.path.isdir(runs):
         for name in sorted(os.listdir(runs)):
             ctx.results[name] = os.path.join(runs, name)
-    rounds = os.path.join(out, "rounds")
-    if os.path.isdir(rounds):
-        for name in sorted(os.listdir(rounds)):
-            extra = sorted((d for d in os.listdir(os.path.join(rounds, name)) if d.isdigit()), key=int)
-            if name in ctx.results and extra:
-                ctx.rounds[name] = [ctx.results[name]] + [os.path.join(rounds, name, d) for d in extra]
+    for name in list(ctx.results):
+        extra = round_folders(out, name)
+        if extra:
+            ctx.rounds[name] = [ctx.results[name]] + extra
     sims = os.path.join(out, "sim")
     if os.path.isdir(sims):
         for name in sorted(os.listdir(sims)):

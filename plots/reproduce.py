@@ -81,18 +81,30 @@ QUICK_BUDGET_S = 280
 TIMED_SUITES = {"fig6": min_rounds(), "fig10": 8, "fig11": 8}
 
 
+def process_cpu() -> float:
+    """User + system CPU seconds of this process and of its children that have been waited for."""
+    t = os.times()
+    return t.user + t.system + t.children_user + t.children_system
+
+
 class Runner:
     """Shells out to contactbench, logs every command, keeps a time budget."""
 
     def __init__(self, contactbench: str, budget_s: Optional[float], log_path: str):
         self.cb = contactbench
         self.start = time.monotonic()
+        self.cpu_start = process_cpu()
         self.budget = budget_s
         self.steps: List[str] = []
         self.log_path = log_path
 
     def elapsed(self) -> float:
         return time.monotonic() - self.start
+
+    def cpu(self) -> float:
+        """CPU seconds (user + system) since the start, of this process and of the contactbench
+        runs it waited for: on a loaded machine the wall time grows with the load, this much less."""
+        return process_cpu() - self.cpu_start
 
     def remaining(self) -> Optional[float]:
         return None if self.budget is None else self.budget - self.elapsed()
@@ -109,7 +121,7 @@ class Runner:
             return 124, "quick-mode time budget exhausted"
         cmd = [self.cb] + args
         self.say(f"{what}: {' '.join(cmd)}")
-        t0 = time.monotonic()
+        t0, cpu0 = time.monotonic(), self.cpu()
         timeout = rem if rem is not None else 6 * 3600
         errors: List[str] = []
         try:
@@ -140,8 +152,9 @@ class Runner:
             self.say(f"{what}: timed out after {dt:.0f} s")
             return 124, f"timed out after {dt:.0f} s"
         err = errors[-1] if errors else ""
-        self.steps.append(f"{what}: exit {rc} in {dt:.1f} s" + (f" ({err})" if rc else ""))
-        self.say(f"{what}: exit {rc} in {dt:.1f} s")
+        cpu = self.cpu() - cpu0
+        self.steps.append(f"{what}: exit {rc} in {dt:.1f} s (CPU {cpu:.1f} s)" + (f" ({err})" if rc else ""))
+        self.say(f"{what}: exit {rc} in {dt:.1f} s (CPU {cpu:.1f} s)")
         return rc, err
 
 
@@ -565,12 +578,14 @@ def main(argv=None) -> int:
             previous = json.load(f)
     elapsed = runner.elapsed()
     full_run_s = elapsed if not args.quick else previous.get("full_run_s")
+    full_run_cpu_s = runner.cpu() if not args.quick else previous.get("full_run_cpu_s")
     strips = {}
     for key, folder in sorted(ctx.sims.items()):
         found_strips = sorted(glob.glob(os.path.join(folder, "*_strip.png")))
         if found_strips:
             strips[key] = found_strips[0]
-    meta = {"quick": args.quick, "elapsed_s": elapsed, "strips": strips, "full_run_s": full_run_s, "steps": runner.steps,
+    meta = {"quick": args.quick, "elapsed_s": elapsed, "cpu_s": runner.cpu(), "strips": strips, "full_run_s": full_run_s,
+            "full_run_cpu_s": full_run_cpu_s, "steps": runner.steps,
             "reasons": ctx.reasons, "profiles": profile_paths, "provenance": provenance,
             "contactbench": runner.cb, "data": data}
     if full_run_s is None:

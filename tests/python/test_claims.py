@@ -191,6 +191,12 @@ class TestClaimRulesOnConstructedRuns(unittest.TestCase):
         no_contact = runs.assign(m=0)
         self.assertTrue(math.isnan(fig6.time_ratio(no_contact, "coupled-fair")[0]))
 
+    def test_table1_says_which_frames_of_each_scene_it_judged(self):
+        from plots import table1
+        rows = [{"scene": "longcube", "runs": 20, "frames_run": 20, "frames": 100, "contact_runs": 8},
+                {"scene": "bunny_glass"}]  # not run: not listed
+        self.assertEqual(table1.frames_run(rows), "longcube: 20 of 100 frames, 8 with contact")
+
 
 if __name__ == "__main__":
     unittest.main()
