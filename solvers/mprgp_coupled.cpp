@@ -46,6 +46,10 @@ const SettingsTable<MprgpCoupledSettings>& mprgp_coupled_settings_table()
             .integer("sparse_max_updates", &MprgpCoupledSettings::sparse_max_updates, 1, 100000000,
                      "operators = components, components above dense_max_rows: a face or LCP set that changes in "
                      "more rows than this is refactored; fewer are CHOLMOD row additions / deletions")
+            .integer("sparse_dense_set_rows", &MprgpCoupledSettings::sparse_dense_set_rows, 0, 100000000,
+                     "operators = components, components above dense_max_rows: an LCP whose set has at most this "
+                     "many rows solves on a dense factor of the set's Gram matrix, not the component's masked factor "
+                     "(0: never)")
             .choice("trial", &MprgpCoupledSettings::trial, {"chain", "project"},
                     "a CG trial y that left the set with F(P(y)) < F(P(x)): chain (Alg. 2: the chain goes on from the "
                     "infeasible y) | project: x = P(y) and the chain restarts on its face")
@@ -277,12 +281,31 @@ private:
             m_z = m_phi;
             return;
         }
-        m_tmp = m_dinv.cwiseProduct(m_g);
-        rows_times(m_tmp, m_jdg);
+        // z = D^-1 (g - J_A' eta) (J_A z = 0): one pass for D^-1 g, then only the DOFs of the face
+        // rows, where g - J_A' eta is accumulated row by row as a full copy would be.
+        m_z = m_dinv.cwiseProduct(m_g);
+        rows_times(m_z, m_jdg);
         m_ops->jacobi_multipliers(m_jdg, m_eta, m_cnt);
-        m_tmp = m_g;
+        for (int j : m_face_dofs) m_tmp[j] = m_g[j];
         add_rows_transpose(m_eta, -1.0, m_tmp);
-        m_z = m_dinv.cwiseProduct(m_tmp);  // J_A z = 0
+        for (int j : m_face_dofs) m_z[j] = m_dinv[j] * m_tmp[j];
+    }
+    /// m_face_dof / m_face_dofs: the DOFs some face row touches (after every face change).
+    void list_face_dofs()
+    {
+        for (int j : m_face_dofs) m_face_dof[static_cast<size_t>(j)] = 0;
+        m_face_dofs.clear();
+        for (Eigen::Index i = 0; i < m_m; ++i) {
+            if (!m_active[static_cast<size_t>(i)]) continue;
+            for (SpMat::InnerIterator it(m_J, i); it; ++it) {
+                const int j = static_cast<int>(it.col());
+                if (!m_face_dof[static_cast<size_t>(j)]) {
+                    m_face_dof[static_cast<size_t>(j)] = 1;
+                    m_face_dofs.push_back(j);
+                }
+            }
+        }
+        m_face_dofs_known = true;
     }
     /// Chain start at the current (feasible) x with the current g: face, phi, z, p, F.
     void restart()
@@ -295,6 +318,7 @@ private:
             m_active[static_cast<size_t>(i)] = a;
         }
         if (changed) ++m_cnt.pivots;  // an active-set change
+        if (changed || !m_face_dofs_known) list_face_dofs();
         m_ops->set_face(m_active, m_cnt);
         face_gradient(true);
         m_p = m_z;
@@ -318,8 +342,9 @@ private:
     void monitor_view(IterationInfo& shown)
     {
         if (!m_chopped_exact) {
-            Counters monitor_only;
-            chopped_gradient(monitor_only, false);
+            m_monitor_chopped = Counters();
+            chopped_gradient(m_monitor_chopped, false);
+            m_chopped_by_monitor = true;
         }
         shown.lambda = &m_mu;
         shown.native_residual = m_native;
@@ -360,7 +385,11 @@ private:
     double m_native = 0.0, m_error = 0.0, m_face_error = 0.0, m_beta2 = 0.0, m_phi2 = 0.0;
     double m_primal = 0.0, m_beta2_upper = 0.0;
     bool m_chopped_exact = false;
-    std::vector<char> m_face_dof;
+    bool m_chopped_by_monitor = false;  // m_monitor_chopped: that solve's work, not yet counted
+    Counters m_monitor_chopped;
+    std::vector<char> m_face_dof;  // flags of m_face_dofs
+    std::vector<int> m_face_dofs;
+    bool m_face_dofs_known = false;
     long m_chopped_solved = 0, m_chopped_deferred = 0, m_proportional_by_bound = 0;
     long m_proportional_by_sweeps = 0, m_bound_sweeps = 0;
     Vec m_mu_bound;
@@ -373,10 +402,6 @@ void CoupledRun::evaluate(bool exact)
     rows_times(m_x, m_jx);
     // The parts of the accuracy error that do not depend on mu: the feasibility, and the
     // stationarity at DOFs no face row touches (there g - J_A'mu = g = phi for every mu).
-    std::fill(m_face_dof.begin(), m_face_dof.end(), 0);
-    for (Eigen::Index i = 0; i < m_m; ++i)
-        if (m_active[static_cast<size_t>(i)])
-            for (SpMat::InnerIterator it(m_J, i); it; ++it) m_face_dof[static_cast<size_t>(it.col())] = 1;
     double stat_phi = 0.0, stat_free = 0.0;
     for (Eigen::Index j = 0; j < m_n; ++j) {
         const double r = std::abs(m_phi[j]) * m_scale.inv_diag[j];
@@ -400,6 +425,7 @@ void CoupledRun::evaluate(bool exact)
     for (int j : m_touched) m_beta2_upper += m_d[j] * m_d[j];
     clear_d();
     m_chopped_exact = false;
+    m_chopped_by_monitor = false;
     const double error_lower = std::max(stat_free, m_primal) * m_scale.inv_length;
     const bool native = m_st.common.stop == StopRule::NATIVE;
     // ||phi + beta||^2 = ||phi||^2 + ||beta||^2 (beta in range(J_A'), phi in its complement).
@@ -418,7 +444,20 @@ void CoupledRun::evaluate(bool exact)
 
 void CoupledRun::chopped_gradient(Counters& cnt, bool solver_work)
 {
-    if (m_chopped_exact) return;
+    if (m_chopped_exact) {
+        if (solver_work && m_chopped_by_monitor) {
+            // The solver needs the solve the monitor had done: its work counts now, as without a monitor.
+            m_cnt.lcp_iterations += m_monitor_chopped.lcp_iterations;
+            m_cnt.pgs_sweeps += m_monitor_chopped.pgs_sweeps;
+            m_cnt.cholmod_factorizations += m_monitor_chopped.cholmod_factorizations;
+            m_cnt.cholmod_solves += m_monitor_chopped.cholmod_solves;
+            m_cnt.work_flops += m_monitor_chopped.work_flops;
+            m_lcp_by_use.chopped += m_monitor_chopped.lcp_iterations;
+            ++m_chopped_solved;
+            m_chopped_by_monitor = false;
+        }
+        return;
+    }
     // q_A = J_A (g - phi) on the face rows for the chopped LCP; beta = J_A'(nu - mu).
     for (Eigen::Index i = 0; i < m_m; ++i) m_q[i] = m_active[static_cast<size_t>(i)] ? m_jg[i] - m_jphi[i] : 0.0;
     const long pivots_before = cnt.lcp_iterations;
@@ -633,6 +672,7 @@ SolverResult CoupledRun::run()
     opt.jacobi = m_jacobi;
     opt.dense_max_rows = m_st.dense_max_rows;
     opt.sparse_max_updates = m_st.sparse_max_updates;
+    opt.sparse_dense_set_rows = m_st.sparse_dense_set_rows;
     opt.lcp_max_pivots = m_st.lcp_max_pivots;
     opt.pgs_max_sweeps = m_st.pgs_max_sweeps;
     m_ops = std::make_unique<CoupledFaceOperators>(m_J, m_dinv, opt);
@@ -663,6 +703,7 @@ SolverResult CoupledRun::run()
     m_violated.assign(static_cast<size_t>(m_m), 0);
     m_mark.assign(static_cast<size_t>(m_n), 0);
     m_face_dof.assign(static_cast<size_t>(m_n), 0);
+    m_face_dofs.reserve(static_cast<size_t>(m_J.nonZeros()));
     m_mu_bound.setZero(m_m);
     m_touched.reserve(static_cast<size_t>(m_J.nonZeros()));
 
