@@ -586,8 +586,7 @@ class LargeBlock final : public RowBlock {
 public:
     LargeBlock(const SpMat& J, std::vector<int> rows, const Vec& dinv, const CoupledOperatorOptions& opt)
         : RowBlock(std::move(rows)), m_jacobi(opt.jacobi), m_max_pivots(opt.lcp_max_pivots),
-          m_max_sweeps(opt.pgs_max_sweeps),
-          m_dense_set_rows(static_cast<size_t>(std::max(0L, opt.sparse_dense_set_rows)))
+          m_max_sweeps(opt.pgs_max_sweeps)
     {
         {
             const SpMat JB = block_rows(J, m_rows);
@@ -624,8 +623,6 @@ public:
         m_cur.setZero(static_cast<Eigen::Index>(k));
         m_w.setZero(static_cast<Eigen::Index>(k));
         m_bad.reserve(k);
-        m_position.assign(k, -1);
-        m_set_rows.reserve(std::min(k, m_dense_set_rows));
     }
 
     void face_solve(const double* rhs, double* out, bool weighted, Counters& cnt) override
@@ -689,12 +686,10 @@ private:
         if (m_jacobi) m_face_factor_d->set_mask(m_mask, cnt);
     }
 
-    /// m_z = G(S, S)^-1 q_S on the set S (zero off it): a small S by a dense Cholesky factor of its
-    /// scaled Gram matrix, else with the set's masked factor modified to S.
+    /// m_z = G(S, S)^-1 q_S on the set S (zero off it), with the set's factor modified to S.
     bool solve_on_set(const std::vector<int>& universe, const double* q, const std::vector<char>& set,
                       MaskedGramFactor& f, Counters& cnt)
     {
-        if (dense_solve_on_set(universe, q, set, cnt)) return true;
         std::fill(m_mask.begin(), m_mask.end(), 0);
         for (size_t r = 0; r < universe.size(); ++r)
             if (set[r]) m_mask[static_cast<size_t>(universe[r])] = 1;
@@ -704,52 +699,6 @@ private:
             if (set[r]) m_b[universe[r]] = m_scale[universe[r]] * q[r];
         f.solve(m_b.data(), cnt);
         m_z = m_scale.cwiseProduct(m_b);
-        ++cnt.lcp_iterations;
-        return true;
-    }
-
-    /// solve_on_set for a set of at most sparse_dense_set_rows rows: a projection LCP's set (10-100
-    /// rows on flank_press) costs a full solve and row modifications of the component's 1152-row
-    /// factor, against k^3/3 flops here. The masked factor is left as it is (modified when a set
-    /// next needs it). @return false (nothing done) for a larger set or a failed factorisation.
-    bool dense_solve_on_set(const std::vector<int>& universe, const double* q, const std::vector<char>& set,
-                            Counters& cnt)
-    {
-        m_set_rows.clear();
-        for (size_t r = 0; r < universe.size(); ++r)
-            if (set[r]) {
-                if (m_set_rows.size() >= m_dense_set_rows) return false;
-                m_set_rows.push_back(static_cast<int>(r));
-            }
-        const int k = static_cast<int>(m_set_rows.size());
-        if (k == 0) return false;
-        m_dense.assign(static_cast<size_t>(k) * static_cast<size_t>(k), 0.0);
-        for (int a = 0; a < k; ++a) m_position[static_cast<size_t>(universe[static_cast<size_t>(m_set_rows[a])])] = a;
-        for (int a = 0; a < k; ++a) {
-            const int j = universe[static_cast<size_t>(m_set_rows[static_cast<size_t>(a)])];
-            for (SpMatCol::InnerIterator it(m_gram, j); it; ++it) {
-                const int b = m_position[static_cast<size_t>(it.row())];
-                if (b < 0) continue;
-                m_dense[static_cast<size_t>(b) * static_cast<size_t>(k) + static_cast<size_t>(a)] =
-                    m_scale[it.row()] * it.value() * m_scale[j] + (b == a ? GRAM_SHIFT : 0.0);
-            }
-        }
-        bool ok = cholesky_in_place(m_dense.data(), k, k);
-        m_rhs.resize(static_cast<size_t>(k));
-        for (int a = 0; a < k; ++a) {
-            const size_t r = static_cast<size_t>(m_set_rows[static_cast<size_t>(a)]);
-            m_rhs[static_cast<size_t>(a)] = m_scale[universe[r]] * q[r];
-            m_position[static_cast<size_t>(universe[r])] = -1;
-        }
-        if (!ok) return false;
-        cholesky_solve(m_dense.data(), k, k, m_rhs.data());
-        m_z.setZero();
-        for (int a = 0; a < k; ++a) {
-            const int j = universe[static_cast<size_t>(m_set_rows[static_cast<size_t>(a)])];
-            m_z[j] = m_scale[j] * m_rhs[static_cast<size_t>(a)];
-        }
-        cnt.work_flops += dense_factor_flops(k) + 2.0 * static_cast<double>(k) * k;
-        ++m_dense_set_solves;
         ++cnt.lcp_iterations;
         return true;
     }
@@ -899,10 +848,6 @@ private:
     std::vector<int> m_all, m_bad;
     std::vector<char> m_mask, m_added;
     Vec m_b, m_z, m_cur, m_w;
-    size_t m_dense_set_rows;
-    std::vector<int> m_set_rows, m_position;  // dense_solve_on_set: the set, block row -> its place (-1 off it)
-    std::vector<double> m_dense, m_rhs;
-    long m_dense_set_solves = 0;
 };
 
 }  // namespace

@@ -28,8 +28,7 @@ struct CoupledOperatorOptions {
     long dense_max_rows = 400;  ///< largest component done with dense factors
     long lcp_max_pivots = 200;  ///< block principal pivoting iterations before the PGS fallback
     long pgs_max_sweeps = 10000;
-    long sparse_max_updates = 64;     ///< large components: a set change of more rows refactors instead of modifying
-    long sparse_dense_set_rows = 96;  ///< large components: LCP sets of at most this many rows on a dense factor
+    long sparse_max_updates = 64;  ///< large components: a set change of more rows refactors instead of modifying
 };
 
 class RowBlock;

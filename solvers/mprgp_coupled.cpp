@@ -46,10 +46,6 @@ const SettingsTable<MprgpCoupledSettings>& mprgp_coupled_settings_table()
             .integer("sparse_max_updates", &MprgpCoupledSettings::sparse_max_updates, 1, 100000000,
                      "operators = components, components above dense_max_rows: a face or LCP set that changes in "
                      "more rows than this is refactored; fewer are CHOLMOD row additions / deletions")
-            .integer("sparse_dense_set_rows", &MprgpCoupledSettings::sparse_dense_set_rows, 0, 100000000,
-                     "operators = components, components above dense_max_rows: an LCP whose set has at most this "
-                     "many rows solves on a dense factor of the set's Gram matrix, not the component's masked factor "
-                     "(0: never)")
             .choice("trial", &MprgpCoupledSettings::trial, {"chain", "project"},
                     "a CG trial y that left the set with F(P(y)) < F(P(x)): chain (Alg. 2: the chain goes on from the "
                     "infeasible y) | project: x = P(y) and the chain restarts on its face")
@@ -672,7 +668,6 @@ SolverResult CoupledRun::run()
     opt.jacobi = m_jacobi;
     opt.dense_max_rows = m_st.dense_max_rows;
     opt.sparse_max_updates = m_st.sparse_max_updates;
-    opt.sparse_dense_set_rows = m_st.sparse_dense_set_rows;
     opt.lcp_max_pivots = m_st.lcp_max_pivots;
     opt.pgs_max_sweeps = m_st.pgs_max_sweeps;
     m_ops = std::make_unique<CoupledFaceOperators>(m_J, m_dinv, opt);

@@ -28,7 +28,6 @@ struct MprgpCoupledSettings {
     std::string operators = "components";  ///< components (per row-graph component) | global (one CHOLMOD problem)
     long dense_max_rows = 128;  ///< largest component with dense factors (larger: CHOLMOD; measured crossover 100-200)
     long sparse_max_updates = 64;     ///< larger set changes of a large component refactor (fewer: row updates)
-    long sparse_dense_set_rows = 96;  ///< a large component's LCP set of at most this many rows: dense factor
     std::string trial = "chain";      ///< chain (Alg. 2) | project (x = P(y), restart on its face)
     std::string expansion = "paper";  ///< paper (x = P(x - alpha_bar phi)) | feasible_step (half step first)
     std::string expansion_projection = "face";  ///< face (the face rows stay equalities) | all (P of Alg. 1)

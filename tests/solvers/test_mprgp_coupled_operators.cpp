@@ -36,12 +36,13 @@ struct Run {
     IterateRecorder recorder;
 };
 
-void solve(const Qp& qp, const std::string& operators, const std::string& precond, Run& run, long dense_max_rows = 400,
-           long dense_set_rows = 96)
+void solve(const Qp& qp, const std::string& operators, const std::string& precond, Run& run, long dense_max_rows = 400)
 {
-    const nlohmann::json s = {
-        {"tol", 1e-10},       {"max_iterations", 20000},          {"operators", operators},
-        {"precond", precond}, {"dense_max_rows", dense_max_rows}, {"sparse_dense_set_rows", dense_set_rows}};
+    const nlohmann::json s = {{"tol", 1e-10},
+                              {"max_iterations", 20000},
+                              {"operators", operators},
+                              {"precond", precond},
+                              {"dense_max_rows", dense_max_rows}};
     cb::SolveContext context;
     context.monitor = &run.recorder;
     run.result = cb::builtin_registry().create("mprgp-coupled", s)->solve(qp.view(), context);
@@ -63,13 +64,11 @@ Qp loaded(Qp qp, std::uint64_t seed)
 cb::RowComponents components(const Qp& qp) { return cb::find_row_components(qp.J); }
 
 /// @param dense_max_rows  400: every component dense; 1: every component of 2+ rows on CHOLMOD
-/// @param dense_set_rows  large components' LCP sets up to this size on dense factors (0: never)
-void expect_same_run(const Qp& qp, const std::string& precond, const std::string& what, long dense_max_rows = 400,
-                     long dense_set_rows = 96)
+void expect_same_run(const Qp& qp, const std::string& precond, const std::string& what, long dense_max_rows = 400)
 {
     Run global, comp;
     solve(qp, "global", precond, global);
-    solve(qp, "components", precond, comp, dense_max_rows, dense_set_rows);
+    solve(qp, "components", precond, comp, dense_max_rows);
     ASSERT_EQ(global.result.status, SolveStatus::CONVERGED) << what << ": " << global.result.message;
     ASSERT_EQ(comp.result.status, SolveStatus::CONVERGED) << what << ": " << comp.result.message;
     // Same step kinds, iteration by iteration.
@@ -175,16 +174,12 @@ Qp with_dependent_row(Qp qp, int row, double factor)
 TEST(MprgpCoupledOperators, LargeComponentRowUpdatesAgreeWithGlobal)
 {
     // A 196-row patch above the default dense_max_rows = 128: its face changes several times and
-    // its masked sparse factors follow by row additions and deletions (and refactorisations); with
-    // sparse_dense_set_rows = 0 the LCP sets do too (by default this patch's sets are small and dense).
+    // its masked sparse factors follow by row additions and deletions (and refactorisations).
     const Qp qp = loaded(cb::make_synthetic("coupled", {{"nx", 13}, {"ny", 2}, {"nz", 13}}, 7), 7);
     ASSERT_GT(components(qp).largest(), 128);
     for (long max_updates : {1L, 64L}) {
         ::Run comp;
-        const nlohmann::json s = {{"tol", 1e-10},
-                                  {"max_iterations", 20000},
-                                  {"sparse_max_updates", max_updates},
-                                  {"sparse_dense_set_rows", 0}};
+        const nlohmann::json s = {{"tol", 1e-10}, {"max_iterations", 20000}, {"sparse_max_updates", max_updates}};
         cb::SolveContext context;
         context.monitor = &comp.recorder;
         comp.result = cb::builtin_registry().create("mprgp-coupled", s)->solve(qp.view(), context);
@@ -200,7 +195,6 @@ TEST(MprgpCoupledOperators, LargeComponentRowUpdatesAgreeWithGlobal)
     }
     expect_same_run(qp, "jacobi", "196-row patch, default dense_max_rows", 128);
     expect_same_run(qp, "none", "196-row patch, default dense_max_rows, precond none", 128);
-    expect_same_run(qp, "jacobi", "196-row patch, LCP sets on the masked factors", 128, 0);
     // A duplicated and a parallel (scaled) row inside the large component.
     const Qp dep = with_dependent_row(with_dependent_row(qp, 40, 1.0), 90, 3.0);
     ASSERT_EQ(components(dep).largest(), components(qp).largest() + 2);
