@@ -88,7 +88,9 @@ TEST(MprgpCoupledChoppedBound, MonitorSeesExactMultipliersAndChangesNoStep)
         ASSERT_GT(cb::find_row_components(qp.J).largest(), 128);
         for (const std::string operators : {"components", "global"}) {
             for (const std::string stop : {"kkt", "native"}) {
-                const std::string what = "seed " + std::to_string(seed) + ", " + operators + ", stop " + stop;
+                std::string what = "seed " + std::to_string(seed);
+                what += ", " + operators;
+                what += ", stop " + stop;
                 StepRecorder quiet;
                 ResidualRecorder reader(qp);
                 const cb::SolverResult a = solve(qp, quiet, operators, stop);
