@@ -730,14 +730,17 @@ private:
         // A feasible start from the warm set: the set's solution with its negative rows dropped.
         m_cur.setZero();
         bool solved = solve_on_set(universe, q, set, f, cnt);
+        bool dropped = false;  // else m_z is already the first step's solve on the same set
         if (solved) {
             for (size_t r = 0; r < ku; ++r) {
                 if (!set[r]) continue;
                 const int j = universe[r];
-                if (is_fixed(r) || m_z[j] > 0.0)
+                if (is_fixed(r) || m_z[j] > 0.0) {
                     m_cur[j] = m_z[j];
-                else
+                } else {
                     set[r] = 0;
+                    dropped = true;
+                }
             }
         }
         // Blocks of rows leave (every negative one) and enter (every one with w < 0) while the
@@ -747,7 +750,7 @@ private:
         double best_f = std::numeric_limits<double>::infinity();
         const long max_steps = m_max_pivots + 2 * static_cast<long>(ku);
         for (long step = 0; solved && step < max_steps; ++step) {
-            if (!(solved = solve_on_set(universe, q, set, f, cnt))) break;
+            if ((step > 0 || dropped) && !(solved = solve_on_set(universe, q, set, f, cnt))) break;
             double zinf = 0.0;
             for (size_t r = 0; r < ku; ++r)
                 if (set[r]) zinf = std::max(zinf, std::abs(m_z[universe[r]]));

@@ -104,6 +104,9 @@ std::string fmt(double v)
     return s.str();
 }
 
+/// Projected coordinate-descent sweeps tried on the chopped problem's upper bound before its LCP.
+constexpr int BOUND_SWEEPS = 8;
+
 /// Why chains end (issue 31's question: why the coupled chain keeps expanding), counted.
 struct ChainCounts {
     long rejected_infeasible_trials = 0;   ///< CG trial with a projected P(y) and F(P(y)) >= F(P(x)): expansion
@@ -274,12 +277,31 @@ private:
             m_z = m_phi;
             return;
         }
-        m_tmp = m_dinv.cwiseProduct(m_g);
-        rows_times(m_tmp, m_jdg);
+        // z = D^-1 (g - J_A' eta) (J_A z = 0): one pass for D^-1 g, then only the DOFs of the face
+        // rows, where g - J_A' eta is accumulated row by row as a full copy would be.
+        m_z = m_dinv.cwiseProduct(m_g);
+        rows_times(m_z, m_jdg);
         m_ops->jacobi_multipliers(m_jdg, m_eta, m_cnt);
-        m_tmp = m_g;
+        for (int j : m_face_dofs) m_tmp[j] = m_g[j];
         add_rows_transpose(m_eta, -1.0, m_tmp);
-        m_z = m_dinv.cwiseProduct(m_tmp);  // J_A z = 0
+        for (int j : m_face_dofs) m_z[j] = m_dinv[j] * m_tmp[j];
+    }
+    /// m_face_dof / m_face_dofs: the DOFs some face row touches (after every face change).
+    void list_face_dofs()
+    {
+        for (int j : m_face_dofs) m_face_dof[static_cast<size_t>(j)] = 0;
+        m_face_dofs.clear();
+        for (Eigen::Index i = 0; i < m_m; ++i) {
+            if (!m_active[static_cast<size_t>(i)]) continue;
+            for (SpMat::InnerIterator it(m_J, i); it; ++it) {
+                const int j = static_cast<int>(it.col());
+                if (!m_face_dof[static_cast<size_t>(j)]) {
+                    m_face_dof[static_cast<size_t>(j)] = 1;
+                    m_face_dofs.push_back(j);
+                }
+            }
+        }
+        m_face_dofs_known = true;
     }
     /// Chain start at the current (feasible) x with the current g: face, phi, z, p, F.
     void restart()
@@ -292,6 +314,7 @@ private:
             m_active[static_cast<size_t>(i)] = a;
         }
         if (changed) ++m_cnt.pivots;  // an active-set change
+        if (changed || !m_face_dofs_known) list_face_dofs();
         m_ops->set_face(m_active, m_cnt);
         face_gradient(true);
         m_p = m_z;
@@ -299,8 +322,29 @@ private:
         m_corr_x = 0.0;
         m_x_feasible = true;
     }
-    /// Chopped gradient, multipliers, native residual and the accuracy error at x.
-    void evaluate();
+    /// phi'phi, the face error and bounds at x; with `exact`, or when the criterion may hold, the
+    /// chopped gradient too (chopped_gradient), else the error is a lower bound, beta'beta an upper one.
+    void evaluate(bool exact = false);
+    /// The chopped LCP: mu, beta, native residual and accuracy error at x (once per evaluate).
+    /// @param solver_work  false for the monitor's copy (notify's prepare): not counted as solver work
+    void chopped_gradient(Counters& cnt, bool solver_work);
+    /// beta'beta <= Gamma^2 phitilde'phi, from the upper bound of beta'beta when that decides it.
+    bool proportional_test(double gamma2);
+    /// Whether a few projected coordinate-descent sweeps on the chopped problem bring its value
+    /// (an upper bound of beta'beta) to `bound` or below.
+    bool projected_sweeps_bound(double bound);
+    /// The monitor's view of x: the exact mu, native residual and error (chopped_gradient, not
+    /// counted as solver work, so the iterates and counters are those of an unmonitored run).
+    void monitor_view(IterationInfo& shown)
+    {
+        if (!m_chopped_exact) {
+            m_monitor_chopped = Counters();
+            chopped_gradient(m_monitor_chopped, false);
+            m_chopped_by_monitor = true;
+        }
+        shown.lambda = &m_mu;
+        shown.native_residual = m_native;
+    }
     /// phitilde'phi = phi'phi - lam'(J phi) / alpha_bar with lam of P(x - alpha_bar phi) (eq. 13).
     double reduced_free_gradient_dot();
     bool safeguard(double f_before, double& f_now);
@@ -335,50 +379,172 @@ private:
     double m_f_x = 0.0, m_corr_x = 0.0, m_cg_alpha = 0.0;
     bool m_x_feasible = true;
     double m_native = 0.0, m_error = 0.0, m_face_error = 0.0, m_beta2 = 0.0, m_phi2 = 0.0;
+    double m_primal = 0.0, m_beta2_upper = 0.0;
+    bool m_chopped_exact = false;
+    bool m_chopped_by_monitor = false;  // m_monitor_chopped: that solve's work, not yet counted
+    Counters m_monitor_chopped;
+    std::vector<char> m_face_dof;  // flags of m_face_dofs
+    std::vector<int> m_face_dofs;
+    bool m_face_dofs_known = false;
+    long m_chopped_solved = 0, m_chopped_deferred = 0, m_proportional_by_bound = 0;
+    long m_proportional_by_sweeps = 0, m_bound_sweeps = 0;
+    Vec m_mu_bound;
 };
 
-void CoupledRun::evaluate()
+void CoupledRun::evaluate(bool exact)
 {
-    // q_A = J_A (g - phi) on the face rows for the chopped LCP; beta = J_A'(nu - mu).
     rows_times(m_phi, m_jphi);
+    m_phi2 = m_phi.squaredNorm();
+    rows_times(m_x, m_jx);
+    // The parts of the accuracy error that do not depend on mu: the feasibility, and the
+    // stationarity at DOFs no face row touches (there g - J_A'mu = g = phi for every mu).
+    double stat_phi = 0.0, stat_free = 0.0;
+    for (Eigen::Index j = 0; j < m_n; ++j) {
+        const double r = std::abs(m_phi[j]) * m_scale.inv_diag[j];
+        stat_phi = std::max(stat_phi, r);
+        if (!m_face_dof[static_cast<size_t>(j)]) stat_free = std::max(stat_free, r);
+    }
+    m_face_error = stat_phi * m_scale.inv_length;
+    m_primal = 0.0;
+    for (Eigen::Index i = 0; i < m_m; ++i) {
+        const double inv_norm = m_scale.inv_row_norm[i];
+        if (inv_norm == 0.0) {
+            if (!(m_c[i] <= 0.0)) m_primal = std::numeric_limits<double>::infinity();
+            continue;
+        }
+        m_primal = std::max(m_primal, std::max(m_c[i] - m_jx[i], 0.0) * inv_norm);
+    }
+    // beta'beta = min over mu >= 0 of ||J_A'(nu - mu)||^2 <= its value at mu = max(nu, 0).
+    for (Eigen::Index i = 0; i < m_m; ++i) m_q[i] = std::min(m_nu[i], 0.0);
+    build_d(m_q);
+    m_beta2_upper = 0.0;
+    for (int j : m_touched) m_beta2_upper += m_d[j] * m_d[j];
+    clear_d();
+    m_chopped_exact = false;
+    m_chopped_by_monitor = false;
+    const double error_lower = std::max(stat_free, m_primal) * m_scale.inv_length;
+    const bool native = m_st.common.stop == StopRule::NATIVE;
+    // ||phi + beta||^2 = ||phi||^2 + ||beta||^2 (beta in range(J_A'), phi in its complement).
+    const bool may_converge = m_x_feasible && (native ? std::sqrt(m_phi2) : error_lower) <= m_st.common.tol;
+    if (exact || may_converge) {
+        chopped_gradient(m_cnt, true);
+        return;
+    }
+    // Bounds until the chopped LCP is needed: the criterion cannot hold, the monitor gets the exact
+    // values from chopped_gradient in notify's prepare, the proportioning test tries the upper bound.
+    m_beta2 = m_beta2_upper;
+    m_native = std::sqrt(m_phi2 + m_beta2_upper);
+    m_error = std::isfinite(error_lower) ? error_lower : std::numeric_limits<double>::infinity();
+    ++m_chopped_deferred;
+}
+
+void CoupledRun::chopped_gradient(Counters& cnt, bool solver_work)
+{
+    if (m_chopped_exact) {
+        if (solver_work && m_chopped_by_monitor) {
+            // The solver needs the solve the monitor had done: its work counts now, as without a monitor.
+            m_cnt.lcp_iterations += m_monitor_chopped.lcp_iterations;
+            m_cnt.pgs_sweeps += m_monitor_chopped.pgs_sweeps;
+            m_cnt.cholmod_factorizations += m_monitor_chopped.cholmod_factorizations;
+            m_cnt.cholmod_solves += m_monitor_chopped.cholmod_solves;
+            m_cnt.work_flops += m_monitor_chopped.work_flops;
+            m_lcp_by_use.chopped += m_monitor_chopped.lcp_iterations;
+            ++m_chopped_solved;
+            m_chopped_by_monitor = false;
+        }
+        return;
+    }
+    // q_A = J_A (g - phi) on the face rows for the chopped LCP; beta = J_A'(nu - mu).
     for (Eigen::Index i = 0; i < m_m; ++i) m_q[i] = m_active[static_cast<size_t>(i)] ? m_jg[i] - m_jphi[i] : 0.0;
-    const long pivots_before = m_cnt.lcp_iterations;
-    m_ops->chopped_multipliers(m_q, m_nu, m_mu, m_cnt);
-    m_lcp_by_use.chopped += m_cnt.lcp_iterations - pivots_before;
+    const long pivots_before = cnt.lcp_iterations;
+    m_ops->chopped_multipliers(m_q, m_nu, m_mu, cnt);
+    if (solver_work) {
+        m_lcp_by_use.chopped += cnt.lcp_iterations - pivots_before;
+        ++m_chopped_solved;
+    }
     m_beta.setZero();
     for (Eigen::Index i = 0; i < m_m; ++i)
         if (m_nu[i] != m_mu[i]) row_axpy(m_J, i, m_nu[i] - m_mu[i], m_beta);
     // phi + beta = g - J'mu: the native residual and the measure's stationarity part together.
     double pb2 = 0.0, stat = 0.0;
     m_beta2 = m_beta.squaredNorm();
-    m_phi2 = m_phi.squaredNorm();
     for (Eigen::Index j = 0; j < m_n; ++j) {
         const double r = m_phi[j] + m_beta[j];
         pb2 += r * r;
         stat = std::max(stat, std::abs(r) * m_scale.inv_diag[j]);
     }
-    double stat_phi = 0.0;
-    for (Eigen::Index j = 0; j < m_n; ++j) stat_phi = std::max(stat_phi, std::abs(m_phi[j]) * m_scale.inv_diag[j]);
-    rows_times(m_x, m_jx);
-    double primal = 0.0, dual = 0.0, comp = 0.0, gap = 0.0;
+    double dual = 0.0, comp = 0.0, gap = 0.0;
     for (Eigen::Index i = 0; i < m_m; ++i) {
         const double slack = m_jx[i] - m_c[i];
         const double inv_norm = m_scale.inv_row_norm[i];
-        if (inv_norm == 0.0) {
-            if (!(m_c[i] <= 0.0)) primal = std::numeric_limits<double>::infinity();
-            continue;
-        }
-        primal = std::max(primal, std::max(-slack, 0.0) * inv_norm);
+        if (inv_norm == 0.0) continue;
         const double push = m_mu[i] * m_scale.length_per_multiplier[i];
         dual = std::max(dual, std::max(-push, 0.0));
         comp = std::max(comp, std::min(std::abs(push), std::abs(slack) * inv_norm));
         gap += std::abs(m_mu[i] * slack);
     }
     m_native = std::sqrt(pb2);
-    const double error =
-        std::max(std::max(std::max(stat, primal), std::max(dual, comp)) * m_scale.inv_length, gap * m_scale.inv_energy);
+    const double error = std::max(std::max(std::max(stat, m_primal), std::max(dual, comp)) * m_scale.inv_length,
+                                  gap * m_scale.inv_energy);
     m_error = std::isfinite(error) ? error : std::numeric_limits<double>::infinity();
-    m_face_error = stat_phi * m_scale.inv_length;
+    m_chopped_exact = true;
+}
+
+bool CoupledRun::proportional_test(double gamma2)
+{
+    const double reduced = reduced_free_gradient_dot();
+    const double bound = gamma2 * reduced;
+    // beta'beta <= any ||J_A'(nu - mu)||^2 with mu >= 0 decides without the chopped LCP when the
+    // bound passes. Tried first even when a monitor had mu computed: a monitor changes no decision.
+    if (m_beta2_upper <= bound) {
+        ++m_proportional_by_bound;
+        return true;
+    }
+    if (projected_sweeps_bound(bound)) {
+        ++m_proportional_by_sweeps;
+        return true;
+    }
+    chopped_gradient(m_cnt, true);
+    return m_beta2 <= bound;
+}
+
+bool CoupledRun::projected_sweeps_bound(double bound)
+{
+    // Coordinate descent on 1/2 ||r||^2, r = J_A'(nu - mu), mu >= 0, from mu = max(nu, 0): each
+    // row step is exact and keeps mu feasible, so ||r||^2 only falls and bounds beta'beta at
+    // every point. A sweep costs O(nnz(J_A)) against the LCP's factor modifications.
+    for (Eigen::Index i = 0; i < m_m; ++i) {
+        m_mu_bound[i] = std::max(m_nu[i], 0.0);
+        m_q[i] = m_nu[i] - m_mu_bound[i];
+    }
+    build_d(m_q);  // m_d = r
+    double r2 = m_beta2_upper;
+    bool decided = false;
+    for (int sweep = 0; sweep < BOUND_SWEEPS && !decided; ++sweep) {
+        for (Eigen::Index i = 0; i < m_m; ++i) {
+            if (!m_active[static_cast<size_t>(i)]) continue;
+            double jr = 0.0;
+            for (SpMat::InnerIterator it(m_J, i); it; ++it) jr += it.value() * m_d[it.col()];
+            const double next = std::max(0.0, m_mu_bound[i] + jr / m_s[i]);
+            const double step = next - m_mu_bound[i];
+            if (step == 0.0) continue;
+            m_mu_bound[i] = next;
+            for (SpMat::InnerIterator it(m_J, i); it; ++it) {
+                const int j = static_cast<int>(it.col());
+                if (!m_mark[static_cast<size_t>(j)]) {
+                    m_mark[static_cast<size_t>(j)] = 1;
+                    m_touched.push_back(j);
+                }
+                m_d[j] -= step * it.value();
+            }
+        }
+        r2 = 0.0;
+        for (int j : m_touched) r2 += m_d[j] * m_d[j];
+        ++m_bound_sweeps;
+        decided = r2 <= bound;
+    }
+    clear_d();
+    return decided;
 }
 
 double CoupledRun::reduced_free_gradient_dot()
@@ -531,6 +697,9 @@ SolverResult CoupledRun::run()
     m_active.assign(static_cast<size_t>(m_m), 0);
     m_violated.assign(static_cast<size_t>(m_m), 0);
     m_mark.assign(static_cast<size_t>(m_n), 0);
+    m_face_dof.assign(static_cast<size_t>(m_n), 0);
+    m_face_dofs.reserve(static_cast<size_t>(m_J.nonZeros()));
+    m_mu_bound.setZero(m_m);
     m_touched.reserve(static_cast<size_t>(m_J.nonZeros()));
 
     // Translation invariance: positions enter only as differences from x_ref = P(x0), whose
@@ -566,11 +735,11 @@ SolverResult CoupledRun::run()
         info.iteration = m_cnt.iterations;
         info.step = last;
         info.x = &m_x;
-        info.lambda = &m_mu;
+        info.lambda = m_chopped_exact ? &m_mu : nullptr;
         info.native_residual = m_native;
         info.active_set_size = static_cast<long>(std::count(m_active.begin(), m_active.end(), 1));
         info.counters = &m_cnt;
-        if (!m_loop.notify(info)) {
+        if (!m_loop.notify(info, [this](IterationInfo& shown) { monitor_view(shown); })) {
             status = SolveStatus::STOPPED_BY_MONITOR;
             why = "the monitor asked to stop";
             break;
@@ -586,7 +755,7 @@ SolverResult CoupledRun::run()
         ++m_cnt.iterations;
         // An infeasible chain iterate whose face problem is solved cannot improve along the face.
         const bool face_done = !m_x_feasible && (native ? std::sqrt(m_phi2) <= common.tol : m_face_error <= common.tol);
-        const bool proportional = !face_done && m_beta2 <= gamma2 * reduced_free_gradient_dot();
+        const bool proportional = !face_done && proportional_test(gamma2);
         bool do_expansion = false;
         if (proportional) {
             // --- CG trial step (Alg. 2), F(P(y)) - F(P(x)) in difference form ---
@@ -690,7 +859,7 @@ SolverResult CoupledRun::run()
     if (project_x(true) || status != SolveStatus::CONVERGED) {
         exact_gradient();
         restart();
-        evaluate();
+        evaluate(true);
     }
     if (status == SolveStatus::CONVERGED && !criterion()) {
         status = SolveStatus::STALLED;
@@ -706,6 +875,12 @@ SolverResult CoupledRun::run()
                    {"components", m_ops->stats()},
                    {"chain", m_chain.to_json()},
                    {"lcp_pivots_by_use", m_lcp_by_use.to_json()},
+                   {"chopped_lcp",
+                    {{"solved", m_chopped_solved},
+                     {"deferred", m_chopped_deferred},
+                     {"proportional_by_bound", m_proportional_by_bound},
+                     {"proportional_by_sweeps", m_proportional_by_sweeps},
+                     {"bound_sweeps", m_bound_sweeps}}},
                    {"feasible_half_steps", m_feasible_half_steps},
                    {"projected_restarts", m_projected_restarts},
                    {"lcp_failures", m_ops->lcp_failures()},
