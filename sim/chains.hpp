@@ -35,7 +35,7 @@ struct ChainOptions {
 
 /// Bump when what `chains` writes for the same inputs changes (caches key on it with the
 /// simulator's version).
-constexpr int kChainsVersion = 2;  // 2: the picture at the largest penetration
+constexpr int kChainsVersion = 3;  // 2: the picture at the largest penetration; 3: exact = mprgp-coupled
 
 /// Per-vertex distance between two position vectors of the same mesh: RMS and max over vertices.
 struct ChainDistance {
