@@ -100,8 +100,8 @@ class Rule(unittest.TestCase):
         old = summary({"exact": 0.01, "exact-tol1e-6": 0.01, "authors": 0.02})  # a record without chains
         self.assertEqual(old["exact_solver"], "?")
         rows = decoupling.compact_table({"s": {"h": s}}).splitlines()
-        self.assertTrue(rows[0].endswith("| price (authors) | exact solver |"), rows[0])
-        self.assertTrue(rows[2].endswith("| inconclusive | mprgp-coupled |"), rows[2])
+        self.assertTrue(rows[0].endswith("| vertices inside (exact / authors) | price (authors) | exact solver |"), rows[0])
+        self.assertTrue(rows[2].endswith("| — / — | inconclusive | mprgp-coupled |"), rows[2])  # no count: version < 4
 
 
 @unittest.skipUnless(os.environ.get("CB_CONTACTBENCH"), "needs CB_CONTACTBENCH (set by ctest)")
@@ -151,6 +151,7 @@ class DemoChains(unittest.TestCase):
             self.assertGreater(s["chains"]["authors"]["rows_dropped_fraction"], 0)
             self.assertEqual(s["chains"]["exact"]["rows_dropped_fraction"], 0)
             self.assertEqual(s["exact_solver"], "mprgp-coupled")  # the default exact solver
+            self.assertGreater(s["chains"]["authors"]["max_vertices_inside"], 0)  # decoupled boxes interpenetrate
             self.assertLess(s["noise_floor_rel"], 1e-4)
             self.assertGreater(s["chains"]["authors"]["max_distance_rel"], 10 * s["noise_floor_rel"])
             claims = decoupling.report(out)
