@@ -26,7 +26,9 @@ int cmd_simulate(const Args& args)
         "  --data DIR     the authors' data folder (resolves \"data:\" mesh paths; default:\n"
         "                 $CB_CACHE/paper-data when `make paper-data` has written it, else none, so\n"
         "                 scenes use their CGAL-data stand-ins)\n"
-        "  --solver NAME  stepping solver (default: the scene's, else mprgp)\n"
+        "  --solver NAME  stepping solver (default: the scene's, else mprgp); another solver than the scene's\n"
+        "                 gets its own defaults plus the scene's common settings (a native stop and its\n"
+        "                 tol are the scene solver's own and are not passed on)\n"
         "  --decouple ORDER  which rows a step keeps: auto (default: the authors' order when the solver\n"
         "                 needs decoupled rows, else all), none, authors, random, depth (deepest first)\n"
         "  --decouple-seed S  seed of the random order (step s uses S + s; default 0)\n"
@@ -57,6 +59,17 @@ int cmd_simulate(const Args& args)
     const bool no_data = !cl.has("--data") && !std::filesystem::is_directory(cached);
     if (!cl.has("--data") && !no_data) data = cached;
     sim::Scene scene = sim::load_scene(scene_path, sim::default_path_roots(scene_path, data));
+    if (cl.has("--solver")) {  // another solver gets its own defaults, not the scene solver's settings
+        const std::string solver = cl.value("--solver");
+        const ReplacedSolverSettings replaced = settings_for_solver(scene.solver, scene.solver_settings, solver);
+        if (!replaced.dropped.empty()) {
+            std::cerr << "simulate: --solver " << solver << ": the scene's settings for " << scene.solver
+                      << " not passed on:";
+            for (const std::string& key : replaced.dropped) std::cerr << " " << key;
+            std::cerr << " (" << solver << "'s defaults apply; docs/simulator.md)\n";
+        }
+        scene.solver_settings = replaced.settings;
+    }
     if (no_data)  // said once the scene is known to be valid, so that an input error stands alone
         std::cerr << "simulate: no authors' data in " << cached
                   << " (`make paper-data` writes it); \"data:\" meshes use their stand-ins\n";

@@ -35,7 +35,8 @@ struct ChainOptions {
 
 /// Bump when what `chains` writes for the same inputs changes (caches key on it with the
 /// simulator's version).
-constexpr int kChainsVersion = 2;  // 2: the picture at the largest penetration
+// 2: the picture at the largest penetration; 3: exact = mprgp-coupled; 4: vertices_inside
+constexpr int kChainsVersion = 4;
 
 /// Per-vertex distance between two position vectors of the same mesh: RMS and max over vertices.
 struct ChainDistance {

@@ -128,6 +128,8 @@ public:
     double body_size() const { return m_body_size; }
     /// Deepest penetration at the current positions (a detection run now; m).
     double penetration_now() const;
+    /// Every contact row at the current positions (a detection run now).
+    std::vector<ContactRow> contacts_now() const { return m_detector->detect(m_x); }
     /// The time step used (s, after --h) and the steps per frame.
     double step_h() const { return m_scene.step.h; }
     int steps_per_frame() const { return m_scene.steps_per_frame; }

@@ -92,6 +92,17 @@ class Rule(unittest.TestCase):
         self.assertEqual(rows["sec7-decoupling-no-noticeable-artifacts"]["verdict"], decoupling.HOLDS)
         self.assertEqual(rows["sec5-depth-sorted-selection"]["verdict"], decoupling.INCONCLUSIVE)
 
+    def test_the_table_names_each_runs_exact_solver(self):
+        record = {"scene": "s", "h": 0.005, "frames": 4, "body_size": 1.0,
+                  "chains": [{"label": "exact", "solver": "mprgp-coupled"}, {"label": "authors", "solver": "mprgp"}]}
+        s = decoupling.summarize(chains_frame({"exact": 0.01, "exact-tol1e-6": 0.01, "authors": 0.02}), record)
+        self.assertEqual(s["exact_solver"], "mprgp-coupled")
+        old = summary({"exact": 0.01, "exact-tol1e-6": 0.01, "authors": 0.02})  # a record without chains
+        self.assertEqual(old["exact_solver"], "?")
+        rows = decoupling.compact_table({"s": {"h": s}}).splitlines()
+        self.assertTrue(rows[0].endswith("| vertices inside (exact / authors) | price (authors) | exact solver |"), rows[0])
+        self.assertTrue(rows[2].endswith("| — / — | inconclusive | mprgp-coupled |"), rows[2])  # no count: version < 4
+
 
 @unittest.skipUnless(os.environ.get("CB_CONTACTBENCH"), "needs CB_CONTACTBENCH (set by ctest)")
 class BadOptions(unittest.TestCase):
@@ -139,6 +150,8 @@ class DemoChains(unittest.TestCase):
             # the boxes touch at frame 6: the decoupled chains drop rows there, the exact ones none
             self.assertGreater(s["chains"]["authors"]["rows_dropped_fraction"], 0)
             self.assertEqual(s["chains"]["exact"]["rows_dropped_fraction"], 0)
+            self.assertEqual(s["exact_solver"], "mprgp-coupled")  # the default exact solver
+            self.assertGreater(s["chains"]["authors"]["max_vertices_inside"], 0)  # decoupled boxes interpenetrate
             self.assertLess(s["noise_floor_rel"], 1e-4)
             self.assertGreater(s["chains"]["authors"]["max_distance_rel"], 10 * s["noise_floor_rel"])
             claims = decoupling.report(out)
