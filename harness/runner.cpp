@@ -176,7 +176,7 @@ RunOutcome run_solver(const SolverRegistry& registry, const Qp& original, const 
     }
     const Vec g = original.A * x - original.b;  // decoupling keeps A and b
     const double tol = effective.value("tol", DEFAULT_ACCURACY_TOL);
-    const bool native = result.criterion == "native";
+    const bool native = result.criterion == StopCriterion::NATIVE;
     const double accuracy_tol = native ? DEFAULT_ACCURACY_TOL : tol;
     const bool own_valid = !result.lambda_fitted && result.lambda.size() == qp->m();
     // The solver's multipliers on the original rows (0 on rows it did not see).
@@ -252,7 +252,7 @@ RunOutcome run_solver(const SolverRegistry& registry, const Qp& original, const 
     rec["warm"] = {{"lambda0", lambda0 != nullptr}, {"eigenvector", warm.eigenvector != nullptr}};
     rec["status"] = out.status;
     rec["solver_status"] = to_string(result.status);
-    rec["criterion"] = result.criterion;
+    rec["criterion"] = to_string(result.criterion);
     rec["message"] = note.empty() ? result.message : result.message + (result.message.empty() ? "" : "; ") + note;
     rec["iterations"] = result.iterations;
     rec["objective"] = finite_or_null(out.objective);

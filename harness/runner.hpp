@@ -33,7 +33,7 @@ struct RunOptions {
 inline constexpr const char* STATUS_SOLVED_RELAXATION = "solved_relaxation";
 inline constexpr const char* STATUS_UNCONFIRMED = "unconfirmed";
 /// The accuracy a `stop=native` run must reach on e to count as converged.
-inline constexpr double DEFAULT_ACCURACY_TOL = 1e-6;
+inline constexpr double DEFAULT_ACCURACY_TOL = kDefaultTol;  // the one default (solvers/settings.hpp)
 
 struct RunOutcome {
     SolverResult result;                  ///< as the solver returned it (result.status: the solver's word)

@@ -44,32 +44,17 @@ const SettingsTable<MprgpBoxSettings>& mprgp_box_settings_table()
 
 MprgpBoxSettings MprgpBoxSettings::from_json(const nlohmann::json& settings)
 {
-    SettingsReader reader(settings, "mprgp-box");
-    MprgpBoxSettings s;
-    s.common = reader.common();
-    mprgp_box_settings_table().read(reader, s);
-    reader.finish();
-    return s;
+    return read_settings(settings, "mprgp-box", mprgp_box_settings_table());
 }
 
-nlohmann::json MprgpBoxSettings::to_json() const
-{
-    nlohmann::json j = common.to_json();
-    mprgp_box_settings_table().write(*this, j);
-    return j;
-}
-
-std::vector<SettingDoc> mprgp_box_setting_docs() { return mprgp_box_settings_table().docs(); }
+nlohmann::json MprgpBoxSettings::to_json() const { return write_settings(*this, mprgp_box_settings_table()); }
 
 SolverEntry mprgp_box_entry()
 {
-    SolverEntry entry;
-    entry.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
-        return std::make_unique<MprgpBoxSolver>(MprgpBoxSettings::from_json(settings));
-    };
-    entry.description = "Dostal's MPRGP for bound rows (every row of J a signed unit vector), lower and upper bounds";
-    entry.settings = mprgp_box_setting_docs();
-    return entry;
+    return solver_entry<MprgpBoxSolver>(
+        "mprgp-box", mprgp_box_settings_table(),
+        "Dostal's MPRGP for bound rows (every row of J a signed unit vector), lower and upper bounds",
+        "bounds only (every row of J has at most one nonzero)");
 }
 
 namespace {
@@ -171,7 +156,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
     result.info["power"] = {{"products", power.products}, {"estimate", power.estimate}, {"warm_start", power.warm}};
     const AccuracyScale scale = accuracy_scale(qp);
     cnt.a_products += scale.a_products;
-    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT, "", loop.time_limit_message());
+    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT);
 
     // --- the MPRGP loop ---
     Vec x = qp.x0.cwiseMax(lower).cwiseMin(upper);
@@ -216,24 +201,23 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
     classify();
     gradients();
     p = z;
-    const bool native = common.stop == StopRule::NATIVE;
-    SolveStatus status = SolveStatus::MAX_ITERATIONS;
-    std::string why = "iteration cap " + std::to_string(common.max_iterations) + " reached";
+    SolveStatus status = SolveStatus::NOT_RUN;
+    std::string why;  // a breakdown's reason (the loop's own exits need none)
     StepKind last = StepKind::START;
     double native_residual = 0.0, error = 0.0;
     while (true) {
         multipliers();
         native_residual = (phi + beta).norm();
         error = accuracy_from_gradient(qp, scale, x, g, lambda).max();
-        bool converged = native ? native_residual <= common.tol : error <= common.tol;
+        bool converged = loop.criterion_met(native_residual, error);
         if (converged) {  // confirm at an exact gradient
             g = a_product(qp.A, x) - qp.b;
             ++cnt.a_products;
             gradients();
             multipliers();
             native_residual = (phi + beta).norm();
-            converged =
-                native ? native_residual <= common.tol : accuracy_converged(qp, scale, x, g, lambda, common.tol);
+            converged = loop.criterion_met(native_residual,
+                                           [&] { return accuracy_from_gradient(qp, scale, x, g, lambda).max(); });
             p = z;
         }
         IterationInfo info;
@@ -245,16 +229,11 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
         info.counters = &cnt;
         if (!loop.notify(info)) {
             status = SolveStatus::STOPPED_BY_MONITOR;
-            why = "the monitor asked to stop";
             break;
         }
         // The exit checks in the loop's order (a non-finite residual never counts as converged).
-        status = loop.exit_status(std::isfinite(native_residual), converged, cnt.iterations);
-        if (status != SolveStatus::NOT_RUN) {
-            if (status == SolveStatus::DIVERGED) why = "non-finite gradient";
-            if (status == SolveStatus::TIME_LIMIT) why = loop.time_limit_reason();
-            break;
-        }
+        status = loop.check(cnt.iterations, std::isfinite(native_residual), converged);
+        if (status != SolveStatus::NOT_RUN) break;
         ++cnt.iterations;
         if (beta.squaredNorm() <= m_settings.gamma * m_settings.gamma * phitilde_dot_phi()) {
             a_product(qp.A, p, Ap);
@@ -333,15 +312,10 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
     result.lambda = lambda;
     result.counters = cnt;
     result.native_residual = native_residual;
-    if (status == SolveStatus::CONVERGED) {
-        result.message =
-            "converged: " +
-            std::string(native ? "||phi+beta||_2 = " + fmt(native_residual) : "accuracy error = " + fmt(error)) +
-            " <= tol";
-    } else {
-        result.message = "not converged: " + why + " (accuracy error " + fmt(error) + ")";
-    }
-    return loop.finish(result, status, status == SolveStatus::CONVERGED ? (native ? "native" : "kkt") : "");
+    // The loop writes the reason of its own exits; a breakdown is the solver's word.
+    const std::string figures = "accuracy error " + fmt(error);
+    return loop.finish(result, status,
+                       !loop.owns(status) ? "mprgp-box: not converged: " + why + " (" + figures + ")" : figures);
 }
 
 }  // namespace cb
