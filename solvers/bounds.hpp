@@ -1,7 +1,7 @@
 #pragma once
 /// Rows as bounds: the one reading of a J whose every row has at most one nonzero (a x_j >= c is
 /// x_j >= c/a for a > 0, x_j <= c/a for a < 0), its policy for what it cannot take, and the
-/// multipliers of a point. Used by `template` and `tao-tron`.
+/// multipliers of a point. Used by `template`, `mprgp-box` and `tao-tron`.
 #include "solvers/qp.hpp"
 #include "solvers/solver.hpp"
 

@@ -7,6 +7,7 @@
 
 #include "solvers/a_product.hpp"
 #include "solvers/accuracy.hpp"
+#include "solvers/bounds.hpp"
 #include "solvers/mprgp_kernels.hpp"
 
 #include <cmath>
@@ -78,54 +79,19 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
     Counters cnt;
     result.x = qp.x0;
     result.lambda = Vec::Zero(m);
-    // --- bounds from the rows ---
+    // --- bounds from the rows (solvers/bounds.hpp: one policy for what a bounds solver cannot take) ---
+    const RowBounds bounds = bounds_from_rows(qp);
+    if (bounds.status != SolveStatus::NOT_RUN)
+        return loop.finish(
+            result, bounds.status,
+            "mprgp-box: " + bounds.why +
+                (bounds.status == SolveStatus::NOT_APPLICABLE ? "; use mprgp (decoupled J) or mprgp-coupled" : ""));
     const double inf = std::numeric_limits<double>::infinity();
-    Vec lower = Vec::Constant(n, -inf), upper = Vec::Constant(n, inf);
-    std::vector<int> lower_row(static_cast<size_t>(n), -1), upper_row(static_cast<size_t>(n), -1);
-    std::vector<int> row_dof(static_cast<size_t>(m), -1);
-    Vec row_coef = Vec::Zero(m);
-    for (Eigen::Index i = 0; i < m; ++i) {
-        int nonzeros = 0;
-        for (SpMat::InnerIterator it(qp.J, i); it; ++it) {
-            if (it.value() == 0.0) continue;
-            ++nonzeros;
-            row_dof[static_cast<size_t>(i)] = static_cast<int>(it.col());
-            row_coef[i] = it.value();
-        }
-        if (nonzeros > 1) {
-            result.status = SolveStatus::NOT_APPLICABLE;
-            result.message = "mprgp-box: row " + std::to_string(i) + " of J has " + std::to_string(nonzeros) +
-                             " nonzeros; mprgp-box needs bound rows (one nonzero per row, a x_j >= c); use mprgp "
-                             "(decoupled J) or mprgp-coupled";
-            return loop.finish(result, result.status);
-        }
-        if (nonzeros == 0) {
-            if (qp.c[i] > active_tolerance(qp.c[i])) {
-                result.status = SolveStatus::INFEASIBLE;
-                result.message = "mprgp-box: row " + std::to_string(i) + " is zero but c > 0: empty feasible set";
-                return loop.finish(result, result.status);
-            }
-            continue;
-        }
-        const int j = row_dof[static_cast<size_t>(i)];
-        const double bound = qp.c[i] / row_coef[i];
-        if (row_coef[i] > 0.0) {
-            if (bound > lower[j]) {
-                lower[j] = bound;
-                lower_row[static_cast<size_t>(j)] = static_cast<int>(i);
-            }
-        } else if (bound < upper[j]) {
-            upper[j] = bound;
-            upper_row[static_cast<size_t>(j)] = static_cast<int>(i);
-        }
-    }
-    for (Eigen::Index j = 0; j < n; ++j)
-        if (lower[j] > upper[j]) {
-            result.status = SolveStatus::INFEASIBLE;
-            result.message = "mprgp-box: DOF " + std::to_string(j) + " has lower bound " + fmt(lower[j]) +
-                             " > upper bound " + fmt(upper[j]);
-            return loop.finish(result, result.status);
-        }
+    const Vec& lower = bounds.lower;
+    const Vec& upper = bounds.upper;
+    const Vec& row_coef = bounds.coef;
+    const std::vector<Eigen::Index>& lower_row = bounds.lower_row;
+    const std::vector<Eigen::Index>& upper_row = bounds.upper_row;
     Vec dinv = Vec::Ones(n);
     if (m_settings.precond == "jacobi") {
         const Vec diag = qp.A.diagonal();
