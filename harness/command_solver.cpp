@@ -295,7 +295,7 @@ SolverResult CommandSolver::solve(const QpView& qp, const SolveContext& context)
                                     {"n", qp.n()},
                                     {"m", qp.m()},
                                     {"tol", common.tol},
-                                    {"stop", common.stop == StopRule::KKT ? "kkt" : "native"},
+                                    {"stop", to_string(common.stop)},
                                     {"max_iterations", common.max_iterations},
                                     {"time_limit_s", common.time_limit_s},
                                     {"seed", common.seed},
@@ -409,7 +409,7 @@ SolverResult CommandSolver::solve(const QpView& qp, const SolveContext& context)
     }
     // A program that exits 0 without a status claims it solved the problem: the measure checks it.
     const SolveStatus status = report.has_status ? report.status : SolveStatus::CONVERGED;
-    if (status == SolveStatus::CONVERGED) result.criterion = "program";
+    if (status == SolveStatus::CONVERGED) result.criterion = StopCriterion::PROGRAM;
     return finish(status, message.empty() ? "command: the program exited normally" : message);
 }
 

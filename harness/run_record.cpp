@@ -62,7 +62,7 @@ nlohmann::json run_record(const RunOutcome& out, const RunFacts& facts, int repe
     rec["warm"] = {{"lambda0", facts.warm_lambda0}, {"eigenvector", facts.warm_eigenvector}};
     rec["status"] = out.status;
     rec["solver_status"] = to_string(result.status);
-    rec["criterion"] = result.criterion;
+    rec["criterion"] = to_string(result.criterion);
     rec["message"] =
         facts.note.empty() ? result.message : result.message + (result.message.empty() ? "" : "; ") + facts.note;
     rec["iterations"] = result.iterations;

@@ -157,7 +157,7 @@ void measure_outcome(RunOutcome& out, RunFacts& facts, const CommonSettings& com
     }
     const Vec g = original.A * x - original.b;  // decoupling keeps A and b
     facts.tol = common.tol;
-    facts.native = result.criterion == "native";
+    facts.native = result.criterion == StopCriterion::NATIVE;
     facts.accuracy_tol = facts.native ? DEFAULT_ACCURACY_TOL : facts.tol;
     const bool own_valid = !result.lambda_fitted && result.lambda.size() == problem.qp->m();
     const Vec own_full = own_multipliers(result, original, problem);

@@ -170,7 +170,7 @@ std::pair<StressRow, json> run_one(const Qp& qp, const StressCase& c, const std:
         const RunOutcome out = run_solver(qp, spec.first, settings, ro, info);
         row.status = out.status;
         row.solver_status = to_string(out.result.status);
-        row.criterion = out.result.criterion;
+        row.criterion = to_string(out.result.criterion);
         row.accuracy = out.accuracy.max();
         row.accuracy_solved = out.accuracy_solved.max();
         row.violation = out.violation;

@@ -149,7 +149,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
     auto invalid = [&](const std::string& message) {
         result.x = qp.x0.size() == n ? qp.x0 : Vec::Zero(n);
         result.lambda = Vec::Zero(m);
-        return loop.finish(result, SolveStatus::INVALID_INPUT, "", "active-set: " + message);
+        return loop.finish(result, SolveStatus::INVALID_INPUT, "active-set: " + message);
     };
     if (qp.A.cols() != n || qp.b.size() != n || qp.x0.size() != n || qp.c.size() != m || (m > 0 && qp.J.cols() != n)) {
         std::ostringstream msg;
@@ -197,12 +197,14 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
     if (!loop.end_setup()) {
         result.x = qp.x0;
         result.lambda = Vec::Zero(m);
-        return loop.finish(result, SolveStatus::TIME_LIMIT, "", loop.time_limit_message());
+        return loop.finish(result, SolveStatus::TIME_LIMIT);
     }
 
     const AccuracyScale scale = accuracy_scale(qp);
     counters.a_products += scale.a_products;
     const Vec x_unc = solve_A(qp.b);
+    // A non-finite b (or A) leaves nothing to pivot on: the loop's finiteness check ends the solve.
+    if (!x_unc.allFinite()) return loop.finish(result, loop.check(counters.iterations, false, false));
     Vec s_base = m > 0 ? Vec(qp.J * x_unc - qp.c) : Vec(0);
     const double x_scale = std::max(x_unc.size() ? x_unc.lpNorm<Eigen::Infinity>() : 0.0,
                                     qp.x0.size() ? qp.x0.lpNorm<Eigen::Infinity>() : 0.0);
@@ -452,29 +454,16 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
     const double stationarity_abs = (g - Jt(lambda)).lpNorm<Eigen::Infinity>();
     result.native_residual = std::max(stationarity_abs, max_violation(qp, x));
 
+    std::ostringstream detail;  // the loop writes the reason; INFEASIBLE keeps its own message
     if (result.status == SolveStatus::NOT_RUN) {
-        const bool ok = common.stop == StopRule::KKT ? rel <= common.tol : result.native_residual <= common.tol;
-        std::ostringstream msg;
-        if (ok) {
-            result.status = SolveStatus::CONVERGED;
-            result.criterion = common.stop == StopRule::KKT ? "kkt" : "native";
-            msg << "active-set: optimal working set of " << W.size() << " rows after " << counters.iterations
-                << " steps; accuracy error " << rel;
-        } else {
-            result.status = SolveStatus::STALLED;
-            msg << "active-set: working set of " << W.size() << " rows found, but the polished "
-                << (common.stop == StopRule::KKT ? "accuracy error " : "native residual ")
-                << (common.stop == StopRule::KKT ? rel : result.native_residual) << " > tol " << common.tol
-                << " (ill-conditioned A or dependent rows)";
-        }
-        result.message = msg.str();
-    } else if (result.message.empty()) {
-        std::ostringstream msg;
-        msg << "active-set: " << to_string(result.status) << " after " << counters.iterations << " steps; working set "
-            << W.size() << " rows; accuracy error " << rel;
-        if (result.status == SolveStatus::TIME_LIMIT) msg << "; " << loop.time_limit_message();
-        result.message = msg.str();
+        // A finite method: the loop's verdict on the polished point.
+        result.status = loop.verdict(x.allFinite() && lambda.allFinite(), result.native_residual, rel);
+        detail << (result.status == SolveStatus::STALLED ? "working set of " : "optimal working set of ") << W.size()
+               << " rows after " << counters.iterations << " steps"
+               << (result.status == SolveStatus::STALLED ? " (ill-conditioned A or dependent rows)" : "");
     }
+    if (detail.tellp() == 0)
+        detail << counters.iterations << " steps; working set " << W.size() << " rows; accuracy error " << rel;
     result.x = x;
     result.lambda = lambda;
     result.iterations = counters.iterations;
@@ -489,7 +478,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
     result.info["clipped_negative_lambda"] = clipped;
     result.info["accuracy_error"] = rel;
     monitor(StepKind::FINAL, &x, result.native_residual);
-    return loop.finish(result, result.status, result.criterion);
+    return loop.finish(result, result.status, result.message.empty() ? detail.str() : result.message);
 }
 
 SolverEntry active_set_entry()
@@ -501,6 +490,7 @@ SolverEntry active_set_entry()
     entry.description =
         "Goldfarb-Idnani dual active-set QP on a CHOLMOD factor of A (the reference; detects infeasibility)";
     entry.settings = active_set_setting_docs();
+    entry.applies_to = "any J (dense Schur complement of the working set)";
     return entry;
 }
 

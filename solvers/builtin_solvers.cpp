@@ -24,43 +24,30 @@
 
 namespace cb {
 
-namespace {
-
-/// The entry with its applicability line (what `contactbench solvers` prints beside the name).
-SolverEntry applies_to(SolverEntry entry, const char* problems)
-{
-    entry.applies_to = problems;
-    return entry;
-}
-
-}  // namespace
-
 void register_builtin_solvers(SolverRegistry& registry)
 {
     // REGISTRATIONS (one line each): registry.add("name", name_entry());
-    registry.add("active-set", applies_to(active_set_entry(), "any J (dense Schur complement of the working set)"));
-    registry.add("cg", applies_to(cg_entry(), "ignores J (solves Ax = b)"));
-    registry.add("mprgp", applies_to(mprgp_entry(), "decoupled rows only (the harness decouples a coupled J first)"));
-    registry.add("mprgp-box", applies_to(mprgp_box_entry(), "bounds only (every row of J has at most one nonzero)"));
-    registry.add("mprgp-coupled", applies_to(mprgp_coupled_entry(), "any J"));
-    registry.add("ica", applies_to(ica_entry(), "any J"));
-    registry.add("pgs", applies_to(pgs_entry(), "any J with at most max_rows rows (2000; the dual matrix is dense)"));
+    registry.add("active-set", active_set_entry());
+    registry.add("cg", cg_entry());
+    registry.add("mprgp", mprgp_entry());
+    registry.add("mprgp-box", mprgp_box_entry());
+    registry.add("mprgp-coupled", mprgp_coupled_entry());  // applies to any J (the entry's default)
+    registry.add("ica", ica_entry());
+    registry.add("pgs", pgs_entry());
     // External peers (solvers/peers/), each only when CMake found its library:
 #ifdef CB_HAVE_IPOPT
-    registry.add("ipopt", applies_to(ipopt_entry(), "any J (interior point on the primal QP)"));
+    registry.add("ipopt", ipopt_entry());
 #endif
 #ifdef CB_HAVE_SICONOS
-    registry.add("siconos-lemke",
-                 applies_to(siconos_lemke_entry(), "any J with at most max_rows rows (dense dual LCP)"));
-    registry.add("siconos-nsn", applies_to(siconos_nsn_entry(), "any J (global problem, mu = 0)"));
+    registry.add("siconos-lemke", siconos_lemke_entry());
+    registry.add("siconos-nsn", siconos_nsn_entry());
 #endif
 #ifdef CB_HAVE_PETSC
-    registry.add("tao-pdipm", applies_to(tao_pdipm_entry(), "any J (interior point on the primal QP)"));
-    registry.add("tao-tron", applies_to(tao_tron_entry(), "bounds only (every row of J has at most one nonzero)"));
+    registry.add("tao-pdipm", tao_pdipm_entry());
+    registry.add("tao-tron", tao_tron_entry());
 #endif
 #ifdef CB_HAVE_BULLET
-    registry.add("bullet-dantzig",
-                 applies_to(bullet_dantzig_entry(), "any J with at most max_rows rows (dense dual LCP)"));
+    registry.add("bullet-dantzig", bullet_dantzig_entry());
 #endif
 }
 

@@ -36,45 +36,15 @@ const SettingsTable<CgSettings>& cg_settings_table()
 
 CgSettings CgSettings::from_json(const nlohmann::json& settings)
 {
-    SettingsReader reader(settings, "cg");
-    CgSettings s;
-    s.common = reader.common();
-    cg_settings_table().read(reader, s);
-    reader.finish();
-    return s;
+    return read_settings(settings, "cg", cg_settings_table());
 }
 
-nlohmann::json CgSettings::to_json() const
-{
-    nlohmann::json j = common.to_json();
-    cg_settings_table().write(*this, j);
-    return j;
-}
-
-std::vector<SettingDoc> cg_setting_docs() { return cg_settings_table().docs(); }
-
-namespace {
-
-/// Stop test of cg: kkt = the accuracy error of the unconstrained relaxation (its stationarity
-/// part |D^-1 r|_inf / l, docs/accuracy.md), native = |r|_2 absolute.
-struct CgStopTest {
-    StopRule rule;
-    double tol;
-    const AccuracyScale& scale;  ///< of the relaxation (no rows)
-    bool met(const Vec& r) const
-    {
-        if (rule == StopRule::NATIVE) return r.norm() <= tol;
-        return r.cwiseProduct(scale.inv_diag).lpNorm<Eigen::Infinity>() * scale.inv_length <= tol;
-    }
-};
-
-}  // namespace
+nlohmann::json CgSettings::to_json() const { return write_settings(*this, cg_settings_table()); }
 
 SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
 {
     SolverResult result;
     result.info["ignores_constraints"] = true;
-    result.criterion = "";
     Counters& counters = result.counters;
     const Eigen::Index n = qp.n();
     const CommonSettings& common = m_settings.common;
@@ -83,7 +53,7 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
     result.lambda = Vec::Zero(qp.m());
     if (qp.A.cols() != n || qp.b.size() != n || qp.x0.size() != n) {
         result.x = qp.x0;
-        return loop.finish(result, SolveStatus::INVALID_INPUT, "",
+        return loop.finish(result, SolveStatus::INVALID_INPUT,
                            "cg: sizes disagree (A " + std::to_string(qp.A.rows()) + "x" + std::to_string(qp.A.cols()) +
                                ", b " + std::to_string(qp.b.size()) + ", x0 " + std::to_string(qp.x0.size()) + ")");
     }
@@ -97,7 +67,7 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
                 msg << "cg: jacobi preconditioner needs a positive diagonal; A(" << i << "," << i
                     << ") = " << inv_diag[i];
                 result.x = qp.x0;
-                return loop.finish(result, SolveStatus::INVALID_INPUT, "", msg.str());
+                return loop.finish(result, SolveStatus::INVALID_INPUT, msg.str());
             }
             inv_diag[i] = 1.0 / inv_diag[i];
         }
@@ -108,7 +78,7 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
         std::string error;
         if (!ic.factor(qp.A, error)) {
             result.x = qp.x0;
-            return loop.finish(result, SolveStatus::INVALID_INPUT, "", "cg: precond=ichol: " + error);
+            return loop.finish(result, SolveStatus::INVALID_INPUT, "cg: precond=ichol: " + error);
         }
         ++counters.precond_factorizations;
         counters.work_flops += ic.factor_flops();
@@ -149,7 +119,7 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
     };
     if (!loop.end_setup()) {
         result.x = qp.x0;
-        return loop.finish(result, SolveStatus::TIME_LIMIT, "", loop.time_limit_message());
+        return loop.finish(result, SolveStatus::TIME_LIMIT);
     }
 
     Vec x = m_settings.start == "zero" ? Vec(Vec::Zero(n)) : qp.x0;
@@ -159,7 +129,14 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
     const Vec no_c(0);
     const AccuracyScale scale = accuracy_scale(QpView{qp.A, qp.b, no_rows, no_c, qp.x0});
     counters.a_products += scale.a_products;
-    const CgStopTest stop{common.stop, common.tol, scale};
+    // Stop test of cg: native = |r|_2 absolute; accuracy = the error of the unconstrained
+    // relaxation (its stationarity part |D^-1 r|_inf / l, docs/accuracy.md).
+    auto relaxation_error = [&](const Vec& res) {
+        return res.cwiseProduct(scale.inv_diag).lpNorm<Eigen::Infinity>() * scale.inv_length;
+    };
+    auto rule_met = [&](const Vec& res) {
+        return loop.criterion_met([&] { return res.norm(); }, [&] { return relaxation_error(res); });
+    };
 
     auto monitor = [&](StepKind step) {
         IterationInfo info;
@@ -194,30 +171,24 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
 
     long replacements = 0;  // residual replacements after a false (recurrence-only) convergence
     while (result.status == SolveStatus::NOT_RUN) {
-        if (!std::isfinite(rz) || !x.allFinite()) {
-            result.status = SolveStatus::DIVERGED;
-            result.message = "cg: non-finite iterate or residual";
-            break;
-        }
-        if (stop.met(r)) {
+        const bool finite = std::isfinite(rz) && x.allFinite();
+        bool converged = false;
+        if (finite && rule_met(r)) {
             // The recurrence residual drifts from b - Ax: confirm on the true residual.
             Vec r_true = qp.b - a_product(qp.A, x);
             ++counters.a_products;
-            if (stop.met(r_true)) {
-                r = r_true;
-                result.status = SolveStatus::CONVERGED;
-                result.criterion = common.stop == StopRule::KKT ? "kkt" : "native";
-                break;
-            }
-            ++replacements;
+            converged = rule_met(r_true);
             r = r_true;
-            galerkin();
-            z = direction(r);
-            p = z;
-            rz = r.dot(z);
-            continue;
+            if (!converged) {
+                ++replacements;
+                galerkin();
+                z = direction(r);
+                p = z;
+                rz = r.dot(z);
+                continue;
+            }
         }
-        result.status = loop.limit_status(counters.iterations);
+        result.status = loop.check(counters.iterations, finite, converged);
         if (result.status != SolveStatus::NOT_RUN) break;
         a_product(qp.A, p, Ap);
         ++counters.a_products;
@@ -262,27 +233,19 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
                                     {"rayleigh_min", defl.min_rayleigh_seen()},
                                     {"rayleigh_max", defl.max_rayleigh_seen()},
                                     {"galerkin_steps", galerkin_steps}};
-    if (result.message.empty()) {
-        std::ostringstream msg;
-        msg << "cg (" << m_settings.precond << (deflate ? ", rigid deflation" : "") << "): " << to_string(result.status)
-            << " after " << counters.iterations << " iterations, |b - Ax|_2 = " << result.native_residual
-            << " (constraints ignored)";
-        if (result.status == SolveStatus::TIME_LIMIT) msg << "; " << loop.time_limit_message();
-        result.message = msg.str();
-    }
-    return loop.finish(result, result.status, result.criterion);
+    std::ostringstream detail;  // the loop writes the reason (a breakdown's message is kept as it is)
+    detail << m_settings.precond << (deflate ? ", rigid deflation" : "") << ", " << counters.iterations
+           << " iterations, |b - Ax|_2 = " << result.native_residual << " (constraints ignored)";
+    return loop.finish(result, result.status, result.message.empty() ? detail.str() : result.message);
 }
 
 SolverEntry cg_entry()
 {
-    SolverEntry entry;
-    entry.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
-        return std::make_unique<CgSolver>(CgSettings::from_json(settings));
-    };
-    entry.description = "preconditioned (jacobi | ichol) CG on Ax = b ignoring J (Fig. 8 baseline); stop=kkt is the "
-                        "accuracy error of the unconstrained relaxation";
-    entry.settings = cg_setting_docs();
-    return entry;
+    return solver_entry<CgSolver>(
+        "cg", cg_settings_table(),
+        "preconditioned (jacobi | ichol) CG on Ax = b ignoring J (Fig. 8 baseline); stop=kkt is the "
+        "accuracy error of the unconstrained relaxation",
+        "ignores J (solves Ax = b)");
 }
 
 }  // namespace cb

@@ -25,9 +25,6 @@ struct CgSettings {
     nlohmann::json to_json() const;
 };
 
-/// The solver-specific keys of `cg`, for --help.
-std::vector<SettingDoc> cg_setting_docs();
-
 class CgSolver final : public Solver {
 public:
     explicit CgSolver(CgSettings settings) : m_settings(std::move(settings)) {}

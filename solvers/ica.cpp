@@ -34,20 +34,10 @@ const SettingsTable<IcaSettings>& ica_settings_table()
 
 IcaSettings IcaSettings::from_json(const nlohmann::json& settings)
 {
-    SettingsReader reader(settings, "ica");
-    IcaSettings s;
-    s.common = reader.common();
-    ica_settings_table().read(reader, s);
-    reader.finish();
-    return s;
+    return read_settings(settings, "ica", ica_settings_table());
 }
 
-nlohmann::json IcaSettings::to_json() const
-{
-    nlohmann::json j = common.to_json();
-    ica_settings_table().write(*this, j);
-    return j;
-}
+nlohmann::json IcaSettings::to_json() const { return write_settings(*this, ica_settings_table()); }
 
 namespace {
 
@@ -164,7 +154,7 @@ SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
     BlockDiagonal d;
     std::string error;
     if (!build_block_diagonal(qp.A, d, error))
-        return loop.finish(result, SolveStatus::INVALID_INPUT, "", "ica: A must be SPD: " + error);
+        return loop.finish(result, SolveStatus::INVALID_INPUT, "ica: A must be SPD: " + error);
     const SpMat Dinv = block_inverse_matrix(d);
     const SpMat JD = qp.J * Dinv;                           // J D3^-1, m x n
     const SpMat B = SpMat(JD * qp.J.transpose()).pruned();  // J D3^-1 J', m x m
@@ -187,7 +177,7 @@ SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
         ++counters.cholmod_factorizations;
         counters.work_flops += cholmod_factor_flops(llt.cholmod());
         if (llt.info() != Eigen::Success)
-            return loop.finish(result, SolveStatus::INVALID_INPUT, "",
+            return loop.finish(result, SolveStatus::INVALID_INPUT,
                                "ica: start=unconstrained: CHOLMOD could not factor A (not SPD?)");
         x = llt.solve(qp.b);
         ++counters.cholmod_solves;
@@ -197,7 +187,7 @@ SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
     }
     Vec lambda = Vec::Zero(m);
     if (context.lambda0 && context.lambda0->size() == m) lambda = context.lambda0->cwiseMax(0.0);
-    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT, "", loop.time_limit_message());
+    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT);
     const AccuracyScale scale = accuracy_scale(qp);
     counters.a_products += scale.a_products;
     Vec Ax = a_product(qp.A, x);
@@ -206,35 +196,32 @@ SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
     double native = (Ax - f).norm();
     Vec g = Ax - qp.b;
 
-    auto finish = [&](SolveStatus status, const std::string& criterion, const std::string& message) {
+    auto finish = [&](SolveStatus status) {
         result.x = x;
         result.lambda = lambda;
         result.native_residual = native;
         result.info["native_residual_definition"] = "||A x - b - J' lambda||_2 (absolute)";
-        return loop.finish(result, status, criterion, message);
+        std::ostringstream detail;  // the loop writes the reason
+        detail << "native residual ||Ax-b-J'lambda||_2 = " << native << " (stationarity only)";
+        return loop.finish(result, status, detail.str());
     };
-    auto converged = [&]() -> std::string {
-        if (s.common.stop == StopRule::NATIVE) return native <= s.common.tol ? "native" : "";
-        return accuracy_converged(qp, scale, x, g, lambda, s.common.tol) ? "kkt" : "";
-    };
+    auto accuracy_error = [&] { return accuracy_from_gradient(qp, scale, x, g, lambda).max(); };
 
     if (!loop.notify({0, StepKind::START, &x, &lambda, native, -1, &counters, 0.0}))
-        return finish(SolveStatus::STOPPED_BY_MONITOR, "", "ica: stopped by the monitor");
-    if (!x.allFinite()) return finish(SolveStatus::DIVERGED, "", "ica: non-finite start point");
-    {
-        const std::string c = converged();
-        if (!c.empty()) return finish(SolveStatus::CONVERGED, c, "ica: the start point meets the stop rule");
-    }
+        return finish(SolveStatus::STOPPED_BY_MONITOR);
 
     Vec q(m);
     double last_dlambda = 0.0;
     long last_sweeps = 0;
     for (;;) {
-        // Non-finite and converged were tested after the previous iteration (below): the limits.
-        const SolveStatus limit = loop.limit_status(counters.iterations);
-        if (limit == SolveStatus::MAX_ITERATIONS)
-            return finish(limit, "", "ica: max_iterations reached (" + std::to_string(s.common.max_iterations) + ")");
-        if (limit == SolveStatus::TIME_LIMIT) return finish(limit, "", loop.time_limit_message());
+        // The loop's exit checks: non-finite, the stop rule, the iteration cap, the time.
+        const SolveStatus exit = loop.check(
+            counters.iterations, x.allFinite() && lambda.allFinite() && std::isfinite(native), native, accuracy_error);
+        if (exit == SolveStatus::CONVERGED && counters.iterations > 0) {
+            result.info["last_pgs_sweeps"] = last_sweeps;
+            result.info["last_pgs_dlambda"] = last_dlambda;
+        }
+        if (exit != SolveStatus::NOT_RUN) return finish(exit);
 
         // 1. anticipation: the LCP of the block-Jacobi prediction x~ = D3^-1 (b + J'l - (L+U) x).
         if (m > 0) {
@@ -277,33 +264,16 @@ SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
         ++counters.iterations;
 
         if (!loop.notify({counters.iterations, StepKind::OUTER, &x, &lambda, native, -1, &counters, 0.0}))
-            return finish(SolveStatus::STOPPED_BY_MONITOR, "", "ica: stopped by the monitor");
-        if (!x.allFinite() || !lambda.allFinite() || !std::isfinite(native))
-            return finish(SolveStatus::DIVERGED, "", "ica: non-finite iterate");
-        const std::string c = converged();
-        if (!c.empty()) {
-            result.info["last_pgs_sweeps"] = last_sweeps;
-            result.info["last_pgs_dlambda"] = last_dlambda;
-            std::ostringstream msg;
-            msg << "ica: "
-                << (c == "native" ? "native residual ||Ax-b-J'lambda||_2 = "
-                                  : "accuracy error <= tol; native residual = ")
-                << native << (c == "native" ? " <= tol (stationarity only; feasibility not checked)" : "");
-            return finish(SolveStatus::CONVERGED, c, msg.str());
-        }
+            return finish(SolveStatus::STOPPED_BY_MONITOR);
     }
 }
 
 SolverEntry ica_entry()
 {
-    SolverEntry e;
-    e.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
-        return std::make_unique<IcaSolver>(IcaSettings::from_json(settings));
-    };
-    e.description =
-        "iterative constraint anticipation (Otaduy et al. 2009) with PGS on J D3^-1 J', as the authors ran it";
-    e.settings = ica_settings_table().docs();
-    return e;
+    return solver_entry<IcaSolver>(
+        "ica", ica_settings_table(),
+        "iterative constraint anticipation (Otaduy et al. 2009) with PGS on J D3^-1 J', as the authors ran it",
+        "any J");
 }
 
 }  // namespace cb

@@ -68,32 +68,16 @@ const SettingsTable<MprgpSettings>& mprgp_settings_table()
 
 MprgpSettings MprgpSettings::from_json(const nlohmann::json& settings)
 {
-    SettingsReader reader(settings, "mprgp");
-    MprgpSettings s;
-    s.common = reader.common();
-    mprgp_settings_table().read(reader, s);
-    reader.finish();
-    return s;
+    return read_settings(settings, "mprgp", mprgp_settings_table());
 }
 
-nlohmann::json MprgpSettings::to_json() const
-{
-    nlohmann::json j = common.to_json();
-    mprgp_settings_table().write(*this, j);
-    return j;
-}
-
-std::vector<SettingDoc> mprgp_setting_docs() { return mprgp_settings_table().docs(); }
+nlohmann::json MprgpSettings::to_json() const { return write_settings(*this, mprgp_settings_table()); }
 
 SolverEntry mprgp_entry()
 {
-    SolverEntry entry;
-    entry.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
-        return std::make_unique<MprgpSolver>(MprgpSettings::from_json(settings));
-    };
-    entry.description = "extended monotone MPRGP on decoupled J (paper Alg. 1-3, closed-form operators)";
-    entry.settings = mprgp_setting_docs();
-    return entry;
+    return solver_entry<MprgpSolver>("mprgp", mprgp_settings_table(),
+                                     "extended monotone MPRGP on decoupled J (paper Alg. 1-3, closed-form operators)",
+                                     "decoupled rows only (the harness decouples a coupled J first)");
 }
 
 namespace {
@@ -110,8 +94,8 @@ std::string fmt(double v)
 class MprgpRun {
 public:
     MprgpRun(const QpView& qp, const MprgpSettings& settings, const SolveContext& context)
-        : m_qp(qp), m_A(qp.A), m_J(qp.J), m_b(qp.b), m_c(qp.c), m_st(settings), m_ctx(context), m_n(qp.n()), m_m(qp.m()),
-          m_loop("mprgp", qp, settings.common, context)
+        : m_qp(qp), m_A(qp.A), m_J(qp.J), m_b(qp.b), m_c(qp.c), m_st(settings), m_ctx(context), m_n(qp.n()),
+          m_m(qp.m()), m_loop("mprgp", qp, settings.common, context)
     {
     }
 
@@ -649,7 +633,7 @@ SolverResult MprgpRun::run()
     result.info["power"]["seconds"] = m_loop.setup_s();
     if (!setup_in_time) {
         result.counters = m_cnt;
-        return m_loop.finish(result, SolveStatus::TIME_LIMIT, "", m_loop.time_limit_message());
+        return m_loop.finish(result, SolveStatus::TIME_LIMIT);
     }
 
     // --- solve ---
@@ -670,12 +654,11 @@ SolverResult MprgpRun::run()
     refresh_gradient();
     restart(true);
 
-    const bool native = common.stop == StopRule::NATIVE;
     const bool recompute = m_st.objective == "recompute";
     const double gamma2 = m_st.gamma * m_st.gamma;
     StepKind last_step = StepKind::START;
-    SolveStatus status = SolveStatus::MAX_ITERATIONS;
-    std::string why;
+    SolveStatus status = SolveStatus::NOT_RUN;
+    std::string why;  // a breakdown's reason (the loop's own exits need none)
     while (true) {
         if (m_face_factor_failed) {
             status = SolveStatus::DIVERGED;
@@ -684,38 +667,31 @@ SolverResult MprgpRun::run()
         }
         evaluate_rows();
         if (!std::isfinite(m_native)) {
-            status = SolveStatus::DIVERGED;
-            why = "non-finite gradient";
+            status = m_loop.check(m_cnt.iterations, false, false);  // DIVERGED: non-finite iterate
             break;
         }
         // Converged means at a feasible x (an infeasible chain iterate ends in an expansion).
-        bool converged = !m_infeasible && (native ? m_native <= common.tol : m_error <= common.tol);
+        bool converged = !m_infeasible && m_loop.criterion_met(m_native, m_error);
         if (converged) {
             // Confirm at an exact gradient (the recursive g drifts along long chains); the
-            // kkt rule is confirmed by the common measure itself.
+            // accuracy rule is confirmed by the common measure itself.
             refresh_gradient();
             restart();
             evaluate_rows();
-            converged =
-                native ? m_native <= common.tol : accuracy_converged(m_qp, m_scale, m_x, m_g, m_lambda, common.tol);
+            converged = m_loop.criterion_met(
+                m_native, [&] { return accuracy_from_gradient(m_qp, m_scale, m_x, m_g, m_lambda).max(); });
         }
         if (!call_monitor(last_step)) {
             status = SolveStatus::STOPPED_BY_MONITOR;
-            why = "the monitor asked to stop";
             break;
         }
         // Non-finite was tested above; converged, the cap and the time in the loop's order.
-        status = m_loop.exit_status(true, converged, m_cnt.iterations);
-        if (status != SolveStatus::NOT_RUN) {
-            if (status == SolveStatus::MAX_ITERATIONS)
-                why = "iteration cap " + std::to_string(common.max_iterations) + " reached";
-            if (status == SolveStatus::TIME_LIMIT) why = m_loop.time_limit_reason();
-            break;
-        }
+        status = m_loop.check(m_cnt.iterations, true, converged);
+        if (status != SolveStatus::NOT_RUN) break;
         ++m_cnt.iterations;
         // An infeasible chain iterate whose face problem is already solved cannot improve
         // along the frozen face: end the chain (the expansion step projects).
-        const bool face_done = m_infeasible && (native ? m_native <= common.tol : m_face_error <= common.tol);
+        const bool face_done = m_infeasible && m_loop.rule_holds(m_native, m_face_error);
         const bool proportional = !face_done && m_beta2 <= gamma2 * m_phitilde_phi;
         if (proportional) {
             // --- CG trial step (Alg. 2) ---
@@ -821,7 +797,7 @@ SolverResult MprgpRun::run()
             // F(P(y)) went up: the chain ends with an (infeasible) trial point -> expansion.
             if (!expansion()) {
                 status = SolveStatus::TIME_LIMIT;
-                why = "time limit reached in a safeguard loop";
+                why = "in a safeguard loop";
                 break;
             }
             last_step = StepKind::EXPANSION;
@@ -829,7 +805,7 @@ SolverResult MprgpRun::run()
             // Not proportional at an infeasible chain iterate: no feasible point to proportion from.
             if (!expansion()) {
                 status = SolveStatus::TIME_LIMIT;
-                why = "time limit reached in a safeguard loop";
+                why = "in a safeguard loop";
                 break;
             }
             last_step = StepKind::EXPANSION;
@@ -837,7 +813,7 @@ SolverResult MprgpRun::run()
             if (!proportioning()) {
                 if (over_time()) {
                     status = SolveStatus::TIME_LIMIT;
-                    why = "time limit reached in a safeguard loop";
+                    why = "in a safeguard loop";
                 } else {
                     status = SolveStatus::STALLED;
                     why = "zero proportioning direction (beta'A beta = 0)";
@@ -857,15 +833,12 @@ SolverResult MprgpRun::run()
     }
     evaluate_rows();
     result.native_residual = m_native;
-    if (status == SolveStatus::CONVERGED) {
-        result.message = std::string("converged: ") + (native ? "||phi+beta||_2 = " : "accuracy error = ") +
-                         fmt(native ? m_native : m_error) + " <= tol";
-    } else {
-        result.message = "not converged: " + why + " (accuracy error " + fmt(m_error) + ", ||phi+beta|| " +
-                         fmt(m_native) + "; " + std::to_string(m_cnt.cg_steps) + " cg, " +
-                         std::to_string(m_cnt.expansion_steps) + " expansion, " +
-                         std::to_string(m_cnt.proportioning_steps) + " proportioning steps)";
-    }
+    // The loop writes the reason of its own exits; a breakdown is the solver's word.
+    const std::string figures = "accuracy error " + fmt(m_error) + ", ||phi+beta|| " + fmt(m_native) + "; " +
+                                std::to_string(m_cnt.cg_steps) + " cg, " + std::to_string(m_cnt.expansion_steps) +
+                                " expansion, " + std::to_string(m_cnt.proportioning_steps) + " proportioning steps";
+    const std::string detail = !m_loop.owns(status) ? "mprgp: not converged: " + why + " (" + figures + ")"
+                                                    : (why.empty() ? "" : why + "; ") + figures;
     result.x = m_x;
     result.lambda = m_lambda;
     result.lambda_fitted = false;
@@ -899,7 +872,7 @@ SolverResult MprgpRun::run()
         info.counters = &m_cnt;
         m_loop.notify(info);
     }
-    return m_loop.finish(result, status, status == SolveStatus::CONVERGED ? (native ? "native" : "kkt") : "");
+    return m_loop.finish(result, status, detail);
 }
 
 }  // namespace

@@ -32,8 +32,6 @@ struct MprgpSettings {
     nlohmann::json to_json() const;
 };
 
-std::vector<SettingDoc> mprgp_setting_docs();
-
 class MprgpSolver final : public Solver {
 public:
     explicit MprgpSolver(MprgpSettings settings) : m_settings(std::move(settings)) {}

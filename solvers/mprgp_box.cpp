@@ -7,6 +7,7 @@
 
 #include "solvers/a_product.hpp"
 #include "solvers/accuracy.hpp"
+#include "solvers/bounds.hpp"
 #include "solvers/mprgp_kernels.hpp"
 
 #include <cmath>
@@ -44,32 +45,17 @@ const SettingsTable<MprgpBoxSettings>& mprgp_box_settings_table()
 
 MprgpBoxSettings MprgpBoxSettings::from_json(const nlohmann::json& settings)
 {
-    SettingsReader reader(settings, "mprgp-box");
-    MprgpBoxSettings s;
-    s.common = reader.common();
-    mprgp_box_settings_table().read(reader, s);
-    reader.finish();
-    return s;
+    return read_settings(settings, "mprgp-box", mprgp_box_settings_table());
 }
 
-nlohmann::json MprgpBoxSettings::to_json() const
-{
-    nlohmann::json j = common.to_json();
-    mprgp_box_settings_table().write(*this, j);
-    return j;
-}
-
-std::vector<SettingDoc> mprgp_box_setting_docs() { return mprgp_box_settings_table().docs(); }
+nlohmann::json MprgpBoxSettings::to_json() const { return write_settings(*this, mprgp_box_settings_table()); }
 
 SolverEntry mprgp_box_entry()
 {
-    SolverEntry entry;
-    entry.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
-        return std::make_unique<MprgpBoxSolver>(MprgpBoxSettings::from_json(settings));
-    };
-    entry.description = "Dostal's MPRGP for bound rows (every row of J a signed unit vector), lower and upper bounds";
-    entry.settings = mprgp_box_setting_docs();
-    return entry;
+    return solver_entry<MprgpBoxSolver>(
+        "mprgp-box", mprgp_box_settings_table(),
+        "Dostal's MPRGP for bound rows (every row of J a signed unit vector), lower and upper bounds",
+        "bounds only (every row of J has at most one nonzero)");
 }
 
 namespace {
@@ -93,54 +79,19 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
     Counters cnt;
     result.x = qp.x0;
     result.lambda = Vec::Zero(m);
-    // --- bounds from the rows ---
+    // --- bounds from the rows (solvers/bounds.hpp: one policy for what a bounds solver cannot take) ---
+    const RowBounds bounds = bounds_from_rows(qp);
+    if (bounds.status != SolveStatus::NOT_RUN)
+        return loop.finish(
+            result, bounds.status,
+            "mprgp-box: " + bounds.why +
+                (bounds.status == SolveStatus::NOT_APPLICABLE ? "; use mprgp (decoupled J) or mprgp-coupled" : ""));
     const double inf = std::numeric_limits<double>::infinity();
-    Vec lower = Vec::Constant(n, -inf), upper = Vec::Constant(n, inf);
-    std::vector<int> lower_row(static_cast<size_t>(n), -1), upper_row(static_cast<size_t>(n), -1);
-    std::vector<int> row_dof(static_cast<size_t>(m), -1);
-    Vec row_coef = Vec::Zero(m);
-    for (Eigen::Index i = 0; i < m; ++i) {
-        int nonzeros = 0;
-        for (SpMat::InnerIterator it(qp.J, i); it; ++it) {
-            if (it.value() == 0.0) continue;
-            ++nonzeros;
-            row_dof[static_cast<size_t>(i)] = static_cast<int>(it.col());
-            row_coef[i] = it.value();
-        }
-        if (nonzeros > 1) {
-            result.status = SolveStatus::NOT_APPLICABLE;
-            result.message = "mprgp-box: row " + std::to_string(i) + " of J has " + std::to_string(nonzeros) +
-                             " nonzeros; mprgp-box needs bound rows (one nonzero per row, a x_j >= c); use mprgp "
-                             "(decoupled J) or mprgp-coupled";
-            return loop.finish(result, result.status);
-        }
-        if (nonzeros == 0) {
-            if (qp.c[i] > active_tolerance(qp.c[i])) {
-                result.status = SolveStatus::INFEASIBLE;
-                result.message = "mprgp-box: row " + std::to_string(i) + " is zero but c > 0: empty feasible set";
-                return loop.finish(result, result.status);
-            }
-            continue;
-        }
-        const int j = row_dof[static_cast<size_t>(i)];
-        const double bound = qp.c[i] / row_coef[i];
-        if (row_coef[i] > 0.0) {
-            if (bound > lower[j]) {
-                lower[j] = bound;
-                lower_row[static_cast<size_t>(j)] = static_cast<int>(i);
-            }
-        } else if (bound < upper[j]) {
-            upper[j] = bound;
-            upper_row[static_cast<size_t>(j)] = static_cast<int>(i);
-        }
-    }
-    for (Eigen::Index j = 0; j < n; ++j)
-        if (lower[j] > upper[j]) {
-            result.status = SolveStatus::INFEASIBLE;
-            result.message = "mprgp-box: DOF " + std::to_string(j) + " has lower bound " + fmt(lower[j]) +
-                             " > upper bound " + fmt(upper[j]);
-            return loop.finish(result, result.status);
-        }
+    const Vec& lower = bounds.lower;
+    const Vec& upper = bounds.upper;
+    const Vec& row_coef = bounds.coef;
+    const std::vector<Eigen::Index>& lower_row = bounds.lower_row;
+    const std::vector<Eigen::Index>& upper_row = bounds.upper_row;
     Vec dinv = Vec::Ones(n);
     if (m_settings.precond == "jacobi") {
         const Vec diag = qp.A.diagonal();
@@ -171,7 +122,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
     result.info["power"] = {{"products", power.products}, {"estimate", power.estimate}, {"warm_start", power.warm}};
     const AccuracyScale scale = accuracy_scale(qp);
     cnt.a_products += scale.a_products;
-    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT, "", loop.time_limit_message());
+    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT);
 
     // --- the MPRGP loop ---
     Vec x = qp.x0.cwiseMax(lower).cwiseMin(upper);
@@ -216,24 +167,23 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
     classify();
     gradients();
     p = z;
-    const bool native = common.stop == StopRule::NATIVE;
-    SolveStatus status = SolveStatus::MAX_ITERATIONS;
-    std::string why = "iteration cap " + std::to_string(common.max_iterations) + " reached";
+    SolveStatus status = SolveStatus::NOT_RUN;
+    std::string why;  // a breakdown's reason (the loop's own exits need none)
     StepKind last = StepKind::START;
     double native_residual = 0.0, error = 0.0;
     while (true) {
         multipliers();
         native_residual = (phi + beta).norm();
         error = accuracy_from_gradient(qp, scale, x, g, lambda).max();
-        bool converged = native ? native_residual <= common.tol : error <= common.tol;
+        bool converged = loop.criterion_met(native_residual, error);
         if (converged) {  // confirm at an exact gradient
             g = a_product(qp.A, x) - qp.b;
             ++cnt.a_products;
             gradients();
             multipliers();
             native_residual = (phi + beta).norm();
-            converged =
-                native ? native_residual <= common.tol : accuracy_converged(qp, scale, x, g, lambda, common.tol);
+            converged = loop.criterion_met(native_residual,
+                                           [&] { return accuracy_from_gradient(qp, scale, x, g, lambda).max(); });
             p = z;
         }
         IterationInfo info;
@@ -245,16 +195,11 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
         info.counters = &cnt;
         if (!loop.notify(info)) {
             status = SolveStatus::STOPPED_BY_MONITOR;
-            why = "the monitor asked to stop";
             break;
         }
         // The exit checks in the loop's order (a non-finite residual never counts as converged).
-        status = loop.exit_status(std::isfinite(native_residual), converged, cnt.iterations);
-        if (status != SolveStatus::NOT_RUN) {
-            if (status == SolveStatus::DIVERGED) why = "non-finite gradient";
-            if (status == SolveStatus::TIME_LIMIT) why = loop.time_limit_reason();
-            break;
-        }
+        status = loop.check(cnt.iterations, std::isfinite(native_residual), converged);
+        if (status != SolveStatus::NOT_RUN) break;
         ++cnt.iterations;
         if (beta.squaredNorm() <= m_settings.gamma * m_settings.gamma * phitilde_dot_phi()) {
             a_product(qp.A, p, Ap);
@@ -333,15 +278,10 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
     result.lambda = lambda;
     result.counters = cnt;
     result.native_residual = native_residual;
-    if (status == SolveStatus::CONVERGED) {
-        result.message =
-            "converged: " +
-            std::string(native ? "||phi+beta||_2 = " + fmt(native_residual) : "accuracy error = " + fmt(error)) +
-            " <= tol";
-    } else {
-        result.message = "not converged: " + why + " (accuracy error " + fmt(error) + ")";
-    }
-    return loop.finish(result, status, status == SolveStatus::CONVERGED ? (native ? "native" : "kkt") : "");
+    // The loop writes the reason of its own exits; a breakdown is the solver's word.
+    const std::string figures = "accuracy error " + fmt(error);
+    return loop.finish(result, status,
+                       !loop.owns(status) ? "mprgp-box: not converged: " + why + " (" + figures + ")" : figures);
 }
 
 }  // namespace cb

@@ -28,8 +28,6 @@ struct MprgpBoxSettings {
     nlohmann::json to_json() const;
 };
 
-std::vector<SettingDoc> mprgp_box_setting_docs();
-
 class MprgpBoxSolver final : public Solver {
 public:
     explicit MprgpBoxSolver(MprgpBoxSettings settings) : m_settings(std::move(settings)) {}

@@ -423,9 +423,9 @@ void CoupledRun::evaluate(bool exact)
     m_chopped_exact = false;
     m_chopped_by_monitor = false;
     const double error_lower = std::max(stat_free, m_primal) * m_scale.inv_length;
-    const bool native = m_st.common.stop == StopRule::NATIVE;
-    // ||phi + beta||^2 = ||phi||^2 + ||beta||^2 (beta in range(J_A'), phi in its complement).
-    const bool may_converge = m_x_feasible && (native ? std::sqrt(m_phi2) : error_lower) <= m_st.common.tol;
+    // ||phi + beta||^2 = ||phi||^2 + ||beta||^2 (beta in range(J_A'), phi in its complement):
+    // both are lower bounds, so the rule can hold only when it holds on them.
+    const bool may_converge = m_x_feasible && m_loop.rule_holds(std::sqrt(m_phi2), error_lower);
     if (exact || may_converge) {
         chopped_gradient(m_cnt, true);
         return;
@@ -689,7 +689,7 @@ SolverResult CoupledRun::run()
     m_alpha_bar = power.estimate > 0.0 ? 2.0 / (1.01 * power.estimate) : 1.0;
     m_scale = accuracy_scale(m_qp);
     m_cnt.a_products += m_scale.a_products;
-    if (!m_loop.end_setup()) return m_loop.finish(result, SolveStatus::TIME_LIMIT, "", m_loop.time_limit_message());
+    if (!m_loop.end_setup()) return m_loop.finish(result, SolveStatus::TIME_LIMIT);
 
     for (Vec* v : {&m_g, &m_phi, &m_z, &m_p, &m_Ap, &m_beta, &m_tmp, &m_x_ref, &m_g_ref}) v->setZero(m_n);
     m_d = Vec::Zero(m_n);
@@ -714,12 +714,11 @@ SolverResult CoupledRun::run()
     m_g = m_g_ref;
     restart();
 
-    const bool native = common.stop == StopRule::NATIVE;
     const double gamma2 = m_st.gamma * m_st.gamma;
-    SolveStatus status = SolveStatus::MAX_ITERATIONS;
-    std::string why = "iteration cap " + std::to_string(common.max_iterations) + " reached";
+    SolveStatus status = SolveStatus::NOT_RUN;
+    std::string why;  // a breakdown's reason (the loop's own exits need none)
     StepKind last = StepKind::START;
-    auto criterion = [&]() { return m_x_feasible && (native ? m_native <= common.tol : m_error <= common.tol); };
+    auto criterion = [&]() { return m_x_feasible && m_loop.criterion_met(m_native, m_error); };
     while (true) {
         evaluate();
         bool converged = criterion();
@@ -741,20 +740,13 @@ SolverResult CoupledRun::run()
         info.counters = &m_cnt;
         if (!m_loop.notify(info, [this](IterationInfo& shown) { monitor_view(shown); })) {
             status = SolveStatus::STOPPED_BY_MONITOR;
-            why = "the monitor asked to stop";
             break;
         }
-        status = m_loop.exit_status(std::isfinite(m_native), converged, m_cnt.iterations);
-        if (status != SolveStatus::NOT_RUN) {
-            if (status == SolveStatus::DIVERGED) why = "non-finite gradient";
-            if (status == SolveStatus::TIME_LIMIT) why = m_loop.time_limit_reason();
-            if (status == SolveStatus::MAX_ITERATIONS)
-                why = "iteration cap " + std::to_string(common.max_iterations) + " reached";
-            break;
-        }
+        status = m_loop.check(m_cnt.iterations, std::isfinite(m_native), converged);
+        if (status != SolveStatus::NOT_RUN) break;
         ++m_cnt.iterations;
         // An infeasible chain iterate whose face problem is solved cannot improve along the face.
-        const bool face_done = !m_x_feasible && (native ? std::sqrt(m_phi2) <= common.tol : m_face_error <= common.tol);
+        const bool face_done = !m_x_feasible && m_loop.rule_holds([&] { return std::sqrt(m_phi2); }, m_face_error);
         const bool proportional = !face_done && proportional_test(gamma2);
         bool do_expansion = false;
         if (proportional) {
@@ -886,17 +878,13 @@ SolverResult CoupledRun::run()
                    {"lcp_failures", m_ops->lcp_failures()},
                    {"safeguard_firings", m_cnt.safeguard_steps},
                    {"dependent_rows", "handled by a shift 1e-12 of the unit-diagonal-scaled Gram matrices"}};
-    if (status == SolveStatus::CONVERGED) {
-        result.message =
-            "converged: " +
-            std::string(native ? "||phi+beta||_2 = " + fmt(m_native) : "accuracy error = " + fmt(m_error)) +
-            " <= tol; safeguard firings " + std::to_string(m_cnt.safeguard_steps);
-    } else {
-        result.message = "not converged: " + why + " (accuracy error " + fmt(m_error) + ")";
-    }
+    // The loop writes the reason of its own exits; a breakdown is the solver's word.
+    std::string detail =
+        "accuracy error " + fmt(m_error) + ", safeguard firings " + std::to_string(m_cnt.safeguard_steps);
+    if (!m_loop.owns(status)) detail = "mprgp-coupled: not converged: " + why + " (" + detail + ")";
     if (m_ops->lcp_failures() > 0)
-        result.message += "; " + std::to_string(m_ops->lcp_failures()) + " LCP solves missed their tolerance";
-    return m_loop.finish(result, status, status == SolveStatus::CONVERGED ? (native ? "native" : "kkt") : "");
+        detail += "; " + std::to_string(m_ops->lcp_failures()) + " LCP solves missed their tolerance";
+    return m_loop.finish(result, status, detail);
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace cb {
@@ -29,20 +30,10 @@ const SettingsTable<PgsSettings>& pgs_settings_table()
 
 PgsSettings PgsSettings::from_json(const nlohmann::json& settings)
 {
-    SettingsReader reader(settings, "pgs");
-    PgsSettings s;
-    s.common = reader.common();
-    pgs_settings_table().read(reader, s);
-    reader.finish();
-    return s;
+    return read_settings(settings, "pgs", pgs_settings_table());
 }
 
-nlohmann::json PgsSettings::to_json() const
-{
-    nlohmann::json j = common.to_json();
-    pgs_settings_table().write(*this, j);
-    return j;
-}
+nlohmann::json PgsSettings::to_json() const { return write_settings(*this, pgs_settings_table()); }
 
 namespace {
 
@@ -63,7 +54,7 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
 
     SolveLoop loop("pgs", qp, s.common, context);
     if (m > s.max_rows) {
-        return loop.finish(result, SolveStatus::NOT_APPLICABLE, "",
+        return loop.finish(result, SolveStatus::NOT_APPLICABLE,
                            "pgs: m = " + std::to_string(m) + " rows exceeds max_rows = " + std::to_string(s.max_rows) +
                                " (S = J A^-1 J' is a dense m x m matrix formed with m CHOLMOD solves); "
                                "raise the max_rows setting to allow it");
@@ -82,7 +73,7 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
             std::ostringstream msg;
             msg << "pgs: row " << i << " of J is zero but c_" << i << " = " << qp.c[i]
                 << " > 0: the constraint 0 >= c_i cannot hold";
-            return loop.finish(result, SolveStatus::INFEASIBLE, "", msg.str());
+            return loop.finish(result, SolveStatus::INFEASIBLE, msg.str());
         }
     }
     result.info["zero_rows"] = zero_rows;
@@ -96,12 +87,14 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
     ++counters.cholmod_factorizations;
     counters.work_flops += cholmod_factor_flops(llt.cholmod());
     if (llt.info() != Eigen::Success)
-        return loop.finish(result, SolveStatus::INVALID_INPUT, "",
+        return loop.finish(result, SolveStatus::INVALID_INPUT,
                            "pgs: CHOLMOD could not factor A (not positive definite to working precision)");
     const Vec x_u = llt.solve(qp.b);
     ++counters.cholmod_solves;
     counters.work_flops += cholmod_solve_flops(llt.cholmod());
     const Vec q = qp.c - qp.J * x_u;
+    // A non-finite b or c would sit in q, where the clamp max(0, .) hides it from the sweeps.
+    if (!x_u.allFinite() || !q.allFinite()) return loop.finish(result, loop.check(counters.iterations, false, false));
 
     // S = J A^-1 J', column block by column block.
     const bool keep_y = static_cast<double>(n) * static_cast<double>(m) <= kMaxStoredEntries;
@@ -118,14 +111,12 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
                                sparse_product_flops(static_cast<double>(qp.J.nonZeros()), static_cast<double>(k));
         S.middleCols(j0, k) = qp.J * Yc;
         if (keep_y) Y.middleCols(j0, k) = Yc;
-        if (loop.time_up())
-            return loop.finish(result, SolveStatus::TIME_LIMIT, "",
-                               loop.time_limit_message() + " while forming S = J A^-1 J'");
+        if (loop.time_up()) return loop.finish(result, SolveStatus::TIME_LIMIT, "while forming S = J A^-1 J'");
     }
     S = 0.5 * (S + S.transpose()).eval();  // exact symmetry (the solves leave O(eps) asymmetry)
     const Vec S_diag = S.diagonal();
     result.info["y_stored"] = keep_y;
-    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT, "", loop.time_limit_message());
+    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT);
     const AccuracyScale scale = accuracy_scale(qp);
     counters.a_products += scale.a_products;
 
@@ -169,43 +160,35 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
 
     double native = natural_residual();
     double dual_threshold = s.common.tol;
-    auto finish = [&](SolveStatus status, const std::string& criterion, const std::string& message) {
+    auto finish = [&](SolveStatus status) {
         primal_point(true);
         result.x = x;
         result.lambda = lambda;
         result.native_residual = native;
-        return loop.finish(result, status, criterion, message);
+        std::ostringstream detail;  // the loop writes the reason
+        detail << "LCP natural residual " << native << " after " << counters.iterations << " sweeps";
+        return loop.finish(result, status, detail.str());
     };
     // x(lambda) for the monitor only: formed inside the monitor's pause (loop.notify's prepare).
     auto monitor = [&](long iteration, StepKind step) {
         return loop.notify({iteration, step, &x, &lambda, native, -1, &counters, 0.0}, [&] { primal_point(false); });
     };
-    // Returns the criterion met, or "" (a kkt candidate is confirmed at the exact primal point).
-    auto converged = [&]() -> std::string {
-        if (s.common.stop == StopRule::NATIVE) return native <= s.common.tol ? "native" : "";
-        if (dual_space_error() > dual_threshold) return "";
+    // The accuracy error for the loop's stop rule: screened in dual space first, then measured at
+    // the exact primal point; +inf when the screen already says "not met".
+    auto accuracy_error = [&]() -> double {
+        if (dual_space_error() > dual_threshold) return std::numeric_limits<double>::infinity();
         primal_point(true);
         const Vec g = a_product(qp.A, x) - qp.b;
         ++counters.a_products;
-        if (accuracy_converged(qp, scale, x, g, lambda, s.common.tol)) return "kkt";
-        dual_threshold *= 0.5;  // the solve's error showed up: ask more of the dual estimate
-        return "";
+        const double e = accuracy_from_gradient(qp, scale, x, g, lambda).max();
+        if (!(e <= s.common.tol)) dual_threshold *= 0.5;  // the solve's error showed up: ask more of the dual estimate
+        return e;
     };
 
-    if (!monitor(0, StepKind::START))
-        return finish(SolveStatus::STOPPED_BY_MONITOR, "", "pgs: stopped by the monitor");
-    {
-        const std::string c = converged();
-        if (!c.empty()) return finish(SolveStatus::CONVERGED, c, "pgs: the start point meets the stop rule");
-    }
-
-    for (;;) {
-        // Non-finite and converged were tested after the previous sweep (below): the limits.
-        const SolveStatus limit = loop.limit_status(counters.iterations);
-        if (limit == SolveStatus::MAX_ITERATIONS)
-            return finish(limit, "",
-                          "pgs: max_iterations reached (" + std::to_string(s.common.max_iterations) + " sweeps)");
-        if (limit == SolveStatus::TIME_LIMIT) return finish(limit, "", loop.time_limit_message());
+    SolveStatus status = monitor(0, StepKind::START) ? SolveStatus::NOT_RUN : SolveStatus::STOPPED_BY_MONITOR;
+    while (status == SolveStatus::NOT_RUN) {
+        status = loop.check(counters.iterations, lambda.allFinite() && std::isfinite(native), native, accuracy_error);
+        if (status != SolveStatus::NOT_RUN) break;
 
         // One ascending sweep; w = S lambda - q is kept current by rank-one updates.
         long updates = 0;  // columns of S added to w (2m flops each; docs/work.md)
@@ -228,30 +211,16 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
             counters.work_flops += dense_matvec_flops(m, m);
         }
         native = natural_residual();
-
-        if (!monitor(counters.iterations, StepKind::PGS_SWEEP))
-            return finish(SolveStatus::STOPPED_BY_MONITOR, "", "pgs: stopped by the monitor");
-        if (!lambda.allFinite() || !std::isfinite(native))
-            return finish(SolveStatus::DIVERGED, "", "pgs: non-finite multipliers");
-        const std::string c = converged();
-        if (!c.empty()) {
-            std::ostringstream msg;
-            msg << "pgs: " << (c == "native" ? "LCP natural residual " : "accuracy error <= tol; natural residual ")
-                << native << " after " << counters.iterations << " sweeps";
-            return finish(SolveStatus::CONVERGED, c, msg.str());
-        }
+        if (!monitor(counters.iterations, StepKind::PGS_SWEEP)) status = SolveStatus::STOPPED_BY_MONITOR;
     }
+    return finish(status);
 }
 
 SolverEntry pgs_entry()
 {
-    SolverEntry e;
-    e.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
-        return std::make_unique<PgsSolver>(PgsSettings::from_json(settings));
-    };
-    e.description = "projected Gauss-Seidel on the exact dual S = J A^-1 J' (CHOLMOD; small m only)";
-    e.settings = pgs_settings_table().docs();
-    return e;
+    return solver_entry<PgsSolver>("pgs", pgs_settings_table(),
+                                   "projected Gauss-Seidel on the exact dual S = J A^-1 J' (CHOLMOD; small m only)",
+                                   "any J with at most max_rows rows (2000; the dual matrix is dense)");
 }
 
 }  // namespace cb

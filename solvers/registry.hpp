@@ -23,6 +23,25 @@ struct SolverEntry {
     bool needs_settings = false;  ///< cannot run without its own settings (command: argv); left out of "every solver"
 };
 
+/// A solver's registry entry in one line: T built from its settings struct S (S::common plus the
+/// rows of `table`, read strictly by read_settings: unknown keys and bad values name `name` and the
+/// key), with `--help`'s description and setting docs and the applicability line.
+///
+///   SolverEntry cg_entry() { return solver_entry<CgSolver>("cg", cg_settings_table(), "...", "ignores J"); }
+template <class T, class S>
+SolverEntry solver_entry(const std::string& name, const SettingsTable<S>& table, std::string description,
+                         std::string applies_to = "any J")
+{
+    SolverEntry entry;
+    entry.make = [name, &table](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
+        return std::make_unique<T>(read_settings(settings, name, table));
+    };
+    entry.description = std::move(description);
+    entry.settings = table.docs();
+    entry.applies_to = std::move(applies_to);
+    return entry;
+}
+
 class SolverRegistry {
 public:
     /// Throws std::logic_error on a duplicate name.

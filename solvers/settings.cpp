@@ -8,13 +8,40 @@
 
 namespace cb {
 
+const SettingsTable<CommonSettings>& common_settings_table()
+{
+    using C = CommonSettings;
+    static const SettingsTable<C> table =
+        SettingsTable<C>()
+            .number("tol", &C::tol, 0.0, 1e300,
+                    "stop tolerance on the accuracy error e, dimensionless: residual lengths as a fraction of the "
+                    "scene size (stop=kkt); or on the native residual in the paper's units (stop=native)")
+            .row(
+                "stop", to_string(C{}.stop),
+                "kkt | native: which criterion ends the solve (kkt = the accuracy error e of docs/accuracy.md)",
+                [](SettingsReader& reader, C& s) {
+                    s.stop = reader.choice("stop", to_string(s.stop), {"kkt", "native"}) == "kkt" ? StopRule::ACCURACY
+                                                                                                  : StopRule::NATIVE;
+                },
+                [](const C& s, nlohmann::json& j) { j["stop"] = to_string(s.stop); }, {"kkt", "native"})
+            .integer("max_iterations", &C::max_iterations, 0, kMaxIterationsLimit,
+                     "cap on outer iterations (at most 10^12; bound long runs with time_limit_s)")
+            .number("time_limit_s", &C::time_limit_s, -1e-300, 1e300,
+                    "wall-time limit of the solve in seconds; 0 = none")
+            .row(
+                "seed", std::to_string(C{}.seed), "seed of every random choice",
+                [](SettingsReader& reader, C& s) {
+                    s.seed = static_cast<std::uint64_t>(reader.integer("seed", static_cast<long>(s.seed), 0));
+                },
+                [](const C& s, nlohmann::json& j) { j["seed"] = s.seed; });
+    return table;
+}
+
 nlohmann::json CommonSettings::to_json() const
 {
-    return {{"tol", tol},
-            {"stop", stop == StopRule::KKT ? "kkt" : "native"},
-            {"max_iterations", max_iterations},
-            {"time_limit_s", time_limit_s},
-            {"seed", seed}};
+    nlohmann::json j = nlohmann::json::object();
+    common_settings_table().write(*this, j);
+    return j;
 }
 
 SettingsReader::SettingsReader(const nlohmann::json& settings, std::string where)
@@ -108,11 +135,7 @@ std::string SettingsReader::choice(const std::string& key, const std::string& fa
 CommonSettings SettingsReader::common()
 {
     CommonSettings s;
-    s.tol = number("tol", s.tol, 0.0);
-    s.stop = choice("stop", "kkt", {"kkt", "native"}) == "kkt" ? StopRule::KKT : StopRule::NATIVE;
-    s.max_iterations = integer("max_iterations", s.max_iterations, 0, kMaxIterationsLimit);
-    s.time_limit_s = number("time_limit_s", s.time_limit_s, -1e-300);
-    s.seed = static_cast<std::uint64_t>(integer("seed", 0, 0));
+    common_settings_table().read(*this, s);
     return s;
 }
 
@@ -126,17 +149,7 @@ void SettingsReader::finish() const
         }
 }
 
-std::vector<SettingDoc> common_setting_docs()
-{
-    return {{"tol", "1e-6",
-             "stop tolerance on the accuracy error e, dimensionless: residual lengths as a fraction of the scene size "
-             "(stop=kkt); or on the native residual in the paper's units (stop=native)"},
-            {"stop", "kkt",
-             "kkt | native: which criterion ends the solve (kkt = the accuracy error e of docs/accuracy.md)"},
-            {"max_iterations", "10000", "cap on outer iterations (at most 10^12; bound long runs with time_limit_s)"},
-            {"time_limit_s", "0", "wall-time limit of the solve in seconds; 0 = none"},
-            {"seed", "0", "seed of every random choice"}};
-}
+std::vector<SettingDoc> common_setting_docs() { return common_settings_table().docs(); }
 
 std::string setting_default_text(double value)
 {

@@ -12,23 +12,35 @@
 
 namespace cb {
 
+/// Which measure `tol` bounds. Only SolveLoop (solvers/solve_loop.hpp) reads it.
 enum class StopRule {
-    KKT,     ///< the common accuracy error e of docs/accuracy.md (default; the name `kkt` is kept)
-    NATIVE,  ///< the solver's published criterion; `tol` is then the paper's absolute tolerance
+    ACCURACY,  ///< the common accuracy error e of docs/accuracy.md (default; the setting's name `kkt` is kept)
+    NATIVE,    ///< the solver's published criterion; `tol` is then the paper's absolute tolerance
 };
+/// The setting's text: "kkt" or "native".
+inline const char* to_string(StopRule rule) { return rule == StopRule::NATIVE ? "native" : "kkt"; }
 
 /// Largest accepted max_iterations: counters stay far from overflow (a larger value is an error
 /// naming the key, not a silent clamp).
 constexpr long kMaxIterationsLimit = 1000000000000L;
 
-/// Settings every solver accepts.
+/// The default `tol`: the accuracy error e of a converged run (a millionth of the scene size).
+/// The harness's verdict on a stop=native run uses it too (harness/runner.hpp).
+constexpr double kDefaultTol = 1e-6;
+
+/// Settings every solver accepts; their keys, bounds and docs are one table
+/// (common_settings_table() in settings.cpp), the defaults the initial values below.
 struct CommonSettings {
     double tol =
-        1e-6;  ///< on the accuracy error e (a fraction of the scene size), or the native residual (stop=native)
-    StopRule stop = StopRule::KKT;
+        kDefaultTol;  ///< on the accuracy error e (a fraction of the scene size), or the native residual (stop=native)
+    StopRule stop = StopRule::ACCURACY;
     long max_iterations = 10000;  ///< outer iterations
     double time_limit_s = 0.0;    ///< 0 disables the limit
     std::uint64_t seed = 0;       ///< every random choice is seeded
+
+    /// stop=native. For a peer that passes `tol` to its library as that library's own tolerance;
+    /// whether a solve converged is SolveLoop's decision, never the solver's.
+    bool stops_on_native() const { return stop == StopRule::NATIVE; }
 
     nlohmann::json to_json() const;
 };
@@ -84,8 +96,7 @@ inline std::string setting_default_text(const std::string& value) { return value
 ///       .choice("precond", &MySettings::precond, {"none", "jacobi"}, "none | jacobi: ...");
 ///
 /// Rows are read in order, so a row's default may depend on rows above it (`default_of`).
-template <class S>
-class SettingsTable {
+template <class S> class SettingsTable {
 public:
     SettingsTable& number(const std::string& key, double S::*field, double min_exclusive, double max_inclusive,
                           const std::string& doc, std::function<double(const S&)> default_of = nullptr)
@@ -130,6 +141,16 @@ public:
         return *this;
     }
 
+    /// A row of another type (an enum, an unsigned seed): its own reader and writer.
+    SettingsTable& row(const std::string& key, const std::string& default_text, const std::string& doc,
+                       std::function<void(SettingsReader&, S&)> read,
+                       std::function<void(const S&, nlohmann::json&)> write,
+                       const std::vector<std::string>& choices = {})
+    {
+        m_rows.push_back(Row{{key, default_text, doc}, choices, std::move(read), std::move(write)});
+        return *this;
+    }
+
     /// Reads every row (after reader.common(); the caller calls reader.finish()).
     void read(SettingsReader& reader, S& s) const
     {
@@ -164,6 +185,30 @@ private:
     };
     std::vector<Row> m_rows;
 };
+
+/// The common block as one table: key, type and bounds, default (CommonSettings{}), doc. The
+/// reader (SettingsReader::common), the record (CommonSettings::to_json) and `--help`
+/// (common_setting_docs) all read it.
+const SettingsTable<CommonSettings>& common_settings_table();
+/// A solver's whole settings struct S (a `common` block plus its own rows) from JSON: the common
+/// table, then `table`, then unknown keys rejected; errors name `solver` and the key.
+template <class S>
+S read_settings(const nlohmann::json& settings, const std::string& solver, const SettingsTable<S>& table)
+{
+    SettingsReader reader(settings, solver);
+    S s;
+    s.common = reader.common();
+    table.read(reader, s);
+    reader.finish();
+    return s;
+}
+/// The effective values of S as recorded in every results file: the common block and `table`'s rows.
+template <class S> nlohmann::json write_settings(const S& s, const SettingsTable<S>& table)
+{
+    nlohmann::json j = s.common.to_json();
+    table.write(s, j);
+    return j;
+}
 
 /// Converts "key=value" strings (command line --set) to JSON: numbers, true/false, else string.
 nlohmann::json parse_set_arguments(const std::vector<std::string>& assignments);

@@ -38,6 +38,21 @@ SolveStatus solve_status_from_string(const std::string& name)
     throw InputError("unknown solve status '" + name + "'");
 }
 
+const char* to_string(StopCriterion criterion)
+{
+    switch (criterion) {
+    case StopCriterion::NONE:
+        return "";
+    case StopCriterion::ACCURACY:
+        return "kkt";
+    case StopCriterion::NATIVE:
+        return "native";
+    case StopCriterion::PROGRAM:
+        return "program";
+    }
+    return "unknown";
+}
+
 const char* to_string(StepKind kind)
 {
     switch (kind) {

@@ -27,6 +27,17 @@ enum class SolveStatus {
 const char* to_string(SolveStatus status);
 SolveStatus solve_status_from_string(const std::string& name);  ///< throws InputError
 
+/// Which stop rule a converged solve met (SolverResult::criterion); only SolveLoop::finish sets it
+/// (a harness solver that trusts its program: PROGRAM).
+enum class StopCriterion {
+    NONE,      ///< not converged
+    ACCURACY,  ///< stop=kkt: the accuracy error e of docs/accuracy.md <= tol
+    NATIVE,    ///< stop=native: the solver's own residual <= tol
+    PROGRAM,   ///< the external program's own verdict (harness/command_solver)
+};
+/// "", "kkt", "native", "program": the record's `criterion` text (stop=kkt keeps its name).
+const char* to_string(StopCriterion criterion);
+
 /// What the last step of an iteration was (reported to the Monitor and in histories).
 enum class StepKind { START, CG, EXPANSION, PROPORTIONING, SAFEGUARD, PGS_SWEEP, PIVOT, OUTER, FINAL };
 const char* to_string(StepKind kind);
@@ -48,7 +59,7 @@ struct Counters {
     long cholmod_solves = 0;
     long lcp_iterations = 0;  ///< inner LCP pivots or PGS sweeps
     long pgs_sweeps = 0;
-    long pivots = 0;  ///< active-set changes
+    long pivots = 0;          ///< active-set changes
     double work_flops = 0.0;  ///< flops of work other than A-products (solvers/work_units.hpp, docs/work.md)
     nlohmann::json to_json() const;
 };
@@ -88,14 +99,14 @@ struct SolveContext {
 struct SolverResult {
     Vec x, lambda;
     SolveStatus status = SolveStatus::NOT_RUN;
-    std::string criterion;  ///< which stop rule was met: "kkt", "native", or "" if none
-    std::string message;    ///< human-readable detail (why it stopped, what was dropped)
+    StopCriterion criterion = StopCriterion::NONE;  ///< which stop rule was met (set by SolveLoop::finish)
+    std::string message;                            ///< human-readable detail (why it stopped, what was dropped)
     long iterations = 0;
     Counters counters;
-    double setup_s = 0.0;  ///< start of solve() to the end of setup (factorisations, power method ...)
-    double solve_s = 0.0;  ///< the iterations (setup_s + solve_s: the solver's time, monitor excluded)
-    double native_residual = 0.0;                    ///< at the returned x
-    bool lambda_fitted = false;                      ///< true when lambda came from fit_multipliers, not the solver
+    double setup_s = 0.0;          ///< start of solve() to the end of setup (factorisations, power method ...)
+    double solve_s = 0.0;          ///< the iterations (setup_s + solve_s: the solver's time, monitor excluded)
+    double native_residual = 0.0;  ///< at the returned x
+    bool lambda_fitted = false;    ///< true when lambda came from fit_multipliers, not the solver
     nlohmann::json info = nlohmann::json::object();  ///< solver-specific facts (power method, rows dropped ...)
 };
 

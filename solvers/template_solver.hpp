@@ -12,7 +12,8 @@
 /// Algorithm: x <- P(x - t g) with g = Ax - b, P the clamp onto the bounds, and the fixed step
 /// t = step_scale / |A|_inf (|A|_2 <= |A|_inf for symmetric A, so t < 2 / |A|_2 decreases F).
 /// Accepts a J whose every row has at most one nonzero: a x_j >= c is x_j >= c/a when a > 0 and
-/// x_j <= c/a when a < 0 (as `mprgp-box`); any other J gives status invalid_input.
+/// x_j <= c/a when a < 0 (solvers/bounds.hpp, shared with `mprgp-box` and `tao-tron`); any other J is
+/// not_applicable, rows that contradict are infeasible.
 #include "solvers/registry.hpp"
 #include "solvers/settings.hpp"
 #include "solvers/solver.hpp"
@@ -31,9 +32,6 @@ struct TemplateSettings {
     static TemplateSettings from_json(const nlohmann::json& settings);  ///< throws InputError
     nlohmann::json to_json() const;
 };
-
-/// The solver-specific keys, for `contactbench solve --solver template --help`.
-std::vector<SettingDoc> template_setting_docs();
 
 class TemplateSolver final : public Solver {
 public:

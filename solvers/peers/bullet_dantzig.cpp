@@ -4,26 +4,30 @@
 
 #include <BulletDynamics/MLCPSolvers/btDantzigLCP.h>
 
+#include <climits>
 #include <vector>
 
 namespace cb {
 
-BulletDantzigSettings BulletDantzigSettings::from_json(const nlohmann::json& settings)
+namespace {
+
+/// Its own settings, declared once (settings.hpp SettingsTable); the common block comes first.
+const SettingsTable<BulletDantzigSettings>& bullet_dantzig_settings_table()
 {
-    SettingsReader reader(settings, "bullet-dantzig");
-    BulletDantzigSettings s;
-    s.common = reader.common();
-    s.max_rows = reader.integer("max_rows", s.max_rows, 0);
-    reader.finish();
-    return s;
+    static const SettingsTable<BulletDantzigSettings> table = SettingsTable<BulletDantzigSettings>().integer(
+        "max_rows", &BulletDantzigSettings::max_rows, 0, LONG_MAX,
+        "refuse (not_applicable) problems with more rows of J (W is dense m x m)");
+    return table;
 }
 
-nlohmann::json BulletDantzigSettings::to_json() const
+}  // namespace
+
+BulletDantzigSettings BulletDantzigSettings::from_json(const nlohmann::json& settings)
 {
-    nlohmann::json j = common.to_json();
-    j["max_rows"] = max_rows;
-    return j;
+    return read_settings(settings, "bullet-dantzig", bullet_dantzig_settings_table());
 }
+
+nlohmann::json BulletDantzigSettings::to_json() const { return write_settings(*this, bullet_dantzig_settings_table()); }
 
 namespace {
 
@@ -62,7 +66,7 @@ SolverResult BulletDantzigSolver::solve(const QpView& qp, const SolveContext& co
     DualLcpPeer peer;
     peer.name = "bullet-dantzig";
     peer.library = "Bullet";
-    peer.method = "bullet-dantzig: Bullet btSolveDantzigLCP";
+    peer.method = "Bullet btSolveDantzigLCP";
     peer.steps = "driving indexes (m: Bullet counts neither its pivots nor where it stopped)";
     peer.max_rows = m_settings.max_rows;
     peer.residual_from_lcp = true;  // Bullet reports no error of its own
@@ -72,15 +76,13 @@ SolverResult BulletDantzigSolver::solve(const QpView& qp, const SolveContext& co
 
 SolverEntry bullet_dantzig_entry()
 {
-    SolverEntry e;
+    SolverEntry e = solver_entry<BulletDantzigSolver>(
+        "bullet-dantzig", bullet_dantzig_settings_table(),
+        std::string("peer: Bullet ") + CB_BULLET_VERSION +
+            " Dantzig pivoting (btDantzigSolver's LCP) on the dual LCP W = J A^-1 J' (CHOLMOD, dense; "
+            "child process)",
+        "any J with at most max_rows rows (dense dual LCP)");
     e.library = std::string("Bullet ") + CB_BULLET_VERSION;
-    e.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
-        return std::make_unique<BulletDantzigSolver>(BulletDantzigSettings::from_json(settings));
-    };
-    e.description = std::string("peer: Bullet ") + CB_BULLET_VERSION +
-                    " Dantzig pivoting (btDantzigSolver's LCP) on the dual LCP W = J A^-1 J' (CHOLMOD, dense; "
-                    "child process)";
-    e.settings = {{"max_rows", "4000", "refuse (not_applicable) problems with more rows of J (W is dense m x m)"}};
     return e;
 }
 

@@ -76,4 +76,16 @@ ChildOutcome run_in_child(const std::function<std::vector<char>()>& work, const 
     return outcome;
 }
 
+std::optional<SolverResult> finish_failed_child(const ChildOutcome& child, size_t expected, const std::string& library,
+                                                const SolveLoop& loop, SolverResult& result)
+{
+    if (child.timed_out) return loop.finish(result, SolveStatus::TIME_LIMIT, "the child process was killed");
+    result.info["crashed"] = child.failed || child.bytes.size() != expected;
+    if (!result.info["crashed"].get<bool>()) return std::nullopt;
+    std::ostringstream msg;
+    msg << loop.solver() << ": the " << library << " child process " << (child.failed ? child.failure : "sent") << " ("
+        << child.bytes.size() << " of " << expected << " bytes received)";
+    return loop.finish(result, SolveStatus::DIVERGED, msg.str());
+}
+
 }  // namespace cb

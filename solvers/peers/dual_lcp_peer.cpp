@@ -5,6 +5,7 @@
 #include "solvers/solve_loop.hpp"
 
 #include <cstring>
+#include <limits>
 #include <sstream>
 
 namespace cb {
@@ -36,31 +37,24 @@ SolverResult solve_dual_lcp_peer(const QpView& qp, const SolveContext& context, 
     DualLcp dual;
     std::string error;
     if (!dual.form(qp, counters, error))
-        return loop.finish(result, SolveStatus::INVALID_INPUT, "", peer.name + ": " + error);
-    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT, "", loop.time_limit_message());
+        return loop.finish(result, SolveStatus::INVALID_INPUT, peer.name + ": " + error);
+    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT);
+    if (!loop.inputs_finite())  // the library would abort on it (seen: Siconos's assertions)
+        return loop.finish(result, loop.check(counters.iterations, false, false), peer.library + " not called");
     if (m == 0) {  // both libraries assert on an empty LCP (an abort of the process, seen in the child)
         result.x = dual.unconstrained();
         const Vec g = qp.A * result.x - qp.b;
         ++counters.a_products;
-        const bool ok = accuracy_converged(qp, accuracy_scale(qp), result.x, g, result.lambda, common.tol);
-        return loop.finish(result, ok ? SolveStatus::CONVERGED : SolveStatus::STALLED, ok ? "kkt" : "",
-                           peer.name + ": no constraints: x = A^-1 b (" + peer.library + " not called)");
+        const SolveStatus status = loop.verdict(result.x.allFinite(), std::numeric_limits<double>::infinity(), [&] {
+            return accuracy_from_gradient(qp, accuracy_scale(qp), result.x, g, result.lambda).max();
+        });
+        return loop.finish(result, status, "no constraints: x = A^-1 b (" + peer.library + " not called)");
     }
     const size_t expected = static_cast<size_t>(m) * sizeof(double) + sizeof(SiconosReport);
     const ChildOutcome child =
         run_in_child([&]() { return peer.run(dual.W(), dual.q()); }, loop.stopwatch(), common.time_limit_s);
     const std::vector<char>& bytes = child.bytes;
-    if (child.timed_out)
-        return loop.finish(result, SolveStatus::TIME_LIMIT, "",
-                           loop.time_limit_message() + "; the child process was killed");
-    if (child.failed || bytes.size() != expected) {
-        result.info["crashed"] = true;
-        std::ostringstream msg;
-        msg << peer.name << ": the " << peer.library << " child process " << (child.failed ? child.failure : "sent")
-            << " (" << bytes.size() << " of " << expected << " bytes received)";
-        return loop.finish(result, SolveStatus::DIVERGED, "", msg.str());
-    }
-    result.info["crashed"] = false;
+    if (auto failed = finish_failed_child(child, expected, peer.library, loop, result)) return std::move(*failed);
     std::memcpy(result.lambda.data(), bytes.data(), static_cast<size_t>(m) * sizeof(double));
     SiconosReport report;
     std::memcpy(&report, bytes.data() + static_cast<size_t>(m) * sizeof(double), sizeof report);
@@ -70,10 +64,7 @@ SolverResult solve_dual_lcp_peer(const QpView& qp, const SolveContext& context, 
     if (peer.residual_from_lcp)  // on the W the parent kept
         report.residual = result.lambda.cwiseMin(dual.W() * result.lambda + dual.q()).norm() / (1.0 + dual.q().norm());
     result.x = dual.primal(qp, result.lambda, counters);  // x from lambda, before the final measure
-    result.setup_s = loop.setup_s();                      // the final monitor call's stamp
-    result.solve_s = loop.solve_s();
-    finish_siconos_result(qp, common, context, report, peer.method, peer.steps, counters, result);
-    return loop.finish(result, result.status, result.criterion);
+    return finish_siconos_result(qp, loop, report, peer.method, peer.steps, counters, result);
 }
 
 }  // namespace cb

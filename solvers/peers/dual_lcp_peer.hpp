@@ -19,7 +19,7 @@ namespace cb {
 struct DualLcpPeer {
     std::string name;     ///< the registry name, first word of every message ("siconos-lemke")
     std::string library;  ///< the library in messages ("Siconos": "the Siconos child process")
-    std::string method;   ///< the finisher's `what` ("siconos-lemke: Siconos Lemke")
+    std::string method;   ///< the finisher's `what` ("Siconos Lemke")
     std::string steps;    ///< the finisher's `steps` ("pivots")
     long max_rows = 4000;
     bool steps_are_pivots = false;   ///< also count the steps as counters.pivots

@@ -11,28 +11,32 @@
 #include <IpoptConfig.h>
 
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace cb {
 
-IpoptSettings IpoptSettings::from_json(const nlohmann::json& settings)
+namespace {
+
+/// Its own settings, declared once (settings.hpp SettingsTable); the common block comes first.
+const SettingsTable<IpoptSettings>& ipopt_settings_table()
 {
-    SettingsReader reader(settings, "ipopt");
-    IpoptSettings s;
-    s.common = reader.common();
-    s.nlp_scaling = reader.choice("nlp_scaling", s.nlp_scaling, {"gradient-based", "none"});
-    s.print_level = reader.integer("print_level", s.print_level, 0, 12);
-    reader.finish();
-    return s;
+    static const SettingsTable<IpoptSettings> table =
+        SettingsTable<IpoptSettings>()
+            .choice("nlp_scaling", &IpoptSettings::nlp_scaling, {"gradient-based", "none"},
+                    "Ipopt's nlp_scaling_method: gradient-based or none")
+            .integer("print_level", &IpoptSettings::print_level, 0, 12, "Ipopt's print_level (0 silent .. 12)");
+    return table;
 }
 
-nlohmann::json IpoptSettings::to_json() const
+}  // namespace
+
+IpoptSettings IpoptSettings::from_json(const nlohmann::json& settings)
 {
-    nlohmann::json j = common.to_json();
-    j["nlp_scaling"] = nlp_scaling;
-    j["print_level"] = print_level;
-    return j;
+    return read_settings(settings, "ipopt", ipopt_settings_table());
 }
+
+nlohmann::json IpoptSettings::to_json() const { return write_settings(*this, ipopt_settings_table()); }
 
 std::string ipopt_version() { return IPOPT_VERSION; }
 
@@ -141,8 +145,10 @@ public:
         current_iterate(ip_data, ip_cq);
         const Vec g = m_qp.A * m_x - m_qp.b;
         ++m_result.counters.a_products;
-        const bool kkt_ok = m_settings.common.stop == StopRule::KKT &&
-                            accuracy_converged(m_qp, m_scale, m_x, g, m_lambda, m_settings.common.tol);
+        // The loop's rule on this iterate; under stop=native Ipopt's own test ends the solve (+inf here).
+        const bool kkt_ok = m_loop.criterion_met(std::numeric_limits<double>::infinity(), [&] {
+            return accuracy_from_gradient(m_qp, m_scale, m_x, g, m_lambda).max();
+        });
         m_native = inf_du;
         const StepKind step = iter == 0 ? StepKind::START : StepKind::OUTER;
         if (!m_loop.notify({iter, step, &m_x, &m_lambda, inf_du, -1, &m_result.counters, 0.0})) {
@@ -250,7 +256,7 @@ SolverResult IpoptSolver::solve(const QpView& qp, const SolveContext& context)
     SolverResult result;
     result.x = qp.x0;
     result.lambda = Vec::Zero(qp.m());
-    const double ipopt_tol = s.common.stop == StopRule::NATIVE ? s.common.tol : 1e-2 * s.common.tol;
+    const double ipopt_tol = s.common.stops_on_native() ? s.common.tol : 1e-2 * s.common.tol;
     result.info["library"] = std::string("Ipopt ") + IPOPT_VERSION;
     result.info["native_residual_definition"] = "Ipopt's inf_du (scaled dual infeasibility) at its last iterate";
     result.info["ipopt_options"] = {{"tol", ipopt_tol},
@@ -275,9 +281,9 @@ SolverResult IpoptSolver::solve(const QpView& qp, const SolveContext& context)
     app->Options()->SetIntegerValue("print_level", static_cast<Index>(s.print_level));
     app->Options()->SetStringValue("sb", "yes");  // no banner
     if (app->Initialize() != Ipopt::Solve_Succeeded) {
-        return loop.finish(result, SolveStatus::INVALID_INPUT, "", "ipopt: Ipopt rejected its options");
+        return loop.finish(result, SolveStatus::INVALID_INPUT, "ipopt: Ipopt rejected its options");
     }
-    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT, "", loop.time_limit_message());
+    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT);
 
     Ipopt::SmartPtr<QpTnlp> tnlp = new QpTnlp(qp, context, s, loop, result);
     Ipopt::ApplicationReturnStatus rc = app->OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(Ipopt::GetRawPtr(tnlp)));
@@ -291,7 +297,7 @@ SolverResult IpoptSolver::solve(const QpView& qp, const SolveContext& context)
         return tnlp->x().allFinite() && tnlp->lambda().allFinite() &&
                accuracy_converged(qp, accuracy_scale(qp), tnlp->x(), g, tnlp->lambda(), s.common.tol);
     };
-    while (s.common.stop == StopRule::KKT && retries < 2 && tol_used > 1e-14 &&
+    while (!s.common.stops_on_native() && retries < 2 && tol_used > 1e-14 &&
            (rc == Ipopt::Solve_Succeeded || rc == Ipopt::Solved_To_Acceptable_Level) && !kkt_holds()) {
         ++retries;
         tol_used = std::max(1e-14, tol_used * 1e-3);
@@ -308,54 +314,47 @@ SolverResult IpoptSolver::solve(const QpView& qp, const SolveContext& context)
     result.iterations = result.counters.iterations;
     result.info["ipopt_status"] = ipopt_status_name(rc);
     std::ostringstream msg;
-    msg << "ipopt: Ipopt " << IPOPT_VERSION << " returned " << ipopt_status_name(rc) << " after " << result.iterations
+    msg << "Ipopt " << IPOPT_VERSION << " returned " << ipopt_status_name(rc) << " after " << result.iterations
         << " iterations";
     if (retries > 0) msg << " (" << retries << " re-solve(s) with a tighter Ipopt tol, last " << tol_used << ")";
 
-    // The verdict is the common KKT test at the returned point, never Ipopt's own flag.
+    // The verdict is the loop's rule at the returned point (stop=kkt: the accuracy error; stop=native:
+    // Ipopt's own test with tol), never Ipopt's flag alone; Ipopt's return code names the rest.
     const Vec g = qp.A * result.x - qp.b;
     ++result.counters.a_products;
-    const bool finite = result.x.allFinite() && result.lambda.allFinite();
-    const bool kkt_ok = finite && accuracy_converged(qp, accuracy_scale(qp), result.x, g, result.lambda, s.common.tol);
-    if (tnlp->stopped_by_monitor()) {
-        result.status = SolveStatus::STOPPED_BY_MONITOR;
-    } else if (s.common.stop == StopRule::KKT && kkt_ok) {
-        result.status = SolveStatus::CONVERGED;
-        result.criterion = "kkt";
-        msg << (tnlp->stopped_at_kkt() ? " (stopped by the harness: relative KKT error <= tol)"
-                                       : " (relative KKT error <= tol)");
-    } else if (s.common.stop == StopRule::NATIVE &&
-               (rc == Ipopt::Solve_Succeeded || rc == Ipopt::Solved_To_Acceptable_Level)) {
-        result.status = SolveStatus::CONVERGED;
-        result.criterion = "native";
-    } else if (!finite || rc == Ipopt::Diverging_Iterates || rc == Ipopt::Invalid_Number_Detected) {
-        result.status = SolveStatus::DIVERGED;
-    } else if (rc == Ipopt::Infeasible_Problem_Detected) {
-        result.status = SolveStatus::INFEASIBLE;
-    } else if (tnlp->time_up() || rc == Ipopt::Maximum_CpuTime_Exceeded) {
-        result.status = SolveStatus::TIME_LIMIT;
-    } else if (rc == Ipopt::Maximum_Iterations_Exceeded) {
-        result.status = SolveStatus::MAX_ITERATIONS;
-    } else if (rc == Ipopt::Invalid_Problem_Definition || rc == Ipopt::Not_Enough_Degrees_Of_Freedom) {
-        result.status = SolveStatus::INVALID_INPUT;
-    } else {
-        result.status = SolveStatus::STALLED;  // Ipopt finished, the common KKT test does not hold
-        msg << " but the relative KKT error at its point is above tol";
-    }
-    return loop.finish(result, result.status, result.criterion, msg.str());
+    // Ipopt's Invalid_Number_Detected is a NaN or Inf met in the problem's functions: not finite either.
+    const bool finite = result.x.allFinite() && result.lambda.allFinite() && rc != Ipopt::Invalid_Number_Detected;
+    const bool ipopt_solved = rc == Ipopt::Solve_Succeeded || rc == Ipopt::Solved_To_Acceptable_Level;
+    SolveStatus otherwise = SolveStatus::STALLED;  // Ipopt finished, the rule does not hold
+    if (rc == Ipopt::Diverging_Iterates)
+        otherwise = SolveStatus::DIVERGED;
+    else if (rc == Ipopt::Infeasible_Problem_Detected)
+        otherwise = SolveStatus::INFEASIBLE;
+    else if (tnlp->time_up() || rc == Ipopt::Maximum_CpuTime_Exceeded)
+        otherwise = SolveStatus::TIME_LIMIT;
+    else if (rc == Ipopt::Maximum_Iterations_Exceeded)
+        otherwise = SolveStatus::MAX_ITERATIONS;
+    else if (rc == Ipopt::Invalid_Problem_Definition || rc == Ipopt::Not_Enough_Degrees_Of_Freedom)
+        otherwise = SolveStatus::INVALID_INPUT;
+    const SolveStatus status =
+        tnlp->stopped_by_monitor()
+            ? SolveStatus::STOPPED_BY_MONITOR
+            : loop.verdict(
+                  finite, ipopt_solved,
+                  [&] { return accuracy_from_gradient(qp, accuracy_scale(qp), result.x, g, result.lambda).max(); },
+                  otherwise);
+    if (status == SolveStatus::CONVERGED && tnlp->stopped_at_kkt()) msg << " (stopped by the harness's test)";
+    return loop.finish(result, status, !loop.owns(status) ? "ipopt: " + msg.str() : msg.str());
 }
 
 SolverEntry ipopt_entry()
 {
-    SolverEntry e;
+    SolverEntry e =
+        solver_entry<IpoptSolver>("ipopt", ipopt_settings_table(),
+                                  std::string("peer: Ipopt ") + IPOPT_VERSION +
+                                      " interior point (MUMPS) on the primal QP, any J, bound_relax_factor 0",
+                                  "any J (interior point on the primal QP)");
     e.library = std::string("Ipopt ") + IPOPT_VERSION;
-    e.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
-        return std::make_unique<IpoptSolver>(IpoptSettings::from_json(settings));
-    };
-    e.description = std::string("peer: Ipopt ") + IPOPT_VERSION +
-                    " interior point (MUMPS) on the primal QP, any J, bound_relax_factor 0";
-    e.settings = {{"nlp_scaling", "gradient-based", "Ipopt's nlp_scaling_method: gradient-based or none"},
-                  {"print_level", "0", "Ipopt's print_level (0 silent .. 12)"}};
     return e;
 }
 

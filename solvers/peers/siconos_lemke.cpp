@@ -10,26 +10,30 @@
 #include <lcp_cst.h>
 
 #include <algorithm>
+#include <climits>
 #include <vector>
 
 namespace cb {
 
-SiconosLemkeSettings SiconosLemkeSettings::from_json(const nlohmann::json& settings)
+namespace {
+
+/// Its own settings, declared once (settings.hpp SettingsTable); the common block comes first.
+const SettingsTable<SiconosLemkeSettings>& siconos_lemke_settings_table()
 {
-    SettingsReader reader(settings, "siconos-lemke");
-    SiconosLemkeSettings s;
-    s.common = reader.common();
-    s.max_rows = reader.integer("max_rows", s.max_rows, 0);
-    reader.finish();
-    return s;
+    static const SettingsTable<SiconosLemkeSettings> table = SettingsTable<SiconosLemkeSettings>().integer(
+        "max_rows", &SiconosLemkeSettings::max_rows, 0, LONG_MAX,
+        "refuse (not_applicable) problems with more rows of J (W is dense m x m)");
+    return table;
 }
 
-nlohmann::json SiconosLemkeSettings::to_json() const
+}  // namespace
+
+SiconosLemkeSettings SiconosLemkeSettings::from_json(const nlohmann::json& settings)
 {
-    nlohmann::json j = common.to_json();
-    j["max_rows"] = max_rows;
-    return j;
+    return read_settings(settings, "siconos-lemke", siconos_lemke_settings_table());
 }
+
+nlohmann::json SiconosLemkeSettings::to_json() const { return write_settings(*this, siconos_lemke_settings_table()); }
 
 namespace {
 
@@ -70,7 +74,7 @@ SolverResult SiconosLemkeSolver::solve(const QpView& qp, const SolveContext& con
     DualLcpPeer peer;
     peer.name = "siconos-lemke";
     peer.library = "Siconos";
-    peer.method = "siconos-lemke: Siconos Lemke";
+    peer.method = "Siconos Lemke";
     peer.steps = "pivots";
     peer.max_rows = s.max_rows;
     peer.steps_are_pivots = true;
@@ -80,14 +84,12 @@ SolverResult SiconosLemkeSolver::solve(const QpView& qp, const SolveContext& con
 
 SolverEntry siconos_lemke_entry()
 {
-    SolverEntry e;
+    SolverEntry e =
+        solver_entry<SiconosLemkeSolver>("siconos-lemke", siconos_lemke_settings_table(),
+                                         std::string("peer: Siconos numerics ") + CB_SICONOS_VERSION +
+                                             " Lemke on the dual LCP W = J A^-1 J' (CHOLMOD, dense; child process)",
+                                         "any J with at most max_rows rows (dense dual LCP)");
     e.library = std::string("Siconos numerics ") + CB_SICONOS_VERSION;
-    e.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
-        return std::make_unique<SiconosLemkeSolver>(SiconosLemkeSettings::from_json(settings));
-    };
-    e.description = std::string("peer: Siconos numerics ") + CB_SICONOS_VERSION +
-                    " Lemke on the dual LCP W = J A^-1 J' (CHOLMOD, dense; child process)";
-    e.settings = {{"max_rows", "4000", "refuse (not_applicable) problems with more rows of J (W is dense m x m)"}};
     return e;
 }
 

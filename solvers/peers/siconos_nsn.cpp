@@ -1,8 +1,8 @@
 // Siconos numerics' global nonsmooth Newton (mu = 0) in a child process (see siconos_nsn.hpp).
 #include "solvers/peers/siconos_nsn.hpp"
-#include "solvers/solve_loop.hpp"
 #include "solvers/peers/child_process.hpp"
 #include "solvers/peers/siconos_report.hpp"
+#include "solvers/solve_loop.hpp"
 
 #include <Friction_cst.h>
 #include <GlobalFrictionContactProblem.h>
@@ -18,16 +18,23 @@
 
 namespace cb {
 
-SiconosNsnSettings SiconosNsnSettings::from_json(const nlohmann::json& settings)
+namespace {
+
+/// Its own settings, declared once (settings.hpp SettingsTable); the common block comes first.
+const SettingsTable<SiconosNsnSettings>& siconos_nsn_settings_table()
 {
-    SettingsReader reader(settings, "siconos-nsn");
-    SiconosNsnSettings s;
-    s.common = reader.common();
-    reader.finish();
-    return s;
+    static const SettingsTable<SiconosNsnSettings> table = SettingsTable<SiconosNsnSettings>();
+    return table;
 }
 
-nlohmann::json SiconosNsnSettings::to_json() const { return common.to_json(); }
+}  // namespace
+
+SiconosNsnSettings SiconosNsnSettings::from_json(const nlohmann::json& settings)
+{
+    return read_settings(settings, "siconos-nsn", siconos_nsn_settings_table());
+}
+
+nlohmann::json SiconosNsnSettings::to_json() const { return write_settings(*this, siconos_nsn_settings_table()); }
 
 namespace {
 
@@ -101,21 +108,12 @@ SolverResult SiconosNsnSolver::solve(const QpView& qp, const SolveContext& conte
     result.info["native_residual_definition"] = "Siconos's global friction-contact error (SICONOS_DPARAM_RESIDU)";
     SolveLoop loop("siconos-nsn", qp, s.common, context);  // no setup: the child does all the work
     loop.end_setup();
+    if (!loop.inputs_finite())  // the library would abort on it (seen: Siconos's assertions)
+        return loop.finish(result, loop.check(counters.iterations, false, false), "Siconos not called");
     const size_t expected = static_cast<size_t>(n + 3 * m) * sizeof(double) + sizeof(SiconosReport);
     const ChildOutcome child = run_in_child([&]() { return run_nsn(qp, s.common.max_iterations, s.common.tol); },
-                                            loop.stopwatch(),
-                                            s.common.time_limit_s);
-    if (child.timed_out)
-        return loop.finish(result, SolveStatus::TIME_LIMIT, "",
-                           loop.time_limit_message() + "; the child process was killed");
-    if (child.failed || child.bytes.size() != expected) {
-        result.info["crashed"] = true;
-        std::ostringstream msg;
-        msg << "siconos-nsn: the Siconos child process " << (child.failed ? child.failure : "sent") << " ("
-            << child.bytes.size() << " of " << expected << " bytes received)";
-        return loop.finish(result, SolveStatus::DIVERGED, "", msg.str());
-    }
-    result.info["crashed"] = false;
+                                            loop.stopwatch(), s.common.time_limit_s);
+    if (auto failed = finish_failed_child(child, expected, "Siconos", loop, result)) return std::move(*failed);
     const char* p = child.bytes.data();
     std::memcpy(result.x.data(), p, static_cast<size_t>(n) * sizeof(double));
     Vec r(3 * m);
@@ -124,22 +122,17 @@ SolverResult SiconosNsnSolver::solve(const QpView& qp, const SolveContext& conte
     SiconosReport report;
     std::memcpy(&report, p + (n + 3 * m) * sizeof(double), sizeof report);
     counters.iterations = report.iterations;
-    result.setup_s = loop.setup_s();  // the final monitor call's stamp
-    result.solve_s = loop.solve_s();
-    finish_siconos_result(qp, s.common, context, report, "siconos-nsn: Siconos NSN_AC", "Newton iterations", counters,
-                          result);
-    return loop.finish(result, result.status, result.criterion);
+    return finish_siconos_result(qp, loop, report, "Siconos NSN_AC", "Newton iterations", counters, result);
 }
 
 SolverEntry siconos_nsn_entry()
 {
-    SolverEntry e;
+    SolverEntry e =
+        solver_entry<SiconosNsnSolver>("siconos-nsn", siconos_nsn_settings_table(),
+                                       std::string("peer: Siconos numerics ") + CB_SICONOS_VERSION +
+                                           " global nonsmooth Newton (NSN_AC, mu = 0) on M = A, H = J' (child process)",
+                                       "any J (global problem, mu = 0)");
     e.library = std::string("Siconos numerics ") + CB_SICONOS_VERSION;
-    e.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
-        return std::make_unique<SiconosNsnSolver>(SiconosNsnSettings::from_json(settings));
-    };
-    e.description = std::string("peer: Siconos numerics ") + CB_SICONOS_VERSION +
-                    " global nonsmooth Newton (NSN_AC, mu = 0) on M = A, H = J' (child process)";
     return e;
 }
 

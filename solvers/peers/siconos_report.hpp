@@ -2,6 +2,7 @@
 /// What a peer's child process reports (Siconos's, and Bullet's in the same shape), and the one
 /// rule that turns it into a result: the status is the accuracy measure's verdict at the returned
 /// point (docs/accuracy.md), the library's own word goes into the message.
+#include "solvers/solve_loop.hpp"
 #include "solvers/solver.hpp"
 
 #include <string>
@@ -19,11 +20,15 @@ struct SiconosReport {
     bool ray_termination = false;
 };
 
-/// Fills result.iterations, native_residual, info, status, criterion and message from the report at
-/// (result.x, result.lambda), after one final monitor call. `what` names the solver and the
-/// method ("siconos-lemke: Siconos Lemke"), `steps` its iterations ("pivots").
-void finish_siconos_result(const QpView& qp, const CommonSettings& common, const SolveContext& context,
-                           const SiconosReport& report, const std::string& what, const std::string& steps,
-                           Counters& counters, SolverResult& result);
+/// The one verdict of a peer that reports in this shape: fills result.iterations,
+/// native_residual and info, calls the monitor once at the returned point (through the loop, on
+/// its paused clock), then lets the loop judge (result.x, result.lambda): non-finite -> DIVERGED,
+/// the stop rule (stop=native: the library said solved and its residual <= tol) -> CONVERGED, the
+/// library at its own cap -> MAX_ITERATIONS, else STALLED. `what` names the method ("Siconos
+/// Lemke"), `steps` its iterations ("pivots"); `extra` is appended to the message. Returns the
+/// finished result.
+SolverResult finish_siconos_result(const QpView& qp, SolveLoop& loop, const SiconosReport& report,
+                                   const std::string& what, const std::string& steps, Counters& counters,
+                                   SolverResult& result, const std::string& extra = "");
 
 }  // namespace cb

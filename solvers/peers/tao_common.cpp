@@ -140,21 +140,21 @@ PetscErrorCode kkt_convergence_test(Tao tao, void* ctx)
 
 PetscErrorCode constant_hessian(Tao, ::Vec, Mat, Mat, void*) { return 0; }
 
-void finish_result(const QpView& qp, const CommonSettings& common, const SolveContext& context, const Outcome& run,
-                   const std::string& what, const std::string& stuck_text, Counters& counters, SolverResult& result)
+SolverResult finish_result(const QpView& qp, const CommonSettings& common, SolveLoop& loop, const Outcome& run,
+                           const std::string& what, const std::string& stuck_text, Counters& counters,
+                           SolverResult& result)
 {
     result.info["tao_reason"] = TaoConvergedReasons[run.reason];
     result.info["tao_gatol"] = run.gatol;
-    result.info["kkt_test_in_tao"] = common.stop != StopRule::NATIVE;
+    result.info["kkt_test_in_tao"] = !common.stops_on_native();
     result.info["tao_stuck"] = run.stuck;
     result.info["objective_evaluations"] = run.evaluations;
     // The verdict judges the point: where TAO's multipliers miss tol, fitted ones are tried.
     bool fitted = false;
-    if (common.stop != StopRule::NATIVE) kkt_holds(qp, result.x, result.lambda, common.tol, &fitted);
+    if (!common.stops_on_native()) kkt_holds(qp, result.x, result.lambda, common.tol, &fitted);
     result.info["lambda_fitted"] = fitted;
-    finish_siconos_result(qp, common, context, run.report, what, "iterations", counters, result);
     std::ostringstream msg;
-    msg << result.message << "; TAO reason " << TaoConvergedReasons[run.reason];
+    msg << "; TAO reason " << TaoConvergedReasons[run.reason];
     if (run.report.info <= -2000)
         msg << " (PETSc did not start)";
     else if (run.report.info <= -1000) {
@@ -165,7 +165,7 @@ void finish_result(const QpView& qp, const CommonSettings& common, const SolveCo
     }
     if (run.kkt_met) msg << " (set by the harness: its accuracy test met tol at TAO's iterate)";
     if (run.stuck) msg << " (set by the harness: " << stuck_text << ")";
-    result.message = msg.str();
+    return finish_siconos_result(qp, loop, run.report, what, "iterations", counters, result, msg.str());
 }
 
 }  // namespace cb::tao

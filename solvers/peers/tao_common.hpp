@@ -81,9 +81,10 @@ struct Outcome {
 /// In the parent, once x and lambda are in `result`: TAO's facts into result.info, the verdict on
 /// the point (kkt_holds: fitted multipliers where TAO's miss tol), finish_siconos_result, and the
 /// message: TAO's reason, a PETSc error by its code, and what the harness set (`stuck_text` says
-/// why the guard fired). `what` names the peer and method ("tao-tron: TAOTRON").
-void finish_result(const QpView& qp, const CommonSettings& common, const SolveContext& context, const Outcome& run,
-                   const std::string& what, const std::string& stuck_text, Counters& counters, SolverResult& result);
+/// why the guard fired). `what` names the method ("TAOTRON"). Returns the finished result.
+SolverResult finish_result(const QpView& qp, const CommonSettings& common, SolveLoop& loop, const Outcome& run,
+                           const std::string& what, const std::string& stuck_text, Counters& counters,
+                           SolverResult& result);
 
 /// The Hessian is A, copied once: nothing to do.
 PetscErrorCode constant_hessian(Tao, ::Vec, Mat, Mat, void*);

@@ -14,16 +14,23 @@
 
 namespace cb {
 
-TaoPdipmSettings TaoPdipmSettings::from_json(const nlohmann::json& settings)
+namespace {
+
+/// Its own settings, declared once (settings.hpp SettingsTable); the common block comes first.
+const SettingsTable<TaoPdipmSettings>& tao_pdipm_settings_table()
 {
-    SettingsReader reader(settings, "tao-pdipm");
-    TaoPdipmSettings s;
-    s.common = reader.common();
-    reader.finish();
-    return s;
+    static const SettingsTable<TaoPdipmSettings> table = SettingsTable<TaoPdipmSettings>();
+    return table;
 }
 
-nlohmann::json TaoPdipmSettings::to_json() const { return common.to_json(); }
+}  // namespace
+
+TaoPdipmSettings TaoPdipmSettings::from_json(const nlohmann::json& settings)
+{
+    return read_settings(settings, "tao-pdipm", tao_pdipm_settings_table());
+}
+
+nlohmann::json TaoPdipmSettings::to_json() const { return write_settings(*this, tao_pdipm_settings_table()); }
 
 namespace {
 
@@ -118,7 +125,7 @@ PetscErrorCode pdipm(const QpView& qp, const CommonSettings& common, double tol_
     // reach TAOPDIPM iterates without end, so it is capped (the cap is `stalled`, not max_iterations).
     const long cap = std::min<long>(max_iterations, kIterationCap);
     PetscCall(TaoSetMaximumIterations(tao, static_cast<PetscInt>(cap)));
-    if (common.stop != StopRule::NATIVE) {
+    if (!common.stops_on_native()) {
         kkt.qp = &qp;
         kkt.scale = accuracy_scale(qp);
         kkt.tol = common.tol;
@@ -171,7 +178,7 @@ std::vector<char> run_pdipm(const QpView& qp, const CommonSettings& common)
         true) {
         // stop=kkt: the harness's test ends the solve, not TAO's absolute tolerances (0: off), which
         // do not scale with the problem; the iteration cap and time limit bound a run that never meets it.
-        run.gatol = common.stop == StopRule::NATIVE ? common.tol : 0.0;
+        run.gatol = common.stops_on_native() ? common.tol : 0.0;
         const PetscErrorCode ierr = pdipm(qp, common, run.gatol, x, lambda, run);
         if (ierr != 0) run.report.info = -1000 - static_cast<int>(ierr);
         PetscFinalize();
@@ -211,20 +218,12 @@ SolverResult TaoPdipmSolver::solve(const QpView& qp, const SolveContext& context
                                   {"variable_bounds", "-inf, +inf"}};
     SolveLoop loop("tao-pdipm", qp, s.common, context);  // no setup: the child does all the work
     loop.end_setup();
+    if (!loop.inputs_finite())  // the library would abort on it (seen: Siconos's assertions)
+        return loop.finish(result, loop.check(counters.iterations, false, false), "PETSc not called");
     const size_t expected = static_cast<size_t>(n + m) * sizeof(double) + sizeof(TaoRun);
     const ChildOutcome child =
         run_in_child([&]() { return run_pdipm(qp, s.common); }, loop.stopwatch(), s.common.time_limit_s);
-    if (child.timed_out)
-        return loop.finish(result, SolveStatus::TIME_LIMIT, "",
-                           loop.time_limit_message() + "; the child process was killed");
-    if (child.failed || child.bytes.size() != expected) {
-        result.info["crashed"] = true;
-        std::ostringstream msg;
-        msg << "tao-pdipm: the PETSc child process " << (child.failed ? child.failure : "sent") << " ("
-            << child.bytes.size() << " of " << expected << " bytes received)";
-        return loop.finish(result, SolveStatus::DIVERGED, "", msg.str());
-    }
-    result.info["crashed"] = false;
+    if (auto failed = finish_failed_child(child, expected, "PETSc", loop, result)) return std::move(*failed);
     const char* p = child.bytes.data();
     std::memcpy(result.x.data(), p, static_cast<size_t>(n) * sizeof(double));
     std::memcpy(result.lambda.data(), p + n * sizeof(double), static_cast<size_t>(m) * sizeof(double));
@@ -233,26 +232,21 @@ SolverResult TaoPdipmSolver::solve(const QpView& qp, const SolveContext& context
     counters.iterations = run.report.iterations;
     // one A x per objective and gradient evaluation and per harness test in TAO's convergence test
     counters.a_products += run.evaluations + run.kkt_checks;
-    result.setup_s = loop.setup_s();
-    result.solve_s = loop.solve_s();
     std::ostringstream stuck;
     stuck << "TAOPDIPM's Newton step failed " << kStuckEvaluations << " times in a row at iteration "
           << run.stuck_iteration
           << ", its inner SNES reporting DIVERGED_LINEAR_SOLVE, and TAOPDIPM retries without end";
-    tao::finish_result(qp, s.common, context, run, "tao-pdipm: TAOPDIPM", stuck.str(), counters, result);
-    return loop.finish(result, result.status, result.criterion);
+    return tao::finish_result(qp, s.common, loop, run, "TAOPDIPM", stuck.str(), counters, result);
 }
 
 SolverEntry tao_pdipm_entry()
 {
-    SolverEntry e;
-    e.library = "PETSc " PETSC_VERSION_STRING_CB;
-    e.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
-        return std::make_unique<TaoPdipmSolver>(TaoPdipmSettings::from_json(settings));
-    };
-    e.description =
+    SolverEntry e = solver_entry<TaoPdipmSolver>(
+        "tao-pdipm", tao_pdipm_settings_table(),
         "peer: PETSc " PETSC_VERSION_STRING_CB
-        " TAO primal-dual interior point (TAOPDIPM, direct LU inner solves) on the primal QP (child process)";
+        " TAO primal-dual interior point (TAOPDIPM, direct LU inner solves) on the primal QP (child process)",
+        "any J (interior point on the primal QP)");
+    e.library = "PETSc " PETSC_VERSION_STRING_CB;
     return e;
 }
 

@@ -2,6 +2,7 @@
 #include "solvers/peers/tao_tron.hpp"
 #include "solvers/a_product.hpp"
 #include "solvers/accuracy.hpp"
+#include "solvers/bounds.hpp"
 #include "solvers/peers/child_process.hpp"
 #include "solvers/peers/siconos_report.hpp"
 #include "solvers/peers/tao_common.hpp"
@@ -15,95 +16,33 @@
 
 namespace cb {
 
-TaoTronSettings TaoTronSettings::from_json(const nlohmann::json& settings)
+namespace {
+
+/// Its own settings, declared once (settings.hpp SettingsTable); the common block comes first.
+const SettingsTable<TaoTronSettings>& tao_tron_settings_table()
 {
-    SettingsReader reader(settings, "tao-tron");
-    TaoTronSettings s;
-    s.common = reader.common();
-    reader.finish();
-    return s;
+    static const SettingsTable<TaoTronSettings> table = SettingsTable<TaoTronSettings>();
+    return table;
 }
 
-nlohmann::json TaoTronSettings::to_json() const { return common.to_json(); }
+}  // namespace
+
+TaoTronSettings TaoTronSettings::from_json(const nlohmann::json& settings)
+{
+    return read_settings(settings, "tao-tron", tao_tron_settings_table());
+}
+
+nlohmann::json TaoTronSettings::to_json() const { return write_settings(*this, tao_tron_settings_table()); }
 
 namespace {
 
-/// The rows of J read as bounds l <= x <= u; `row` names, per DOF, the row that sets each bound
-/// (-1: none). `refusal` is set (with `status`) when the rows are not bounds or contradict.
-struct Bounds {
-    cb::Vec lower, upper, coef;  // coef: the row's nonzero (per row)
-    std::vector<Eigen::Index> lower_row, upper_row;
-    SolveStatus status = SolveStatus::CONVERGED;  // CONVERGED: usable
-    std::string refusal;
-};
-
-Bounds bounds_of(const QpView& qp)
-{
-    const Eigen::Index n = qp.n(), m = qp.m();
-    const double inf = std::numeric_limits<double>::infinity();
-    Bounds b;
-    b.lower = cb::Vec::Constant(n, -inf);
-    b.upper = cb::Vec::Constant(n, inf);
-    b.coef = cb::Vec::Zero(m);
-    b.lower_row.assign(static_cast<size_t>(n), -1);
-    b.upper_row.assign(static_cast<size_t>(n), -1);
-    for (Eigen::Index i = 0; i < m; ++i) {
-        int nonzeros = 0;
-        Eigen::Index j = -1;
-        for (SpMat::InnerIterator it(qp.J, i); it; ++it) {
-            if (it.value() == 0.0) continue;
-            ++nonzeros;
-            j = it.col();
-            b.coef[i] = it.value();
-        }
-        if (nonzeros > 1) {
-            b.status = SolveStatus::NOT_APPLICABLE;
-            b.refusal =
-                "tao-tron: row " + std::to_string(i) + " of J has " + std::to_string(nonzeros) +
-                " nonzeros; TRON takes bound rows only (one nonzero per row, a x_j >= c); use tao-pdipm (any J)";
-            return b;
-        }
-        if (nonzeros == 0) {
-            if (qp.c[i] > active_tolerance(qp.c[i])) {
-                b.status = SolveStatus::INFEASIBLE;
-                b.refusal = "tao-tron: row " + std::to_string(i) + " is zero but c > 0: empty feasible set";
-                return b;
-            }
-            continue;
-        }
-        const double bound = qp.c[i] / b.coef[i] + 0.0;  // + 0.0: no "-0" in messages
-        const size_t js = static_cast<size_t>(j);
-        if (b.coef[i] > 0.0 && bound > b.lower[j]) {
-            b.lower[j] = bound;
-            b.lower_row[js] = i;
-        } else if (b.coef[i] < 0.0 && bound < b.upper[j]) {
-            b.upper[j] = bound;
-            b.upper_row[js] = i;
-        }
-    }
-    for (Eigen::Index j = 0; j < n; ++j)
-        if (b.lower[j] > b.upper[j]) {
-            std::ostringstream msg;
-            msg << "tao-tron: DOF " << j << " has lower bound " << b.lower[j] << " > upper bound " << b.upper[j];
-            b.status = SolveStatus::INFEASIBLE;
-            b.refusal = msg.str();
-            return b;
-        }
-    return b;
-}
+using Bounds = RowBounds;  // solvers/bounds.hpp: the rows read as bounds, one policy
 
 /// TRON's multipliers are not returned: at its point, the gradient g_j of a DOF at a bound is the
-/// binding row's force, lambda = g_j / a (g_j > 0 on a lower bound, < 0 on an upper one).
+/// binding row's force (bound_multipliers).
 cb::Vec multipliers(const QpView& qp, const Bounds& b, const cb::Vec& x)
 {
-    const cb::Vec g = a_product(qp.A, x) - qp.b;
-    cb::Vec lambda = cb::Vec::Zero(qp.m());
-    for (Eigen::Index j = 0; j < qp.n(); ++j) {
-        const Eigen::Index row =
-            g[j] > 0.0 ? b.lower_row[static_cast<size_t>(j)] : (g[j] < 0.0 ? b.upper_row[static_cast<size_t>(j)] : -1);
-        if (row >= 0) lambda[row] = g[j] / b.coef[row];
-    }
-    return lambda;
+    return bound_multipliers(qp, b, a_product(qp.A, x) - qp.b);
 }
 
 /// Objective evaluations at one TRON iteration before the solve is ended as stuck: TRON shrinks
@@ -154,7 +93,7 @@ PetscErrorCode tron(const QpView& qp, const Bounds& bounds, const CommonSettings
     PetscCall(TaoGetKSP(tao, &ksp));
     PetscCall(KSPGetPC(ksp, &pc));
     PetscCall(PCSetType(pc, PCJACOBI));
-    if (common.stop != StopRule::NATIVE) {
+    if (!common.stops_on_native()) {
         kkt.qp = &qp;
         kkt.scale = accuracy_scale(qp);
         kkt.tol = common.tol;
@@ -198,7 +137,7 @@ std::vector<char> run_tron(const QpView& qp, const Bounds& bounds, const CommonS
     if (tao::start_petsc()) {
         // stop=kkt: the harness's test ends the solve, not TAO's absolute tolerances (0: off), which
         // do not scale with the problem; the iteration cap and time limit bound a run that never meets it.
-        run.gatol = common.stop == StopRule::NATIVE ? common.tol : 0.0;
+        run.gatol = common.stops_on_native() ? common.tol : 0.0;
         const PetscErrorCode ierr = tron(qp, bounds, common, run.gatol, x, run);
         if (ierr != 0) run.report.info = -1000 - static_cast<int>(ierr);
         PetscFinalize();
@@ -228,26 +167,18 @@ SolverResult TaoTronSolver::solve(const QpView& qp, const SolveContext& context)
     result.info["lambda"] = "from the gradient at TRON's point (g_j / a on the binding bound row)";
     result.info["tao_options"] = {{"tao_type", "tron"}, {"pc_type", "jacobi"}};
     SolveLoop loop("tao-tron", qp, s.common, context);
-    const Bounds bounds = bounds_of(qp);
-    if (bounds.status != SolveStatus::CONVERGED) {
-        result.message = bounds.refusal;
-        return loop.finish(result, bounds.status);
-    }
+    const Bounds bounds = bounds_from_rows(qp);
+    if (bounds.status != SolveStatus::NOT_RUN)
+        return loop.finish(result, bounds.status,
+                           "tao-tron: " + bounds.why +
+                               (bounds.status == SolveStatus::NOT_APPLICABLE ? "; use tao-pdipm (any J)" : ""));
     loop.end_setup();
+    if (!loop.inputs_finite())  // the library would abort on it (seen: Siconos's assertions)
+        return loop.finish(result, loop.check(counters.iterations, false, false), "PETSc not called");
     const size_t expected = static_cast<size_t>(n) * sizeof(double) + sizeof(TronRun);
     const ChildOutcome child =
         run_in_child([&]() { return run_tron(qp, bounds, s.common); }, loop.stopwatch(), s.common.time_limit_s);
-    if (child.timed_out)
-        return loop.finish(result, SolveStatus::TIME_LIMIT, "",
-                           loop.time_limit_message() + "; the child process was killed");
-    if (child.failed || child.bytes.size() != expected) {
-        result.info["crashed"] = true;
-        std::ostringstream msg;
-        msg << "tao-tron: the PETSc child process " << (child.failed ? child.failure : "sent") << " ("
-            << child.bytes.size() << " of " << expected << " bytes received)";
-        return loop.finish(result, SolveStatus::DIVERGED, "", msg.str());
-    }
-    result.info["crashed"] = false;
+    if (auto failed = finish_failed_child(child, expected, "PETSc", loop, result)) return std::move(*failed);
     std::memcpy(result.x.data(), child.bytes.data(), static_cast<size_t>(n) * sizeof(double));
     TronRun run;
     std::memcpy(&run, child.bytes.data() + n * sizeof(double), sizeof run);
@@ -255,23 +186,19 @@ SolverResult TaoTronSolver::solve(const QpView& qp, const SolveContext& context)
     // the multipliers' gradient; one A x per evaluation and per harness test in TAO's convergence test
     counters.a_products += 1 + run.evaluations + 2 * run.kkt_checks;
     counters.iterations = run.report.iterations;
-    result.setup_s = loop.setup_s();
-    result.solve_s = loop.solve_s();
     std::ostringstream stuck;
     stuck << kStuckEvaluations << " objective evaluations at iteration " << run.report.iterations;
-    tao::finish_result(qp, s.common, context, run, "tao-tron: TAOTRON", stuck.str(), counters, result);
-    return loop.finish(result, result.status, result.criterion);
+    return tao::finish_result(qp, s.common, loop, run, "TAOTRON", stuck.str(), counters, result);
 }
 
 SolverEntry tao_tron_entry()
 {
-    SolverEntry e;
+    SolverEntry e = solver_entry<TaoTronSolver>(
+        "tao-tron", tao_tron_settings_table(),
+        "peer: PETSc " PETSC_VERSION_STRING_CB
+        " TAO TRON (Newton trust region for bound constraints) on bound rows (child process)",
+        "bounds only (every row of J has at most one nonzero)");
     e.library = "PETSc " PETSC_VERSION_STRING_CB;
-    e.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
-        return std::make_unique<TaoTronSolver>(TaoTronSettings::from_json(settings));
-    };
-    e.description = "peer: PETSc " PETSC_VERSION_STRING_CB
-                    " TAO TRON (Newton trust region for bound constraints) on bound rows (child process)";
     return e;
 }
 

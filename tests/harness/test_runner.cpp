@@ -69,7 +69,7 @@ public:
         if (m_mode == "lie") {
             r.x = x;
             r.status = SolveStatus::CONVERGED;
-            r.criterion = "kkt";
+            r.criterion = StopCriterion::ACCURACY;
             r.solve_s = watch.seconds();
             return r;
         }
@@ -97,7 +97,7 @@ public:
             if (m_mode == "honest" && accuracy_converged(qp, scale, x, g, lambda, m_common.tol)) {
                 ++it;
                 r.status = SolveStatus::CONVERGED;
-                r.criterion = "kkt";
+                r.criterion = StopCriterion::ACCURACY;
                 break;
             }
         }

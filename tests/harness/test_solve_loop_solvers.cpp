@@ -11,12 +11,18 @@
 namespace cb {
 namespace {
 
-/// A problem the solver takes: bound rows for mprgp-box and the template, else a falling body
-/// on a plane (decoupled rows, which every other solver accepts).
+/// A problem the solver takes: a falling body on a plane (decoupled rows, which every general
+/// solver accepts), or bound rows for a solver that answers not_applicable on it.
 Qp problem_for(const std::string& solver)
 {
-    if (solver == "mprgp-box" || solver == "template") return make_synthetic("box", {{"nx", 3}}, 1);
-    return make_synthetic("plane", {{"nx", 3}}, 1);
+    Qp plane = make_synthetic("plane", {{"nx", 3}}, 1);
+    SolverRegistry own;
+    own.add("template", template_entry());
+    const SolverRegistry& registry = solver == "template" ? own : builtin_registry();
+    if (registry.create(solver, nlohmann::json::object())->solve(plane.view(), SolveContext{}).status !=
+        SolveStatus::NOT_APPLICABLE)
+        return plane;
+    return make_synthetic("box", {{"nx", 3}}, 1);
 }
 
 std::vector<std::string> every_solver()

@@ -57,7 +57,7 @@ TEST(ActiveSet, OneDimensionalActiveRow)
                            Vec::Constant(1, 1.0), Vec::Zero(1));
     const SolverResult r = run_active_set(qp);
     ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
-    EXPECT_EQ(r.criterion, "kkt");
+    EXPECT_EQ(r.criterion, cb::StopCriterion::ACCURACY);
     EXPECT_NEAR(r.x[0], 1.0, 1e-14);
     EXPECT_NEAR(r.lambda[0], 2.0, 1e-13);
     EXPECT_EQ(r.info["working_set"], 1);
@@ -361,7 +361,7 @@ TEST(ActiveSet, InfeasibleFamilyIsReportedInfeasible)
     const Qp qp = cb::make_synthetic("infeasible", {{"nx", 2}, {"ny", 2}, {"nz", 2}}, 3);
     const SolverResult r = run_active_set(qp);
     EXPECT_EQ(r.status, SolveStatus::INFEASIBLE) << r.message;
-    EXPECT_TRUE(r.criterion.empty());
+    EXPECT_EQ(r.criterion, cb::StopCriterion::NONE);
 }
 
 TEST(ActiveSet, IterationCapIsNotConverged)
@@ -414,7 +414,7 @@ TEST(ActiveSet, TimeLimitIsHonoured)
     const Qp qp = cb::make_synthetic("plane", {{"nx", 3}, {"ny", 2}, {"nz", 3}}, 1);
     const SolverResult r = run_active_set(qp, {{"time_limit_s", 1e-12}});
     EXPECT_EQ(r.status, SolveStatus::TIME_LIMIT) << r.message;
-    EXPECT_TRUE(r.criterion.empty());
+    EXPECT_EQ(r.criterion, cb::StopCriterion::NONE);
 }
 
 namespace {

@@ -62,7 +62,7 @@ TEST_P(AllSolvers, TinyHandDerivedQpsSatisfyKkt)
         }
         ASSERT_EQ(r.status, SolveStatus::CONVERGED) << cb::to_string(r.status) << ": " << r.message;
         const cb::AccuracyParts e = cb::accuracy(hc.qp.view(), r.x, r.lambda);
-        if (r.criterion == "kkt") {
+        if (r.criterion == cb::StopCriterion::ACCURACY) {
             EXPECT_LE(e.max(), TOL * (1 + 1e-6)) << "status honesty";
         }
         EXPECT_LE(e.stationarity, 1e-6);
@@ -92,7 +92,7 @@ TEST_P(AllSolvers, ConvergedStatusIsConfirmedByTheAccuracyMeasure)
     for (double tol : {1e-4, 1e-8}) {
         const auto solver = cb::builtin_registry().create(GetParam(), {{"tol", tol}});
         const SolverResult r = solver->solve(qp.view(), cb::SolveContext{});
-        if (r.status != SolveStatus::CONVERGED || r.criterion != "kkt") continue;
+        if (r.status != SolveStatus::CONVERGED || r.criterion != cb::StopCriterion::ACCURACY) continue;
         if (r.info.is_object() && r.info.value("ignores_constraints", false)) continue;
         const double rel = cb::accuracy(qp.view(), r.x, r.lambda).max();
         EXPECT_LE(rel, tol * (1 + 1e-6)) << GetParam() << " claims convergence at tol " << tol;

@@ -46,7 +46,7 @@ TEST(Cg, SolvesHandUnconstrainedQpInThreeSteps)
     const Qp qp = cb::testing_qps::unconstrained_qp();
     const SolverResult r = run_cg(qp, {{"tol", 1e-12}, {"precond", "none"}});
     ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
-    EXPECT_EQ(r.criterion, "kkt");
+    EXPECT_EQ(r.criterion, cb::StopCriterion::ACCURACY);
     EXPECT_LE((r.x - cb::testing_qps::unconstrained_x()).lpNorm<Eigen::Infinity>(), 1e-12);
     EXPECT_LE(r.iterations, 3);
     EXPECT_EQ(r.lambda.size(), 0);
@@ -112,7 +112,7 @@ TEST(Cg, NativeStopIsAbsoluteResidualNorm)
     const Qp qp = cb::make_synthetic("unconstrained", {{"nx", 3}, {"ny", 3}, {"nz", 3}}, 2);
     const SolverResult r = run_cg(qp, {{"tol", 1e-9}, {"stop", "native"}});
     ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
-    EXPECT_EQ(r.criterion, "native");
+    EXPECT_EQ(r.criterion, cb::StopCriterion::NATIVE);
     const double residual = (qp.b - qp.A * r.x).norm();
     EXPECT_LE(residual, 1e-9);
     EXPECT_NEAR(r.native_residual, residual, 1e-12);
@@ -133,7 +133,7 @@ TEST(Cg, IterationCapGivesMaxIterations)
     const SolverResult r = run_cg(qp, {{"max_iterations", 2}});
     EXPECT_EQ(r.status, SolveStatus::MAX_ITERATIONS);
     EXPECT_EQ(r.iterations, 2);
-    EXPECT_TRUE(r.criterion.empty());
+    EXPECT_EQ(r.criterion, cb::StopCriterion::NONE);
     EXPECT_NEAR(r.native_residual, (qp.b - qp.A * r.x).norm(), 1e-12 * std::max(1.0, r.native_residual));
 }
 

@@ -26,7 +26,7 @@ TEST(Ica, ConvergesOnPlaneRowsToTheCommonKkt)
     ASSERT_GT(qp.m(), 10);
     const SolverResult r = run(qp, {{"tol", 1e-6}});
     ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
-    EXPECT_EQ(r.criterion, "kkt");
+    EXPECT_EQ(r.criterion, cb::StopCriterion::ACCURACY);
     EXPECT_LE(relative_kkt(qp, r.x, r.lambda), 1e-6);
     EXPECT_FALSE(r.lambda_fitted);
     EXPECT_LT(max_violation(qp.view(), r.x), 1e-6);
@@ -59,7 +59,7 @@ TEST(Ica, ReportsMaxIterationsHonestly)
     const SolverResult r = run(qp, {{"tol", 1e-12}, {"max_iterations", 3}});
     EXPECT_EQ(r.status, SolveStatus::MAX_ITERATIONS);
     EXPECT_EQ(r.iterations, 3);
-    EXPECT_EQ(r.criterion, "");
+    EXPECT_EQ(r.criterion, cb::StopCriterion::NONE);
     EXPECT_GT(relative_kkt(qp, r.x, r.lambda), 1e-12);
 }
 
@@ -73,7 +73,7 @@ TEST(Ica, NativeStopMeetsStationarityWhileStillPenetrating)
     const double tol = 1e-2;
     const SolverResult r = run(qp, {{"stop", "native"}, {"tol", tol}});
     ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
-    EXPECT_EQ(r.criterion, "native");
+    EXPECT_EQ(r.criterion, cb::StopCriterion::NATIVE);
     EXPECT_LE(r.native_residual, tol);
     const double violation = max_violation(qp.view(), r.x);
     EXPECT_GT(violation, 1e-4);
@@ -86,7 +86,7 @@ TEST(Ica, NativeStopMeetsStationarityWhileStillPenetrating)
     options.decouple = "none";
     const RunOutcome out = run_solver(qp, "ica", {{"stop", "native"}, {"tol", tol}}, options);
     EXPECT_EQ(out.result.status, SolveStatus::CONVERGED);
-    EXPECT_EQ(out.result.criterion, "native");
+    EXPECT_EQ(out.result.criterion, cb::StopCriterion::NATIVE);
     EXPECT_GT(out.accuracy.primal, 1e-4);
     EXPECT_GT(out.violation, 1e-4);
     EXPECT_FALSE(out.status_confirmed);

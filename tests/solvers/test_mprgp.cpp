@@ -202,7 +202,7 @@ TEST(Mprgp, NativeStopMeetsPhiPlusBeta)
     const double tol = 1e-7 * qp.b.norm();
     const cb::SolverResult r = mprgp({{"tol", tol}, {"stop", "native"}})->solve(qp.view(), {});
     ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
-    EXPECT_EQ(r.criterion, "native");
+    EXPECT_EQ(r.criterion, cb::StopCriterion::NATIVE);
     // ||phi + beta|| recomputed here with the kernels at the returned x.
     const cb::DecoupledRows rows = cb::make_decoupled_rows(qp.J, cb::Vec::Ones(qp.n()));
     std::vector<char> active;
@@ -221,7 +221,7 @@ TEST(Mprgp, NonConvergenceIsReported)
     const cb::SolverResult r = mprgp({{"tol", 1e-12}, {"max_iterations", 3}})->solve(qp.view(), {});
     EXPECT_EQ(r.status, SolveStatus::MAX_ITERATIONS);
     EXPECT_EQ(r.iterations, 3);
-    EXPECT_EQ(r.criterion, "");
+    EXPECT_EQ(r.criterion, cb::StopCriterion::NONE);
     EXPECT_GT(relative_kkt(qp, r.x, r.lambda), 1e-12);
     EXPECT_LE(cb::max_violation(qp.view(), r.x), 1e-9);  // the returned x is projected
 

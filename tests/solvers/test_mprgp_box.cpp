@@ -43,7 +43,7 @@ TEST(MprgpBox, BoundRowsAreRecognised)
     EXPECT_FALSE(cb::is_bound_rows(tilted.J));
     const cb::SolverResult r = cb::builtin_registry().create("mprgp-box", {})->solve(tilted.view(), {});
     EXPECT_EQ(r.status, SolveStatus::NOT_APPLICABLE);
-    EXPECT_NE(r.message.find("needs bound rows"), std::string::npos) << r.message;
+    EXPECT_NE(r.message.find("nonzeros (bound rows only"), std::string::npos) << r.message;
 }
 
 TEST(MprgpBox, AgreesWithActiveSetOnLowerAndUpperBounds)

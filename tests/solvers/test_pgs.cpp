@@ -27,7 +27,7 @@ TEST(Pgs, ConvergesOnPlaneRowsToTheCommonKkt)
     const Qp qp = make_grid_qp(GridQpParams{});
     const SolverResult r = run("pgs", qp, {{"tol", 1e-8}});
     ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
-    EXPECT_EQ(r.criterion, "kkt");
+    EXPECT_EQ(r.criterion, cb::StopCriterion::ACCURACY);
     EXPECT_LE(relative_kkt(qp, r.x, r.lambda), 1e-8);
     EXPECT_EQ(r.counters.cholmod_factorizations, 1);
     // One solve for A^-1 b, m for S, one per confirmed candidate and the final x.
@@ -68,7 +68,7 @@ TEST(Pgs, NativeStopIsTheNaturalResidual)
     const Qp qp = make_grid_qp(GridQpParams{});
     const SolverResult r = run("pgs", qp, {{"stop", "native"}, {"tol", 1e-9}});
     ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
-    EXPECT_EQ(r.criterion, "native");
+    EXPECT_EQ(r.criterion, cb::StopCriterion::NATIVE);
     // ||min(lambda, Jx - c)||_inf at the returned point (Jx - c = S lambda - q at x = x(lambda)).
     const Vec slack = qp.J * r.x - qp.c;
     EXPECT_LE(r.lambda.cwiseMin(slack).lpNorm<Eigen::Infinity>(), 1e-9 * 1.01);
@@ -137,7 +137,7 @@ TEST(Pgs, SweepCapIsReported)
     const SolverResult r = run("pgs", qp, {{"tol", 1e-14}, {"max_iterations", 2}});
     EXPECT_EQ(r.status, SolveStatus::MAX_ITERATIONS);
     EXPECT_EQ(r.iterations, 2);
-    EXPECT_EQ(r.criterion, "");
+    EXPECT_EQ(r.criterion, cb::StopCriterion::NONE);
 }
 
 }  // namespace

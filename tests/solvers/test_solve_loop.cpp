@@ -1,9 +1,11 @@
-// The solve-loop protocol (solvers/solve_loop.hpp): exit order, `>=` on both limits, setup
-// counted in the time limit, the monitor on a paused clock, the finisher.
+// The solve-loop protocol (solvers/solve_loop.hpp): the stop rule, exit order, `>=` on both
+// limits, setup counted in the time limit, the monitor on a paused clock, the finisher's criterion
+// and standard messages.
 #include "solvers/solve_loop.hpp"
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <functional>
 
 namespace cb {
@@ -21,11 +23,13 @@ struct Fixture {
     QpView view() const { return QpView{A, b, J, c, x0}; }
 };
 
-CommonSettings limits(long max_iterations, double time_limit_s)
+CommonSettings limits(long max_iterations, double time_limit_s, StopRule stop = StopRule::ACCURACY, double tol = 1e-6)
 {
     CommonSettings s;
     s.max_iterations = max_iterations;
     s.time_limit_s = time_limit_s;
+    s.stop = stop;
+    s.tol = tol;
     return s;
 }
 
@@ -56,13 +60,16 @@ TEST(SolveLoop, ExitChecksInOneOrder)
     spend(loop, 1e-8);  // the time limit is reached as well
     ASSERT_TRUE(loop.time_up());
     // non-finite first, even when every other exit holds
-    EXPECT_EQ(loop.exit_status(false, true, 5), SolveStatus::DIVERGED);
+    EXPECT_EQ(loop.check(5, false, true), SolveStatus::DIVERGED);
+    EXPECT_EQ(loop.check(5, false, 0.0, 0.0), SolveStatus::DIVERGED);
     // then converged, before the cap and the time
-    EXPECT_EQ(loop.exit_status(true, true, 5), SolveStatus::CONVERGED);
+    EXPECT_EQ(loop.check(5, true, true), SolveStatus::CONVERGED);
+    EXPECT_EQ(loop.check(5, true, 1.0, 1e-7), SolveStatus::CONVERGED);  // stop=kkt reads the accuracy error
     // then the iteration cap, before the time
-    EXPECT_EQ(loop.exit_status(true, false, 5), SolveStatus::MAX_ITERATIONS);
+    EXPECT_EQ(loop.check(5, true, false), SolveStatus::MAX_ITERATIONS);
+    EXPECT_EQ(loop.check(5, true, 0.0, 1e-5), SolveStatus::MAX_ITERATIONS);
     // then the time
-    EXPECT_EQ(loop.exit_status(true, false, 4), SolveStatus::TIME_LIMIT);
+    EXPECT_EQ(loop.check(4, true, false), SolveStatus::TIME_LIMIT);
     EXPECT_EQ(loop.limit_status(4), SolveStatus::TIME_LIMIT);
 }
 
@@ -72,13 +79,13 @@ TEST(SolveLoop, ConvergenceTestIsNotEvaluatedOnANonFiniteIterate)
     const SolveContext context;
     SolveLoop loop("t", f.view(), limits(10, 0.0), context);
     int calls = 0;
-    auto converged = [&] {
+    auto error = [&] {
         ++calls;
-        return false;
+        return 1.0;
     };
-    EXPECT_EQ(loop.exit_status(false, converged, 0), SolveStatus::DIVERGED);
+    EXPECT_EQ(loop.check(0, false, 0.0, error), SolveStatus::DIVERGED);
     EXPECT_EQ(calls, 0);
-    EXPECT_EQ(loop.exit_status(true, converged, 0), SolveStatus::NOT_RUN);
+    EXPECT_EQ(loop.check(0, true, 0.0, error), SolveStatus::NOT_RUN);
     EXPECT_EQ(calls, 1);
 }
 
@@ -86,11 +93,11 @@ TEST(SolveLoop, IterationCapIsGreaterOrEqual)
 {
     const Fixture f;
     const SolveContext context;
-    const SolveLoop loop("t", f.view(), limits(3, 0.0), context);
+    SolveLoop loop("t", f.view(), limits(3, 0.0), context);
     EXPECT_EQ(loop.limit_status(2), SolveStatus::NOT_RUN);
     EXPECT_EQ(loop.limit_status(3), SolveStatus::MAX_ITERATIONS);
     EXPECT_EQ(loop.limit_status(4), SolveStatus::MAX_ITERATIONS);
-    const SolveLoop none("t", f.view(), limits(0, 0.0), context);  // max_iterations = 0: no iteration
+    SolveLoop none("t", f.view(), limits(0, 0.0), context);  // max_iterations = 0: no iteration
     EXPECT_EQ(none.limit_status(0), SolveStatus::MAX_ITERATIONS);
 }
 
@@ -116,7 +123,7 @@ TEST(SolveLoop, TimeLimitCountsSetup)
     const std::string message = loop.time_limit_message();
     EXPECT_EQ(message.rfind("my-solver: time limit of 1e-06 s reached during setup (after ", 0), 0u) << message;
     SolverResult result;
-    const SolverResult out = loop.finish(result, SolveStatus::TIME_LIMIT, "", message);
+    const SolverResult out = loop.finish(result, SolveStatus::TIME_LIMIT);
     EXPECT_EQ(out.status, SolveStatus::TIME_LIMIT);
     EXPECT_EQ(out.message, message);
     EXPECT_DOUBLE_EQ(out.setup_s, loop.setup_s());
@@ -160,14 +167,14 @@ TEST(SolveLoop, MonitorAndItsPreparationRunOnAPausedClock)
         const double before = loop.elapsed_s();
         volatile double sink = 0.0;
         for (int k = 0; k < 200000; ++k) sink = sink + 1.0;  // monitor-only work
-        EXPECT_EQ(loop.elapsed_s(), before);                  // the clock did not move
+        EXPECT_EQ(loop.elapsed_s(), before);                 // the clock did not move
         seen_in_prepare = before;
     });
     EXPECT_TRUE(go_on);
     EXPECT_EQ(seen_in_monitor, seen_in_prepare);  // paused through prepare and the monitor
     EXPECT_EQ(stamped, seen_in_monitor);
     EXPECT_DOUBLE_EQ(stamped_setup, setup);
-    EXPECT_GE(stamped, setup + 2e-5);  // stamped from the start of setup
+    EXPECT_GE(stamped, setup + 2e-5);      // stamped from the start of setup
     EXPECT_GT(loop.elapsed_s(), stamped);  // and running again afterwards
     monitor.answer = false;
     EXPECT_FALSE(loop.notify(info));
@@ -234,13 +241,97 @@ TEST(SolveLoop, FinishFillsCountersAndTimes)
     result.counters.iterations = 7;
     result.x = Vec::Constant(2, 1.0);
     result.message = "kept";
-    const SolverResult out = loop.finish(result, SolveStatus::CONVERGED, "kkt");
+    const SolverResult out = loop.finish(result, SolveStatus::STALLED);  // the solver's own word: kept
     EXPECT_EQ(out.iterations, 7);
-    EXPECT_EQ(out.criterion, "kkt");
+    EXPECT_EQ(out.criterion, StopCriterion::NONE);
     EXPECT_EQ(out.message, "kept");
     EXPECT_EQ(out.x, Vec::Constant(2, 1.0));
     EXPECT_GE(out.solve_s, 1e-6);
     EXPECT_DOUBLE_EQ(out.setup_s, loop.setup_s());
+}
+
+TEST(SolveLoop, TheRuleReadsOnlyItsOwnMeasure)
+{
+    const Fixture f;
+    const SolveContext context;
+    int native_calls = 0, accuracy_calls = 0;
+    auto native = [&] {
+        ++native_calls;
+        return 0.5;
+    };
+    auto accuracy = [&] {
+        ++accuracy_calls;
+        return 1e-9;
+    };
+    SolveLoop kkt("t", f.view(), limits(10, 0.0, StopRule::ACCURACY, 1e-6), context);
+    EXPECT_TRUE(kkt.criterion_met(native, accuracy));
+    EXPECT_EQ(native_calls, 0);
+    EXPECT_EQ(accuracy_calls, 1);
+    SolveLoop own("t", f.view(), limits(10, 0.0, StopRule::NATIVE, 1e-6), context);
+    EXPECT_FALSE(own.criterion_met(native, accuracy));  // 0.5 > 1e-6
+    EXPECT_EQ(native_calls, 1);
+    EXPECT_EQ(accuracy_calls, 1);
+    EXPECT_TRUE(own.rule_holds(1e-7, 1.0));
+    EXPECT_FALSE(kkt.rule_holds(1e-7, 1.0));
+    // `<=`: a measure exactly at tol meets the rule; NaN never does
+    EXPECT_TRUE(kkt.criterion_met(0.0, 1e-6));
+    EXPECT_FALSE(kkt.criterion_met(0.0, std::nan("")));
+}
+
+TEST(SolveLoop, FinishRecordsTheCriterionAndWritesTheStandardMessages)
+{
+    const Fixture f;
+    const SolveContext context;
+    {
+        SolveLoop loop("s", f.view(), limits(10, 0.0, StopRule::ACCURACY, 1e-6), context);
+        ASSERT_EQ(loop.check(3, true, 9.0, 2.5e-7), SolveStatus::CONVERGED);
+        SolverResult r;
+        const SolverResult out = loop.finish(r, SolveStatus::CONVERGED, "3 steps");
+        EXPECT_EQ(out.criterion, StopCriterion::ACCURACY);
+        EXPECT_STREQ(to_string(out.criterion), "kkt");
+        EXPECT_EQ(out.message, "s: converged: accuracy error 2.5e-07 <= tol 1e-06; 3 steps");
+    }
+    {
+        SolveLoop loop("s", f.view(), limits(10, 0.0, StopRule::NATIVE, 1e-3), context);
+        ASSERT_EQ(loop.check(3, true, 5e-4, 1.0), SolveStatus::CONVERGED);
+        SolverResult r;
+        const SolverResult out = loop.finish(r, SolveStatus::CONVERGED);
+        EXPECT_EQ(out.criterion, StopCriterion::NATIVE);
+        EXPECT_EQ(out.message, "s: converged: native residual 0.0005 <= tol 0.001");
+    }
+    {
+        SolveLoop loop("s", f.view(), limits(10, 0.0), context);
+        ASSERT_EQ(loop.check(10, true, 1.0, 1.0), SolveStatus::MAX_ITERATIONS);
+        SolverResult r;
+        const SolverResult out = loop.finish(r, SolveStatus::MAX_ITERATIONS, "detail");
+        EXPECT_EQ(out.criterion, StopCriterion::NONE);
+        EXPECT_EQ(out.message, "s: iteration cap 10 reached; detail");
+    }
+    {
+        SolveLoop loop("s", f.view(), limits(10, 0.0), context);
+        ASSERT_EQ(loop.check(0, false, 1.0, 1.0), SolveStatus::DIVERGED);
+        SolverResult r;
+        EXPECT_EQ(loop.finish(r, SolveStatus::DIVERGED).message, "s: non-finite iterate");
+    }
+    {
+        // a DIVERGED the loop did not decide (a breakdown) keeps the solver's message
+        SolveLoop loop("s", f.view(), limits(10, 0.0), context);
+        SolverResult r;
+        EXPECT_EQ(loop.finish(r, SolveStatus::DIVERGED, "s: p'Ap < 0").message, "s: p'Ap < 0");
+        SolverResult m;
+        EXPECT_EQ(loop.finish(m, SolveStatus::STOPPED_BY_MONITOR).message, "s: stopped by the monitor");
+    }
+    {
+        // a finite method's or a peer's verdict
+        SolveLoop loop("s", f.view(), limits(10, 0.0, StopRule::ACCURACY, 1e-6), context);
+        EXPECT_EQ(loop.verdict(true, 0.0, 2e-6), SolveStatus::STALLED);
+        SolverResult r;
+        EXPECT_EQ(loop.finish(r, SolveStatus::STALLED).message,
+                  "s: the stop rule does not hold at the returned point: accuracy error 2e-06 > tol 1e-06");
+        EXPECT_EQ(loop.verdict(true, 0.0, 2e-6, SolveStatus::MAX_ITERATIONS), SolveStatus::MAX_ITERATIONS);
+        EXPECT_EQ(loop.verdict(false, 0.0, 0.0), SolveStatus::DIVERGED);
+        EXPECT_EQ(loop.verdict(true, 1.0, 1e-7), SolveStatus::CONVERGED);
+    }
 }
 
 }  // namespace

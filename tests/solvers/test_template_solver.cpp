@@ -26,7 +26,7 @@ TEST(TemplateSolver, SolvesTinyBoundQpToTheAskedKktError)
     const auto solver = registry_with_template().create("template", {{"tol", 1e-10}});
     const cb::SolverResult r = solver->solve(qp.view(), {});
     ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
-    EXPECT_EQ(r.criterion, "kkt");
+    EXPECT_EQ(r.criterion, cb::StopCriterion::ACCURACY);
     EXPECT_LE(cb::accuracy(qp.view(), r.x, r.lambda).max(), 1e-10);
     EXPECT_NEAR(r.x[0], 1.0, 1e-9);
     EXPECT_NEAR(r.x[1], 1.0, 1e-9);
@@ -41,7 +41,7 @@ TEST(TemplateSolver, CoupledMatrixWithTwoBoundsAndNativeStop)
     const auto solver = registry_with_template().create("template", {{"stop", "native"}, {"tol", 1e-12}});
     const cb::SolverResult r = solver->solve(qp.view(), {});
     ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
-    EXPECT_EQ(r.criterion, "native");
+    EXPECT_EQ(r.criterion, cb::StopCriterion::NATIVE);
     EXPECT_LE(r.native_residual, 1e-12);
     EXPECT_NEAR(r.x[0], 1.0, 1e-12);
     EXPECT_NEAR(r.lambda[0], 3.0, 1e-12);
@@ -64,8 +64,8 @@ TEST(TemplateSolver, RefusesRowsThatAreNotBounds)
     const cb::Qp qp = cb::testing_qps::dense_qp(2.0 * Eigen::MatrixXd::Identity(2, 2), Vec::Zero(2), J,
                                                 Vec::Constant(1, 1.0), Vec::Zero(2));
     const cb::SolverResult r = registry_with_template().create("template", {})->solve(qp.view(), {});
-    EXPECT_EQ(r.status, SolveStatus::INVALID_INPUT);
-    EXPECT_EQ(r.message, "template: row 0 has more than one nonzero (bound rows only)");
+    EXPECT_EQ(r.status, SolveStatus::NOT_APPLICABLE);
+    EXPECT_EQ(r.message, "template: row 0 of J has 2 nonzeros (bound rows only: one nonzero per row, a x_j >= c)");
 }
 
 TEST(TemplateSolver, SettingsAreCheckedAndRecorded)
