@@ -173,32 +173,4 @@ std::string setting_default_text(double value)
     return text;
 }
 
-nlohmann::json parse_set_arguments(const std::vector<std::string>& assignments)
-{
-    nlohmann::json out = nlohmann::json::object();
-    for (const auto& a : assignments) {
-        const auto eq = a.find('=');
-        if (eq == std::string::npos || eq == 0) throw_input_error("--set", a, "expected key=value");
-        const std::string key = a.substr(0, eq), value = a.substr(eq + 1);
-        if (value == "true")
-            out[key] = true;
-        else if (value == "false")
-            out[key] = false;
-        else {
-            char* end = nullptr;
-            const long long as_int = std::strtoll(value.c_str(), &end, 10);
-            if (!value.empty() && end && *end == '\0') {
-                out[key] = as_int;
-                continue;
-            }
-            const double as_double = std::strtod(value.c_str(), &end);
-            if (!value.empty() && end && *end == '\0')
-                out[key] = as_double;
-            else
-                out[key] = value;
-        }
-    }
-    return out;
-}
-
 }  // namespace cb

@@ -210,7 +210,4 @@ template <class S> nlohmann::json write_settings(const S& s, const SettingsTable
     return j;
 }
 
-/// Converts "key=value" strings (command line --set) to JSON: numbers, true/false, else string.
-nlohmann::json parse_set_arguments(const std::vector<std::string>& assignments);
-
 }  // namespace cb
