@@ -65,33 +65,17 @@ const SettingsTable<MprgpCoupledSettings>& mprgp_coupled_settings_table()
 
 MprgpCoupledSettings MprgpCoupledSettings::from_json(const nlohmann::json& settings)
 {
-    SettingsReader reader(settings, "mprgp-coupled");
-    MprgpCoupledSettings s;
-    s.common = reader.common();
-    mprgp_coupled_settings_table().read(reader, s);
-    reader.finish();
-    return s;
+    return read_settings(settings, "mprgp-coupled", mprgp_coupled_settings_table());
 }
 
-nlohmann::json MprgpCoupledSettings::to_json() const
-{
-    nlohmann::json j = common.to_json();
-    mprgp_coupled_settings_table().write(*this, j);
-    return j;
-}
-
-std::vector<SettingDoc> mprgp_coupled_setting_docs() { return mprgp_coupled_settings_table().docs(); }
+nlohmann::json MprgpCoupledSettings::to_json() const { return write_settings(*this, mprgp_coupled_settings_table()); }
 
 SolverEntry mprgp_coupled_entry()
 {
-    SolverEntry entry;
-    entry.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
-        return std::make_unique<MprgpCoupledSolver>(MprgpCoupledSettings::from_json(settings));
-    };
-    entry.description =
-        "extended MPRGP with general (coupled) J: per-component dense subproblems, LCPs by principal pivoting";
-    entry.settings = mprgp_coupled_setting_docs();
-    return entry;
+    return solver_entry<MprgpCoupledSolver>(
+        "mprgp-coupled", mprgp_coupled_settings_table(),
+        "extended MPRGP with general (coupled) J: exact operators per component of the row graph (dense, or CHOLMOD "
+        "factors updated by row changes)");
 }
 
 namespace {

@@ -36,8 +36,6 @@ struct MprgpCoupledSettings {
     nlohmann::json to_json() const;
 };
 
-std::vector<SettingDoc> mprgp_coupled_setting_docs();
-
 class MprgpCoupledSolver final : public Solver {
 public:
     explicit MprgpCoupledSolver(MprgpCoupledSettings settings) : m_settings(std::move(settings)) {}
