@@ -8,7 +8,6 @@
 #include "sim/chains.hpp"
 #include "solvers/registry.hpp"
 
-#include <filesystem>
 #include <iostream>
 #include <sstream>
 
@@ -58,9 +57,7 @@ int cmd_chains(const Args& args)
     }
     cl.expect_positional(1, 1, usage);
     const std::string scene_path = cl.positional()[0];
-    std::string data = cl.value("--data");
-    const std::string cached = cache_dir() + "/paper-data";
-    if (!cl.has("--data") && std::filesystem::is_directory(cached)) data = cached;
+    const std::string data = paper_data_dir(cl.has("--data"), cl.value("--data"));
     const sim::PathRoots roots = sim::default_path_roots(scene_path, data);
     const sim::Scene scene = sim::load_scene(scene_path, roots);  // validated once, before any chain
 

@@ -6,7 +6,6 @@
 #include "harness/suite.hpp"
 #include "sim/simulator.hpp"
 
-#include <filesystem>
 #include <iostream>
 
 namespace cb {
@@ -54,10 +53,8 @@ int cmd_simulate(const Args& args)
     cl.expect_positional(1, 1, usage);
     const std::string scene_path = cl.positional()[0];
     // The authors' data: --data, else where `make paper-data` puts it, else none (stand-in meshes).
-    std::string data = cl.value("--data");
-    const std::string cached = cache_dir() + "/paper-data";
-    const bool no_data = !cl.has("--data") && !std::filesystem::is_directory(cached);
-    if (!cl.has("--data") && !no_data) data = cached;
+    const std::string data = paper_data_dir(cl.has("--data"), cl.value("--data"));
+    const bool no_data = !cl.has("--data") && data.empty();
     sim::Scene scene = sim::load_scene(scene_path, sim::default_path_roots(scene_path, data));
     if (cl.has("--solver")) {  // another solver gets its own defaults, not the scene solver's settings
         const std::string solver = cl.value("--solver");
@@ -71,7 +68,7 @@ int cmd_simulate(const Args& args)
         scene.solver_settings = replaced.settings;
     }
     if (no_data)  // said once the scene is known to be valid, so that an input error stands alone
-        std::cerr << "simulate: no authors' data in " << cached
+        std::cerr << "simulate: no authors' data in " << paper_data_cache()
                   << " (`make paper-data` writes it); \"data:\" meshes use their stand-ins\n";
     sim::SimulatorOptions opt;
     opt.out_dir = cl.path("--out", "results/sim/" + scene.name);

@@ -153,6 +153,14 @@ std::string cache_dir()
     return "/tmp/contactbench-cache";
 }
 
+std::string paper_data_cache() { return cache_dir() + "/paper-data"; }
+
+std::string paper_data_dir(bool given, const std::string& option)
+{
+    if (given) return option;
+    return std::filesystem::is_directory(paper_data_cache()) ? paper_data_cache() : std::string();
+}
+
 Suite parse_suite(const nlohmann::json& j, const std::string& where)
 {
     if (!j.is_object()) throw_input_error(where, "", "a suite must be a JSON object, got " + type_name(j));

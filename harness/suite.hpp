@@ -83,6 +83,11 @@ struct SuiteSnapshot {
 
 /// The cache folder: $CB_CACHE, else $HOME/.cache/contactbench, else /tmp/contactbench-cache.
 std::string cache_dir();
+/// Where `make paper-data` writes the authors' data: cache_dir()/paper-data.
+std::string paper_data_cache();
+/// The authors' data folder of simulate and chains: `--data` when given, else paper_data_cache()
+/// when it exists, else "" (a scene's "data:" meshes then use their stand-ins).
+std::string paper_data_dir(bool given, const std::string& option);
 
 /// Expands patterns (files, folders: every *.qpsnap inside, globs: sorted matches) in the
 /// order listed, then the generate entries (written with write_qpsnap into

@@ -83,7 +83,7 @@ class ReportsDanglingReferences(unittest.TestCase):
         write(self.root, "harness/runner.cpp", "")
         write(self.root, "harness/runner.hpp", "")
         write(self.root, "harness/cmd_run.cpp", "")
-        write(self.root, "docs/NOTES.md",
+        write(self.root, "docs/DESIGN.md",
               "harness/runner.cpp, harness/runner.{hpp,cpp}, harness/runner, harness/cmd_*.cpp, harness/runner.*\n"
               "harness/kkt.*, harness/cmd_<name>.cpp, scenes/x.json, solvers/my_solver.{hpp,cpp}\n"
               "harness/runner.{hpp,py} and harness/cmd_*.py; see https://example.org/harness/gone.cpp\n")
@@ -93,9 +93,9 @@ class ReportsDanglingReferences(unittest.TestCase):
         self.assertEqual(self.problems(), [
             "CMakeLists.txt:1: cites tests/build/no_peers.sh, which is not in the repository",
             "CMakeLists.txt:2: cites tests/gone.sh, which is not in the repository",
-            "docs/NOTES.md:2: cites harness/kkt.*, which is not in the repository",
-            "docs/NOTES.md:3: cites harness/runner.{hpp,py}, which is not in the repository",
-            "docs/NOTES.md:3: cites harness/cmd_*.py, which is not in the repository",
+            "docs/DESIGN.md:2: cites harness/kkt.*, which is not in the repository",
+            "docs/DESIGN.md:3: cites harness/runner.{hpp,py}, which is not in the repository",
+            "docs/DESIGN.md:3: cites harness/cmd_*.py, which is not in the repository",
             "harness/a.cpp:1: cites harness/gone.hpp, which is not in the repository",
             "plots/b.py:1: cites harness/gone.csv, which is not in the repository",
             "plots/b.py:2: cites harness/none.txt, which is not in the repository"])
