@@ -177,7 +177,9 @@ int main(int argc, char** argv)
             stationarity = s > stationarity ? s : stationarity;
         }
         error = (stationarity > primal ? stationarity : primal) / length;
-        if (error <= 0.5 * tol) {
+        /* A hundredth of tol: this test leaves out the measure's rigid motion of each body
+           (docs/accuracy.md), which a stiff body's residual can hide from the Jacobi step. */
+        if (error <= 0.01 * tol) {
             status = "converged";
             break;
         }

@@ -155,7 +155,15 @@ AccuracyScale accuracy_scale(const QpView& qp)
     s.inv_length = 1.0 / l;
     s.inv_energy = 1.0 / (s.stiffness * l * l);
     s.length_source = source;
+    s.bodies = BodyMotion(qp.A, qp.x0, l);
     return s;
+}
+
+double AccuracyScale::stationarity(const Vec& r) const
+{
+    double local = 0.0;
+    for (Eigen::Index j = 0; j < r.size(); ++j) local = std::max(local, sanitize(std::abs(r[j]) * inv_diag[j]));
+    return std::max(local, sanitize(bodies.displacement(r))) * inv_length;
 }
 
 AccuracyParts accuracy_from_gradient(const QpView& qp, const AccuracyScale& scale, const Vec& x, const Vec& g,
@@ -165,9 +173,6 @@ AccuracyParts accuracy_from_gradient(const QpView& qp, const AccuracyScale& scal
     const Eigen::Index m = qp.m();
     const bool has_lambda = m > 0 && lambda.size() == m;
     const Vec r = has_lambda ? Vec(g - qp.J.transpose() * lambda) : g;
-    double stat = 0.0;
-    for (Eigen::Index j = 0; j < r.size(); ++j) stat = std::max(stat, sanitize(std::abs(r[j]) * scale.inv_diag[j]));
-    e.stationarity = stat;
     double primal = 0.0, dual = 0.0, comp = 0.0, gap = 0.0;
     for (Eigen::Index i = 0; i < m; ++i) {
         double jx = 0.0;
@@ -192,7 +197,7 @@ AccuracyParts accuracy_from_gradient(const QpView& qp, const AccuracyScale& scal
     e.dual = dual * scale.inv_length;
     e.complementarity = comp * scale.inv_length;
     e.gap = sanitize(gap * scale.inv_energy);
-    e.stationarity = stat * scale.inv_length;
+    e.stationarity = scale.stationarity(r);
     return e;
 }
 

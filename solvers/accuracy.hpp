@@ -5,7 +5,8 @@
 ///
 /// Notation: D = diag(A), n_i = |J_i|_2, k_i = sum_j (J_ij / n_i)^2 D_jj (the stiffness along row
 /// i's unit normal), r = Ax - b - J'lambda. At (x, lambda):
-///   stationarity     |D^-1 r|_inf / l                           (displacement the residual force causes)
+///   stationarity     max(|D^-1 r|_inf, |V (V'AV)^+ V'r|_inf) / l  (displacement the residual force causes:
+///                    on a DOF alone, and on each body as a whole, V its rigid modes: solvers/body_motion.hpp)
 ///   primal           max_i max(0, c_i - J_i x) / n_i / l         (penetration)
 ///   dual             max_i max(0, -lambda_i) n_i / k_i / l       (displacement of a pulling force)
 ///   complementarity  max_i min(|lambda_i| n_i / k_i, |J_i x - c_i| / n_i) / l
@@ -14,6 +15,7 @@
 ///   e = max of the five.
 /// A zero row (n_i = 0) is feasible iff c_i <= 0 (else the primal part is infinite); its
 /// multiplier exerts no force, so it adds nothing to the dual, complementarity and gap parts.
+#include "solvers/body_motion.hpp"
 #include "solvers/qp.hpp"
 
 #include <nlohmann/json.hpp>
@@ -47,6 +49,9 @@ struct AccuracyScale {
     double stiffness = 1.0;          ///< d_ref = mean of D: the energy scale is d_ref * l^2
     double inv_energy = 1.0;         ///< 1 / (d_ref l^2)
     long a_products = 0;             ///< A-products spent computing this scale
+    BodyMotion bodies;               ///< the rigid half of stationarity (built from A, x0 and l)
+    /// The stationarity part of a residual force r: max(|D^-1 r|_inf, body motion) / l.
+    double stationarity(const Vec& r) const;
     nlohmann::json to_json() const;  ///< {length_scale, length_scale_source, stiffness_scale}
 };
 

@@ -130,10 +130,8 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
     const AccuracyScale scale = accuracy_scale(QpView{qp.A, qp.b, no_rows, no_c, qp.x0});
     counters.a_products += scale.a_products;
     // Stop test of cg: native = |r|_2 absolute; accuracy = the error of the unconstrained
-    // relaxation (its stationarity part |D^-1 r|_inf / l, docs/accuracy.md).
-    auto relaxation_error = [&](const Vec& res) {
-        return res.cwiseProduct(scale.inv_diag).lpNorm<Eigen::Infinity>() * scale.inv_length;
-    };
+    // relaxation (its stationarity part, docs/accuracy.md).
+    auto relaxation_error = [&](const Vec& res) { return scale.stationarity(res); };
     auto rule_met = [&](const Vec& res) {
         return loop.criterion_met([&] { return res.norm(); }, [&] { return relaxation_error(res); });
     };
@@ -224,8 +222,7 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
     result.iterations = counters.iterations;
     result.native_residual = r.norm();
     result.info["residual_replacements"] = replacements;
-    result.info["unconstrained_error"] =
-        n ? r.cwiseProduct(scale.inv_diag).lpNorm<Eigen::Infinity>() * scale.inv_length : 0.0;
+    result.info["unconstrained_error"] = n ? scale.stationarity(r) : 0.0;
     if (m_settings.deflation != "none")
         result.info["deflation"] = {{"active", deflate},
                                     {"bodies", defl.components()},
