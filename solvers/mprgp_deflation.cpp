@@ -211,6 +211,24 @@ bool RigidDeflation::set_face(const SpMat& A, const SpMat& J, const DecoupledRow
     return full;
 }
 
+void RigidDeflation::set_face_projected(const SpMat& A, const std::function<void(Vec&)>& project)
+{
+    m_V.resize(m_W.rows(), kModes);
+    Vec column(m_W.rows());
+    for (int k = 0; k < kModes; ++k) {
+        column = m_W.col(k);
+        project(column);
+        m_V.col(k) = column;
+    }
+    m_AV = A * m_V;
+    m_E.assign(static_cast<size_t>(m_components), Mat6::Zero());
+    for (Eigen::Index j = 0; j < m_V.rows(); ++j)
+        m_E[static_cast<size_t>(m_comp[static_cast<size_t>(j)])] += m_V.row(j).transpose() * m_AV.row(j);
+    for (int c = 0; c < m_components; ++c) invert(c);
+    m_have_face = false;  // set_face()'s row-by-row updates do not apply to this V
+    m_updates = 0;
+}
+
 void RigidDeflation::coarse(const Vec& g, Vec& d, Vec& ad) const
 {
     Eigen::MatrixXd R;

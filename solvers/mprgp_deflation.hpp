@@ -15,6 +15,7 @@
 #include "solvers/types.hpp"
 
 #include <Eigen/Dense>
+#include <functional>
 #include <vector>
 
 namespace cb {
@@ -48,6 +49,12 @@ public:
     /// are formed anew with kModes A-products, and the call returns true.
     bool set_face(const SpMat& A, const SpMat& J, const DecoupledRows& rows, const std::vector<char>& active,
                   double* work_flops = nullptr);
+    /// V = project(W) mode by mode, AV = A V and each component's (V'AV)^+, formed anew (kModes
+    /// A-products). For a general J (`mprgp-coupled`), whose face projector is not row by row:
+    /// `project` maps an n-vector onto the face in place and must keep each component's DOFs in
+    /// that component (true of Q = I - J_A'(J_A J_A')^-1 J_A, since rows join the bodies they
+    /// touch). The next set_face() then starts afresh.
+    void set_face_projected(const SpMat& A, const std::function<void(Vec&)>& project);
     /// Coarse correction d = V y, y = (V'AV)^+ V'g, and Ad = AV y: F(x - d) = min over x + V y
     /// (the Galerkin step). `g` should be in face form (the free gradient).
     void coarse(const Vec& g, Vec& d, Vec& ad) const;
