@@ -72,10 +72,12 @@ void CoupledPreconditioner::face_direction(const Vec& r, Vec& out, Counters& cnt
 void CoupledPreconditioner::update_face(const std::vector<char>& active, Counters& cnt)
 {
     if (!m_deflate || (m_have_defl_face && m_defl_face == active)) return;
-    // The face changed (a few times per solve): V = Q W anew, 6 A-products. The row-by-row update
-    // of `mprgp` does not apply, since Q of coupled rows is not a sum of rank-one row terms.
-    m_defl.set_face_projected(m_A, [&](Vec& v) { project(v, cnt); });
-    cnt.a_products += RigidDeflation::kModes;
+    // The face changed: V = Q W by 6 projections (Q of coupled rows is no sum of row terms, so
+    // mprgp's row-by-row formula for V does not apply); AV and E follow V on the DOFs where it
+    // changed, or anew with 6 A-products when those are many.
+    if (m_defl.set_face_projected(
+            m_A, [&](Vec& v) { project(v, cnt); }, &cnt.work_flops))
+        cnt.a_products += RigidDeflation::kModes;
     m_defl_face = active;
     m_have_defl_face = true;
     ++m_deflation_faces;

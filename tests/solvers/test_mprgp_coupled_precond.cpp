@@ -221,3 +221,42 @@ TEST(MprgpCoupledPrecond, SettingsAreRecordedAndCheckedAgainstTheirChoices)
         EXPECT_STREQ(e.what(), "mprgp-coupled: /deflation: expected one of none | rigid, got \"elastic\"");
     }
 }
+
+TEST(MprgpCoupledPrecond, IncrementalRigidFaceUpdateMatchesAFreshOne)
+{
+    // A stiff body on the ground (one row per vertex): toggling one row changes V on 3 DOFs, so
+    // the second face is an incremental update of AV and V'AV; a fresh object on that face is the oracle.
+    const Qp qp = cb::make_synthetic("plane", {{"nx", 4}, {"ny", 3}, {"nz", 4}, {"youngs", 1e9}}, 4);
+    ASSERT_GE(qp.m(), 4);
+    const Vec dinv = qp.A.diagonal().cwiseInverse();
+    cb::CoupledFaceOperators ops(qp.J, dinv, cb::CoupledOperatorOptions{});
+    cb::Counters cnt;
+    std::vector<char> first(static_cast<size_t>(qp.m()), 1), second = first;
+    second[1] = 0;
+    cb::RigidDeflation incremental, fresh;
+    ASSERT_TRUE(incremental.build(qp.A, qp.J, qp.x0, cb::RigidDeflation::kSlowRayleigh));
+    ASSERT_TRUE(fresh.build(qp.A, qp.J, qp.x0, cb::RigidDeflation::kSlowRayleigh));
+    auto project = [&](Vec& v) {
+        Vec jv = qp.J * v, nu = Vec::Zero(qp.m());
+        ops.face_multipliers(jv, nu, cnt);
+        v -= qp.J.transpose() * nu;
+    };
+    ops.set_face(first, cnt);
+    EXPECT_TRUE(incremental.set_face_projected(qp.A, project));
+    ops.set_face(second, cnt);
+    double flops = 0.0;
+    EXPECT_FALSE(incremental.set_face_projected(qp.A, project, &flops)) << "3 changed DOFs of " << qp.n();
+    EXPECT_GT(flops, 0.0);
+    EXPECT_TRUE(fresh.set_face_projected(qp.A, project));
+    std::srand(5);
+    Vec phi = Vec::Random(qp.n());
+    project(phi);
+    Vec d1, ad1, d2, ad2;
+    incremental.coarse(phi, d1, ad1);
+    fresh.coarse(phi, d2, ad2);
+    EXPECT_LE((d1 - d2).norm(), 1e-10 * d2.norm());
+    EXPECT_LE((ad1 - ad2).norm(), 1e-10 * ad2.norm());
+    // The coarse correction is the Galerkin one on the new face: V'(phi - A d) = 0, seen as
+    // d'(phi - A d) = 0 (d in range V).
+    EXPECT_LE(std::abs(d1.dot(phi - ad1)), 1e-10 * std::abs(d1.dot(phi)));
+}
