@@ -75,9 +75,11 @@ void CoupledPreconditioner::update_face(const std::vector<char>& active, Counter
     // The face changed: V = Q W by 6 projections (Q of coupled rows is no sum of row terms, so
     // mprgp's row-by-row formula for V does not apply); AV and E follow V on the DOFs where it
     // changed, or anew with 6 A-products when those are many.
-    if (m_defl.set_face_projected(
-            m_A, [&](Vec& v) { project(v, cnt); }, &cnt.work_flops))
+    const auto project_face = [&](Vec& v) { project(v, cnt); };
+    if (m_defl.set_face_projected(m_A, project_face, &cnt.work_flops)) {
         cnt.a_products += RigidDeflation::kModes;
+        ++m_full_face_updates;
+    }
     m_defl_face = active;
     m_have_defl_face = true;
     ++m_deflation_faces;
@@ -160,7 +162,8 @@ nlohmann::json CoupledPreconditioner::stats() const
                           {"rayleigh_min", m_defl.min_rayleigh_seen()},
                           {"rayleigh_max", m_defl.max_rayleigh_seen()},
                           {"galerkin_steps", m_galerkin_steps},
-                          {"faces", m_deflation_faces}};
+                          {"faces", m_deflation_faces},
+                          {"full_face_updates", m_full_face_updates}};
     return j;
 }
 

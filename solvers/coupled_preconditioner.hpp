@@ -47,7 +47,7 @@ public:
     /// @param s  ||J_i||^2 (zero rows are never active)
     void galerkin_steps(Vec& x, Vec& g, const Vec& c, const Vec& s, Counters& cnt);
     /// {precond, ichol: {factor_nonzeros, a_nonzeros}, deflation: {active, bodies, modes, rayleigh_*,
-    ///  galerkin_steps, faces}}
+    ///  galerkin_steps, faces, full_face_updates (the ones with 6 A-products)}}
     nlohmann::json stats() const;
 
 private:
@@ -68,7 +68,7 @@ private:
     RigidDeflation m_defl;
     std::vector<char> m_defl_face, m_galerkin_face;
     bool m_have_defl_face = false;
-    long m_galerkin_steps = 0, m_deflation_faces = 0;
+    long m_galerkin_steps = 0, m_deflation_faces = 0, m_full_face_updates = 0;
     Vec m_jv, m_nu, m_jx;     // m-vectors of the projection and the Galerkin step
     Vec m_r, m_w, m_d, m_ad;  // n-vectors of the balanced direction and the Galerkin step
 };
