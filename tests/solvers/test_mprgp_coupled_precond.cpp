@@ -260,3 +260,48 @@ TEST(MprgpCoupledPrecond, IncrementalRigidFaceUpdateMatchesAFreshOne)
     // d'(phi - A d) = 0 (d in range V).
     EXPECT_LE(std::abs(d1.dot(phi - ad1)), 1e-10 * std::abs(d1.dot(phi)));
 }
+
+namespace {
+
+class StepRecorder : public cb::Monitor {
+public:
+    bool on_iteration(const cb::IterationInfo& info) override
+    {
+        steps.push_back(info.step);
+        xs.push_back(*info.x);
+        return true;
+    }
+    std::vector<cb::StepKind> steps;
+    std::vector<Vec> xs;
+};
+
+}  // namespace
+
+TEST(MprgpCoupledPrecond, ComponentOperatorsTakeTheGlobalOperatorsSteps)
+{
+    // The preconditioners reach Q only through the face operators, so the per-component ones and
+    // the global CHOLMOD oracle give the same step kinds and iterates to rounding.
+    const Qp qp = loaded(cb::make_synthetic("coupled", {{"nx", 6}, {"ny", 2}, {"nz", 6}}, 7), 7);
+    for (const char* deflation : {"none", "rigid"}) {
+        StepRecorder global, comp;
+        for (auto* run : {&global, &comp}) {
+            const nlohmann::json s = {{"tol", 1e-10},
+                                      {"max_iterations", 20000},
+                                      {"precond", "ichol"},
+                                      {"deflation", deflation},
+                                      {"operators", run == &global ? "global" : "components"}};
+            cb::SolveContext context;
+            context.monitor = run;
+            const cb::SolverResult r = cb::builtin_registry().create("mprgp-coupled", s)->solve(qp.view(), context);
+            ASSERT_EQ(r.status, SolveStatus::CONVERGED) << deflation << ": " << r.message;
+        }
+        const size_t shorter = std::min(global.steps.size(), comp.steps.size());
+        EXPECT_LE(std::max(global.steps.size(), comp.steps.size()) - shorter, 1u) << deflation;
+        double worst = 0.0;
+        for (size_t k = 0; k < shorter; ++k) {
+            EXPECT_EQ(global.steps[k], comp.steps[k]) << deflation << ": step " << k;
+            worst = std::max(worst, (global.xs[k] - comp.xs[k]).lpNorm<Eigen::Infinity>());
+        }
+        EXPECT_LE(worst, 1e-7 * scene_size(qp)) << deflation;
+    }
+}
