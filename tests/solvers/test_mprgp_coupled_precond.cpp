@@ -121,7 +121,6 @@ TEST(MprgpCoupledPrecond, DirectionStaysOnTheFaceAndIsSymmetricPositive)
 {
     // The 49-row patch with every other row on the face.
     const Qp qp = cb::make_synthetic("coupled", {{"nx", 6}, {"ny", 2}, {"nz", 6}}, 7);
-    const cb::Counters unused;
     for (const char* precond : {"ichol", "jacobi", "none"})
         for (bool rigid : {false, true}) {
             const std::string label = std::string(precond) + (rigid ? " rigid" : "");
