@@ -80,7 +80,7 @@ const std::vector<Variant>& variants()
 cb::SolverResult expect_variants_agree(const Qp& qp, const std::string& what, long dense_max_rows = 128,
                                        const Vec* x_star = nullptr)
 {
-    const cb::SolverResult ref = solve(qp, {{"precond", "jacobi"}, {"dense_max_rows", dense_max_rows}});
+    cb::SolverResult ref = solve(qp, {{"precond", "jacobi"}, {"dense_max_rows", dense_max_rows}});
     EXPECT_EQ(ref.status, SolveStatus::CONVERGED) << what << ": " << ref.message;
     // The face changes during the solve (several components refactor their face factors).
     EXPECT_GT(ref.info["components"]["face_refactorizations"].get<long>(), 1) << what;
