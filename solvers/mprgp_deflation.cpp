@@ -103,6 +103,7 @@ bool RigidDeflation::build(const SpMat& A, const SpMat& J, const Vec& x0, double
     m_Einv.assign(static_cast<size_t>(m_components), Mat6::Zero());
     m_E = m_Einv;
     m_have_face = false;
+    m_projected_ready = false;
     m_updates = 0;
     m_ready = m_kept > 0;
     return m_ready;
@@ -208,6 +209,63 @@ bool RigidDeflation::set_face(const SpMat& A, const SpMat& J, const DecoupledRow
     }
     m_face = active;
     m_have_face = true;
+    return full;
+}
+
+bool RigidDeflation::set_face_projected(const SpMat& A, const std::function<void(Vec&)>& project, double* work_flops)
+{
+    m_next.resize(m_W.rows(), kModes);
+    Vec column(m_W.rows());
+    for (int k = 0; k < kModes; ++k) {
+        column = m_W.col(k);
+        project(column);
+        m_next.col(k) = column;
+    }
+    // DOFs whose row of V changed: those of the components whose face changed.
+    m_changed.clear();
+    if (m_projected_ready)
+        for (Eigen::Index j = 0; j < m_next.rows(); ++j)
+            if (m_next.row(j) != m_V.row(j)) m_changed.push_back(static_cast<int>(j));
+    const bool full =
+        !m_projected_ready || m_updates >= kMaxUpdates || 20 * static_cast<Eigen::Index>(m_changed.size()) > m_W.rows();
+    if (full) {
+        m_V = m_next;
+        m_AV = A * m_V;
+        m_E.assign(static_cast<size_t>(m_components), Mat6::Zero());
+        for (Eigen::Index j = 0; j < m_V.rows(); ++j)
+            m_E[static_cast<size_t>(m_comp[static_cast<size_t>(j)])] += m_V.row(j).transpose() * m_AV.row(j);
+        for (int c = 0; c < m_components; ++c) invert(c);
+        m_updates = 0;
+    } else {
+        // The row-by-row update of set_face() with Delta = V_new - V on the changed DOFs.
+        const int* a_outer = A.outerIndexPtr();
+        const int* a_inner = A.innerIndexPtr();
+        const double* a_val = A.valuePtr();
+        std::vector<int> touched_components;
+        double flops = 0.0;
+        for (int j : m_changed) {
+            const ModeRow delta = m_next.row(j) - m_V.row(j);
+            const int c = m_comp[static_cast<size_t>(j)];
+            Mat6& e = m_E[static_cast<size_t>(c)];
+            e += delta.transpose() * m_AV.row(j);
+            m_V.row(j) += delta;
+            for (int q = a_outer[j]; q < a_outer[j + 1]; ++q) {
+                const ModeRow a_delta = a_val[q] * delta;
+                m_AV.row(a_inner[q]) += a_delta;
+                e += m_V.row(a_inner[q]).transpose() * a_delta;
+            }
+            flops += 2.0 * kModes * (kModes + 2) * static_cast<double>(a_outer[j + 1] - a_outer[j] + 1);
+            touched_components.push_back(c);
+        }
+        std::sort(touched_components.begin(), touched_components.end());
+        touched_components.erase(std::unique(touched_components.begin(), touched_components.end()),
+                                 touched_components.end());
+        for (int c : touched_components) invert(c);
+        if (work_flops) *work_flops += flops;
+        ++m_updates;
+    }
+    m_projected_ready = true;
+    m_have_face = false;  // set_face()'s row-by-row updates do not apply to this V
     return full;
 }
 

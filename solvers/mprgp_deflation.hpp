@@ -15,6 +15,7 @@
 #include "solvers/types.hpp"
 
 #include <Eigen/Dense>
+#include <functional>
 #include <vector>
 
 namespace cb {
@@ -48,6 +49,13 @@ public:
     /// are formed anew with kModes A-products, and the call returns true.
     bool set_face(const SpMat& A, const SpMat& J, const DecoupledRows& rows, const std::vector<char>& active,
                   double* work_flops = nullptr);
+    /// V = project(W) mode by mode, AV = A V and each component's (V'AV)^+. For a general J (`mprgp-coupled`), whose
+    /// face projector is not row by row: `project` maps an n-vector onto the face in place and must keep each
+    /// component's DOFs in that component (true of Q = I - J_A'(J_A J_A')^-1 J_A, since rows join the bodies they
+    /// touch). As set_face(): when the new V differs from the last one on few DOFs (under n/20),
+    /// AV and V'AV are updated on those DOFs only (flops added to *work_flops), else formed anew
+    /// with kModes A-products, and the call returns true. Not to be mixed with set_face().
+    bool set_face_projected(const SpMat& A, const std::function<void(Vec&)>& project, double* work_flops = nullptr);
     /// Coarse correction d = V y, y = (V'AV)^+ V'g, and Ad = AV y: F(x - d) = min over x + V y
     /// (the Galerkin step). `g` should be in face form (the free gradient).
     void coarse(const Vec& g, Vec& d, Vec& ad) const;
@@ -73,6 +81,9 @@ private:
     void expand(const Modes& M, const Eigen::MatrixXd& Y, Vec& out) const;
 
     Modes m_W, m_V, m_AV;
+    Modes m_next;                // set_face_projected(): the new V
+    std::vector<int> m_changed;  // set_face_projected(): DOFs whose row of V changed
+    bool m_projected_ready = false;
     std::vector<int> m_comp;  // #DOF: component of the DOF's vertex
     std::vector<Mat6> m_E, m_Einv;
     std::vector<char> m_face;  // the face V was built for

@@ -1,0 +1,306 @@
+// `mprgp-coupled` with precond = ichol and deflation = rigid (solvers/coupled_preconditioner.*,
+// docs/preconditioners.md): the direction stays in null(J_A) and is symmetric and positive on the
+// face; every variant converges on the original QP and agrees with the jacobi run on x and F, on
+// QPs with components of 2-200 rows, dependent rows and face changes; the rigid modes pay on a
+// stiff coupled QP.
+#include "problems/synthetic.hpp"
+#include "solvers/accuracy.hpp"
+#include "solvers/coupled_face_operators.hpp"
+#include "solvers/coupled_preconditioner.hpp"
+#include "solvers/registry.hpp"
+#include "solvers/row_components.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+
+namespace {
+
+using cb::Qp;
+using cb::SolveStatus;
+using cb::Vec;
+
+double scene_size(const Qp& qp) { return cb::accuracy_scale(qp.view()).length; }
+
+/// The coupled scene with a random extra load, so that some rows separate and others press
+/// harder: the face changes during the solve (as in test_mprgp_coupled_operators.cpp).
+Qp loaded(Qp qp, std::uint64_t seed)
+{
+    std::srand(static_cast<unsigned>(seed));
+    const Vec push = Vec::Random(qp.n()) * 0.5 * scene_size(qp) / 10.0;
+    qp.b += qp.A * push;
+    return qp;
+}
+
+/// qp with row `row` of J appended again scaled by `factor` (c alike): a dependent row.
+Qp with_dependent_row(Qp qp, int row, double factor)
+{
+    std::vector<cb::Triplet> t;
+    for (int i = 0; i < qp.J.rows(); ++i)
+        for (cb::SpMat::InnerIterator it(qp.J, i); it; ++it) t.emplace_back(i, static_cast<int>(it.col()), it.value());
+    const int m = static_cast<int>(qp.J.rows());
+    for (cb::SpMat::InnerIterator it(qp.J, row); it; ++it)
+        t.emplace_back(m, static_cast<int>(it.col()), factor * it.value());
+    cb::SpMat J(m + 1, qp.J.cols());
+    J.setFromTriplets(t.begin(), t.end());
+    Vec c(m + 1);
+    c << qp.c, factor * qp.c[row];
+    qp.J = J;
+    qp.c = c;
+    return qp;
+}
+
+cb::SolverResult solve(const Qp& qp, nlohmann::json settings)
+{
+    settings["tol"] = 1e-10;
+    settings["max_iterations"] = 20000;
+    return cb::builtin_registry().create("mprgp-coupled", settings)->solve(qp.view(), {});
+}
+
+struct Variant {
+    const char* name;
+    nlohmann::json settings;
+};
+
+const std::vector<Variant>& variants()
+{
+    static const std::vector<Variant> v = {
+        {"ichol", {{"precond", "ichol"}, {"deflation", "none"}}},
+        {"ichol rigid", {{"precond", "ichol"}, {"deflation", "rigid"}}},
+        {"jacobi rigid", {{"precond", "jacobi"}, {"deflation", "rigid"}}},
+        {"none rigid", {{"precond", "none"}, {"deflation", "rigid"}}},
+    };
+    return v;
+}
+
+/// Every variant: converged at e <= 1e-9 on the original QP (tol 1e-10), x within 1e-6 of the
+/// scene size of the jacobi run's (or of `x_star`) and the same objective. @return the jacobi run
+cb::SolverResult expect_variants_agree(const Qp& qp, const std::string& what, long dense_max_rows = 128,
+                                       const Vec* x_star = nullptr)
+{
+    cb::SolverResult ref = solve(qp, {{"precond", "jacobi"}, {"dense_max_rows", dense_max_rows}});
+    EXPECT_EQ(ref.status, SolveStatus::CONVERGED) << what << ": " << ref.message;
+    // The face changes during the solve (several components refactor their face factors).
+    EXPECT_GT(ref.info["components"]["face_refactorizations"].get<long>(), 1) << what;
+    const double l = scene_size(qp);
+    const Vec& x_ref = x_star ? *x_star : ref.x;
+    const double f_ref = cb::objective(qp.view(), x_ref);
+    for (const Variant& v : variants()) {
+        nlohmann::json s = v.settings;
+        s["dense_max_rows"] = dense_max_rows;
+        const cb::SolverResult r = solve(qp, s);
+        const std::string label = what + ", " + v.name;
+        EXPECT_EQ(r.status, SolveStatus::CONVERGED) << label << ": " << r.message;
+        if (r.status != SolveStatus::CONVERGED) continue;
+        EXPECT_LE(cb::accuracy(qp.view(), r.x, r.lambda).max(), 1e-9) << label;
+        EXPECT_LE(cb::max_violation(qp.view(), r.x), 1e-9 * l) << label;
+        EXPECT_LE((r.x - x_ref).lpNorm<Eigen::Infinity>(), 1e-6 * l) << label;
+        EXPECT_LE(std::abs(cb::objective(qp.view(), r.x) - f_ref), 1e-9 * std::max(1.0, std::abs(f_ref))) << label;
+        EXPECT_EQ(r.info["preconditioner"]["precond"].get<std::string>(), v.settings["precond"].get<std::string>());
+        if (v.settings["precond"] == "ichol") {
+            // A's pattern, factored once: nnz(L) = the lower triangle of A.
+            EXPECT_EQ(r.counters.precond_factorizations, 1) << label;
+            EXPECT_EQ(r.info["preconditioner"]["ichol"]["factor_nonzeros"].get<long>(), (qp.A.nonZeros() + qp.n()) / 2)
+                << label;
+        }
+        if (v.settings["deflation"] == "rigid") {
+            const nlohmann::json& d = r.info["preconditioner"]["deflation"];
+            EXPECT_TRUE(d["active"].get<bool>()) << label << ": the grid bodies have slow rigid modes";
+            EXPECT_GT(d["modes"].get<long>(), 0) << label;
+            EXPECT_GT(d["faces"].get<long>(), 1) << label << ": V follows the face changes";
+        }
+    }
+    return ref;
+}
+
+}  // namespace
+
+TEST(MprgpCoupledPrecond, DirectionStaysOnTheFaceAndIsSymmetricPositive)
+{
+    // The 49-row patch with every other row on the face.
+    const Qp qp = cb::make_synthetic("coupled", {{"nx", 6}, {"ny", 2}, {"nz", 6}}, 7);
+    for (const char* precond : {"ichol", "jacobi", "none"})
+        for (bool rigid : {false, true}) {
+            const std::string label = std::string(precond) + (rigid ? " rigid" : "");
+            const Vec dinv = qp.A.diagonal().cwiseInverse();
+            cb::CoupledOperatorOptions opt;
+            opt.jacobi = std::string(precond) == "jacobi";
+            cb::CoupledFaceOperators ops(qp.J, dinv, opt);
+            cb::CoupledPreconditioner pre(qp.A, qp.J, dinv, ops, precond);
+            cb::Counters cnt;
+            std::string error;
+            ASSERT_TRUE(pre.setup(rigid, qp.x0, error, cnt)) << error;
+            EXPECT_EQ(pre.deflating(), rigid) << label;
+            std::vector<char> active(static_cast<size_t>(qp.m()), 0);
+            for (size_t i = 0; i < active.size(); i += 2) active[i] = 1;
+            ops.set_face(active, cnt);
+            // phi = Q g through the face multipliers, as the solver forms it.
+            auto phi_of = [&](const Vec& g) {
+                Vec jg = qp.J * g, nu = Vec::Zero(qp.m());
+                ops.face_multipliers(jg, nu, cnt);
+                return Vec(g - qp.J.transpose() * nu);
+            };
+            std::srand(11);
+            const Vec g1 = Vec::Random(qp.n()), g2 = Vec::Random(qp.n());
+            Vec z1(qp.n()), z2(qp.n());
+            pre.apply(active, g1, phi_of(g1), z1, cnt);
+            pre.apply(active, g2, phi_of(g2), z2, cnt);
+            double face_residual = 0.0;
+            const Vec jz = qp.J * z1;
+            for (Eigen::Index i = 0; i < qp.m(); ++i)
+                if (active[static_cast<size_t>(i)])
+                    face_residual = std::max(face_residual, std::abs(jz[i]) / qp.J.row(i).norm());
+            EXPECT_LE(face_residual, 1e-12 * z1.norm()) << label << ": J_A z = 0";
+            // The operator g -> z is symmetric on the face: phi2'z1 = phi1'z2.
+            const Vec p1 = phi_of(g1), p2 = phi_of(g2);
+            EXPECT_NEAR(p2.dot(z1), p1.dot(z2), 1e-9 * std::abs(p2.dot(z1)) + 1e-14) << label;
+            EXPECT_GT(p1.dot(z1), 0.0) << label << ": positive on the face";
+            if (rigid) {
+                EXPECT_GE(cnt.a_products, 2 * cb::RigidDeflation::kModes) << label << ": build and one face";
+            }
+        }
+}
+
+TEST(MprgpCoupledPrecond, VariantsAgreeWithJacobiOnCoupledPatches)
+{
+    // nx = nz = 3, 6, 13: one patch of 16, 49 and 196 rows sharing vertices (the last one above
+    // dense_max_rows: its face solves run on CHOLMOD).
+    for (int nx : {3, 6, 13}) {
+        const Qp qp = loaded(cb::make_synthetic("coupled", {{"nx", nx}, {"ny", 2}, {"nz", nx}}, 7), 7);
+        const cb::RowComponents rc = cb::find_row_components(qp.J);
+        EXPECT_GE(rc.largest(), nx == 13 ? 150 : 2);
+        EXPECT_LE(rc.largest(), 200);
+        expect_variants_agree(qp, "coupled nx " + std::to_string(nx));
+    }
+}
+
+TEST(MprgpCoupledPrecond, VariantsAgreeWithJacobiOnDependentRows)
+{
+    const Qp dup = loaded(cb::make_synthetic("duplicate-rows", {{"nx", 4}, {"ny", 2}, {"nz", 4}}, 3), 3);
+    expect_variants_agree(dup, "duplicate rows");
+    const Qp scaled = loaded(cb::make_synthetic("scaled-rows", {{"nx", 4}, {"ny", 2}, {"nz", 4}}, 3), 3);
+    expect_variants_agree(scaled, "scaled rows");
+    // A duplicated and a parallel row inside the 196-row patch (CHOLMOD block, dense blocks with 400).
+    const Qp patch = loaded(cb::make_synthetic("coupled", {{"nx", 13}, {"ny", 2}, {"nz", 13}}, 7), 7);
+    const Qp dep = with_dependent_row(with_dependent_row(patch, 40, 1.0), 90, 3.0);
+    expect_variants_agree(dep, "196-row patch with dependent rows");
+    expect_variants_agree(dep, "196-row patch with dependent rows, dense", 400);
+}
+
+TEST(MprgpCoupledPrecond, RigidModesCutIterationsOnAStiffCoupledQp)
+{
+    // The stress case stiffness-coupled-1e9 (two stiff grid bodies, vertex-triangle rows): the
+    // rigid modes carry the contact response, which Jacobi and the incomplete factor miss.
+    const Qp qp = loaded(cb::make_synthetic("coupled", {{"youngs", 1e9}}, 1), 5);
+    // Here the jacobi run itself stops 1.4e-6 of the scene size from x* at e = 1e-10 (the slow
+    // rigid modes move x a lot for a small gradient): the variants are compared with x* of active-set.
+    const cb::SolverResult exact = cb::builtin_registry().create("active-set", {{"tol", 1e-12}})->solve(qp.view(), {});
+    ASSERT_EQ(exact.status, SolveStatus::CONVERGED) << exact.message;
+    const cb::SolverResult ref = expect_variants_agree(qp, "stiff coupled", 128, &exact.x);
+    const cb::SolverResult rigid = solve(qp, {{"precond", "ichol"}, {"deflation", "rigid"}});
+    ASSERT_EQ(rigid.status, SolveStatus::CONVERGED) << rigid.message;
+    EXPECT_LT(rigid.iterations, ref.iterations) << "ichol rigid against jacobi";
+}
+
+TEST(MprgpCoupledPrecond, SettingsAreRecordedAndCheckedAgainstTheirChoices)
+{
+    const auto& registry = cb::builtin_registry();
+    EXPECT_EQ(registry.create("mprgp-coupled", {})->settings()["deflation"], "none");
+    // As for `mprgp`: rigid by default with ichol (docs/preconditioners.md).
+    EXPECT_EQ(registry.create("mprgp-coupled", {{"precond", "ichol"}})->settings()["deflation"], "rigid");
+    const auto solver = registry.create("mprgp-coupled", {{"precond", "ichol"}, {"deflation", "rigid"}});
+    EXPECT_EQ(solver->settings()["precond"], "ichol");
+    EXPECT_EQ(solver->settings()["deflation"], "rigid");
+    try {
+        registry.create("mprgp-coupled", {{"deflation", "elastic"}});
+        FAIL() << "deflation = elastic accepted";
+    } catch (const cb::InputError& e) {
+        EXPECT_STREQ(e.what(), "mprgp-coupled: /deflation: expected one of none | rigid, got \"elastic\"");
+    }
+}
+
+TEST(MprgpCoupledPrecond, IncrementalRigidFaceUpdateMatchesAFreshOne)
+{
+    // A stiff body on the ground (one row per vertex): toggling one row changes V on 3 DOFs, so
+    // the second face is an incremental update of AV and V'AV; a fresh object on that face is the oracle.
+    const Qp qp = cb::make_synthetic("plane", {{"nx", 4}, {"ny", 3}, {"nz", 4}, {"youngs", 1e9}}, 4);
+    ASSERT_GE(qp.m(), 4);
+    const Vec dinv = qp.A.diagonal().cwiseInverse();
+    cb::CoupledFaceOperators ops(qp.J, dinv, cb::CoupledOperatorOptions{});
+    cb::Counters cnt;
+    std::vector<char> first(static_cast<size_t>(qp.m()), 1), second = first;
+    second[1] = 0;
+    cb::RigidDeflation incremental, fresh;
+    ASSERT_TRUE(incremental.build(qp.A, qp.J, qp.x0, cb::RigidDeflation::kSlowRayleigh));
+    ASSERT_TRUE(fresh.build(qp.A, qp.J, qp.x0, cb::RigidDeflation::kSlowRayleigh));
+    auto project = [&](Vec& v) {
+        Vec jv = qp.J * v, nu = Vec::Zero(qp.m());
+        ops.face_multipliers(jv, nu, cnt);
+        v -= qp.J.transpose() * nu;
+    };
+    ops.set_face(first, cnt);
+    EXPECT_TRUE(incremental.set_face_projected(qp.A, project));
+    ops.set_face(second, cnt);
+    double flops = 0.0;
+    EXPECT_FALSE(incremental.set_face_projected(qp.A, project, &flops)) << "3 changed DOFs of " << qp.n();
+    EXPECT_GT(flops, 0.0);
+    EXPECT_TRUE(fresh.set_face_projected(qp.A, project));
+    std::srand(5);
+    Vec phi = Vec::Random(qp.n());
+    project(phi);
+    Vec d1, ad1, d2, ad2;
+    incremental.coarse(phi, d1, ad1);
+    fresh.coarse(phi, d2, ad2);
+    EXPECT_LE((d1 - d2).norm(), 1e-10 * d2.norm());
+    EXPECT_LE((ad1 - ad2).norm(), 1e-10 * ad2.norm());
+    // The coarse correction is the Galerkin one on the new face: V'(phi - A d) = 0, seen as
+    // d'(phi - A d) = 0 (d in range V).
+    EXPECT_LE(std::abs(d1.dot(phi - ad1)), 1e-10 * std::abs(d1.dot(phi)));
+}
+
+namespace {
+
+class StepRecorder : public cb::Monitor {
+public:
+    bool on_iteration(const cb::IterationInfo& info) override
+    {
+        steps.push_back(info.step);
+        xs.push_back(*info.x);
+        return true;
+    }
+    std::vector<cb::StepKind> steps;
+    std::vector<Vec> xs;
+};
+
+}  // namespace
+
+TEST(MprgpCoupledPrecond, ComponentOperatorsTakeTheGlobalOperatorsSteps)
+{
+    // The preconditioners reach Q only through the face operators, so the per-component ones and
+    // the global CHOLMOD oracle give the same step kinds and iterates to rounding.
+    const Qp qp = loaded(cb::make_synthetic("coupled", {{"nx", 6}, {"ny", 2}, {"nz", 6}}, 7), 7);
+    for (const char* deflation : {"none", "rigid"}) {
+        StepRecorder global, comp;
+        for (auto* run : {&global, &comp}) {
+            const nlohmann::json s = {{"tol", 1e-10},
+                                      {"max_iterations", 20000},
+                                      {"precond", "ichol"},
+                                      {"deflation", deflation},
+                                      {"operators", run == &global ? "global" : "components"}};
+            cb::SolveContext context;
+            context.monitor = run;
+            const cb::SolverResult r = cb::builtin_registry().create("mprgp-coupled", s)->solve(qp.view(), context);
+            ASSERT_EQ(r.status, SolveStatus::CONVERGED) << deflation << ": " << r.message;
+        }
+        const size_t shorter = std::min(global.steps.size(), comp.steps.size());
+        EXPECT_LE(std::max(global.steps.size(), comp.steps.size()) - shorter, 1u) << deflation;
+        double worst = 0.0;
+        for (size_t k = 0; k < shorter; ++k) {
+            EXPECT_EQ(global.steps[k], comp.steps[k]) << deflation << ": step " << k;
+            worst = std::max(worst, (global.xs[k] - comp.xs[k]).lpNorm<Eigen::Infinity>());
+        }
+        EXPECT_LE(worst, 1e-7 * scene_size(qp)) << deflation;
+    }
+}
