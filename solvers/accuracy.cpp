@@ -155,15 +155,20 @@ AccuracyScale accuracy_scale(const QpView& qp)
     s.inv_length = 1.0 / l;
     s.inv_energy = 1.0 / (s.stiffness * l * l);
     s.length_source = source;
-    s.bodies = BodyMotion(qp.A, qp.x0, l);
+    s.bodies = BodyMotion(qp, l);
     return s;
 }
 
-double AccuracyScale::stationarity(const Vec& r) const
+double AccuracyScale::stationarity(const Vec& r, const Vec& x, const Vec& lambda) const
 {
     double local = 0.0;
     for (Eigen::Index j = 0; j < r.size(); ++j) local = std::max(local, sanitize(std::abs(r[j]) * inv_diag[j]));
-    return std::max(local, sanitize(bodies.displacement(r))) * inv_length;
+    return std::max(local * inv_length, body_motion(x, lambda));
+}
+
+double AccuracyScale::body_motion(const Vec& x, const Vec& lambda) const
+{
+    return sanitize(bodies.displacement(x, lambda)) * inv_length;
 }
 
 AccuracyParts accuracy_from_gradient(const QpView& qp, const AccuracyScale& scale, const Vec& x, const Vec& g,
@@ -197,7 +202,7 @@ AccuracyParts accuracy_from_gradient(const QpView& qp, const AccuracyScale& scal
     e.dual = dual * scale.inv_length;
     e.complementarity = comp * scale.inv_length;
     e.gap = sanitize(gap * scale.inv_energy);
-    e.stationarity = scale.stationarity(r);
+    e.stationarity = scale.stationarity(r, x, has_lambda ? lambda : Vec(0));
     return e;
 }
 

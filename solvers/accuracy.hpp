@@ -49,9 +49,12 @@ struct AccuracyScale {
     double stiffness = 1.0;          ///< d_ref = mean of D: the energy scale is d_ref * l^2
     double inv_energy = 1.0;         ///< 1 / (d_ref l^2)
     long a_products = 0;             ///< A-products spent computing this scale
-    BodyMotion bodies;               ///< the rigid half of stationarity (built from A, x0 and l)
-    /// The stationarity part of a residual force r: max(|D^-1 r|_inf, body motion) / l.
-    double stationarity(const Vec& r) const;
+    BodyMotion bodies;               ///< the rigid half of stationarity (built from the QP and l)
+    /// The stationarity part at (x, lambda) whose residual force is r = Ax - b - J'lambda:
+    /// max(|D^-1 r|_inf, the bodies' motion) / l (a lambda of another size than m counts as 0).
+    double stationarity(const Vec& r, const Vec& x, const Vec& lambda) const;
+    /// Its rigid half alone, the bodies' motion / l (for solvers whose fused passes hold the rest).
+    double body_motion(const Vec& x, const Vec& lambda) const;
     nlohmann::json to_json() const;  ///< {length_scale, length_scale_source, stiffness_scale}
 };
 

@@ -1,6 +1,7 @@
 #include "solvers/body_motion.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -20,24 +21,42 @@ int find_root(std::vector<int>& parent, int v)
 /// Eigenvalues below this fraction of a body's largest are modes the body cannot move.
 constexpr double RANK_CUTOFF = 1e-12;
 
+using LongVec6 = std::array<long double, BodyMotion::MODES>;
+
 }  // namespace
 
-BodyMotion::BodyMotion(const SpMat& A, const Vec& x0, double length)
+int BodyMotion::mode_row(Eigen::Index p, int mode[3], double value[3]) const
 {
+    mode[0] = m_spatial ? static_cast<int>(p % 3) : 0;
+    value[0] = 1.0;
+    if (!m_spatial) return 1;
+    // (e_k x d)_a for the two axes k != a: +d_{a+2} for k = a+1 and -d_{a+1} for k = a+2 (mod 3).
+    const int a = static_cast<int>(p % 3), k1 = (a + 1) % 3, k2 = (a + 2) % 3;
+    const auto d = m_offset.row(p / 3);
+    mode[1] = 3 + k1;
+    value[1] = d[k2] * m_inv_length;
+    mode[2] = 3 + k2;
+    value[2] = -d[k1] * m_inv_length;
+    return 3;
+}
+
+BodyMotion::BodyMotion(const QpView& qp, double length)
+{
+    const SpMat& A = qp.A;
     const Eigen::Index n = A.rows();
-    if (n == 0) return;
-    m_spatial = n % 3 == 0 && x0.size() == n;
+    if (n == 0 || qp.x0.size() != n || qp.b.size() != n) return;
+    m_spatial = n % 3 == 0;
+    m_per_node = m_spatial ? 3 : 1;
     m_inv_length = length > 0.0 && std::isfinite(length) ? 1.0 / length : 1.0;
-    const int dofs_per_node = m_spatial ? 3 : 1;
-    const int nodes = static_cast<int>(n / dofs_per_node);
+    const int nodes = static_cast<int>(n / m_per_node);
 
     std::vector<int> parent(static_cast<size_t>(nodes));
     for (int v = 0; v < nodes; ++v) parent[static_cast<size_t>(v)] = v;
     for (Eigen::Index r = 0; r < A.outerSize(); ++r)
         for (SpMat::InnerIterator it(A, r); it; ++it) {
             if (it.value() == 0.0) continue;  // a stored zero couples nothing
-            const int a = find_root(parent, static_cast<int>(r) / dofs_per_node);
-            const int b = find_root(parent, static_cast<int>(it.col()) / dofs_per_node);
+            const int a = find_root(parent, static_cast<int>(r) / m_per_node);
+            const int b = find_root(parent, static_cast<int>(it.col()) / m_per_node);
             if (a != b) parent[static_cast<size_t>(a)] = b;
         }
     m_body.assign(static_cast<size_t>(nodes), -1);
@@ -48,56 +67,54 @@ BodyMotion::BodyMotion(const SpMat& A, const Vec& x0, double length)
         if (id[static_cast<size_t>(root)] < 0) id[static_cast<size_t>(root)] = bodies++;
         m_body[static_cast<size_t>(v)] = id[static_cast<size_t>(root)];
     }
+    auto body_of = [&](Eigen::Index p) { return static_cast<size_t>(m_body[static_cast<size_t>(p / m_per_node)]); };
 
     if (m_spatial) {
         std::vector<Eigen::Vector3d> centroid(static_cast<size_t>(bodies), Eigen::Vector3d::Zero());
         std::vector<double> count(static_cast<size_t>(bodies), 0.0);
         for (int v = 0; v < nodes; ++v) {
-            const auto b = static_cast<size_t>(m_body[static_cast<size_t>(v)]);
-            centroid[b] += x0.segment<3>(3 * v);
-            count[b] += 1.0;
+            centroid[body_of(3 * v)] += qp.x0.segment<3>(3 * v);
+            count[body_of(3 * v)] += 1.0;
         }
         for (size_t b = 0; b < centroid.size(); ++b) centroid[b] /= count[b];
         m_offset.resize(nodes, 3);
         for (int v = 0; v < nodes; ++v)
-            m_offset.row(v) =
-                (x0.segment<3>(3 * v) - centroid[static_cast<size_t>(m_body[static_cast<size_t>(v)])]).transpose();
+            m_offset.row(v) = (qp.x0.segment<3>(3 * v) - centroid[body_of(3 * v)]).transpose();
     }
+    m_x0 = qp.x0;
 
-    // E = V'AV per body, one pass over A. Row p of V (DOF p = 3v + a) has three nonzeros: the
-    // translation a, and the rotations k != a, (e_k x d_v)_a / l.
-    std::vector<Mat6> E(static_cast<size_t>(bodies), Mat6::Zero());
-    auto mode_row = [&](Eigen::Index p, int idx[3], double val[3]) {
-        if (!m_spatial) {
-            idx[0] = 0;
-            val[0] = 1.0;
-            return 1;
-        }
-        const int a = static_cast<int>(p % 3);
-        const auto d = m_offset.row(p / 3);
-        idx[0] = a;
-        val[0] = 1.0;
-        // (e_k x d)_a for k = a+1 and a+2 (mod 3): +d_{a+2} and -d_{a+1}.
-        const int k1 = (a + 1) % 3, k2 = (a + 2) % 3;
-        idx[1] = 3 + k1;
-        val[1] = d[k2] * m_inv_length;
-        idx[2] = 3 + k2;
-        val[2] = -d[k1] * m_inv_length;
-        return 3;
-    };
-    for (Eigen::Index r = 0; r < A.outerSize(); ++r) {
-        int ri[3], ci[3];
-        double rv[3], cv[3];
-        const int rn = mode_row(r, ri, rv);
-        Mat6& Eb = E[static_cast<size_t>(m_body[static_cast<size_t>(r / dofs_per_node)])];
-        for (SpMat::InnerIterator it(A, r); it; ++it) {
+    // AV and V'(A x0 - b), one pass over A with long double sums (see the header: the stiffness
+    // parts of a row cancel, and must do so before rounding to double).
+    m_av.setZero(n, MODES);
+    std::vector<LongVec6> load(static_cast<size_t>(bodies), LongVec6{});
+    int mode[3], cmode[3];
+    double value[3], cvalue[3];
+    for (Eigen::Index p = 0; p < A.outerSize(); ++p) {
+        LongVec6 av{};
+        long double r0 = -static_cast<long double>(qp.b[p]);
+        for (SpMat::InnerIterator it(A, p); it; ++it) {
             if (it.value() == 0.0) continue;
-            const int cn = mode_row(it.col(), ci, cv);
-            for (int s = 0; s < rn; ++s)
-                for (int t = 0; t < cn; ++t) Eb(ri[s], ci[t]) += rv[s] * it.value() * cv[t];
+            r0 += static_cast<long double>(it.value()) * qp.x0[it.col()];
+            const int cn = mode_row(it.col(), cmode, cvalue);
+            for (int t = 0; t < cn; ++t)
+                av[static_cast<size_t>(cmode[t])] += static_cast<long double>(it.value()) * cvalue[t];
         }
+        for (int k = 0; k < MODES; ++k) m_av(p, k) = static_cast<double>(av[static_cast<size_t>(k)]);
+        const int rn = mode_row(p, mode, value);
+        LongVec6& l = load[body_of(p)];
+        for (int s = 0; s < rn; ++s) l[static_cast<size_t>(mode[s])] += value[s] * r0;
     }
+    m_load0.assign(static_cast<size_t>(bodies), Vec6::Zero());
+    for (size_t b = 0; b < load.size(); ++b)
+        for (int k = 0; k < MODES; ++k) m_load0[b][k] = static_cast<double>(load[b][static_cast<size_t>(k)]);
 
+    // E = V'AV per body, from AV.
+    std::vector<Mat6> E(static_cast<size_t>(bodies), Mat6::Zero());
+    for (Eigen::Index p = 0; p < n; ++p) {
+        const int rn = mode_row(p, mode, value);
+        Mat6& Eb = E[body_of(p)];
+        for (int s = 0; s < rn; ++s) Eb.row(mode[s]) += value[s] * m_av.row(p);
+    }
     m_pinv.assign(static_cast<size_t>(bodies), Mat6::Zero());
     for (size_t b = 0; b < E.size(); ++b) {
         if (!m_spatial) {
@@ -109,41 +126,65 @@ BodyMotion::BodyMotion(const SpMat& A, const Vec& x0, double length)
         const Vec6 lambda = eig.eigenvalues();
         const double cutoff = RANK_CUTOFF * lambda.maxCoeff();
         Vec6 inv = Vec6::Zero();
-        for (int k = 0; k < kModes; ++k)
+        for (int k = 0; k < MODES; ++k)
             if (lambda[k] > cutoff && lambda[k] > 0.0) inv[k] = 1.0 / lambda[k];
         m_pinv[b] = eig.eigenvectors() * inv.asDiagonal() * eig.eigenvectors().transpose();
     }
+
+    // JV: each row's load per body it touches (a contact row touches one or two bodies).
+    const Eigen::Index m = qp.J.rows();
+    m_row_start.assign(static_cast<size_t>(m) + 1, 0);
+    for (Eigen::Index i = 0; i < m; ++i) {
+        const auto first = m_row_body.size();
+        for (SpMat::InnerIterator it(qp.J, i); it; ++it) {
+            if (it.value() == 0.0 || it.col() >= n) continue;
+            const int b = static_cast<int>(body_of(it.col()));
+            size_t e = first;
+            while (e < m_row_body.size() && m_row_body[e] != b) ++e;
+            if (e == m_row_body.size()) {
+                m_row_body.push_back(b);
+                m_row_jv.push_back(Vec6::Zero());
+            }
+            const int cn = mode_row(it.col(), cmode, cvalue);
+            for (int t = 0; t < cn; ++t) m_row_jv[e][cmode[t]] += it.value() * cvalue[t];
+        }
+        m_row_start[static_cast<size_t>(i) + 1] = static_cast<int>(m_row_body.size());
+    }
 }
 
-double BodyMotion::displacement(const Vec& r) const
+double BodyMotion::displacement(const Vec& x, const Vec& lambda) const
 {
     if (m_body.empty()) return 0.0;
-    if (!r.allFinite()) return std::numeric_limits<double>::infinity();
-    std::vector<Vec6> load(m_pinv.size(), Vec6::Zero());  // V'r per body
-    const auto nodes = static_cast<Eigen::Index>(m_body.size());
-    if (!m_spatial) {
-        for (Eigen::Index v = 0; v < nodes; ++v) load[static_cast<size_t>(m_body[static_cast<size_t>(v)])][0] += r[v];
-        double widest = 0.0;
-        for (size_t b = 0; b < load.size(); ++b) widest = std::max(widest, std::abs(m_pinv[b](0, 0) * load[b][0]));
-        return widest;
-    }
-    for (Eigen::Index v = 0; v < nodes; ++v) {
-        Vec6& l = load[static_cast<size_t>(m_body[static_cast<size_t>(v)])];
-        const Eigen::Vector3d f = r.segment<3>(3 * v);
-        const Eigen::Vector3d d = m_offset.row(v).transpose();
-        l.head<3>() += f;
-        l.tail<3>() += d.cross(f) * m_inv_length;  // (e_k x d)'f / l = e_k'(d x f) / l
+    if (x.size() != m_x0.size() || !x.allFinite()) return std::numeric_limits<double>::infinity();
+    std::vector<Vec6> load = m_load0;  // V'r per body
+    for (Eigen::Index p = 0; p < x.size(); ++p)
+        load[static_cast<size_t>(m_body[static_cast<size_t>(p / m_per_node)])] +=
+            m_av.row(p).transpose() * (x[p] - m_x0[p]);
+    const auto m = static_cast<Eigen::Index>(m_row_start.size()) - 1;
+    if (lambda.size() == m && m > 0) {
+        if (!lambda.allFinite()) return std::numeric_limits<double>::infinity();
+        for (Eigen::Index i = 0; i < m; ++i) {
+            if (lambda[i] == 0.0) continue;
+            for (int e = m_row_start[static_cast<size_t>(i)]; e < m_row_start[static_cast<size_t>(i) + 1]; ++e)
+                load[static_cast<size_t>(m_row_body[static_cast<size_t>(e)])] -=
+                    lambda[i] * m_row_jv[static_cast<size_t>(e)];
+        }
     }
     std::vector<Vec6> motion(load.size());
     for (size_t b = 0; b < load.size(); ++b) motion[b] = m_pinv[b] * load[b];
     double widest = 0.0;
+    const auto nodes = static_cast<Eigen::Index>(m_body.size());
     for (Eigen::Index v = 0; v < nodes; ++v) {
         const Vec6& y = motion[static_cast<size_t>(m_body[static_cast<size_t>(v)])];
+        if (!m_spatial) {
+            widest = std::max(widest, std::abs(y[0]));
+            continue;
+        }
         const Eigen::Vector3d d = m_offset.row(v).transpose();
         const Eigen::Vector3d u = y.head<3>() + y.tail<3>().cross(d) * m_inv_length;
         widest = std::max(widest, u.cwiseAbs().maxCoeff());
     }
-    return widest;
+    return std::isfinite(widest) ? widest : std::numeric_limits<double>::infinity();
 }
 
 }  // namespace cb

@@ -131,7 +131,8 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
     counters.a_products += scale.a_products;
     // Stop test of cg: native = |r|_2 absolute; accuracy = the error of the unconstrained
     // relaxation (its stationarity part, docs/accuracy.md).
-    auto relaxation_error = [&](const Vec& res) { return scale.stationarity(res); };
+    const Vec no_lambda(0);
+    auto relaxation_error = [&](const Vec& res) { return scale.stationarity(res, x, no_lambda); };
     auto rule_met = [&](const Vec& res) {
         return loop.criterion_met([&] { return res.norm(); }, [&] { return relaxation_error(res); });
     };
@@ -222,7 +223,7 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
     result.iterations = counters.iterations;
     result.native_residual = r.norm();
     result.info["residual_replacements"] = replacements;
-    result.info["unconstrained_error"] = n ? scale.stationarity(r) : 0.0;
+    result.info["unconstrained_error"] = n ? scale.stationarity(r, x, no_lambda) : 0.0;
     if (m_settings.deflation != "none")
         result.info["deflation"] = {{"active", deflate},
                                     {"bodies", defl.components()},

@@ -198,7 +198,7 @@ private:
     double m_alpha_bar = 0.0;
     AccuracyScale m_scale;
 
-    Vec m_x, m_g, m_z, m_p, m_Ap, m_tmp, m_d, m_lambda, m_jx, m_jg, m_jp, m_residual;
+    Vec m_x, m_g, m_z, m_p, m_Ap, m_tmp, m_d, m_lambda, m_jx, m_jg, m_jp;
     std::vector<char> m_active;
     std::vector<int> m_touched;
 
@@ -360,13 +360,7 @@ double MprgpRun::error_with_bodies()
     // m_error holds every part but the bodies' rigid motion (solvers/body_motion.hpp): added only
     // when the rest already meets the rule, the one time it can change the decision.
     if (!m_loop.rule_holds(m_native, m_error)) return m_error;
-    m_residual = m_g;  // g - J'lambda
-    const int* outer = m_J.outerIndexPtr();
-    const int* inner = m_J.innerIndexPtr();
-    const double* val = m_J.valuePtr();
-    for (Eigen::Index i = 0; i < m_m; ++i)
-        for (int k = outer[i]; k < outer[i + 1]; ++k) m_residual[inner[k]] -= val[k] * m_lambda[i];
-    return std::max(m_error, m_scale.stationarity(m_residual));
+    return std::max(m_error, m_scale.body_motion(m_x, m_lambda));
 }
 
 void MprgpRun::evaluate_rows()

@@ -731,7 +731,7 @@ SolverResult CoupledRun::run()
     // when the rest already meets the rule, the one time it can change the decision.
     auto error_with_bodies = [&]() {
         if (!m_loop.rule_holds(m_native, m_error)) return m_error;
-        return std::max(m_error, m_scale.stationarity(m_phi + m_beta));
+        return std::max(m_error, m_scale.body_motion(m_x, m_mu));
     };
     auto criterion = [&]() { return m_x_feasible && m_loop.criterion_met(m_native, error_with_bodies); };
     while (true) {

@@ -45,6 +45,15 @@ Vec chain_positions(int vertices, int bodies)
     return x;
 }
 
+/// The bodies' motion under a residual force r at the start: b = A x0 - r, so that A x0 - b = r.
+double motion_under(const Eigen::MatrixXd& A, const Vec& x0, const Vec& r, double length, int* bodies = nullptr)
+{
+    const Qp qp = cb::testing_qps::dense_qp(A, A * x0 - r, Eigen::MatrixXd(0, A.cols()), Vec(0), x0);
+    const cb::BodyMotion motion(qp.view(), length);
+    if (bodies) *bodies = motion.bodies();
+    return motion.displacement(x0, Vec(0));
+}
+
 }  // namespace
 
 // Free fall: x0 at rest, b = A x0 + h^2 M g, so x* = x0 + h^2 g on every vertex. At x0 the residual
@@ -82,42 +91,52 @@ TEST(BodyMotion, BodiesAreJudgedApart)
     const int vertices = 4;
     const Eigen::MatrixXd A = chain_matrix(vertices, 2, 2.0, 50.0);
     const Vec x0 = chain_positions(vertices, 2);
-    cb::SpMat As = A.sparseView();
-    const cb::BodyMotion motion(As, x0, 6.0);
-    EXPECT_EQ(motion.bodies(), 2);
     // A force 1 along z on every vertex of body 2: total 4 on mass 8 -> 0.5 along z.
     Vec r = Vec::Zero(x0.size());
     for (int v = vertices; v < 2 * vertices; ++v) r[3 * v + 2] = 1.0;
-    EXPECT_NEAR(motion.displacement(r), 0.5, 1e-12);
+    int bodies = 0;
+    EXPECT_NEAR(motion_under(A, x0, r, 6.0, &bodies), 0.5, 1e-12);
+    EXPECT_EQ(bodies, 2);
     // Not finite -> infinite.
-    r[0] = std::numeric_limits<double>::quiet_NaN();
-    EXPECT_EQ(motion.displacement(r), std::numeric_limits<double>::infinity());
+    const Qp qp = cb::testing_qps::dense_qp(A, A * x0 - r, Eigen::MatrixXd(0, A.cols()), Vec(0), x0);
+    Vec x = x0;
+    x[0] = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_EQ(cb::BodyMotion(qp.view(), 6.0).displacement(x, Vec(0)), std::numeric_limits<double>::infinity());
 }
 
-// A torque on a free body: equal and opposite forces at the ends of a soft-free (K = 0 along z)
-// chain turn it. Without springs A = M: every vertex is its own body and the motion is r / m.
-// With springs the torque rotates the whole body: u = (omega x d) with the inertia of the chain.
+// A torque on a stiff chain turns the whole body; without springs each vertex is its own body.
 TEST(BodyMotion, TorqueTurnsTheBody)
 {
     const int vertices = 3;  // x = 0, 1, 2; centroid 1: offsets -1, 0, 1
     const Eigen::MatrixXd A = chain_matrix(vertices, 1, 1.0, 1e6);
     const Vec x0 = chain_positions(vertices, 1);
-    cb::SpMat As = A.sparseView();
-    const cb::BodyMotion motion(As, x0, 2.0);
     Vec r = Vec::Zero(x0.size());
     r[1] = -1.0;  // vertex 0 (offset -1) pushed along -y, vertex 2 (offset +1) along +y: torque 2 about z
     r[3 * 2 + 1] = 1.0;
-    // Rotation about z: V'AV = sum m |d|^2 = 2 for the M part; K's springs along the chain stretch
-    // under a rotation (K = k L (x) I3 resists every relative motion), so the body turns by the
-    // Galerkin amount 2 / (2 + h^2k * sum over springs (d_i - d_j)^2) = 2 / (2 + 2e6).
-    const double omega = 2.0 / (2.0 + 2e6);
-    EXPECT_NEAR(motion.displacement(r), omega * 1.0, 1e-12);
-    // Without springs each vertex is its own body: the displacement is the force over the mass.
-    const Eigen::MatrixXd M = chain_matrix(vertices, 1, 1.0, 0.0);
-    cb::SpMat Ms = M.sparseView();
-    const cb::BodyMotion loose(Ms, x0, 2.0);
-    EXPECT_EQ(loose.bodies(), 3);
-    EXPECT_NEAR(loose.displacement(r), 1.0, 1e-12);
+    // Rotation about z: the mode (0, d_x, 0) / l has M-energy 2 / l^2 and, since K = k L (x) I3
+    // resists every relative motion, spring energy h^2k * 2 / l^2: it turns by 2 / (2 + 2e6) at the ends.
+    EXPECT_NEAR(motion_under(A, x0, r, 2.0), 2.0 / (2.0 + 2e6), 1e-12);
+    int bodies = 0;
+    EXPECT_NEAR(motion_under(chain_matrix(vertices, 1, 1.0, 0.0), x0, r, 2.0, &bodies), 1.0, 1e-12);
+    EXPECT_EQ(bodies, 3);
+}
+
+// The contact force balances: a row's multiplier enters V'r through (JV)'lambda.
+TEST(BodyMotion, ContactForcesEnterThroughTheRows)
+{
+    const int vertices = 4;
+    const Eigen::MatrixXd A = chain_matrix(vertices, 1, 1.0, 1e4);
+    const Vec x0 = chain_positions(vertices, 1);
+    Vec r = Vec::Zero(x0.size());
+    for (int v = 0; v < vertices; ++v) r[3 * v + 1] = 0.25;  // weight 1 along +y in total
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(2, A.cols());
+    J(0, 1) = 1.0;  // rows on vertex 0 and vertex 3 along y: lambda 0.5 each balances the weight
+    J(1, 3 * 3 + 1) = 1.0;
+    const Qp qp = cb::testing_qps::dense_qp(A, A * x0 - r, J, Eigen::Vector2d(-1, -1), x0);
+    const cb::BodyMotion motion(qp.view(), 3.0);
+    EXPECT_NEAR(motion.displacement(x0, Vec(0)), 0.25, 1e-12);  // 1 over the mass 4
+    EXPECT_LE(motion.displacement(x0, Eigen::Vector2d(0.5, 0.5)), 1e-15);
+    EXPECT_GT(motion.displacement(x0, Eigen::Vector2d(1.0, 0.0)), 1e-6);  // balanced force, unbalanced torque
 }
 
 // n not a multiple of 3: one constant mode per connected component of A's DOF graph.
@@ -125,12 +144,11 @@ TEST(BodyMotion, OneModePerComponentWithoutThreeDimensions)
 {
     Eigen::MatrixXd A(4, 4);
     A << 3, -1, 0, 0, -1, 3, 0, 0, 0, 0, 5, 0, 0, 0, 0, 2;
-    cb::SpMat As = A.sparseView();
-    const cb::BodyMotion motion(As, Vec::Zero(4), 1.0);
-    EXPECT_EQ(motion.bodies(), 3);
+    int bodies = 0;
     // r = (1, 1, 0, 0): the pair's constant mode has 1'A1 = 4, 1'r = 2 -> 0.5.
-    EXPECT_NEAR(motion.displacement(Eigen::Vector4d(1, 1, 0, 0)), 0.5, 1e-15);
+    EXPECT_NEAR(motion_under(A, Vec::Zero(4), Eigen::Vector4d(1, 1, 0, 0), 1.0, &bodies), 0.5, 1e-15);
+    EXPECT_EQ(bodies, 3);
     // r on the loose DOF 3: 1 / 2.
-    EXPECT_NEAR(motion.displacement(Eigen::Vector4d(0, 0, 0, 1)), 0.5, 1e-15);
-    EXPECT_EQ(cb::BodyMotion().displacement(Vec(0)), 0.0);
+    EXPECT_NEAR(motion_under(A, Vec::Zero(4), Eigen::Vector4d(0, 0, 0, 1), 1.0), 0.5, 1e-15);
+    EXPECT_EQ(cb::BodyMotion().displacement(Vec(0), Vec(0)), 0.0);
 }

@@ -102,7 +102,7 @@ TEST(Cg, KktStopIsTheUnconstrainedAccuracyError)
         const double jacobi = g.cwiseQuotient(Vec(qp.A.diagonal())).lpNorm<Eigen::Infinity>() / scale.length;
         // With m = 0 the accuracy error is the stationarity part: the larger of the Jacobi step and
         // the body's rigid motion (docs/accuracy.md), computed here from its definition.
-        const double body = scale.bodies.displacement(g) / scale.length;
+        const double body = scale.body_motion(r.x, Vec(0));
         const double at_x = std::max(jacobi, body);
         EXPECT_LE(at_x, tol);
         EXPECT_NEAR(cb::accuracy(qp.view(), r.x, r.lambda).max(), at_x, 1e-12 * at_x);
