@@ -39,30 +39,10 @@ const SettingsTable<ActiveSetSettings>& active_set_settings_table()
 
 ActiveSetSettings ActiveSetSettings::from_json(const nlohmann::json& settings)
 {
-    SettingsReader reader(settings, "active-set");
-    ActiveSetSettings s;
-    s.common = reader.common();
-    // The reference solver aims at 1e-10 unless told otherwise (the common default is 1e-6).
-    if (!(settings.is_object() && settings.contains("tol"))) s.common.tol = 1e-10;
-    active_set_settings_table().read(reader, s);
-    reader.finish();
-    return s;
+    return read_settings(settings, "active-set", active_set_settings_table());
 }
 
-nlohmann::json ActiveSetSettings::to_json() const
-{
-    nlohmann::json j = common.to_json();
-    active_set_settings_table().write(*this, j);
-    return j;
-}
-
-std::vector<SettingDoc> active_set_setting_docs()
-{
-    std::vector<SettingDoc> docs = active_set_settings_table().docs();
-    docs.insert(docs.begin(),
-                {"tol", "1e-10", "(overrides the common default) accuracy error e required for 'converged'"});
-    return docs;
-}
+nlohmann::json ActiveSetSettings::to_json() const { return write_settings(*this, active_set_settings_table()); }
 
 // ---------------------------------------------------------------------------------------------
 // GrowingCholesky
@@ -483,15 +463,10 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
 
 SolverEntry active_set_entry()
 {
-    SolverEntry entry;
-    entry.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
-        return std::make_unique<ActiveSetSolver>(ActiveSetSettings::from_json(settings));
-    };
-    entry.description =
-        "Goldfarb-Idnani dual active-set QP on a CHOLMOD factor of A (the reference; detects infeasibility)";
-    entry.settings = active_set_setting_docs();
-    entry.applies_to = "any J (dense Schur complement of the working set)";
-    return entry;
+    return solver_entry<ActiveSetSolver>(
+        "active-set", active_set_settings_table(),
+        "Goldfarb-Idnani dual active-set QP on a CHOLMOD factor of A (the reference; detects infeasibility)",
+        "any J (dense Schur complement of the working set)");
 }
 
 }  // namespace cb
