@@ -86,9 +86,9 @@ PetscErrorCode duals(Tao tao, Eigen::Index m, cb::Vec& lambda)
 }
 
 /// One TAOPDIPM solve from qp.x0 with gatol = catol = `tol_tao`, under stop=kkt (`common`) ended
-/// by the harness's accuracy test at the first iterate that meets tol; x and lambda (m) out.
-PetscErrorCode pdipm(const QpView& qp, const CommonSettings& common, double tol_tao, cb::Vec& x_out,
-                     cb::Vec& lambda_out, TaoRun& run)
+/// at the first iterate where the loop's rule holds (tao::KktTest); x and lambda (m) out.
+PetscErrorCode pdipm(const QpView& qp, const CommonSettings& common, const SolveLoop& loop, double tol_tao,
+                     cb::Vec& x_out, cb::Vec& lambda_out, TaoRun& run)
 {
     const long max_iterations = common.max_iterations;
     const PetscInt n = static_cast<PetscInt>(qp.n()), m = static_cast<PetscInt>(qp.m());
@@ -127,8 +127,8 @@ PetscErrorCode pdipm(const QpView& qp, const CommonSettings& common, double tol_
     PetscCall(TaoSetMaximumIterations(tao, static_cast<PetscInt>(cap)));
     if (!common.stops_on_native()) {
         kkt.qp = &qp;
+        kkt.loop = &loop;
         kkt.scale = accuracy_scale(qp);
-        kkt.tol = common.tol;
         kkt.multipliers = [&qp](Tao t, const cb::Vec&, cb::Vec& lambda) { return duals(t, qp.m(), lambda); };
         PetscCall(TaoSetConvergenceTest(tao, tao::kkt_convergence_test, &kkt));
     }
@@ -163,8 +163,9 @@ PetscErrorCode pdipm(const QpView& qp, const CommonSettings& common, double tol_
     PetscFunctionReturn(0);
 }
 
-/// In the child: returns x (n doubles), lambda (m doubles), then a TaoRun.
-std::vector<char> run_pdipm(const QpView& qp, const CommonSettings& common)
+/// In the child (a fork: `loop` is its copy of the parent's): returns x (n doubles), lambda (m
+/// doubles), then a TaoRun.
+std::vector<char> run_pdipm(const QpView& qp, const CommonSettings& common, const SolveLoop& loop)
 {
     const Eigen::Index n = qp.n(), m = qp.m();
     cb::Vec x = qp.x0, lambda = cb::Vec::Zero(m);
@@ -179,7 +180,7 @@ std::vector<char> run_pdipm(const QpView& qp, const CommonSettings& common)
         // stop=kkt: the harness's test ends the solve, not TAO's absolute tolerances (0: off), which
         // do not scale with the problem; the iteration cap and time limit bound a run that never meets it.
         run.gatol = common.stops_on_native() ? common.tol : 0.0;
-        const PetscErrorCode ierr = pdipm(qp, common, run.gatol, x, lambda, run);
+        const PetscErrorCode ierr = pdipm(qp, common, loop, run.gatol, x, lambda, run);
         if (ierr != 0) run.report.info = -1000 - static_cast<int>(ierr);
         PetscFinalize();
     } else {
@@ -222,7 +223,7 @@ SolverResult TaoPdipmSolver::solve(const QpView& qp, const SolveContext& context
         return loop.finish(result, loop.check(counters.iterations, false, false), "PETSc not called");
     const size_t expected = static_cast<size_t>(n + m) * sizeof(double) + sizeof(TaoRun);
     const ChildOutcome child =
-        run_in_child([&]() { return run_pdipm(qp, s.common); }, loop.stopwatch(), s.common.time_limit_s);
+        run_in_child([&]() { return run_pdipm(qp, s.common, loop); }, loop.stopwatch(), s.common.time_limit_s);
     if (auto failed = finish_failed_child(child, expected, "PETSc", loop, result)) return std::move(*failed);
     const char* p = child.bytes.data();
     std::memcpy(result.x.data(), p, static_cast<size_t>(n) * sizeof(double));
