@@ -24,7 +24,7 @@ const SettingsTable<CommonSettings>& common_settings_table()
                                                                                                   : StopRule::NATIVE;
                 },
                 [](const C& s, nlohmann::json& j) { j["stop"] = to_string(s.stop); }, {"kkt", "native"})
-            .integer("max_iterations", &C::max_iterations, 0, kMaxIterationsLimit,
+            .integer("max_iterations", &C::max_iterations, 0, MAX_ITERATIONS_LIMIT,
                      "cap on outer iterations (at most 10^12; bound long runs with time_limit_s)")
             .number("time_limit_s", &C::time_limit_s, -1e-300, 1e300,
                     "wall-time limit of the solve in seconds; 0 = none")

@@ -22,17 +22,17 @@ inline const char* to_string(StopRule rule) { return rule == StopRule::NATIVE ? 
 
 /// Largest accepted max_iterations: counters stay far from overflow (a larger value is an error
 /// naming the key, not a silent clamp).
-constexpr long kMaxIterationsLimit = 1000000000000L;
+constexpr long MAX_ITERATIONS_LIMIT = 1000000000000L;
 
 /// The default `tol`: the accuracy error e of a converged run (a millionth of the scene size).
 /// The harness's verdict on a stop=native run uses it too (harness/runner.hpp).
-constexpr double kDefaultTol = 1e-6;
+constexpr double DEFAULT_TOL = 1e-6;
 
 /// Settings every solver accepts; their keys, bounds and docs are one table
 /// (common_settings_table() in settings.cpp), the defaults the initial values below.
 struct CommonSettings {
     double tol =
-        kDefaultTol;  ///< on the accuracy error e (a fraction of the scene size), or the native residual (stop=native)
+        DEFAULT_TOL;  ///< on the accuracy error e (a fraction of the scene size), or the native residual (stop=native)
     StopRule stop = StopRule::ACCURACY;
     long max_iterations = 10000;  ///< outer iterations
     double time_limit_s = 0.0;    ///< 0 disables the limit

@@ -5,16 +5,39 @@
 #include "solvers/solver.hpp"
 
 #include <fcntl.h>
+#include <stdlib.h>
 #include <unistd.h>
 
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 #include <vector>
 
 namespace cb::tao {
 
-bool start_petsc()
+SessionFolder::SessionFolder()
 {
+    std::string pattern = (std::filesystem::temp_directory_path() / "contactbench-mpi-XXXXXX").string();
+    if (!::mkdtemp(pattern.data()))
+        throw std::runtime_error("tao: cannot create a session folder " + pattern + ": " + std::strerror(errno));
+    m_path = pattern;
+}
+
+SessionFolder::~SessionFolder()
+{
+    std::error_code ignored;  // a folder that cannot be removed is left behind, never an exception here
+    std::filesystem::remove_all(m_path, ignored);
+}
+
+bool start_petsc(const std::string& session_folder)
+{
+    // Only this child's environment changes (it is a fork): the parent's stays as it was.
+    if (::setenv("TMPDIR", session_folder.c_str(), 1) != 0 ||
+        ::setenv("OMPI_MCA_orte_tmpdir_base", session_folder.c_str(), 1) != 0)
+        return false;
     // dup2 on the descriptor, not freopen: freopen would flush the stdio buffer inherited from the
     // parent and print the parent's pending output twice.
     const int devnull = ::open("/dev/null", O_WRONLY);

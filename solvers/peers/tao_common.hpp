@@ -15,11 +15,30 @@
 
 namespace cb::tao {
 
-/// In the child process: sends stdout to /dev/null (TAOPDIPM prints each failed inner SNES solve
-/// there, which would interleave with the harness's output), initialises PETSc (and an Open MPI
-/// singleton) and makes PETSc errors return their code without printing. False when PETSc did
-/// not start.
-bool start_petsc();
+/// A fresh folder for one TAO child's Open MPI session files (mkdtemp under the system's temporary
+/// folder: $TMPDIR, else /tmp), removed with its contents on destruction. Two children that start
+/// Open MPI at once otherwise share its one session folder /tmp/ompi.<host>.<uid>, and one of them
+/// can abort in MPI_Init_thread ("mkdir ... File exists"; docs/peers.md). Made in the parent
+/// before the fork and destroyed there after the child ended. Throws std::runtime_error when the
+/// folder cannot be made.
+class SessionFolder {
+public:
+    SessionFolder();
+    ~SessionFolder();
+    SessionFolder(const SessionFolder&) = delete;
+    SessionFolder& operator=(const SessionFolder&) = delete;
+    const std::string& path() const { return m_path; }
+
+private:
+    std::string m_path;
+};
+
+/// In the child process: points Open MPI's session folder at `session_folder` (TMPDIR and
+/// OMPI_MCA_orte_tmpdir_base, both read by Open MPI 4.1; the singleton's orted inherits them), sends
+/// stdout to /dev/null (TAOPDIPM prints each failed inner SNES solve there, which would interleave
+/// with the harness's output), initialises PETSc (and an Open MPI singleton) and makes PETSc errors
+/// return their code without printing. False when PETSc did not start.
+bool start_petsc(const std::string& session_folder);
 
 /// A sequential AIJ copy of S.
 PetscErrorCode aij(const SpMat& S, Mat* out);
