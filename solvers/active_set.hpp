@@ -59,7 +59,7 @@ private:
 
 class ActiveSetSolver final : public Solver {
 public:
-    explicit ActiveSetSolver(ActiveSetSettings settings) : m_settings(std::move(settings)) {}
+    explicit ActiveSetSolver(const ActiveSetSettings& settings) : m_settings(settings) {}
     std::string name() const override { return "active-set"; }
     nlohmann::json settings() const override { return m_settings.to_json(); }
     SolverResult solve(const QpView& qp, const SolveContext& context) override;

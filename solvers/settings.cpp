@@ -126,7 +126,7 @@ std::string SettingsReader::choice(const std::string& key, const std::string& fa
     std::string known;
     for (const auto& a : allowed) known += (known.empty() ? "" : " | ") + a;
     if (!value->is_string()) fail(key, "expected one of " + known + ", got " + value->dump());
-    const std::string v = value->get<std::string>();
+    std::string v = value->get<std::string>();  // not const: returned by move
     for (const auto& a : allowed)
         if (a == v) return v;
     fail(key, "expected one of " + known + ", got \"" + v + "\"");
