@@ -16,7 +16,7 @@ namespace cb {
 namespace {
 /// The exact chains' tolerances on e: the reference, and the looser one whose distance to it is
 /// the noise floor (what a tolerance change alone does to a chaotic chain).
-constexpr double kReferenceTol = 1e-8, kNoiseTol = 1e-6;
+constexpr double REFERENCE_TOL = 1e-8, NOISE_TOL = 1e-6;
 }  // namespace
 
 int cmd_chains(const Args& args)
@@ -79,8 +79,8 @@ int cmd_chains(const Args& args)
     const std::string exact = cl.value("--exact", "mprgp-coupled");
     if (!builtin_registry().contains(exact))
         throw_input_error("--exact", "", "no solver named '" + exact + "' (contactbench solvers lists them)");
-    opt.chains.push_back({"exact", exact, {{"tol", kReferenceTol}}, "none"});
-    opt.chains.push_back({"exact-tol1e-6", exact, {{"tol", kNoiseTol}}, "none"});
+    opt.chains.push_back({"exact", exact, {{"tol", REFERENCE_TOL}}, "none"});
+    opt.chains.push_back({"exact-tol1e-6", exact, {{"tol", NOISE_TOL}}, "none"});
     opt.reference = "exact";
     std::stringstream orders(cl.value("--orders", "authors,random,depth"));
     std::string order;
@@ -91,7 +91,7 @@ int cmd_chains(const Args& args)
         opt.chains.push_back({order, scene.solver, scene.solver_settings, order});
         if (opt.render_chain.empty() || order == "authors") opt.render_chain = order;
     }
-    if (cl.has("--control")) opt.chains.push_back({"authors-exact", exact, {{"tol", kReferenceTol}}, "authors"});
+    if (cl.has("--control")) opt.chains.push_back({"authors-exact", exact, {{"tol", REFERENCE_TOL}}, "authors"});
     std::cerr << scene.name << ": chains exact (" << exact << ", tol 1e-8), exact-tol1e-6 (" << exact << ")";
     for (size_t c = 2; c < opt.chains.size(); ++c)
         std::cerr << ", " << opt.chains[c].label << " (" << opt.chains[c].solver << ")";

@@ -12,7 +12,7 @@ namespace cb {
 /// JSON, indented by 1, NaN/Inf as null, written atomically.
 void write_json_atomic(const std::string& path, const nlohmann::json& value);
 /// Reads a JSON file; throws InputError("PATH: ...") when it is missing, not a regular file,
-/// nested deeper than kMaxJsonDepth or not JSON.
+/// nested deeper than MAX_JSON_DEPTH or not JSON.
 nlohmann::json read_json_file(const std::string& path);
 
 /// File name of a run: "<snapshot-id>__<label>.json".

@@ -48,7 +48,7 @@ inline constexpr const char* STATUS_SOLVED_RELAXATION = "solved_relaxation";
 inline constexpr const char* STATUS_UNCONFIRMED = "unconfirmed";
 /// The accuracy a `stop=native` run must reach on e to count as converged: the default tol of
 /// the common settings (solvers/settings.hpp), declared there once.
-inline constexpr double DEFAULT_ACCURACY_TOL = kDefaultTol;  // the one default (solvers/settings.hpp)
+inline constexpr double DEFAULT_ACCURACY_TOL = DEFAULT_TOL;  // the one default (solvers/settings.hpp)
 
 struct RunOutcome {
     SolverResult result;                  ///< as the solver returned it (result.status: the solver's word)

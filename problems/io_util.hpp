@@ -15,7 +15,7 @@ namespace cb {
 
 /// Deepest JSON nesting any reader accepts (a header, suite, scene or settings file of ours
 /// nests fewer than 10 levels; the parser and the destructor recurse once per level).
-constexpr int kMaxJsonDepth = 64;
+constexpr int MAX_JSON_DEPTH = 64;
 
 /// Opens `path` read-only after checking (without blocking) that it is a regular file; returns
 /// the descriptor. "cannot open: Too many levels of symbolic links", "not a regular file (a FIFO)".
@@ -30,7 +30,7 @@ std::string read_regular_file(const std::string& path, std::uint64_t max_bytes =
 /// Throws InputError("where: FIELD: nesting deeper than 64 levels at byte K") when brackets
 /// outside strings nest deeper than `max_depth`; cheap (one pass, no allocation).
 void check_json_depth(const char* begin, const char* end, const std::string& where, const std::string& field = "",
-                      int max_depth = kMaxJsonDepth);
+                      int max_depth = MAX_JSON_DEPTH);
 
 /// Parses JSON text after the depth check; InputError("where: not valid JSON: ...") otherwise.
 nlohmann::json parse_json_text(const std::string& text, const std::string& where, bool allow_comments = false);

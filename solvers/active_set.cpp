@@ -39,30 +39,10 @@ const SettingsTable<ActiveSetSettings>& active_set_settings_table()
 
 ActiveSetSettings ActiveSetSettings::from_json(const nlohmann::json& settings)
 {
-    SettingsReader reader(settings, "active-set");
-    ActiveSetSettings s;
-    s.common = reader.common();
-    // The reference solver aims at 1e-10 unless told otherwise (the common default is 1e-6).
-    if (!(settings.is_object() && settings.contains("tol"))) s.common.tol = 1e-10;
-    active_set_settings_table().read(reader, s);
-    reader.finish();
-    return s;
+    return read_settings(settings, "active-set", active_set_settings_table());
 }
 
-nlohmann::json ActiveSetSettings::to_json() const
-{
-    nlohmann::json j = common.to_json();
-    active_set_settings_table().write(*this, j);
-    return j;
-}
-
-std::vector<SettingDoc> active_set_setting_docs()
-{
-    std::vector<SettingDoc> docs = active_set_settings_table().docs();
-    docs.insert(docs.begin(),
-                {"tol", "1e-10", "(overrides the common default) accuracy error e required for 'converged'"});
-    return docs;
-}
+nlohmann::json ActiveSetSettings::to_json() const { return write_settings(*this, active_set_settings_table()); }
 
 // ---------------------------------------------------------------------------------------------
 // GrowingCholesky
@@ -189,7 +169,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
     counters.work_flops += cholmod_factor_flops(chol.cholmod());
     if (chol.info() != Eigen::Success)
         return invalid("A is not positive definite (CHOLMOD Cholesky factorization failed)");
-    auto solve_A = [&](const Vec& rhs) -> Vec {
+    auto apply_a_inverse = [&](const Vec& rhs) -> Vec {
         ++counters.cholmod_solves;
         counters.work_flops += cholmod_solve_flops(chol.cholmod());
         return chol.solve(rhs);
@@ -202,7 +182,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
 
     const AccuracyScale scale = accuracy_scale(qp);
     counters.a_products += scale.a_products;
-    const Vec x_unc = solve_A(qp.b);
+    const Vec x_unc = apply_a_inverse(qp.b);
     // A non-finite b (or A) leaves nothing to pivot on: the loop's finiteness check ends the solve.
     if (!x_unc.allFinite()) return loop.finish(result, loop.check(counters.iterations, false, false));
     Vec s_base = m > 0 ? Vec(qp.J * x_unc - qp.c) : Vec(0);
@@ -249,7 +229,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
     }
 
     std::vector<int> W;  // working set, in the order of the Cholesky factor
-    std::vector<char> in_W(m, 0);
+    std::vector<char> in_working_set(m, 0);
     GrowingCholesky schur;  // S_W = L L'
     Vec lambda = Vec::Zero(m);
     Vec s(m);
@@ -265,7 +245,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
     };
     auto drop = [&](int k) {
         lambda[W[k]] = 0.0;
-        in_W[W[k]] = 0;
+        in_working_set[W[k]] = 0;
         W.erase(W.begin() + k);
         schur.remove(k);  // Givens rotations of the trailing columns: about 6 q (q - k) flops
         counters.work_flops +=
@@ -324,7 +304,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
             double best = 0.0;
             for (Eigen::Index i = 0; i < m; ++i) {
                 if (zero_row[i] || s[i] >= -tau[i]) continue;
-                if (in_W[i]) continue;
+                if (in_working_set[i]) continue;
                 const double score = s[i] / row_norm[i];  // signed distance to the row's plane
                 if (p < 0 || score < best) {
                     best = score;
@@ -377,7 +357,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
                 if (t2 <= t1) {  // full step: p joins the working set
                     schur.append(l, pivot);
                     W.push_back(p);
-                    in_W[p] = 1;
+                    in_working_set[p] = 1;
                     ++added;
                     ++counters.pivots;
                     p_added = true;
@@ -397,7 +377,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
         // ---- Polish: iterative refinement of the equality QP on W ----
         //   A x - J_W' lambda_W = b,  J_W x = c_W
         const int q = static_cast<int>(W.size());
-        x = solve_A(qp.b + Jt(lambda));
+        x = apply_a_inverse(qp.b + Jt(lambda));
         double best_error = INF;
         Vec best_x = x, best_lambda = lambda;
         for (long round = 0; round <= m_settings.polish_rounds; ++round) {
@@ -413,14 +393,14 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
             }
             if (round == m_settings.polish_rounds || error <= 1e-15) break;
             const Vec r1 = Jt(lambda) - g;
-            const Vec v = solve_A(r1);
+            const Vec v = apply_a_inverse(r1);
             Vec rhs(q);
             for (int a = 0; a < q; ++a) rhs[a] = qp.c[W[a]] - qp.J.row(W[a]).dot(x) - qp.J.row(W[a]).dot(v);
             const Vec dlam = schur.solve(rhs);
             counters.work_flops += 2.0 * dense_triangular_solve_flops(q);
             Vec dlam_full = Vec::Zero(m);
             for (int a = 0; a < q; ++a) dlam_full[W[a]] = dlam[a];
-            x += solve_A(r1 + Jt(dlam_full));
+            x += apply_a_inverse(r1 + Jt(dlam_full));
             lambda += dlam_full;
             ++polish_done;
         }
@@ -437,7 +417,8 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
         // (slacks tracked in K carried solve errors), resume from it.
         const Vec s_exact = m > 0 ? Vec(qp.J * x - qp.c) : Vec(0);
         bool violated = false;
-        for (Eigen::Index i = 0; i < m && !violated; ++i) violated = !zero_row[i] && !in_W[i] && s_exact[i] < -tau[i];
+        for (Eigen::Index i = 0; i < m && !violated; ++i)
+            violated = !zero_row[i] && !in_working_set[i] && s_exact[i] < -tau[i];
         if (!violated || gi_restarts >= 3) break;
         ++gi_restarts;
         s_base = s_exact;
@@ -447,7 +428,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
         x_polished = false;
     }
 
-    if (!x_polished) x = solve_A(qp.b + Jt(lambda));
+    if (!x_polished) x = apply_a_inverse(qp.b + Jt(lambda));
     const Vec g = a_product(qp.A, x) - qp.b;
     ++counters.a_products;
     const double rel = accuracy_from_gradient(qp, scale, x, g, lambda).max();
@@ -483,15 +464,10 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
 
 SolverEntry active_set_entry()
 {
-    SolverEntry entry;
-    entry.make = [](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
-        return std::make_unique<ActiveSetSolver>(ActiveSetSettings::from_json(settings));
-    };
-    entry.description =
-        "Goldfarb-Idnani dual active-set QP on a CHOLMOD factor of A (the reference; detects infeasibility)";
-    entry.settings = active_set_setting_docs();
-    entry.applies_to = "any J (dense Schur complement of the working set)";
-    return entry;
+    return solver_entry<ActiveSetSolver>(
+        "active-set", active_set_settings_table(),
+        "Goldfarb-Idnani dual active-set QP on a CHOLMOD factor of A (the reference; detects infeasibility)",
+        "any J (dense Schur complement of the working set)");
 }
 
 }  // namespace cb

@@ -16,8 +16,10 @@ using SolverFactory = std::function<std::unique_ptr<Solver>(const nlohmann::json
 
 struct SolverEntry {
     SolverFactory make;
-    std::string description;           ///< one line for `--help`
-    std::vector<SettingDoc> settings;  ///< solver-specific keys (the common ones are implied)
+    std::string description;  ///< one line for `--help`
+    /// solver-specific keys, after any common key whose default the solver changes (the common
+    /// ones are implied: --help prints common_setting_docs() first)
+    std::vector<SettingDoc> settings;
     std::string applies_to = "any J";  ///< which problems it accepts, for `contactbench solvers`
     std::string library;               ///< external peers: the library and its version ("Bullet 3.24"); else empty
     bool needs_settings = false;  ///< cannot run without its own settings (command: argv); left out of "every solver"
@@ -25,7 +27,8 @@ struct SolverEntry {
 
 /// A solver's registry entry in one line: T built from its settings struct S (S::common plus the
 /// rows of `table`, read strictly by read_settings: unknown keys and bad values name `name` and the
-/// key), with `--help`'s description and setting docs and the applicability line.
+/// key), with `--help`'s description and setting docs (a common default that S's initial `common`
+/// changes first, then the table's rows) and the applicability line.
 ///
 ///   SolverEntry cg_entry() { return solver_entry<CgSolver>("cg", cg_settings_table(), "...", "ignores J"); }
 template <class T, class S>
@@ -37,7 +40,9 @@ SolverEntry solver_entry(const std::string& name, const SettingsTable<S>& table,
         return std::make_unique<T>(read_settings(settings, name, table));
     };
     entry.description = std::move(description);
-    entry.settings = table.docs();
+    entry.settings = common_default_overrides(S{}.common);  // a common default this solver changes
+    const std::vector<SettingDoc> own = table.docs();
+    entry.settings.insert(entry.settings.end(), own.begin(), own.end());
     entry.applies_to = std::move(applies_to);
     return entry;
 }

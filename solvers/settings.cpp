@@ -17,19 +17,19 @@ const SettingsTable<CommonSettings>& common_settings_table()
                     "stop tolerance on the accuracy error e, dimensionless: residual lengths as a fraction of the "
                     "scene size (stop=kkt); or on the native residual in the paper's units (stop=native)")
             .row(
-                "stop", to_string(C{}.stop),
+                "stop", [](const C& s) { return std::string(to_string(s.stop)); },
                 "kkt | native: which criterion ends the solve (kkt = the accuracy error e of docs/accuracy.md)",
                 [](SettingsReader& reader, C& s) {
                     s.stop = reader.choice("stop", to_string(s.stop), {"kkt", "native"}) == "kkt" ? StopRule::ACCURACY
                                                                                                   : StopRule::NATIVE;
                 },
                 [](const C& s, nlohmann::json& j) { j["stop"] = to_string(s.stop); }, {"kkt", "native"})
-            .integer("max_iterations", &C::max_iterations, 0, kMaxIterationsLimit,
+            .integer("max_iterations", &C::max_iterations, 0, MAX_ITERATIONS_LIMIT,
                      "cap on outer iterations (at most 10^12; bound long runs with time_limit_s)")
             .number("time_limit_s", &C::time_limit_s, -1e-300, 1e300,
                     "wall-time limit of the solve in seconds; 0 = none")
             .row(
-                "seed", std::to_string(C{}.seed), "seed of every random choice",
+                "seed", [](const C& s) { return std::to_string(s.seed); }, "seed of every random choice",
                 [](SettingsReader& reader, C& s) {
                     s.seed = static_cast<std::uint64_t>(reader.integer("seed", static_cast<long>(s.seed), 0));
                 },
@@ -126,17 +126,16 @@ std::string SettingsReader::choice(const std::string& key, const std::string& fa
     std::string known;
     for (const auto& a : allowed) known += (known.empty() ? "" : " | ") + a;
     if (!value->is_string()) fail(key, "expected one of " + known + ", got " + value->dump());
-    const std::string v = value->get<std::string>();
+    std::string v = value->get<std::string>();  // not const: returned by move
     for (const auto& a : allowed)
         if (a == v) return v;
     fail(key, "expected one of " + known + ", got \"" + v + "\"");
 }
 
-CommonSettings SettingsReader::common()
+CommonSettings SettingsReader::common(CommonSettings defaults)
 {
-    CommonSettings s;
-    common_settings_table().read(*this, s);
-    return s;
+    common_settings_table().read(*this, defaults);  // each row falls back to the value it finds
+    return defaults;
 }
 
 void SettingsReader::finish() const
@@ -150,6 +149,17 @@ void SettingsReader::finish() const
 }
 
 std::vector<SettingDoc> common_setting_docs() { return common_settings_table().docs(); }
+
+std::vector<SettingDoc> common_default_overrides(const CommonSettings& defaults)
+{
+    const std::vector<SettingDoc> common = common_settings_table().docs();
+    std::vector<SettingDoc> own = common_settings_table().docs(defaults), out;
+    for (size_t i = 0; i < own.size(); ++i)
+        if (own[i].default_value != common[i].default_value)
+            out.push_back({own[i].key, own[i].default_value,
+                           "(this solver's default; the common one is " + common[i].default_value + ")"});
+    return out;
+}
 
 std::string setting_default_text(double value)
 {

@@ -22,17 +22,17 @@ inline const char* to_string(StopRule rule) { return rule == StopRule::NATIVE ? 
 
 /// Largest accepted max_iterations: counters stay far from overflow (a larger value is an error
 /// naming the key, not a silent clamp).
-constexpr long kMaxIterationsLimit = 1000000000000L;
+constexpr long MAX_ITERATIONS_LIMIT = 1000000000000L;
 
 /// The default `tol`: the accuracy error e of a converged run (a millionth of the scene size).
 /// The harness's verdict on a stop=native run uses it too (harness/runner.hpp).
-constexpr double kDefaultTol = 1e-6;
+constexpr double DEFAULT_TOL = 1e-6;
 
 /// Settings every solver accepts; their keys, bounds and docs are one table
 /// (common_settings_table() in settings.cpp), the defaults the initial values below.
 struct CommonSettings {
     double tol =
-        kDefaultTol;  ///< on the accuracy error e (a fraction of the scene size), or the native residual (stop=native)
+        DEFAULT_TOL;  ///< on the accuracy error e (a fraction of the scene size), or the native residual (stop=native)
     StopRule stop = StopRule::ACCURACY;
     long max_iterations = 10000;  ///< outer iterations
     double time_limit_s = 0.0;    ///< 0 disables the limit
@@ -41,6 +41,14 @@ struct CommonSettings {
     /// stop=native. For a peer that passes `tol` to its library as that library's own tolerance;
     /// whether a solve converged is SolveLoop's decision, never the solver's.
     bool stops_on_native() const { return stop == StopRule::NATIVE; }
+    /// These settings with another tol: a solver's own default, as its settings struct's initial
+    /// `common` (active-set: `CommonSettings common = CommonSettings{}.with_tol(1e-10);`).
+    CommonSettings with_tol(double value) const
+    {
+        CommonSettings copy = *this;
+        copy.tol = value;
+        return copy;
+    }
 
     nlohmann::json to_json() const;
 };
@@ -58,8 +66,9 @@ class SettingsReader {
 public:
     SettingsReader(const nlohmann::json& settings, std::string where);
 
-    /// Reads the common block (tol, stop, max_iterations, time_limit_s, seed).
-    CommonSettings common();
+    /// Reads the common block (tol, stop, max_iterations, time_limit_s, seed); a key not given
+    /// keeps its value in `defaults` (a solver's own defaults: active-set's tol is 1e-10).
+    CommonSettings common(CommonSettings defaults = CommonSettings{});
 
     double number(const std::string& key, double fallback, double min_exclusive = -1e300, double max_inclusive = 1e300);
     long integer(const std::string& key, long fallback, long min_inclusive = LONG_MIN, long max_inclusive = LONG_MAX);
@@ -101,7 +110,7 @@ public:
     SettingsTable& number(const std::string& key, double S::*field, double min_exclusive, double max_inclusive,
                           const std::string& doc, std::function<double(const S&)> default_of = nullptr)
     {
-        Row row{{key, setting_default_text(S{}.*field), doc}, {}, nullptr, nullptr};
+        Row row{{key, setting_default_text(S{}.*field), doc}, {}, nullptr, nullptr, shown(field)};
         row.read = [=](SettingsReader& reader, S& s) {
             s.*field = reader.number(key, default_of ? default_of(s) : s.*field, min_exclusive, max_inclusive);
         };
@@ -112,7 +121,7 @@ public:
     SettingsTable& integer(const std::string& key, long S::*field, long min_inclusive, long max_inclusive,
                            const std::string& doc)
     {
-        Row row{{key, setting_default_text(S{}.*field), doc}, {}, nullptr, nullptr};
+        Row row{{key, setting_default_text(S{}.*field), doc}, {}, nullptr, nullptr, shown(field)};
         row.read = [=](SettingsReader& reader, S& s) {
             s.*field = reader.integer(key, s.*field, min_inclusive, max_inclusive);
         };
@@ -122,7 +131,7 @@ public:
     }
     SettingsTable& boolean(const std::string& key, bool S::*field, const std::string& doc)
     {
-        Row row{{key, setting_default_text(S{}.*field), doc}, {}, nullptr, nullptr};
+        Row row{{key, setting_default_text(S{}.*field), doc}, {}, nullptr, nullptr, shown(field)};
         row.read = [=](SettingsReader& reader, S& s) { s.*field = reader.boolean(key, s.*field); };
         row.write = [=](const S& s, nlohmann::json& j) { j[key] = s.*field; };
         m_rows.push_back(std::move(row));
@@ -132,7 +141,7 @@ public:
     SettingsTable& choice(const std::string& key, std::string S::*field, const std::vector<std::string>& choices,
                           const std::string& doc, std::function<std::string(const S&)> default_of = nullptr)
     {
-        Row row{{key, setting_default_text(S{}.*field), doc}, choices, nullptr, nullptr};
+        Row row{{key, setting_default_text(S{}.*field), doc}, choices, nullptr, nullptr, shown(field)};
         row.read = [=](SettingsReader& reader, S& s) {
             s.*field = reader.choice(key, default_of ? default_of(s) : s.*field, choices);
         };
@@ -141,13 +150,14 @@ public:
         return *this;
     }
 
-    /// A row of another type (an enum, an unsigned seed): its own reader and writer.
-    SettingsTable& row(const std::string& key, const std::string& default_text, const std::string& doc,
-                       std::function<void(SettingsReader&, S&)> read,
+    /// A row of another type (an enum, an unsigned seed): its own reader, writer and default text.
+    SettingsTable& row(const std::string& key, std::function<std::string(const S&)> default_text,
+                       const std::string& doc, std::function<void(SettingsReader&, S&)> read,
                        std::function<void(const S&, nlohmann::json&)> write,
                        const std::vector<std::string>& choices = {})
     {
-        m_rows.push_back(Row{{key, default_text, doc}, choices, std::move(read), std::move(write)});
+        m_rows.push_back(
+            Row{{key, default_text(S{}), doc}, choices, std::move(read), std::move(write), std::move(default_text)});
         return *this;
     }
 
@@ -168,6 +178,16 @@ public:
         for (const Row& row : m_rows) out.push_back(row.doc);
         return out;
     }
+    /// The `--help` lines with the defaults taken from `defaults` instead of S{}.
+    std::vector<SettingDoc> docs(const S& defaults) const
+    {
+        std::vector<SettingDoc> out;
+        for (const Row& row : m_rows) {
+            out.push_back(row.doc);
+            out.back().default_value = row.default_text(defaults);
+        }
+        return out;
+    }
     /// The allowed values of a choice row (empty for other rows or unknown keys).
     std::vector<std::string> choices(const std::string& key) const
     {
@@ -182,7 +202,12 @@ private:
         std::vector<std::string> choices;
         std::function<void(SettingsReader&, S&)> read;
         std::function<void(const S&, nlohmann::json&)> write;
+        std::function<std::string(const S&)> default_text;  ///< the row's value as `--help` shows it
     };
+    template <class T> static std::function<std::string(const S&)> shown(T S::*field)
+    {
+        return [field](const S& s) { return setting_default_text(s.*field); };
+    }
     std::vector<Row> m_rows;
 };
 
@@ -190,14 +215,21 @@ private:
 /// reader (SettingsReader::common), the record (CommonSettings::to_json) and `--help`
 /// (common_setting_docs) all read it.
 const SettingsTable<CommonSettings>& common_settings_table();
+/// `--help` lines for the common keys whose default `defaults` changes, e.g. active-set's
+/// `CommonSettings common{...}` with tol 1e-10: "tol [1e-10] (this solver's default; the common one
+/// is 1e-6)". Empty when a solver keeps every common default. They follow the common lines, so the
+/// last line of a key is its default.
+std::vector<SettingDoc> common_default_overrides(const CommonSettings& defaults);
+
 /// A solver's whole settings struct S (a `common` block plus its own rows) from JSON: the common
-/// table, then `table`, then unknown keys rejected; errors name `solver` and the key.
+/// table, then `table`, then unknown keys rejected; errors name `solver` and the key. Defaults are
+/// the initial values of S, its common block included (a solver may start it from other values).
 template <class S>
 S read_settings(const nlohmann::json& settings, const std::string& solver, const SettingsTable<S>& table)
 {
     SettingsReader reader(settings, solver);
     S s;
-    s.common = reader.common();
+    s.common = reader.common(s.common);
     table.read(reader, s);
     reader.finish();
     return s;

@@ -134,9 +134,9 @@ bool notify_monitor(const SolveContext& context, Stopwatch& watch, IterationInfo
 bool notify_monitor(const SolveContext& context, Stopwatch& watch, IterationInfo& info, double setup_s,
                     void (*prepare)(void*) = nullptr, void* prepare_data = nullptr);
 
-/// Helper for solvers: the common stopping test (docs/accuracy.md). True when the accuracy error
-/// e of (x, lambda) on `qp` (gradient g = Ax - b given) is <= tol. Every solver's `stop=kkt`
-/// test and its confirmation of `stop=native` call this, on the QP it solves.
+/// The accuracy test by itself (docs/accuracy.md), for tests and tools: true when the accuracy
+/// error e of (x, lambda) on `qp` (gradient g = Ax - b given) is <= tol. A solver never calls it:
+/// its stop is SolveLoop's rule (check, verdict, rule_holds), which also honours stop=native.
 bool accuracy_converged(const QpView& qp, const AccuracyScale& scale, const Vec& x, const Vec& g, const Vec& lambda,
                         double tol);
 

@@ -55,12 +55,12 @@ PetscErrorCode inequalities(Tao, ::Vec X, ::Vec C, void* ctx)
 
 PetscErrorCode inequality_jacobian(Tao, ::Vec, Mat, Mat, void*) { return 0; }  // constant: J
 
-constexpr long kIterationCap = 200;
+constexpr long ITERATION_CAP = 200;
 
 /// Objective evaluations at one TAO iteration number before the solve is ended as stuck: a PDIPM
 /// iteration takes 2 or 3 (SNES's function, the line search's residual); a failing inner SNES
 /// takes 1 per retry and retries forever.
-constexpr long kStuckEvaluations = 50;
+constexpr long STUCK_EVALUATIONS = 50;
 
 struct TaoRun : tao::Outcome {
     long stuck_iteration = 0;
@@ -86,16 +86,16 @@ PetscErrorCode duals(Tao tao, Eigen::Index m, cb::Vec& lambda)
 }
 
 /// One TAOPDIPM solve from qp.x0 with gatol = catol = `tol_tao`, under stop=kkt (`common`) ended
-/// by the harness's accuracy test at the first iterate that meets tol; x and lambda (m) out.
-PetscErrorCode pdipm(const QpView& qp, const CommonSettings& common, double tol_tao, cb::Vec& x_out,
-                     cb::Vec& lambda_out, TaoRun& run)
+/// at the first iterate where the loop's rule holds (tao::KktTest); x and lambda (m) out.
+PetscErrorCode pdipm(const QpView& qp, const CommonSettings& common, const SolveLoop& loop, double tol_tao,
+                     cb::Vec& x_out, cb::Vec& lambda_out, TaoRun& run)
 {
     const long max_iterations = common.max_iterations;
     const PetscInt n = static_cast<PetscInt>(qp.n()), m = static_cast<PetscInt>(qp.m());
     TaoQp ctx{&qp};
     tao::Objective objective;
     objective.qp = &qp;
-    objective.stuck_limit = kStuckEvaluations;
+    objective.stuck_limit = STUCK_EVALUATIONS;
     Tao tao;
     ::Vec X, XL, XU, C;
     tao::KktTest kkt;
@@ -123,12 +123,12 @@ PetscErrorCode pdipm(const QpView& qp, const CommonSettings& common, double tol_
     PetscCall(TaoSetConstraintTolerances(tao, tol_tao, 0.0));
     // An interior point converges in tens of iterations; at an absolute tolerance beyond its
     // reach TAOPDIPM iterates without end, so it is capped (the cap is `stalled`, not max_iterations).
-    const long cap = std::min<long>(max_iterations, kIterationCap);
+    const long cap = std::min<long>(max_iterations, ITERATION_CAP);
     PetscCall(TaoSetMaximumIterations(tao, static_cast<PetscInt>(cap)));
     if (!common.stops_on_native()) {
         kkt.qp = &qp;
+        kkt.loop = &loop;
         kkt.scale = accuracy_scale(qp);
-        kkt.tol = common.tol;
         kkt.multipliers = [&qp](Tao t, const cb::Vec&, cb::Vec& lambda) { return duals(t, qp.m(), lambda); };
         PetscCall(TaoSetConvergenceTest(tao, tao::kkt_convergence_test, &kkt));
     }
@@ -163,14 +163,16 @@ PetscErrorCode pdipm(const QpView& qp, const CommonSettings& common, double tol_
     PetscFunctionReturn(0);
 }
 
-/// In the child: returns x (n doubles), lambda (m doubles), then a TaoRun.
-std::vector<char> run_pdipm(const QpView& qp, const CommonSettings& common)
+/// In the child (a fork: `loop` is its copy of the parent's): returns x (n doubles), lambda (m
+/// doubles), then a TaoRun.
+std::vector<char> run_pdipm(const QpView& qp, const CommonSettings& common, const SolveLoop& loop,
+                            const std::string& session_folder)
 {
     const Eigen::Index n = qp.n(), m = qp.m();
     cb::Vec x = qp.x0, lambda = cb::Vec::Zero(m);
     TaoRun run;
     // A direct inner solver: the default GMRES + ILU fails on stiff problems.
-    if (tao::start_petsc() && PetscOptionsSetValue(nullptr, "-ksp_type", "preonly") == 0 &&
+    if (tao::start_petsc(session_folder) && PetscOptionsSetValue(nullptr, "-ksp_type", "preonly") == 0 &&
         PetscOptionsSetValue(nullptr, "-pc_type", "lu") == 0 &&
 #ifdef PETSC_HAVE_MUMPS
         PetscOptionsSetValue(nullptr, "-pc_factor_mat_solver_type", "mumps") == 0 &&
@@ -179,7 +181,7 @@ std::vector<char> run_pdipm(const QpView& qp, const CommonSettings& common)
         // stop=kkt: the harness's test ends the solve, not TAO's absolute tolerances (0: off), which
         // do not scale with the problem; the iteration cap and time limit bound a run that never meets it.
         run.gatol = common.stops_on_native() ? common.tol : 0.0;
-        const PetscErrorCode ierr = pdipm(qp, common, run.gatol, x, lambda, run);
+        const PetscErrorCode ierr = pdipm(qp, common, loop, run.gatol, x, lambda, run);
         if (ierr != 0) run.report.info = -1000 - static_cast<int>(ierr);
         PetscFinalize();
     } else {
@@ -221,8 +223,9 @@ SolverResult TaoPdipmSolver::solve(const QpView& qp, const SolveContext& context
     if (!loop.inputs_finite())  // the library would abort on it (seen: Siconos's assertions)
         return loop.finish(result, loop.check(counters.iterations, false, false), "PETSc not called");
     const size_t expected = static_cast<size_t>(n + m) * sizeof(double) + sizeof(TaoRun);
-    const ChildOutcome child =
-        run_in_child([&]() { return run_pdipm(qp, s.common); }, loop.stopwatch(), s.common.time_limit_s);
+    const tao::SessionFolder session;  // removed when the solve returns, after the child ended
+    const ChildOutcome child = run_in_child([&]() { return run_pdipm(qp, s.common, loop, session.path()); },
+                                            loop.stopwatch(), s.common.time_limit_s);
     if (auto failed = finish_failed_child(child, expected, "PETSc", loop, result)) return std::move(*failed);
     const char* p = child.bytes.data();
     std::memcpy(result.x.data(), p, static_cast<size_t>(n) * sizeof(double));
@@ -233,7 +236,7 @@ SolverResult TaoPdipmSolver::solve(const QpView& qp, const SolveContext& context
     // one A x per objective and gradient evaluation and per harness test in TAO's convergence test
     counters.a_products += run.evaluations + run.kkt_checks;
     std::ostringstream stuck;
-    stuck << "TAOPDIPM's Newton step failed " << kStuckEvaluations << " times in a row at iteration "
+    stuck << "TAOPDIPM's Newton step failed " << STUCK_EVALUATIONS << " times in a row at iteration "
           << run.stuck_iteration
           << ", its inner SNES reporting DIVERGED_LINEAR_SOLVE, and TAOPDIPM retries without end";
     return tao::finish_result(qp, s.common, loop, run, "TAOPDIPM", stuck.str(), counters, result);

@@ -27,7 +27,7 @@ struct TaoPdipmSettings {
 
 class TaoPdipmSolver : public Solver {
 public:
-    explicit TaoPdipmSolver(TaoPdipmSettings settings) : m_settings(std::move(settings)) {}
+    explicit TaoPdipmSolver(const TaoPdipmSettings& settings) : m_settings(settings) {}
     std::string name() const override { return "tao-pdipm"; }
     nlohmann::json settings() const override { return m_settings.to_json(); }
     SolverResult solve(const QpView& qp, const SolveContext& context) override;

@@ -48,21 +48,21 @@ cb::Vec multipliers(const QpView& qp, const Bounds& b, const cb::Vec& x)
 /// Objective evaluations at one TRON iteration before the solve is ended as stuck: TRON shrinks
 /// its trust region and re-evaluates while a step is rejected; that ends by itself once the
 /// radius is below its step tolerance, and this guard only bounds a loop that would not.
-constexpr long kStuckEvaluations = 200;
+constexpr long STUCK_EVALUATIONS = 200;
 
 using TronRun = tao::Outcome;
 
 /// One TAOTRON solve from qp.x0 (projected onto the bounds by TRON) with gatol = `tol_tao`, under
-/// stop=kkt ended by the harness's accuracy test at the first iterate that meets tol.
-PetscErrorCode tron(const QpView& qp, const Bounds& bounds, const CommonSettings& common, double tol_tao,
-                    cb::Vec& x_out, TronRun& run)
+/// stop=kkt ended at the first iterate where the loop's rule holds (tao::KktTest).
+PetscErrorCode tron(const QpView& qp, const Bounds& bounds, const CommonSettings& common, const SolveLoop& loop,
+                    double tol_tao, cb::Vec& x_out, TronRun& run)
 {
     const long max_iterations = common.max_iterations;
     tao::KktTest kkt;
     const PetscInt n = static_cast<PetscInt>(qp.n());
     tao::Objective objective;
     objective.qp = &qp;
-    objective.stuck_limit = kStuckEvaluations;
+    objective.stuck_limit = STUCK_EVALUATIONS;
     Tao tao;
     ::Vec X, XL, XU;
     Mat H;
@@ -95,8 +95,8 @@ PetscErrorCode tron(const QpView& qp, const Bounds& bounds, const CommonSettings
     PetscCall(PCSetType(pc, PCJACOBI));
     if (!common.stops_on_native()) {
         kkt.qp = &qp;
+        kkt.loop = &loop;
         kkt.scale = accuracy_scale(qp);
-        kkt.tol = common.tol;
         kkt.multipliers = [&qp, &bounds](Tao, const cb::Vec& x, cb::Vec& lambda) -> PetscErrorCode {
             lambda = multipliers(qp, bounds, x);
             return 0;
@@ -128,17 +128,18 @@ PetscErrorCode tron(const QpView& qp, const Bounds& bounds, const CommonSettings
     PetscFunctionReturn(0);
 }
 
-/// In the child: returns x (n doubles), then a TronRun.
-std::vector<char> run_tron(const QpView& qp, const Bounds& bounds, const CommonSettings& common)
+/// In the child (a fork: `loop` is its copy of the parent's): returns x (n doubles), then a TronRun.
+std::vector<char> run_tron(const QpView& qp, const Bounds& bounds, const CommonSettings& common, const SolveLoop& loop,
+                           const std::string& session_folder)
 {
     const Eigen::Index n = qp.n();
     cb::Vec x = qp.x0;
     TronRun run;
-    if (tao::start_petsc()) {
+    if (tao::start_petsc(session_folder)) {
         // stop=kkt: the harness's test ends the solve, not TAO's absolute tolerances (0: off), which
         // do not scale with the problem; the iteration cap and time limit bound a run that never meets it.
         run.gatol = common.stops_on_native() ? common.tol : 0.0;
-        const PetscErrorCode ierr = tron(qp, bounds, common, run.gatol, x, run);
+        const PetscErrorCode ierr = tron(qp, bounds, common, loop, run.gatol, x, run);
         if (ierr != 0) run.report.info = -1000 - static_cast<int>(ierr);
         PetscFinalize();
     } else {
@@ -176,8 +177,9 @@ SolverResult TaoTronSolver::solve(const QpView& qp, const SolveContext& context)
     if (!loop.inputs_finite())  // the library would abort on it (seen: Siconos's assertions)
         return loop.finish(result, loop.check(counters.iterations, false, false), "PETSc not called");
     const size_t expected = static_cast<size_t>(n) * sizeof(double) + sizeof(TronRun);
-    const ChildOutcome child =
-        run_in_child([&]() { return run_tron(qp, bounds, s.common); }, loop.stopwatch(), s.common.time_limit_s);
+    const tao::SessionFolder session;  // removed when the solve returns, after the child ended
+    const ChildOutcome child = run_in_child([&]() { return run_tron(qp, bounds, s.common, loop, session.path()); },
+                                            loop.stopwatch(), s.common.time_limit_s);
     if (auto failed = finish_failed_child(child, expected, "PETSc", loop, result)) return std::move(*failed);
     std::memcpy(result.x.data(), child.bytes.data(), static_cast<size_t>(n) * sizeof(double));
     TronRun run;
@@ -187,7 +189,7 @@ SolverResult TaoTronSolver::solve(const QpView& qp, const SolveContext& context)
     counters.a_products += 1 + run.evaluations + 2 * run.kkt_checks;
     counters.iterations = run.report.iterations;
     std::ostringstream stuck;
-    stuck << kStuckEvaluations << " objective evaluations at iteration " << run.report.iterations;
+    stuck << STUCK_EVALUATIONS << " objective evaluations at iteration " << run.report.iterations;
     return tao::finish_result(qp, s.common, loop, run, "TAOTRON", stuck.str(), counters, result);
 }
 

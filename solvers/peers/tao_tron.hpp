@@ -24,7 +24,7 @@ struct TaoTronSettings {
 
 class TaoTronSolver : public Solver {
 public:
-    explicit TaoTronSolver(TaoTronSettings settings) : m_settings(std::move(settings)) {}
+    explicit TaoTronSolver(const TaoTronSettings& settings) : m_settings(settings) {}
     std::string name() const override { return "tao-tron"; }
     nlohmann::json settings() const override { return m_settings.to_json(); }
     SolverResult solve(const QpView& qp, const SolveContext& context) override;

@@ -19,11 +19,11 @@ namespace cb {
 namespace {
 
 /// Built into every binary (solvers/builtin_solvers.cpp, no external package): missing is a failure.
-const std::set<std::string> kAlwaysRegistered = {"active-set",    "cg", "ica", "mprgp", "mprgp-box",
+const std::set<std::string> ALWAYS_REGISTERED = {"active-set",    "cg", "ica", "mprgp", "mprgp-box",
                                                  "mprgp-coupled", "pgs"};
 /// Finite methods that take no iteration cap (docs/peers.md): with max_iterations = 1 they still
 /// finish, and the loop's verdict judges their point.
-const std::set<std::string> kNoIterationCap = {"bullet-dantzig"};
+const std::set<std::string> NO_ITERATION_CAP = {"bullet-dantzig"};
 
 /// The solvers under test and the registry each comes from.
 struct Candidate {
@@ -69,7 +69,7 @@ bool starts_with(const std::string& text, const std::string& prefix) { return te
 
 TEST(Conformance, EveryAlwaysRegisteredSolverIsThere)
 {
-    for (const std::string& name : kAlwaysRegistered)
+    for (const std::string& name : ALWAYS_REGISTERED)
         EXPECT_TRUE(builtin_registry().contains(name)) << name << " is not registered";
 }
 
@@ -85,9 +85,11 @@ TEST(Conformance, StopKktConvergesOnTheAccuracyError)
         EXPECT_TRUE(starts_with(r.message, c.name + ": converged: accuracy error ")) << r.message;
         // The number behind the word, measured here: cg ignores J, so its own QP is the relaxation.
         const bool ignores = r.info.value("ignores_constraints", false);
-        const Qp relaxation{qp.A, qp.b, SpMat(0, qp.n()), Vec(0), qp.x0};
+        const SpMat no_rows(0, qp.n());
+        const Vec no_values(0);
+        const QpView relaxation{qp.A, qp.b, no_rows, no_values, qp.x0};
         const double e =
-            ignores ? accuracy(relaxation.view(), r.x, Vec(0)).max() : accuracy(qp.view(), r.x, r.lambda).max();
+            ignores ? accuracy(relaxation, r.x, no_values).max() : accuracy(qp.view(), r.x, r.lambda).max();
         EXPECT_LE(e, tol * (1.0 + 1e-9));
     }
 }
@@ -114,14 +116,14 @@ TEST(Conformance, IterationCap)
         SCOPED_TRACE(c.name);
         const Qp qp = problem_for(c);
         const SolverResult r = solve(c, qp, {{"tol", 1e-14}, {"max_iterations", 1}});
-        if (kNoIterationCap.count(c.name)) {  // judged at its point; the cap does not apply
+        if (NO_ITERATION_CAP.count(c.name)) {  // judged at its point; the cap does not apply
             EXPECT_NE(r.status, SolveStatus::MAX_ITERATIONS) << r.message;
             continue;
         }
         EXPECT_LE(r.iterations, 1);
         // A peer's exact method (siconos-nsn's Newton step on a QP) may finish within one
         // iteration; none of the project's own solvers does on this problem at tol 1e-14.
-        if (r.status == SolveStatus::CONVERGED && !kAlwaysRegistered.count(c.name) && c.name != "template") continue;
+        if (r.status == SolveStatus::CONVERGED && !ALWAYS_REGISTERED.count(c.name) && c.name != "template") continue;
         ASSERT_EQ(r.status, SolveStatus::MAX_ITERATIONS) << r.message;
         EXPECT_EQ(r.criterion, StopCriterion::NONE);
         EXPECT_TRUE(starts_with(r.message, c.name + ": iteration cap 1 reached")) << r.message;

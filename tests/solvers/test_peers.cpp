@@ -1,8 +1,8 @@
 // The external peers (solvers/peers/, compiled only when their packages are found) against the
 // reference `active-set` on the CI suite's problems (suites/ci.json): same objective to 1e-6
 // relative, a feasible point, and the common KKT test met. A peer that is not built is skipped.
-#include "problems/fclib_io.hpp"
 #include "harness/stress_families.hpp"
+#include "problems/fclib_io.hpp"
 #include "problems/synthetic.hpp"
 #include "solvers/accuracy.hpp"
 #include "solvers/registry.hpp"
@@ -65,7 +65,8 @@ TEST_P(Peers, AgreeWithActiveSetOnTheCiSuite)
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(Installed, Peers, ::testing::Values("ipopt", "siconos-lemke", "siconos-nsn", "bullet-dantzig", "tao-pdipm"),
+INSTANTIATE_TEST_SUITE_P(Installed, Peers,
+                         ::testing::Values("ipopt", "siconos-lemke", "siconos-nsn", "bullet-dantzig", "tao-pdipm"),
                          [](const ::testing::TestParamInfo<std::string>& p) {
                              std::string s = p.param;
                              std::replace(s.begin(), s.end(), '-', '_');
@@ -206,6 +207,26 @@ TEST(Ipopt, MaxIterationsIsIpoptsMaxIter)
     EXPECT_EQ(r.status, SolveStatus::MAX_ITERATIONS) << r.message;
     EXPECT_EQ(r.info.value("ipopt_status", ""), "Maximum_Iterations_Exceeded");
     EXPECT_EQ(r.iterations, 2);
+}
+
+// Ipopt's success at its own tol (1e-2 tol on its scaled error) can leave the accuracy error above
+// tol: the loop's rule then asks for a re-solve with a tighter Ipopt tol. Under stop=native the rule
+// is Ipopt's own test, which its success meets: no re-solve.
+TEST(Ipopt, ResolvesWhenTheLoopsRuleDoesNotHoldAtItsSuccess)
+{
+    if (!cb::builtin_registry().contains("ipopt")) GTEST_SKIP() << "ipopt is not built";
+    const Qp qp = cb::make_synthetic("box", nlohmann::json::object(), 1);
+    const auto view = qp.view();
+    const SolverResult kkt = cb::builtin_registry().create("ipopt", {{"tol", 1e-6}})->solve(view, cb::SolveContext{});
+    EXPECT_EQ(kkt.status, SolveStatus::CONVERGED) << kkt.message;
+    EXPECT_EQ(kkt.info.value("ipopt_retries", -1), 1);
+    EXPECT_DOUBLE_EQ(kkt.info.value("ipopt_tol_last", 0.0), 1e-11);  // 1e-2 tol, then / 1e3
+    const Vec g = qp.A * kkt.x - qp.b;
+    EXPECT_LE(cb::accuracy_from_gradient(view, cb::accuracy_scale(view), kkt.x, g, kkt.lambda).max(), 1e-6);
+    const SolverResult native =
+        cb::builtin_registry().create("ipopt", {{"tol", 1e-10}, {"stop", "native"}})->solve(view, cb::SolveContext{});
+    EXPECT_EQ(native.status, SolveStatus::CONVERGED) << native.message;
+    EXPECT_EQ(native.info.value("ipopt_retries", -1), 0);
 }
 
 // max_iterations maps onto TaoSetMaximumIterations: TAO stops with DIVERGED_MAXITS after exactly

@@ -1,6 +1,7 @@
 // The PETSc TAO peers (solvers/peers/tao_*, compiled only when PETSc is found): tao-tron on bound
-// rows against active-set and its refusals, and the guard that ends TAOPDIPM's endless retries of
-// a failing Newton step. A peer that is not built is skipped.
+// rows against active-set and its refusals, the guard that ends TAOPDIPM's endless retries of a
+// failing Newton step, and each child's own Open MPI session folder. A peer that is not built is
+// skipped.
 #include "problems/synthetic.hpp"
 #include "solvers/accuracy.hpp"
 #include "solvers/mprgp_box.hpp"
@@ -10,6 +11,10 @@
 #include <gtest/gtest.h>
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
 
 namespace {
 
@@ -170,4 +175,40 @@ TEST(TaoPdipm, StopsOnTheHarnessTestWhateverTheObjectiveScale)
     const SolverResult ref = solve("active-set", qp, {{"tol", 1e-10}});
     const double scale = (ref.x - qp.x0).lpNorm<Eigen::Infinity>();
     EXPECT_LE((rs.x - ref.x).lpNorm<Eigen::Infinity>(), 1e-4 * scale);
+}
+
+// Each TAO child starts Open MPI in a session folder of its own (a fresh folder under TMPDIR,
+// removed afterwards), not in the one shared folder TMPDIR/ompi.<host>.<uid> where two children
+// starting at once raced ("mkdir ... File exists", MPI_Init_thread aborts). The shared name is
+// taken here by a plain file, which makes Open MPI's mkdir fail every time it is used: both peers
+// still converge, and nothing but that file is left in TMPDIR.
+TEST(TaoPeers, StartOpenMpiInTheirOwnSessionFolder)
+{
+    if (!built("tao-pdipm") || !built("tao-tron")) GTEST_SKIP() << "the TAO peers are not built";
+    namespace fs = std::filesystem;
+    std::string pattern = (fs::temp_directory_path() / "cb-test-tao-tmp-XXXXXX").string();
+    ASSERT_NE(::mkdtemp(pattern.data()), nullptr);
+    const fs::path folder = pattern;
+    char host[256] = {};
+    ASSERT_EQ(::gethostname(host, sizeof host - 1), 0);
+    std::string short_host = host;  // Open MPI drops the domain
+    short_host = short_host.substr(0, short_host.find('.'));
+    const fs::path shared = folder / ("ompi." + short_host + "." + std::to_string(::getuid()));
+    std::ofstream(shared) << "a file where Open MPI's shared session folder would go\n";
+    const char* old = std::getenv("TMPDIR");
+    const std::string saved = old ? old : "";
+    ::setenv("TMPDIR", folder.c_str(), 1);
+    const Qp qp = cb::make_synthetic("box", {{"nx", 3}, {"ny", 3}, {"nz", 3}}, 2);
+    const SolverResult pdipm = solve("tao-pdipm", qp, {{"tol", 1e-6}});
+    const SolverResult tron = solve("tao-tron", qp, {{"tol", 1e-6}});
+    if (old)
+        ::setenv("TMPDIR", saved.c_str(), 1);
+    else
+        ::unsetenv("TMPDIR");
+    EXPECT_EQ(pdipm.status, SolveStatus::CONVERGED) << pdipm.message;
+    EXPECT_EQ(tron.status, SolveStatus::CONVERGED) << tron.message;
+    std::vector<std::string> left;
+    for (const auto& entry : fs::directory_iterator(folder)) left.push_back(entry.path().filename().string());
+    EXPECT_EQ(left, std::vector<std::string>{shared.filename().string()});
+    fs::remove_all(folder);
 }

@@ -59,12 +59,12 @@ struct Toy {
 
 const SettingsTable<Toy>& toy_table()
 {
-    static const SettingsTable<Toy> table = SettingsTable<Toy>()
-                                                .choice("mode", &Toy::mode, {"a", "b"}, "a | b")
-                                                .number("step", &Toy::step, 0.0, 1.0, "step",
-                                                        [](const Toy& t) { return t.mode == "b" ? 0.25 : t.step; })
-                                                .integer("rounds", &Toy::rounds, 1, 10, "rounds")
-                                                .boolean("fast", &Toy::fast, "fast");
+    static const SettingsTable<Toy> table =
+        SettingsTable<Toy>()
+            .choice("mode", &Toy::mode, {"a", "b"}, "a | b")
+            .number("step", &Toy::step, 0.0, 1.0, "step", [](const Toy& t) { return t.mode == "b" ? 0.25 : t.step; })
+            .integer("rounds", &Toy::rounds, 1, 10, "rounds")
+            .boolean("fast", &Toy::fast, "fast");
     return table;
 }
 
@@ -118,6 +118,48 @@ TEST(SettingsTable, ReadsChecksWritesAndDocuments)
         InputError);
     EXPECT_THROW(read_toy({{"rounds", 0}}), InputError);
     EXPECT_THROW(read_toy({{"other", 0}}), InputError);
+}
+
+/// A solver whose struct starts the common block from other defaults (as active-set's tol 1e-10).
+struct StrictToy {
+    CommonSettings common = CommonSettings{}.with_tol(1e-9);
+    long rounds = 3;
+};
+
+class StrictToySolver final : public Solver {
+public:
+    explicit StrictToySolver(StrictToy settings) : m_settings(settings) {}
+    std::string name() const override { return "strict-toy"; }
+    nlohmann::json settings() const override { return nlohmann::json::object(); }
+    SolverResult solve(const QpView&, const SolveContext&) override { return SolverResult{}; }
+    StrictToy m_settings;
+};
+
+TEST(SettingsTable, SolverOwnCommonDefaultIsReadAndDocumented)
+{
+    static const SettingsTable<StrictToy> table =
+        SettingsTable<StrictToy>().integer("rounds", &StrictToy::rounds, 1, 10, "rounds");
+    EXPECT_EQ(read_settings(nlohmann::json::object(), "strict-toy", table).common.tol, 1e-9);
+    EXPECT_EQ(read_settings({{"tol", 1e-4}}, "strict-toy", table).common.tol, 1e-4);
+    // Only tol differs from the common block: one help line, before the solver's own rows.
+    const SolverEntry entry = solver_entry<StrictToySolver>("strict-toy", table, "toy");
+    ASSERT_EQ(entry.settings.size(), 2u);
+    EXPECT_EQ(entry.settings[0].key, "tol");
+    EXPECT_EQ(entry.settings[0].default_value, "1e-9");
+    EXPECT_EQ(entry.settings[0].doc, "(this solver's default; the common one is 1e-6)");
+    EXPECT_EQ(entry.settings[1].key, "rounds");
+    EXPECT_TRUE(common_default_overrides(CommonSettings{}).empty());
+    EXPECT_EQ(common_settings_table().docs(CommonSettings{}.with_tol(0.5))[0].default_value, "0.5");
+}
+
+TEST(SettingsTable, ActiveSetDefaultTolIsTheReferenceAccuracy)
+{
+    const SolverEntry& entry = builtin_registry().entry("active-set");
+    ASSERT_FALSE(entry.settings.empty());
+    EXPECT_EQ(entry.settings[0].key, "tol");
+    EXPECT_EQ(entry.settings[0].default_value, "1e-10");
+    EXPECT_EQ(builtin_registry().create("active-set", nlohmann::json::object())->settings()["tol"].get<double>(),
+              1e-10);
 }
 
 TEST(SettingsTable, DefaultTexts)
