@@ -5,6 +5,7 @@
 // infeasible count stops dropping, warm-started from the last set; projected Gauss-Seidel fallback.
 #include "solvers/coupled_face_operators.hpp"
 
+#include "solvers/dense_set_factor.hpp"
 #include "solvers/masked_gram_factor.hpp"
 #include "solvers/work_units.hpp"
 
@@ -24,6 +25,11 @@ namespace {
 // own norm, so rows scaled by 1e-3 and 1e3 in one J are not regularised away, while a duplicated
 // or parallel row still gets a (split) multiplier.
 constexpr double GRAM_SHIFT = 1e-12;
+
+// Large components' projection LCP sets of up to this many rows use a dense Cholesky factor kept by
+// row appends and deletions (dense_set_factor.hpp): at 128 rows an append or deletion costs ~16k
+// flops, about what one of CHOLMOD's row modifications costs on flank_press's 1152-row factor.
+constexpr int DENSE_SET_MAX_ROWS = 128;
 
 struct LcpTally {
     long& pgs_fallbacks;
@@ -623,6 +629,8 @@ public:
         // an expansion's projection set nearly equals the next face, the face the chopped set.
         m_donors = {m_face_factor.get(), m_chopped_factor.get(), m_projection_factors[0].get(),
                     m_projection_factors[1].get(), m_projection_factors[2].get()};
+        m_scaled = scaled_shifted(m_gram, m_scale);
+        for (auto& d : m_dense_sets) d = std::make_unique<DenseSetFactor>(m_scaled, DENSE_SET_MAX_ROWS);
         const size_t k = m_rows.size();
         m_all.resize(k);
         std::iota(m_all.begin(), m_all.end(), 0);
@@ -650,12 +658,12 @@ public:
     }
     bool face_lcp(const double* q, double* mu, Counters& cnt, LcpTally& tally) override
     {
-        return lcp(m_face, q, nullptr, m_face_set, *m_chopped_factor, mu, cnt, tally);
+        return lcp(m_face, q, nullptr, m_face_set, *m_chopped_factor, nullptr, mu, cnt, tally);
     }
     bool block_lcp(const double* q, double* lam, const char* fixed, int use, Counters& cnt, LcpTally& tally) override
     {
         const size_t u = static_cast<size_t>(use);
-        return lcp(m_all, q, fixed, m_use_sets[u], *m_projection_factors[u], lam, cnt, tally);
+        return lcp(m_all, q, fixed, m_use_sets[u], *m_projection_factors[u], m_dense_sets[u].get(), lam, cnt, tally);
     }
     void add_tally(MaskedFactorTally& t) const override
     {
@@ -668,6 +676,12 @@ public:
             t.row_deletions += f->tally().row_deletions;
             t.reuses += f->tally().reuses;
             t.copies += f->tally().copies;
+        }
+        t.dense_set_solves += m_dense_solves;
+        for (const auto& d : m_dense_sets) {
+            t.dense_set_appends += d->appends();
+            t.dense_set_removals += d->removals();
+            t.dense_set_rebuilds += d->rebuilds();
         }
     }
 
@@ -698,27 +712,34 @@ private:
 
     /// m_z = G(S, S)^-1 q_S on the set S (zero off it), with the set's factor modified to S.
     bool solve_on_set(const std::vector<int>& universe, const double* q, const std::vector<char>& set,
-                      MaskedGramFactor& f, Counters& cnt)
+                      MaskedGramFactor& f, DenseSetFactor* dense, Counters& cnt)
     {
         std::fill(m_mask.begin(), m_mask.end(), 0);
-        bool empty = true;
+        int in = 0;
         for (size_t r = 0; r < universe.size(); ++r)
             if (set[r]) {
                 m_mask[static_cast<size_t>(universe[r])] = 1;
-                empty = false;
+                ++in;
             }
-        if (empty) {
+        if (in == 0) {
             // Nothing to factor: z = 0, and the factor stays warm for the next set (flank_press
             // frame 0: 5 refactorisations to the identity before).
             m_z.setZero();
             ++cnt.lcp_iterations;
             return true;
         }
-        if (!f.set_mask(m_mask, cnt, &m_donors)) return false;
+        // A small set on its dense factor; else (or when that factor refuses) the masked sparse one.
+        const bool on_dense = dense != nullptr && in <= dense->capacity() && dense->set_mask(m_mask, cnt);
+        if (!on_dense && !f.set_mask(m_mask, cnt, &m_donors)) return false;
         m_b.setZero();
         for (size_t r = 0; r < universe.size(); ++r)
             if (set[r]) m_b[universe[r]] = m_scale[universe[r]] * q[r];
-        f.solve(m_b.data(), cnt);
+        if (on_dense) {
+            dense->solve(m_b.data(), cnt);
+            ++m_dense_solves;
+        } else {
+            f.solve(m_b.data(), cnt);
+        }
         m_z = m_scale.cwiseProduct(m_b);
         ++cnt.lcp_iterations;
         return true;
@@ -732,8 +753,9 @@ private:
     /// cycled here: on flank_press frame 0 it took 946 pivots and 8933 row flips (Murty's single
     /// flips ran up to 71 pivots in one LCP). Rows flagged in `fixed` are equalities (lam of
     /// either sign, never leave). At most lcp_max_pivots + 2 |U| steps, then PGS.
+    /// `dense` (may be null): the set's dense factor, used while the set has at most its capacity rows.
     bool lcp(const std::vector<int>& universe, const double* q, const char* fixed, std::vector<char>& set,
-             MaskedGramFactor& f, double* lam, Counters& cnt, LcpTally& tally)
+             MaskedGramFactor& f, DenseSetFactor* dense, double* lam, Counters& cnt, LcpTally& tally)
     {
         ++tally.solves;
         const size_t ku = universe.size();
@@ -750,7 +772,7 @@ private:
         m_added.assign(ku, 0);
         // A feasible start from the warm set: the set's solution with its negative rows dropped.
         m_cur.setZero();
-        bool solved = solve_on_set(universe, q, set, f, cnt);
+        bool solved = solve_on_set(universe, q, set, f, dense, cnt);
         bool dropped = false;  // else m_z is already the first step's solve on the same set
         if (solved) {
             for (size_t r = 0; r < ku; ++r) {
@@ -771,7 +793,7 @@ private:
         double best_f = std::numeric_limits<double>::infinity();
         const long max_steps = m_max_pivots + 2 * static_cast<long>(ku);
         for (long step = 0; solved && step < max_steps; ++step) {
-            if ((step > 0 || dropped) && !(solved = solve_on_set(universe, q, set, f, cnt))) break;
+            if ((step > 0 || dropped) && !(solved = solve_on_set(universe, q, set, f, dense, cnt))) break;
             double zinf = 0.0;
             for (size_t r = 0; r < ku; ++r)
                 if (set[r]) zinf = std::max(zinf, std::abs(m_z[universe[r]]));
@@ -876,6 +898,9 @@ private:
     std::array<std::unique_ptr<MaskedGramFactor>, PROJECTION_USES> m_projection_factors;
     std::array<std::vector<char>, PROJECTION_USES> m_use_sets;
     std::vector<const MaskedGramFactor*> m_donors;
+    SpMatCol m_scaled;  // the scaled, shifted J_B J_B' (the dense set factors read it)
+    std::array<std::unique_ptr<DenseSetFactor>, PROJECTION_USES> m_dense_sets;
+    long m_dense_solves = 0;
     std::vector<int> m_all, m_bad;
     std::vector<char> m_mask, m_added;
     Vec m_b, m_z, m_cur, m_w;
@@ -1070,7 +1095,11 @@ nlohmann::json CoupledFaceOperators::stats() const
             {"sparse_row_additions", t.row_additions},
             {"sparse_row_deletions", t.row_deletions},
             {"sparse_factor_reuses", t.reuses},
-            {"sparse_factor_copies", t.copies}};
+            {"sparse_factor_copies", t.copies},
+            {"dense_set_solves", t.dense_set_solves},
+            {"dense_set_appends", t.dense_set_appends},
+            {"dense_set_removals", t.dense_set_removals},
+            {"dense_set_rebuilds", t.dense_set_rebuilds}};
 }
 
 }  // namespace cb

@@ -24,6 +24,8 @@ struct MaskedFactorTally {
     long row_deletions = 0;     ///< cholmod_rowdel calls
     long reuses = 0;            ///< set_mask calls with the mask already factored
     long copies = 0;            ///< a donor's factor copied instead of a refactorisation
+    // The dense factors of small LCP sets beside the masked ones (coupled_face_operators.cpp).
+    long dense_set_solves = 0, dense_set_appends = 0, dense_set_removals = 0, dense_set_rebuilds = 0;
 };
 
 class MaskedGramFactor {
