@@ -251,7 +251,6 @@ private:
     /// nu, phi = g - J_A' nu and (with with_z) the direction z, from the current g and face.
     void face_gradient(bool with_z)
     {
-        m_phi_stats_fresh = false;
         rows_times(m_g, m_jg);
         m_ops->face_multipliers(m_jg, m_nu, m_cnt);
         m_phi = m_g;
@@ -270,95 +269,6 @@ private:
         for (int j : m_face_dofs) m_tmp[j] = m_g[j];
         add_rows_transpose(m_eta, -1.0, m_tmp);
         for (int j : m_face_dofs) m_z[j] = m_dinv[j] * m_tmp[j];
-    }
-    /// Ap = A p, with p'Ap, p'phi and z'phi summed in the same pass over A (one counted A-product;
-    /// three n-vector passes fewer per CG trial, as mprgp's product_dot).
-    void product_with_dots(double& pap, double& pphi, double& zphi)
-    {
-        const int* __restrict outer = m_A.outerIndexPtr();
-        const int* __restrict inner = m_A.innerIndexPtr();
-        const double* __restrict val = m_A.valuePtr();
-        const double* __restrict p = m_p.data();
-        const double* __restrict z = m_z.data();
-        const double* __restrict phi = m_phi.data();
-        double* __restrict ap = m_Ap.data();
-        double s_pap = 0.0, s_pphi = 0.0, s_zphi = 0.0;
-        for (Eigen::Index i = 0; i < m_n; ++i) {
-            double s = 0.0;
-            for (int k = outer[i]; k < outer[i + 1]; ++k) s += val[k] * p[inner[k]];
-            ap[i] = s;
-            s_pap += p[i] * s;
-            s_pphi += p[i] * phi[i];
-            s_zphi += z[i] * phi[i];
-        }
-        ++m_cnt.a_products;
-        pap = s_pap;
-        pphi = s_pphi;
-        zphi = s_zphi;
-    }
-    /// An accepted CG step on a fixed face: x -= alpha p, g -= alpha Ap, then phi, z (face_gradient)
-    /// and p = z - beta p with beta = z'Ap / p'Ap. One pass writes x, g and the uncorrected phi = g,
-    /// z = D^-1 g and sums, over the DOFs no face row touches (where the face corrections leave
-    /// phi and z alone), z'Ap and evaluate's phi'phi and scaled max |phi|; the face rows' DOFs add
-    /// theirs after the corrections. Replaces eight n-vector passes by two.
-    void cg_update(double alpha, double pap)
-    {
-        m_phi_stats_fresh = false;
-        double zap = 0.0, phi2 = 0.0, stat_free = 0.0;
-        {
-            double* __restrict x = m_x.data();
-            double* __restrict g = m_g.data();
-            double* __restrict phi = m_phi.data();
-            double* __restrict z = m_z.data();
-            const double* __restrict p = m_p.data();
-            const double* __restrict ap = m_Ap.data();
-            const double* __restrict dinv = m_dinv.data();
-            const double* __restrict w = m_scale.inv_diag.data();
-            const char* __restrict face_dof = m_face_dof.data();
-            for (Eigen::Index j = 0; j < m_n; ++j) {
-                x[j] -= alpha * p[j];
-                const double gj = g[j] - alpha * ap[j];
-                g[j] = gj;
-                phi[j] = gj;
-                const double zj = m_jacobi ? dinv[j] * gj : gj;
-                z[j] = zj;
-                if (!face_dof[j]) {
-                    zap += zj * ap[j];
-                    phi2 += gj * gj;
-                    stat_free = std::max(stat_free, std::abs(gj) * w[j]);
-                }
-            }
-        }
-        rows_times(m_g, m_jg);
-        m_ops->face_multipliers(m_jg, m_nu, m_cnt);
-        add_rows_transpose(m_nu, -1.0, m_phi);
-        ++m_cnt.precond_applications;
-        if (m_jacobi) {
-            // z = D^-1 (g - J_A' eta) on the face rows' DOFs (face_gradient's correction).
-            rows_times(m_z, m_jdg);
-            m_ops->jacobi_multipliers(m_jdg, m_eta, m_cnt);
-            for (int j : m_face_dofs) m_tmp[j] = m_g[j];
-            add_rows_transpose(m_eta, -1.0, m_tmp);
-            for (int j : m_face_dofs) m_z[j] = m_dinv[j] * m_tmp[j];
-        } else {
-            for (int j : m_face_dofs) m_z[j] = m_phi[j];
-        }
-        double stat_phi = stat_free;
-        for (int j : m_face_dofs) {
-            zap += m_z[j] * m_Ap[j];
-            phi2 += m_phi[j] * m_phi[j];
-            stat_phi = std::max(stat_phi, std::abs(m_phi[j]) * m_scale.inv_diag[j]);
-        }
-        const double beta_cg = zap / pap;
-        {
-            double* __restrict p = m_p.data();
-            const double* __restrict z = m_z.data();
-            for (Eigen::Index j = 0; j < m_n; ++j) p[j] = z[j] - beta_cg * p[j];
-        }
-        m_fresh_phi2 = phi2;
-        m_fresh_stat_phi = stat_phi;
-        m_fresh_stat_free = stat_free;
-        m_phi_stats_fresh = true;
     }
     /// m_face_dof / m_face_dofs: the DOFs some face row touches (after every face change).
     void list_face_dofs()
@@ -460,10 +370,6 @@ private:
     std::vector<char> m_face_dof;  // flags of m_face_dofs
     std::vector<int> m_face_dofs;
     bool m_face_dofs_known = false;
-    // phi'phi and the scaled max |phi| (all DOFs, and those of no face row) from cg_update's pass,
-    // valid until phi changes (face_gradient), used by the next evaluate.
-    bool m_phi_stats_fresh = false;
-    double m_fresh_phi2 = 0.0, m_fresh_stat_phi = 0.0, m_fresh_stat_free = 0.0;
     long m_chopped_solved = 0, m_chopped_deferred = 0, m_proportional_by_bound = 0;
     long m_proportional_by_sweeps = 0, m_bound_sweeps = 0;
     Vec m_mu_bound;
@@ -472,22 +378,15 @@ private:
 void CoupledRun::evaluate(bool exact)
 {
     rows_times(m_phi, m_jphi);
+    m_phi2 = m_phi.squaredNorm();
     rows_times(m_x, m_jx);
     // The parts of the accuracy error that do not depend on mu: the feasibility, and the
     // stationarity at DOFs no face row touches (there g - J_A'mu = g = phi for every mu).
     double stat_phi = 0.0, stat_free = 0.0;
-    if (m_phi_stats_fresh) {
-        m_phi2 = m_fresh_phi2;  // summed by cg_update's pass
-        stat_phi = m_fresh_stat_phi;
-        stat_free = m_fresh_stat_free;
-    } else {
-        m_phi2 = 0.0;
-        for (Eigen::Index j = 0; j < m_n; ++j) {
-            m_phi2 += m_phi[j] * m_phi[j];
-            const double r = std::abs(m_phi[j]) * m_scale.inv_diag[j];
-            stat_phi = std::max(stat_phi, r);
-            if (!m_face_dof[static_cast<size_t>(j)]) stat_free = std::max(stat_free, r);
-        }
+    for (Eigen::Index j = 0; j < m_n; ++j) {
+        const double r = std::abs(m_phi[j]) * m_scale.inv_diag[j];
+        stat_phi = std::max(stat_phi, r);
+        if (!m_face_dof[static_cast<size_t>(j)]) stat_free = std::max(stat_free, r);
     }
     m_face_error = stat_phi * m_scale.inv_length;
     m_primal = 0.0;
@@ -836,15 +735,17 @@ SolverResult CoupledRun::run()
         bool do_expansion = false;
         if (proportional) {
             // --- CG trial step (Alg. 2), F(P(y)) - F(P(x)) in difference form ---
-            double pap = 0.0, pg = 0.0, zphi = 0.0;
-            product_with_dots(pap, pg, zphi);
+            a_product(m_A, m_p, m_Ap);
+            ++m_cnt.a_products;
+            const double pap = m_p.dot(m_Ap);
             if (!(pap > 0.0) || !std::isfinite(pap)) {
                 status = pap == 0.0 ? SolveStatus::STALLED : SolveStatus::DIVERGED;
                 why = "p'Ap <= 0";
                 break;
             }
-            const double alpha = zphi / pap;  // z'g = z'phi (z in null(J_A)), without cancellation
+            const double alpha = m_z.dot(m_phi) / pap;  // z'g = z'phi (z in null(J_A)), without cancellation
             m_cg_alpha = alpha;
+            const double pg = m_p.dot(m_phi);
             const double df = -alpha * pg + 0.5 * alpha * alpha * pap;  // F(x - alpha p) - F(x)
             rows_times(m_p, m_jp);
             for (Eigen::Index i = 0; i < m_m; ++i) m_q[i] = m_c[i] - m_jx[i] + alpha * m_jp[i];
@@ -885,7 +786,11 @@ SolverResult CoupledRun::run()
             }
             clear_d();
             if (accept) {
-                cg_update(alpha, pap);
+                m_x -= alpha * m_p;
+                m_g -= alpha * m_Ap;
+                face_gradient(true);
+                const double beta_cg = m_z.dot(m_Ap) / pap;
+                m_p = m_z - beta_cg * m_p;
                 m_f_x += df;
                 m_corr_x = corr_y;
                 m_x_feasible = !moved;
