@@ -5,6 +5,7 @@
 // infeasible count stops dropping, warm-started from the last set; projected Gauss-Seidel fallback.
 #include "solvers/coupled_face_operators.hpp"
 
+#include "solvers/dense_set_factor.hpp"
 #include "solvers/masked_gram_factor.hpp"
 #include "solvers/work_units.hpp"
 
@@ -24,6 +25,11 @@ namespace {
 // own norm, so rows scaled by 1e-3 and 1e3 in one J are not regularised away, while a duplicated
 // or parallel row still gets a (split) multiplier.
 constexpr double GRAM_SHIFT = 1e-12;
+
+// Large components' projection LCP sets of up to this many rows use a dense Cholesky factor kept by
+// row appends and deletions (dense_set_factor.hpp): at 128 rows an append or deletion costs ~16k
+// flops, about what one of CHOLMOD's row modifications costs on flank_press's 1152-row factor.
+constexpr int DENSE_SET_MAX_ROWS = 128;
 
 struct LcpTally {
     long& pgs_fallbacks;
@@ -101,7 +107,7 @@ public:
         if (m_initialised && m_next == m_face) return false;
         m_initialised = true;
         m_face.swap(m_next);
-        m_face_set.assign(m_face.size(), 0);
+        m_face_set.assign(m_face.size(), m_fresh_face_set);
         if (!m_face.empty()) refactor(cnt);
         return true;
     }
@@ -123,6 +129,7 @@ protected:
     virtual void refactor(Counters& cnt) = 0;
     std::vector<int> m_rows, m_face, m_next;
     std::vector<char> m_face_set, m_proj_set;
+    char m_fresh_face_set = 0;  ///< the chopped LCP's warm set after a face change: no row, or (1) every face row
     bool m_initialised = false;
 };
 
@@ -603,6 +610,10 @@ public:
         m_gram = SpMatCol(JB * JB.transpose());
         m_gram.makeCompressed();
         const long max_updates = std::max(1L, opt.sparse_max_updates);
+        // After a face change the chopped LCP starts from the whole face: its first solve is then nu
+        // on the face factor's mask (copied, MaskedGramFactor::set_mask), and the negative rows leave
+        // one by one, where an empty start added the rows in blocks of hundreds, each refactored.
+        m_fresh_face_set = 1;
         m_scale = unit_diagonal_scale(m_gram);
         m_face_factor = std::make_unique<MaskedGramFactor>(scaled_shifted(m_gram, m_scale), max_updates);
         m_chopped_factor = std::make_unique<MaskedGramFactor>(scaled_shifted(m_gram, m_scale), max_updates);
@@ -614,6 +625,12 @@ public:
             m_scale_d = unit_diagonal_scale(gram_d);
             m_face_factor_d = std::make_unique<MaskedGramFactor>(scaled_shifted(gram_d, m_scale_d), max_updates);
         }
+        // The factors of the scaled, shifted J_B J_B' are donors to each other (MaskedGramFactor::set_mask):
+        // an expansion's projection set nearly equals the next face, the face the chopped set.
+        m_donors = {m_face_factor.get(), m_chopped_factor.get(), m_projection_factors[0].get(),
+                    m_projection_factors[1].get(), m_projection_factors[2].get()};
+        m_scaled = scaled_shifted(m_gram, m_scale);
+        for (auto& d : m_dense_sets) d = std::make_unique<DenseSetFactor>(m_scaled, DENSE_SET_MAX_ROWS);
         const size_t k = m_rows.size();
         m_all.resize(k);
         std::iota(m_all.begin(), m_all.end(), 0);
@@ -641,12 +658,12 @@ public:
     }
     bool face_lcp(const double* q, double* mu, Counters& cnt, LcpTally& tally) override
     {
-        return lcp(m_face, q, nullptr, m_face_set, *m_chopped_factor, mu, cnt, tally);
+        return lcp(m_face, q, nullptr, m_face_set, *m_chopped_factor, nullptr, mu, cnt, tally);
     }
     bool block_lcp(const double* q, double* lam, const char* fixed, int use, Counters& cnt, LcpTally& tally) override
     {
         const size_t u = static_cast<size_t>(use);
-        return lcp(m_all, q, fixed, m_use_sets[u], *m_projection_factors[u], lam, cnt, tally);
+        return lcp(m_all, q, fixed, m_use_sets[u], *m_projection_factors[u], m_dense_sets[u].get(), lam, cnt, tally);
     }
     void add_tally(MaskedFactorTally& t) const override
     {
@@ -658,6 +675,13 @@ public:
             t.row_additions += f->tally().row_additions;
             t.row_deletions += f->tally().row_deletions;
             t.reuses += f->tally().reuses;
+            t.copies += f->tally().copies;
+        }
+        t.dense_set_solves += m_dense_solves;
+        for (const auto& d : m_dense_sets) {
+            t.dense_set_appends += d->appends();
+            t.dense_set_removals += d->removals();
+            t.dense_set_rebuilds += d->rebuilds();
         }
     }
 
@@ -682,22 +706,40 @@ private:
     {
         std::fill(m_mask.begin(), m_mask.end(), 0);
         for (int r : m_face) m_mask[static_cast<size_t>(r)] = 1;
-        m_face_factor->set_mask(m_mask, cnt);
+        m_face_factor->set_mask(m_mask, cnt, &m_donors);
         if (m_jacobi) m_face_factor_d->set_mask(m_mask, cnt);
     }
 
     /// m_z = G(S, S)^-1 q_S on the set S (zero off it), with the set's factor modified to S.
     bool solve_on_set(const std::vector<int>& universe, const double* q, const std::vector<char>& set,
-                      MaskedGramFactor& f, Counters& cnt)
+                      MaskedGramFactor& f, DenseSetFactor* dense, Counters& cnt)
     {
         std::fill(m_mask.begin(), m_mask.end(), 0);
+        int in = 0;
         for (size_t r = 0; r < universe.size(); ++r)
-            if (set[r]) m_mask[static_cast<size_t>(universe[r])] = 1;
-        if (!f.set_mask(m_mask, cnt)) return false;
+            if (set[r]) {
+                m_mask[static_cast<size_t>(universe[r])] = 1;
+                ++in;
+            }
+        if (in == 0) {
+            // Nothing to factor: z = 0, and the factor stays warm for the next set (flank_press
+            // frame 0: 5 refactorisations to the identity before).
+            m_z.setZero();
+            ++cnt.lcp_iterations;
+            return true;
+        }
+        // A small set on its dense factor; else (or when that factor refuses) the masked sparse one.
+        const bool on_dense = dense != nullptr && in <= dense->capacity() && dense->set_mask(m_mask, cnt);
+        if (!on_dense && !f.set_mask(m_mask, cnt, &m_donors)) return false;
         m_b.setZero();
         for (size_t r = 0; r < universe.size(); ++r)
             if (set[r]) m_b[universe[r]] = m_scale[universe[r]] * q[r];
-        f.solve(m_b.data(), cnt);
+        if (on_dense) {
+            dense->solve(m_b.data(), cnt);
+            ++m_dense_solves;
+        } else {
+            f.solve(m_b.data(), cnt);
+        }
         m_z = m_scale.cwiseProduct(m_b);
         ++cnt.lcp_iterations;
         return true;
@@ -711,8 +753,9 @@ private:
     /// cycled here: on flank_press frame 0 it took 946 pivots and 8933 row flips (Murty's single
     /// flips ran up to 71 pivots in one LCP). Rows flagged in `fixed` are equalities (lam of
     /// either sign, never leave). At most lcp_max_pivots + 2 |U| steps, then PGS.
+    /// `dense` (may be null): the set's dense factor, used while the set has at most its capacity rows.
     bool lcp(const std::vector<int>& universe, const double* q, const char* fixed, std::vector<char>& set,
-             MaskedGramFactor& f, double* lam, Counters& cnt, LcpTally& tally)
+             MaskedGramFactor& f, DenseSetFactor* dense, double* lam, Counters& cnt, LcpTally& tally)
     {
         ++tally.solves;
         const size_t ku = universe.size();
@@ -729,7 +772,7 @@ private:
         m_added.assign(ku, 0);
         // A feasible start from the warm set: the set's solution with its negative rows dropped.
         m_cur.setZero();
-        bool solved = solve_on_set(universe, q, set, f, cnt);
+        bool solved = solve_on_set(universe, q, set, f, dense, cnt);
         bool dropped = false;  // else m_z is already the first step's solve on the same set
         if (solved) {
             for (size_t r = 0; r < ku; ++r) {
@@ -750,7 +793,7 @@ private:
         double best_f = std::numeric_limits<double>::infinity();
         const long max_steps = m_max_pivots + 2 * static_cast<long>(ku);
         for (long step = 0; solved && step < max_steps; ++step) {
-            if ((step > 0 || dropped) && !(solved = solve_on_set(universe, q, set, f, cnt))) break;
+            if ((step > 0 || dropped) && !(solved = solve_on_set(universe, q, set, f, dense, cnt))) break;
             double zinf = 0.0;
             for (size_t r = 0; r < ku; ++r)
                 if (set[r]) zinf = std::max(zinf, std::abs(m_z[universe[r]]));
@@ -795,8 +838,17 @@ private:
             // z >= 0 on the set: the minimiser there. Rows off the set with w < 0 enter.
             for (size_t r = 0; r < ku; ++r)
                 if (set[r]) m_cur[universe[r]] = is_fixed(r) ? m_z[universe[r]] : std::max(0.0, m_z[universe[r]]);
-            m_w.noalias() = m_gram * m_cur;
-            cnt.work_flops += sparse_product_flops(static_cast<double>(m_gram.nonZeros()));
+            // w = G cur over the columns of the set only (projection sets hold 10-100 of flank_press's
+            // 1152 rows); the same sums in the same order as the full product.
+            m_w.setZero();
+            long touched = 0;
+            for (Eigen::Index j = 0; j < m_gram.outerSize(); ++j) {
+                const double cj = m_cur[j];
+                if (cj == 0.0) continue;
+                for (SpMatCol::InnerIterator it(m_gram, j); it; ++it) m_w[it.index()] += it.value() * cj;
+                touched += m_gram.outerIndexPtr()[j + 1] - m_gram.outerIndexPtr()[j];
+            }
+            cnt.work_flops += sparse_product_flops(static_cast<double>(touched));
             double f_set = 0.0;  // 1/2 lam'G lam - q'lam
             for (size_t r = 0; r < ku; ++r)
                 if (set[r]) f_set += m_cur[universe[r]] * (0.5 * m_w[universe[r]] - q[r]);
@@ -845,6 +897,10 @@ private:
     std::unique_ptr<MaskedGramFactor> m_face_factor, m_face_factor_d, m_chopped_factor;
     std::array<std::unique_ptr<MaskedGramFactor>, PROJECTION_USES> m_projection_factors;
     std::array<std::vector<char>, PROJECTION_USES> m_use_sets;
+    std::vector<const MaskedGramFactor*> m_donors;
+    SpMatCol m_scaled;  // the scaled, shifted J_B J_B' (the dense set factors read it)
+    std::array<std::unique_ptr<DenseSetFactor>, PROJECTION_USES> m_dense_sets;
+    long m_dense_solves = 0;
     std::vector<int> m_all, m_bad;
     std::vector<char> m_mask, m_added;
     Vec m_b, m_z, m_cur, m_w;
@@ -1038,7 +1094,12 @@ nlohmann::json CoupledFaceOperators::stats() const
             {"sparse_refactorizations", t.refactorizations},
             {"sparse_row_additions", t.row_additions},
             {"sparse_row_deletions", t.row_deletions},
-            {"sparse_factor_reuses", t.reuses}};
+            {"sparse_factor_reuses", t.reuses},
+            {"sparse_factor_copies", t.copies},
+            {"dense_set_solves", t.dense_set_solves},
+            {"dense_set_appends", t.dense_set_appends},
+            {"dense_set_removals", t.dense_set_removals},
+            {"dense_set_rebuilds", t.dense_set_rebuilds}};
 }
 
 }  // namespace cb

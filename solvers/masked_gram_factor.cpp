@@ -96,14 +96,49 @@ bool MaskedGramFactor::refactor(Counters& cnt)
     return m_ok;
 }
 
-bool MaskedGramFactor::set_mask(const std::vector<char>& mask, Counters& cnt)
+long MaskedGramFactor::distance(const std::vector<char>& mask) const
 {
+    if (!m_factored || !m_ok) return static_cast<long>(m_k) + 1;
     long changes = 0;
     for (int j = 0; j < m_k; ++j)
         changes += (mask[static_cast<size_t>(j)] != 0) != (m_mask[static_cast<size_t>(j)] != 0);
-    if (m_factored && m_ok && changes == 0) {
+    return changes;
+}
+
+bool MaskedGramFactor::set_mask(const std::vector<char>& mask, Counters& cnt,
+                                const std::vector<const MaskedGramFactor*>* donors)
+{
+    long changes = distance(mask);
+    if (changes == 0) {
         ++m_tally.reuses;
         return true;
+    }
+    if (changes > m_max_updates && donors != nullptr) {
+        // A warm factor elsewhere (the face's for the chopped set, another use's projection set)
+        // saves the refactorisation: copy it, then modify it row by row below.
+        const MaskedGramFactor* nearest = nullptr;
+        long nearest_changes = m_max_updates + 1;
+        for (const MaskedGramFactor* d : *donors) {
+            if (d == nullptr || d == this || d->m_k != m_k) continue;
+            const long c = d->distance(mask);
+            if (c < nearest_changes) {
+                nearest = d;
+                nearest_changes = c;
+            }
+        }
+        if (nearest != nullptr) {
+            cholmod_factor* copy = cholmod_copy_factor(nearest->m_L, &m_cm);
+            if (copy != nullptr) {
+                cholmod_free_factor(&m_L, &m_cm);
+                m_L = copy;
+                m_mask = nearest->m_mask;
+                m_factored = m_ok = true;
+                changes = nearest_changes;
+                ++m_tally.copies;
+                cnt.work_flops += m_lnz;  // the copy: one pass over L
+                if (changes == 0) return true;
+            }
+        }
     }
     if (!m_factored || !m_ok || changes > m_max_updates) {
         for (int j = 0; j < m_k; ++j) m_mask[static_cast<size_t>(j)] = mask[static_cast<size_t>(j)] != 0;

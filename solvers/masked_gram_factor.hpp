@@ -23,6 +23,9 @@ struct MaskedFactorTally {
     long row_additions = 0;     ///< cholmod_rowadd calls
     long row_deletions = 0;     ///< cholmod_rowdel calls
     long reuses = 0;            ///< set_mask calls with the mask already factored
+    long copies = 0;            ///< a donor's factor copied instead of a refactorisation
+    // The dense factors of small LCP sets beside the masked ones (coupled_face_operators.cpp).
+    long dense_set_solves = 0, dense_set_appends = 0, dense_set_removals = 0, dense_set_rebuilds = 0;
 };
 
 class MaskedGramFactor {
@@ -35,8 +38,14 @@ public:
     MaskedGramFactor& operator=(const MaskedGramFactor&) = delete;
 
     /// Makes the factor that of S restricted to `mask` (size k, nonzero = in).
+    /// @param donors  factors of the same S: when this one would be refactored and a donor's mask is
+    ///                within max_updates rows of `mask`, the nearest donor's factor is copied and
+    ///                modified instead (a copy is a memcpy of L, a refactorisation ~75 row modifications)
     /// @return false when CHOLMOD failed (S(mask, mask) not positive definite to rounding)
-    bool set_mask(const std::vector<char>& mask, Counters& cnt);
+    bool set_mask(const std::vector<char>& mask, Counters& cnt,
+                  const std::vector<const MaskedGramFactor*>* donors = nullptr);
+    /// Rows in which `mask` differs from the factored mask (k + 1 when nothing usable is factored).
+    long distance(const std::vector<char>& mask) const;
     /// b = S(mask, mask)^-1 b in place (b of size k, zero outside the mask on entry and on exit).
     void solve(double* b, Counters& cnt);
     bool ok() const { return m_ok; }

@@ -83,6 +83,41 @@ TEST(MaskedGramFactor, ModifiedAndRefactoredSolvesMatchDenseOnEveryMask)
     EXPECT_EQ(f.tally().reuses, 1);
 }
 
+TEST(MaskedGramFactor, ADonorsFactorIsCopiedInsteadOfARefactorisationAndSolvesTheSame)
+{
+    // The mask jumps by 60 rows (max_updates 8: a refactorisation without donors) to within 3 rows
+    // of the donor's mask: the donor's factor is copied and modified; a donor farther than
+    // max_updates is not used; the solve matches the dense one either way.
+    std::mt19937 rng(5);
+    const int k = 120;
+    const SpMatCol S = random_gram(k, rng);
+    cb::MaskedGramFactor donor(S, 8), f(S, 8), far(S, 8);
+    cb::Counters cnt;
+    std::vector<char> donor_mask(static_cast<size_t>(k), 0), mask(static_cast<size_t>(k), 0);
+    for (int i = 0; i < 80; ++i) donor_mask[static_cast<size_t>(i)] = 1;
+    for (int i = 60; i < 90; ++i) mask[static_cast<size_t>(i)] = 1;
+    ASSERT_TRUE(donor.set_mask(donor_mask, cnt));
+    ASSERT_TRUE(f.set_mask(mask, cnt));
+    EXPECT_EQ(donor.distance(donor_mask), 0);
+    const std::vector<const cb::MaskedGramFactor*> donors{&donor, &far};
+    std::vector<char> near = donor_mask;
+    near[3] = 0;
+    near[100] = near[101] = 1;
+    ASSERT_TRUE(f.set_mask(near, cnt, &donors));
+    EXPECT_EQ(f.tally().copies, 1);
+    EXPECT_EQ(f.tally().refactorizations, 1);  // only the first mask
+    EXPECT_EQ(f.tally().row_additions, 2);
+    EXPECT_EQ(f.tally().row_deletions, 1);
+    EXPECT_LE(masked_solve_error(f, S, near, rng), 1e-10);
+    EXPECT_LE(masked_solve_error(donor, S, donor_mask, rng), 1e-10);  // the donor is untouched
+    std::vector<char> away(static_cast<size_t>(k), 0);
+    for (int i = 0; i < 30; ++i) away[static_cast<size_t>(i)] = 1;
+    ASSERT_TRUE(f.set_mask(away, cnt, &donors));  // 53 rows from the donor: refactored
+    EXPECT_EQ(f.tally().copies, 1);
+    EXPECT_EQ(f.tally().refactorizations, 2);
+    EXPECT_LE(masked_solve_error(f, S, away, rng), 1e-10);
+}
+
 TEST(MaskedGramFactor, DuplicatedRowsStaySolvableWithTheShift)
 {
     // Rows 0 and 1 equal: S(mask, mask) singular but for the shift 1e-12 (as mprgp-coupled adds);
