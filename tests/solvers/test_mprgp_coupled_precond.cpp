@@ -196,7 +196,8 @@ TEST(MprgpCoupledPrecond, RigidModesCutIterationsOnAStiffCoupledQp)
     const Qp qp = loaded(cb::make_synthetic("coupled", {{"youngs", 1e9}}, 1), 5);
     // Here the jacobi run itself stops 1.4e-6 of the scene size from x* at e = 1e-10 (the slow
     // rigid modes move x a lot for a small gradient): the variants are compared with x* of active-set.
-    const cb::SolverResult exact = cb::builtin_registry().create("active-set", {{"tol", 1e-12}})->solve(qp.view(), {});
+    // 1e-11: the direct solve of this stiff QP reads e = 1.1e-12 in some builds (the rounding of its rigid modes).
+    const cb::SolverResult exact = cb::builtin_registry().create("active-set", {{"tol", 1e-11}})->solve(qp.view(), {});
     ASSERT_EQ(exact.status, SolveStatus::CONVERGED) << exact.message;
     const cb::SolverResult ref = expect_variants_agree(qp, "stiff coupled", 128, &exact.x);
     const cb::SolverResult rigid = solve(qp, {{"precond", "ichol"}, {"deflation", "rigid"}});
