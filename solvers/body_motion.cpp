@@ -1,4 +1,5 @@
 #include "solvers/body_motion.hpp"
+#include "solvers/disjoint_sets.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <array>
@@ -8,15 +9,6 @@
 namespace cb {
 
 namespace {
-
-int find_root(std::vector<int>& parent, int v)
-{
-    while (parent[static_cast<size_t>(v)] != v) {
-        parent[static_cast<size_t>(v)] = parent[static_cast<size_t>(parent[static_cast<size_t>(v)])];
-        v = parent[static_cast<size_t>(v)];
-    }
-    return v;
-}
 
 /// Eigenvalues below this fraction of a body's largest are modes the body cannot move.
 constexpr double RANK_CUTOFF = 1e-12;
@@ -50,23 +42,13 @@ BodyMotion::BodyMotion(const QpView& qp, double length)
     m_inv_length = length > 0.0 && std::isfinite(length) ? 1.0 / length : 1.0;
     const int nodes = static_cast<int>(n / m_per_node);
 
-    std::vector<int> parent(static_cast<size_t>(nodes));
-    for (int v = 0; v < nodes; ++v) parent[static_cast<size_t>(v)] = v;
+    DisjointSets sets(nodes);
     for (Eigen::Index r = 0; r < A.outerSize(); ++r)
-        for (SpMat::InnerIterator it(A, r); it; ++it) {
-            if (it.value() == 0.0) continue;  // a stored zero couples nothing
-            const int a = find_root(parent, static_cast<int>(r) / m_per_node);
-            const int b = find_root(parent, static_cast<int>(it.col()) / m_per_node);
-            if (a != b) parent[static_cast<size_t>(a)] = b;
-        }
-    m_body.assign(static_cast<size_t>(nodes), -1);
-    std::vector<int> id(static_cast<size_t>(nodes), -1);
+        for (SpMat::InnerIterator it(A, r); it; ++it)
+            if (it.value() != 0.0)  // a stored zero couples nothing
+                sets.join(static_cast<int>(r) / m_per_node, static_cast<int>(it.col()) / m_per_node);
     int bodies = 0;
-    for (int v = 0; v < nodes; ++v) {
-        const int root = find_root(parent, v);
-        if (id[static_cast<size_t>(root)] < 0) id[static_cast<size_t>(root)] = bodies++;
-        m_body[static_cast<size_t>(v)] = id[static_cast<size_t>(root)];
-    }
+    m_body = sets.labels(bodies);
     auto body_of = [&](Eigen::Index p) { return static_cast<size_t>(m_body[static_cast<size_t>(p / m_per_node)]); };
 
     if (m_spatial) {

@@ -1,4 +1,5 @@
 #include "solvers/mprgp_deflation.hpp"
+#include "solvers/disjoint_sets.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -6,19 +7,6 @@
 #include <numeric>
 
 namespace cb {
-
-namespace {
-
-int find_root(std::vector<int>& parent, int v)
-{
-    while (parent[static_cast<size_t>(v)] != v) {
-        parent[static_cast<size_t>(v)] = parent[static_cast<size_t>(parent[static_cast<size_t>(v)])];
-        v = parent[static_cast<size_t>(v)];
-    }
-    return v;
-}
-
-}  // namespace
 
 bool RigidDeflation::build(const SpMat& A, const SpMat& J, const Vec& x0, double max_rayleigh)
 {
@@ -28,32 +16,19 @@ bool RigidDeflation::build(const SpMat& A, const SpMat& J, const Vec& x0, double
     if (n == 0 || n % 3 != 0 || x0.size() != n) return false;
     const int nv = static_cast<int>(n / 3);
     // Bodies = connected components of A's vertex graph (A couples no two bodies), joined by rows.
-    std::vector<int> parent(static_cast<size_t>(nv));
-    std::iota(parent.begin(), parent.end(), 0);
+    DisjointSets sets(nv);
     const int* outer = A.outerIndexPtr();
     const int* inner = A.innerIndexPtr();
     for (Eigen::Index i = 0; i < n; ++i)
-        for (int k = outer[i]; k < outer[i + 1]; ++k) {
-            const int a = find_root(parent, static_cast<int>(i / 3));
-            const int b = find_root(parent, inner[k] / 3);
-            if (a != b) parent[static_cast<size_t>(a)] = b;
-        }
+        for (int k = outer[i]; k < outer[i + 1]; ++k) sets.join(static_cast<int>(i / 3), inner[k] / 3);
     const int* j_outer = J.outerIndexPtr();
     const int* j_inner = J.innerIndexPtr();
     for (Eigen::Index i = 0; i < J.rows(); ++i)
-        for (int k = j_outer[i] + 1; k < j_outer[i + 1]; ++k) {
-            const int a = find_root(parent, j_inner[j_outer[i]] / 3);
-            const int b = find_root(parent, j_inner[k] / 3);
-            if (a != b) parent[static_cast<size_t>(a)] = b;
-        }
-    std::vector<int> id(static_cast<size_t>(nv), -1);
-    m_components = 0;
+        for (int k = j_outer[i] + 1; k < j_outer[i + 1]; ++k) sets.join(j_inner[j_outer[i]] / 3, j_inner[k] / 3);
+    const std::vector<int> body = sets.labels(m_components);
     m_comp.assign(static_cast<size_t>(n), 0);
-    for (int v = 0; v < nv; ++v) {
-        const int r = find_root(parent, v);
-        if (id[static_cast<size_t>(r)] < 0) id[static_cast<size_t>(r)] = m_components++;
-        for (int d = 0; d < 3; ++d) m_comp[static_cast<size_t>(3 * v + d)] = id[static_cast<size_t>(r)];
-    }
+    for (int v = 0; v < nv; ++v)
+        for (int d = 0; d < 3; ++d) m_comp[static_cast<size_t>(3 * v + d)] = body[static_cast<size_t>(v)];
     // Centroids, then translations e_d and rotations e_d x (p - centroid).
     Eigen::MatrixXd centroid = Eigen::MatrixXd::Zero(m_components, 3);
     Eigen::VectorXd count = Eigen::VectorXd::Zero(m_components);
@@ -148,6 +123,44 @@ void RigidDeflation::invert(int c)
     m_Einv[static_cast<size_t>(c)] = eig.eigenvectors() * inv.asDiagonal() * eig.eigenvectors().transpose();
 }
 
+void RigidDeflation::rebuild(const SpMat& A)
+{
+    m_AV = A * m_V;
+    m_E.assign(static_cast<size_t>(m_components), Mat6::Zero());
+    for (Eigen::Index j = 0; j < m_V.rows(); ++j)
+        m_E[static_cast<size_t>(m_comp[static_cast<size_t>(j)])] += m_V.row(j).transpose() * m_AV.row(j);
+    for (int c = 0; c < m_components; ++c) invert(c);
+    m_updates = 0;
+}
+
+double RigidDeflation::update_row(const SpMat& A, int j, const ModeRow& delta, std::vector<int>& touched)
+{
+    // V_new'A V_new = E + Delta'(A V) + V_new'(A Delta), and A V += A Delta: both local to row j.
+    const int* a_outer = A.outerIndexPtr();
+    const int* a_inner = A.innerIndexPtr();
+    const double* a_val = A.valuePtr();
+    const int c = m_comp[static_cast<size_t>(j)];
+    Mat6& e = m_E[static_cast<size_t>(c)];
+    e += delta.transpose() * m_AV.row(j);
+    m_V.row(j) += delta;
+    for (int q = a_outer[j]; q < a_outer[j + 1]; ++q) {  // column j of A = row j (A symmetric)
+        const ModeRow a_delta = a_val[q] * delta;
+        m_AV.row(a_inner[q]) += a_delta;
+        e += m_V.row(a_inner[q]).transpose() * a_delta;
+    }
+    touched.push_back(c);
+    return 2.0 * kModes * (kModes + 2) * static_cast<double>(a_outer[j + 1] - a_outer[j] + 1);
+}
+
+void RigidDeflation::finish_updates(std::vector<int>& touched, double flops, double* work_flops)
+{
+    std::sort(touched.begin(), touched.end());
+    touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+    for (int c : touched) invert(c);
+    if (work_flops) *work_flops += flops;
+    ++m_updates;
+}
+
 bool RigidDeflation::set_face(const SpMat& A, const SpMat& J, const DecoupledRows& rows,
                               const std::vector<char>& active, double* work_flops)
 {
@@ -166,18 +179,10 @@ bool RigidDeflation::set_face(const SpMat& A, const SpMat& J, const DecoupledRow
             if (!active[static_cast<size_t>(i)]) continue;
             for (int k = outer[i]; k < outer[i + 1]; ++k) m_V.row(inner[k]) = face_row(J, rows, i, k, true);
         }
-        m_AV = A * m_V;
-        m_E.assign(static_cast<size_t>(m_components), Mat6::Zero());
-        for (Eigen::Index j = 0; j < m_V.rows(); ++j)
-            m_E[static_cast<size_t>(m_comp[static_cast<size_t>(j)])] += m_V.row(j).transpose() * m_AV.row(j);
-        for (int c = 0; c < m_components; ++c) invert(c);
-        m_updates = 0;
+        rebuild(A);
     } else {
         // A few rows changed: V changes on their DOFs only (Delta), so
         // V_new'A V_new = E + Delta'(A V) + V_new'(A Delta), and A V += A Delta, both local.
-        const int* a_outer = A.outerIndexPtr();
-        const int* a_inner = A.innerIndexPtr();
-        const double* a_val = A.valuePtr();
         std::vector<int> touched_components;
         double flops = 0.0;
         for (Eigen::Index i = 0; i < J.rows(); ++i) {
@@ -185,27 +190,10 @@ bool RigidDeflation::set_face(const SpMat& A, const SpMat& J, const DecoupledRow
             if (now == (m_face[static_cast<size_t>(i)] != 0)) continue;
             for (int k = outer[i]; k < outer[i + 1]; ++k) {
                 const int j = inner[k];
-                const ModeRow delta = face_row(J, rows, i, k, now) - m_V.row(j);
-                const int c = m_comp[static_cast<size_t>(j)];
-                Mat6& e = m_E[static_cast<size_t>(c)];
-                e += delta.transpose() * m_AV.row(j);
-                m_V.row(j) += delta;
-                // Column j of A = row j (A symmetric).
-                for (int q = a_outer[j]; q < a_outer[j + 1]; ++q) {
-                    const ModeRow a_delta = a_val[q] * delta;
-                    m_AV.row(a_inner[q]) += a_delta;
-                    e += m_V.row(a_inner[q]).transpose() * a_delta;
-                }
-                flops += 2.0 * kModes * (kModes + 2) * static_cast<double>(a_outer[j + 1] - a_outer[j] + 1);
-                touched_components.push_back(c);
+                flops += update_row(A, j, face_row(J, rows, i, k, now) - m_V.row(j), touched_components);
             }
         }
-        std::sort(touched_components.begin(), touched_components.end());
-        touched_components.erase(std::unique(touched_components.begin(), touched_components.end()),
-                                 touched_components.end());
-        for (int c : touched_components) invert(c);
-        if (work_flops) *work_flops += flops;
-        ++m_updates;
+        finish_updates(touched_components, flops, work_flops);
     }
     m_face = active;
     m_have_face = true;
@@ -230,39 +218,13 @@ bool RigidDeflation::set_face_projected(const SpMat& A, const std::function<void
         !m_projected_ready || m_updates >= kMaxUpdates || 20 * static_cast<Eigen::Index>(m_changed.size()) > m_W.rows();
     if (full) {
         m_V = m_next;
-        m_AV = A * m_V;
-        m_E.assign(static_cast<size_t>(m_components), Mat6::Zero());
-        for (Eigen::Index j = 0; j < m_V.rows(); ++j)
-            m_E[static_cast<size_t>(m_comp[static_cast<size_t>(j)])] += m_V.row(j).transpose() * m_AV.row(j);
-        for (int c = 0; c < m_components; ++c) invert(c);
-        m_updates = 0;
+        rebuild(A);
     } else {
         // The row-by-row update of set_face() with Delta = V_new - V on the changed DOFs.
-        const int* a_outer = A.outerIndexPtr();
-        const int* a_inner = A.innerIndexPtr();
-        const double* a_val = A.valuePtr();
         std::vector<int> touched_components;
         double flops = 0.0;
-        for (int j : m_changed) {
-            const ModeRow delta = m_next.row(j) - m_V.row(j);
-            const int c = m_comp[static_cast<size_t>(j)];
-            Mat6& e = m_E[static_cast<size_t>(c)];
-            e += delta.transpose() * m_AV.row(j);
-            m_V.row(j) += delta;
-            for (int q = a_outer[j]; q < a_outer[j + 1]; ++q) {
-                const ModeRow a_delta = a_val[q] * delta;
-                m_AV.row(a_inner[q]) += a_delta;
-                e += m_V.row(a_inner[q]).transpose() * a_delta;
-            }
-            flops += 2.0 * kModes * (kModes + 2) * static_cast<double>(a_outer[j + 1] - a_outer[j] + 1);
-            touched_components.push_back(c);
-        }
-        std::sort(touched_components.begin(), touched_components.end());
-        touched_components.erase(std::unique(touched_components.begin(), touched_components.end()),
-                                 touched_components.end());
-        for (int c : touched_components) invert(c);
-        if (work_flops) *work_flops += flops;
-        ++m_updates;
+        for (int j : m_changed) flops += update_row(A, j, m_next.row(j) - m_V.row(j), touched_components);
+        finish_updates(touched_components, flops, work_flops);
     }
     m_projected_ready = true;
     m_have_face = false;  // set_face()'s row-by-row updates do not apply to this V

@@ -75,6 +75,12 @@ private:
     ModeRow face_row(const SpMat& J, const DecoupledRows& rows, Eigen::Index i, int k, bool is_active) const;
     /// m_Einv[c] = pseudo-inverse of m_E[c].
     void invert(int c);
+    /// AV = A V, E = V'AV per component and their pseudo-inverses, from scratch (kModes A-products).
+    void rebuild(const SpMat& A);
+    /// V's row j += delta with AV and E updated locally; records j's component; returns the flops.
+    double update_row(const SpMat& A, int j, const ModeRow& delta, std::vector<int>& touched);
+    /// Re-inverts the touched components and counts one incremental update.
+    void finish_updates(std::vector<int>& touched, double flops, double* work_flops);
     /// Per component: R(c, :) = sum over its DOFs of M(j, :) v_j.
     void reduce(const Modes& M, const Vec& v, Eigen::MatrixXd& R) const;
     /// out_j = M(j, :) Y(comp(j), :)'.

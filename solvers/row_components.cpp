@@ -1,5 +1,6 @@
 // Connected components of J's row graph (rows joined through shared vertices), by union-find.
 #include "solvers/row_components.hpp"
+#include "solvers/disjoint_sets.hpp"
 
 #include <algorithm>
 #include <numeric>
@@ -20,50 +21,26 @@ int RowComponents::singletons() const
     return ones;
 }
 
-namespace {
-
-int find_root(std::vector<int>& parent, int i)
-{
-    while (parent[static_cast<size_t>(i)] != i) {
-        parent[static_cast<size_t>(i)] = parent[static_cast<size_t>(parent[static_cast<size_t>(i)])];  // halving
-        i = parent[static_cast<size_t>(i)];
-    }
-    return i;
-}
-
-}  // namespace
-
 RowComponents find_row_components(const SpMat& J)
 {
     const int m = static_cast<int>(J.rows());
-    std::vector<int> parent(static_cast<size_t>(m));
-    std::iota(parent.begin(), parent.end(), 0);
+    DisjointSets sets(m);
     // The first row seen on each vertex; every later row on it joins that row's set.
     std::vector<int> owner(static_cast<size_t>(J.cols() / 3 + 1), -1);
     for (int i = 0; i < m; ++i)
         for (SpMat::InnerIterator it(J, i); it; ++it) {
             if (it.value() == 0.0) continue;
             int& o = owner[static_cast<size_t>(it.col() / 3)];
-            if (o < 0) {
+            if (o < 0)
                 o = i;
-                continue;
-            }
-            const int a = find_root(parent, o), b = find_root(parent, i);
-            if (a != b) parent[static_cast<size_t>(std::max(a, b))] = std::min(a, b);
+            else
+                sets.join(o, i);
         }
     RowComponents rc;
-    rc.of_row.assign(static_cast<size_t>(m), -1);
-    std::vector<int> id_of_root(static_cast<size_t>(m), -1);
-    std::vector<int> sizes;
-    for (int i = 0; i < m; ++i) {
-        int& id = id_of_root[static_cast<size_t>(find_root(parent, i))];
-        if (id < 0) {
-            id = static_cast<int>(sizes.size());
-            sizes.push_back(0);
-        }
-        rc.of_row[static_cast<size_t>(i)] = id;
-        ++sizes[static_cast<size_t>(id)];
-    }
+    int count = 0;
+    rc.of_row = sets.labels(count);
+    std::vector<int> sizes(static_cast<size_t>(count), 0);
+    for (int c : rc.of_row) ++sizes[static_cast<size_t>(c)];
     rc.start.assign(sizes.size() + 1, 0);
     for (size_t k = 0; k < sizes.size(); ++k) rc.start[k + 1] = rc.start[k] + sizes[k];
     rc.rows.resize(static_cast<size_t>(m));
