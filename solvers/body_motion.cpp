@@ -54,13 +54,13 @@ BodyMotion::BodyMotion(const QpView& qp, double length)
     if (m_spatial) {
         std::vector<Eigen::Vector3d> centroid(static_cast<size_t>(bodies), Eigen::Vector3d::Zero());
         std::vector<double> count(static_cast<size_t>(bodies), 0.0);
-        for (int v = 0; v < nodes; ++v) {
+        for (Eigen::Index v = 0; v < nodes; ++v) {
             centroid[body_of(3 * v)] += qp.x0.segment<3>(3 * v);
             count[body_of(3 * v)] += 1.0;
         }
         for (size_t b = 0; b < centroid.size(); ++b) centroid[b] /= count[b];
         m_offset.resize(nodes, 3);
-        for (int v = 0; v < nodes; ++v)
+        for (Eigen::Index v = 0; v < nodes; ++v)
             m_offset.row(v) = (qp.x0.segment<3>(3 * v) - centroid[body_of(3 * v)]).transpose();
     }
     m_x0 = qp.x0;
@@ -105,7 +105,7 @@ BodyMotion::BodyMotion(const QpView& qp, double length)
         }
         if (!E[b].allFinite()) continue;  // not SPD: the Jacobi half of the measure still judges it
         const Eigen::SelfAdjointEigenSolver<Mat6> eig(0.5 * (E[b] + E[b].transpose()));
-        const Vec6 lambda = eig.eigenvalues();
+        const Vec6& lambda = eig.eigenvalues();
         const double cutoff = RANK_CUTOFF * lambda.maxCoeff();
         Vec6 inv = Vec6::Zero();
         for (int k = 0; k < MODES; ++k)

@@ -27,8 +27,8 @@ bool RigidDeflation::build(const SpMat& A, const SpMat& J, const Vec& x0, double
         for (int k = j_outer[i] + 1; k < j_outer[i + 1]; ++k) sets.join(j_inner[j_outer[i]] / 3, j_inner[k] / 3);
     const std::vector<int> body = sets.labels(m_components);
     m_comp.assign(static_cast<size_t>(n), 0);
-    for (int v = 0; v < nv; ++v)
-        for (int d = 0; d < 3; ++d) m_comp[static_cast<size_t>(3 * v + d)] = body[static_cast<size_t>(v)];
+    for (size_t v = 0; v < static_cast<size_t>(nv); ++v)
+        for (size_t d = 0; d < 3; ++d) m_comp[3 * v + d] = body[v];
     // Centroids, then translations e_d and rotations e_d x (p - centroid).
     Eigen::MatrixXd centroid = Eigen::MatrixXd::Zero(m_components, 3);
     Eigen::VectorXd count = Eigen::VectorXd::Zero(m_components);
