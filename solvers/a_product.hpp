@@ -10,6 +10,11 @@ namespace cb {
 /// y = A x, counted. y is resized; it must not alias x.
 void a_product(const SpMat& A, const Vec& x, Vec& y);
 
+/// y = A x with x'y and x'w summed in the same pass over A, counted as one product: the CG step's
+/// p'Ap and p'g without two more passes over vectors the product has just pushed out of cache.
+/// y is resized; it must not alias x or w. @return x'y; xw receives x'w.
+double a_product_dots(const SpMat& A, const Vec& x, Vec& y, const Vec& w, double& xw);
+
 /// A x, counted (for expressions such as `b - a_product(A, x)`).
 Vec a_product(const SpMat& A, const Vec& x);
 

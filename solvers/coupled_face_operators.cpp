@@ -647,6 +647,12 @@ public:
         MaskedGramFactor& f = weighted ? *m_face_factor_d : *m_face_factor;
         const Vec& sc = weighted ? m_scale_d : m_scale;
         const size_t q = m_face.size();
+        if (weighted && m_face_d_stale) {
+            std::fill(m_mask.begin(), m_mask.end(), 0);
+            for (int r : m_face) m_mask[static_cast<size_t>(r)] = 1;
+            f.set_mask(m_mask, cnt);
+            m_face_d_stale = false;
+        }
         if (!f.ok()) {
             for (size_t r = 0; r < q; ++r) out[r] = 0.0;
             return;
@@ -707,7 +713,9 @@ private:
         std::fill(m_mask.begin(), m_mask.end(), 0);
         for (int r : m_face) m_mask[static_cast<size_t>(r)] = 1;
         m_face_factor->set_mask(m_mask, cnt, &m_donors);
-        if (m_jacobi) m_face_factor_d->set_mask(m_mask, cnt);
+        // The weighted factor follows on its first solve: a face that only passes through (the
+        // expansion's intermediate face, which needs phi but no z) is never factored weighted.
+        m_face_d_stale = m_jacobi;
     }
 
     /// m_z = G(S, S)^-1 q_S on the set S (zero off it), with the set's factor modified to S.
@@ -899,6 +907,7 @@ private:
     std::array<std::vector<char>, PROJECTION_USES> m_use_sets;
     std::vector<const MaskedGramFactor*> m_donors;
     SpMatCol m_scaled;  // the scaled, shifted J_B J_B' (the dense set factors read it)
+    bool m_face_d_stale = false;  // m_face_factor_d not yet on the current face
     std::array<std::unique_ptr<DenseSetFactor>, PROJECTION_USES> m_dense_sets;
     long m_dense_solves = 0;
     std::vector<int> m_all, m_bad;

@@ -24,6 +24,28 @@ TEST(AProduct, ComputesTheProductAndCountsEachCall)
     EXPECT_EQ((z - expected).lpNorm<Eigen::Infinity>(), 0.0);
 }
 
+TEST(AProduct, FusedDotsAreTheProductsDotsAndOneCountedProduct)
+{
+    const Qp qp = make_synthetic("plane", {{"nx", 3}, {"ny", 2}, {"nz", 3}}, 5);
+    const Vec x = Vec::LinSpaced(qp.n(), -1.0, 2.0);
+    const Vec w = Vec::LinSpaced(qp.n(), 3.0, -0.5);
+    const Vec expected = qp.A * x;
+    SpMat uncompressed = qp.A;
+    uncompressed.uncompress();  // the fallback path (the raw loop reads compressed storage only)
+    const SpMat* matrices[] = {&qp.A, &uncompressed};
+    for (const SpMat* A : matrices) {
+        const long before = a_product_count();
+        Vec y;
+        double xw = 0.0;
+        const double xy = a_product_dots(*A, x, y, w, xw);
+        EXPECT_EQ(a_product_count() - before, 1);
+        ASSERT_EQ(y.size(), qp.n());
+        EXPECT_LE((y - expected).lpNorm<Eigen::Infinity>(), 1e-14 * expected.lpNorm<Eigen::Infinity>());
+        EXPECT_NEAR(xy, x.dot(expected), 1e-12 * std::abs(x.dot(expected)));
+        EXPECT_NEAR(xw, x.dot(w), 1e-12 * x.norm() * w.norm());
+    }
+}
+
 TEST(AProduct, RunnerRecordsTheHarnessCountOfTheSolveOnly)
 {
     const Qp qp = make_synthetic("plane", {{"nx", 4}, {"ny", 3}, {"nz", 4}}, 7);
@@ -42,4 +64,10 @@ TEST(AProduct, RunnerRecordsTheHarnessCountOfTheSolveOnly)
     EXPECT_GT(m["a_products_harness"].get<long>(), 0);
     EXPECT_GT(m["cg_steps"].get<long>(), 0);
     EXPECT_LT(m["a_products_harness"].get<long>(), m["a_products"].get<long>());
+
+    // mprgp-coupled's fused CG product goes through the counting a_product_dots: both counts agree.
+    const RunOutcome coupled = run_solver(qp, "mprgp-coupled", {{"tol", 1e-8}}, RunOptions{});
+    const auto& c = coupled.record["counters"];
+    EXPECT_GT(c["cg_steps"].get<long>(), 0);
+    EXPECT_EQ(c["a_products_harness"].get<long>(), c["a_products"].get<long>());
 }
