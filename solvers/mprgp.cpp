@@ -843,7 +843,13 @@ SolverResult MprgpRun::run()
     evaluate_rows();
     result.native_residual = m_native;
     // The loop writes the reason of its own exits; a breakdown is the solver's word.
-    const std::string figures = "accuracy error " + fmt(m_error) + ", ||phi+beta|| " + fmt(m_native) + "; " +
+    // The whole measure at the returned point (m_error leaves out the bodies' rigid motion); a
+    // converged run's message already states it.
+    const std::string error =
+        status == SolveStatus::CONVERGED
+            ? std::string()
+            : "accuracy error " + fmt(std::max(m_error, m_scale.body_motion(m_x, m_lambda))) + ", ";
+    const std::string figures = error + "||phi+beta|| " + fmt(m_native) + "; " +
                                 std::to_string(m_cnt.cg_steps) + " cg, " + std::to_string(m_cnt.expansion_steps) +
                                 " expansion, " + std::to_string(m_cnt.proportioning_steps) + " proportioning steps";
     const std::string detail = !m_loop.owns(status) ? "mprgp: not converged: " + why + " (" + figures + ")"

@@ -917,8 +917,11 @@ SolverResult CoupledRun::run()
                    {"safeguard_firings", m_cnt.safeguard_steps},
                    {"dependent_rows", "handled by a shift 1e-12 of the unit-diagonal-scaled Gram matrices"}};
     // The loop writes the reason of its own exits; a breakdown is the solver's word.
-    std::string detail =
-        "accuracy error " + fmt(m_error) + ", safeguard firings " + std::to_string(m_cnt.safeguard_steps);
+    // The whole measure at the returned point (m_error leaves out the bodies' rigid motion); a
+    // converged run's message already states it.
+    std::string detail = "safeguard firings " + std::to_string(m_cnt.safeguard_steps);
+    if (status != SolveStatus::CONVERGED)
+        detail = "accuracy error " + fmt(std::max(m_error, m_scale.body_motion(m_x, m_mu))) + ", " + detail;
     if (!m_loop.owns(status)) detail = "mprgp-coupled: not converged: " + why + " (" + detail + ")";
     if (m_ops->lcp_failures() > 0)
         detail += "; " + std::to_string(m_ops->lcp_failures()) + " LCP solves missed their tolerance";
