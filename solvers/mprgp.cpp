@@ -849,9 +849,9 @@ SolverResult MprgpRun::run()
         status == SolveStatus::CONVERGED
             ? std::string()
             : "accuracy error " + fmt(std::max(m_error, m_scale.body_motion(m_x, m_lambda))) + ", ";
-    const std::string figures = error + "||phi+beta|| " + fmt(m_native) + "; " +
-                                std::to_string(m_cnt.cg_steps) + " cg, " + std::to_string(m_cnt.expansion_steps) +
-                                " expansion, " + std::to_string(m_cnt.proportioning_steps) + " proportioning steps";
+    const std::string figures = error + "||phi+beta|| " + fmt(m_native) + "; " + std::to_string(m_cnt.cg_steps) +
+                                " cg, " + std::to_string(m_cnt.expansion_steps) + " expansion, " +
+                                std::to_string(m_cnt.proportioning_steps) + " proportioning steps";
     const std::string detail = !m_loop.owns(status) ? "mprgp: not converged: " + why + " (" + figures + ")"
                                                     : (why.empty() ? "" : why + "; ") + figures;
     result.x = m_x;
