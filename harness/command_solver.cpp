@@ -1,5 +1,6 @@
 // `command`: an external program as a solver (command_solver.hpp, docs/INTERFACES.md).
 #include "harness/command_solver.hpp"
+#include "harness/temp_folder.hpp"
 
 #include "harness/program_run.hpp"
 #include "harness/results.hpp"
@@ -13,6 +14,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
+#include <optional>
 
 namespace cb {
 
@@ -79,29 +81,6 @@ std::string replace_all(std::string s, const std::string& from, const std::strin
         s.replace(at, from.size(), to);
     return s;
 }
-
-/// A fresh folder under the system's temporary folder, removed on destruction unless kept.
-class WorkFolder {
-public:
-    explicit WorkFolder(bool keep) : m_keep(keep)
-    {
-        std::string pattern = (fs::temp_directory_path() / "contactbench-command-XXXXXX").string();
-        if (!::mkdtemp(pattern.data())) throw std::runtime_error("command: cannot create a work folder in " + pattern);
-        m_path = pattern;
-    }
-    ~WorkFolder()
-    {
-        std::error_code ignored;
-        if (!m_keep) fs::remove_all(m_path, ignored);
-    }
-    WorkFolder(const WorkFolder&) = delete;
-    WorkFolder& operator=(const WorkFolder&) = delete;
-    const fs::path& path() const { return m_path; }
-
-private:
-    fs::path m_path;
-    bool m_keep;
-};
 
 /// The last `max_chars` of a text file on one line (for messages).
 std::string tail_of(const fs::path& path, size_t max_chars = 300)
@@ -281,7 +260,16 @@ SolverResult CommandSolver::solve(const QpView& qp, const SolveContext& context)
     SolverResult result;
     result.native_residual = std::numeric_limits<double>::quiet_NaN();
     const CommonSettings& common = m_settings.common;
-    WorkFolder work(m_settings.keep_files);
+    std::optional<TempFolder> folder;
+    try {
+        folder.emplace("contactbench-command", m_settings.keep_files);
+    } catch (const std::exception& e) {
+        // No place to hand the problem over: the run fails, it does not end the harness.
+        result.status = SolveStatus::DIVERGED;
+        result.message = std::string("command: ") + e.what();
+        return result;
+    }
+    const TempFolder& work = *folder;
     const fs::path snapshot = work.path() / "problem.qpsnap", settings_path = work.path() / "settings.json",
                    out = work.path() / "out";
     fs::create_directories(out);

@@ -1,4 +1,5 @@
 #include "harness/stress_families.hpp"
+#include "harness/temp_folder.hpp"
 
 #include "problems/qpsnap.hpp"
 #include "sim/scene.hpp"
@@ -9,6 +10,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <optional>
 #include <random>
 #include <unistd.h>
 
@@ -217,16 +219,6 @@ json fem_demo_scene(const json& params)
     };
 }
 
-/// Removes a temporary folder when it goes out of scope.
-struct TempDir {
-    std::string path;
-    ~TempDir()
-    {
-        std::error_code ec;
-        if (!path.empty()) std::filesystem::remove_all(path, ec);
-    }
-};
-
 /// A FEM snapshot from our own simulator: the demo scene (with the case's overrides) stepped
 /// for params["frames"] time steps (mprgp as the stepping solver, so the trajectory does
 /// not depend on a solver under test); the QP of the last step that had contact rows is the
@@ -236,13 +228,17 @@ Qp make_fem_sim_qp(const StressCase& c)
     const std::string where = "stress case " + c.id;
     const long frames = c.params.value("frames", 5L);
     if (frames < 1) throw_input_error(where, "frames", "expected >= 1");
-    std::string pattern = (std::filesystem::temp_directory_path() / "cb-stress-fem-XXXXXX").string();
-    if (!mkdtemp(pattern.data())) throw_input_error(where, pattern, "cannot create a temporary folder");
-    TempDir tmp{pattern};
-    std::filesystem::create_directories(tmp.path + "/snapshots");
+    std::optional<TempFolder> folder;
+    try {
+        folder.emplace("cb-stress-fem");
+    } catch (const std::exception& e) {
+        throw_input_error(where, "temporary folder", e.what());
+    }
+    const std::string tmp_path = folder->path().string();
+    std::filesystem::create_directories(tmp_path + "/snapshots");
 
     sim::SimulatorOptions options;
-    options.out_dir = tmp.path;
+    options.out_dir = tmp_path;
     const std::string scene = c.params.value("scene", std::string("demo"));
     const bool slab = scene == "slab";
     const bool dino = scene == "dino";

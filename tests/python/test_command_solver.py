@@ -30,8 +30,8 @@ FAKE = os.path.join(HERE, "fixtures", "fake_command_solver.py")
 PY = "/usr/bin/python3"
 
 
-def run(args, cwd=None):
-    env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
+def run(args, cwd=None, extra_env=None):
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", **(extra_env or {}))
     return subprocess.run([CB] + args, capture_output=True, text=True, cwd=cwd, env=env, timeout=300)
 
 
@@ -62,13 +62,13 @@ class CommandCase(unittest.TestCase):
     def tearDownClass(cls):
         shutil.rmtree(cls.tmp, ignore_errors=True)
 
-    def solve_with(self, argv, *extra):
+    def solve_with(self, argv, *extra, extra_env=None):
         """`solve --solver command` with argv; returns (completed process, run record)."""
         record = os.path.join(self.tmp, "run.json")
         if os.path.exists(record):
             os.remove(record)
         r = run(["solve", self.snap, "--solver", "command", "--set", "argv=" + json.dumps(argv), "--json", record]
-                + list(extra))
+                + list(extra), extra_env=extra_env)
         self.assertEqual(r.returncode, 0, r.stderr)
         with open(record) as f:
             return r, json.load(f)
@@ -102,6 +102,13 @@ class TestHonestStatuses(CommandCase):
         self.assertEqual(rec["status"], "diverged")
         self.assertIn("could not be started", rec["message"])
         self.assertIn("No such file or directory", rec["message"])
+
+    def test_no_temporary_folder_is_diverged_and_says_so(self):
+        # $TMPDIR unusable: the problem cannot be handed over; the run fails, the harness goes on.
+        _, rec = self.solve_with([PY, FAKE, "exact", "{settings}"],
+                                 extra_env={"TMPDIR": os.path.join(self.tmp, "no-such-folder")})
+        self.assertEqual(rec["status"], "diverged")
+        self.assertIn("command: cannot find the temporary folder ($TMPDIR)", rec["message"])
 
     def test_hang_is_killed_at_the_time_limit_with_its_children(self):
         pids = os.path.join(self.tmp, "pids.txt")
