@@ -277,7 +277,7 @@ SolverResult CommandSolver::solve(const QpView& qp, const SolveContext& context)
     // The problem exactly as this solver is given it (decoupled rows when the harness decoupled).
     Qp problem{qp.A, qp.b, qp.J, qp.c, qp.x0, {}, {{"source", "contactbench command solver"}}};
     write_qpsnap(snapshot.string(), problem);
-    nlohmann::json settings_file = {{"protocol", kCommandProtocolVersion},
+    nlohmann::json settings_file = {{"protocol", COMMAND_PROTOCOL_VERSION},
                                     {"snapshot", snapshot.string()},
                                     {"out", out.string()},
                                     {"n", qp.n()},

@@ -32,7 +32,7 @@ struct CommandSettings {
 };
 
 /// The protocol version written into settings.json.
-inline constexpr int kCommandProtocolVersion = 1;
+inline constexpr int COMMAND_PROTOCOL_VERSION = 1;
 
 class CommandSolver : public Solver {
 public:

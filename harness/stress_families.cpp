@@ -110,14 +110,16 @@ void add_rows_on_one_vertex(Qp& qp, std::uint64_t seed)
     RowAppender out;
     const bool keep = !qp.contacts.empty();
     for (Eigen::Index r = 0; r < qp.m(); ++r) out.add_existing(qp, r, 1.0, qp.c[r]);
-    Eigen::Vector3d target = qp.x0.segment<3>(3 * vertex);
+    Eigen::Vector3d target = qp.x0.segment<3>(3 * static_cast<Eigen::Index>(vertex));
     target.y() = std::max(0.0, target.y());
     for (int k = 0; k < 20; ++k) {
         Eigen::Vector3d normal(gauss(rng), 0.0, gauss(rng));
         normal.y() = 1.0;  // upper hemisphere, at most ~70 degrees from the plane normal
         normal.normalize();
         const double c_value = normal.dot(target);
-        out.add_vertex_row(vertex, normal, c_value, std::max(0.0, c_value - normal.dot(qp.x0.segment<3>(3 * vertex))));
+        out.add_vertex_row(
+            vertex, normal, c_value,
+            std::max(0.0, c_value - normal.dot(qp.x0.segment<3>(3 * static_cast<Eigen::Index>(vertex)))));
     }
     out.finish(qp, keep);
 }

@@ -103,10 +103,10 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
     RigidDeflation defl;
     bool deflate = false;
     if (m_settings.deflation == "rigid") {
-        deflate = defl.build(qp.A, no_rows, qp.x0, RigidDeflation::kSlowRayleigh);
+        deflate = defl.build(qp.A, no_rows, qp.x0, RigidDeflation::SLOW_RAYLEIGH);
         counters.a_products += defl.build_products();
         if (deflate && defl.set_face(qp.A, no_rows, DecoupledRows{}, std::vector<char>(), &counters.work_flops))
-            counters.a_products += RigidDeflation::kModes;  // A V
+            counters.a_products += RigidDeflation::MODES;  // A V
     }
     // The search direction: M^-1 r, made A-conjugate to V when deflating (deflated PCG).
     auto direction = [&](const Vec& r) -> Vec {
@@ -191,16 +191,16 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
         if (result.status != SolveStatus::NOT_RUN) break;
         a_product(qp.A, p, Ap);
         ++counters.a_products;
-        const double pAp = p.dot(Ap);
-        if (!(pAp > 0.0)) {
+        const double p_ap = p.dot(Ap);
+        if (!(p_ap > 0.0)) {
             std::ostringstream msg;
-            msg << "cg: breakdown at iteration " << counters.iterations << ": p'Ap = " << pAp
-                << (pAp < 0.0 ? " < 0 (A is not positive definite)" : "");
-            result.status = (pAp == 0.0) ? SolveStatus::STALLED : SolveStatus::DIVERGED;
+            msg << "cg: breakdown at iteration " << counters.iterations << ": p'Ap = " << p_ap
+                << (p_ap < 0.0 ? " < 0 (A is not positive definite)" : "");
+            result.status = (p_ap == 0.0) ? SolveStatus::STALLED : SolveStatus::DIVERGED;
             result.message = msg.str();
             break;
         }
-        const double alpha = rz / pAp;
+        const double alpha = rz / p_ap;
         x.noalias() += alpha * p;
         r.noalias() -= alpha * Ap;
         z = direction(r);

@@ -32,7 +32,7 @@ bool CoupledPreconditioner::setup(bool rigid, const Vec& x0, std::string& error,
     }
     m_rigid_asked = rigid;
     if (rigid) {
-        m_deflate = m_defl.build(m_A, m_J, x0, RigidDeflation::kSlowRayleigh);
+        m_deflate = m_defl.build(m_A, m_J, x0, RigidDeflation::SLOW_RAYLEIGH);
         cnt.a_products += m_defl.build_products();
     }
     return true;
@@ -77,7 +77,7 @@ void CoupledPreconditioner::update_face(const std::vector<char>& active, Counter
     // changed, or anew with 6 A-products when those are many.
     const auto project_face = [&](Vec& v) { project(v, cnt); };
     if (m_defl.set_face_projected(m_A, project_face, &cnt.work_flops)) {
-        cnt.a_products += RigidDeflation::kModes;
+        cnt.a_products += RigidDeflation::MODES;
         ++m_full_face_updates;
     }
     m_defl_face = active;

@@ -242,7 +242,7 @@ double MprgpRun::face_dot(const Vec& a) const
 void MprgpRun::update_deflation_face()
 {
     if (!m_defl_face.empty() && m_defl_face == m_active) return;
-    if (m_defl.set_face(m_A, m_J, m_rows, m_active, &m_cnt.work_flops)) m_cnt.a_products += RigidDeflation::kModes;
+    if (m_defl.set_face(m_A, m_J, m_rows, m_active, &m_cnt.work_flops)) m_cnt.a_products += RigidDeflation::MODES;
     ++m_deflation_faces;
     m_defl_face = m_active;
 }
@@ -604,7 +604,7 @@ SolverResult MprgpRun::run()
     }
     m_ichol = m_st.precond == "ichol";
     if (m_st.deflation == "rigid") {
-        m_deflate = m_defl.build(m_A, m_J, m_qp.x0, RigidDeflation::kSlowRayleigh);
+        m_deflate = m_defl.build(m_A, m_J, m_qp.x0, RigidDeflation::SLOW_RAYLEIGH);
         m_cnt.a_products += m_defl.build_products();
     }
     m_rows = make_decoupled_rows(m_J, m_dinv);

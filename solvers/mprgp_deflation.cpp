@@ -38,7 +38,7 @@ bool RigidDeflation::build(const SpMat& A, const SpMat& J, const Vec& x0, double
         count[c] += 1.0;
     }
     for (int c = 0; c < m_components; ++c) centroid.row(c) /= count[c];
-    m_W = Modes::Zero(n, kModes);
+    m_W = Modes::Zero(n, MODES);
     for (Eigen::Index v = 0; v < nv; ++v) {
         const Eigen::Vector3d r = x0.segment<3>(3 * v) - centroid.row(m_comp[static_cast<size_t>(3 * v)]).transpose();
         for (int d = 0; d < 3; ++d) {
@@ -49,24 +49,24 @@ bool RigidDeflation::build(const SpMat& A, const SpMat& J, const Vec& x0, double
     }
     // Keep the slow modes only: w'Aw against w'Dw per component and mode.
     const Modes AW = A * m_W;
-    m_build_products = kModes;
+    m_build_products = MODES;
     const Vec diag = A.diagonal();
-    Eigen::MatrixXd wAw = Eigen::MatrixXd::Zero(m_components, kModes), wDw = wAw;
+    Eigen::MatrixXd w_a_w = Eigen::MatrixXd::Zero(m_components, MODES), w_d_w = w_a_w;
     for (Eigen::Index j = 0; j < n; ++j) {
         const int c = m_comp[static_cast<size_t>(j)];
-        for (int k = 0; k < kModes; ++k) {
-            wAw(c, k) += m_W(j, k) * AW(j, k);
-            wDw(c, k) += m_W(j, k) * m_W(j, k) * diag[j];
+        for (int k = 0; k < MODES; ++k) {
+            w_a_w(c, k) += m_W(j, k) * AW(j, k);
+            w_d_w(c, k) += m_W(j, k) * m_W(j, k) * diag[j];
         }
     }
-    Eigen::MatrixXd keep = Eigen::MatrixXd::Zero(m_components, kModes);
+    Eigen::MatrixXd keep = Eigen::MatrixXd::Zero(m_components, MODES);
     m_kept = 0;
     m_max_rayleigh_seen = 0.0;
     m_min_rayleigh_seen = std::numeric_limits<double>::infinity();
     for (int c = 0; c < m_components; ++c)
-        for (int k = 0; k < kModes; ++k) {
-            if (!(wDw(c, k) > 0.0)) continue;
-            const double q = wAw(c, k) / wDw(c, k);
+        for (int k = 0; k < MODES; ++k) {
+            if (!(w_d_w(c, k) > 0.0)) continue;
+            const double q = w_a_w(c, k) / w_d_w(c, k);
             m_max_rayleigh_seen = std::max(m_max_rayleigh_seen, q);
             m_min_rayleigh_seen = std::min(m_min_rayleigh_seen, q);
             if (q <= max_rayleigh) {
@@ -86,7 +86,7 @@ bool RigidDeflation::build(const SpMat& A, const SpMat& J, const Vec& x0, double
 
 void RigidDeflation::reduce(const Modes& M, const Vec& v, Eigen::MatrixXd& R) const
 {
-    R.setZero(m_components, kModes);
+    R.setZero(m_components, MODES);
     for (Eigen::Index j = 0; j < M.rows(); ++j) R.row(m_comp[static_cast<size_t>(j)]) += v[j] * M.row(j);
 }
 
@@ -116,9 +116,9 @@ void RigidDeflation::invert(int c)
     Eigen::SelfAdjointEigenSolver<Mat6> eig(e);
     const auto& ev = eig.eigenvalues();
     const double cut = 1e-10 * ev.cwiseAbs().maxCoeff();
-    Eigen::Matrix<double, kModes, 1> inv = Eigen::Matrix<double, kModes, 1>::Zero();
+    Eigen::Matrix<double, MODES, 1> inv = Eigen::Matrix<double, MODES, 1>::Zero();
     // Modes the face removes (or the dropped fast modes) have V'AV ~ 0: left out.
-    for (int k = 0; k < kModes; ++k)
+    for (int k = 0; k < MODES; ++k)
         if (ev[k] > cut && ev[k] > 0.0) inv[k] = 1.0 / ev[k];
     m_Einv[static_cast<size_t>(c)] = eig.eigenvectors() * inv.asDiagonal() * eig.eigenvectors().transpose();
 }
@@ -149,7 +149,7 @@ double RigidDeflation::update_row(const SpMat& A, int j, const ModeRow& delta, s
         e += m_V.row(a_inner[q]).transpose() * a_delta;
     }
     touched.push_back(c);
-    return 2.0 * kModes * (kModes + 2) * static_cast<double>(a_outer[j + 1] - a_outer[j] + 1);
+    return 2.0 * MODES * (MODES + 2) * static_cast<double>(a_outer[j + 1] - a_outer[j] + 1);
 }
 
 void RigidDeflation::finish_updates(std::vector<int>& touched, double flops, double* work_flops)
@@ -172,7 +172,7 @@ bool RigidDeflation::set_face(const SpMat& A, const SpMat& J, const DecoupledRow
         for (Eigen::Index i = 0; i < J.rows(); ++i)
             if (active[static_cast<size_t>(i)] != m_face[static_cast<size_t>(i)])
                 changed_dofs += outer[i + 1] - outer[i];
-    const bool full = !m_have_face || m_updates >= kMaxUpdates || 20 * changed_dofs > m_W.rows();
+    const bool full = !m_have_face || m_updates >= MAX_UPDATES || 20 * changed_dofs > m_W.rows();
     if (full) {
         m_V = m_W;
         for (Eigen::Index i = 0; i < J.rows(); ++i) {
@@ -202,9 +202,9 @@ bool RigidDeflation::set_face(const SpMat& A, const SpMat& J, const DecoupledRow
 
 bool RigidDeflation::set_face_projected(const SpMat& A, const std::function<void(Vec&)>& project, double* work_flops)
 {
-    m_next.resize(m_W.rows(), kModes);
+    m_next.resize(m_W.rows(), MODES);
     Vec column(m_W.rows());
-    for (int k = 0; k < kModes; ++k) {
+    for (int k = 0; k < MODES; ++k) {
         column = m_W.col(k);
         project(column);
         m_next.col(k) = column;
@@ -215,7 +215,7 @@ bool RigidDeflation::set_face_projected(const SpMat& A, const std::function<void
         for (Eigen::Index j = 0; j < m_next.rows(); ++j)
             if (m_next.row(j) != m_V.row(j)) m_changed.push_back(static_cast<int>(j));
     const bool full =
-        !m_projected_ready || m_updates >= kMaxUpdates || 20 * static_cast<Eigen::Index>(m_changed.size()) > m_W.rows();
+        !m_projected_ready || m_updates >= MAX_UPDATES || 20 * static_cast<Eigen::Index>(m_changed.size()) > m_W.rows();
     if (full) {
         m_V = m_next;
         rebuild(A);

@@ -22,12 +22,12 @@ namespace cb {
 
 class RigidDeflation {
 public:
-    static constexpr int kModes = 6;
+    static constexpr int MODES = 6;
     /// The slow-mode filter of build() that cg and mprgp use: a rigid mode w is kept when
     /// w'Aw <= 0.1 w'diag(A)w, only then a slow mode worth a coarse space (a stiff body's rigid
     /// modes see its mass only).
-    static constexpr double kSlowRayleigh = 0.1;
-    using Modes = Eigen::Matrix<double, Eigen::Dynamic, kModes>;
+    static constexpr double SLOW_RAYLEIGH = 0.1;
+    using Modes = Eigen::Matrix<double, Eigen::Dynamic, MODES>;
 
     /// Builds W from the connected components of the vertex graph (vertex = DOF / 3) of A and J
     /// (a row joins the bodies it touches, so that the face projector Q never mixes components)
@@ -35,18 +35,18 @@ public:
     /// A mode is kept only when it is a slow one: w'Aw <= max_rayleigh w'diag(A)w (a stiff
     /// body's rigid modes see only its mass; a random SPD matrix or a soft body has none).
     /// Returns false (deflation off) when n is not a multiple of 3 or no mode is kept.
-    /// Costs kModes A-products.
+    /// Costs MODES A-products.
     bool build(const SpMat& A, const SpMat& J, const Vec& x0, double max_rayleigh);
     /// Largest w'Aw / w'diag(A)w over the modes of build() (kept or not).
     double max_rayleigh_seen() const { return m_max_rayleigh_seen; }
     double min_rayleigh_seen() const { return m_min_rayleigh_seen; }
     int kept_modes() const { return m_kept; }
-    /// A-products the last build() spent (kModes, or 0 when it returned before the slow-mode test).
+    /// A-products the last build() spent (MODES, or 0 when it returned before the slow-mode test).
     long build_products() const { return m_build_products; }
     /// V = Q W on the face `active`, AV = A V and the pseudo-inverse of each component's V'AV
     /// (modes that the face removes are dropped). When few rows changed since the last face, V, AV
     /// and V'AV are updated on those rows' DOFs only (flops added to *work_flops); otherwise they
-    /// are formed anew with kModes A-products, and the call returns true.
+    /// are formed anew with MODES A-products, and the call returns true.
     bool set_face(const SpMat& A, const SpMat& J, const DecoupledRows& rows, const std::vector<char>& active,
                   double* work_flops = nullptr);
     /// V = project(W) mode by mode, AV = A V and each component's (V'AV)^+. For a general J (`mprgp-coupled`), whose
@@ -54,7 +54,7 @@ public:
     /// component's DOFs in that component (true of Q = I - J_A'(J_A J_A')^-1 J_A, since rows join the bodies they
     /// touch). As set_face(): when the new V differs from the last one on few DOFs (under n/20),
     /// AV and V'AV are updated on those DOFs only (flops added to *work_flops), else formed anew
-    /// with kModes A-products, and the call returns true. Not to be mixed with set_face().
+    /// with MODES A-products, and the call returns true. Not to be mixed with set_face().
     bool set_face_projected(const SpMat& A, const std::function<void(Vec&)>& project, double* work_flops = nullptr);
     /// Coarse correction d = V y, y = (V'AV)^+ V'g, and Ad = AV y: F(x - d) = min over x + V y
     /// (the Galerkin step). `g` should be in face form (the free gradient).
@@ -64,18 +64,18 @@ public:
     bool ready() const { return m_ready; }
     int components() const { return m_components; }
     /// Flops of one deflate() or coarse(): two passes over the n x 6 modes.
-    double apply_flops() const { return 4.0 * kModes * static_cast<double>(m_W.rows()); }
+    double apply_flops() const { return 4.0 * MODES * static_cast<double>(m_W.rows()); }
 
 private:
-    using ModeRow = Eigen::Matrix<double, 1, kModes>;
-    using Mat6 = Eigen::Matrix<double, kModes, kModes>;
+    using ModeRow = Eigen::Matrix<double, 1, MODES>;
+    using Mat6 = Eigen::Matrix<double, MODES, MODES>;
     /// Incremental face updates between two full ones (bounds the drift of V'AV).
-    static constexpr int kMaxUpdates = 50;
+    static constexpr int MAX_UPDATES = 50;
     /// Row of V at DOF inner[k] of row i: W's row, projected when the row is active.
     ModeRow face_row(const SpMat& J, const DecoupledRows& rows, Eigen::Index i, int k, bool is_active) const;
     /// m_Einv[c] = pseudo-inverse of m_E[c].
     void invert(int c);
-    /// AV = A V, E = V'AV per component and their pseudo-inverses, from scratch (kModes A-products).
+    /// AV = A V, E = V'AV per component and their pseudo-inverses, from scratch (MODES A-products).
     void rebuild(const SpMat& A);
     /// V's row j += delta with AV and E updated locally; records j's component; returns the flops.
     double update_row(const SpMat& A, int j, const ModeRow& delta, std::vector<int>& touched);

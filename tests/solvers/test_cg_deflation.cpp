@@ -80,7 +80,7 @@ TEST(CgDeflation, StiffBodySameSolutionFewerIcholIterations)
             EXPECT_LE(std::max(energy_error(plain.x), energy_error(rigid.x)), 1e-8);
         // Honest work: build (6) + A V (6) A-products over plain's, one precond application per
         // direction, and the coarse passes in work_flops.
-        const long extra_products = 2L * cb::RigidDeflation::kModes;
+        const long extra_products = 2L * cb::RigidDeflation::MODES;
         EXPECT_EQ(rigid.counters.a_products - rigid.iterations,
                   plain.counters.a_products - plain.iterations + extra_products)
             << precond;
@@ -92,7 +92,7 @@ TEST(CgDeflation, StiffBodySameSolutionFewerIcholIterations)
             // direction (1 + iterations + replacements) and per Galerkin correction.
             const double passes = 1.0 + static_cast<double>(rigid.iterations) + 2.0 * replacements + 1.0;
             EXPECT_DOUBLE_EQ(rigid.counters.work_flops,
-                             passes * 4.0 * cb::RigidDeflation::kModes * static_cast<double>(qp.n()));
+                             passes * 4.0 * cb::RigidDeflation::MODES * static_cast<double>(qp.n()));
         }
         std::printf("stiff column (n %ld): cg %s iterations none %ld, rigid %ld\n", static_cast<long>(qp.n()), precond,
                     plain.iterations, rigid.iterations);
@@ -116,7 +116,7 @@ TEST(CgDeflation, NoSlowModeLeavesPlainPcgUnchanged)
         EXPECT_EQ(rigid.iterations, plain.iterations);
         EXPECT_EQ(rigid.x, plain.x);
         // The slow-mode test still cost its 6 A-products.
-        EXPECT_EQ(rigid.counters.a_products, plain.counters.a_products + cb::RigidDeflation::kModes);
+        EXPECT_EQ(rigid.counters.a_products, plain.counters.a_products + cb::RigidDeflation::MODES);
     }
 }
 

@@ -158,7 +158,7 @@ TEST(MprgpCoupledPrecond, DirectionStaysOnTheFaceAndIsSymmetricPositive)
             EXPECT_NEAR(p2.dot(z1), p1.dot(z2), 1e-9 * std::abs(p2.dot(z1)) + 1e-14) << label;
             EXPECT_GT(p1.dot(z1), 0.0) << label << ": positive on the face";
             if (rigid) {
-                EXPECT_GE(cnt.a_products, 2 * cb::RigidDeflation::kModes) << label << ": build and one face";
+                EXPECT_GE(cnt.a_products, 2 * cb::RigidDeflation::MODES) << label << ": build and one face";
             }
         }
 }
@@ -234,8 +234,8 @@ TEST(MprgpCoupledPrecond, IncrementalRigidFaceUpdateMatchesAFreshOne)
     std::vector<char> first(static_cast<size_t>(qp.m()), 1), second = first;
     second[1] = 0;
     cb::RigidDeflation incremental, fresh;
-    ASSERT_TRUE(incremental.build(qp.A, qp.J, qp.x0, cb::RigidDeflation::kSlowRayleigh));
-    ASSERT_TRUE(fresh.build(qp.A, qp.J, qp.x0, cb::RigidDeflation::kSlowRayleigh));
+    ASSERT_TRUE(incremental.build(qp.A, qp.J, qp.x0, cb::RigidDeflation::SLOW_RAYLEIGH));
+    ASSERT_TRUE(fresh.build(qp.A, qp.J, qp.x0, cb::RigidDeflation::SLOW_RAYLEIGH));
     auto project = [&](Vec& v) {
         Vec jv = qp.J * v, nu = Vec::Zero(qp.m());
         ops.face_multipliers(jv, nu, cnt);
