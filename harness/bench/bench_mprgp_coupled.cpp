@@ -9,10 +9,10 @@
 // machine shared with other jobs the wall clock counts the time the process waited for a core
 // (measured: 0.3 CPUs utilised under load 10 on 2 cores). The wall-clock figures (solve_s per
 // iteration) are reported beside it.
-// Compare builds only when both were configured with -DCMAKE_CXX_FLAGS="-falign-loops=64
-// -falign-functions=64": the A-product's inner loop runs ~20% slower when it crosses a 64-byte
-// boundary, so unrelated code moving it swung the ratio of identical solver code from 0.85 to 1.21
-// (two_dinos_1303 frame 11; docs/ALGORITHMS.md §4).
+// The build aligns loops and functions to 64 bytes (CMakeLists.txt): the A-product's inner loop
+// runs ~20% slower when it crosses a 64-byte boundary, so without that rule unrelated code moving it
+// swung the ratio of identical solver code from 0.85 to 1.21 (two_dinos_1303 frame 11;
+// docs/ALGORITHMS.md §4). Compare builds made under the same rule.
 #include "problems/qpsnap.hpp"
 #include "solvers/decouple.hpp"
 #include "solvers/registry.hpp"
