@@ -1,6 +1,7 @@
 // DenseSetFactor (solvers/dense_set_factor.hpp): after any sequence of sets, reached by row
 // appends, deletions at any position or a fresh factor, its solve equals a dense LLT solve on
 // S(set, set); sets above the capacity and non-positive pivots are refused.
+#include "set_solve_check.hpp"
 #include "solvers/dense_set_factor.hpp"
 
 #include <gtest/gtest.h>
@@ -12,53 +13,8 @@ namespace {
 
 using cb::SpMatCol;
 using cb::Vec;
-
-/// A sparse SPD matrix with unit diagonal: B B' scaled, B a random sparse k x 2k matrix.
-SpMatCol random_gram(int k, std::mt19937& rng)
-{
-    std::uniform_real_distribution<double> val(-1.0, 1.0);
-    std::uniform_int_distribution<int> col(0, 2 * k - 1);
-    std::vector<cb::Triplet> t;
-    for (int i = 0; i < k; ++i) {
-        t.emplace_back(i, 2 * i, 1.0);
-        for (int e = 0; e < 3; ++e) t.emplace_back(i, col(rng), val(rng));
-    }
-    cb::SpMat B(k, 2 * static_cast<Eigen::Index>(k));
-    B.setFromTriplets(t.begin(), t.end());
-    SpMatCol G = SpMatCol(B * B.transpose());
-    Vec sc = G.diagonal().cwiseSqrt().cwiseInverse();
-    return SpMatCol(sc.asDiagonal() * G * sc.asDiagonal());
-}
-
-/// max |x - S(set, set)^-1 b| over the set and |x| off it, for a random b on the set.
-double solve_error(cb::DenseSetFactor& f, const SpMatCol& S, const std::vector<char>& mask, std::mt19937& rng)
-{
-    const int k = static_cast<int>(S.rows());
-    std::vector<int> idx;
-    for (int i = 0; i < k; ++i)
-        if (mask[static_cast<size_t>(i)]) idx.push_back(i);
-    std::uniform_real_distribution<double> val(-1.0, 1.0);
-    Vec b = Vec::Zero(k);
-    for (int i : idx) b[i] = val(rng);
-    const Eigen::MatrixXd dense = Eigen::MatrixXd(S);
-    const auto s = static_cast<Eigen::Index>(idx.size());
-    Eigen::MatrixXd sub(s, s);
-    Vec rhs(s);
-    for (Eigen::Index r = 0; r < s; ++r) {
-        rhs[r] = b[idx[static_cast<size_t>(r)]];
-        for (Eigen::Index c = 0; c < s; ++c)
-            sub(r, c) = dense(idx[static_cast<size_t>(r)], idx[static_cast<size_t>(c)]);
-    }
-    const Vec expect = s == 0 ? Vec() : Vec(sub.llt().solve(rhs));
-    cb::Counters cnt;
-    f.solve(b.data(), cnt);
-    double err = 0.0;
-    for (Eigen::Index r = 0; r < s; ++r) {
-        err = std::max(err, std::abs(b[idx[static_cast<size_t>(r)]] - expect[r]));
-        b[idx[static_cast<size_t>(r)]] = 0.0;
-    }
-    return std::max(err, b.lpNorm<Eigen::Infinity>());
-}
+using cb::set_solve_check::random_gram;
+using cb::set_solve_check::solve_error;
 
 TEST(DenseSetFactor, AppendedDeletedAndFreshFactorsSolveAsDenseOnEverySet)
 {

@@ -1,5 +1,6 @@
 // MaskedGramFactor (solvers/masked_gram_factor.hpp): after any sequence of masks, reached by row
 // modifications or by refactorisation, its solve equals a dense solve on S(mask, mask).
+#include "set_solve_check.hpp"
 #include "solvers/masked_gram_factor.hpp"
 
 #include <gtest/gtest.h>
@@ -11,54 +12,8 @@ namespace {
 
 using cb::SpMatCol;
 using cb::Vec;
-
-/// A sparse SPD matrix with unit diagonal: B B' scaled, B a random sparse k x 2k matrix.
-SpMatCol random_gram(int k, std::mt19937& rng)
-{
-    std::uniform_real_distribution<double> val(-1.0, 1.0);
-    std::uniform_int_distribution<int> col(0, 2 * k - 1);
-    std::vector<cb::Triplet> t;
-    for (int i = 0; i < k; ++i) {
-        t.emplace_back(i, 2 * i, 1.0);  // full row rank
-        for (int e = 0; e < 3; ++e) t.emplace_back(i, col(rng), val(rng));
-    }
-    cb::SpMat B(k, 2 * static_cast<Eigen::Index>(k));
-    B.setFromTriplets(t.begin(), t.end());
-    SpMatCol G = SpMatCol(B * B.transpose());
-    Vec sc = G.diagonal().cwiseSqrt().cwiseInverse();
-    return SpMatCol(sc.asDiagonal() * G * sc.asDiagonal());
-}
-
-double masked_solve_error(cb::MaskedGramFactor& f, const SpMatCol& S, const std::vector<char>& mask, std::mt19937& rng)
-{
-    const int k = static_cast<int>(S.rows());
-    std::vector<int> idx;
-    for (int i = 0; i < k; ++i)
-        if (mask[static_cast<size_t>(i)]) idx.push_back(i);
-    std::uniform_real_distribution<double> val(-1.0, 1.0);
-    Vec b = Vec::Zero(k);
-    for (int i : idx) b[i] = val(rng);
-    Eigen::MatrixXd dense = Eigen::MatrixXd(S);
-    Eigen::MatrixXd sub(idx.size(), idx.size());
-    Vec rhs(static_cast<Eigen::Index>(idx.size()));
-    for (size_t r = 0; r < idx.size(); ++r) {
-        rhs[static_cast<Eigen::Index>(r)] = b[idx[r]];
-        for (size_t c = 0; c < idx.size(); ++c)
-            sub(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = dense(idx[r], idx[c]);
-    }
-    const Vec expect = idx.empty() ? Vec() : Vec(sub.llt().solve(rhs));
-    cb::Counters cnt;
-    f.solve(b.data(), cnt);
-    double err = 0.0;
-    std::vector<char> in(static_cast<size_t>(k), 0);
-    for (size_t r = 0; r < idx.size(); ++r) {
-        err = std::max(err, std::abs(b[idx[r]] - expect[static_cast<Eigen::Index>(r)]));
-        in[static_cast<size_t>(idx[r])] = 1;
-    }
-    for (int i = 0; i < k; ++i)
-        if (!in[static_cast<size_t>(i)]) err = std::max(err, std::abs(b[i]));  // zero off the mask
-    return err;
-}
+using cb::set_solve_check::random_gram;
+using cb::set_solve_check::solve_error;
 
 TEST(MaskedGramFactor, ModifiedAndRefactoredSolvesMatchDenseOnEveryMask)
 {
@@ -74,7 +29,7 @@ TEST(MaskedGramFactor, ModifiedAndRefactoredSolvesMatchDenseOnEveryMask)
         const int flips = step % 10 == 9 ? 40 : 1 + step % 5;
         for (int e = 0; e < flips; ++e) mask[static_cast<size_t>(row(rng))] ^= 1;
         ASSERT_TRUE(f.set_mask(mask, cnt)) << "step " << step;
-        EXPECT_LE(masked_solve_error(f, S, mask, rng), 1e-10) << "step " << step;
+        EXPECT_LE(solve_error(f, S, mask, rng), 1e-10) << "step " << step;
     }
     EXPECT_GT(f.tally().row_additions, 30);
     EXPECT_GT(f.tally().row_deletions, 30);
@@ -108,14 +63,14 @@ TEST(MaskedGramFactor, ADonorsFactorIsCopiedInsteadOfARefactorisationAndSolvesTh
     EXPECT_EQ(f.tally().refactorizations, 1);  // only the first mask
     EXPECT_EQ(f.tally().row_additions, 2);
     EXPECT_EQ(f.tally().row_deletions, 1);
-    EXPECT_LE(masked_solve_error(f, S, near, rng), 1e-10);
-    EXPECT_LE(masked_solve_error(donor, S, donor_mask, rng), 1e-10);  // the donor is untouched
+    EXPECT_LE(solve_error(f, S, near, rng), 1e-10);
+    EXPECT_LE(solve_error(donor, S, donor_mask, rng), 1e-10);  // the donor is untouched
     std::vector<char> away(static_cast<size_t>(k), 0);
     for (int i = 0; i < 30; ++i) away[static_cast<size_t>(i)] = 1;
     ASSERT_TRUE(f.set_mask(away, cnt, &donors));  // 53 rows from the donor: refactored
     EXPECT_EQ(f.tally().copies, 1);
     EXPECT_EQ(f.tally().refactorizations, 2);
-    EXPECT_LE(masked_solve_error(f, S, away, rng), 1e-10);
+    EXPECT_LE(solve_error(f, S, away, rng), 1e-10);
 }
 
 TEST(MaskedGramFactor, DuplicatedRowsStaySolvableWithTheShift)

@@ -2,6 +2,7 @@
 // the same step kinds and iterates to rounding, compared on x and J'lambda (dependent rows make
 // lambda itself non-unique), on QPs with components of 1 to ~200 rows, dependent rows and face
 // changes. Also the row-graph components themselves (solvers/row_components.hpp).
+#include "coupled_test_qps.hpp"
 #include "problems/synthetic.hpp"
 #include "solvers/accuracy.hpp"
 #include "solvers/registry.hpp"
@@ -18,6 +19,9 @@ namespace {
 using cb::Qp;
 using cb::SolveStatus;
 using cb::Vec;
+using cb::coupled_test_qps::loaded;
+using cb::coupled_test_qps::scene_size;
+using cb::coupled_test_qps::with_dependent_row;
 
 class IterateRecorder : public cb::Monitor {
 public:
@@ -46,18 +50,6 @@ void solve(const Qp& qp, const std::string& operators, const std::string& precon
     cb::SolveContext context;
     context.monitor = &run.recorder;
     run.result = cb::builtin_registry().create("mprgp-coupled", s)->solve(qp.view(), context);
-}
-
-double scene_size(const Qp& qp) { return cb::accuracy_scale(qp.view()).length; }
-
-/// The coupled scene with a random extra load, so that some rows separate and others press
-/// harder: the face changes during the solve.
-Qp loaded(Qp qp, std::uint64_t seed)
-{
-    std::srand(static_cast<unsigned>(seed));
-    const Vec push = Vec::Random(qp.n()) * 0.5 * scene_size(qp) / 10.0;
-    qp.b += qp.A * push;
-    return qp;
 }
 
 /// Component statistics of a QP's row graph.
@@ -144,29 +136,6 @@ TEST(MprgpCoupledOperators, ComponentsAgreeWithGlobalOnDependentAndScaledRows)
     const Qp scaled = loaded(cb::make_synthetic("scaled-rows", {{"nx", 4}, {"ny", 2}, {"nz", 4}}, 3), 3);
     EXPECT_EQ(components(scaled).largest(), 1);
     expect_same_run(scaled, "jacobi", "scaled rows");
-}
-
-}  // namespace
-
-namespace {
-
-/// qp with row `row` of J appended again scaled by `factor` (c scaled alike): a dependent row in
-/// the same component, so the Gram matrices are singular but for their shift.
-Qp with_dependent_row(Qp qp, int row, double factor)
-{
-    std::vector<cb::Triplet> t;
-    for (int i = 0; i < qp.J.rows(); ++i)
-        for (cb::SpMat::InnerIterator it(qp.J, i); it; ++it) t.emplace_back(i, static_cast<int>(it.col()), it.value());
-    const int m = static_cast<int>(qp.J.rows());
-    for (cb::SpMat::InnerIterator it(qp.J, row); it; ++it)
-        t.emplace_back(m, static_cast<int>(it.col()), factor * it.value());
-    cb::SpMat J(m + 1, qp.J.cols());
-    J.setFromTriplets(t.begin(), t.end());
-    Vec c(m + 1);
-    c << qp.c, factor * qp.c[row];
-    qp.J = J;
-    qp.c = c;
-    return qp;
 }
 
 }  // namespace

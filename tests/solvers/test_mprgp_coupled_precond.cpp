@@ -3,6 +3,7 @@
 // face; every variant converges on the original QP and agrees with the jacobi run on x and F, on
 // QPs with components of 2-200 rows, dependent rows and face changes; the rigid modes pay on a
 // stiff coupled QP.
+#include "coupled_test_qps.hpp"
 #include "problems/synthetic.hpp"
 #include "solvers/accuracy.hpp"
 #include "solvers/coupled_face_operators.hpp"
@@ -21,36 +22,9 @@ namespace {
 using cb::Qp;
 using cb::SolveStatus;
 using cb::Vec;
-
-double scene_size(const Qp& qp) { return cb::accuracy_scale(qp.view()).length; }
-
-/// The coupled scene with a random extra load, so that some rows separate and others press
-/// harder: the face changes during the solve (as in test_mprgp_coupled_operators.cpp).
-Qp loaded(Qp qp, std::uint64_t seed)
-{
-    std::srand(static_cast<unsigned>(seed));
-    const Vec push = Vec::Random(qp.n()) * 0.5 * scene_size(qp) / 10.0;
-    qp.b += qp.A * push;
-    return qp;
-}
-
-/// qp with row `row` of J appended again scaled by `factor` (c alike): a dependent row.
-Qp with_dependent_row(Qp qp, int row, double factor)
-{
-    std::vector<cb::Triplet> t;
-    for (int i = 0; i < qp.J.rows(); ++i)
-        for (cb::SpMat::InnerIterator it(qp.J, i); it; ++it) t.emplace_back(i, static_cast<int>(it.col()), it.value());
-    const int m = static_cast<int>(qp.J.rows());
-    for (cb::SpMat::InnerIterator it(qp.J, row); it; ++it)
-        t.emplace_back(m, static_cast<int>(it.col()), factor * it.value());
-    cb::SpMat J(m + 1, qp.J.cols());
-    J.setFromTriplets(t.begin(), t.end());
-    Vec c(m + 1);
-    c << qp.c, factor * qp.c[row];
-    qp.J = J;
-    qp.c = c;
-    return qp;
-}
+using cb::coupled_test_qps::loaded;
+using cb::coupled_test_qps::scene_size;
+using cb::coupled_test_qps::with_dependent_row;
 
 cb::SolverResult solve(const Qp& qp, nlohmann::json settings)
 {
