@@ -87,6 +87,7 @@ public:
         m_face.reserve(m_rows.size());
         m_next.reserve(m_rows.size());
         m_face_set.reserve(m_rows.size());
+        m_next_set.reserve(m_rows.size());
         m_proj_set.assign(m_rows.size(), 0);
     }
     virtual ~RowBlock() = default;
@@ -106,8 +107,20 @@ public:
         }
         if (m_initialised && m_next == m_face) return false;
         m_initialised = true;
+        // The chopped LCP's warm set follows the face: a row that stays keeps its state (the next
+        // chopped problem is near the last one), a row that joins takes m_fresh_face_set.
+        m_next_set.assign(m_next.size(), m_fresh_face_set);
+        for (size_t a = 0, b = 0; a < m_face.size() && b < m_next.size();) {
+            if (m_face[a] < m_next[b]) {
+                ++a;
+            } else if (m_next[b] < m_face[a]) {
+                ++b;
+            } else {
+                m_next_set[b++] = m_face_set[a++];
+            }
+        }
         m_face.swap(m_next);
-        m_face_set.assign(m_face.size(), m_fresh_face_set);
+        m_face_set.swap(m_next_set);
         if (!m_face.empty()) refactor(cnt);
         return true;
     }
@@ -128,8 +141,8 @@ public:
 protected:
     virtual void refactor(Counters& cnt) = 0;
     std::vector<int> m_rows, m_face, m_next;
-    std::vector<char> m_face_set, m_proj_set;
-    char m_fresh_face_set = 0;  ///< the chopped LCP's warm set after a face change: no row, or (1) every face row
+    std::vector<char> m_face_set, m_next_set, m_proj_set;
+    char m_fresh_face_set = 0;  ///< a row joining the face joins the chopped LCP's warm set (1) or not (0)
     bool m_initialised = false;
 };
 
@@ -610,9 +623,11 @@ public:
         m_gram = SpMatCol(JB * JB.transpose());
         m_gram.makeCompressed();
         const long max_updates = std::max(1L, opt.sparse_max_updates);
-        // After a face change the chopped LCP starts from the whole face: its first solve is then nu
-        // on the face factor's mask (copied, MaskedGramFactor::set_mask), and the negative rows leave
-        // one by one, where an empty start added the rows in blocks of hundreds, each refactored.
+        // Rows that join the face join the chopped LCP's start set (RowBlock::set_face): the first
+        // face's start is then the whole face, whose solve is nu on the face factor's mask (copied,
+        // MaskedGramFactor::set_mask), and the negative rows leave, where an empty start added the
+        // rows in blocks of hundreds, each refactored. Rows that stay keep their last state (flank_press
+        // frame 0: chopped LCP steps 60 -> 49, row modifications 510 -> 404).
         m_fresh_face_set = 1;
         m_scale = unit_diagonal_scale(m_gram);
         m_face_factor = std::make_unique<MaskedGramFactor>(scaled_shifted(m_gram, m_scale), max_updates);

@@ -7,6 +7,12 @@
 
 namespace cb {
 
+namespace {
+/// A copy of L (one memcpy of ~lnz entries) costs about as much as this many row changes
+/// (flank_press's 1152-row component: copy ~40 us, a row addition or deletion ~6 us).
+constexpr long COPY_IN_ROW_CHANGES = 8;
+}  // namespace
+
 MaskedGramFactor::MaskedGramFactor(const SpMatCol& S, long max_updates)
     : m_k(static_cast<int>(S.rows())), m_max_updates(max_updates), m_S(S)
 {
@@ -113,11 +119,11 @@ bool MaskedGramFactor::set_mask(const std::vector<char>& mask, Counters& cnt,
         ++m_tally.reuses;
         return true;
     }
-    if (changes > m_max_updates && donors != nullptr) {
+    if (changes > COPY_IN_ROW_CHANGES && donors != nullptr) {
         // A warm factor elsewhere (the face's for the chopped set, another use's projection set)
-        // saves the refactorisation: copy it, then modify it row by row below.
+        // saves the refactorisation or most row changes: copy it, then modify it row by row below.
         const MaskedGramFactor* nearest = nullptr;
-        long nearest_changes = m_max_updates + 1;
+        long nearest_changes = std::min(changes - COPY_IN_ROW_CHANGES, m_max_updates + 1);
         for (const MaskedGramFactor* d : *donors) {
             if (d == nullptr || d == this || d->m_k != m_k) continue;
             const long c = d->distance(mask);

@@ -38,9 +38,10 @@ public:
     MaskedGramFactor& operator=(const MaskedGramFactor&) = delete;
 
     /// Makes the factor that of S restricted to `mask` (size k, nonzero = in).
-    /// @param donors  factors of the same S: when this one would be refactored and a donor's mask is
-    ///                within max_updates rows of `mask`, the nearest donor's factor is copied and
-    ///                modified instead (a copy is a memcpy of L, a refactorisation ~75 row modifications)
+    /// @param donors  factors of the same S: when a donor's mask is within max_updates rows of `mask`
+    ///                and nearer than this factor's by more than a copy costs (~8 row changes), the
+    ///                nearest donor's factor is copied and modified instead (a copy is a memcpy of L, a
+    ///                refactorisation ~75 row modifications)
     /// @return false when CHOLMOD failed (S(mask, mask) not positive definite to rounding)
     bool set_mask(const std::vector<char>& mask, Counters& cnt,
                   const std::vector<const MaskedGramFactor*>* donors = nullptr);

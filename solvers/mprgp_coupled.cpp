@@ -13,6 +13,7 @@
 #include "solvers/coupled_face_operators.hpp"
 #include "solvers/coupled_preconditioner.hpp"
 #include "solvers/mprgp_kernels.hpp"
+#include "solvers/work_units.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -269,6 +270,7 @@ private:
         if (ap != nullptr) {
             m_x -= alpha * m_p;
             m_g -= alpha * *ap;
+            m_jx -= alpha * m_jp;  // J x by the step's own J p (the trial's); restarts form it afresh
         }
         m_phi = m_g;
         rows_times(m_g, m_jg);
@@ -406,13 +408,17 @@ private:
     bool m_face_dofs_known = false;
     long m_chopped_solved = 0, m_chopped_deferred = 0, m_proportional_by_bound = 0;
     long m_proportional_by_sweeps = 0, m_bound_sweeps = 0;
-    Vec m_mu_bound;
+    Vec m_mu_bound, m_w_bound;
+    SpMat m_gram;  // J J' (symmetric: row i is column i), for the proportioning test's sweeps
 };
 
 void CoupledRun::evaluate(bool exact)
 {
+    // J x comes from the last restart, moved by each accepted CG step (J x - alpha J p, the trial's
+    // J p): every evaluate follows one of the two. (J phi as J g - G nu, also without a gather, took
+    // the components' iterates 10x further from the global operators' on 251-step chains: the
+    // difference cancels on the face rows.)
     rows_times(m_phi, m_jphi);
-    rows_times(m_x, m_jx);
     // The parts of the accuracy error that do not depend on mu: the feasibility, and the
     // stationarity at DOFs no face row touches (there g - J_A'mu = g = phi for every mu): one
     // vectorised pass over every DOF with the face DOFs weighted 0, then the face DOFs alone.
@@ -528,38 +534,37 @@ bool CoupledRun::projected_sweeps_bound(double bound)
 {
     // Coordinate descent on 1/2 ||r||^2, r = J_A'(nu - mu), mu >= 0, from mu = max(nu, 0): each
     // row step is exact and keeps mu feasible, so ||r||^2 only falls and bounds beta'beta at
-    // every point. A sweep costs O(nnz(J_A)) against the LCP's factor modifications.
+    // every point. Done in the rows' space: w = J_A r = G (nu - mu) (G = J J', nu and mu zero off
+    // the face), a row step reads w_i and moves w by a column of G, and ||r||^2 = (nu - mu)'w; the
+    // m-vectors stay in cache where r's DOFs were gathered and scattered (flank_press frame 0:
+    // 1052 face rows, 12 DOFs each).
+    const int* outer = m_gram.outerIndexPtr();
+    const int* inner = m_gram.innerIndexPtr();
+    const double* val = m_gram.valuePtr();
+    m_w_bound.setZero();
     for (Eigen::Index i = 0; i < m_m; ++i) {
         m_mu_bound[i] = std::max(m_nu[i], 0.0);
-        m_q[i] = m_nu[i] - m_mu_bound[i];
+        const double delta = m_nu[i] - m_mu_bound[i];
+        if (delta == 0.0) continue;
+        for (int k = outer[i]; k < outer[i + 1]; ++k) m_w_bound[inner[k]] += val[k] * delta;
     }
-    build_d(m_q);  // m_d = r
-    double r2 = m_beta2_upper;
     bool decided = false;
     for (int sweep = 0; sweep < BOUND_SWEEPS && !decided; ++sweep) {
         for (Eigen::Index i = 0; i < m_m; ++i) {
             if (!m_active[static_cast<size_t>(i)]) continue;
-            double jr = 0.0;
-            for (SpMat::InnerIterator it(m_J, i); it; ++it) jr += it.value() * m_d[it.col()];
-            const double next = std::max(0.0, m_mu_bound[i] + jr / m_s[i]);
+            const double next = std::max(0.0, m_mu_bound[i] + m_w_bound[i] / m_s[i]);
             const double step = next - m_mu_bound[i];
             if (step == 0.0) continue;
             m_mu_bound[i] = next;
-            for (SpMat::InnerIterator it(m_J, i); it; ++it) {
-                const int j = static_cast<int>(it.col());
-                if (!m_mark[static_cast<size_t>(j)]) {
-                    m_mark[static_cast<size_t>(j)] = 1;
-                    m_touched.push_back(j);
-                }
-                m_d[j] -= step * it.value();
-            }
+            for (int k = outer[i]; k < outer[i + 1]; ++k) m_w_bound[inner[k]] -= val[k] * step;
         }
-        r2 = 0.0;
-        for (int j : m_touched) r2 += m_d[j] * m_d[j];
+        double r2 = 0.0;
+        for (Eigen::Index i = 0; i < m_m; ++i)
+            if (m_active[static_cast<size_t>(i)]) r2 += (m_nu[i] - m_mu_bound[i]) * m_w_bound[i];
+        m_cnt.work_flops += sparse_product_flops(static_cast<double>(m_gram.nonZeros()));
         ++m_bound_sweeps;
         decided = r2 <= bound;
     }
-    clear_d();
     return decided;
 }
 
@@ -687,6 +692,7 @@ SolverResult CoupledRun::run()
     opt.lcp_max_pivots = m_st.lcp_max_pivots;
     opt.pgs_max_sweeps = m_st.pgs_max_sweeps;
     m_ops = std::make_unique<CoupledFaceOperators>(m_J, m_dinv, opt);
+    m_gram = SpMat(m_J * m_J.transpose());
     if (m_st.precond == "ichol" || m_st.deflation == "rigid") {
         m_precond = std::make_unique<CoupledPreconditioner>(m_A, m_J, m_dinv, *m_ops, m_st.precond);
         std::string error;
@@ -726,6 +732,7 @@ SolverResult CoupledRun::run()
     m_face_dof.assign(static_cast<size_t>(m_n), 0);
     m_face_dofs.reserve(static_cast<size_t>(m_J.nonZeros()));
     m_mu_bound.setZero(m_m);
+    m_w_bound.setZero(m_m);
     m_touched.reserve(static_cast<size_t>(m_J.nonZeros()));
 
     // Translation invariance: positions enter only as differences from x_ref = P(x0), whose
