@@ -43,10 +43,16 @@ BodyMotion::BodyMotion(const QpView& qp, double length)
     const int nodes = static_cast<int>(n / m_per_node);
 
     DisjointSets sets(nodes);
-    for (Eigen::Index r = 0; r < A.outerSize(); ++r)
-        for (SpMat::InnerIterator it(A, r); it; ++it)
-            if (it.value() != 0.0)  // a stored zero couples nothing
-                sets.join(static_cast<int>(r) / m_per_node, static_cast<int>(it.col()) / m_per_node);
+    for (Eigen::Index r = 0; r < A.outerSize(); ++r) {
+        const int node = static_cast<int>(r) / m_per_node;
+        int last = node;  // a row's columns are sorted: a vertex's DOFs come together, one join each
+        for (SpMat::InnerIterator it(A, r); it; ++it) {
+            const int other = static_cast<int>(it.col()) / m_per_node;
+            if (it.value() == 0.0 || other == last) continue;  // a stored zero couples nothing
+            sets.join(node, other);
+            last = other;
+        }
+    }
     int bodies = 0;
     m_body = sets.labels(bodies);
     auto body_of = [&](Eigen::Index p) { return static_cast<size_t>(m_body[static_cast<size_t>(p / m_per_node)]); };
