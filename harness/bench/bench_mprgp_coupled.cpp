@@ -13,11 +13,20 @@
 // runs ~20% slower when it crosses a 64-byte boundary, so without that rule unrelated code moving it
 // swung the ratio of identical solver code from 0.85 to 1.21 (two_dinos_1303 frame 11;
 // docs/ALGORITHMS.md §4). Compare builds made under the same rule.
+// With CB_BENCH_CALLGRIND set, under `valgrind --tool=callgrind --collect-atstart=no` (tools/
+// iteration_instructions.py runs it), each benchmark solves once with each solver and callgrind
+// collects from the first monitor call to the solve's return, one dump per solve labelled
+// "coupled <snapshot>" / "mprgp <snapshot>": instructions per iteration, the same on every run
+// (thread CPU time per iteration swings ~10% run to run on a shared VM).
 #include "problems/qpsnap.hpp"
 #include "solvers/decouple.hpp"
 #include "solvers/registry.hpp"
 
 #include <benchmark/benchmark.h>
+#if __has_include(<valgrind/callgrind.h>)
+#include <valgrind/callgrind.h>
+#define CB_BENCH_HAVE_CALLGRIND 1
+#endif
 
 #include <cstdlib>
 #include <ctime>
@@ -40,6 +49,22 @@ double thread_cpu_s()
     return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
+/// CB_BENCH_CALLGRIND: callgrind collects only inside the solves' iterations (see the header).
+bool callgrind_mode() { return std::getenv("CB_BENCH_CALLGRIND") != nullptr; }
+
+/// Starts (at the first monitor call) or ends (after the solve, with a dump named `label`) callgrind's
+/// collection in callgrind mode; no-ops otherwise and outside valgrind.
+void toggle_callgrind(const std::string* dump_label = nullptr)
+{
+#ifdef CB_BENCH_HAVE_CALLGRIND
+    if (!callgrind_mode()) return;
+    CALLGRIND_TOGGLE_COLLECT;
+    if (dump_label != nullptr) CALLGRIND_DUMP_STATS_AT(dump_label->c_str());
+#else
+    (void)dump_label;
+#endif
+}
+
 /// Thread CPU time at the first and the last outer iteration.
 class CpuClockMonitor : public cb::Monitor {
 public:
@@ -47,6 +72,7 @@ public:
     {
         const double now = thread_cpu_s();
         if (m_calls++ == 0) {
+            toggle_callgrind();
             m_first = now;
             m_first_iteration = info.iteration;
         }
@@ -55,6 +81,7 @@ public:
         return true;
     }
     bool wants_iterate() const override { return false; }
+    bool called() const { return m_calls > 0; }
     double per_iteration() const
     {
         const long k = m_last_iteration - m_first_iteration;
@@ -90,8 +117,12 @@ void BM_mprgp_coupled_iteration_ratio(benchmark::State& state, const std::string
         cb::SolveContext context_d, context_c;
         context_d.monitor = &clock_d;
         context_c.monitor = &clock_c;
+        const std::string stem = std::filesystem::path(path).stem().string();
+        const std::string label_d = "mprgp " + stem, label_c = "coupled " + stem;
         const cb::SolverResult d = decoupled->solve(loaded->decoupled.view(), context_d);
+        if (clock_d.called()) toggle_callgrind(&label_d);  // collection ends (it began at the first call)
         const cb::SolverResult c = coupled->solve(loaded->coupled.view(), context_c);
+        if (clock_c.called()) toggle_callgrind(&label_c);
         const double per_d = clock_d.per_iteration(), per_c = clock_c.per_iteration();
         state.SetIterationTime(per_c);
         ratio_sum += per_c / per_d;
@@ -128,7 +159,7 @@ const bool registered = [] {
         benchmark::RegisterBenchmark(name.c_str(), BM_mprgp_coupled_iteration_ratio, path)
             ->UseManualTime()
             ->Unit(benchmark::kMillisecond)
-            ->Iterations(3);
+            ->Iterations(callgrind_mode() ? 1 : 3);
     }
     return true;
 }();

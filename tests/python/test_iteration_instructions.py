@@ -1,0 +1,89 @@
+"""tools/iteration_instructions.py: issue 31's iteration-cost ratio counted in instructions. The dumps'
+parser on synthetic callgrind files; a run on a small coupled QP, whose counts must be positive, equal
+on a second run (the point of counting) and give the printed ratio; bad input exits 2 naming the file."""
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import unittest
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+TOOL = os.path.join(ROOT, "tools", "iteration_instructions.py")
+BINARY = os.environ.get("CB_CONTACTBENCH", os.path.join(ROOT, "build", "bin", "contactbench"))
+BENCH = os.path.join(os.path.dirname(BINARY), "cb_bench")
+sys.path.insert(0, os.path.join(ROOT, "tools"))
+import iteration_instructions  # noqa: E402
+
+
+def tool(*args):
+    return subprocess.run([sys.executable, TOOL, "--binary", BENCH, *args], capture_output=True, text=True)
+
+
+class ReadDumps(unittest.TestCase):
+    def test_labels_and_totals_of_client_request_dumps(self):
+        with tempfile.TemporaryDirectory() as d:
+            for name, body in [("callgrind.out.1", "desc: Trigger: Client Request: coupled snap_a\nsummary: 1234\n"),
+                               ("callgrind.out.2", "desc: Trigger: Client Request: mprgp snap_a\ntotals: 567\n"),
+                               ("callgrind.out", "desc: Trigger: Program termination\nsummary: 9\n")]:
+                with open(os.path.join(d, name), "w") as f:
+                    f.write("version: 1\ncreator: callgrind-3.19.0\n" + body)
+            totals = iteration_instructions.read_dumps(d)
+        self.assertEqual(totals, {"coupled snap_a": 1234, "mprgp snap_a": 567})
+
+
+class BadInput(unittest.TestCase):
+    def test_a_missing_snapshot_is_named_with_exit_2(self):
+        r = tool("/nonexistent/frame.qpsnap")
+        self.assertEqual(r.returncode, 2, r.stderr)
+        self.assertIn("/nonexistent/frame.qpsnap: no such snapshot file", r.stderr)
+
+    def test_a_missing_binary_is_named_with_exit_2(self):
+        with tempfile.NamedTemporaryFile(suffix=".qpsnap") as f:
+            r = subprocess.run([sys.executable, TOOL, "--binary", "/nonexistent/cb_bench", f.name],
+                               capture_output=True, text=True)
+        self.assertEqual(r.returncode, 2, r.stderr)
+        self.assertIn("/nonexistent/cb_bench: no such binary", r.stderr)
+
+
+class SmallCoupledQp(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        if shutil.which("valgrind") is None:
+            raise unittest.SkipTest("valgrind is not installed (make deps installs it)")
+        if not os.path.isfile(BENCH):
+            raise unittest.SkipTest("cb_bench is not built (CB_BUILD_BENCH=OFF)")
+        cls.work = tempfile.mkdtemp(prefix="cb_test_iteration_instructions_")
+        cls.snap = os.path.join(cls.work, "coupled_small.qpsnap")
+        r = subprocess.run([BINARY, "generate", "coupled", "--out", cls.snap, "--param", "nx=4", "--param", "nz=4"],
+                           capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+
+    @classmethod
+    def tearDownClass(cls):
+        shutil.rmtree(cls.work, ignore_errors=True)
+
+    def rows(self):
+        r = tool(self.snap)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        lines = [line.split() for line in r.stdout.splitlines()[1:]]
+        self.assertEqual(len(lines), 1, r.stdout)
+        return lines[0]
+
+    def test_counts_are_positive_repeatable_and_the_ratio_is_theirs(self):
+        first, second = self.rows(), self.rows()
+        self.assertEqual(first, second)  # instructions: the same on every run of one binary
+        stem, it_c, per_c, it_d, per_d, ratio = first[0], int(first[1]), int(first[2]), int(first[3]), \
+            int(first[4]), float(first[5])
+        self.assertEqual(stem, "coupled_small")
+        self.assertEqual(first[6], "converged")
+        self.assertGreater(it_c, 0)
+        self.assertGreater(it_d, 0)
+        self.assertGreater(per_c, 0)
+        self.assertGreater(per_d, 0)
+        self.assertAlmostEqual(ratio, per_c / per_d, delta=1e-3 * ratio)
+
+
+if __name__ == "__main__":
+    unittest.main()
