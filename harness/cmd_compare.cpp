@@ -12,7 +12,7 @@ namespace cb {
 namespace {
 
 /// Exit status of a comparison that found a regression (2 and 1 are bad input and internal error).
-constexpr int kRegression = 3;
+constexpr int REGRESSION = 3;
 
 }  // namespace
 
@@ -67,7 +67,7 @@ int cmd_compare(const Args& args)
     const CompareReport report = compare_inputs(base, next, options, cl.value("--filter"));
     std::cout << report.header() << "\n" << report.table(cl.has("--only-changes")) << "\n" << report.verdict() << "\n";
     if (cl.has("--json")) write_json_atomic(cl.path("--json"), report.to_json());
-    return report.failed() ? kRegression : 0;
+    return report.failed() ? REGRESSION : 0;
 }
 
 }  // namespace cb

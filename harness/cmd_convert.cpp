@@ -13,7 +13,7 @@
 namespace cb {
 namespace {
 
-const char* const kUsage =
+const char* const USAGE =
     "contactbench convert IN OUT\n"
     "  IN.qpsnap  -> OUT folder (A.mtx b.mtx J.mtx c.mtx x0.mtx meta.json [contact.json x_ref.mtx lambda_ref.mtx])\n"
     "  IN folder  -> OUT.qpsnap (Matrix Market files as written by scipy.io.mmwrite, Julia, MATLAB ...)\n"
@@ -32,10 +32,10 @@ int cmd_convert(const Args& args)
 {
     const CommandLine cl("convert", args, {}, {});
     if (cl.help()) {
-        std::cout << "usage: " << kUsage << "\n";
+        std::cout << "usage: " << USAGE << "\n";
         return 0;
     }
-    cl.expect_positional(2, 2, kUsage);
+    cl.expect_positional(2, 2, USAGE);
     const std::string in = cl.positional()[0], out = cl.positional()[1];
     Qp qp;
     SnapshotExtras extras;

@@ -14,10 +14,10 @@
 namespace cb {
 namespace {
 
-const char* const kUsage = "contactbench info SNAP [--json] [--time]\n"
-                           "  SNAP: a .qpsnap file or a Matrix Market folder (A.mtx b.mtx J.mtx c.mtx x0.mtx)\n"
-                           "  --json: print one JSON object instead of text\n"
-                           "  --time: also time the validated load (read_qpsnap / the folder reader), wall and CPU";
+const char* const USAGE = "contactbench info SNAP [--json] [--time]\n"
+                          "  SNAP: a .qpsnap file or a Matrix Market folder (A.mtx b.mtx J.mtx c.mtx x0.mtx)\n"
+                          "  --json: print one JSON object instead of text\n"
+                          "  --time: also time the validated load (read_qpsnap / the folder reader), wall and CPU";
 
 const char* kind_name(std::int64_t k)
 {
@@ -51,10 +51,10 @@ int cmd_info(const Args& args)
 {
     const CommandLine cl("info", args, {}, {"--json", "--time"});
     if (cl.help()) {
-        std::cout << "usage: " << kUsage << "\n";
+        std::cout << "usage: " << USAGE << "\n";
         return 0;
     }
-    cl.expect_positional(1, 1, kUsage);
+    cl.expect_positional(1, 1, USAGE);
     const std::string path = cl.positional()[0];
     const bool folder = std::filesystem::is_directory(path);
     nlohmann::json info;

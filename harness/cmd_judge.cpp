@@ -17,7 +17,7 @@ namespace cb {
 
 namespace {
 
-const char* const kUsage =
+const char* const USAGE =
     "contactbench judge SNAP SOLUTION [--lambda FILE] [--tol T] [--record RUN.json] [--json FILE]\n"
     "  SOLUTION: a folder with x.{mtx,npy,txt} and optionally lambda.{mtx,npy,txt} (solve --save-solution),\n"
     "            or one file holding x: .npy, .mtx, or plain text (numbers separated by white space)";
@@ -35,10 +35,10 @@ int cmd_judge(const Args& args)
 {
     const CommandLine cl("judge", args, {"--lambda", "--tol", "--record", "--json"}, {});
     if (cl.help()) {
-        std::cout << "usage: " << kUsage << "\n";
+        std::cout << "usage: " << USAGE << "\n";
         return 0;
     }
-    cl.expect_positional(2, 2, kUsage);
+    cl.expect_positional(2, 2, USAGE);
     const std::string snap = cl.positional()[0];
     const std::string solution = cl.positional()[1];
     JudgeOptions options;

@@ -21,7 +21,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const char* const kUsage = "contactbench merge OUT DIR1 DIR2 ...";
+const char* const USAGE = "contactbench merge OUT DIR1 DIR2 ...";
 
 std::string slurp(const fs::path& p) { return read_regular_file(p.string()); }
 
@@ -168,14 +168,14 @@ int cmd_merge(const Args& args)
 {
     const CommandLine cl("merge", args, {}, {});
     if (cl.help()) {
-        std::cout << "usage: " << kUsage
+        std::cout << "usage: " << USAGE
                   << "\n\nChecks that DIR1 DIR2 ... are the complete shards i/N (every i once) of one suite,\n"
                      "each finished (DIRk/jobs.json lists every job, each has its run file, of that suite\n"
                      "and with a known status), then copies DIRk/runs/*.json into OUT/runs and rewrites\n"
                      "OUT/summary.csv. Nothing is written unless every shard passes.\n";
         return 0;
     }
-    cl.expect_positional(2, 100000, kUsage);
+    cl.expect_positional(2, 100000, USAGE);
     const std::string out = cl.positional()[0];
     if (out.empty()) throw_input_error("merge", "OUT", "expects a folder name, got \"\"");
     // Every shard is checked, and every run file read and checked, before anything is written.

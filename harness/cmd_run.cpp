@@ -47,21 +47,21 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const char* const kUsage =
+const char* const USAGE =
     "contactbench run SUITE.json [--out DIR] [--shard i/N] [--force] [--fresh] [--jobs N [--jobs-timed]]";
 
-const char* const kHelp = "\n\nRuns every (snapshot, solver label) of a suite; writes DIR/runs/<id>__<label>.json,\n"
-                          "DIR/summary.csv, DIR/suite.json and DIR/provenance.json (DIR defaults to\n"
-                          "results/<suite name>). A finished run is reused only when its snapshot content,\n"
-                          "solver, settings, suite entry and build are unchanged; --force reruns every job,\n"
-                          "--fresh first discards every result in DIR (needed when DIR holds another suite\n"
-                          "or shard). --shard i/N runs job j iff j % N == i-1; `contactbench merge` joins\n"
-                          "the shard folders. In a Slurm array task without --shard, the shard comes from\n"
-                          "SLURM_ARRAY_TASK_ID/MIN/COUNT and the runs go to DIR/shard-<i>-of-<N> (see\n"
-                          "`contactbench cluster --help`).\n"
-                          "--jobs N runs N jobs at a time in child processes when the suite's times are not judged\n"
-                          "(\"timed\": false); timed suites still run one at a time unless --jobs-timed. With\n"
-                          "\"reference\": true, the reference solutions are computed N snapshots at a time first.\n";
+const char* const HELP = "\n\nRuns every (snapshot, solver label) of a suite; writes DIR/runs/<id>__<label>.json,\n"
+                         "DIR/summary.csv, DIR/suite.json and DIR/provenance.json (DIR defaults to\n"
+                         "results/<suite name>). A finished run is reused only when its snapshot content,\n"
+                         "solver, settings, suite entry and build are unchanged; --force reruns every job,\n"
+                         "--fresh first discards every result in DIR (needed when DIR holds another suite\n"
+                         "or shard). --shard i/N runs job j iff j % N == i-1; `contactbench merge` joins\n"
+                         "the shard folders. In a Slurm array task without --shard, the shard comes from\n"
+                         "SLURM_ARRAY_TASK_ID/MIN/COUNT and the runs go to DIR/shard-<i>-of-<N> (see\n"
+                         "`contactbench cluster --help`).\n"
+                         "--jobs N runs N jobs at a time in child processes when the suite's times are not judged\n"
+                         "(\"timed\": false); timed suites still run one at a time unless --jobs-timed. With\n"
+                         "\"reference\": true, the reference solutions are computed N snapshots at a time first.\n";
 
 /// Holds an exclusive flock on DIR/.lock for the life of the process (released by the kernel
 /// when the process ends, however it ends).
@@ -361,10 +361,10 @@ int cmd_run(const Args& args)
 {
     const CommandLine cl("run", args, {"--out", "--shard", "--jobs"}, {"--force", "--fresh", "--jobs-timed"});
     if (cl.help()) {
-        std::cout << "usage: " << kUsage << kHelp;
+        std::cout << "usage: " << USAGE << HELP;
         return 0;
     }
-    cl.expect_positional(1, 1, kUsage);
+    cl.expect_positional(1, 1, USAGE);
     Suite suite = load_suite(cl.positional()[0]);
     for (const std::string& notice : drop_unbuilt_optional_solvers(suite, builtin_registry().names()))
         std::cerr << "run: " << notice << "\n";

@@ -18,7 +18,7 @@ namespace cb {
 
 namespace {
 
-const char* const kUsage =
+const char* const USAGE =
     "contactbench solve SNAP --solver NAME [--set key=value ...] [--json FILE] [--save-solution DIR]\n"
     "                   [--history] [--decouple auto|none|authors|random|depth] [--decouple-seed S]\n"
     "                   [--repeat k] [--time-limit SECONDS]";
@@ -39,7 +39,7 @@ void write_mtx_vector(const std::string& path, const Vec& v)
 void print_solver_list(std::ostream& out)
 {
     const auto& registry = builtin_registry();
-    out << "usage: " << kUsage << "\n\nsolvers (contactbench solve --solver NAME --help for settings):\n";
+    out << "usage: " << USAGE << "\n\nsolvers (contactbench solve --solver NAME --help for settings):\n";
     size_t width = 0;
     for (const auto& name : registry.names()) width = std::max(width, name.size());
     for (const auto& name : registry.names())
@@ -82,8 +82,8 @@ int cmd_solve(const Args& args)
             print_solver_list(std::cout);
         return 0;
     }
-    cl.expect_positional(1, 1, kUsage);
-    if (!cl.has("--solver")) throw_input_error("solve", "--solver", "missing; usage: " + std::string(kUsage));
+    cl.expect_positional(1, 1, USAGE);
+    if (!cl.has("--solver")) throw_input_error("solve", "--solver", "missing; usage: " + std::string(USAGE));
     const std::string snap = cl.positional()[0];
     const std::string name = cl.value("--solver");
     if (!builtin_registry().contains(name)) builtin_registry().entry(name);  // throws the named InputError

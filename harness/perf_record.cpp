@@ -102,6 +102,7 @@ std::vector<nlohmann::json> read_perf_record(const std::string& csv_path)
     if (line.back() == '\r') line.pop_back();
     const std::vector<std::string> written = split_csv_line(line);  // as in the file, for the messages
     std::vector<std::string> header;                                // current names (old ones with a notice)
+    header.reserve(written.size());
     for (const auto& column : written) header.push_back(current_column_name(column, csv_path));
     std::set<std::string> seen;
     for (const auto& column : header) {
@@ -117,9 +118,9 @@ std::vector<nlohmann::json> read_perf_record(const std::string& csv_path)
     long number = 1;
     while (std::getline(in, line)) {
         ++number;
-        if (line.size() > kMaxPerfRecordLine)
+        if (line.size() > MAX_PERF_RECORD_LINE)
             throw_input_error(csv_path + ": line " + std::to_string(number), "",
-                              "longer than " + std::to_string(kMaxPerfRecordLine) + " characters");
+                              "longer than " + std::to_string(MAX_PERF_RECORD_LINE) + " characters");
         if (!line.empty() && line.back() == '\r') line.pop_back();
         if (line.empty()) continue;
         const std::string where = csv_path + ": line " + std::to_string(number);
@@ -154,9 +155,9 @@ std::vector<nlohmann::json> read_perf_record(const std::string& csv_path)
             run["time"] = time;
         }
         runs.push_back(std::move(run));
-        if (runs.size() > kMaxPerfRecordRuns)
+        if (runs.size() > MAX_PERF_RECORD_RUNS)
             throw_input_error(csv_path + ": line " + std::to_string(number), "",
-                              "more than " + std::to_string(kMaxPerfRecordRuns) +
+                              "more than " + std::to_string(MAX_PERF_RECORD_RUNS) +
                                   " runs: not a performance record of a suite (memory is bounded)");
     }
     if (runs.empty()) throw_input_error(csv_path, "", "no runs (only a header)");

@@ -17,8 +17,8 @@ const std::vector<std::string>& perf_record_columns();
 
 /// At most this many runs in a record (a run costs ~4 kB in memory as a record: 400 MB at most;
 /// the largest suite, fig6 over every frame, has a few thousand), and this many characters a line.
-constexpr std::size_t kMaxPerfRecordRuns = 100000;
-constexpr std::size_t kMaxPerfRecordLine = 4096;
+constexpr std::size_t MAX_PERF_RECORD_RUNS = 100000;
+constexpr std::size_t MAX_PERF_RECORD_LINE = 4096;
 
 /// Reads a compact CSV into run records shaped like results JSON (label, snapshot.id, status,
 /// iterations, counters{...}, accuracy.max, tol, instructions, time{min_total_s, noise,

@@ -15,7 +15,7 @@ namespace fs = std::filesystem;
 namespace {
 
 // Keyed on everything F* depends on: the snapshot (content hash in `key`), the reference
-// solver, its settings and kReferenceVersion; not on the binary, so a rebuild keeps the cache.
+// solver, its settings and REFERENCE_VERSION; not on the binary, so a rebuild keeps the cache.
 const nlohmann::json& reference_settings()
 {
     static const nlohmann::json settings = {{"tol", 1e-10}, {"max_iterations", 100000}, {"monitor_every", 0}};
@@ -24,7 +24,7 @@ const nlohmann::json& reference_settings()
 
 nlohmann::json reference_method()
 {
-    return {{"solver", "active-set"}, {"settings", reference_settings()}, {"version", kReferenceVersion}};
+    return {{"solver", "active-set"}, {"settings", reference_settings()}, {"version", REFERENCE_VERSION}};
 }
 
 std::string reference_path(const std::string& key, const std::string& cache)

@@ -1,7 +1,7 @@
 #pragma once
 /// Reference solutions (x*, F*) of the ORIGINAL QP for the energy figure of docs/accuracy.md,
 /// computed with the `active-set` solver (every row, tol 1e-10) and cached by snapshot content
-/// hash and method (solver, settings, kReferenceVersion): <cache_dir()>/reference/<key>-<method hash>.json.
+/// hash and method (solver, settings, REFERENCE_VERSION): <cache_dir()>/reference/<key>-<method hash>.json.
 #include "solvers/qp.hpp"
 
 #include <nlohmann/json.hpp>
@@ -11,7 +11,7 @@ namespace cb {
 
 /// Bump when the reference computation changes in a way its settings do not show (cached
 /// references of another version are recomputed).
-constexpr int kReferenceVersion = 2;
+constexpr int REFERENCE_VERSION = 2;
 
 /// {"objective": F*, "objective_x0": F(x0), "source": "active-set", "status", "accuracy": {...},
 ///  "key", "cached": bool}. `key` is the snapshot hash. Pass the QP in

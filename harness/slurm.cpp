@@ -13,10 +13,10 @@ namespace cb {
 
 namespace {
 
-const char* const kVariables[] = {"SLURM_ARRAY_TASK_ID",  "SLURM_ARRAY_TASK_COUNT", "SLURM_ARRAY_TASK_MIN",
-                                  "SLURM_ARRAY_TASK_MAX", "SLURM_ARRAY_JOB_ID",     "SLURM_JOB_ID",
-                                  "SLURMD_NODENAME",      "SLURM_JOB_PARTITION",    "SLURM_CPUS_ON_NODE",
-                                  "SLURM_CPU_BIND"};
+const char* const VARIABLES[] = {"SLURM_ARRAY_TASK_ID",  "SLURM_ARRAY_TASK_COUNT", "SLURM_ARRAY_TASK_MIN",
+                                 "SLURM_ARRAY_TASK_MAX", "SLURM_ARRAY_JOB_ID",     "SLURM_JOB_ID",
+                                 "SLURMD_NODENAME",      "SLURM_JOB_PARTITION",    "SLURM_CPUS_ON_NODE",
+                                 "SLURM_CPU_BIND"};
 
 /// The integer value of `name`, or nullopt when it is not set; InputError when it is not an integer.
 std::optional<long> integer_variable(const Environment& env, const std::string& name)
@@ -92,7 +92,7 @@ void sbatch_common(std::ostringstream& s, const SbatchOptions& o)
 Environment slurm_environment()
 {
     Environment env;
-    for (const char* name : kVariables)
+    for (const char* name : VARIABLES)
         if (const char* value = std::getenv(name)) env[name] = value;
     return env;
 }
@@ -162,19 +162,19 @@ std::string shell_quote(const std::string& word)
 
 void check_sbatch_options(const SbatchOptions& o)
 {
-    if (o.shards < 1 || o.shards > kMaxArrayShards)
+    if (o.shards < 1 || o.shards > MAX_ARRAY_SHARDS)
         throw_input_error("cluster", "--shards",
-                          "must be in 1.." + std::to_string(kMaxArrayShards) + ", got " + std::to_string(o.shards));
-    if (o.first_index < 0 || o.first_index > kMaxArrayIndex - o.shards + 1)
+                          "must be in 1.." + std::to_string(MAX_ARRAY_SHARDS) + ", got " + std::to_string(o.shards));
+    if (o.first_index < 0 || o.first_index > MAX_ARRAY_INDEX - o.shards + 1)
         throw_input_error("cluster", "--first-index",
-                          "must be in 0.." + std::to_string(kMaxArrayIndex - o.shards + 1) + " for " +
+                          "must be in 0.." + std::to_string(MAX_ARRAY_INDEX - o.shards + 1) + " for " +
                               std::to_string(o.shards) + " shards (Slurm array indices end at " +
-                              std::to_string(kMaxArrayIndex) + "), got " + std::to_string(o.first_index));
+                              std::to_string(MAX_ARRAY_INDEX) + "), got " + std::to_string(o.first_index));
     if (o.cpus_per_task < 1 || o.cpus_per_task > 100000)
         throw_input_error("cluster", "--cpus-per-task", "must be in 1..100000, got " + std::to_string(o.cpus_per_task));
-    if (o.max_parallel < 0 || o.max_parallel > kMaxArrayShards)
+    if (o.max_parallel < 0 || o.max_parallel > MAX_ARRAY_SHARDS)
         throw_input_error("cluster", "--max-parallel",
-                          "must be in 0.." + std::to_string(kMaxArrayShards) + ", got " +
+                          "must be in 0.." + std::to_string(MAX_ARRAY_SHARDS) + ", got " +
                               std::to_string(o.max_parallel));
     // Shell-quoted words and comment lines: only a line break (or another control character) escapes.
     refuse_control_characters("contactbench binary", o.contactbench);

@@ -40,10 +40,10 @@ nlohmann::json slurm_job_provenance(const Environment& env);
 
 /// At most this many array tasks: the merge job names every shard on its command line, and Slurm's
 /// default MaxArraySize is 1001 (a larger array needs a site that raised it).
-constexpr long kMaxArrayShards = 10000;
+constexpr long MAX_ARRAY_SHARDS = 10000;
 
 /// Highest array index Slurm accepts (MaxArraySize is at most 4000001).
-constexpr long kMaxArrayIndex = 4000000;
+constexpr long MAX_ARRAY_INDEX = 4000000;
 
 /// What `contactbench cluster slurm` writes.
 struct SbatchOptions {

@@ -256,7 +256,7 @@ std::string exact(double value)
 }
 
 /// Largest size or count accepted (our sparse matrices index with int).
-constexpr long long kMaxIndex = 2147483646;
+constexpr long long MAX_INDEX = 2147483646;
 
 /// The declared sizes of the matrix in `group`, each in range.
 SparseSizes read_sizes(FclibReader& file, const std::string& group)
@@ -267,9 +267,9 @@ SparseSizes read_sizes(FclibReader& file, const std::string& group)
     s.n = file.integer(group + "/n");
     s.nz = file.integer(group + "/nz");
     for (const auto& [name, value] : {std::pair<const char*, long long>{"nzmax", s.nzmax}, {"m", s.m}, {"n", s.n}})
-        if (value < 0 || value > kMaxIndex)
+        if (value < 0 || value > MAX_INDEX)
             file.fail(group + "/" + name,
-                      "must be in 0.." + std::to_string(kMaxIndex) + ", got " + std::to_string(value));
+                      "must be in 0.." + std::to_string(MAX_INDEX) + ", got " + std::to_string(value));
     if (s.nz < -2)
         file.fail(group + "/nz", "must be >= 0 (triplets), -1 (CSC) or -2 (CSR), got " + std::to_string(s.nz));
     if (s.nz > s.nzmax)
@@ -332,7 +332,7 @@ void write_fclib_global(const std::string& path, const Qp& qp, const SnapshotExt
         throw InputError(path +
                          ": J: the QP has no constraints (m = 0); FCLIB stores no problem without contacts (write "
                          "a .qpsnap or a Matrix Market folder instead)");
-    if (3 * m > kMaxIndex || qp.A.nonZeros() > kMaxIndex || qp.J.nonZeros() > kMaxIndex)
+    if (3 * m > MAX_INDEX || qp.A.nonZeros() > MAX_INDEX || qp.J.nonZeros() > MAX_INDEX)
         throw InputError(path + ": the QP is too large for FCLIB's int sizes");
     MatrixView M = csr_view(qp.A), H = h_view(qp.J);
     Vec f = qp.b;

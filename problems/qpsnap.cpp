@@ -26,7 +26,7 @@
 namespace cb {
 namespace {
 
-constexpr std::uint64_t kMaxInt32 = 2147483647ULL;
+constexpr std::uint64_t MAX_INT32 = 2147483647ULL;
 
 std::string fmt_double(double v)
 {
@@ -198,7 +198,7 @@ nlohmann::json parse_header(const std::string& path, const unsigned char* bytes,
         const auto& v = h[key];
         if (!v.is_number_integer() || (v.is_number_integer() && !v.is_number_unsigned() && v.get<std::int64_t>() < 0))
             throw_input_error(path, key, "expected a non-negative integer, got " + v.dump());
-        if (v.get<std::uint64_t>() > kMaxInt32)
+        if (v.get<std::uint64_t>() > MAX_INT32)
             throw_input_error(path, key, "too large: " + v.dump() + " > 2147483647 (indices are 32-bit)");
     }
     if (!h.contains("arrays") || !h["arrays"].is_object())
@@ -215,7 +215,7 @@ struct ArraySpec {
     bool required;
 };
 
-const ArraySpec kArrays[] = {
+const ArraySpec ARRAYS[] = {
     {"A.indptr", "int64", true},
     {"A.indices", "int64", true},
     {"A.data", "float64", true},
@@ -448,7 +448,7 @@ void symmetrise(const std::string& path, SpMat& A)
         SpMat At = A.transpose();
         SpMat S = (0.5 * A + 0.5 * At).pruned(0.0, 0.0);  // a tiny one-sided entry is mirrored at half
         S.makeCompressed();
-        A = std::move(S);
+        A = S;  // Eigen 3.4 SparseMatrix has no move assignment: a copy either way
     }
 }
 
@@ -538,11 +538,11 @@ Qp read_qpsnap_bytes(const std::string& path, const unsigned char* bytes, std::u
     const nlohmann::json& arrays = h["arrays"];
     for (auto it = arrays.begin(); it != arrays.end(); ++it) {
         bool known = false;
-        for (const auto& spec : kArrays) known = known || it.key() == spec.name;
+        for (const auto& spec : ARRAYS) known = known || it.key() == spec.name;
         if (!known) throw_input_error(path, "arrays." + it.key(), "unknown array name");
     }
     std::map<std::string, Located> a;
-    for (const auto& spec : kArrays) {
+    for (const auto& spec : ARRAYS) {
         if (!arrays.contains(spec.name)) {
             if (spec.required) throw_input_error(path, spec.name, "required array missing");
             a[spec.name] = Located{};
@@ -555,19 +555,19 @@ Qp read_qpsnap_bytes(const std::string& path, const unsigned char* bytes, std::u
     expect_shape(path, "A.indptr", a["A.indptr"], {n + 1}, nn + ", n + 1 entries");
     if (a["A.indices"].shape.size() != 1)
         expect_shape(path, "A.indices", a["A.indices"], {a["A.indices"].count}, "one dimension");
-    const std::uint64_t nnzA = a["A.indices"].count;
-    if (nnzA > kMaxInt32)
-        throw_input_error(path, "A.indices", "nnz " + str(nnzA) + " > 2147483647 (indices are 32-bit)");
-    expect_shape(path, "A.data", a["A.data"], {nnzA}, "the length of A.indices");
+    const std::uint64_t nnz_a = a["A.indices"].count;
+    if (nnz_a > MAX_INT32)
+        throw_input_error(path, "A.indices", "nnz " + str(nnz_a) + " > 2147483647 (indices are 32-bit)");
+    expect_shape(path, "A.data", a["A.data"], {nnz_a}, "the length of A.indices");
     expect_shape(path, "b", a["b"], {n}, nn);
     expect_shape(path, "x0", a["x0"], {n}, nn);
     expect_shape(path, "J.indptr", a["J.indptr"], {m + 1}, mm + ", m + 1 entries");
     if (a["J.indices"].shape.size() != 1)
         expect_shape(path, "J.indices", a["J.indices"], {a["J.indices"].count}, "one dimension");
-    const std::uint64_t nnzJ = a["J.indices"].count;
-    if (nnzJ > kMaxInt32)
-        throw_input_error(path, "J.indices", "nnz " + str(nnzJ) + " > 2147483647 (indices are 32-bit)");
-    expect_shape(path, "J.data", a["J.data"], {nnzJ}, "the length of J.indices");
+    const std::uint64_t nnz_j = a["J.indices"].count;
+    if (nnz_j > MAX_INT32)
+        throw_input_error(path, "J.indices", "nnz " + str(nnz_j) + " > 2147483647 (indices are 32-bit)");
+    expect_shape(path, "J.data", a["J.data"], {nnz_j}, "the length of J.indices");
     expect_shape(path, "c", a["c"], {m}, mm);
     if (a["contact.kind"].present) expect_shape(path, "contact.kind", a["contact.kind"], {m}, mm);
     if (a["contact.depth"].present) expect_shape(path, "contact.depth", a["contact.depth"], {m}, mm);
@@ -595,7 +595,7 @@ Qp read_qpsnap_bytes(const std::string& path, const unsigned char* bytes, std::u
     if (a["contact.vertex"].present)
         for (std::uint64_t e = 0; e < 4 * m; ++e) {
             const std::int64_t v = a["contact.vertex"].i64()[e];
-            if (v < -1 || v > std::int64_t(kMaxInt32))
+            if (v < -1 || v > std::int64_t(MAX_INT32))
                 throw_input_error(path, "contact.vertex",
                                   "value " + str(v) + " at row " + str(e / 4) + " is not a vertex id or -1");
         }

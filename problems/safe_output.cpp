@@ -25,7 +25,7 @@ namespace fs = std::filesystem;
 namespace {
 
 /// A temporary of a gone process untouched for this long is a leftover (see remove_stale_temporaries).
-constexpr long kStaleAfterSeconds = 600;
+constexpr long STALE_AFTER_SECONDS = 600;
 
 /// N for /dev/stdout (1), /dev/stderr (2), /dev/fd/N and /proc/self/fd/N; -1 for any other name.
 int own_descriptor(const std::string& absolute)
@@ -109,10 +109,10 @@ std::size_t remove_stale_temporaries(const std::string& target)
         if (::lstat(entry.c_str(), &st) != 0) continue;  // already gone
         // The pid is only known gone on this machine: a young temporary may be another machine's
         // write in progress on a shared file system (a cache written by two array tasks). Ours are
-        // written within seconds, so one untouched for kStaleAfterSeconds is left over.
-        if (std::time(nullptr) - st.st_mtime < kStaleAfterSeconds) {
+        // written within seconds, so one untouched for STALE_AFTER_SECONDS is left over.
+        if (std::time(nullptr) - st.st_mtime < STALE_AFTER_SECONDS) {
             std::cerr << "note: kept " << entry.string() << ": process " << pid
-                      << " is gone here, but the file is younger than " << kStaleAfterSeconds / 60
+                      << " is gone here, but the file is younger than " << STALE_AFTER_SECONDS / 60
                       << " minutes (another machine may be writing it); remove it if not\n";
             continue;
         }

@@ -618,6 +618,7 @@ Qp make_coupled(const std::string& family, const nlohmann::json& p, std::uint64_
     for (const Row& r : rows) {
         const int vi = nv1 + r.i;  // upper body DOFs follow the lower body's
         std::vector<std::pair<int, double>> e;
+        e.reserve(12);  // the vertex's 3 DOFs and the triangle's 9
         for (int d = 0; d < 3; ++d) e.push_back({3 * vi + d, normal[d]});
         for (int t = 0; t < 3; ++t)
             for (int d = 0; d < 3; ++d) e.push_back({3 * r.tri[t] + d, -r.w[t] * normal[d]});

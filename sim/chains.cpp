@@ -65,6 +65,7 @@ void render_side_by_side(const std::string& path, const Scene& scene,
                                                     {0.85, 0.7, 0.25},  {0.6, 0.4, 0.8},    {0.3, 0.75, 0.75}};
     for (size_t c = 0; c < chain_surfaces.size(); ++c) {
         std::vector<ColoredSurface> surfaces;
+        surfaces.reserve(obstacles.size() + chain_surfaces[c].size());
         for (const auto& s : obstacles) surfaces.push_back({&s, {0.75, 0.75, 0.75}});
         for (size_t b = 0; b < chain_surfaces[c].size(); ++b)
             surfaces.push_back({&chain_surfaces[c][b], palette[b % 6]});

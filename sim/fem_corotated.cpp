@@ -115,7 +115,7 @@ CorotatedFem::CorotatedFem(const Positions& rest, const Tets& tets, const std::v
             const auto& list = nbr[static_cast<size_t>(tets(static_cast<Eigen::Index>(t), a))];
             for (int b = 0; b < 4; ++b) {
                 const int j = tets(static_cast<Eigen::Index>(t), b);
-                m_block_pos[t][static_cast<size_t>(4 * a + b)] =
+                m_block_pos[t][4 * static_cast<size_t>(a) + static_cast<size_t>(b)] =
                     3 * static_cast<int>(std::lower_bound(list.begin(), list.end(), j) - list.begin());
             }
         }
@@ -180,7 +180,7 @@ void CorotatedFem::assemble(double mass_coef, double stiff_coef, SpMat& out) con
             const int i = m_tets(t, a);
             for (int b = 0; b < 4; ++b) {
                 const double gg = mu * g.row(a).dot(g.row(b));
-                const int off = m_block_pos[T][static_cast<size_t>(4 * a + b)];
+                const int off = m_block_pos[T][4 * static_cast<size_t>(a) + static_cast<size_t>(b)];
                 for (int r = 0; r < 3; ++r) {
                     double* dst = v + outer[3 * i + r] + off;
                     for (int s = 0; s < 3; ++s)

@@ -88,7 +88,7 @@ public:
         const auto* v = find(key);
         if (!v) return fallback;
         if (!v->is_string()) fail(key, "expected a string, got " + json_type(*v));
-        const std::string s = v->get<std::string>();
+        std::string s = v->get<std::string>();
         if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), s) == allowed.end()) {
             std::string list;
             for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;

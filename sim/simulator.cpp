@@ -632,6 +632,7 @@ bool Simulator::run_frames(long frames, bool write, PartialTable& steps_csv, Par
                                                         {0.85, 0.7, 0.25},  {0.6, 0.4, 0.8},    {0.3, 0.75, 0.75}};
         for (size_t f = 0; f < strip_meshes.size(); ++f) {
             std::vector<ColoredSurface> surfaces;
+            surfaces.reserve(obstacle_surfaces.size() + strip_meshes[f].size());
             for (const auto& s : obstacle_surfaces) surfaces.push_back({&s, {0.75, 0.75, 0.75}});
             for (size_t b = 0; b < strip_meshes[f].size(); ++b)
                 surfaces.push_back({&strip_meshes[f][b], palette[b % 6]});

@@ -27,9 +27,9 @@ bool DualLcp::form(const QpView& qp, Counters& counters, std::string& error)
     m_q = qp.J * m_x_free - qp.c;
     m_W.resize(m, m);
     const SpMatCol Jt = SpMatCol(qp.J.transpose());
-    constexpr Eigen::Index kBlock = 64;  // right-hand sides per CHOLMOD solve
-    for (Eigen::Index j0 = 0; j0 < m; j0 += kBlock) {
-        const Eigen::Index k = std::min(kBlock, m - j0);
+    constexpr Eigen::Index BLOCK = 64;  // right-hand sides per CHOLMOD solve
+    for (Eigen::Index j0 = 0; j0 < m; j0 += BLOCK) {
+        const Eigen::Index k = std::min(BLOCK, m - j0);
         m_W.middleCols(j0, k) = qp.J * Eigen::MatrixXd(m_llt.solve(Eigen::MatrixXd(Jt.middleCols(j0, k))));
         counters.cholmod_solves += k;
         counters.work_flops += cholmod_solve_flops(m_llt.cholmod(), k) +

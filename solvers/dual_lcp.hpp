@@ -20,7 +20,7 @@ public:
     /// factor A (not positive definite to working precision).
     bool form(const QpView& qp, Counters& counters, std::string& error);
 
-    Eigen::MatrixXd& W() { return m_W; }  ///< m x m, column-major (= row-major: symmetric)
+    Eigen::MatrixXd& matrix() { return m_W; }  ///< W, m x m, column-major (= row-major: symmetric)
     Vec& q() { return m_q; }
     const Vec& unconstrained() const { return m_x_free; }  ///< A^-1 b, the answer when m = 0
 

@@ -38,7 +38,7 @@ nlohmann::json PgsSettings::to_json() const { return write_settings(*this, pgs_s
 namespace {
 
 /// Y = A^-1 J' is kept (x = x_u + Y lambda without a solve) when it fits in this many doubles.
-constexpr double kMaxStoredEntries = 16e6;
+constexpr double MAX_STORED_ENTRIES = 16e6;
 
 }  // namespace
 
@@ -97,7 +97,7 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
     if (!x_u.allFinite() || !q.allFinite()) return loop.finish(result, loop.check(counters.iterations, false, false));
 
     // S = J A^-1 J', column block by column block.
-    const bool keep_y = static_cast<double>(n) * static_cast<double>(m) <= kMaxStoredEntries;
+    const bool keep_y = static_cast<double>(n) * static_cast<double>(m) <= MAX_STORED_ENTRIES;
     Eigen::MatrixXd Y;
     if (keep_y) Y.resize(n, m);
     Eigen::MatrixXd S(m, m);

@@ -31,7 +31,7 @@ struct PgsSettings {
 
 class PgsSolver : public Solver {
 public:
-    explicit PgsSolver(PgsSettings settings) : m_settings(std::move(settings)) {}
+    explicit PgsSolver(PgsSettings settings) : m_settings(settings) {}
     std::string name() const override { return "pgs"; }
     nlohmann::json settings() const override { return m_settings.to_json(); }
     SolverResult solve(const QpView& qp, const SolveContext& context) override;

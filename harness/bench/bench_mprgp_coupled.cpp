@@ -93,6 +93,7 @@ private:
     double m_first = 0.0, m_last = 0.0;
 };
 
+// NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_<name> convention
 void BM_mprgp_coupled_iteration_ratio(benchmark::State& state, const std::string& path)
 {
     static std::unique_ptr<SnapshotPair> loaded;  // one snapshot in memory at a time

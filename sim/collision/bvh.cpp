@@ -25,7 +25,7 @@ int Bvh::build_node(int first, int count, std::vector<Eigen::Vector3d>& centroid
     m_nodes.emplace_back();
     Box3 box, cbox;
     for (int k = 0; k < count; ++k) {
-        const int prim = m_order[static_cast<size_t>(first + k)];
+        const int prim = m_order[static_cast<size_t>(first) + static_cast<size_t>(k)];
         box.extend(m_boxes[static_cast<size_t>(prim)]);
         cbox.extend(centroids[static_cast<size_t>(prim)]);
     }
@@ -66,7 +66,7 @@ int Bvh::nearest(const Eigen::Vector3d& p, const std::function<double(int)>& dis
             const Node& node = m_nodes[static_cast<size_t>(ni)];
             if (node.count > 0) {
                 for (int k = 0; k < node.count; ++k) {
-                    const int prim = m_order[static_cast<size_t>(node.first + k)];
+                    const int prim = m_order[static_cast<size_t>(node.first) + static_cast<size_t>(k)];
                     if (m_boxes[static_cast<size_t>(prim)].squaredExteriorDistance(p) >= best) continue;
                     const double dd = distance2(prim);
                     if (dd < best) {

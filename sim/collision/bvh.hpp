@@ -31,7 +31,7 @@ public:
             if (!node.box.contains(p)) continue;
             if (node.count > 0) {
                 for (int k = 0; k < node.count; ++k) {
-                    const int prim = m_order[static_cast<size_t>(node.first + k)];
+                    const int prim = m_order[static_cast<size_t>(node.first) + static_cast<size_t>(k)];
                     if (m_boxes[static_cast<size_t>(prim)].contains(p)) visit(prim);
                 }
             } else {
@@ -53,7 +53,7 @@ public:
             if (!node.box.intersects(box)) continue;
             if (node.count > 0) {
                 for (int k = 0; k < node.count; ++k) {
-                    const int prim = m_order[static_cast<size_t>(node.first + k)];
+                    const int prim = m_order[static_cast<size_t>(node.first) + static_cast<size_t>(k)];
                     if (m_boxes[static_cast<size_t>(prim)].intersects(box)) visit(prim);
                 }
             } else {

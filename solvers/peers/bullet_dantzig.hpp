@@ -24,7 +24,7 @@ struct BulletDantzigSettings {
 
 class BulletDantzigSolver : public Solver {
 public:
-    explicit BulletDantzigSolver(BulletDantzigSettings settings) : m_settings(std::move(settings)) {}
+    explicit BulletDantzigSolver(BulletDantzigSettings settings) : m_settings(settings) {}
     std::string name() const override { return "bullet-dantzig"; }
     nlohmann::json settings() const override { return m_settings.to_json(); }
     SolverResult solve(const QpView& qp, const SolveContext& context) override;

@@ -52,7 +52,7 @@ SolverResult solve_dual_lcp_peer(const QpView& qp, const SolveContext& context, 
     }
     const size_t expected = static_cast<size_t>(m) * sizeof(double) + sizeof(SiconosReport);
     const ChildOutcome child =
-        run_in_child([&]() { return peer.run(dual.W(), dual.q()); }, loop.stopwatch(), common.time_limit_s);
+        run_in_child([&]() { return peer.run(dual.matrix(), dual.q()); }, loop.stopwatch(), common.time_limit_s);
     const std::vector<char>& bytes = child.bytes;
     if (auto failed = finish_failed_child(child, expected, peer.library, loop, result)) return std::move(*failed);
     std::memcpy(result.lambda.data(), bytes.data(), static_cast<size_t>(m) * sizeof(double));
@@ -62,7 +62,8 @@ SolverResult solve_dual_lcp_peer(const QpView& qp, const SolveContext& context, 
     counters.lcp_iterations = report.iterations;
     if (peer.steps_are_pivots) counters.pivots = report.iterations;
     if (peer.residual_from_lcp)  // on the W the parent kept
-        report.residual = result.lambda.cwiseMin(dual.W() * result.lambda + dual.q()).norm() / (1.0 + dual.q().norm());
+        report.residual =
+            result.lambda.cwiseMin(dual.matrix() * result.lambda + dual.q()).norm() / (1.0 + dual.q().norm());
     result.x = dual.primal(qp, result.lambda, counters);  // x from lambda, before the final measure
     return finish_siconos_result(qp, loop, report, peer.method, peer.steps, counters, result);
 }

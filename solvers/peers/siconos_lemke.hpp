@@ -23,7 +23,7 @@ struct SiconosLemkeSettings {
 
 class SiconosLemkeSolver : public Solver {
 public:
-    explicit SiconosLemkeSolver(SiconosLemkeSettings settings) : m_settings(std::move(settings)) {}
+    explicit SiconosLemkeSolver(SiconosLemkeSettings settings) : m_settings(settings) {}
     std::string name() const override { return "siconos-lemke"; }
     nlohmann::json settings() const override { return m_settings.to_json(); }
     SolverResult solve(const QpView& qp, const SolveContext& context) override;

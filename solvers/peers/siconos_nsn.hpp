@@ -19,7 +19,7 @@ struct SiconosNsnSettings {
 
 class SiconosNsnSolver : public Solver {
 public:
-    explicit SiconosNsnSolver(SiconosNsnSettings settings) : m_settings(std::move(settings)) {}
+    explicit SiconosNsnSolver(SiconosNsnSettings settings) : m_settings(settings) {}
     std::string name() const override { return "siconos-nsn"; }
     nlohmann::json settings() const override { return m_settings.to_json(); }
     SolverResult solve(const QpView& qp, const SolveContext& context) override;

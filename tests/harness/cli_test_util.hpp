@@ -21,7 +21,7 @@ inline std::string contactbench_binary()
 /// and references stay there) and BLAS runs on one thread, as the Makefile runs it.
 inline std::filesystem::path make_test_work_dir(const std::string& name)
 {
-    const std::filesystem::path d =
+    std::filesystem::path d =
         std::filesystem::temp_directory_path() / ("cb_test_" + name + "_" + std::to_string(::getpid()));
     std::filesystem::remove_all(d);
     std::filesystem::create_directories(d);

@@ -64,16 +64,16 @@ size_t count_files(const fs::path& dir, const std::string& needle)
     return n;
 }
 
-const nlohmann::json kSolvers = {{{"label", "mprgp"}, {"solver", "mprgp"}},
-                                 {{"label", "exact"}, {"solver", "active-set"}},
-                                 {{"label", "ghost"}, {"solver", "no-such-solver"}}};
+const nlohmann::json SOLVERS = {{{"label", "mprgp"}, {"solver", "mprgp"}},
+                                {{"label", "exact"}, {"solver", "active-set"}},
+                                {{"label", "ghost"}, {"solver", "no-such-solver"}}};
 
 /// Removes the scratch folder after the last test.
 class CleanUp : public ::testing::Environment {
 public:
     void TearDown() override { fs::remove_all(work_dir()); }
 };
-const auto* const kCleanUp = ::testing::AddGlobalTestEnvironment(new CleanUp);
+const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new CleanUp);
 
 }  // namespace
 
@@ -140,7 +140,7 @@ TEST(Cli, SolveHelpListsSolversAndSettings)
 
 TEST(Cli, RunResumesShardsMergesAndIsDeterministic)
 {
-    const std::string suite = write_suite("e2e", kSolvers);
+    const std::string suite = write_suite("e2e", SOLVERS);
     const fs::path out = work_dir() / "e2e";
     const Output first = run("run '" + suite + "' --out '" + out.string() + "'");
     ASSERT_EQ(first.status, 0) << first.err;

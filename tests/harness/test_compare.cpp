@@ -158,7 +158,7 @@ struct PerfRow {
     long time_samples = 5;
 };
 
-const char* const kPerfHeader =
+const char* const PERF_HEADER =
     "snapshot,label,status,iterations,a_products,a_products_harness,accuracy,tol,instructions,time_min_s,time_noise,"
     "time_samples\n";
 
@@ -182,7 +182,7 @@ fs::path perf_dir()
 std::string write_perf(const std::string& name, const std::vector<PerfRow>& rows, const std::string& cpu = "")
 {
     const fs::path csv = perf_dir() / (name + ".csv");
-    std::string text = kPerfHeader;
+    std::string text = PERF_HEADER;
     for (const auto& r : rows) text += perf_line(r);
     write_file_atomic(csv.string(), text);
     if (!cpu.empty())
@@ -359,7 +359,7 @@ TEST(ComparePerfRecord, NanCountersMissingJudgedColumnsAndHugeRecordsAreRefused)
         return "no error";
     };
     auto record = [&](const std::string& name, const std::string& text) {
-        const std::string path = (dir / name).string();
+        std::string path = (dir / name).string();
         write_file_atomic(path, text);
         return path;
     };

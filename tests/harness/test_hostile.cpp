@@ -36,7 +36,7 @@ const fs::path& work_dir()
     return dir;
 }
 
-const fs::path kHostile = fs::path(CB_TEST_DATA_DIR).parent_path() / "hostile";
+const fs::path HOSTILE = fs::path(CB_TEST_DATA_DIR).parent_path() / "hostile";
 
 /// Runs `[PREFIX;] timeout 120 contactbench ARGS` in bash (PREFIX: ulimit ...); a hang ends as 124.
 Output run(const std::string& args, const std::string& prefix = "",
@@ -72,17 +72,17 @@ fs::path write_suite(const fs::path& dir, const std::string& name, const nlohman
                                   {"solvers", solvers},
                                   {"tol", tol},
                                   {"time_limit_s", 20}};
-    const fs::path p = dir / (name + ".json");
+    fs::path p = dir / (name + ".json");
     write_json_atomic(p.string(), suite);
     return p;
 }
 
-const nlohmann::json kTwoSolvers = {{{"label", "mprgp"}, {"solver", "mprgp"}},
+const nlohmann::json TWO_SOLVERS = {{{"label", "mprgp"}, {"solver", "mprgp"}},
                                     {{"label", "exact"}, {"solver", "active-set"}}};
 
 fs::path fresh_dir(const std::string& name)
 {
-    const fs::path d = work_dir() / name;
+    fs::path d = work_dir() / name;
     fs::remove_all(d);
     fs::create_directories(d);
     return d;
@@ -92,7 +92,7 @@ class CleanUp : public ::testing::Environment {
 public:
     void TearDown() override { fs::remove_all(work_dir()); }
 };
-const auto* const kCleanUp = ::testing::AddGlobalTestEnvironment(new CleanUp);
+const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new CleanUp);
 
 }  // namespace
 
@@ -104,7 +104,7 @@ TEST(RunIdentity, EditedSuiteReplacedSnapshotAndFixedInputAreRedone)
     write_snapshot(dir / "a.qpsnap", 1);
     write_snapshot(dir / "b.qpsnap", 2);
     const fs::path out = dir / "out";
-    const fs::path suite = write_suite(dir, "ident", kTwoSolvers);
+    const fs::path suite = write_suite(dir, "ident", TWO_SOLVERS);
     ASSERT_EQ(run("run " + q(suite) + " --out " + q(out)).status, 0);
     const nlohmann::json first = read_json_file((out / "runs" / "a__mprgp.json").string());
     ASSERT_TRUE(first["identity"].is_object()) << first.dump();
@@ -120,7 +120,7 @@ TEST(RunIdentity, EditedSuiteReplacedSnapshotAndFixedInputAreRedone)
     EXPECT_NE(same.err.find("ran 0 of 4 jobs"), std::string::npos) << same.err;
 
     // The suite's tol edited: every run is redone and suite.json describes the new suite.
-    write_suite(dir, "ident", kTwoSolvers, 1e-8);
+    write_suite(dir, "ident", TWO_SOLVERS, 1e-8);
     const Output edited = run("run " + q(suite) + " --out " + q(out));
     ASSERT_EQ(edited.status, 0) << edited.err;
     EXPECT_NE(edited.err.find("ran 4 of 4 jobs"), std::string::npos) << edited.err;
@@ -286,7 +286,7 @@ TEST(Merge, RefusesIncompleteOrMixedShards)
     const fs::path dir = fresh_dir("merge");
     write_snapshot(dir / "a.qpsnap", 1);
     write_snapshot(dir / "b.qpsnap", 2);
-    const fs::path suite = write_suite(dir, "sharded", kTwoSolvers);
+    const fs::path suite = write_suite(dir, "sharded", TWO_SOLVERS);
     const fs::path s1 = dir / "s1", s2 = dir / "s2", other = dir / "other";
     ASSERT_EQ(run("run " + q(suite) + " --out " + q(s1) + " --shard 1/2").status, 0);
     const Output lonely = run("merge " + q(dir / "m1") + " " + q(s1));
@@ -294,7 +294,7 @@ TEST(Merge, RefusesIncompleteOrMixedShards)
     EXPECT_EQ(lonely.err, "contactbench merge: error: merge: shards: missing shard(s) 2/2 of suite \"sharded\"\n");
     EXPECT_FALSE(fs::exists(dir / "m1"));
     // A shard of an edited suite is not of the same suite.
-    const fs::path edited = write_suite(dir, "sharded", kTwoSolvers, 1e-8);
+    const fs::path edited = write_suite(dir, "sharded", TWO_SOLVERS, 1e-8);
     ASSERT_EQ(run("run " + q(edited) + " --out " + q(other) + " --shard 2/2").status, 0);
     const Output mixed = run("merge " + q(dir / "m2") + " " + q(s1) + " " + q(other));
     EXPECT_EQ(mixed.status, 2);
@@ -302,7 +302,7 @@ TEST(Merge, RefusesIncompleteOrMixedShards)
         << mixed.err;
     EXPECT_NE(mixed.err.find("not one suite"), std::string::npos) << mixed.err;
     // The right shard 2/2, but one of its runs lost.
-    write_suite(dir, "sharded", kTwoSolvers);
+    write_suite(dir, "sharded", TWO_SOLVERS);
     ASSERT_EQ(run("run " + q(suite) + " --out " + q(s2) + " --shard 2/2").status, 0);
     fs::remove(s2 / "runs" / "a__exact.json");
     const Output holes = run("merge " + q(dir / "m3") + " " + q(s1) + " " + q(s2));
@@ -323,7 +323,7 @@ TEST(Merge, EveryShardIsCheckedWholeBeforeAnythingIsWritten)
     const fs::path dir = fresh_dir("merge_hostile");
     write_snapshot(dir / "a.qpsnap", 1);
     write_snapshot(dir / "b.qpsnap", 2);
-    const fs::path suite = write_suite(dir, "sharded", kTwoSolvers);
+    const fs::path suite = write_suite(dir, "sharded", TWO_SOLVERS);
     const fs::path s1 = dir / "s1", s2 = dir / "s2", good = dir / "good";
     ASSERT_EQ(run("run " + q(suite) + " --out " + q(s1) + " --shard 1/2").status, 0);
     ASSERT_EQ(run("run " + q(suite) + " --out " + q(s2) + " --shard 2/2").status, 0);
@@ -399,7 +399,7 @@ namespace {
 /// A scene small enough to simulate in well under a second.
 fs::path tiny_scene(const fs::path& dir, long frames)
 {
-    const fs::path p = dir / "tiny.json";
+    fs::path p = dir / "tiny.json";
     write_json_atomic(p.string(), {{"name", "tiny"},
                                    {"h", 0.01},
                                    {"frames", frames},
@@ -699,17 +699,17 @@ TEST(Hostile, HugeDeclaredSizesUnderAMemoryLimit)
     // 600 MB of address space: enough for the binary and its libraries, far from the 1.6 GB the
     // declared 2e8 rows once cost.
     const std::string limit = "ulimit -v 600000";
-    const fs::path rows = kHostile / "mtx_huge_rows";
+    const fs::path rows = HOSTILE / "mtx_huge_rows";
     const Output a = run("convert " + q(rows) + " " + q(work_dir() / "huge.qpsnap"), limit);
     EXPECT_EQ(a.status, 2);
     EXPECT_EQ(a.err, "contactbench convert: error: " + (rows / "A.mtx").string() +
                          ": line 2: declares 200000000 rows but only 1 entries (every row needs its diagonal entry)\n");
-    const fs::path vec = kHostile / "mtx_huge_vector";
+    const fs::path vec = HOSTILE / "mtx_huge_vector";
     const Output b = run("convert " + q(vec) + " " + q(work_dir() / "huge.qpsnap"), limit);
     EXPECT_EQ(b.status, 2);
     EXPECT_EQ(b.err, "contactbench convert: error: " + (vec / "b.mtx").string() +
                          ": size: expected n (from A.mtx) = 1 entries, got 200000000\n");
-    const fs::path j = kHostile / "mtx_huge_j";
+    const fs::path j = HOSTILE / "mtx_huge_j";
     const Output jj = run("convert " + q(j) + " " + q(work_dir() / "huge.qpsnap"), limit);
     EXPECT_EQ(jj.status, 2);
     const auto c_bytes = fs::file_size(j / "c.mtx");
@@ -731,20 +731,20 @@ TEST(Hostile, HugeDeclaredSizesUnderAMemoryLimit)
 
 TEST(Hostile, SceneAndGeneratorParametersAreBounded)
 {
-    const Output cells = run("simulate " + q(kHostile / "scene_box_cells.json") + " --out " + q(work_dir() / "x"));
+    const Output cells = run("simulate " + q(HOSTILE / "scene_box_cells.json") + " --out " + q(work_dir() / "x"));
     EXPECT_EQ(cells.status, 2);
-    EXPECT_EQ(cells.err, "contactbench simulate: error: " + (kHostile / "scene_box_cells.json").string() +
+    EXPECT_EQ(cells.err, "contactbench simulate: error: " + (HOSTILE / "scene_box_cells.json").string() +
                              ": /bodies/0/box/cells: [3000000000, 1, 1] is 3000000000 cells, more than the limit of "
                              "1000000 (6000000 tets)\n");
-    const Output count = run("simulate " + q(kHostile / "scene_array_count.json") + " --out " + q(work_dir() / "x"));
+    const Output count = run("simulate " + q(HOSTILE / "scene_array_count.json") + " --out " + q(work_dir() / "x"));
     EXPECT_EQ(count.status, 2);
     EXPECT_EQ(count.err,
-              "contactbench simulate: error: " + (kHostile / "scene_array_count.json").string() +
+              "contactbench simulate: error: " + (HOSTILE / "scene_array_count.json").string() +
                   ": /bodies/0/array/count: 1000000000000000 copies, more than the limit of 6000000 tets allows\n");
-    const Output many = run("simulate " + q(kHostile / "scene_many_bodies.json") + " --out " + q(work_dir() / "x"));
+    const Output many = run("simulate " + q(HOSTILE / "scene_many_bodies.json") + " --out " + q(work_dir() / "x"));
     EXPECT_EQ(many.status, 2);
     EXPECT_EQ(many.err,
-              "contactbench simulate: error: " + (kHostile / "scene_many_bodies.json").string() +
+              "contactbench simulate: error: " + (HOSTILE / "scene_many_bodies.json").string() +
                   ": /bodies/0/array/count: the scene reaches 13500000 tets, more than the limit of 6000000\n");
     EXPECT_FALSE(fs::exists(work_dir() / "x"));
 
@@ -775,7 +775,7 @@ TEST(Hostile, IntegerSettingsDoNotOverflow)
     EXPECT_EQ(big.err, "contactbench solve: error: mprgp: /max_iterations: must be <= 1000000000000, got 1e+19\n");
     // The same through a suite (tests/hostile/suite_overflow.json): the run is refused, named.
     const fs::path out = work_dir() / "overflow";
-    const Output r = run("run " + q(kHostile / "suite_overflow.json") + " --out " + q(out));
+    const Output r = run("run " + q(HOSTILE / "suite_overflow.json") + " --out " + q(out));
     ASSERT_EQ(r.status, 0) << r.err;
     const nlohmann::json rec = read_json_file((out / "runs" / "plane_2x2x2__mprgp.json").string());
     EXPECT_EQ(rec["status"], "invalid_input");

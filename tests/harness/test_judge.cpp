@@ -36,7 +36,7 @@ class CleanUp : public ::testing::Environment {
 public:
     void TearDown() override { fs::remove_all(work_dir()); }
 };
-const auto* const kCleanUp = ::testing::AddGlobalTestEnvironment(new CleanUp);
+const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new CleanUp);
 
 /// Runs a subcommand in this process with its standard output captured.
 std::string run_command(int (*command)(const Args&), const Args& args)

@@ -19,10 +19,10 @@
 namespace cb {
 namespace {
 
-constexpr int kSamples = 7;              ///< at least, each kind
-constexpr double kMinSampledTime = 1.0;  ///< seconds of each kind: millisecond solves take more samples
-constexpr double kMaxRatio = 1.2;
-constexpr int kAttempts = 3;  ///< independent measurements of a solver over the bound
+constexpr int SAMPLES = 7;                ///< at least, each kind
+constexpr double MIN_SAMPLED_TIME = 1.0;  ///< seconds of each kind: millisecond solves take more samples
+constexpr double MAX_RATIO = 1.2;
+constexpr int ATTEMPTS = 3;  ///< independent measurements of a solver over the bound
 
 /// A stiff body (E = 1e9 Pa) of 13 x 7 x 13 vertices (n = 3549) on a plane (338 decoupled rows)
 /// or, for solvers that take bounds only (mprgp-box, tao-tron: NOT_APPLICABLE on the plane), under
@@ -100,16 +100,16 @@ TEST(MonitorTiming, MonitoredAndUnmonitoredRunsTakeTheSameTime)
             once = solver_time(name, qp, false, status_plain);
         }
         const double once_s = std::max(1e-6, once.setup_s + once.solve_s);
-        const int samples = std::max(kSamples, static_cast<int>(std::min(200.0, kMinSampledTime / once_s)));
+        const int samples = std::max(SAMPLES, static_cast<int>(std::min(200.0, MIN_SAMPLED_TIME / once_s)));
         // A busy neighbour (another process on a 2-core machine) can slow one kind's every sample
         // for a while; a leak slows the monitored kind in every measurement. So a solver passes
-        // when one of kAttempts independent measurements is within the bound.
+        // when one of ATTEMPTS independent measurements is within the bound.
         double best = std::numeric_limits<double>::infinity();
-        for (int attempt = 0; attempt < kAttempts && best > kMaxRatio; ++attempt)
+        for (int attempt = 0; attempt < ATTEMPTS && best > MAX_RATIO; ++attempt)
             best = std::min(best, timing_ratio(name, qp, samples, status_monitored, status_plain));
         EXPECT_EQ(status_monitored, SolveStatus::CONVERGED);
         EXPECT_EQ(status_plain, status_monitored);
-        EXPECT_LE(best, kMaxRatio) << "in each of " << kAttempts << " measurements";
+        EXPECT_LE(best, MAX_RATIO) << "in each of " << ATTEMPTS << " measurements";
     }
 }
 

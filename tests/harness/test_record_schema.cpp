@@ -27,7 +27,7 @@ namespace {
 
 fs::path fresh_dir(const std::string& name)
 {
-    const fs::path dir = fs::temp_directory_path() / ("cb_test_record_schema_" + std::to_string(::getpid())) / name;
+    fs::path dir = fs::temp_directory_path() / ("cb_test_record_schema_" + std::to_string(::getpid())) / name;
     fs::remove_all(dir);
     fs::create_directories(dir);
     return dir;

@@ -24,7 +24,7 @@ namespace {
 
 fs::path fresh_dir(const std::string& name)
 {
-    const fs::path dir = fs::temp_directory_path() / ("cb_test_results_" + std::to_string(::getpid())) / name;
+    fs::path dir = fs::temp_directory_path() / ("cb_test_results_" + std::to_string(::getpid())) / name;
     fs::remove_all(dir);
     fs::create_directories(dir);
     return dir;
@@ -62,7 +62,7 @@ public:
         fs::remove_all(fs::temp_directory_path() / ("cb_test_results_" + std::to_string(::getpid())));
     }
 };
-const auto* const kCleanUp = ::testing::AddGlobalTestEnvironment(new CleanUp);
+const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new CleanUp);
 
 }  // namespace
 
@@ -238,7 +238,7 @@ TEST(Reference, CachedByKeyAndAttached)
     EXPECT_FALSE(ref["cached"].get<bool>());
     // Keyed on the snapshot key and the reference method (solver, settings, version): k1-<method>.json.
     EXPECT_EQ(ref["method"]["solver"], "active-set");
-    EXPECT_EQ(ref["method"]["version"], kReferenceVersion);
+    EXPECT_EQ(ref["method"]["version"], REFERENCE_VERSION);
     std::vector<fs::path> files;
     for (const auto& e : fs::directory_iterator(dir / "reference")) files.push_back(e.path());
     ASSERT_EQ(files.size(), 1u);

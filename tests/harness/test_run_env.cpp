@@ -81,7 +81,7 @@ class CleanUp : public ::testing::Environment {
 public:
     void TearDown() override { fs::remove_all(work_dir()); }
 };
-const auto* const kCleanUp = ::testing::AddGlobalTestEnvironment(new CleanUp);
+const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new CleanUp);
 
 }  // namespace
 

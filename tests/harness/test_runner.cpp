@@ -27,6 +27,7 @@ Qp diagonal_qp()
     b << 1, -2, 3, -4, 5, -6;
     c << 0, 0, 0, 0, 0, 0;
     std::vector<Triplet> t;
+    t.reserve(n);
     for (int i = 0; i < n; ++i) t.emplace_back(i, i, d[i]);
     qp.A.resize(n, n);
     qp.A.setFromTriplets(t.begin(), t.end());

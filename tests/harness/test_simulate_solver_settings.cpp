@@ -14,19 +14,19 @@ using nlohmann::json;
 namespace fs = std::filesystem;
 
 namespace {
-const json kMprgpNative = {{"stop", "native"}, {"tol", 1e-5}, {"max_iterations", 5000}, {"gamma", 2}};
+const json MPRGP_NATIVE = {{"stop", "native"}, {"tol", 1e-5}, {"max_iterations", 5000}, {"gamma", 2}};
 }
 
 TEST(SettingsForSolver, TheScenesOwnSolverKeepsEverySetting)
 {
-    const ReplacedSolverSettings same = settings_for_solver("mprgp", kMprgpNative, "mprgp");
-    EXPECT_EQ(same.settings, kMprgpNative);
+    const ReplacedSolverSettings same = settings_for_solver("mprgp", MPRGP_NATIVE, "mprgp");
+    EXPECT_EQ(same.settings, MPRGP_NATIVE);
     EXPECT_TRUE(same.dropped.empty());
 }
 
 TEST(SettingsForSolver, AnotherSolverGetsOnlyTheCommonSettingsAndNoNativeTolerance)
 {
-    const ReplacedSolverSettings pgs = settings_for_solver("mprgp", kMprgpNative, "pgs");
+    const ReplacedSolverSettings pgs = settings_for_solver("mprgp", MPRGP_NATIVE, "pgs");
     EXPECT_EQ(pgs.settings, json({{"max_iterations", 5000}}));
     EXPECT_EQ(pgs.dropped, (std::vector<std::string>{"gamma", "stop", "tol"}));
     // A tolerance on e means the same for every solver: it is passed on with its stop rule.
@@ -41,7 +41,7 @@ TEST(SimulateSolver, PgsStepsAMprgpSceneWithItsOwnDefaults)
     const fs::path dir = make_test_work_dir("simulate_solver");
     std::ifstream in(std::string(CB_SOURCE_DIR) + "/scenes/demo.json");
     json scene = json::parse(in);
-    scene["solver_settings"] = kMprgpNative;  // gamma is mprgp's: pgs would reject it
+    scene["solver_settings"] = MPRGP_NATIVE;  // gamma is mprgp's: pgs would reject it
     {
         std::ofstream(dir / "demo_gamma.json") << scene.dump();
     }

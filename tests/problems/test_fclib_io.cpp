@@ -304,5 +304,5 @@ class CleanUp : public ::testing::Environment {
 public:
     void TearDown() override { fs::remove_all(scratch("x").parent_path()); }
 };
-const auto* const kCleanUp = ::testing::AddGlobalTestEnvironment(new CleanUp);
+const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new CleanUp);
 }  // namespace

@@ -23,7 +23,7 @@ namespace fs = std::filesystem;
 fs::path scratch()
 {
     static const fs::path dir = [] {
-        const fs::path d = fs::temp_directory_path() / ("cb_test_io_" + std::to_string(::getpid()));
+        fs::path d = fs::temp_directory_path() / ("cb_test_io_" + std::to_string(::getpid()));
         fs::remove_all(d);
         fs::create_directories(d);
         return d;
@@ -176,7 +176,7 @@ class CleanUp : public ::testing::Environment {
 public:
     void TearDown() override { fs::remove_all(scratch()); }
 };
-const auto* const kCleanUp = ::testing::AddGlobalTestEnvironment(new CleanUp);
+const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new CleanUp);
 
 }  // namespace
 }  // namespace cb

@@ -39,7 +39,7 @@ std::string file_bytes(const std::string& path)
 /// A valid folder for A = [4 1; 1 3], J = [1 -1], with one file replaced by `override`.
 std::string tiny_folder(const std::string& name, const std::string& file = "", const std::string& text = "")
 {
-    const std::string d = temp_dir(name);
+    std::string d = temp_dir(name);
     put(d + "/A.mtx",
         "%%MatrixMarket matrix coordinate real symmetric\n% lower triangle\n2 2 3\n1 1 4\n2 1 1\n2 2 3\n");
     put(d + "/b.mtx", "%%MatrixMarket matrix array real general\n2 1\n1\n2\n");

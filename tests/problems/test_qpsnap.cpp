@@ -93,7 +93,7 @@ std::string write_raw(const std::string& name, const std::map<std::string, Raw>&
     std::string file(8, '\0');
     const std::uint64_t len = text.size();
     std::memcpy(&file[0], &len, 8);
-    const std::string path = temp_path(name);
+    std::string path = temp_path(name);
     put_bytes(path, file + text + data);
     return path;
 }

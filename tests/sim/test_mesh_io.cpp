@@ -22,7 +22,7 @@ std::string tmp_path(const std::string& name)
 }
 std::string write(const std::string& name, const std::string& text)
 {
-    const std::string p = tmp_path(name);
+    std::string p = tmp_path(name);
     std::ofstream(p) << text;
     return p;
 }

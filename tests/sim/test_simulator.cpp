@@ -16,14 +16,14 @@ using namespace cb::sim;
 using nlohmann::json;
 
 namespace {
-const std::string kSource = CB_SOURCE_DIR;
+const std::string SOURCE = CB_SOURCE_DIR;
 // The authors' data where `make paper-data` writes it ($CB_CACHE/paper-data); the test using it skips without it.
-const std::string kPaperData = cb::cache_dir() + "/paper-data";
+const std::string PAPER_DATA = cb::cache_dir() + "/paper-data";
 
 std::string tmp_dir(const std::string& name)
 {
     const char* dir = std::getenv("TMPDIR");
-    const std::string p = std::string(dir ? dir : "/tmp") + "/cb_test_sim_" + std::to_string(::getpid()) + "_" + name;
+    std::string p = std::string(dir ? dir : "/tmp") + "/cb_test_sim_" + std::to_string(::getpid()) + "_" + name;
     ::mkdir(p.c_str(), 0755);
     return p;
 }
@@ -67,7 +67,7 @@ Vec3 momentum(const Simulator& s)
 
 TEST(Simulator, LongCubeHasThePapersSize)
 {
-    const std::string path = kSource + "/scenes/long_cube.json";
+    const std::string path = SOURCE + "/scenes/long_cube.json";
     Scene scene = load_scene(path, default_path_roots(path, ""));
     ASSERT_EQ(scene.bodies.size(), 1u);
     EXPECT_EQ(scene.bodies[0].mesh.vertices(), 9537);
@@ -186,12 +186,12 @@ TEST(Simulator, AuthorsIniImportMapsSwappedDampingNames)
 
 TEST(Simulator, TwoDinosFrame11HasInterBodyRowsOf12Nonzeros)
 {
-    if (!exists(kPaperData + "/meshes/dino_1303_4014.abq")) GTEST_SKIP() << "no authors' data at " << kPaperData;
-    const std::string path = kSource + "/scenes/two_dinos_1303.json";
+    if (!exists(PAPER_DATA + "/meshes/dino_1303_4014.abq")) GTEST_SKIP() << "no authors' data at " << PAPER_DATA;
+    const std::string path = SOURCE + "/scenes/two_dinos_1303.json";
     SimulatorOptions opt = options();
     opt.out_dir = tmp_dir("two_dinos");
     opt.frames = 12;
-    Scene scene = load_scene(path, default_path_roots(path, kPaperData));
+    Scene scene = load_scene(path, default_path_roots(path, PAPER_DATA));
     scene.output.snapshot_first = 11;
     scene.output.strip_frames = 0;
     Simulator sim(std::move(scene), opt);
@@ -212,7 +212,7 @@ TEST(Simulator, TwoDinosFrame11HasInterBodyRowsOf12Nonzeros)
 
 TEST(Simulator, DemoWritesCsvPngAndObj)
 {
-    const std::string path = kSource + "/scenes/demo.json";
+    const std::string path = SOURCE + "/scenes/demo.json";
     SimulatorOptions opt = options();
     opt.out_dir = tmp_dir("demo");
     opt.frames = 20;

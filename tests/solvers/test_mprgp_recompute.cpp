@@ -81,24 +81,24 @@ nlohmann::json published(double tol)
     return {{"precond", "jacobi"}, {"alpha", "authors"}, {"stop", "native"}, {"tol", tol}};
 }
 
-const nlohmann::json kPlane = {{"nx", 6}, {"ny", 4}, {"nz", 6}};
+const nlohmann::json PLANE = {{"nx", 6}, {"ny", 4}, {"nz", 6}};
 // A stiff tilted body hit hard with a long step: chains end by rejection, expansions and
 // proportioning steps both occur (about 20 each), and the F decreases of late CG steps fall
 // below eps |F| (the directly computed F then decides differently dozens of times).
-const nlohmann::json kStiff = {{"h", 0.05}, {"youngs", 1e9}, {"speed", 3.0}, {"tilt_deg", 20.0}};
+const nlohmann::json STIFF = {{"h", 0.05}, {"youngs", 1e9}, {"speed", 3.0}, {"tilt_deg", 20.0}};
 
 INSTANTIATE_TEST_SUITE_P(Families, MprgpRecompute,
-                         ::testing::Values(Case{"plane_kkt", kPlane, {{"tol", 1e-10}}, false},
-                                           Case{"plane_published", kPlane, published(1e-9), false},
-                                           Case{"stiff_kkt", kStiff, {{"tol", 1e-10}}, true},
-                                           Case{"stiff_published", kStiff, published(1e-9), true}),
+                         ::testing::Values(Case{"plane_kkt", PLANE, {{"tol", 1e-10}}, false},
+                                           Case{"plane_published", PLANE, published(1e-9), false},
+                                           Case{"stiff_kkt", STIFF, {{"tol", 1e-10}}, true},
+                                           Case{"stiff_published", STIFF, published(1e-9), true}),
                          [](const ::testing::TestParamInfo<Case>& info) { return std::string(info.param.name); });
 
 TEST(MprgpRecomputeDiagnostics, DirectComparisonWouldHaveDecidedOtherwiseOnStiffProblem)
 {
     // Why the difference form: on this problem comparing directly computed F values flips
     // decisions (before issue 14 that ran into the iteration cap with 2000 expansions).
-    const Qp qp = cb::make_synthetic("plane", kStiff, 1);
+    const Qp qp = cb::make_synthetic("plane", STIFF, 1);
     nlohmann::json settings = published(1e-9);
     settings["max_iterations"] = 20000;
     const SolverResult rec = solve_mprgp(qp, settings, "recompute");

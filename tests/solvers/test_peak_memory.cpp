@@ -54,5 +54,7 @@ TEST(PeakMemory, AChildsPeakIsSeenByTheParent)
     const PeakMemory peak = read_peak_memory();
     EXPECT_GE(peak.children_bytes, 192 * MIB);
     // The parent did not allocate the block: its own peak stays below it (plus the gtest binary).
-    if (peak.reset) EXPECT_LT(peak.process_bytes, peak.children_bytes);
+    if (peak.reset) {
+        EXPECT_LT(peak.process_bytes, peak.children_bytes);
+    }
 }
