@@ -13,7 +13,6 @@
 #include "solvers/coupled_face_operators.hpp"
 #include "solvers/coupled_preconditioner.hpp"
 #include "solvers/mprgp_kernels.hpp"
-#include "solvers/work_units.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -537,7 +536,7 @@ bool CoupledRun::projected_sweeps_bound(double bound)
     // every point. Done in the rows' space: w = J_A r = G (nu - mu) (G = J J', nu and mu zero off
     // the face), a row step reads w_i and moves w by a column of G, and ||r||^2 = (nu - mu)'w; the
     // m-vectors stay in cache where r's DOFs were gathered and scattered (flank_press frame 0:
-    // 1052 face rows, 12 DOFs each).
+    // 1052 face rows, 12 DOFs each). Row work, not counted in `work` (solvers/work_units.hpp).
     const int* outer = m_gram.outerIndexPtr();
     const int* inner = m_gram.innerIndexPtr();
     const double* val = m_gram.valuePtr();
@@ -561,7 +560,6 @@ bool CoupledRun::projected_sweeps_bound(double bound)
         double r2 = 0.0;
         for (Eigen::Index i = 0; i < m_m; ++i)
             if (m_active[static_cast<size_t>(i)]) r2 += (m_nu[i] - m_mu_bound[i]) * m_w_bound[i];
-        m_cnt.work_flops += sparse_product_flops(static_cast<double>(m_gram.nonZeros()));
         ++m_bound_sweeps;
         decided = r2 <= bound;
     }
