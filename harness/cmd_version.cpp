@@ -30,6 +30,7 @@ int cmd_version(const Args& args)
                               {"build_type", text("build_type")}, {"compiler", text("compiler")},
                               {"eigen", text("eigen")},           {"suitesparse", text("suitesparse")},
                               {"nlohmann_json", json_version},    {"blas", text("blas")}};
+        out["blas_threads"] = p.value("blas_threads", 0);
         out["peers"] = p.value("peers", nlohmann::json::object());
         std::cout << out.dump(1) << "\n";
         return 0;
@@ -43,7 +44,8 @@ int cmd_version(const Args& args)
               << "Eigen         " << text("eigen") << "\n"
               << "SuiteSparse   " << text("suitesparse") << "\n"
               << "nlohmann-json " << json_version << "\n"
-              << "BLAS          " << text("blas") << "\n";
+              << "BLAS          " << text("blas") << " (" << p.value("blas_threads", 0)
+              << " threads; 0: not OpenBLAS)\n";
     std::string peers;
     const nlohmann::json built = p.value("peers", nlohmann::json::object());
     for (const auto& peer : built.items())

@@ -1,4 +1,5 @@
 // contactbench: parse the subcommand and dispatch. Exit status: 0 ran, 2 bad input, 1 internal error.
+#include "harness/blas_threads.hpp"
 #include "harness/command_solver.hpp"
 #include "harness/commands.hpp"
 #include "solvers/types.hpp"
@@ -55,6 +56,7 @@ void usage(std::ostream& out)
 
 int main(int argc, char** argv)
 {
+    cb::limit_blas_threads();      // timed runs on one BLAS thread unless OPENBLAS_NUM_THREADS says otherwise
     cb::install_command_solver();  // `command` lives in harness/ (it writes files); see command_solver.hpp
     if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "help")) {
         usage(std::cout);

@@ -1,5 +1,6 @@
 #include "harness/provenance.hpp"
 
+#include "harness/blas_threads.hpp"
 #include "harness/slurm.hpp"
 #include "solvers/registry.hpp"
 
@@ -113,6 +114,7 @@ nlohmann::json compute()
     p["suitesparse"] = std::to_string(SUITESPARSE_MAIN_VERSION) + "." + std::to_string(SUITESPARSE_SUB_VERSION) + "." +
                        std::to_string(SUITESPARSE_SUBSUB_VERSION) + " (CHOLMOD " + CB_CHOLMOD_VERSION + ")";
     p["blas"] = blas_in_use();
+    p["blas_threads"] = blas_threads();  // 0: not OpenBLAS (harness/blas_threads.hpp)
     // The external peers compiled in, with their libraries' versions (docs/peers.md).
     nlohmann::json peers = nlohmann::json::object();
     const SolverRegistry& registry = builtin_registry();

@@ -5,7 +5,7 @@
 namespace cb {
 
 /// {"git_commit","git_dirty","build_type","compiler","cpu","cores","date","eigen","suitesparse",
-///  "blas","hostname","load_average"} and, inside a Slurm job, "slurm" (slurm_job_provenance).
+///  "blas","blas_threads","hostname","load_average"} and, inside a Slurm job, "slurm" (slurm_job_provenance).
 /// Computed once per process (the date is the first call's, UTC ISO 8601) except the load
 /// average [1, 5, 15 min] from /proc/loadavg, read at every call.
 nlohmann::json provenance();
