@@ -245,7 +245,8 @@ Assembled assemble(const GridBody& g, const FemGridParams& p)
                 for (const auto& o : offsets) {
                     const int a = i + o[0], b = j + o[1], d = k + o[2];
                     if (a < 0 || a >= NX || b < 0 || b >= NY || d < 0 || d >= NZ) continue;
-                    slot[size_t(v) * 27 + (o[0] + 1) + 3 * (o[1] + 1) + 9 * (o[2] + 1)] = c++;
+                    slot[size_t(v) * 27 + (o[0] + 1) + 3 * static_cast<size_t>(o[1] + 1) +
+                         9 * static_cast<size_t>(o[2] + 1)] = c++;
                 }
                 count[v] = c;
                 base[v + 1] = base[v] + 9L * c;
@@ -300,7 +301,7 @@ Assembled assemble(const GridBody& g, const FemGridParams& p)
                     for (int s = 0; s < 3; ++s) grad[s + 1] = Dinv.row(s).transpose();
                     grad[0] = -(grad[1] + grad[2] + grad[3]);
                     for (int a = 0; a < 4; ++a) {
-                        out.mass.segment<3>(3 * vid[a]).array() += p.density * volume / 4.0;
+                        out.mass.segment<3>(3 * static_cast<Eigen::Index>(vid[a])).array() += p.density * volume / 4.0;
                         for (int b = 0; b < 4; ++b) {
                             const int code =
                                 (c[b][0] - c[a][0] + 1) + 3 * (c[b][1] - c[a][1] + 1) + 9 * (c[b][2] - c[a][2] + 1);
@@ -427,7 +428,7 @@ Scene plane_scene(const FemGridParams& fp, const nlohmann::json& p, const V3& no
     for (int v = 0; v < g.vertices(); ++v) {
         V3 vel = -p["speed"].get<double>() * normal;
         for (int d = 0; d < 3; ++d) vel[d] += uniform(rng, -noise, noise);
-        s.pred.segment<3>(3 * v) = g.rest[v] + fp.h * vel;
+        s.pred.segment<3>(3 * static_cast<Eigen::Index>(v)) = g.rest[v] + fp.h * vel;
     }
     s.vertices = g.vertices();
     s.tets = g.tets();
@@ -485,7 +486,7 @@ Qp make_plane_like(const std::string& family, const nlohmann::json& p, std::uint
     if (rows) {
         const double margin = p["margin"].get<double>() * fp.spacing;
         for (int v = 0; v < s.vertices; ++v) {
-            const double dist = normal.dot(V3(s.pred.segment<3>(3 * v)));
+            const double dist = normal.dot(V3(s.pred.segment<3>(3 * static_cast<Eigen::Index>(v))));
             if (dist >= margin) continue;
             rb.add({{3 * v, normal.x()}, {3 * v + 1, normal.y()}, {3 * v + 2, normal.z()}}, 0.0, ContactKind::PLANE,
                    std::max(0.0, -dist), {v, -1, -1, -1});
@@ -601,14 +602,14 @@ Qp make_coupled(const std::string& family, const nlohmann::json& p, std::uint64_
     sc.fem.A = block_diag(f1.A, f2.A);
     sc.fem.mass.resize(f1.mass.size() + f2.mass.size());
     sc.fem.mass << f1.mass, f2.mass;
-    sc.rest.resize(3 * (nv1 + nv2));
+    sc.rest.resize(3 * static_cast<Eigen::Index>(nv1 + nv2));
     sc.rest << flatten(lower.rest), flatten(upper.rest);
     sc.pred = sc.rest;
     sc.gravity = gravity;
     for (int v = 0; v < nv1 + nv2; ++v) {
         V3 vel = v >= nv1 ? V3(-speed * normal) : V3::Zero();
         for (int d = 0; d < 3; ++d) vel[d] += uniform(rng, -noise, noise);
-        sc.pred.segment<3>(3 * v) += fp.h * vel;
+        sc.pred.segment<3>(3 * static_cast<Eigen::Index>(v)) += fp.h * vel;
     }
     Qp qp;
     qp.A = sc.fem.A;
@@ -622,8 +623,9 @@ Qp make_coupled(const std::string& family, const nlohmann::json& p, std::uint64_
         for (int d = 0; d < 3; ++d) e.push_back({3 * vi + d, normal[d]});
         for (int t = 0; t < 3; ++t)
             for (int d = 0; d < 3; ++d) e.push_back({3 * r.tri[t] + d, -r.w[t] * normal[d]});
-        double gapv = normal.dot(V3(qp.x0.segment<3>(3 * vi)));
-        for (int t = 0; t < 3; ++t) gapv -= r.w[t] * normal.dot(V3(qp.x0.segment<3>(3 * r.tri[t])));
+        double gapv = normal.dot(V3(qp.x0.segment<3>(3 * static_cast<Eigen::Index>(vi))));
+        for (int t = 0; t < 3; ++t)
+            gapv -= r.w[t] * normal.dot(V3(qp.x0.segment<3>(3 * static_cast<Eigen::Index>(r.tri[t]))));
         rb.add(e, 0.0, ContactKind::INTER_BODY, std::max(0.0, -gapv), {vi, r.tri[0], r.tri[1], r.tri[2]});
     }
     rb.finish(qp, qp.A.rows());
