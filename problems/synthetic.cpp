@@ -142,8 +142,8 @@ nlohmann::json effective_params(const std::string& family, const FamilySpec& spe
 }
 
 /// Bounds of the generator (problems/synthetic.hpp): what a laptop holds, stated in the messages.
-constexpr double kMaxGridVertices = 1e6;
-constexpr long kMaxRows = 10000000;
+constexpr double MAX_GRID_VERTICES = 1e6;
+constexpr long MAX_ROWS = 10000000;
 
 [[noreturn]] void bad_param(const std::string& family, const std::string& key, const std::string& what,
                             const nlohmann::json& got)
@@ -179,7 +179,7 @@ void validate(const FemGridParams& p, const std::string& where)
     if (p.nz < 1) bad("nz", "an integer >= 1", p.nz);
     // Memory grows with the grid (about 1 kB per vertex while assembling): bounded before it is built.
     const double vertices = double(p.nx + 1) * (double(p.ny) + 1) * (double(p.nz) + 1);
-    if (vertices > kMaxGridVertices) bad("nx", "at most 1e6 vertices in all (nx+1)(ny+1)(nz+1)", vertices);
+    if (vertices > MAX_GRID_VERTICES) bad("nx", "at most 1e6 vertices in all (nx+1)(ny+1)(nz+1)", vertices);
     if (!(p.spacing > 0) || !std::isfinite(p.spacing)) bad("spacing", "> 0", p.spacing);
     if (!(p.youngs > 0) || !std::isfinite(p.youngs)) bad("youngs", "> 0", p.youngs);
     if (!(p.poisson > -1 && p.poisson < 0.5)) bad("poisson", "a value in (-1, 0.5)", p.poisson);
@@ -548,7 +548,7 @@ Qp make_coupled(const std::string& family, const nlohmann::json& p, std::uint64_
     if (!(scale > 0 && scale < 1)) bad_param(family, "upper_scale", "a value in (0, 1)", p["upper_scale"]);
     const int upper_ny = p["upper_ny"].get<int>();
     if (upper_ny < 1) bad_param(family, "upper_ny", "an integer >= 1", p["upper_ny"]);
-    if (double(fp.nx + 1) * (double(upper_ny) + 1) * (double(fp.nz) + 1) > kMaxGridVertices)
+    if (double(fp.nx + 1) * (double(upper_ny) + 1) * (double(fp.nz) + 1) > MAX_GRID_VERTICES)
         bad_param(family, "upper_ny", "at most 1e6 vertices in the upper body", p["upper_ny"]);
     std::mt19937_64 rng(seed);
     const double s = fp.spacing;
@@ -641,7 +641,7 @@ Qp make_random_spd(const std::string& family, const nlohmann::json& p, std::uint
     const long n = p["n"].get<long>(), m = p["m"].get<long>(), row_nnz = p["row_nnz"].get<long>();
     const double cond = p["condition"].get<double>();
     if (n < 1 || n > 3000) bad_param(family, "n", "an integer in [1, 3000] (A is dense)", p["n"]);
-    if (m < 0 || m > kMaxRows) bad_param(family, "m", "an integer in [0, 1e7]", p["m"]);
+    if (m < 0 || m > MAX_ROWS) bad_param(family, "m", "an integer in [0, 1e7]", p["m"]);
     if (row_nnz < 1 || row_nnz > n) bad_param(family, "row_nnz", "an integer in [1, n]", p["row_nnz"]);
     if (!(cond >= 1)) bad_param(family, "condition", "a number >= 1", p["condition"]);
     if (!(p["length_scale"].get<double>() > 0)) bad_param(family, "length_scale", "> 0", p["length_scale"]);
@@ -730,7 +730,7 @@ Qp make_variant(const std::string& family, const nlohmann::json& p, std::uint64_
     } else if (family == "zero-rows") {
         const long count = p["count"].get<long>();
         zero_c = p["c"].get<double>();
-        if (count < 0 || count > kMaxRows) bad_param(family, "count", "an integer in [0, 1e7]", p["count"]);
+        if (count < 0 || count > MAX_ROWS) bad_param(family, "count", "an integer in [0, 1e7]", p["count"]);
         if (!(zero_c <= 0)) bad_param(family, "c", "a number <= 0 (a zero row must be satisfiable)", p["c"]);
         for (long r = 0; r < m; ++r) order.push_back(r);
         for (long k = 0; k < count; ++k) {
@@ -740,7 +740,7 @@ Qp make_variant(const std::string& family, const nlohmann::json& p, std::uint64_
         scale.assign(order.size(), 1.0);
     } else {  // infeasible
         const long pairs = p["pairs"].get<long>();
-        if (pairs < 1 || pairs > kMaxRows / 2) bad_param(family, "pairs", "an integer in [1, 5e6]", p["pairs"]);
+        if (pairs < 1 || pairs > MAX_ROWS / 2) bad_param(family, "pairs", "an integer in [1, 5e6]", p["pairs"]);
         RowBuilder rb;
         // Copy the plane rows, then append the contradictory pairs.
         for (long r = 0; r < m; ++r) {

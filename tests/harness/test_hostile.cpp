@@ -431,9 +431,9 @@ TEST(Writes, SimulateReplacesAnOldOutAndFinishesItsTables)
     EXPECT_EQ(count_matching(out, ".partial"), 0u);
     const nlohmann::json record = read_json_file((out / "simulation.json").string());
     EXPECT_EQ(record["frames_done"], 2);
-    EXPECT_EQ(record["simulator_version"], sim::kSimulatorVersion);
+    EXPECT_EQ(record["simulator_version"], sim::SIMULATOR_VERSION);
     const Output version = run("simulate --version");
-    EXPECT_EQ(version.out, "simulator " + std::to_string(sim::kSimulatorVersion) + "\n");
+    EXPECT_EQ(version.out, "simulator " + std::to_string(sim::SIMULATOR_VERSION) + "\n");
 }
 
 TEST(Writes, FileSizeLimitIsAClearErrorWithNoPartialOutput)
