@@ -43,7 +43,7 @@ int cmd_simulate(const Args& args)
         "Each step is judged as `solve` judges a snapshot: status converged only when the error e on the\n"
         "QP with every detected row meets the tolerance, solved_relaxation when only the kept rows do.\n";
     if (cl.has("--version")) {
-        std::cout << "simulator " << sim::kSimulatorVersion << "\n";
+        std::cout << "simulator " << sim::SIMULATOR_VERSION << "\n";
         return 0;
     }
     if (cl.help()) {

@@ -30,7 +30,7 @@ import pandas as pd  # noqa: E402
 import figutil  # noqa: E402
 from figutil import plt  # noqa: E402
 
-#: sim/chains.hpp kChainsVersion: a cached folder of another version is run again
+#: sim/chains.hpp CHAINS_VERSION: a cached folder of another version is run again
 CHAINS_VERSION = 4
 
 # The rule for "noticeable" (docs/simulator.md). p: the deepest vertex inside a body or obstacle

@@ -145,11 +145,14 @@ private:
 void advise_huge_pages(void* p, std::size_t bytes)
 {
 #ifdef MADV_HUGEPAGE
-    const std::uintptr_t huge = 2u << 20;
+    const std::size_t huge = 2u << 20;
     if (bytes < 2 * huge) return;
-    const std::uintptr_t begin = (reinterpret_cast<std::uintptr_t>(p) + huge - 1) & ~(huge - 1);
-    const std::uintptr_t end = (reinterpret_cast<std::uintptr_t>(p) + bytes) & ~(huge - 1);
-    if (end > begin) ::madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
+    // The whole huge pages inside [p, p + bytes), as offsets from p: the address is only read
+    // (pointer to integer), the advised pointer is p's own char* moved forward.
+    const std::size_t misalign = reinterpret_cast<std::uintptr_t>(p) & (huge - 1);
+    const std::size_t begin = (huge - misalign) & (huge - 1);
+    const std::size_t end = bytes - ((misalign + bytes) & (huge - 1));
+    if (end > begin) ::madvise(static_cast<char*>(p) + begin, end - begin, MADV_HUGEPAGE);
 #endif
 }
 

@@ -142,8 +142,8 @@ nlohmann::json effective_params(const std::string& family, const FamilySpec& spe
 }
 
 /// Bounds of the generator (problems/synthetic.hpp): what a laptop holds, stated in the messages.
-constexpr double kMaxGridVertices = 1e6;
-constexpr long kMaxRows = 10000000;
+constexpr double MAX_GRID_VERTICES = 1e6;
+constexpr long MAX_ROWS = 10000000;
 
 [[noreturn]] void bad_param(const std::string& family, const std::string& key, const std::string& what,
                             const nlohmann::json& got)
@@ -179,7 +179,7 @@ void validate(const FemGridParams& p, const std::string& where)
     if (p.nz < 1) bad("nz", "an integer >= 1", p.nz);
     // Memory grows with the grid (about 1 kB per vertex while assembling): bounded before it is built.
     const double vertices = double(p.nx + 1) * (double(p.ny) + 1) * (double(p.nz) + 1);
-    if (vertices > kMaxGridVertices) bad("nx", "at most 1e6 vertices in all (nx+1)(ny+1)(nz+1)", vertices);
+    if (vertices > MAX_GRID_VERTICES) bad("nx", "at most 1e6 vertices in all (nx+1)(ny+1)(nz+1)", vertices);
     if (!(p.spacing > 0) || !std::isfinite(p.spacing)) bad("spacing", "> 0", p.spacing);
     if (!(p.youngs > 0) || !std::isfinite(p.youngs)) bad("youngs", "> 0", p.youngs);
     if (!(p.poisson > -1 && p.poisson < 0.5)) bad("poisson", "a value in (-1, 0.5)", p.poisson);
@@ -245,7 +245,8 @@ Assembled assemble(const GridBody& g, const FemGridParams& p)
                 for (const auto& o : offsets) {
                     const int a = i + o[0], b = j + o[1], d = k + o[2];
                     if (a < 0 || a >= NX || b < 0 || b >= NY || d < 0 || d >= NZ) continue;
-                    slot[size_t(v) * 27 + (o[0] + 1) + 3 * (o[1] + 1) + 9 * (o[2] + 1)] = c++;
+                    slot[size_t(v) * 27 + (o[0] + 1) + 3 * static_cast<size_t>(o[1] + 1) +
+                         9 * static_cast<size_t>(o[2] + 1)] = c++;
                 }
                 count[v] = c;
                 base[v + 1] = base[v] + 9L * c;
@@ -300,7 +301,7 @@ Assembled assemble(const GridBody& g, const FemGridParams& p)
                     for (int s = 0; s < 3; ++s) grad[s + 1] = Dinv.row(s).transpose();
                     grad[0] = -(grad[1] + grad[2] + grad[3]);
                     for (int a = 0; a < 4; ++a) {
-                        out.mass.segment<3>(3 * vid[a]).array() += p.density * volume / 4.0;
+                        out.mass.segment<3>(3 * static_cast<Eigen::Index>(vid[a])).array() += p.density * volume / 4.0;
                         for (int b = 0; b < 4; ++b) {
                             const int code =
                                 (c[b][0] - c[a][0] + 1) + 3 * (c[b][1] - c[a][1] + 1) + 9 * (c[b][2] - c[a][2] + 1);
@@ -427,7 +428,7 @@ Scene plane_scene(const FemGridParams& fp, const nlohmann::json& p, const V3& no
     for (int v = 0; v < g.vertices(); ++v) {
         V3 vel = -p["speed"].get<double>() * normal;
         for (int d = 0; d < 3; ++d) vel[d] += uniform(rng, -noise, noise);
-        s.pred.segment<3>(3 * v) = g.rest[v] + fp.h * vel;
+        s.pred.segment<3>(3 * static_cast<Eigen::Index>(v)) = g.rest[v] + fp.h * vel;
     }
     s.vertices = g.vertices();
     s.tets = g.tets();
@@ -485,7 +486,7 @@ Qp make_plane_like(const std::string& family, const nlohmann::json& p, std::uint
     if (rows) {
         const double margin = p["margin"].get<double>() * fp.spacing;
         for (int v = 0; v < s.vertices; ++v) {
-            const double dist = normal.dot(V3(s.pred.segment<3>(3 * v)));
+            const double dist = normal.dot(V3(s.pred.segment<3>(3 * static_cast<Eigen::Index>(v))));
             if (dist >= margin) continue;
             rb.add({{3 * v, normal.x()}, {3 * v + 1, normal.y()}, {3 * v + 2, normal.z()}}, 0.0, ContactKind::PLANE,
                    std::max(0.0, -dist), {v, -1, -1, -1});
@@ -547,7 +548,7 @@ Qp make_coupled(const std::string& family, const nlohmann::json& p, std::uint64_
     if (!(scale > 0 && scale < 1)) bad_param(family, "upper_scale", "a value in (0, 1)", p["upper_scale"]);
     const int upper_ny = p["upper_ny"].get<int>();
     if (upper_ny < 1) bad_param(family, "upper_ny", "an integer >= 1", p["upper_ny"]);
-    if (double(fp.nx + 1) * (double(upper_ny) + 1) * (double(fp.nz) + 1) > kMaxGridVertices)
+    if (double(fp.nx + 1) * (double(upper_ny) + 1) * (double(fp.nz) + 1) > MAX_GRID_VERTICES)
         bad_param(family, "upper_ny", "at most 1e6 vertices in the upper body", p["upper_ny"]);
     std::mt19937_64 rng(seed);
     const double s = fp.spacing;
@@ -601,14 +602,14 @@ Qp make_coupled(const std::string& family, const nlohmann::json& p, std::uint64_
     sc.fem.A = block_diag(f1.A, f2.A);
     sc.fem.mass.resize(f1.mass.size() + f2.mass.size());
     sc.fem.mass << f1.mass, f2.mass;
-    sc.rest.resize(3 * (nv1 + nv2));
+    sc.rest.resize(3 * static_cast<Eigen::Index>(nv1 + nv2));
     sc.rest << flatten(lower.rest), flatten(upper.rest);
     sc.pred = sc.rest;
     sc.gravity = gravity;
     for (int v = 0; v < nv1 + nv2; ++v) {
         V3 vel = v >= nv1 ? V3(-speed * normal) : V3::Zero();
         for (int d = 0; d < 3; ++d) vel[d] += uniform(rng, -noise, noise);
-        sc.pred.segment<3>(3 * v) += fp.h * vel;
+        sc.pred.segment<3>(3 * static_cast<Eigen::Index>(v)) += fp.h * vel;
     }
     Qp qp;
     qp.A = sc.fem.A;
@@ -622,8 +623,9 @@ Qp make_coupled(const std::string& family, const nlohmann::json& p, std::uint64_
         for (int d = 0; d < 3; ++d) e.push_back({3 * vi + d, normal[d]});
         for (int t = 0; t < 3; ++t)
             for (int d = 0; d < 3; ++d) e.push_back({3 * r.tri[t] + d, -r.w[t] * normal[d]});
-        double gapv = normal.dot(V3(qp.x0.segment<3>(3 * vi)));
-        for (int t = 0; t < 3; ++t) gapv -= r.w[t] * normal.dot(V3(qp.x0.segment<3>(3 * r.tri[t])));
+        double gapv = normal.dot(V3(qp.x0.segment<3>(3 * static_cast<Eigen::Index>(vi))));
+        for (int t = 0; t < 3; ++t)
+            gapv -= r.w[t] * normal.dot(V3(qp.x0.segment<3>(3 * static_cast<Eigen::Index>(r.tri[t]))));
         rb.add(e, 0.0, ContactKind::INTER_BODY, std::max(0.0, -gapv), {vi, r.tri[0], r.tri[1], r.tri[2]});
     }
     rb.finish(qp, qp.A.rows());
@@ -639,7 +641,7 @@ Qp make_random_spd(const std::string& family, const nlohmann::json& p, std::uint
     const long n = p["n"].get<long>(), m = p["m"].get<long>(), row_nnz = p["row_nnz"].get<long>();
     const double cond = p["condition"].get<double>();
     if (n < 1 || n > 3000) bad_param(family, "n", "an integer in [1, 3000] (A is dense)", p["n"]);
-    if (m < 0 || m > kMaxRows) bad_param(family, "m", "an integer in [0, 1e7]", p["m"]);
+    if (m < 0 || m > MAX_ROWS) bad_param(family, "m", "an integer in [0, 1e7]", p["m"]);
     if (row_nnz < 1 || row_nnz > n) bad_param(family, "row_nnz", "an integer in [1, n]", p["row_nnz"]);
     if (!(cond >= 1)) bad_param(family, "condition", "a number >= 1", p["condition"]);
     if (!(p["length_scale"].get<double>() > 0)) bad_param(family, "length_scale", "> 0", p["length_scale"]);
@@ -728,7 +730,7 @@ Qp make_variant(const std::string& family, const nlohmann::json& p, std::uint64_
     } else if (family == "zero-rows") {
         const long count = p["count"].get<long>();
         zero_c = p["c"].get<double>();
-        if (count < 0 || count > kMaxRows) bad_param(family, "count", "an integer in [0, 1e7]", p["count"]);
+        if (count < 0 || count > MAX_ROWS) bad_param(family, "count", "an integer in [0, 1e7]", p["count"]);
         if (!(zero_c <= 0)) bad_param(family, "c", "a number <= 0 (a zero row must be satisfiable)", p["c"]);
         for (long r = 0; r < m; ++r) order.push_back(r);
         for (long k = 0; k < count; ++k) {
@@ -738,7 +740,7 @@ Qp make_variant(const std::string& family, const nlohmann::json& p, std::uint64_
         scale.assign(order.size(), 1.0);
     } else {  // infeasible
         const long pairs = p["pairs"].get<long>();
-        if (pairs < 1 || pairs > kMaxRows / 2) bad_param(family, "pairs", "an integer in [1, 5e6]", p["pairs"]);
+        if (pairs < 1 || pairs > MAX_ROWS / 2) bad_param(family, "pairs", "an integer in [1, 5e6]", p["pairs"]);
         RowBuilder rb;
         // Copy the plane rows, then append the contradictory pairs.
         for (long r = 0; r < m; ++r) {

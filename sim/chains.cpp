@@ -243,8 +243,8 @@ bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& op
           {"penetration_file",
            penetration.surfaces.empty() ? nlohmann::json() : nlohmann::json(fs::path(pen_png_path).filename())}}},
         {"blow_up", !ok},
-        {"chains_version", kChainsVersion},
-        {"simulator_version", kSimulatorVersion}};
+        {"chains_version", CHAINS_VERSION},
+        {"simulator_version", SIMULATOR_VERSION}};
     write_file_atomic(json_path, record.dump(1) + "\n");
     return ok;
 }

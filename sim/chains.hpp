@@ -36,7 +36,7 @@ struct ChainOptions {
 /// Bump when what `chains` writes for the same inputs changes (caches key on it with the
 /// simulator's version).
 // 2: the picture at the largest penetration; 3: exact = mprgp-coupled; 4: vertices_inside
-constexpr int kChainsVersion = 4;
+constexpr int CHAINS_VERSION = 4;
 
 /// Per-vertex distance between two position vectors of the same mesh: RMS and max over vertices.
 struct ChainDistance {

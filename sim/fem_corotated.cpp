@@ -125,8 +125,8 @@ namespace {
 Eigen::Matrix3d deformation_gradient(const Vec& x, const Tets& tets, Eigen::Index t, const Eigen::Matrix3d& dm_inv)
 {
     Eigen::Matrix3d Ds;
-    const Eigen::Vector3d x0 = x.segment<3>(3 * tets(t, 0));
-    for (int k = 0; k < 3; ++k) Ds.col(k) = x.segment<3>(3 * tets(t, k + 1)) - x0;
+    const Eigen::Vector3d x0 = x.segment<3>(3 * static_cast<Eigen::Index>(tets(t, 0)));
+    for (int k = 0; k < 3; ++k) Ds.col(k) = x.segment<3>(3 * static_cast<Eigen::Index>(tets(t, k + 1))) - x0;
     return Ds * dm_inv;
 }
 }  // namespace
@@ -158,7 +158,8 @@ void CorotatedFem::update(const Vec& x)
         E = 0.5 * (E + E.transpose());  // exact symmetry against round-off
         const Eigen::Matrix3d P = R * (2.0 * m_mu[T] * E + m_lambda[T] * E.trace() * Eigen::Matrix3d::Identity());
         for (int a = 0; a < 4; ++a)
-            m_gradient.segment<3>(3 * m_tets(t, a)) += m_volume[T] * (P * m_grad[T].row(a).transpose());
+            m_gradient.segment<3>(3 * static_cast<Eigen::Index>(m_tets(t, a))) +=
+                m_volume[T] * (P * m_grad[T].row(a).transpose());
     }
 }
 

@@ -477,7 +477,7 @@ bool Simulator::run()
                                            {"frames_done", m_frame},
                                            {"blow_up", !ok},
                                            {"solver", m_solver_name},
-                                           {"simulator_version", kSimulatorVersion},
+                                           {"simulator_version", SIMULATOR_VERSION},
                                            {"decouple", m_opt.decouple},
                                            {"decouple_seed", m_opt.decouple_seed},
                                            {"h", m_scene.step.h},

@@ -64,8 +64,9 @@ struct SimulatorOptions {
 
 /// Bump when a change alters what a simulation of the same scene writes (physics, detection,
 /// snapshot content): caches keyed on it (plots/reproduce.py) then simulate again.
-constexpr int kSimulatorVersion = 4;  // 2: steps.csv judges steps like `solve`; *_rel columns; 3: stage columns;
-                                      // 4: the measure counts each body's rigid motion (free fall is no longer met at x0)
+/// 2: steps.csv judges steps like `solve`; *_rel columns; 3: stage columns;
+/// 4: the measure counts each body's rigid motion (free fall is no longer met at x0)
+constexpr int SIMULATOR_VERSION = 4;
 
 /// What one QP solve of a step produced.
 struct StepRecord {

@@ -31,6 +31,7 @@ public:
 
 /// Manual time: (t_k - t_1) / (k - 1) over k outer iterations of one solve, so that the
 /// setup (block inverses, B = J D3^-1 J') and the first iteration's warm-up are excluded.
+// NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_<name> convention
 void BM_ica_outer_iteration(benchmark::State& state)
 {
     const cb::Qp& qp = dual_bench_problem();
@@ -52,6 +53,7 @@ void BM_ica_outer_iteration(benchmark::State& state)
 }
 BENCHMARK(BM_ica_outer_iteration)->Arg(11)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(3);
 
+// NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_<name> convention
 void BM_ica_reference_a_product(benchmark::State& state)
 {
     const cb::Qp& qp = dual_bench_problem();

@@ -30,6 +30,7 @@ double a_product_bytes(const cb::SpMat& A)
            static_cast<double>(A.rows()) * 8.0 * 2.0;
 }
 
+// NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_<name> convention
 void BM_Triad(benchmark::State& state)
 {
     // Arrays well beyond the last-level cache, as large in all as A's bytes (about 100 MB).
@@ -62,6 +63,7 @@ void csr_product(const cb::SpMat& A, const cb::Vec& x, cb::Vec& y)
     }
 }
 
+// NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_<name> convention
 void BM_AProduct(benchmark::State& state)
 {
     const cb::SpMat& A = problem().A;
@@ -136,6 +138,7 @@ struct Pcg {
 
 constexpr int k_restart = 100;  // PCG restarted every k iterations so values stay normal
 
+// NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_<name> convention
 void BM_PcgIteration(benchmark::State& state)
 {
     const cb::Qp& qp = problem();
@@ -185,6 +188,7 @@ PerIteration solver_per_iteration(const std::string& name, nlohmann::json settin
     return p;
 }
 
+// NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_<name> convention
 void BM_MprgpIteration(benchmark::State& state)
 {
     PerIteration p;
@@ -197,6 +201,7 @@ void BM_MprgpIteration(benchmark::State& state)
 }
 BENCHMARK(BM_MprgpIteration)->UseManualTime()->Iterations(3)->Unit(benchmark::kMillisecond);
 
+// NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_<name> convention
 void BM_RegistryCgIteration(benchmark::State& state)
 {
     if (!cb::builtin_registry().contains("cg")) {
@@ -214,6 +219,7 @@ BENCHMARK(BM_RegistryCgIteration)->UseManualTime()->Iterations(3)->Unit(benchmar
 
 /// Both in one benchmark: counters mprgp_over_pcg (per-iteration time ratio, target <= 1.15)
 /// and aproduct_over_triad_bound (A-product time / (bytes / triad bandwidth), target <= 1.3).
+// NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_<name> convention
 void BM_Ratios(benchmark::State& state)
 {
     const cb::Qp& qp = problem();

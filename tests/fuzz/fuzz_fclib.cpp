@@ -24,51 +24,51 @@
 namespace {
 
 /// Every dataset of the layout the reader looks at, and the groups whose removal matters.
-const char* const kFields[] = {"/fclib_global/spacedim",
-                               "/fclib_global/M/nzmax",
-                               "/fclib_global/M/m",
-                               "/fclib_global/M/n",
-                               "/fclib_global/M/nz",
-                               "/fclib_global/M/p",
-                               "/fclib_global/M/i",
-                               "/fclib_global/M/x",
-                               "/fclib_global/H/nzmax",
-                               "/fclib_global/H/m",
-                               "/fclib_global/H/n",
-                               "/fclib_global/H/nz",
-                               "/fclib_global/H/p",
-                               "/fclib_global/H/i",
-                               "/fclib_global/H/x",
-                               "/fclib_global/G/n",
-                               "/fclib_global/vectors/f",
-                               "/fclib_global/vectors/w",
-                               "/fclib_global/vectors/mu",
-                               "/fclib_global/info/description",
-                               "/guesses/number_of_guesses",
-                               "/guesses/1/v",
-                               "/solution/v",
-                               "/solution/r",
-                               "/fclib_global/M",
-                               "/fclib_global/H",
-                               "/fclib_global/vectors",
-                               "/guesses",
-                               "/solution",
-                               "/fclib_global"};
+const char* const FIELDS[] = {"/fclib_global/spacedim",
+                              "/fclib_global/M/nzmax",
+                              "/fclib_global/M/m",
+                              "/fclib_global/M/n",
+                              "/fclib_global/M/nz",
+                              "/fclib_global/M/p",
+                              "/fclib_global/M/i",
+                              "/fclib_global/M/x",
+                              "/fclib_global/H/nzmax",
+                              "/fclib_global/H/m",
+                              "/fclib_global/H/n",
+                              "/fclib_global/H/nz",
+                              "/fclib_global/H/p",
+                              "/fclib_global/H/i",
+                              "/fclib_global/H/x",
+                              "/fclib_global/G/n",
+                              "/fclib_global/vectors/f",
+                              "/fclib_global/vectors/w",
+                              "/fclib_global/vectors/mu",
+                              "/fclib_global/info/description",
+                              "/guesses/number_of_guesses",
+                              "/guesses/1/v",
+                              "/solution/v",
+                              "/solution/r",
+                              "/fclib_global/M",
+                              "/fclib_global/H",
+                              "/fclib_global/vectors",
+                              "/guesses",
+                              "/solution",
+                              "/fclib_global"};
 
 long long fuzzed_integer(FuzzedDataProvider& in)
 {
-    static const long long kSpecial[] = {
+    static const long long SPECIAL[] = {
         0, 1, -1, -2, -3, 2, 3, 6, INT_MAX, INT_MIN, 2147483646, 2147483648LL, -2147483649LL, LLONG_MAX, LLONG_MIN};
-    if (in.ConsumeBool()) return kSpecial[in.ConsumeIntegralInRange<size_t>(0, std::size(kSpecial) - 1)];
+    if (in.ConsumeBool()) return SPECIAL[in.ConsumeIntegralInRange<size_t>(0, std::size(SPECIAL) - 1)];
     return in.ConsumeIntegralInRange<long long>(-4, 12);
 }
 
 double fuzzed_real(FuzzedDataProvider& in)
 {
-    static const double kSpecial[] = {
+    static const double SPECIAL[] = {
         0.0,      -0.0,      1.0,   -1.0,   2.0,   0.5, std::numeric_limits<double>::quiet_NaN(),
         INFINITY, -INFINITY, 1e308, 5e-324, 1e-300};
-    if (in.ConsumeBool()) return kSpecial[in.ConsumeIntegralInRange<size_t>(0, std::size(kSpecial) - 1)];
+    if (in.ConsumeBool()) return SPECIAL[in.ConsumeIntegralInRange<size_t>(0, std::size(SPECIAL) - 1)];
     return in.ConsumeFloatingPoint<double>();
 }
 
@@ -102,7 +102,7 @@ void write_valid(cb::test::Hdf5Edit& f)
 
 void apply_edit(cb::test::Hdf5Edit& f, FuzzedDataProvider& in)
 {
-    const std::string field = kFields[in.ConsumeIntegralInRange<size_t>(0, std::size(kFields) - 1)];
+    const std::string field = FIELDS[in.ConsumeIntegralInRange<size_t>(0, std::size(FIELDS) - 1)];
     const size_t length = in.ConsumeIntegralInRange<size_t>(0, 24);
     switch (in.ConsumeIntegralInRange<int>(0, 6)) {
     case 0:
@@ -140,6 +140,7 @@ void apply_edit(cb::test::Hdf5Edit& f, FuzzedDataProvider& in)
 
 }  // namespace
 
+// NOLINTNEXTLINE(readability-identifier-naming): libFuzzer's fixed entry point
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)
 {
     // One scratch file per process, removed when libFuzzer exits.

@@ -431,9 +431,9 @@ TEST(Writes, SimulateReplacesAnOldOutAndFinishesItsTables)
     EXPECT_EQ(count_matching(out, ".partial"), 0u);
     const nlohmann::json record = read_json_file((out / "simulation.json").string());
     EXPECT_EQ(record["frames_done"], 2);
-    EXPECT_EQ(record["simulator_version"], sim::kSimulatorVersion);
+    EXPECT_EQ(record["simulator_version"], sim::SIMULATOR_VERSION);
     const Output version = run("simulate --version");
-    EXPECT_EQ(version.out, "simulator " + std::to_string(sim::kSimulatorVersion) + "\n");
+    EXPECT_EQ(version.out, "simulator " + std::to_string(sim::SIMULATOR_VERSION) + "\n");
 }
 
 TEST(Writes, FileSizeLimitIsAClearErrorWithNoPartialOutput)
@@ -639,8 +639,9 @@ TEST(Hostile, TemporariesOfAnInterruptedRunAreRemovedByTheNext)
     std::ofstream(dir / ("other.txt.tmp." + dead)) << "not a target of this run: kept";
     // Left over: untouched for an hour. A young one may be another machine's write in progress on
     // a shared file system (the pid is only known gone here): named and kept.
+    const std::string tmp_suffix = ".tmp." + dead;
     for (const std::string target : {"b.qpsnap", "b.hdf5", "b_mm"})
-        fs::last_write_time(dir / (target + ".tmp." + dead), fs::file_time_type::clock::now() - std::chrono::hours(1));
+        fs::last_write_time(dir / (target + tmp_suffix), fs::file_time_type::clock::now() - std::chrono::hours(1));
     std::ofstream(dir / ("young.qpsnap.tmp." + dead)) << "maybe another machine's";
     const Output young = run("convert " + q(dir / "a.qpsnap") + " " + q(dir / "young.qpsnap"));
     ASSERT_EQ(young.status, 0) << young.err;
@@ -650,11 +651,15 @@ TEST(Hostile, TemporariesOfAnInterruptedRunAreRemovedByTheNext)
     EXPECT_TRUE(fs::exists(dir / ("young.qpsnap.tmp." + dead)));
     fs::remove(dir / ("young.qpsnap.tmp." + dead));
     for (const std::string target : {"b.qpsnap", "b.hdf5", "b_mm"}) {
-        const Output r = run("convert " + q(dir / "a.qpsnap") + " " + q(dir / target));
+        const fs::path tmp = dir / (target + tmp_suffix);
+        const Output r = run(std::string("convert ").append(q(dir / "a.qpsnap")).append(" ").append(q(dir / target)));
         ASSERT_EQ(r.status, 0) << r.err;
-        EXPECT_EQ(r.err, "note: removed " + (dir / (target + ".tmp." + dead)).string() +
-                             ", left by an interrupted earlier run (process " + dead + " is gone)\n");
-        EXPECT_FALSE(fs::exists(dir / (target + ".tmp." + dead)));
+        EXPECT_EQ(r.err, std::string("note: removed ")
+                             .append(tmp.string())
+                             .append(", left by an interrupted earlier run (process ")
+                             .append(dead)
+                             .append(" is gone)\n"));
+        EXPECT_FALSE(fs::exists(tmp));
     }
     EXPECT_TRUE(fs::exists(dir / ("other.txt.tmp." + dead)));
     EXPECT_EQ(count_matching(dir, ".tmp."), 1u);

@@ -163,7 +163,7 @@ std::string interfaces_section(const std::string& heading)
     std::string line, text;
     bool inside = false;
     while (std::getline(in, line)) {
-        if (line.rfind("#", 0) == 0) {
+        if (line.rfind('#', 0) == 0) {
             if (inside) break;
             inside = line.find(heading) != std::string::npos;
             continue;

@@ -48,8 +48,8 @@ struct Raw {
     std::vector<double> f;
 };
 
-Raw ints(std::vector<std::int64_t> v) { return Raw{"int64", {v.size()}, v, {}}; }
-Raw reals(std::vector<double> v) { return Raw{"float64", {v.size()}, {}, v}; }
+Raw ints(const std::vector<std::int64_t>& v) { return Raw{"int64", {v.size()}, v, {}}; }
+Raw reals(const std::vector<double>& v) { return Raw{"float64", {v.size()}, {}, v}; }
 
 /// The valid 3 x 3 / 2-row problem every corruption starts from:
 /// A = [4 1 0; 1 5 2; 0 2 6], J = [1 0 0; 0 -1 1].
