@@ -30,10 +30,12 @@ const SettingsTable<MprgpCoupledSettings>& mprgp_coupled_settings_table()
     static const SettingsTable<MprgpCoupledSettings> table =
         SettingsTable<MprgpCoupledSettings>()
             .number("gamma", &MprgpCoupledSettings::gamma, 0.0, 1e300, "proportioning constant Gamma > 0")
-            .choice("precond", &MprgpCoupledSettings::precond, {"none", "jacobi", "ichol"},
+            .choice("precond", &MprgpCoupledSettings::precond, {"none", "jacobi", "ichol", "scaled"},
                     "none (the authors' Fig. 6 setting) | jacobi (D-weighted face projection, J_A D^-1 J_A' solve) | "
                     "ichol: Q M^-1 Q g, M the incomplete Cholesky factor of A (once), Q the per-component face "
-                    "projector (docs/preconditioners.md)")
+                    "projector (docs/preconditioners.md) | scaled: Jacobi as a change of variables, MPRGP on y = "
+                    "D^1/2 x (A -> D^-1/2 A D^-1/2, J -> J D^-1/2), one face factor instead of two; judged on the "
+                    "original QP")
             .choice(
                 "deflation", &MprgpCoupledSettings::deflation, {"none", "rigid"},
                 "none | rigid: the slow rigid modes of each body, projected on each new face (E = V'AV per body), "
@@ -142,12 +144,42 @@ struct LcpPivotsByUse {
     }
 };
 
+/// precond = scaled: the QP in the variables y = D^1/2 x (D = diag(A)): A -> U A U, J -> J U,
+/// b -> U b, x0 -> x0 / U with U = D^-1/2; c and the multipliers are the same.
+struct ScaledVariables {
+    Vec unscale;  ///< U: x = U y
+    SpMat A, J;
+    Vec b, y0;
+    /// null unless precond = scaled applies (deflation = none, a positive diagonal of A)
+    static std::unique_ptr<ScaledVariables> make(const QpView& qp, const MprgpCoupledSettings& st)
+    {
+        if (st.precond != "scaled" || st.deflation != "none") return nullptr;
+        if (qp.n() > 0 && !(qp.A.diagonal().minCoeff() > 0.0)) return nullptr;
+        auto s = std::make_unique<ScaledVariables>();
+        s->unscale = qp.A.diagonal().cwiseSqrt().cwiseInverse();
+        const Vec& u = s->unscale;
+        s->A = qp.A;  // the same pattern, each entry scaled by its row's and its column's U
+        for (Eigen::Index i = 0; i < s->A.outerSize(); ++i)
+            for (SpMat::InnerIterator it(s->A, i); it; ++it) it.valueRef() *= u[i] * u[it.col()];
+        s->J = qp.J;
+        for (Eigen::Index i = 0; i < s->J.outerSize(); ++i)
+            for (SpMat::InnerIterator it(s->J, i); it; ++it) it.valueRef() *= u[it.col()];
+        s->b = u.cwiseProduct(qp.b);
+        s->y0 = qp.x0.cwiseQuotient(u);
+        return s;
+    }
+};
+
 /// One solve; every vector is allocated before the loop.
 class CoupledRun {
 public:
+    /// With precond = scaled the run iterates on the QP in y = D^1/2 x (ScaledVariables, formed on
+    /// the solver's clock) and measures, monitors and returns x of `qp`, the QP in the file.
     CoupledRun(const QpView& qp, const MprgpCoupledSettings& st, const SolveContext& context)
-        : m_qp(qp), m_A(qp.A), m_J(qp.J), m_c(qp.c), m_st(st), m_ctx(context), m_n(qp.n()), m_m(qp.m()),
-          m_loop("mprgp-coupled", qp, st.common, context)
+        : m_loop("mprgp-coupled", qp, st.common, context), m_original(qp), m_scaled(ScaledVariables::make(qp, st)),
+          m_qp(m_scaled ? QpView{m_scaled->A, m_scaled->b, m_scaled->J, qp.c, m_scaled->y0} : qp), m_A(m_qp.A),
+          m_J(m_qp.J), m_c(m_qp.c), m_st(st), m_ctx(context), m_n(qp.n()), m_m(qp.m()),
+          m_unscale(m_scaled ? &m_scaled->unscale : nullptr)
     {
     }
     SolverResult run();
@@ -280,7 +312,7 @@ private:
         if (m_precond) {
             m_precond->apply(m_active, m_g, m_phi, m_z, m_cnt);  // ichol or deflation=rigid
         } else if (!m_jacobi) {
-            m_z = m_phi;
+            // z = phi: read from m_phi where it is (direction()), not copied (precond = none or scaled)
         } else {
             // z = D^-1 (g - J_A' eta) (J_A z = 0): one pass for D^-1 g, then only the DOFs of the
             // face rows, where g - J_A' eta is accumulated row by row as a full copy would be.
@@ -291,8 +323,9 @@ private:
             add_rows_transpose(m_eta, -1.0, m_tmp);
             for (int j : m_face_dofs) m_z[j] = m_dinv[j] * m_tmp[j];
         }
-        m_zphi = m_z.dot(m_phi);
-        m_zap = ap != nullptr ? m_z.dot(*ap) : 0.0;
+        const Vec& z = direction();
+        m_zphi = z.dot(m_phi);
+        m_zap = ap != nullptr ? z.dot(*ap) : 0.0;
     }
     /// m_face_dof / m_face_dofs: the DOFs some face row touches (after every face change).
     void list_face_dofs()
@@ -333,7 +366,7 @@ private:
         if (changed || !m_face_dofs_known) list_face_dofs();
         m_ops->set_face(m_active, m_cnt);
         face_gradient(with_z);
-        if (with_z) m_p = m_z;
+        if (with_z) m_p = direction();
         m_f_x = objective_from_gradient();
         m_corr_x = 0.0;
         m_x_feasible = true;
@@ -359,6 +392,7 @@ private:
             m_chopped_by_monitor = true;
         }
         shown.lambda = &m_mu;
+        if (m_unscale != nullptr) shown.x = &original_x(m_x);
         shown.native_residual = m_native;
     }
     /// phitilde'phi = phi'phi - lam'(J phi) / alpha_bar with lam of P(x - alpha_bar phi) (eq. 13).
@@ -368,14 +402,28 @@ private:
     bool expansion(double cg_alpha);
     bool proportioning();
 
-    const QpView& m_qp;
+    /// The preconditioned face direction z: m_z, or phi itself without a preconditioner.
+    const Vec& direction() const { return m_precond || m_jacobi ? m_z : m_phi; }
+    /// x of the original QP from the iterate (precond = scaled: x = D^-1/2 y), in m_x_out.
+    const Vec& original_x(const Vec& v)
+    {
+        if (m_unscale == nullptr) return v;
+        m_x_out = m_unscale->cwiseProduct(v);
+        return m_x_out;
+    }
+
+    SolveLoop m_loop;                           // first: its clock starts before the scaled copies are formed
+    const QpView m_original;                    // the QP in the file
+    std::unique_ptr<ScaledVariables> m_scaled;  // precond = scaled: the QP in y = D^1/2 x, else null
+    const QpView m_qp;                          // the QP iterated on: m_original or m_scaled's
     const SpMat& m_A;
     const SpMat& m_J;
     const Vec& m_c;
     const MprgpCoupledSettings& m_st;
     const SolveContext& m_ctx;
     const Eigen::Index m_n, m_m;
-    SolveLoop m_loop;
+    const Vec* m_unscale;  // precond = scaled: D^-1/2 (x = D^-1/2 y), else null
+    Vec m_x_out;           // original_x's result
     Counters m_cnt;
     ChainCounts m_chain;
     LcpPivotsByUse m_lcp_by_use;
@@ -621,20 +669,20 @@ bool CoupledRun::expansion(double cg_alpha)
     const std::vector<char> face_before = m_active;
     restart(false, m_st.expansion == "precond");  // the face of P(x) and phi(P(x)); z only to step along it
     double step = m_alpha_bar;
-    const Vec* direction = &m_phi;
+    const Vec* dir = &m_phi;
     if (m_st.expansion == "precond") {
         // The face direction z with its exact step: alpha_bar = 2/||A|| moves the soft DOFs by
         // almost nothing, so the face grows by a row or two per expansion; this step reaches
         // the rows the CG chain was heading for (Alg. 3's safeguard still guarantees descent).
-        a_product(m_A, m_z, m_Ap);
+        a_product(m_A, direction(), m_Ap);
         ++m_cnt.a_products;
-        const double zaz = m_z.dot(m_Ap), zg = m_z.dot(m_phi);
+        const double zaz = direction().dot(m_Ap), zg = direction().dot(m_phi);
         if (zaz > 0.0 && zg > 0.0 && std::isfinite(zaz)) {
             step = zg / zaz;
-            direction = &m_z;
+            dir = &direction();
         }
     }
-    m_x -= step * *direction;
+    m_x -= step * *dir;
     project_x(false, m_keep_face);
     exact_gradient();
     double f_now = objective_from_gradient();
@@ -667,8 +715,15 @@ SolverResult CoupledRun::run()
 {
     const CommonSettings& common = m_st.common;
     SolverResult result;
-    result.x = m_qp.x0;
+    result.x = m_original.x0;
     result.lambda = Vec::Zero(m_m);
+    if (m_st.precond == "scaled" && !m_scaled) {
+        result.status = SolveStatus::INVALID_INPUT;
+        result.message = m_st.deflation != "none"
+                             ? "mprgp-coupled: precond=scaled takes deflation=none (rigid modes are of x, not of y)"
+                             : "mprgp-coupled: precond=scaled needs a positive diagonal of A";
+        return m_loop.finish(result, result.status);
+    }
     m_jacobi = m_st.precond == "jacobi";
     m_project_trials = m_st.trial == "project";
     m_keep_face = m_st.expansion_projection == "face";
@@ -716,8 +771,11 @@ SolverResult CoupledRun::run()
     m_cnt.power_products = power.products;
     m_cnt.a_products += power.products;
     m_alpha_bar = power.estimate > 0.0 ? 2.0 / (1.01 * power.estimate) : 1.0;
-    m_scale = accuracy_scale(m_qp);
+    m_scale = accuracy_scale(m_original);
     m_cnt.a_products += m_scale.a_products;
+    // precond = scaled: the residual in y is D^-1/2 that in x, so the measure's D^-1 weights act
+    // on it as D^-1/2 = unscale; lengths, rows and multipliers are the same in both variables.
+    if (m_unscale != nullptr) m_scale.inv_diag = m_scale.inv_diag.cwiseQuotient(*m_unscale);
     m_free_weight = m_scale.inv_diag;
     if (!m_loop.end_setup()) return m_loop.finish(result, SolveStatus::TIME_LIMIT);
 
@@ -753,7 +811,7 @@ SolverResult CoupledRun::run()
     // when the rest already meets the rule, the one time it can change the decision.
     auto error_with_bodies = [&]() {
         if (!m_loop.rule_holds(m_native, m_error)) return m_error;
-        return std::max(m_error, m_scale.body_motion(m_x, m_mu));
+        return std::max(m_error, m_scale.body_motion(original_x(m_x), m_mu));
     };
     auto criterion = [&]() { return m_x_feasible && m_loop.criterion_met(m_native, error_with_bodies); };
     while (true) {
@@ -848,7 +906,7 @@ SolverResult CoupledRun::run()
             if (accept) {
                 face_gradient(true, &m_Ap, alpha);  // x -= alpha p, g -= alpha Ap, then phi and z
                 const double beta_cg = m_zap / pap;
-                m_p = m_z - beta_cg * m_p;
+                m_p = direction() - beta_cg * m_p;
                 m_f_x += df;
                 m_corr_x = corr_y;
                 m_x_feasible = !moved;
@@ -899,7 +957,7 @@ SolverResult CoupledRun::run()
         status = SolveStatus::STALLED;
         why = "the criterion held before the final projection but not after it";
     }
-    result.x = m_x;
+    result.x = original_x(m_x);
     result.lambda = m_mu;
     result.counters = m_cnt;
     result.native_residual = m_native;
@@ -926,7 +984,7 @@ SolverResult CoupledRun::run()
     // converged run's message already states it.
     std::string detail = "safeguard firings " + std::to_string(m_cnt.safeguard_steps);
     if (status != SolveStatus::CONVERGED)
-        detail = "accuracy error " + fmt(std::max(m_error, m_scale.body_motion(m_x, m_mu))) + ", " + detail;
+        detail = "accuracy error " + fmt(std::max(m_error, m_scale.body_motion(original_x(m_x), m_mu))) + ", " + detail;
     if (!m_loop.owns(status)) detail = "mprgp-coupled: not converged: " + why + " (" + detail + ")";
     if (m_ops->lcp_failures() > 0)
         detail += "; " + std::to_string(m_ops->lcp_failures()) + " LCP solves missed their tolerance";

@@ -34,10 +34,15 @@ public:
     std::vector<cb::StepKind> steps;
 };
 
-/// Step kinds and the largest gap between the native residual shown and ||A x - b - J'lambda||.
+/// Step kinds and the largest gap between the native residual shown and ||W (A x - b - J'lambda)||
+/// (W = I, or D^-1/2 with precond = scaled: the solver's own residual is that of y = D^1/2 x).
 class ResidualRecorder : public cb::Monitor {
 public:
-    explicit ResidualRecorder(const Qp& qp) : m_qp(qp) {}
+    ResidualRecorder(const Qp& qp, const std::string& precond)
+        : m_qp(qp),
+          m_weight(precond == "scaled" ? Vec(qp.A.diagonal().cwiseSqrt().cwiseInverse()) : Vec(Vec::Ones(qp.n())))
+    {
+    }
     bool on_iteration(const cb::IterationInfo& info) override
     {
         steps.push_back(info.step);
@@ -45,7 +50,7 @@ public:
             ++missing;
             return true;
         }
-        const Vec r = m_qp.A * *info.x - m_qp.b - m_qp.J.transpose() * *info.lambda;
+        const Vec r = m_weight.cwiseProduct(m_qp.A * *info.x - m_qp.b - m_qp.J.transpose() * *info.lambda);
         worst_gap = std::max(worst_gap, std::abs(r.norm() - info.native_residual) / std::max(1.0, r.norm()));
         worst_negative = std::max(worst_negative, -info.lambda->minCoeff());
         return true;
@@ -56,6 +61,7 @@ public:
 
 private:
     const Qp& m_qp;
+    Vec m_weight;
 };
 
 double scene_size(const Qp& qp) { return cb::accuracy_scale(qp.view()).length; }
@@ -71,9 +77,11 @@ Qp loaded_patch(std::uint64_t seed)
     return qp;
 }
 
-cb::SolverResult solve(const Qp& qp, cb::Monitor& monitor, const std::string& operators, const std::string& stop)
+cb::SolverResult solve(const Qp& qp, cb::Monitor& monitor, const std::string& operators, const std::string& stop,
+                       const std::string& precond)
 {
-    const nlohmann::json s = {{"tol", 1e-8}, {"max_iterations", 20000}, {"operators", operators}, {"stop", stop}};
+    const nlohmann::json s = {
+        {"tol", 1e-8}, {"max_iterations", 20000}, {"operators", operators}, {"stop", stop}, {"precond", precond}};
     cb::SolveContext context;
     context.monitor = &monitor;
     return cb::builtin_registry().create("mprgp-coupled", s)->solve(qp.view(), context);
@@ -88,34 +96,37 @@ TEST(MprgpCoupledChoppedBound, MonitorSeesExactMultipliersAndChangesNoStep)
         ASSERT_GT(cb::find_row_components(qp.J).largest(), 128);
         for (const std::string operators : {"components", "global"}) {
             for (const std::string stop : {"kkt", "native"}) {
-                std::string what = "seed " + std::to_string(seed);
-                what += ", " + operators;
-                what += ", stop " + stop;
-                StepRecorder quiet;
-                ResidualRecorder reader(qp);
-                const cb::SolverResult a = solve(qp, quiet, operators, stop);
-                const cb::SolverResult b = solve(qp, reader, operators, stop);
-                ASSERT_EQ(a.status, SolveStatus::CONVERGED) << what << ": " << a.message;
-                ASSERT_EQ(b.status, SolveStatus::CONVERGED) << what << ": " << b.message;
-                EXPECT_EQ(quiet.steps, reader.steps) << what;
-                EXPECT_EQ(a.counters.iterations, b.counters.iterations) << what;
-                EXPECT_LE((a.x - b.x).lpNorm<Eigen::Infinity>() / scene_size(qp), 1e-9) << what;
-                // Every iteration the monitor saw carried x, lambda >= 0 and the exact native residual.
-                EXPECT_EQ(reader.missing, 0) << what;
-                EXPECT_LE(reader.worst_gap, 1e-8) << what;
-                EXPECT_LE(reader.worst_negative, 0.0) << what;
-                // The monitor's LCP solves count only when the solver needs them too: the same decisions
-                // and solves either way (the pivots differ: the monitor's solves warm-start the next).
-                EXPECT_EQ(a.info["chopped_lcp"], b.info["chopped_lcp"]) << what;
-                EXPECT_EQ(a.counters.a_products, b.counters.a_products) << what;
-                // The returned multipliers are the exact ones.
-                EXPECT_LE(cb::accuracy(qp.view(), a.x, a.lambda).max(), 1e-8) << what;
-                // The deferral happened: fewer chopped LCPs than iterations, most tests by the bounds.
-                const nlohmann::json& ch = a.info["chopped_lcp"];
-                EXPECT_GT(ch["deferred"].get<long>(), 0) << what;
-                EXPECT_LT(ch["solved"].get<long>(), a.counters.iterations) << what;
-                EXPECT_GT(ch["proportional_by_bound"].get<long>() + ch["proportional_by_sweeps"].get<long>(), 0)
-                    << what;
+                for (const std::string precond : {"jacobi", "scaled"}) {
+                    std::string what = "seed " + std::to_string(seed);
+                    what += ", " + operators;
+                    what += ", stop " + stop;
+                    what += ", " + precond;
+                    StepRecorder quiet;
+                    ResidualRecorder reader(qp, precond);
+                    const cb::SolverResult a = solve(qp, quiet, operators, stop, precond);
+                    const cb::SolverResult b = solve(qp, reader, operators, stop, precond);
+                    ASSERT_EQ(a.status, SolveStatus::CONVERGED) << what << ": " << a.message;
+                    ASSERT_EQ(b.status, SolveStatus::CONVERGED) << what << ": " << b.message;
+                    EXPECT_EQ(quiet.steps, reader.steps) << what;
+                    EXPECT_EQ(a.counters.iterations, b.counters.iterations) << what;
+                    EXPECT_LE((a.x - b.x).lpNorm<Eigen::Infinity>() / scene_size(qp), 1e-9) << what;
+                    // Every iteration the monitor saw carried x, lambda >= 0 and the exact native residual.
+                    EXPECT_EQ(reader.missing, 0) << what;
+                    EXPECT_LE(reader.worst_gap, 1e-8) << what;
+                    EXPECT_LE(reader.worst_negative, 0.0) << what;
+                    // The monitor's LCP solves count only when the solver needs them too: the same decisions
+                    // and solves either way (the pivots differ: the monitor's solves warm-start the next).
+                    EXPECT_EQ(a.info["chopped_lcp"], b.info["chopped_lcp"]) << what;
+                    EXPECT_EQ(a.counters.a_products, b.counters.a_products) << what;
+                    // The returned multipliers are the exact ones.
+                    EXPECT_LE(cb::accuracy(qp.view(), a.x, a.lambda).max(), 1e-8) << what;
+                    // The deferral happened: fewer chopped LCPs than iterations, most tests by the bounds.
+                    const nlohmann::json& ch = a.info["chopped_lcp"];
+                    EXPECT_GT(ch["deferred"].get<long>(), 0) << what;
+                    EXPECT_LT(ch["solved"].get<long>(), a.counters.iterations) << what;
+                    EXPECT_GT(ch["proportional_by_bound"].get<long>() + ch["proportional_by_sweeps"].get<long>(), 0)
+                        << what;
+                }
             }
         }
     }

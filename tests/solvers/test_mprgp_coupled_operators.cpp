@@ -148,7 +148,9 @@ TEST(MprgpCoupledOperators, LargeComponentRowUpdatesAgreeWithGlobal)
     ASSERT_GT(components(qp).largest(), 128);
     for (long max_updates : {1L, 64L}) {
         ::Run comp;
-        const nlohmann::json s = {{"tol", 1e-10}, {"max_iterations", 20000}, {"sparse_max_updates", max_updates}};
+        // precond = jacobi: two masked face factors (J J' and J D^-1 J') and more face changes to follow
+        const nlohmann::json s = {
+            {"tol", 1e-10}, {"max_iterations", 20000}, {"sparse_max_updates", max_updates}, {"precond", "jacobi"}};
         cb::SolveContext context;
         context.monitor = &comp.recorder;
         comp.result = cb::builtin_registry().create("mprgp-coupled", s)->solve(qp.view(), context);
