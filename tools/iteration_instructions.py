@@ -10,7 +10,7 @@ on every run of the same binary, where the thread CPU time per iteration swings 
 shared VM; on flank_press frame 0 the time ratio has run ~1.09x the instruction ratio (the coupled
 loop gathers more).
 
-usage: tools/iteration_instructions.py [--binary build/bin/cb_bench] SNAPSHOT.qpsnap...
+usage: tools/iteration_instructions.py [--binary build/bin/cb_bench] [--coupled-settings JSON] SNAPSHOT.qpsnap...
 Prints one row per snapshot; takes about 4 s per 1e9 instructions (flank_press frame 0: ~20 s).
 """
 import argparse
@@ -54,8 +54,17 @@ def main(argv):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--binary", default=os.path.join(ROOT, "build", "bin", "cb_bench"),
                         help="cb_bench to run (default: build/bin/cb_bench)")
+    parser.add_argument("--coupled-settings", default="",
+                        help='mprgp-coupled\'s settings as a JSON object, e.g. \'{"precond": "scaled"}\' '
+                             "(default: its registry defaults)")
     parser.add_argument("snapshots", nargs="+", help=".qpsnap files")
     args = parser.parse_args(argv)
+    if args.coupled_settings:
+        try:
+            if not isinstance(json.loads(args.coupled_settings), dict):
+                raise ValueError("not an object")
+        except ValueError as e:
+            fail("--coupled-settings: not a JSON object (%s)" % e)
     for path in args.snapshots:
         if not os.path.isfile(path):
             fail("%s: no such snapshot file" % path)
@@ -70,7 +79,8 @@ def main(argv):
         fail("two snapshots share a file name: the dumps are labelled by it")
     with tempfile.TemporaryDirectory(prefix="cb-iteration-instructions-") as work:
         env = dict(os.environ, CB_BENCH_SNAPSHOTS=":".join(os.path.abspath(p) for p in args.snapshots),
-                   CB_BENCH_CALLGRIND="1", OPENBLAS_NUM_THREADS="1")
+                   CB_BENCH_CALLGRIND="1", OPENBLAS_NUM_THREADS="1",
+                   CB_BENCH_COUPLED_SETTINGS=args.coupled_settings)
         bench_json = os.path.join(work, "bench.json")
         command = ["valgrind", "--tool=callgrind", "--collect-atstart=no",
                    "--callgrind-out-file=" + os.path.join(work, "callgrind.out"), args.binary,

@@ -18,6 +18,8 @@
 // collects from the first monitor call to the solve's return, one dump per solve labelled
 // "coupled <snapshot>" / "mprgp <snapshot>": instructions per iteration, the same on every run
 // (thread CPU time per iteration swings ~10% run to run on a shared VM).
+// CB_BENCH_COUPLED_SETTINGS (a JSON object, e.g. {"precond": "scaled"}) sets `mprgp-coupled`'s
+// settings instead of its defaults; decoupled `mprgp` keeps its own.
 #include "problems/qpsnap.hpp"
 #include "solvers/decouple.hpp"
 #include "solvers/registry.hpp"
@@ -108,7 +110,21 @@ void BM_mprgp_coupled_iteration_ratio(benchmark::State& state, const std::string
         loaded = std::move(pair);
         loaded_path = path;
     }
-    const auto coupled = cb::builtin_registry().create("mprgp-coupled", nlohmann::json::object());
+    nlohmann::json coupled_settings = nlohmann::json::object();
+    if (const char* s = std::getenv("CB_BENCH_COUPLED_SETTINGS"); s != nullptr && *s != '\0') {
+        coupled_settings = nlohmann::json::parse(s, nullptr, false);
+        if (!coupled_settings.is_object()) {
+            state.SkipWithError("CB_BENCH_COUPLED_SETTINGS: not a JSON object");
+            return;
+        }
+    }
+    std::unique_ptr<cb::Solver> coupled;
+    try {
+        coupled = cb::builtin_registry().create("mprgp-coupled", coupled_settings);
+    } catch (const std::exception& e) {
+        state.SkipWithError((std::string("CB_BENCH_COUPLED_SETTINGS: ") + e.what()).c_str());
+        return;
+    }
     const auto decoupled = cb::builtin_registry().create("mprgp", nlohmann::json::object());
     double ratio_sum = 0.0, coupled_sum = 0.0, decoupled_sum = 0.0, wall_ratio_sum = 0.0;
     long runs = 0, coupled_iterations = 0, decoupled_iterations = 0;

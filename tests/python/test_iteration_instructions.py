@@ -46,6 +46,12 @@ class BadInput(unittest.TestCase):
         self.assertEqual(r.returncode, 2, r.stderr)
         self.assertIn("/nonexistent/cb_bench: no such binary", r.stderr)
 
+    def test_coupled_settings_that_are_not_an_object_exit_2(self):
+        with tempfile.NamedTemporaryFile(suffix=".qpsnap") as f:
+            r = tool("--coupled-settings", "[1]", f.name)
+        self.assertEqual(r.returncode, 2, r.stderr)
+        self.assertIn("--coupled-settings: not a JSON object", r.stderr)
+
 
 class SmallCoupledQp(unittest.TestCase):
     @classmethod
@@ -64,8 +70,8 @@ class SmallCoupledQp(unittest.TestCase):
     def tearDownClass(cls):
         shutil.rmtree(cls.work, ignore_errors=True)
 
-    def rows(self):
-        r = tool(self.snap)
+    def rows(self, *extra):
+        r = tool(*extra, self.snap)
         self.assertEqual(r.returncode, 0, r.stderr)
         lines = [line.split() for line in r.stdout.splitlines()[1:]]
         self.assertEqual(len(lines), 1, r.stdout)
@@ -83,6 +89,12 @@ class SmallCoupledQp(unittest.TestCase):
         self.assertGreater(per_c, 0)
         self.assertGreater(per_d, 0)
         self.assertAlmostEqual(ratio, per_c / per_d, delta=1e-3 * ratio)
+
+    def test_coupled_settings_reach_the_coupled_solver_only(self):
+        default, scaled = self.rows(), self.rows("--coupled-settings", '{"precond": "scaled"}')
+        self.assertEqual(scaled[6], "converged")
+        self.assertEqual(default[3:5], scaled[3:5])  # decoupled mprgp: the same run
+        self.assertNotEqual(default[1:3], scaled[1:3])  # mprgp-coupled: another preconditioner, other counts
 
 
 if __name__ == "__main__":

@@ -121,7 +121,7 @@ TEST(MprgpCoupledOperators, ComponentsAgreeWithGlobalOnCoupledRows)
         const cb::RowComponents rc = components(qp);
         EXPECT_GE(rc.largest(), nx == 13 ? 150 : 2);
         EXPECT_LE(rc.largest(), 200);
-        for (const char* precond : {"jacobi", "none"})
+        for (const char* precond : {"jacobi", "none", "scaled"})
             expect_same_run(qp, precond, "coupled nx " + std::to_string(nx) + " " + precond);
         expect_same_run(qp, "jacobi", "coupled nx " + std::to_string(nx) + " sparse components", 1);
     }
@@ -166,8 +166,10 @@ TEST(MprgpCoupledOperators, LargeComponentRowUpdatesAgreeWithGlobal)
     }
     expect_same_run(qp, "jacobi", "196-row patch, default dense_max_rows", 128);
     expect_same_run(qp, "none", "196-row patch, default dense_max_rows, precond none", 128);
+    expect_same_run(qp, "scaled", "196-row patch, default dense_max_rows, precond scaled", 128);
     // A duplicated and a parallel (scaled) row inside the large component.
     const Qp dep = with_dependent_row(with_dependent_row(qp, 40, 1.0), 90, 3.0);
     ASSERT_EQ(components(dep).largest(), components(qp).largest() + 2);
     expect_same_run(dep, "jacobi", "196-row patch with a duplicated and a parallel row", 128);
+    expect_same_run(dep, "scaled", "196-row patch with a duplicated and a parallel row, scaled", 128);
 }
