@@ -13,6 +13,8 @@
 #include "solvers/coupled_face_operators.hpp"
 #include "solvers/coupled_preconditioner.hpp"
 #include "solvers/mprgp_kernels.hpp"
+#include "solvers/row_components.hpp"
+#include "solvers/work_units.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -30,7 +32,10 @@ const SettingsTable<MprgpCoupledSettings>& mprgp_coupled_settings_table()
     static const SettingsTable<MprgpCoupledSettings> table =
         SettingsTable<MprgpCoupledSettings>()
             .number("gamma", &MprgpCoupledSettings::gamma, 0.0, 1e300, "proportioning constant Gamma > 0")
-            .choice("precond", &MprgpCoupledSettings::precond, {"none", "jacobi", "ichol", "scaled"},
+            .choice("precond", &MprgpCoupledSettings::precond, {"auto", "none", "jacobi", "ichol", "scaled"},
+                    "auto: scaled when a component of J's row graph has more than dense_max_rows rows (CHOLMOD "
+                    "face factors, where jacobi's second factor and solve per CG step cost most) and deflation = "
+                    "none, else jacobi; the record's info.precond names the one used | "
                     "none (the authors' Fig. 6 setting) | jacobi (D-weighted face projection, J_A D^-1 J_A' solve) | "
                     "ichol: Q M^-1 Q g, M the incomplete Cholesky factor of A (once), Q the per-component face "
                     "projector (docs/preconditioners.md) | scaled: Jacobi as a change of variables, MPRGP on y = "
@@ -144,6 +149,23 @@ struct LcpPivotsByUse {
     }
 };
 
+/// The preconditioner a run uses: `precond` itself, or for auto scaled or jacobi by the size of
+/// the largest component of J's row graph (the settings' help and docs/preconditioners.md give why).
+/// `why` says how auto chose.
+std::string resolve_precond(const QpView& qp, const MprgpCoupledSettings& st, std::string& why)
+{
+    if (st.precond != "auto") return st.precond;
+    if (st.deflation != "none") {
+        why = "auto: jacobi (deflation = " + st.deflation + ")";
+        return "jacobi";
+    }
+    const int largest = qp.m() > 0 ? find_row_components(qp.J).largest() : 0;
+    const bool large = largest > st.dense_max_rows;
+    why = "auto: " + std::string(large ? "scaled" : "jacobi") + " (largest component " + std::to_string(largest) +
+          " rows, dense_max_rows " + std::to_string(st.dense_max_rows) + ")";
+    return large ? "scaled" : "jacobi";
+}
+
 /// precond = scaled: the QP in the variables y = D^1/2 x (D = diag(A)): A -> U A U, J -> J U,
 /// b -> U b, x0 -> x0 / U with U = D^-1/2; c and the multipliers are the same.
 struct ScaledVariables {
@@ -151,9 +173,10 @@ struct ScaledVariables {
     SpMat A, J;
     Vec b, y0;
     /// null unless precond = scaled applies (deflation = none, a positive diagonal of A)
-    static std::unique_ptr<ScaledVariables> make(const QpView& qp, const MprgpCoupledSettings& st)
+    static std::unique_ptr<ScaledVariables> make(const QpView& qp, const std::string& precond,
+                                                 const MprgpCoupledSettings& st)
     {
-        if (st.precond != "scaled" || st.deflation != "none") return nullptr;
+        if (precond != "scaled" || st.deflation != "none") return nullptr;
         if (qp.n() > 0 && !(qp.A.diagonal().minCoeff() > 0.0)) return nullptr;
         auto s = std::make_unique<ScaledVariables>();
         s->unscale = qp.A.diagonal().cwiseSqrt().cwiseInverse();
@@ -176,7 +199,9 @@ public:
     /// With precond = scaled the run iterates on the QP in y = D^1/2 x (ScaledVariables, formed on
     /// the solver's clock) and measures, monitors and returns x of `qp`, the QP in the file.
     CoupledRun(const QpView& qp, const MprgpCoupledSettings& st, const SolveContext& context)
-        : m_loop("mprgp-coupled", qp, st.common, context), m_original(qp), m_scaled(ScaledVariables::make(qp, st)),
+        : m_loop("mprgp-coupled", qp, st.common, context), m_original(qp),
+          m_precond_name(resolve_precond(qp, st, m_precond_rule)),
+          m_scaled(ScaledVariables::make(qp, m_precond_name, st)),
           m_qp(m_scaled ? QpView{m_scaled->A, m_scaled->b, m_scaled->J, qp.c, m_scaled->y0} : qp), m_A(m_qp.A),
           m_J(m_qp.J), m_c(m_qp.c), m_st(st), m_ctx(context), m_n(qp.n()), m_m(qp.m()),
           m_unscale(m_scaled ? &m_scaled->unscale : nullptr)
@@ -263,6 +288,14 @@ private:
         }
         return dad;
     }
+    /// The nonzeros of A's columns at the touched DOFs (the work of d_a_d or add_a_d).
+    double touched_nonzeros() const
+    {
+        const int* outer = m_A.outerIndexPtr();
+        long nz = 0;
+        for (int j : m_touched) nz += outer[j + 1] - outer[j];
+        return static_cast<double>(nz);
+    }
     /// g += A d (columns of A = rows, A symmetric), O(nnz of the touched columns).
     void add_a_d(Vec& g) const
     {
@@ -307,7 +340,7 @@ private:
         rows_times(m_g, m_jg);
         m_ops->face_multipliers(m_jg, m_nu, m_cnt);
         add_rows_transpose(m_nu, -1.0, m_phi);
-        if (!with_z) return;
+        if (!with_z) return;  // the expansion's intermediate face: m_phi2 and z are not read before the next restart
         ++m_cnt.precond_applications;
         if (m_precond) {
             m_precond->apply(m_active, m_g, m_phi, m_z, m_cnt);  // ichol or deflation=rigid
@@ -326,6 +359,8 @@ private:
         const Vec& z = direction();
         m_zphi = z.dot(m_phi);
         m_zap = ap != nullptr ? z.dot(*ap) : 0.0;
+        // phi'phi for evaluate (every evaluate follows a face_gradient with z): z'phi itself when z = phi.
+        m_phi2 = &z == &m_phi ? m_zphi : m_phi.squaredNorm();
     }
     /// m_face_dof / m_face_dofs: the DOFs some face row touches (after every face change).
     void list_face_dofs()
@@ -414,6 +449,8 @@ private:
 
     SolveLoop m_loop;                           // first: its clock starts before the scaled copies are formed
     const QpView m_original;                    // the QP in the file
+    std::string m_precond_rule;                 // how precond = auto chose (else empty); before m_precond_name
+    const std::string m_precond_name;           // the preconditioner used (precond, or auto's choice)
     std::unique_ptr<ScaledVariables> m_scaled;  // precond = scaled: the QP in y = D^1/2 x, else null
     const QpView m_qp;                          // the QP iterated on: m_original or m_scaled's
     const SpMat& m_A;
@@ -446,6 +483,7 @@ private:
     bool m_x_feasible = true;
     double m_native = 0.0, m_error = 0.0, m_face_error = 0.0, m_beta2 = 0.0, m_phi2 = 0.0;
     double m_primal = 0.0, m_beta2_upper = 0.0;
+    double m_stat_free = 0.0;  // max |phi_j| w_j over the DOFs no face row touches (evaluate)
     bool m_chopped_exact = false;
     bool m_chopped_by_monitor = false;  // m_monitor_chopped: that solve's work, not yet counted
     Counters m_monitor_chopped;
@@ -469,8 +507,8 @@ void CoupledRun::evaluate(bool exact)
     // The parts of the accuracy error that do not depend on mu: the feasibility, and the
     // stationarity at DOFs no face row touches (there g - J_A'mu = g = phi for every mu): one
     // vectorised pass over every DOF with the face DOFs weighted 0, then the face DOFs alone.
-    m_phi2 = m_phi.squaredNorm();
-    const double stat_free = m_n > 0 ? m_phi.cwiseAbs().cwiseProduct(m_free_weight).maxCoeff() : 0.0;
+    m_stat_free = m_n > 0 ? m_phi.cwiseAbs().cwiseProduct(m_free_weight).maxCoeff() : 0.0;
+    const double stat_free = m_stat_free;
     double stat_phi = stat_free;
     for (int j : m_face_dofs) stat_phi = std::max(stat_phi, std::abs(m_phi[j]) * m_scale.inv_diag[j]);
     m_face_error = stat_phi * m_scale.inv_length;
@@ -531,16 +569,20 @@ void CoupledRun::chopped_gradient(Counters& cnt, bool solver_work)
         m_lcp_by_use.chopped += cnt.lcp_iterations - pivots_before;
         ++m_chopped_solved;
     }
-    m_beta.setZero();
+    // beta = J_A'(nu - mu) lives on the face rows' DOFs (nu and mu are 0 off the face), so phi + beta =
+    // g - J'mu differs from phi only there: ||phi + beta||^2 = phi'phi + sum beta_j (2 phi_j + beta_j)
+    // (no cancellation: phi'beta = 0 to rounding) and the free DOFs' stationarity is evaluate's.
     for (Eigen::Index i = 0; i < m_m; ++i)
         if (m_nu[i] != m_mu[i]) row_axpy(m_J, i, m_nu[i] - m_mu[i], m_beta);
     // phi + beta = g - J'mu: the native residual and the measure's stationarity part together.
-    double pb2 = 0.0, stat = 0.0;
-    m_beta2 = m_beta.squaredNorm();
-    for (Eigen::Index j = 0; j < m_n; ++j) {
+    double pb2 = m_phi2, stat = m_stat_free;
+    m_beta2 = 0.0;
+    for (int j : m_face_dofs) {
         const double r = m_phi[j] + m_beta[j];
-        pb2 += r * r;
+        m_beta2 += m_beta[j] * m_beta[j];
+        pb2 += m_beta[j] * (2.0 * m_phi[j] + m_beta[j]);
         stat = std::max(stat, std::abs(r) * m_scale.inv_diag[j]);
+        m_beta[j] = 0.0;  // all of m_beta is 0 again
     }
     double dual = 0.0, comp = 0.0, gap = 0.0;
     for (Eigen::Index i = 0; i < m_m; ++i) {
@@ -696,13 +738,25 @@ bool CoupledRun::expansion(double cg_alpha)
 bool CoupledRun::proportioning()
 {
     const double f_before = m_f_x;
-    a_product(m_A, m_beta, m_Ap);
-    ++m_cnt.a_products;
-    const double dad = m_beta.dot(m_Ap);
-    if (!(dad > 0.0) || !std::isfinite(dad)) return false;
-    const double alpha_p = m_g.dot(m_beta) / dad;
-    m_x -= alpha_p * m_beta;
-    m_g -= alpha_p * m_Ap;
+    // beta = J_A'(nu - mu) (chopped_gradient's multipliers) is 0 off the face rows' DOFs: A beta
+    // over its columns, as the projections' corrections, not a full A-product.
+    for (Eigen::Index i = 0; i < m_m; ++i) m_q[i] = m_nu[i] - m_mu[i];
+    build_d(m_q);
+    const double dad = d_a_d();
+    double gb = 0.0;
+    for (int j : m_touched) gb += m_g[j] * m_d[j];
+    m_cnt.work_flops += 2.0 * sparse_product_flops(touched_nonzeros());
+    if (!(dad > 0.0) || !std::isfinite(dad)) {
+        clear_d();
+        return false;
+    }
+    const double alpha_p = gb / dad;
+    for (int j : m_touched) {
+        m_d[j] *= -alpha_p;
+        m_x[j] += m_d[j];
+    }
+    add_a_d(m_g);  // g -= alpha_p A beta
+    clear_d();
     project_x(false);  // -beta may leave the set when rows are coupled (Sec. 4.4)
     double f_now = objective_from_gradient();
     ++m_cnt.proportioning_steps;
@@ -717,14 +771,14 @@ SolverResult CoupledRun::run()
     SolverResult result;
     result.x = m_original.x0;
     result.lambda = Vec::Zero(m_m);
-    if (m_st.precond == "scaled" && !m_scaled) {
+    if (m_precond_name == "scaled" && !m_scaled) {
         result.status = SolveStatus::INVALID_INPUT;
         result.message = m_st.deflation != "none"
                              ? "mprgp-coupled: precond=scaled takes deflation=none (rigid modes are of x, not of y)"
                              : "mprgp-coupled: precond=scaled needs a positive diagonal of A";
         return m_loop.finish(result, result.status);
     }
-    m_jacobi = m_st.precond == "jacobi";
+    m_jacobi = m_precond_name == "jacobi";
     m_project_trials = m_st.trial == "project";
     m_keep_face = m_st.expansion_projection == "face";
     m_dinv = Vec::Ones(m_n);
@@ -746,8 +800,8 @@ SolverResult CoupledRun::run()
     opt.pgs_max_sweeps = m_st.pgs_max_sweeps;
     m_ops = std::make_unique<CoupledFaceOperators>(m_J, m_dinv, opt);
     m_gram = SpMat(m_J * m_J.transpose());
-    if (m_st.precond == "ichol" || m_st.deflation == "rigid") {
-        m_precond = std::make_unique<CoupledPreconditioner>(m_A, m_J, m_dinv, *m_ops, m_st.precond);
+    if (m_precond_name == "ichol" || m_st.deflation == "rigid") {
+        m_precond = std::make_unique<CoupledPreconditioner>(m_A, m_J, m_dinv, *m_ops, m_precond_name);
         std::string error;
         if (!m_precond->setup(m_st.deflation == "rigid", m_qp.x0, error, m_cnt)) {
             result.status = SolveStatus::DIVERGED;
@@ -826,8 +880,8 @@ SolverResult CoupledRun::run()
             converged = criterion();
             // The returned point is P(x) with the rows met exactly: judge that one, and go on
             // from it when the small move of the projection undid the rule.
+            // project_x updates g by A J'lam over the moved DOFs, exactly: no second full product.
             if (converged && project_x(true)) {
-                exact_gradient();
                 restart();
                 evaluate(true);
                 converged = criterion();
@@ -963,8 +1017,8 @@ SolverResult CoupledRun::run()
     result.native_residual = m_native;
     result.info = {{"alpha_bar", m_alpha_bar},
                    {"power", {{"products", power.products}, {"estimate", power.estimate}, {"warm_start", power.warm}}},
-                   {"precond", m_st.precond},
-                   {"preconditioner", m_precond ? m_precond->stats() : nlohmann::json{{"precond", m_st.precond}}},
+                   {"precond", m_precond_name},
+                   {"preconditioner", m_precond ? m_precond->stats() : nlohmann::json{{"precond", m_precond_name}}},
                    {"components", m_ops->stats()},
                    {"chain", m_chain.to_json()},
                    {"lcp_pivots_by_use", m_lcp_by_use.to_json()},
@@ -979,6 +1033,7 @@ SolverResult CoupledRun::run()
                    {"lcp_failures", m_ops->lcp_failures()},
                    {"safeguard_firings", m_cnt.safeguard_steps},
                    {"dependent_rows", "handled by a shift 1e-12 of the unit-diagonal-scaled Gram matrices"}};
+    if (!m_precond_rule.empty()) result.info["precond_rule"] = m_precond_rule;
     // The loop writes the reason of its own exits; a breakdown is the solver's word.
     // The whole measure at the returned point (m_error leaves out the bodies' rigid motion); a
     // converged run's message already states it.

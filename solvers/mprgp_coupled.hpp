@@ -20,7 +20,7 @@ namespace cb {
 struct MprgpCoupledSettings {
     CommonSettings common;
     double gamma = 1.0;                    ///< proportioning constant Gamma (> 0)
-    std::string precond = "jacobi";        ///< jacobi | scaled (Jacobi as variables) | none (Fig. 6) | ichol
+    std::string precond = "auto";          ///< auto (scaled or jacobi) | jacobi | scaled | none (Fig. 6) | ichol
     std::string deflation = "none";        ///< none | rigid (coupled_preconditioner.hpp); rigid with ichol
     long power_max = 100;                  ///< max power-method products
     long lcp_max_pivots = 200;             ///< block-principal-pivoting iterations before the PGS fallback

@@ -1,6 +1,7 @@
 // Issue 31's per-iteration cost criterion: an iteration of `mprgp-coupled` (all rows) against one
 // of decoupled `mprgp` (the authors' row order, as `contactbench run` with "decouple": "auto"
-// gives it), both with their registry defaults (precond jacobi, tol 1e-6 on the accuracy error),
+// gives it), both with their registry defaults (tol 1e-6 on the accuracy error; precond jacobi for `mprgp`, auto
+// for `mprgp-coupled`: scaled on a component beyond dense_max_rows, else jacobi),
 // on the snapshots named in CB_BENCH_SNAPSHOTS (colon-separated .qpsnap paths; unset: no
 // benchmark is registered). Each benchmark iteration solves with both solvers back to back, so
 // the ratio is measured under one machine load; --benchmark_repetitions=N gives its spread.

@@ -217,6 +217,37 @@ TEST(MprgpCoupledPrecond, ScaledVariablesHalveTheFaceSolvesAndRefuseRigidModes)
     EXPECT_EQ(refused.x, qp.x0);
 }
 
+TEST(MprgpCoupledPrecond, AutoTakesScaledOnlyForComponentsBeyondTheDenseBlocks)
+{
+    // The 196-row patch exceeds dense_max_rows (128): auto runs scaled, the same iterates as
+    // precond=scaled named explicitly; with dense_max_rows 256 the patch is a dense block and auto
+    // runs jacobi. The record names the choice and why.
+    const Qp qp = loaded(cb::make_synthetic("coupled", {{"nx", 13}, {"ny", 2}, {"nz", 13}}, 7), 7);
+    EXPECT_EQ(cb::builtin_registry().create("mprgp-coupled", {})->settings()["precond"], "auto");
+    const cb::SolverResult automatic = solve(qp, {});
+    const cb::SolverResult scaled = solve(qp, {{"precond", "scaled"}});
+    ASSERT_EQ(automatic.status, SolveStatus::CONVERGED) << automatic.message;
+    EXPECT_EQ(automatic.info["precond"], "scaled");
+    EXPECT_EQ(automatic.info["precond_rule"], "auto: scaled (largest component 196 rows, dense_max_rows 128)");
+    EXPECT_EQ(automatic.counters.iterations, scaled.counters.iterations);
+    EXPECT_EQ(automatic.x, scaled.x);
+    EXPECT_FALSE(scaled.info.contains("precond_rule"));
+
+    const cb::SolverResult dense = solve(qp, {{"dense_max_rows", 256}});
+    const cb::SolverResult jacobi = solve(qp, {{"precond", "jacobi"}, {"dense_max_rows", 256}});
+    ASSERT_EQ(dense.status, SolveStatus::CONVERGED) << dense.message;
+    EXPECT_EQ(dense.info["precond"], "jacobi");
+    EXPECT_EQ(dense.info["precond_rule"], "auto: jacobi (largest component 196 rows, dense_max_rows 256)");
+    EXPECT_EQ(dense.x, jacobi.x);
+    EXPECT_LE(cb::accuracy(qp.view(), dense.x, dense.lambda).max(), 1e-9);
+
+    // Rigid modes are of x: auto keeps jacobi with them rather than refusing.
+    const cb::SolverResult rigid = solve(qp, {{"deflation", "rigid"}});
+    ASSERT_EQ(rigid.status, SolveStatus::CONVERGED) << rigid.message;
+    EXPECT_EQ(rigid.info["precond"], "jacobi");
+    EXPECT_EQ(rigid.info["precond_rule"], "auto: jacobi (deflation = rigid)");
+}
+
 TEST(MprgpCoupledPrecond, IncrementalRigidFaceUpdateMatchesAFreshOne)
 {
     // A stiff body on the ground (one row per vertex): toggling one row changes V on 3 DOFs, so
