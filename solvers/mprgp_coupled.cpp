@@ -502,7 +502,7 @@ private:
     Vec m_free_weight;             // the measure's D^-1 on DOFs no face row touches, 0 on m_face_dofs
     std::vector<int> m_face_dofs;
     bool m_face_dofs_known = false;
-    long m_chopped_solved = 0, m_chopped_deferred = 0, m_proportional_by_bound = 0;
+    long m_chopped_solved = 0, m_chopped_deferred = 0, m_proportional_by_bound = 0, m_proportional_without_beta = 0;
     long m_proportional_by_sweeps = 0, m_bound_sweeps = 0;
     Vec m_mu_bound, m_w_bound;
     SpMat m_gram;  // J J' (symmetric: row i is column i), for the proportioning test's sweeps
@@ -614,6 +614,12 @@ void CoupledRun::chopped_gradient(Counters& cnt, bool solver_work)
 
 bool CoupledRun::proportional_test(double gamma2)
 {
+    // No face multiplier negative: beta = 0, and at a feasible x phitilde'phi >= ||phitilde||^2 >= 0
+    // (P is a projection onto a convex set), so the test holds without the projection of eq. (13).
+    if (m_beta2_upper == 0.0 && m_x_feasible) {
+        ++m_proportional_without_beta;
+        return true;
+    }
     const double reduced = reduced_free_gradient_dot();
     const double bound = gamma2 * reduced;
     // beta'beta <= any ||J_A'(nu - mu)||^2 with mu >= 0 decides without the chopped LCP when the
@@ -1037,6 +1043,7 @@ SolverResult CoupledRun::run()
                     {{"solved", m_chopped_solved},
                      {"deferred", m_chopped_deferred},
                      {"proportional_by_bound", m_proportional_by_bound},
+                     {"proportional_without_beta", m_proportional_without_beta},
                      {"proportional_by_sweeps", m_proportional_by_sweeps},
                      {"bound_sweeps", m_bound_sweeps}}},
                    {"feasible_half_steps", m_feasible_half_steps},
