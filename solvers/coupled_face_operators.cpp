@@ -933,7 +933,13 @@ private:
 }  // namespace
 
 CoupledFaceOperators::CoupledFaceOperators(const SpMat& J, const Vec& dinv, const CoupledOperatorOptions& options)
-    : m_opt(options), m_comp(find_row_components(J))
+    : CoupledFaceOperators(J, dinv, options, find_row_components(J))
+{
+}
+
+CoupledFaceOperators::CoupledFaceOperators(const SpMat& J, const Vec& dinv, const CoupledOperatorOptions& options,
+                                           RowComponents components)
+    : m_opt(options), m_comp(std::move(components))
 {
     const Eigen::Index m = J.rows();
     m_s.resize(m);

@@ -42,6 +42,9 @@ class CoupledFaceOperators {
 public:
     /// @param dinv  1 / diag(A) (used only when options.jacobi)
     CoupledFaceOperators(const SpMat& J, const Vec& dinv, const CoupledOperatorOptions& options);
+    /// With J's row components already found (find_row_components(J), or of a column scaling of J).
+    CoupledFaceOperators(const SpMat& J, const Vec& dinv, const CoupledOperatorOptions& options,
+                         RowComponents components);
     ~CoupledFaceOperators();
     CoupledFaceOperators(const CoupledFaceOperators&) = delete;
     CoupledFaceOperators& operator=(const CoupledFaceOperators&) = delete;

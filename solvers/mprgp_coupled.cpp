@@ -20,6 +20,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 namespace cb {
@@ -151,20 +152,31 @@ struct LcpPivotsByUse {
 
 /// The preconditioner a run uses: `precond` itself, or for auto scaled or jacobi by the size of
 /// the largest component of J's row graph (the settings' help and docs/preconditioners.md give why).
-/// `why` says how auto chose.
-std::string resolve_precond(const QpView& qp, const MprgpCoupledSettings& st, std::string& why)
-{
-    if (st.precond != "auto") return st.precond;
-    if (st.deflation != "none") {
-        why = "auto: jacobi (deflation = " + st.deflation + ")";
-        return "jacobi";
+struct PrecondChoice {
+    std::string name;  ///< the preconditioner used
+    std::string rule;  ///< how auto chose (empty unless precond = auto)
+    /// J's row components when auto found them; the face operators take them (a column scaling of
+    /// J, as precond = scaled makes, has the same components), so they are found once per solve.
+    std::optional<RowComponents> components;
+
+    static PrecondChoice make(const QpView& qp, const MprgpCoupledSettings& st)
+    {
+        PrecondChoice c;
+        if (st.precond != "auto") {
+            c.name = st.precond;
+        } else if (st.deflation != "none") {
+            c.name = "jacobi";
+            c.rule = "auto: jacobi (deflation = " + st.deflation + ")";
+        } else {
+            c.components = find_row_components(qp.J);
+            const int largest = qp.m() > 0 ? c.components->largest() : 0;
+            c.name = largest > st.dense_max_rows ? "scaled" : "jacobi";
+            c.rule = "auto: " + c.name + " (largest component " + std::to_string(largest) + " rows, dense_max_rows " +
+                     std::to_string(st.dense_max_rows) + ")";
+        }
+        return c;
     }
-    const int largest = qp.m() > 0 ? find_row_components(qp.J).largest() : 0;
-    const bool large = largest > st.dense_max_rows;
-    why = "auto: " + std::string(large ? "scaled" : "jacobi") + " (largest component " + std::to_string(largest) +
-          " rows, dense_max_rows " + std::to_string(st.dense_max_rows) + ")";
-    return large ? "scaled" : "jacobi";
-}
+};
 
 /// precond = scaled: the QP in the variables y = D^1/2 x (D = diag(A)): A -> U A U, J -> J U,
 /// b -> U b, x0 -> x0 / U with U = D^-1/2; c and the multipliers are the same.
@@ -199,9 +211,8 @@ public:
     /// With precond = scaled the run iterates on the QP in y = D^1/2 x (ScaledVariables, formed on
     /// the solver's clock) and measures, monitors and returns x of `qp`, the QP in the file.
     CoupledRun(const QpView& qp, const MprgpCoupledSettings& st, const SolveContext& context)
-        : m_loop("mprgp-coupled", qp, st.common, context), m_original(qp),
-          m_precond_name(resolve_precond(qp, st, m_precond_rule)),
-          m_scaled(ScaledVariables::make(qp, m_precond_name, st)),
+        : m_loop("mprgp-coupled", qp, st.common, context), m_original(qp), m_choice(PrecondChoice::make(qp, st)),
+          m_scaled(ScaledVariables::make(qp, m_choice.name, st)),
           m_qp(m_scaled ? QpView{m_scaled->A, m_scaled->b, m_scaled->J, qp.c, m_scaled->y0} : qp), m_A(m_qp.A),
           m_J(m_qp.J), m_c(m_qp.c), m_st(st), m_ctx(context), m_n(qp.n()), m_m(qp.m()),
           m_unscale(m_scaled ? &m_scaled->unscale : nullptr)
@@ -460,8 +471,7 @@ private:
 
     SolveLoop m_loop;                           // first: its clock starts before the scaled copies are formed
     const QpView m_original;                    // the QP in the file
-    std::string m_precond_rule;                 // how precond = auto chose (else empty); before m_precond_name
-    const std::string m_precond_name;           // the preconditioner used (precond, or auto's choice)
+    PrecondChoice m_choice;                     // the preconditioner used and, for auto, why
     std::unique_ptr<ScaledVariables> m_scaled;  // precond = scaled: the QP in y = D^1/2 x, else null
     const QpView m_qp;                          // the QP iterated on: m_original or m_scaled's
     const SpMat& m_A;
@@ -788,14 +798,15 @@ SolverResult CoupledRun::run()
     SolverResult result;
     result.x = m_original.x0;
     result.lambda = Vec::Zero(m_m);
-    if (m_precond_name == "scaled" && !m_scaled) {
+    if (m_choice.name == "scaled" && !m_scaled) {
         result.status = SolveStatus::INVALID_INPUT;
         result.message = m_st.deflation != "none"
                              ? "mprgp-coupled: precond=scaled takes deflation=none (rigid modes are of x, not of y)"
                              : "mprgp-coupled: precond=scaled needs a positive diagonal of A";
+        if (!m_choice.rule.empty()) result.message += " (" + m_choice.rule + ")";
         return m_loop.finish(result, result.status);
     }
-    m_jacobi = m_precond_name == "jacobi";
+    m_jacobi = m_choice.name == "jacobi";
     m_project_trials = m_st.trial == "project";
     m_keep_face = m_st.expansion_projection == "face";
     m_dinv = Vec::Ones(m_n);
@@ -815,10 +826,12 @@ SolverResult CoupledRun::run()
     opt.sparse_max_updates = m_st.sparse_max_updates;
     opt.lcp_max_pivots = m_st.lcp_max_pivots;
     opt.pgs_max_sweeps = m_st.pgs_max_sweeps;
-    m_ops = std::make_unique<CoupledFaceOperators>(m_J, m_dinv, opt);
+    m_ops = m_choice.components
+                ? std::make_unique<CoupledFaceOperators>(m_J, m_dinv, opt, std::move(*m_choice.components))
+                : std::make_unique<CoupledFaceOperators>(m_J, m_dinv, opt);
     m_gram = SpMat(m_J * m_J.transpose());
-    if (m_precond_name == "ichol" || m_st.deflation == "rigid") {
-        m_precond = std::make_unique<CoupledPreconditioner>(m_A, m_J, m_dinv, *m_ops, m_precond_name);
+    if (m_choice.name == "ichol" || m_st.deflation == "rigid") {
+        m_precond = std::make_unique<CoupledPreconditioner>(m_A, m_J, m_dinv, *m_ops, m_choice.name);
         std::string error;
         if (!m_precond->setup(m_st.deflation == "rigid", m_qp.x0, error, m_cnt)) {
             result.status = SolveStatus::DIVERGED;
@@ -1034,8 +1047,8 @@ SolverResult CoupledRun::run()
     result.native_residual = m_native;
     result.info = {{"alpha_bar", m_alpha_bar},
                    {"power", {{"products", power.products}, {"estimate", power.estimate}, {"warm_start", power.warm}}},
-                   {"precond", m_precond_name},
-                   {"preconditioner", m_precond ? m_precond->stats() : nlohmann::json{{"precond", m_precond_name}}},
+                   {"precond", m_choice.name},
+                   {"preconditioner", m_precond ? m_precond->stats() : nlohmann::json{{"precond", m_choice.name}}},
                    {"components", m_ops->stats()},
                    {"chain", m_chain.to_json()},
                    {"lcp_pivots_by_use", m_lcp_by_use.to_json()},
@@ -1051,7 +1064,7 @@ SolverResult CoupledRun::run()
                    {"lcp_failures", m_ops->lcp_failures()},
                    {"safeguard_firings", m_cnt.safeguard_steps},
                    {"dependent_rows", "handled by a shift 1e-12 of the unit-diagonal-scaled Gram matrices"}};
-    if (!m_precond_rule.empty()) result.info["precond_rule"] = m_precond_rule;
+    if (!m_choice.rule.empty()) result.info["precond_rule"] = m_choice.rule;
     // The loop writes the reason of its own exits; a breakdown is the solver's word.
     // The whole measure at the returned point (m_error leaves out the bodies' rigid motion); a
     // converged run's message already states it.
