@@ -55,6 +55,10 @@ fi
 ctest_count=$(cd "$BUILD" && ctest -N | awk '/^Total Tests:/{print $3}')
 echo "== make test: ctest has $ctest_count tests"
 stage ctest bash -c "cd '$BUILD' && ctest --output-on-failure -j '$JOBS' --timeout 600"
-stage perf-gate make --no-print-directory perf-gate BUILD="$BUILD" JOBS="$JOBS"
+# In `make test` the gate judges only what the machine cannot vary (statuses, work counters, instructions):
+# wall time on a shared or loaded CI machine is noise, so it is shown from one round, not judged.
+# `make perf-gate` by hand judges time too (beyond 1.5x with its noise band).
+stage perf-gate make --no-print-directory perf-gate BUILD="$BUILD" JOBS="$JOBS" \
+    PERF_GATE_ARGS="--time-ratio 0 --rounds 1 --repeats 1 ${PERF_GATE_ARGS:-}"
 summary
 echo "== make test: PASS ($ctest_count ctest tests, perf gate passed)"
