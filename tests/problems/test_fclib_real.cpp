@@ -1,4 +1,4 @@
-// Real FCLIB files (tests/data/fclib, written by Siconos and LMGC90; NOTICE.md there) taken as a
+// Real FCLIB files (written by Siconos and LMGC90; tests/data/fclib/NOTICE.md) taken as a
 // user takes them: `contactbench convert FILE OUT.qpsnap --drop-friction` (each has mu != 0),
 // then `contactbench solve` with two independent methods whose solutions must agree on
 // F = 1/2 x'Ax - b'x to 1e-8. Global files (A = M, SPD): active-set (on the KKT system) and ipopt
