@@ -61,7 +61,7 @@ int cmd_info(const Args& args)
     const std::string path = cl.positional()[0];
     // By content: an FCLIB file is summarised (convert makes it a snapshot), other formats named.
     const FileFormat format = sniff_format(path);
-    if (format == FileFormat::FCLIB_GLOBAL || format == FileFormat::FCLIB_LOCAL) {
+    if (format == FileFormat::FCLIB_GLOBAL || format == FileFormat::FCLIB_LOCAL || format == FileFormat::HDF5) {
         nlohmann::json fclib = describe_fclib(path);
         fclib["path"] = path;
         fclib["convert"] = "contactbench convert " + path + " OUT.qpsnap" +
