@@ -56,7 +56,8 @@ int cmd_convert(const Args& args)
                           "applies to FCLIB files only; this is " + format_name(format));
     if (format == FileFormat::MATRIX_MARKET_FOLDER || format == FileFormat::FOLDER) {
         qp = read_matrix_market_folder(in, &extras);
-    } else if (format == FileFormat::FCLIB_GLOBAL || format == FileFormat::FCLIB_LOCAL || format == FileFormat::HDF5) {
+    } else if (format == FileFormat::FCLIB_GLOBAL || format == FileFormat::FCLIB_LOCAL || format == FileFormat::HDF5 ||
+               (format == FileFormat::UNKNOWN && is_fclib_path(in))) {  // a damaged .hdf5: the HDF5 reader says why
         qp = read_fclib(in, &extras, options);
         const nlohmann::json provenance = qp.meta.value("provenance", nlohmann::json::object());
         if (provenance.contains("dropped_friction"))
