@@ -1,9 +1,10 @@
-// `contactbench convert IN OUT`: .qpsnap <-> Matrix Market folder, the direction by the names:
-// OUT ending in .qpsnap is written as a snapshot, anything else as a folder; IN that is a folder
-// is read as Matrix Market, anything else as a .qpsnap. Both outputs are written atomically.
+// `contactbench convert IN OUT`: IN is read by its content (format_sniff.hpp: a .qpsnap, a Matrix
+// Market folder or an FCLIB file); OUT by its name: .qpsnap, .hdf5/.h5 (FCLIB), else a folder.
+// Every output is written atomically.
 #include "harness/cli.hpp"
 #include "harness/commands.hpp"
 #include "problems/fclib_io.hpp"
+#include "problems/format_sniff.hpp"
 #include "problems/matrix_market.hpp"
 #include "problems/qpsnap.hpp"
 
@@ -14,12 +15,18 @@ namespace cb {
 namespace {
 
 const char* const USAGE =
-    "contactbench convert IN OUT\n"
+    "contactbench convert IN OUT [--drop-friction] [--symmetrise]\n"
     "  IN.qpsnap  -> OUT folder (A.mtx b.mtx J.mtx c.mtx x0.mtx meta.json [contact.json x_ref.mtx lambda_ref.mtx])\n"
     "  IN folder  -> OUT.qpsnap (Matrix Market files as written by scipy.io.mmwrite, Julia, MATLAB ...)\n"
     "  IN.qpsnap  -> OUT.qpsnap (rewrites; validates on the way)\n"
-    "  IN.qpsnap  -> OUT.hdf5 / .h5: an FCLIB fclib_global problem (mu = 0; /solution when known), and back\n"
-    "values are written with %.17g: .qpsnap -> folder -> .qpsnap keeps every array bit for bit";
+    "  IN.qpsnap  -> OUT.hdf5 / .h5: an FCLIB fclib_global problem (mu = 0; /solution when known)\n"
+    "  IN FCLIB   -> OUT: an fclib_global or fclib_local file as Siconos, LMGC90 or libfclib write it\n"
+    "               (global: A = M, b = f, J = H's normal columns', c = -w_N; local: A = W_NN, b = -q_N, J = I)\n"
+    "  --drop-friction  a frictional FCLIB problem (mu != 0) keeps its normal part (recorded in meta.provenance)\n"
+    "  --symmetrise     an FCLIB matrix not symmetric to rounding is averaged with its transpose (recorded)\n"
+    "IN is recognised by its content, not its name. Values are written with %.17g: .qpsnap -> folder ->\n"
+    ".qpsnap keeps every array bit for bit; FCLIB keeps A, b, x0, J, c bit for bit but not per-row contact\n"
+    "metadata (kinds, depths, vertices), so a .qpsnap -> FCLIB -> .qpsnap trip changes the content hash";
 
 bool ends_with(const std::string& s, const std::string& tail)
 {
@@ -30,7 +37,7 @@ bool ends_with(const std::string& s, const std::string& tail)
 
 int cmd_convert(const Args& args)
 {
-    const CommandLine cl("convert", args, {}, {});
+    const CommandLine cl("convert", args, {}, {"--drop-friction", "--symmetrise"});
     if (cl.help()) {
         std::cout << "usage: " << USAGE << "\n";
         return 0;
@@ -39,12 +46,29 @@ int cmd_convert(const Args& args)
     const std::string in = cl.positional()[0], out = cl.positional()[1];
     Qp qp;
     SnapshotExtras extras;
-    if (std::filesystem::is_directory(in))
+    const FileFormat format = sniff_format(in);
+    FclibReadOptions options;
+    options.drop_friction = cl.has("--drop-friction");
+    options.symmetrise = cl.has("--symmetrise");
+    if ((options.drop_friction || options.symmetrise) && format != FileFormat::FCLIB_GLOBAL &&
+        format != FileFormat::FCLIB_LOCAL)
+        throw_input_error(in, options.drop_friction ? "--drop-friction" : "--symmetrise",
+                          "applies to FCLIB files only; this is " + format_name(format));
+    if (format == FileFormat::MATRIX_MARKET_FOLDER || format == FileFormat::FOLDER) {
         qp = read_matrix_market_folder(in, &extras);
-    else if (is_fclib_path(in))
-        qp = read_fclib_global(in, &extras);
-    else
+    } else if (format == FileFormat::FCLIB_GLOBAL || format == FileFormat::FCLIB_LOCAL || format == FileFormat::HDF5 ||
+               (format == FileFormat::UNKNOWN && is_fclib_path(in))) {  // a damaged .hdf5: the HDF5 reader says why
+        qp = read_fclib(in, &extras, options);
+        const nlohmann::json provenance = qp.meta.value("provenance", nlohmann::json::object());
+        if (provenance.contains("dropped_friction"))
+            std::cout << "dropped friction: mu in [" << provenance["dropped_friction"]["mu_min"] << ", "
+                      << provenance["dropped_friction"]["mu_max"] << "] on " << provenance["contacts"]
+                      << " contacts; the QP is the normal part (recorded in meta.provenance)\n";
+        if (provenance.contains("matrices")) std::cout << "matrices: " << provenance["matrices"].dump() << "\n";
+    } else {
+        expect_qpsnap(in, "convert");  // names a .dat, .npy or single .mtx
         qp = read_qpsnap(in, &extras);
+    }
     if (is_fclib_path(out)) {
         write_fclib_global(out, qp, &extras);
         std::cout << "wrote " << out << " (FCLIB fclib_global, n = " << qp.n() << ", " << qp.m()

@@ -2,6 +2,8 @@
 // header, contact kinds, row nnz histograms, meta and the content hash.
 #include "harness/cli.hpp"
 #include "harness/commands.hpp"
+#include "problems/fclib_io.hpp"
+#include "problems/format_sniff.hpp"
 #include "problems/matrix_market.hpp"
 #include "problems/qpsnap.hpp"
 
@@ -15,7 +17,8 @@ namespace cb {
 namespace {
 
 const char* const USAGE = "contactbench info SNAP [--json] [--time]\n"
-                          "  SNAP: a .qpsnap file or a Matrix Market folder (A.mtx b.mtx J.mtx c.mtx x0.mtx)\n"
+                          "  SNAP: a .qpsnap file or a Matrix Market folder (A.mtx b.mtx J.mtx c.mtx x0.mtx);\n"
+                          "        an FCLIB file (HDF5) is summarised (kind, contacts, mu), other formats named\n"
                           "  --json: print one JSON object instead of text\n"
                           "  --time: also time the validated load (read_qpsnap / the folder reader), wall and CPU";
 
@@ -56,7 +59,24 @@ int cmd_info(const Args& args)
     }
     cl.expect_positional(1, 1, USAGE);
     const std::string path = cl.positional()[0];
-    const bool folder = std::filesystem::is_directory(path);
+    // By content: an FCLIB file is summarised (convert makes it a snapshot), other formats named.
+    const FileFormat format = sniff_format(path);
+    if (format == FileFormat::FCLIB_GLOBAL || format == FileFormat::FCLIB_LOCAL || format == FileFormat::HDF5) {
+        nlohmann::json fclib = describe_fclib(path);
+        fclib["path"] = path;
+        fclib["convert"] = "contactbench convert " + path + " OUT.qpsnap" +
+                           (fclib.value("mu_max", 0.0) > 0.0 ? " --drop-friction" : "");
+        if (cl.has("--json")) {
+            std::cout << fclib.dump(2) << "\n";
+            return 0;
+        }
+        std::cout << "file:        " << path << " (" << format_name(format) << ")\n";
+        for (auto it = fclib.begin(); it != fclib.end(); ++it)
+            if (it.key() != "path") std::cout << it.key() << ": " << it.value().dump() << "\n";
+        return 0;
+    }
+    const bool folder = format == FileFormat::MATRIX_MARKET_FOLDER || format == FileFormat::FOLDER;
+    if (!folder) expect_qpsnap(path, "info");
     nlohmann::json info;
     info["path"] = path;
     SnapshotExtras extras;

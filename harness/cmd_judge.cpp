@@ -4,6 +4,7 @@
 #include "harness/commands.hpp"
 #include "harness/judge.hpp"
 #include "harness/results.hpp"
+#include "problems/format_sniff.hpp"
 #include "problems/qpsnap.hpp"
 #include "problems/solution_io.hpp"
 
@@ -49,6 +50,7 @@ int cmd_judge(const Args& args)
         options.record = read_json_file(options.record_path);
     }
 
+    expect_qpsnap(snap, "judge");
     const Qp qp = read_qpsnap(snap);
     options.snapshot_hash = qpsnap_content_hash(snap);
     const SolutionPoint point = read_solution(solution, qp.n(), qp.m(), cl.value("--lambda"));

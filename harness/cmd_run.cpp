@@ -23,6 +23,7 @@
 #include "harness/runner.hpp"
 #include "harness/slurm.hpp"
 #include "harness/suite.hpp"
+#include "problems/format_sniff.hpp"
 #include "problems/qpsnap.hpp"
 #include "solvers/registry.hpp"
 
@@ -191,6 +192,7 @@ LoadedSnapshot load_snapshot(const SuiteSnapshot& snap, const nlohmann::json& ha
 {
     LoadedSnapshot loaded;
     try {
+        expect_qpsnap(snap.path, "run");
         loaded.qp = std::make_unique<Qp>(read_qpsnap(snap.path));
         loaded.info = {{"id", snap.id},
                        {"path", snap.path},

@@ -5,6 +5,7 @@
 #include "harness/results.hpp"
 #include "harness/runner.hpp"
 #include "harness/set_arguments.hpp"
+#include "problems/format_sniff.hpp"
 #include "problems/qpsnap.hpp"
 #include "solvers/registry.hpp"
 
@@ -112,6 +113,7 @@ int cmd_solve(const Args& args)
     if (options.time_limit_s < 0) throw_input_error("solve", "--time-limit", "must be >= 0");
     const nlohmann::json settings = settings_from_assignments(cl.values("--set"));
 
+    expect_qpsnap(snap, "solve");  // an FCLIB, .dat or .npy file is named, with how to convert it
     const Qp qp = read_qpsnap(snap);
     const nlohmann::json info = {{"id", std::filesystem::path(snap).stem().string()},
                                  {"path", snap},

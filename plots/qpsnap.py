@@ -1,4 +1,4 @@
-"""Reader for contactbench ``.qpsnap`` v1 snapshots (numpy only; scipy optional).
+"""Reader and writer for contactbench ``.qpsnap`` v1 snapshots (numpy only; scipy optional).
 
 Layout (DESIGN.md "Snapshot format"): 8-byte little-endian uint64 N, N bytes of UTF-8 JSON
 header, then a data buffer of little-endian arrays at 8-byte aligned offsets, each with its
@@ -8,6 +8,9 @@ file and the field: ``QpsnapError("PATH: A.indices: column 7 out of range [0, 6)
     snap = read_qpsnap("frame_0003.qpsnap")
     snap["n"], snap["m"], snap["meta"], snap["arrays"]["b"]
     A, J = matrices(snap)            # scipy.sparse.csr_matrix, needs scipy
+
+    # min 1/2 x'Ax - b'x  subject to  Jx >= c, from numpy/scipy arrays (A symmetric):
+    write_qpsnap("mine.qpsnap", A, b, J, c, x0=None, meta={"family": "mine"})
 """
 
 import json
@@ -15,7 +18,8 @@ import zlib
 
 import numpy as np
 
-__all__ = ["QpsnapError", "read_qpsnap", "read_header", "matrices", "content_hash", "REQUIRED", "OPTIONAL"]
+__all__ = ["QpsnapError", "read_qpsnap", "read_header", "matrices", "content_hash", "write_qpsnap", "REQUIRED",
+           "OPTIONAL"]
 
 REQUIRED = {
     "A.indptr": "int64", "A.indices": "int64", "A.data": "float64", "b": "float64", "x0": "float64",
@@ -304,3 +308,95 @@ def content_hash(path):
         h ^= byte
         h = (h * 0x100000001B3) & 0xFFFFFFFFFFFFFFFF
     return "%016x" % h
+
+
+def _csr_arrays(path, name, M, rows, cols):
+    """(indptr, indices, data) of M (scipy sparse or dense 2-D array) in CSR, duplicates summed, rows sorted."""
+    try:
+        import scipy.sparse as sp
+        csr = sp.csr_matrix(M, dtype=np.float64)
+        csr.sum_duplicates()
+        csr.sort_indices()
+        indptr, indices, data = csr.indptr, csr.indices, csr.data
+        shape = csr.shape
+    except ImportError:
+        dense = np.asarray(M, dtype=np.float64)
+        if dense.ndim != 2:
+            _fail(path, name, f"expected a matrix, got an array of {dense.ndim} dimensions")
+        shape = dense.shape
+        r, c = np.nonzero(dense)
+        indptr = np.zeros(shape[0] + 1, dtype=np.int64)
+        np.add.at(indptr, r + 1, 1)
+        indptr, indices, data = np.cumsum(indptr), c, dense[r, c]
+    if tuple(shape) != (rows, cols):
+        _fail(path, name, f"expected shape ({rows}, {cols}), got {tuple(shape)}")
+    return (np.ascontiguousarray(indptr, dtype="<i8"), np.ascontiguousarray(indices, dtype="<i8"),
+            np.ascontiguousarray(data, dtype="<f8"))
+
+
+def _vector(path, name, v, size):
+    arr = np.ascontiguousarray(np.asarray(v, dtype=np.float64).ravel(), dtype="<f8")
+    if arr.size != size:
+        _fail(path, name, f"expected {size} values, got {arr.size}")
+    return arr
+
+
+def write_qpsnap(path, A, b, J=None, c=None, x0=None, meta=None, x_ref=None, lambda_ref=None):
+    """Writes min 1/2 x'Ax - b'x subject to Jx >= c as a .qpsnap v1 (the C++ writer's layout).
+
+    A (n x n) and J (m x n) are scipy sparse matrices or dense arrays; J None means no
+    constraints; x0 defaults to zeros; meta is a JSON object. The file is written to a temporary
+    name beside PATH and renamed, and read back with read_qpsnap before the rename, so a
+    returned call means a snapshot the C++ reader takes (symmetric A, positive diagonal, finite
+    values). Returns PATH.
+    """
+    import os
+    import tempfile
+    path = str(path)
+    b = np.asarray(b, dtype=np.float64).ravel()
+    n = b.size
+    a_indptr, a_indices, a_data = _csr_arrays(path, "A", A, n, n)
+    if J is None:
+        j_indptr, j_indices, j_data = np.zeros(1, "<i8"), np.zeros(0, "<i8"), np.zeros(0, "<f8")
+        m = 0
+    else:
+        m = np.shape(J)[0]
+        j_indptr, j_indices, j_data = _csr_arrays(path, "J", J, m, n)
+    arrays = [("A.indptr", "int64", a_indptr), ("A.indices", "int64", a_indices), ("A.data", "float64", a_data),
+              ("b", "float64", _vector(path, "b", b, n)),
+              ("x0", "float64", _vector(path, "x0", np.zeros(n) if x0 is None else x0, n)),
+              ("J.indptr", "int64", j_indptr), ("J.indices", "int64", j_indices), ("J.data", "float64", j_data),
+              ("c", "float64", _vector(path, "c", np.zeros(m) if c is None else c, m))]
+    if x_ref is not None:
+        arrays.append(("x_ref", "float64", _vector(path, "x_ref", x_ref, n)))
+    if lambda_ref is not None:
+        arrays.append(("lambda_ref", "float64", _vector(path, "lambda_ref", lambda_ref, m)))
+    meta = {} if meta is None else meta
+    if not isinstance(meta, dict):
+        _fail(path, "meta", f"expected a JSON object (dict), got {type(meta).__name__}")
+    entries, offset = {}, 0
+    for name, dtype, arr in arrays:
+        raw = arr.tobytes()
+        entries[name] = {"dtype": dtype, "shape": [int(s) for s in arr.shape], "offset": offset,
+                         "nbytes": len(raw), "crc32": zlib.crc32(raw) & 0xFFFFFFFF}
+        offset += len(raw)
+    header = {"format": "qpsnap", "version": 1, "n": int(n), "m": int(m), "arrays": entries, "meta": meta}
+    text = json.dumps(header, separators=(",", ":"), allow_nan=False).encode("utf-8")
+    text += b" " * ((8 - len(text) % 8) % 8)  # the data buffer starts 8-byte aligned
+    folder = os.path.dirname(os.path.abspath(path))
+    fd, tmp = tempfile.mkstemp(prefix=os.path.basename(path) + ".tmp.", dir=folder)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(len(text).to_bytes(8, "little"))
+            f.write(text)
+            for _, _, arr in arrays:
+                f.write(arr.tobytes())
+            f.flush()
+            os.fsync(f.fileno())
+        read_qpsnap(tmp)  # the reader's checks, before the name is taken
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return path

@@ -1,4 +1,4 @@
-// FCLIB export/import of the contact QP (mapping and its justification in fclib_io.hpp).
+// FCLIB export/import of the contact QP (mappings and their justification in fclib_io.hpp).
 #include "problems/fclib_io.hpp"
 
 #include "problems/io_util.hpp"
@@ -11,6 +11,7 @@ extern "C" {
 #include <fclib.h>
 }
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <hdf5.h>
 #include <unistd.h>
@@ -34,9 +35,22 @@ void write_fclib_global(const std::string& path, const Qp&, const SnapshotExtras
     throw InputError(path + ": FCLIB export is not built (install libfclib-dev and reconfigure with CB_PEERS=ON)");
 }
 
-Qp read_fclib_global(const std::string& path, SnapshotExtras*)
+Qp read_fclib(const std::string& path, SnapshotExtras*, const FclibReadOptions&)
 {
     throw InputError(path + ": FCLIB import is not built (install libfclib-dev and reconfigure with CB_PEERS=ON)");
+}
+
+Qp read_fclib_global(const std::string& path, SnapshotExtras* extras, const FclibReadOptions& options)
+{
+    return read_fclib(path, extras, options);
+}
+
+std::string fclib_kind(const std::string&) { return ""; }
+
+nlohmann::json describe_fclib(const std::string& path)
+{
+    read_fclib(path);
+    return {};
 }
 
 #else
@@ -113,17 +127,20 @@ private:
     herr_t (*m_close)(hid_t);
 };
 
-/// A sparse matrix of the FCLIB layout (group with nzmax, m, n, nz, p, i, x), checked.
-struct SparseSizes {
-    long long nzmax = 0, m = 0, n = 0, nz = 0;
-};
+std::string exact(double value)
+{
+    char text[32];
+    std::snprintf(text, sizeof(text), "%.17g", value);
+    return text;
+}
 
 /// Reads the FCLIB layout (fclib.h; the groups and datasets libfclib writes) with plain HDF5
 /// calls, so that no malformed file reaches libfclib's readers, which allocate from declared
 /// sizes, read whatever length the dataset has, and exit(1) on any HDF5 error. Every dataset's
 /// class, rank, length and stored bytes are checked before its buffer is allocated: a length
-/// must equal the size the layout declares, and the bytes must be in the file (so memory is
-/// bounded by the file's size: no fill values, no compressed data).
+/// must be one the layout declares, and the bytes must be in the file (so memory is bounded by
+/// the file's size: no fill values, no compressed data, no external storage). Only hard links
+/// are followed: an external link would open another file (a FIFO blocks), a soft link can loop.
 class FclibReader {
 public:
     explicit FclibReader(std::string path) : m_path(std::move(path))
@@ -138,17 +155,26 @@ public:
     FclibReader(const FclibReader&) = delete;
     FclibReader& operator=(const FclibReader&) = delete;
 
+    const std::string& path() const { return m_path; }
+
     [[noreturn]] void fail(const std::string& field, const std::string& problem) const
     {
         throw InputError(m_path + ": " + field + ": " + problem);
     }
 
-    /// True when every link of `name` ("/a/b/c") exists (H5Lexists needs the parents to exist).
+    /// True when every link of `name` ("/a/b/c") exists; each must be a hard link (H5Lexists
+    /// needs the parents to exist, and resolving a child would traverse an external parent).
     bool exists(const std::string& name) const
     {
         for (size_t slash = name.find('/', 1);; slash = name.find('/', slash + 1)) {
             const std::string prefix = name.substr(0, slash);
             if (H5Lexists(m_file, prefix.c_str(), H5P_DEFAULT) <= 0) return false;
+            H5L_info_t info{};
+            if (H5Lget_info(m_file, prefix.c_str(), &info, H5P_DEFAULT) < 0) return false;
+            if (info.type == H5L_TYPE_EXTERNAL)
+                fail(prefix, "is an external link to another file (not followed: the file must hold its own data)");
+            if (info.type != H5L_TYPE_HARD)
+                fail(prefix, "is a soft or user-defined link (only hard links are followed)");
             if (slash == std::string::npos) return true;
         }
     }
@@ -156,22 +182,30 @@ public:
     /// One integer (a dataset of one element).
     long long integer(const std::string& name)
     {
-        const std::vector<long long> v = integers(name, 1, "one value");
+        const std::vector<long long> v = integers(name, {1}, "one value");
         return v[0];
     }
 
-    /// An integer array of exactly `expected` values; `declared` says who declares the length.
-    std::vector<long long> integers(const std::string& name, long long expected, const std::string& declared)
+    /// An integer array whose length is one of `allowed` (the first is named in errors when the
+    /// others are equal to it); `declared` says who declares the length.
+    std::vector<long long> integers(const std::string& name, std::vector<long long> allowed,
+                                    const std::string& declared)
     {
         std::vector<long long> values;
-        read(name, H5T_INTEGER, expected, declared, H5T_NATIVE_LLONG, values);
+        read(name, H5T_INTEGER, allowed, declared, H5T_NATIVE_LLONG, values);
         return values;
     }
 
-    std::vector<double> reals(const std::string& name, long long expected, const std::string& declared)
+    /// A real array as above; non-finite values are refused naming the entry when `finite`.
+    std::vector<double> reals(const std::string& name, std::vector<long long> allowed, const std::string& declared,
+                              bool finite = true)
     {
         std::vector<double> values;
-        read(name, H5T_FLOAT, expected, declared, H5T_NATIVE_DOUBLE, values);
+        read(name, H5T_FLOAT, allowed, declared, H5T_NATIVE_DOUBLE, values);
+        if (finite)
+            for (size_t k = 0; k < values.size(); ++k)
+                if (!std::isfinite(values[k]))
+                    fail(name, "entry " + std::to_string(k) + " is " + exact(values[k]) + " (values must be finite)");
         return values;
     }
 
@@ -198,6 +232,17 @@ private:
         if (!exists(name)) fail(name, "missing");
         const hid_t data = H5Dopen2(m_file, name.c_str(), H5P_DEFAULT);
         if (data < 0) fail(name, "not a dataset");
+        // External storage reads another file (any local file, /dev/zero, a FIFO) when the data
+        // are read; a virtual dataset maps other files too. Checked before anything is read.
+        const H5Handle create(H5Dget_create_plist(data), H5Pclose);
+        if (create.id() < 0 || H5Pget_external_count(create.id()) != 0) {
+            H5Dclose(data);
+            fail(name, "stored in an external file (external storage is not read: the file must hold its own data)");
+        }
+        if (H5Pget_layout(create.id()) == H5D_VIRTUAL) {
+            H5Dclose(data);
+            fail(name, "a virtual dataset mapping other files (not read: the file must hold its own data)");
+        }
         return data;
     }
 
@@ -227,19 +272,21 @@ private:
     }
 
     template <typename T>
-    void read(const std::string& name, H5T_class_t kind, long long expected, const std::string& declared,
-              hid_t memory_type, std::vector<T>& out)
+    void read(const std::string& name, H5T_class_t kind, const std::vector<long long>& allowed,
+              const std::string& declared, hid_t memory_type, std::vector<T>& out)
     {
         const H5Handle data(open_dataset(name), H5Dclose);
         const H5Handle type(H5Dget_type(data.id()), H5Tclose);
         if (H5Tget_class(type.id()) != kind)
             fail(name, kind == H5T_INTEGER ? "expected integers" : "expected floating-point numbers");
         const long long count = points(name, data.id());
-        if (count != expected)
+        if (std::find(allowed.begin(), allowed.end(), count) == allowed.end())
             fail(name,
-                 "holds " + std::to_string(count) + " values, " + declared + " declares " + std::to_string(expected));
+                 "holds " + std::to_string(count) + " values, " + declared + " declares " + std::to_string(allowed[0]));
         check_stored(name, data.id(), size_t(count) * H5Tget_size(type.id()));
         out.resize(size_t(count));
+        // HDF5 converts integers that do not fit (a uint64 beyond LLONG_MAX) by clamping: the
+        // range checks below then name them.
         if (count > 0 && H5Dread(data.id(), memory_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()) < 0)
             fail(name, "HDF5 cannot read it");
     }
@@ -248,15 +295,13 @@ private:
     hid_t m_file = -1;
 };
 
-std::string exact(double value)
-{
-    char text[32];
-    std::snprintf(text, sizeof(text), "%.17g", value);
-    return text;
-}
-
 /// Largest size or count accepted (our sparse matrices index with int).
 constexpr long long MAX_INDEX = 2147483646;
+
+/// A sparse matrix of the FCLIB layout (group with nzmax, m, n, nz, p, i, x).
+struct SparseSizes {
+    long long nzmax = 0, m = 0, n = 0, nz = 0;
+};
 
 /// The declared sizes of the matrix in `group`, each in range.
 SparseSizes read_sizes(FclibReader& file, const std::string& group)
@@ -277,49 +322,343 @@ SparseSizes read_sizes(FclibReader& file, const std::string& group)
     return s;
 }
 
-/// The matrix of `group` (sizes checked by read_sizes) as a row-major Eigen matrix; values bit for bit.
+/// The matrix of `group` (sizes checked by read_sizes) as a row-major Eigen matrix; values bit
+/// for bit, duplicates summed (as CSparse's cs_compress does).
 SpMat read_matrix(FclibReader& file, const std::string& group, const SparseSizes& s)
 {
     const std::string nzmax = group + "/nzmax";
-    const std::vector<double> x = file.reals(group + "/x", s.nzmax, nzmax);
     std::vector<Triplet> t;
-    auto index = [&](const char* field, long long k, long long value, long long bound) {
+    auto index = [&](const char* field, long long k, long long value, long long bound, const char* what) {
         if (value < 0 || value >= bound)
             file.fail(group + "/" + field, "entry " + std::to_string(k) + " is " + std::to_string(value) +
-                                               ", outside 0.." + std::to_string(bound - 1));
+                                               ", outside 0.." + std::to_string(bound - 1) + " (" + what + ")");
         return static_cast<int>(value);
     };
-    if (s.nz >= 0) {  // triplets: p holds rows, i columns
+    if (s.nz >= 0) {
+        // Triplets in CSparse's convention, which real writers follow (fclib.h's comment says the
+        // opposite): p holds column indices, i row indices; libfclib writes x with nzmax values.
         const std::string declared = group + "/nz";
-        const std::vector<long long> p = file.integers(group + "/p", s.nz, declared);
-        const std::vector<long long> i = file.integers(group + "/i", s.nz, declared);
+        const std::vector<long long> p = file.integers(group + "/p", {s.nz, s.nzmax}, declared);
+        const std::vector<long long> i = file.integers(group + "/i", {s.nz, s.nzmax}, declared);
+        const std::vector<double> x = file.reals(group + "/x", {s.nz, s.nzmax}, declared);
         t.reserve(size_t(s.nz));
-        for (long long k = 0; k < s.nz; ++k) t.emplace_back(index("p", k, p[k], s.m), index("i", k, i[k], s.n), x[k]);
+        for (long long k = 0; k < s.nz; ++k)
+            t.emplace_back(index("i", k, i[size_t(k)], s.m, "row indices"),
+                           index("p", k, p[size_t(k)], s.n, "column indices"), x[size_t(k)]);
     } else {  // -1: compressed columns (p over the n columns), -2: compressed rows
         const bool columns = s.nz == -1;
         const long long outer = columns ? s.n : s.m, inner = columns ? s.m : s.n;
         const std::vector<long long> p =
-            file.integers(group + "/p", outer + 1, (columns ? group + "/n" : group + "/m") + " + 1 (CSC/CSR)");
-        const std::vector<long long> i = file.integers(group + "/i", s.nzmax, nzmax);
+            file.integers(group + "/p", {outer + 1}, (columns ? group + "/n" : group + "/m") + " + 1 (CSC/CSR)");
         for (long long o = 0; o <= outer; ++o)
-            if (p[o] < (o == 0 ? 0 : p[o - 1]) || p[o] > s.nzmax)
-                file.fail(group + "/p", "entry " + std::to_string(o) + " is " + std::to_string(p[o]) +
-                                            ": column pointers must be non-decreasing within 0..nzmax (" +
+            if (p[size_t(o)] < (o == 0 ? 0 : p[size_t(o - 1)]) || p[size_t(o)] > s.nzmax)
+                file.fail(group + "/p", "entry " + std::to_string(o) + " is " + std::to_string(p[size_t(o)]) +
+                                            ": pointers must be non-decreasing within 0..nzmax (" +
                                             std::to_string(s.nzmax) + ")");
-        t.reserve(size_t(p[outer] - p[0]));
+        // i and x hold nzmax values (libfclib) or just the p[outer] used ones (other writers).
+        const long long used = p[size_t(outer)];
+        const std::vector<long long> i = file.integers(group + "/i", {s.nzmax, used}, nzmax);
+        const std::vector<double> x = file.reals(group + "/x", {s.nzmax, used}, nzmax);
+        t.reserve(size_t(used - p[0]));
         for (long long o = 0; o < outer; ++o)
-            for (long long k = p[o]; k < p[o + 1]; ++k) {
-                const int in = index("i", k, i[k], inner);
+            for (long long k = p[size_t(o)]; k < p[size_t(o + 1)]; ++k) {
+                const int in = index("i", k, i[size_t(k)], inner, columns ? "row indices" : "column indices");
                 if (columns)
-                    t.emplace_back(in, static_cast<int>(o), x[k]);
+                    t.emplace_back(in, static_cast<int>(o), x[size_t(k)]);
                 else
-                    t.emplace_back(static_cast<int>(o), in, x[k]);
+                    t.emplace_back(static_cast<int>(o), in, x[size_t(k)]);
             }
     }
     SpMat out(static_cast<Eigen::Index>(s.m), static_cast<Eigen::Index>(s.n));
     out.setFromTriplets(t.begin(), t.end());
     out.makeCompressed();
     return out;
+}
+
+/// A symmetric matrix as the file means it: stored as one triangle (every off-diagonal entry
+/// above the diagonal, or every one below) it is mirrored; otherwise it must be symmetric to
+/// rounding (1e-12 max|a_ij|, validate_qp's test), or, with `symmetrise`, it is averaged with its
+/// transpose. `note` records what was done (the snapshot's provenance).
+SpMat symmetric_matrix(FclibReader& file, const std::string& field, const std::string& what, SpMat M, bool symmetrise,
+                       nlohmann::json& note)
+{
+    long long upper = 0, lower = 0;
+    double max_abs = 0.0;
+    for (Eigen::Index r = 0; r < M.outerSize(); ++r)
+        for (SpMat::InnerIterator it(M, r); it; ++it) {
+            if (it.value() == 0.0) continue;
+            max_abs = std::max(max_abs, std::abs(it.value()));
+            if (it.col() > r) ++upper;
+            if (it.col() < r) ++lower;
+        }
+    if ((upper == 0) != (lower == 0)) {
+        std::vector<Triplet> both;
+        for (Eigen::Index r = 0; r < M.outerSize(); ++r)
+            for (SpMat::InnerIterator it(M, r); it; ++it) {
+                both.emplace_back(static_cast<int>(r), static_cast<int>(it.col()), it.value());
+                if (it.col() != r) both.emplace_back(static_cast<int>(it.col()), static_cast<int>(r), it.value());
+            }
+        SpMat mirrored(M.rows(), M.cols());
+        mirrored.setFromTriplets(both.begin(), both.end());
+        mirrored.makeCompressed();
+        note[field] = std::string("stored as its ") + (upper ? "upper" : "lower") + " triangle: mirrored";
+        return mirrored;
+    }
+    const SpMat At = M.transpose();
+    const SpMat diff = M - At;
+    double worst = 0.0;
+    Eigen::Index wi = 0, wj = 0;
+    for (Eigen::Index r = 0; r < diff.outerSize(); ++r)
+        for (SpMat::InnerIterator it(diff, r); it; ++it)
+            if (std::abs(it.value()) > worst) {
+                worst = std::abs(it.value());
+                wi = r;
+                wj = it.col();
+            }
+    const double tol = 1e-12 * max_abs;
+    if (worst <= tol) return M;
+    const std::string pair = "(" + std::to_string(wi) + ", " + std::to_string(wj) + ") = " + exact(M.coeff(wi, wj)) +
+                             " but (" + std::to_string(wj) + ", " + std::to_string(wi) +
+                             ") = " + exact(M.coeff(wj, wi));
+    if (!symmetrise)
+        file.fail(field, what + " is not symmetric: " + pair + " (difference " + exact(worst) +
+                             " > 1e-12 max|entry| = " + exact(tol) +
+                             "; one triangle alone is mirrored; `convert --symmetrise` takes (A + A')/2)");
+    SpMat averaged = 0.5 * M + 0.5 * At;
+    averaged.makeCompressed();
+    note[field] = {{"symmetrised", "(A + A')/2"},
+                   {"max_asymmetry", worst},
+                   {"relative_asymmetry", worst / max_abs},
+                   {"worst_entry", pair}};
+    return averaged;
+}
+
+/// mu of every contact: finite and >= 0; nonzero ones refused unless friction is dropped.
+/// Returns {min, max} of mu.
+std::pair<double, double> check_mu(FclibReader& file, const std::string& field, const std::vector<double>& mu,
+                                   bool drop_friction, const std::string& kind)
+{
+    double lo = 0.0, hi = 0.0;
+    for (size_t i = 0; i < mu.size(); ++i) {
+        const std::string contact = "contact " + std::to_string(i);
+        if (!(mu[i] >= 0.0) || !std::isfinite(mu[i]))  // NaN too
+            file.fail(field, contact + " has mu = " + exact(mu[i]) + " (a friction coefficient is finite and >= 0)");
+        if (mu[i] != 0.0 && !drop_friction)
+            file.fail(field, contact + " has mu = " + exact(mu[i]) + ": this " + kind +
+                                 " problem has friction, which the QP cannot hold; `convert --drop-friction` keeps its "
+                                 "normal part (recorded in the snapshot)");
+        lo = i == 0 ? mu[i] : std::min(lo, mu[i]);
+        hi = std::max(hi, mu[i]);
+    }
+    return {lo, hi};
+}
+
+long long spacedim_of(FclibReader& file, const std::string& field)
+{
+    const long long d = file.integer(field);
+    if (d != 2 && d != 3) file.fail(field, "must be 2 or 3, got " + std::to_string(d));
+    return d;
+}
+
+/// The title and description of a foreign file, kept in the provenance (bounded, printable).
+void describe_source(FclibReader& file, const std::string& root, nlohmann::json& provenance)
+{
+    for (const char* key : {"title", "description"}) {
+        const std::string name = root + "/info/" + key;
+        if (!file.exists(name)) continue;
+        try {
+            std::string value = file.text(name);
+            if (value.size() > 1000) value = value.substr(0, 1000) + "...";
+            for (char& ch : value)
+                if (static_cast<unsigned char>(ch) < 32 || static_cast<unsigned char>(ch) > 126) ch = ' ';
+            provenance[key] = value;
+        } catch (const InputError&) {
+        }
+    }
+}
+
+/// The first initial guess's `vector` (v for global, r for local) of `length`, or empty.
+std::vector<double> first_guess(FclibReader& file, const char* vector, long long length, const std::string& declared)
+{
+    if (!file.exists("/guesses")) return {};
+    const long long guesses = file.integer("/guesses/number_of_guesses");
+    if (guesses < 0) file.fail("/guesses/number_of_guesses", "must be >= 0, got " + std::to_string(guesses));
+    if (guesses == 0 || length == 0) return {};
+    return file.reals(std::string("/guesses/1/") + vector, {length}, declared);
+}
+
+Qp read_global(FclibReader& file, SnapshotExtras* extras, const FclibReadOptions& options)
+{
+    const std::string G = "/fclib_global";
+    const long long d = spacedim_of(file, G + "/spacedim");
+    if (file.exists(G + "/G")) {
+        const long long g = file.integer(G + "/G/n");
+        if (g != 0) file.fail(G + "/G", "equality constraints are not supported (" + std::to_string(g) + " columns)");
+    }
+
+    // Every declared size first, checked against each other and against the vectors' lengths
+    // (whose bytes are in the file), before any matrix array is allocated.
+    const SparseSizes ms = read_sizes(file, G + "/M"), hs = read_sizes(file, G + "/H");
+    const long long n = ms.m;
+    if (ms.n != n) file.fail(G + "/M", "not square: m = " + std::to_string(ms.m) + ", n = " + std::to_string(ms.n));
+    if (n == 0) file.fail(G + "/M/n", "the problem has no unknowns (n = 0)");
+    if (hs.m != n) file.fail(G + "/H/m", std::to_string(hs.m) + " rows, but M has " + std::to_string(n));
+    if (hs.n % d != 0)
+        file.fail(G + "/H/n", std::to_string(hs.n) + " columns: not " + std::to_string(d) + " per contact (spacedim " +
+                                  std::to_string(d) + ")");
+    const long long m = hs.n / d;
+    const std::vector<double> f = file.reals(G + "/vectors/f", {n}, G + "/M/m");
+    const std::vector<double> w = file.reals(G + "/vectors/w", {d * m}, G + "/H/n");
+    const std::vector<double> mu = file.reals(G + "/vectors/mu", {m}, G + "/H/n / spacedim", false);
+    const auto [mu_min, mu_max] = check_mu(file, G + "/vectors/mu", mu, options.drop_friction, "fclib_global");
+    const bool exact_map = mu_max == 0.0;
+
+    nlohmann::json notes = nlohmann::json::object();
+    Qp qp;
+    qp.A = symmetric_matrix(file, G + "/M", "M", read_matrix(file, G + "/M", ms), options.symmetrise, notes);
+    const SpMat H = read_matrix(file, G + "/H", hs);
+    qp.b = Eigen::Map<const Vec>(f.data(), Eigen::Index(n));
+    // J's row i is H's normal column d i; the tangential columns carry r_T, which is 0 (mu = 0) or
+    // dropped with the friction.
+    const SpMat Ht = H.transpose();
+    std::vector<Triplet> jt;
+    qp.c.resize(Eigen::Index(m));
+    for (Eigen::Index i = 0; i < m; ++i) {
+        qp.c[i] = -w[size_t(d * i)];
+        for (SpMat::InnerIterator it(Ht, d * i); it; ++it) jt.emplace_back(static_cast<int>(i), it.col(), it.value());
+    }
+    qp.J.resize(Eigen::Index(m), Eigen::Index(n));
+    qp.J.setFromTriplets(jt.begin(), jt.end());
+    qp.J.makeCompressed();
+
+    const std::vector<double> v0 = first_guess(file, "v", n, G + "/M/n");
+    qp.x0 = v0.empty() ? Vec(Vec::Zero(Eigen::Index(n))) : Vec(Eigen::Map<const Vec>(v0.data(), Eigen::Index(n)));
+
+    // Our own export stores the QP's metadata as JSON in the description; other writers free text.
+    bool ours = false;
+    if (file.exists(G + "/info/description")) {
+        try {
+            const nlohmann::json meta = parse_json_text(file.text(G + "/info/description"), file.path());
+            if (meta.is_object()) {
+                qp.meta = meta;
+                ours = true;
+            }
+        } catch (const InputError&) {
+        }
+    }
+    if (!ours || !exact_map || !notes.empty()) {
+        nlohmann::json provenance = {{"format", "fclib_global"},
+                                     {"file", std::filesystem::path(file.path()).filename().string()},
+                                     {"spacedim", d},
+                                     {"contacts", m},
+                                     {"mapping", "A = M, b = f, J = H_N' (the normal columns of H), c = -w_N"}};
+        if (!exact_map)
+            provenance["dropped_friction"] = {
+                {"mu_min", mu_min},
+                {"mu_max", mu_max},
+                {"kept", "the normal rows of H: a frictionless problem, not the file's frictional one"}};
+        if (!notes.empty()) provenance["matrices"] = notes;
+        if (!ours) describe_source(file, G, provenance);
+        qp.meta["provenance"] = provenance;
+    }
+    if (extras) {
+        *extras = SnapshotExtras{};
+        // A frictional file's solution solves another problem than the QP: not a reference.
+        if (exact_map && file.exists("/solution")) {
+            const std::vector<double> v = file.reals("/solution/v", {n}, G + "/M/n");
+            const std::vector<double> r = file.reals("/solution/r", {d * m}, G + "/H/n");
+            extras->x_ref = Eigen::Map<const Vec>(v.data(), Eigen::Index(n));
+            extras->lambda_ref.resize(Eigen::Index(m));
+            for (Eigen::Index i = 0; i < m; ++i) extras->lambda_ref[i] = r[size_t(d * i)];
+        }
+    }
+    return qp;
+}
+
+Qp read_local(FclibReader& file, SnapshotExtras* extras, const FclibReadOptions& options)
+{
+    const std::string L = "/fclib_local";
+    const long long d = spacedim_of(file, L + "/spacedim");
+    for (const char* mixed : {"/V", "/R"})
+        if (file.exists(L + mixed)) {
+            const long long cols = file.integer(L + mixed + "/n");
+            if (cols != 0)
+                file.fail(L + mixed, "equality constraints (a mixed problem) are not supported (" +
+                                         std::to_string(cols) + " columns)");
+        }
+    const SparseSizes ws = read_sizes(file, L + "/W");
+    if (ws.m != ws.n) file.fail(L + "/W", "not square: m = " + std::to_string(ws.m) + ", n = " + std::to_string(ws.n));
+    if (ws.m == 0) file.fail(L + "/W/n", "the problem has no contacts (n = 0)");
+    if (ws.m % d != 0)
+        file.fail(L + "/W/n", std::to_string(ws.m) + " rows: not " + std::to_string(d) + " per contact (spacedim " +
+                                  std::to_string(d) + ")");
+    const long long m = ws.m / d;
+    const std::vector<double> q = file.reals(L + "/vectors/q", {ws.m}, L + "/W/m");
+    const std::vector<double> mu = file.reals(L + "/vectors/mu", {m}, L + "/W/m / spacedim", false);
+    const auto [mu_min, mu_max] = check_mu(file, L + "/vectors/mu", mu, options.drop_friction, "fclib_local");
+    const bool exact_map = mu_max == 0.0;
+
+    // The normal block: rows and columns d i of W.
+    const SpMat W = read_matrix(file, L + "/W", ws);
+    std::vector<Triplet> nt;
+    for (Eigen::Index r = 0; r < W.outerSize(); r += d)
+        for (SpMat::InnerIterator it(W, r); it; ++it)
+            if (it.col() % d == 0) nt.emplace_back(static_cast<int>(r / d), static_cast<int>(it.col() / d), it.value());
+    SpMat WNN(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(m));
+    WNN.setFromTriplets(nt.begin(), nt.end());
+    WNN.makeCompressed();
+
+    nlohmann::json notes = nlohmann::json::object();
+    Qp qp;
+    qp.A =
+        symmetric_matrix(file, L + "/W", "the normal block W_NN (indexed by contact)", WNN, options.symmetrise, notes);
+    qp.b.resize(Eigen::Index(m));
+    for (Eigen::Index i = 0; i < m; ++i) qp.b[i] = -q[size_t(d * i)];
+    qp.J.resize(Eigen::Index(m), Eigen::Index(m));
+    qp.J.setIdentity();
+    qp.J.makeCompressed();
+    qp.c = Vec::Zero(Eigen::Index(m));
+    const std::vector<double> r0 = first_guess(file, "r", ws.m, L + "/W/m");
+    qp.x0 = Vec::Zero(Eigen::Index(m));
+    for (Eigen::Index i = 0; i < Eigen::Index(r0.size() / size_t(d)); ++i) qp.x0[i] = r0[size_t(d * i)];
+
+    nlohmann::json provenance = {{"format", "fclib_local"},
+                                 {"file", std::filesystem::path(file.path()).filename().string()},
+                                 {"spacedim", d},
+                                 {"contacts", m},
+                                 {"mapping", "A = W_NN, b = -q_N, J = I, c = 0 (x = r_N, lambda = u_N)"}};
+    if (!exact_map)
+        provenance["dropped_friction"] = {
+            {"mu_min", mu_min},
+            {"mu_max", mu_max},
+            {"kept", "the normal block W_NN: a frictionless problem, not the file's frictional one"}};
+    if (!notes.empty()) provenance["matrices"] = notes;
+    describe_source(file, L, provenance);
+    qp.meta = nlohmann::json::object();
+    qp.meta["provenance"] = provenance;
+    if (extras) {
+        *extras = SnapshotExtras{};
+        if (exact_map && file.exists("/solution")) {
+            const std::vector<double> r = file.reals("/solution/r", {ws.m}, L + "/W/m");
+            const std::vector<double> u = file.reals("/solution/u", {ws.m}, L + "/W/m");
+            extras->x_ref.resize(Eigen::Index(m));
+            extras->lambda_ref.resize(Eigen::Index(m));
+            for (Eigen::Index i = 0; i < m; ++i) {
+                extras->x_ref[i] = r[size_t(d * i)];
+                extras->lambda_ref[i] = u[size_t(d * i)];
+            }
+        }
+    }
+    return qp;
+}
+
+/// Which problem the file holds; both groups present is ambiguous and refused.
+std::string kind_of(FclibReader& file)
+{
+    const bool global = file.exists("/fclib_global"), local = file.exists("/fclib_local");
+    if (global && local)
+        file.fail("/fclib_global", "the file holds both an fclib_global and an fclib_local problem (ambiguous)");
+    return global ? "fclib_global" : local ? "fclib_local" : "";
 }
 
 }  // namespace
@@ -386,92 +725,67 @@ void write_fclib_global(const std::string& path, const Qp& qp, const SnapshotExt
     out.commit();
 }
 
-Qp read_fclib_global(const std::string& path, SnapshotExtras* extras)
+Qp read_fclib(const std::string& path, SnapshotExtras* extras, const FclibReadOptions& options)
 {
     FclibReader file(path);
-    if (!file.exists("/fclib_global"))
-        file.fail("/fclib_global", "missing: not an HDF5 file with an FCLIB global problem");
-    const long long spacedim = file.integer("/fclib_global/spacedim");
-    if (spacedim != 3) file.fail("/fclib_global/spacedim", "must be 3, got " + std::to_string(spacedim));
-    if (file.exists("/fclib_global/G")) {
-        const long long g = file.integer("/fclib_global/G/n");
-        if (g != 0)
-            file.fail("/fclib_global/G", "equality constraints are not supported (" + std::to_string(g) + " columns)");
-    }
-
-    // Every declared size first, checked against each other and against the vectors' lengths
-    // (whose bytes are in the file), before any matrix array is allocated.
-    const SparseSizes ms = read_sizes(file, "/fclib_global/M"), hs = read_sizes(file, "/fclib_global/H");
-    const long long n = ms.m;
-    if (ms.n != n)
-        file.fail("/fclib_global/M", "not square: m = " + std::to_string(ms.m) + ", n = " + std::to_string(ms.n));
-    if (hs.m != n) file.fail("/fclib_global/H/m", std::to_string(hs.m) + " rows, but M has " + std::to_string(n));
-    if (hs.n % 3 != 0)
-        file.fail("/fclib_global/H/n", std::to_string(hs.n) + " columns: not 3 per contact (spacedim 3)");
-    const long long m = hs.n / 3;
-    const std::vector<double> f = file.reals("/fclib_global/vectors/f", n, "/fclib_global/M/m");
-    const std::vector<double> w = file.reals("/fclib_global/vectors/w", 3 * m, "/fclib_global/H/n");
-    const std::vector<double> mu = file.reals("/fclib_global/vectors/mu", m, "/fclib_global/H/n / 3");
-    for (long long i = 0; i < m; ++i) {
-        const std::string contact = "contact " + std::to_string(i);
-        if (mu[size_t(i)] != 0.0)  // NaN too
-            file.fail("/fclib_global/vectors/mu", contact + " has mu = " + exact(mu[size_t(i)]) +
-                                                      " (friction is not supported: only mu = 0 maps onto the QP)");
-        if (w[size_t(3 * i + 1)] != 0.0 || w[size_t(3 * i + 2)] != 0.0)
-            file.fail("/fclib_global/vectors/w",
-                      contact + " has a tangential entry (only (w_N, 0, 0) maps onto the QP)");
-    }
-
-    Qp qp;
-    qp.A = read_matrix(file, "/fclib_global/M", ms);
-    const SpMat H = read_matrix(file, "/fclib_global/H", hs);
-    qp.b = Eigen::Map<const Vec>(f.data(), Eigen::Index(n));
-    qp.c.resize(Eigen::Index(m));
-    const SpMat Ht = H.transpose();
-    std::vector<Triplet> jt;
-    for (Eigen::Index i = 0; i < m; ++i) {
-        if (Ht.outerIndexPtr()[3 * i + 1] != Ht.outerIndexPtr()[3 * i + 3])
-            file.fail("/fclib_global/H", "contact " + std::to_string(i) +
-                                             " has tangential columns (only the normal column maps onto the QP)");
-        qp.c[i] = -w[size_t(3 * i)];
-        for (SpMat::InnerIterator it(Ht, 3 * i); it; ++it) jt.emplace_back(static_cast<int>(i), it.col(), it.value());
-    }
-    qp.J.resize(Eigen::Index(m), Eigen::Index(n));
-    qp.J.setFromTriplets(jt.begin(), jt.end());
-    qp.J.makeCompressed();
-
-    // The first initial guess (libfclib sizes v by M/n) is the start point.
-    qp.x0 = Vec::Zero(Eigen::Index(n));
-    if (file.exists("/guesses")) {
-        const long long guesses = file.integer("/guesses/number_of_guesses");
-        if (guesses < 0) file.fail("/guesses/number_of_guesses", "must be >= 0, got " + std::to_string(guesses));
-        if (guesses > 0 && n > 0) {
-            const std::vector<double> v = file.reals("/guesses/1/v", n, "/fclib_global/M/n");
-            qp.x0 = Eigen::Map<const Vec>(v.data(), Eigen::Index(n));
-        }
-    }
-    if (file.exists("/fclib_global/info/description")) {
-        // Free text in files from elsewhere: only a JSON object of ours becomes the metadata.
-        try {
-            const nlohmann::json meta = parse_json_text(file.text("/fclib_global/info/description"), path);
-            if (meta.is_object()) qp.meta = meta;
-        } catch (const InputError&) {
-        }
-    }
-    if (extras) {
-        *extras = SnapshotExtras{};
-        if (file.exists("/solution")) {
-            if (n > 0) {
-                const std::vector<double> v = file.reals("/solution/v", n, "/fclib_global/M/n");
-                extras->x_ref = Eigen::Map<const Vec>(v.data(), Eigen::Index(n));
-            }
-            const std::vector<double> r = file.reals("/solution/r", 3 * m, "/fclib_global/H/n");
-            extras->lambda_ref.resize(Eigen::Index(m));
-            for (Eigen::Index i = 0; i < m; ++i) extras->lambda_ref[i] = r[size_t(3 * i)];
-        }
-    }
-    validate_qp(path, qp);
+    const std::string kind = kind_of(file);
+    if (kind.empty())
+        file.fail("/fclib_global",
+                  "missing: an HDF5 file without an FCLIB problem (neither /fclib_global nor /fclib_local)");
+    Qp qp = kind == "fclib_global" ? read_global(file, extras, options) : read_local(file, extras, options);
+    validate_qp(path + ": /" + kind + " as the QP", qp);
     return qp;
+}
+
+Qp read_fclib_global(const std::string& path, SnapshotExtras* extras, const FclibReadOptions& options)
+{
+    FclibReader file(path);
+    if (!file.exists("/fclib_global")) {
+        if (file.exists("/fclib_local"))
+            file.fail("/fclib_global", "missing: this is an fclib_local problem, not an fclib_global one");
+        file.fail("/fclib_global", "missing: not an HDF5 file with an FCLIB global problem");
+    }
+    Qp qp = read_global(file, extras, options);
+    validate_qp(path + ": /fclib_global as the QP", qp);
+    return qp;
+}
+
+std::string fclib_kind(const std::string& path)
+{
+    FclibReader file(path);
+    try {
+        return kind_of(file);
+    } catch (const InputError&) {
+        return "";  // both groups, or a link that is not followed: the reader says which
+    }
+}
+
+nlohmann::json describe_fclib(const std::string& path)
+{
+    FclibReader file(path);
+    const std::string kind = kind_of(file);
+    if (kind.empty())
+        file.fail("/fclib_global",
+                  "missing: an HDF5 file without an FCLIB problem (neither /fclib_global nor /fclib_local)");
+    const std::string root = "/" + kind;
+    nlohmann::json out = {{"format", kind}};
+    const long long d = spacedim_of(file, root + "/spacedim");
+    const SparseSizes s = read_sizes(file, root + (kind == "fclib_global" ? "/H" : "/W"));
+    const long long contacts = (kind == "fclib_global" ? s.n : s.m) / d;
+    out["spacedim"] = d;
+    out["contacts"] = contacts;
+    if (kind == "fclib_global") out["unknowns"] = read_sizes(file, root + "/M").n;
+    const std::vector<double> mu = file.reals(root + "/vectors/mu", {contacts}, root + " sizes", false);
+    if (!mu.empty()) {
+        out["mu_min"] = *std::min_element(mu.begin(), mu.end());
+        out["mu_max"] = *std::max_element(mu.begin(), mu.end());
+    }
+    out["has_solution"] = file.exists("/solution");
+    out["guesses"] = file.exists("/guesses/number_of_guesses") ? file.integer("/guesses/number_of_guesses") : 0;
+    nlohmann::json source = nlohmann::json::object();
+    describe_source(file, root, source);
+    for (auto it = source.begin(); it != source.end(); ++it) out[it.key()] = it.value();
+    return out;
 }
 
 #endif

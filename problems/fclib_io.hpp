@@ -1,14 +1,26 @@
 #pragma once
-/// FCLIB (HDF5) export and import of the contact QP as a frictionless `fclib_global` problem.
-/// Ref: FCLIB, fclib.h (the global problem  M v = H r + f,  u = H'v + w,  C*_mu ∋ u ⊥ r ∈ C_mu).
+/// FCLIB (HDF5) export and import of the contact QP.
+/// Ref: FCLIB, fclib.h (the global problem  M v = H r + f,  u = H'v + w,  C*_mu ∋ u ⊥ r ∈ C_mu;
+/// the local one  u = W r + q,  C*_mu ∋ u ⊥ r ∈ C_mu; each contact's u and r are (normal, tangents)).
 ///
-/// Mapping (exact, so a write/read round trip is bit for bit): v = x, M = A, f = b, spacedim 3,
-/// one contact per row i of J with mu_i = 0; H is n x 3m with column 3i = row i of J (the normal)
-/// and columns 3i+1, 3i+2 (the tangents) empty; w = (-c_i, 0, 0) per contact. With mu = 0 the
-/// cone condition reads r_N = lambda >= 0 ⊥ u_N = J_i x - c_i >= 0 and r_T = 0: our KKT system.
-/// x0 is stored as the first initial guess (/guesses), x_ref and lambda_ref, when known, as the
-/// solution (/solution: v = x_ref, r = (lambda_ref, 0, 0), u = J x_ref - c). The QP's metadata
-/// goes to /fclib_global/info/description as JSON; per-row contact metadata is not exported.
+/// Export, as a frictionless `fclib_global` problem: v = x, M = A, f = b, spacedim 3, one contact
+/// per row i of J with mu_i = 0; H is n x 3m with column 3i = row i of J (the normal) and columns
+/// 3i+1, 3i+2 (the tangents) empty; w = (-c_i, 0, 0) per contact. With mu = 0 the cone condition
+/// reads r_N = lambda >= 0 ⊥ u_N = J_i x - c_i >= 0 and r_T = 0: our KKT system. x0 is stored as
+/// the first initial guess (/guesses), x_ref and lambda_ref, when known, as the solution. The QP's
+/// metadata goes to /fclib_global/info/description as JSON; per-row contact metadata (kinds,
+/// depths, vertices) is not exported, so a .qpsnap -> FCLIB -> .qpsnap trip keeps A, b, x0, J, c
+/// and the references bit for bit but not the snapshot's bytes (nor its content hash).
+///
+/// Import, of files as real writers (Siconos, LMGC90, libfclib) write them: matrices as triplets
+/// in CSparse's convention (p = column indices, i = row indices, nz entries; p, i and x may hold
+/// nz or nzmax values), compressed columns (nz = -1) or rows (nz = -2); a symmetric matrix stored
+/// as one triangle is mirrored; spacedim 2 or 3 (the normal is each contact's first component).
+///   global: A = M, b = f, J = the normal columns of H (transposed), c = -w_N.
+///   local:  A = W_NN, b = -q_N, J = I, c = 0 (the normal block's LCP u_N = W_NN r_N + q_N).
+/// With mu = 0 on every contact this is exact (r_T = 0, so tangential entries carry no force).
+/// Friction is dropped only when asked (options.drop_friction), and then recorded in the QP's
+/// meta.provenance; the file's /solution is kept only when the mapping is exact.
 ///
 /// Built only when CMake finds pkg-config `fclib`; otherwise every function throws InputError
 /// saying so.
@@ -18,16 +30,33 @@
 
 namespace cb {
 
-/// True for the names convert treats as FCLIB files (.hdf5, .h5).
+/// True for the names convert writes as FCLIB files (.hdf5, .h5).
 bool is_fclib_path(const std::string& path);
 
 /// Writes atomically (temporary name in the same folder, then rename).
 void write_fclib_global(const std::string& path, const Qp& qp, const SnapshotExtras* extras = nullptr);
 
-/// Reads an `fclib_global` problem written as above and validates it like a snapshot. Throws
-/// InputError("PATH: FIELD: problem") for anything outside the mapping (equality constraints G,
-/// spacedim != 3, mu != 0, tangential entries in H or w): friction is never dropped silently.
-Qp read_fclib_global(const std::string& path, SnapshotExtras* extras = nullptr);
+struct FclibReadOptions {
+    bool drop_friction = false;  ///< mu != 0 accepted: its normal part only (recorded in meta.provenance)
+    bool symmetrise = false;     ///< A not symmetric to rounding: (A + A')/2 (recorded) instead of refused
+};
+
+/// Reads an `fclib_global` or `fclib_local` problem (whichever the file holds) and validates it
+/// like a snapshot. Throws InputError("PATH: FIELD: problem") naming the HDF5 dataset for anything
+/// outside the mapping: equality constraints (G, V/R), mu != 0 without drop_friction, bad sizes,
+/// indices, values, an asymmetric A, external links or external storage, n = 0.
+Qp read_fclib(const std::string& path, SnapshotExtras* extras = nullptr, const FclibReadOptions& options = {});
+
+/// read_fclib for a file that must hold an `fclib_global` problem.
+Qp read_fclib_global(const std::string& path, SnapshotExtras* extras = nullptr, const FclibReadOptions& options = {});
+
+/// "fclib_global", "fclib_local" or "" for an HDF5 file holding neither (or when not built).
+/// Opens no external file; throws InputError only when the file cannot be opened as HDF5.
+std::string fclib_kind(const std::string& path);
+
+/// A summary of an FCLIB file for `info` (kind, spacedim, contacts, unknowns, mu range, title,
+/// whether a solution and guesses are present), without reading its matrices.
+nlohmann::json describe_fclib(const std::string& path);
 
 /// The FCLIB library version compiled against, or "" when not built.
 std::string fclib_version();

@@ -1,7 +1,9 @@
-// libFuzzer entry point for the FCLIB reader (problems/fclib_io.cpp, issue 27). Each input is a
-// list of edits to a small valid FCLIB global problem (n = 3, m = 2: M in CSR, H in CSC, a start
-// point and a solution); the driver writes the edited file with plain HDF5 calls and gives it to
-// read_fclib_global, which must return a whole QP or throw cb::InputError. A crash, a sanitizer
+// libFuzzer entry point for the FCLIB reader (problems/fclib_io.cpp, issues 27 and 41). Each input
+// picks one of three small valid problems (a global one with M in CSR and H in CSC, a start point
+// and a solution; a global one as Siconos writes it, with triplets in CSparse's convention and M
+// as its upper triangle; a local one) and a list of edits to it; the driver writes the edited file
+// with plain HDF5 calls and gives it to read_fclib (friction dropped and asymmetry averaged or
+// not, by the input's length), which must return a whole QP or throw cb::InputError. A crash, a sanitizer
 // report, a hang, an exit() or any other exception is a finding. The HDF5 files are always
 // well-formed HDF5 (libhdf5 and libfclib are not instrumented, and fuzzing HDF5's own format is
 // not the point): what varies is every dataset of the FCLIB layout, its presence, type, rank,
@@ -44,6 +46,21 @@ const char* const FIELDS[] = {"/fclib_global/spacedim",
                               "/fclib_global/vectors/w",
                               "/fclib_global/vectors/mu",
                               "/fclib_global/info/description",
+                              "/fclib_global/info/title",
+                              "/fclib_local/spacedim",
+                              "/fclib_local/W/nzmax",
+                              "/fclib_local/W/m",
+                              "/fclib_local/W/n",
+                              "/fclib_local/W/nz",
+                              "/fclib_local/W/p",
+                              "/fclib_local/W/i",
+                              "/fclib_local/W/x",
+                              "/fclib_local/V/n",
+                              "/fclib_local/vectors/q",
+                              "/fclib_local/vectors/mu",
+                              "/solution/u",
+                              "/guesses/1/r",
+                              "/fclib_local",
                               "/guesses/number_of_guesses",
                               "/guesses/1/v",
                               "/solution/v",
@@ -100,6 +117,50 @@ void write_valid(cb::test::Hdf5Edit& f)
     f.put_reals("/solution/r", {0.0, 0.0, 0.0, 1.0, 0.0, 0.0});
 }
 
+/// The valid problem as Siconos and LMGC90 write it: the same QP with M (A = 2 I plus 0.5 at (0, 1))
+/// as its upper triangle in triplets (p = columns, i = rows, x with nzmax values), H in triplets.
+void write_valid_triplets(cb::test::Hdf5Edit& f)
+{
+    f.put_ints("/fclib_global/spacedim", {3}, {1});
+    f.put_ints("/fclib_global/M/nzmax", {5}, {1});
+    f.put_ints("/fclib_global/M/m", {3}, {1});
+    f.put_ints("/fclib_global/M/n", {3}, {1});
+    f.put_ints("/fclib_global/M/nz", {4}, {1});
+    f.put_ints("/fclib_global/M/p", {0, 1, 1, 2});
+    f.put_ints("/fclib_global/M/i", {0, 0, 1, 2});
+    f.put_reals("/fclib_global/M/x", {2.0, 0.5, 2.0, 2.0, 7.0});
+    f.put_ints("/fclib_global/H/nzmax", {2}, {1});
+    f.put_ints("/fclib_global/H/m", {3}, {1});
+    f.put_ints("/fclib_global/H/n", {6}, {1});
+    f.put_ints("/fclib_global/H/nz", {2}, {1});
+    f.put_ints("/fclib_global/H/p", {0, 3});
+    f.put_ints("/fclib_global/H/i", {0, 1});
+    f.put_reals("/fclib_global/H/x", {1.0, 1.0});
+    f.put_reals("/fclib_global/vectors/f", {1.0, 1.0, 1.0});
+    f.put_reals("/fclib_global/vectors/w", {0.0, 0.0, 0.0, -1.0, 0.0, 0.0});
+    f.put_reals("/fclib_global/vectors/mu", {0.3, 0.0});
+    f.put_text("/fclib_global/info/title", "LMGC dump");
+}
+
+/// A local problem of 2 contacts: W (6 x 6, CSR) with W_NN = [2 -1; -1 3], a solution and a guess.
+void write_valid_local(cb::test::Hdf5Edit& f)
+{
+    f.put_ints("/fclib_local/spacedim", {3}, {1});
+    f.put_ints("/fclib_local/W/nzmax", {8}, {1});
+    f.put_ints("/fclib_local/W/m", {6}, {1});
+    f.put_ints("/fclib_local/W/n", {6}, {1});
+    f.put_ints("/fclib_local/W/nz", {-2}, {1});
+    f.put_ints("/fclib_local/W/p", {0, 2, 3, 4, 6, 7, 8});
+    f.put_ints("/fclib_local/W/i", {0, 3, 1, 2, 0, 3, 4, 5});
+    f.put_reals("/fclib_local/W/x", {2.0, -1.0, 1.0, 1.0, -1.0, 3.0, 1.0, 1.0});
+    f.put_reals("/fclib_local/vectors/q", {-1.0, 0.3, 0.4, 2.0, 0.0, 0.0});
+    f.put_reals("/fclib_local/vectors/mu", {0.0, 0.0});
+    f.put_reals("/solution/r", {0.5, 0.0, 0.0, 0.0, 0.0, 0.0});
+    f.put_reals("/solution/u", {0.0, 0.0, 0.0, 1.5, 0.0, 0.0});
+    f.put_ints("/guesses/number_of_guesses", {1}, {1});
+    f.put_reals("/guesses/1/r", {0.1, 0.0, 0.0, 0.2, 0.0, 0.0});
+}
+
 void apply_edit(cb::test::Hdf5Edit& f, FuzzedDataProvider& in)
 {
     const std::string field = FIELDS[in.ConsumeIntegralInRange<size_t>(0, std::size(FIELDS) - 1)];
@@ -152,7 +213,17 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     FuzzedDataProvider in(data, size);
     {
         cb::test::Hdf5Edit file(path, true);
-        write_valid(file);
+        switch (size == 0 ? 0 : in.ConsumeIntegralInRange<int>(0, 2)) {
+        case 0:
+            write_valid(file);
+            break;
+        case 1:
+            write_valid_triplets(file);
+            break;
+        default:
+            write_valid_local(file);
+            break;
+        }
         for (int edits = 0; edits < 12 && in.remaining_bytes() > 0; ++edits) {
             try {
                 apply_edit(file, in);
@@ -163,7 +234,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
     try {
         cb::SnapshotExtras extras;
-        const cb::Qp qp = cb::read_fclib_global(path, &extras);
+        cb::FclibReadOptions options;
+        options.drop_friction = size % 2 == 1;
+        options.symmetrise = size % 3 == 0;
+        const cb::Qp qp = cb::read_fclib(path, &extras, options);
         // A returned problem must be whole: the dimensions agree.
         if (qp.b.size() != qp.n() || qp.x0.size() != qp.n() || qp.J.cols() != qp.n() || qp.c.size() != qp.m() ||
             qp.A.cols() != qp.n() || (extras.x_ref.size() != 0 && extras.x_ref.size() != qp.n()) ||

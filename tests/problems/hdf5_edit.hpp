@@ -64,6 +64,27 @@ public:
         H5Dclose(data);
         H5Sclose(space);
     }
+    /// NAME as an external link to OBJECT in FILE (HDF5 resolves it only when it is traversed).
+    void put_external_link(const std::string& name, const std::string& file, const std::string& object)
+    {
+        remove_with_parents(name);
+        if (H5Lcreate_external(file.c_str(), object.c_str(), m_file, name.c_str(), m_links, H5P_DEFAULT) < 0)
+            throw std::runtime_error("HDF5 cannot create the external link " + name);
+    }
+    /// A 1-D double dataset of `count` values stored in TARGET (external storage), none written:
+    /// HDF5 opens TARGET only when the data are read.
+    void put_external_storage(const std::string& name, hsize_t count, const std::string& target)
+    {
+        remove_with_parents(name);
+        const hid_t create = H5Pcreate(H5P_DATASET_CREATE);
+        H5Pset_external(create, target.c_str(), 0, count * sizeof(double));
+        const hid_t space = H5Screate_simple(1, &count, nullptr);
+        const hid_t data = H5Dcreate2(m_file, name.c_str(), H5T_NATIVE_DOUBLE, space, m_links, create, H5P_DEFAULT);
+        H5Sclose(space);
+        H5Pclose(create);
+        if (data < 0) throw std::runtime_error("HDF5 cannot create " + name);
+        H5Dclose(data);
+    }
     /// NAME as a fixed-length string dataset (as H5LTmake_dataset_string writes).
     void put_text(const std::string& name, const std::string& text)
     {

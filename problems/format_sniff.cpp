@@ -1,0 +1,160 @@
+// Format recognition by content (format_sniff.hpp): signatures, not file names.
+#include "problems/format_sniff.hpp"
+
+#include "problems/fclib_io.hpp"
+#include "problems/io_util.hpp"
+
+#include <cctype>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <sys/stat.h>
+#include <unistd.h>
+
+namespace cb {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// Up to `count` bytes at `offset` (fewer at the end of the file).
+std::string bytes_at(int fd, off_t offset, size_t count)
+{
+    std::string out(count, '\0');
+    const ssize_t got = ::pread(fd, &out[0], count, offset);
+    out.resize(got > 0 ? size_t(got) : 0);
+    return out;
+}
+
+const char HDF5_SIGNATURE[] = "\x89HDF\r\n\x1a\n";
+
+/// A text file of numbers whose first line is the space dimension (2 or 3) and whose next lines
+/// are integers: Siconos numerics' printInFile layout of a friction-contact problem.
+bool looks_like_siconos_dat(const std::string& head)
+{
+    if (head.empty()) return false;
+    for (const char ch : head)
+        if (!(std::isdigit(static_cast<unsigned char>(ch)) || std::isspace(static_cast<unsigned char>(ch)) ||
+              std::strchr("+-.eE", ch)))
+            return false;
+    size_t pos = head.find_first_not_of(" \t\r\n");
+    if (pos == std::string::npos) return false;
+    const size_t end = head.find_first_of("\r\n", pos);
+    if (end == std::string::npos) return false;
+    const std::string first = head.substr(pos, head.find_last_not_of(" \t", end - 1) + 1 - pos);
+    if (first != "2" && first != "3") return false;
+    // The next three lines hold one integer each (contacts, sizes).
+    pos = end;
+    for (int line = 0; line < 3; ++line) {
+        pos = head.find_first_not_of("\r\n", pos);
+        if (pos == std::string::npos) return false;
+        const size_t stop = head.find_first_of("\r\n", pos);
+        if (stop == std::string::npos) return false;
+        for (size_t k = pos; k < stop; ++k)
+            if (!std::isdigit(static_cast<unsigned char>(head[k])) && head[k] != ' ' && head[k] != '\t') return false;
+        pos = stop;
+    }
+    return true;
+}
+
+}  // namespace
+
+FileFormat sniff_format(const std::string& path)
+{
+    std::error_code ec;
+    const fs::file_status st = fs::status(path, ec);
+    if (!ec && fs::is_directory(st))
+        return fs::exists(fs::path(path) / "A.mtx", ec) ? FileFormat::MATRIX_MARKET_FOLDER : FileFormat::FOLDER;
+    const int fd = open_regular_file(path);  // a FIFO or device: refused here, never waited on
+    const std::string head = bytes_at(fd, 0, 2048);
+    struct stat info {};
+    ::fstat(fd, &info);
+    // HDF5 allows a user block of 512, 1024, 2048 ... bytes before its signature.
+    bool hdf5 = false;
+    for (off_t at = 0; at < info.st_size && at <= (off_t(1) << 20) && !hdf5; at = at == 0 ? 512 : 2 * at)
+        hdf5 = bytes_at(fd, at, 8) == std::string(HDF5_SIGNATURE, 8);
+    ::close(fd);
+    if (hdf5) {
+        std::string kind;
+        try {
+            kind = fclib_kind(path);
+        } catch (const InputError&) {
+            // HDF5 cannot open it: a damaged HDF5 file
+        }
+        return kind == "fclib_global"  ? FileFormat::FCLIB_GLOBAL
+               : kind == "fclib_local" ? FileFormat::FCLIB_LOCAL
+                                       : FileFormat::HDF5;
+    }
+    if (head.compare(0, 6, "\x93NUMPY") == 0) return FileFormat::NPY;
+    if (head.compare(0, 14, "%%MatrixMarket") == 0) return FileFormat::MATRIX_MARKET_FILE;
+    if (head.size() >= 9) {
+        std::uint64_t length = 0;
+        for (int k = 7; k >= 0; --k) length = (length << 8) | static_cast<unsigned char>(head[size_t(k)]);
+        if (length <= std::uint64_t(info.st_size) - 8 && head[8] == '{') return FileFormat::QPSNAP;
+    }
+    if (looks_like_siconos_dat(head)) return FileFormat::SICONOS_DAT;
+    return FileFormat::UNKNOWN;
+}
+
+std::string format_name(FileFormat format)
+{
+    switch (format) {
+    case FileFormat::QPSNAP:
+        return "a .qpsnap snapshot";
+    case FileFormat::FCLIB_GLOBAL:
+        return "an FCLIB fclib_global problem (HDF5)";
+    case FileFormat::FCLIB_LOCAL:
+        return "an FCLIB fclib_local problem (HDF5)";
+    case FileFormat::HDF5:
+        return fclib_version().empty() ? "an HDF5 file (FCLIB support is not built)"
+                                       : "an HDF5 file without an FCLIB problem";
+    case FileFormat::SICONOS_DAT:
+        return "a Siconos numerics text dump (.dat)";
+    case FileFormat::MATRIX_MARKET_FOLDER:
+        return "a Matrix Market folder";
+    case FileFormat::MATRIX_MARKET_FILE:
+        return "a single Matrix Market file";
+    case FileFormat::NPY:
+        return "a NumPy array (.npy)";
+    case FileFormat::FOLDER:
+        return "a folder without A.mtx";
+    case FileFormat::UNKNOWN:
+        break;
+    }
+    return "a file of unknown format";
+}
+
+void expect_qpsnap(const std::string& path, const std::string& command)
+{
+    const FileFormat format = sniff_format(path);
+    if (format == FileFormat::QPSNAP || format == FileFormat::UNKNOWN) return;
+    std::string how;
+    switch (format) {
+    case FileFormat::FCLIB_GLOBAL:
+    case FileFormat::FCLIB_LOCAL:
+    case FileFormat::MATRIX_MARKET_FOLDER:
+        how = "convert it first: contactbench convert " + path + " OUT.qpsnap" +
+              (format == FileFormat::MATRIX_MARKET_FOLDER ? ""
+                                                          : " (add --drop-friction to keep the normal part of a "
+                                                            "frictional problem)");
+        break;
+    case FileFormat::SICONOS_DAT:
+        how = "contactbench does not read it: write the problem as FCLIB (HDF5) with Siconos, then convert that";
+        break;
+    case FileFormat::MATRIX_MARKET_FILE:
+        how = "a problem is a folder of them (A.mtx b.mtx J.mtx c.mtx x0.mtx): convert the folder";
+        break;
+    case FileFormat::NPY:
+        how = "a snapshot holds a whole QP: write one from numpy/scipy arrays with plots/qpsnap.py's write_qpsnap";
+        break;
+    default:
+        how = "not a problem contactbench reads";
+        break;
+    }
+    const std::string reads =
+        command == "convert" ? "convert reads .qpsnap snapshots, Matrix Market folders and FCLIB files"
+        : command == "info"  ? "info reads .qpsnap snapshots and Matrix Market folders, and summarises FCLIB files"
+                             : command + " reads .qpsnap snapshots";
+    throw_input_error(path, "format", format_name(format) + ", not a .qpsnap snapshot (" + reads + "); " + how);
+}
+
+}  // namespace cb
