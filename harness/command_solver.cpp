@@ -255,8 +255,7 @@ void write_text_vector(const fs::path& path, const Vec& v)
 
 }  // namespace
 
-std::string expand_placeholders(const std::string& arg,
-                                const std::vector<std::pair<std::string, std::string>>& values)
+std::string expand_placeholders(const std::string& arg, const std::vector<std::pair<std::string, std::string>>& values)
 {
     std::string out;
     for (size_t i = 0; i < arg.size();) {
@@ -370,8 +369,8 @@ SolverResult CommandSolver::solve(const QpView& qp, const SolveContext& context)
     ProgramOptions options;
     options.time_limit_s = time_limit_s;
     options.workdir = work_dir.string();  // relative writes of the program stay in its work folder
-    const ProgramOutcome run = run_program(argv, (work_dir / "stdout.txt").string(),
-                                           (work_dir / "stderr.txt").string(), options);
+    const ProgramOutcome run =
+        run_program(argv, (work_dir / "stdout.txt").string(), (work_dir / "stderr.txt").string(), options);
     if (run.interrupted != 0) {  // Ctrl-C or a kill of the harness: the program is gone, so is its folder
         std::cerr << "command: " << strsignal(run.interrupted) << " received: the program's process group was "
                   << "signalled, its work folder " << (m_settings.keep_files ? "kept: " : "removed: ")
@@ -380,23 +379,23 @@ SolverResult CommandSolver::solve(const QpView& qp, const SolveContext& context)
         end_by_signal(run.interrupted);
     }
     if (run.peak_rss_bytes >= 0) note_child_peak_memory(run.peak_rss_bytes);  // in the record's peak
-    nlohmann::json info = {{"argv", argv},
-                           {"time_child_wall_s", run.wall_s},
-                           {"time_prepare_s", prepare_s},
-                           {"time_self_s", nullptr},
-                           {"time_source", "harness"},
-                           {"exit_status", run.exit_status},
-                           {"signal", run.signal},
-                           {"time_limit_s", time_limit_s},
-                           {"peak_rss_mb", run.peak_rss_bytes >= 0 ? nlohmann::json(run.peak_rss_bytes / 1048576.0)
-                                                                   : nlohmann::json()},
-                           {"orphans_killed", run.orphans_killed},
-                           {"stdout_bytes", run.stdout_bytes},
-                           {"stderr_bytes", run.stderr_bytes},
-                           {"output_capped", run.stdout_capped || run.stderr_capped},
-                           {"crashed", false},
-                           {"garbage", false},
-                           {"timed_out", run.timed_out}};
+    nlohmann::json info = {
+        {"argv", argv},
+        {"time_child_wall_s", run.wall_s},
+        {"time_prepare_s", prepare_s},
+        {"time_self_s", nullptr},
+        {"time_source", "harness"},
+        {"exit_status", run.exit_status},
+        {"signal", run.signal},
+        {"time_limit_s", time_limit_s},
+        {"peak_rss_mb", run.peak_rss_bytes >= 0 ? nlohmann::json(run.peak_rss_bytes / 1048576.0) : nlohmann::json()},
+        {"orphans_killed", run.orphans_killed},
+        {"stdout_bytes", run.stdout_bytes},
+        {"stderr_bytes", run.stderr_bytes},
+        {"output_capped", run.stdout_capped || run.stderr_capped},
+        {"crashed", false},
+        {"garbage", false},
+        {"timed_out", run.timed_out}};
     if (m_settings.keep_files) info["workdir"] = work_dir.string();
     const std::string stderr_tail = tail_of(work_dir / "stderr.txt");
     result.setup_s = prepare_s;
@@ -411,8 +410,9 @@ SolverResult CommandSolver::solve(const QpView& qp, const SolveContext& context)
         return finish(SolveStatus::TIME_LIMIT,
                       "command: killed at the time limit of " + nlohmann::json(time_limit_s).dump() +
                           " s (harness wall time of the child" +
-                          (common.time_limit_s > 0.0 ? std::string(")") : std::string("; the command solver's default "
-                                                                                      "when time_limit_s is 0)")));
+                          (common.time_limit_s > 0.0 ? std::string(")")
+                                                     : std::string("; the command solver's default "
+                                                                   "when time_limit_s is 0)")));
     if (!run.failure().empty()) {
         info["crashed"] = true;
         return finish(SolveStatus::DIVERGED, "command: the program " + run.failure() +

@@ -40,8 +40,7 @@ inline constexpr double DEFAULT_COMMAND_TIME_LIMIT_S = 600.0;
 
 /// argv's placeholders ("{snapshot}", ...) replaced by their values in one left-to-right pass:
 /// a value is never scanned again, so a path holding "{out}" stays as it is.
-std::string expand_placeholders(const std::string& arg,
-                                const std::vector<std::pair<std::string, std::string>>& values);
+std::string expand_placeholders(const std::string& arg, const std::vector<std::pair<std::string, std::string>>& values);
 
 /// The protocol version written into settings.json.
 inline constexpr int COMMAND_PROTOCOL_VERSION = 1;

@@ -32,12 +32,11 @@ size_t escape_length(const std::string& s, size_t i)
 size_t utf8_length(const std::string& s, size_t i, unsigned& cp)
 {
     const unsigned char c = static_cast<unsigned char>(s[i]);
-    size_t len = 0;
-    unsigned min = 0;
-    if (c >= 0xC2 && c <= 0xDF) len = 2, min = 0x80, cp = c & 0x1F;
-    else if (c >= 0xE0 && c <= 0xEF) len = 3, min = 0x800, cp = c & 0x0F;
-    else if (c >= 0xF0 && c <= 0xF4) len = 4, min = 0x10000, cp = c & 0x07;
-    else return 0;
+    // The lead byte gives the length, its payload bits and the smallest code point of that length.
+    const size_t len = c >= 0xF0 ? 4 : c >= 0xE0 ? 3 : 2;
+    const unsigned min = len == 4 ? 0x10000 : len == 3 ? 0x800 : 0x80;
+    if (c < 0xC2 || c > 0xF4) return 0;
+    cp = c & (len == 4 ? 0x07 : len == 3 ? 0x0F : 0x1F);
     if (i + len > s.size()) return 0;
     for (size_t k = 1; k < len; ++k) {
         const unsigned char d = static_cast<unsigned char>(s[i + k]);
@@ -66,8 +65,10 @@ std::string printable_text(const std::string& raw)
         } else if (c < 0x80) {
             out += raw[i++];
         } else if (unsigned cp = 0; const size_t len = utf8_length(raw, i, cp)) {
-            if (cp <= 0x9F) out += '?';  // a C1 control (U+009B is a CSI on some terminals)
-            else out.append(raw, i, len);
+            if (cp <= 0x9F)
+                out += '?';  // a C1 control (U+009B is a CSI on some terminals)
+            else
+                out.append(raw, i, len);
             i += len;
         } else {
             out += '?';

@@ -238,8 +238,10 @@ struct GuardArgs {
             break;
         }
         const pid_t reaped = ::waitpid(-1, nullptr, 0);
-        if (reaped > 0) ++report.orphans;
-        else if (errno == ECHILD) break;
+        if (reaped > 0)
+            ++report.orphans;
+        else if (errno == ECHILD)
+            break;
     }
     rusage children{};
     if (::getrusage(RUSAGE_CHILDREN, &children) == 0) report.maxrss_kb = std::max(report.maxrss_kb, children.ru_maxrss);
@@ -249,7 +251,7 @@ struct GuardArgs {
 
 // ---- the harness side ----
 
-int g_wake_fd = -1;                         // write end of the self-pipe
+int g_wake_fd = -1;                          // write end of the self-pipe
 volatile sig_atomic_t g_harness_signal = 0;  // the last signal received while the program ran
 void harness_on_signal(int sig)
 {
@@ -347,7 +349,8 @@ ProgramOutcome run_program(const std::vector<std::string>& argv, const std::stri
     args.push_back(nullptr);
     Fds held;
     auto pipe_or_throw = [&](int p[2]) {
-        if (::pipe2(p, O_CLOEXEC) != 0) throw std::runtime_error(std::string("run_program: pipe: ") + std::strerror(errno));
+        if (::pipe2(p, O_CLOEXEC) != 0)
+            throw std::runtime_error(std::string("run_program: pipe: ") + std::strerror(errno));
         held.fds.push_back(p[0]);
         held.fds.push_back(p[1]);
     };
@@ -433,8 +436,8 @@ ProgramOutcome run_program(const std::vector<std::string>& argv, const std::stri
                 continue;
             }
             if (p[i].fd == report_pipe[0]) {
-                const ssize_t got = ::read(report_pipe[0], reinterpret_cast<char*>(&report) + report_got,
-                                           sizeof report - report_got);
+                const ssize_t got =
+                    ::read(report_pipe[0], reinterpret_cast<char*>(&report) + report_got, sizeof report - report_got);
                 if (got > 0) report_got += size_t(got);
                 if (got == 0 || (got < 0 && errno != EINTR && errno != EAGAIN)) {
                     guard_done = true;

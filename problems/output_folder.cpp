@@ -15,12 +15,18 @@ namespace {
 const char* special_kind(fs::file_type type)
 {
     switch (type) {
-    case fs::file_type::symlink: return "is a symbolic link";
-    case fs::file_type::fifo: return "is a FIFO";
-    case fs::file_type::character: return "is a character device";
-    case fs::file_type::block: return "is a block device";
-    case fs::file_type::socket: return "is a socket";
-    default: return nullptr;
+    case fs::file_type::symlink:
+        return "is a symbolic link";
+    case fs::file_type::fifo:
+        return "is a FIFO";
+    case fs::file_type::character:
+        return "is a character device";
+    case fs::file_type::block:
+        return "is a block device";
+    case fs::file_type::socket:
+        return "is a socket";
+    default:
+        return nullptr;
     }
 }
 

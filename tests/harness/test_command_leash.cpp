@@ -135,9 +135,9 @@ TEST(CommandLeash, SigtermEndsProgramAndRemovesWorkFolder)
 {
     const fs::path d = fresh_dir("sigterm"), tmp = fresh_dir("sigterm/tmp");
     const fs::path snap = plane_snapshot(d), pid_file = d / "program.pid";
-    const fs::path prog = write_program(d / "ignore_term.sh", "trap '' TERM INT HUP\necho $$ > " + q(pid_file) +
-                                                                  ".tmp\nmv " + q(pid_file) + ".tmp " + q(pid_file) +
-                                                                  "\nwhile :; do sleep 1; done\n");
+    const fs::path prog =
+        write_program(d / "ignore_term.sh", "trap '' TERM INT HUP\necho $$ > " + q(pid_file) + ".tmp\nmv " +
+                                                q(pid_file) + ".tmp " + q(pid_file) + "\nwhile :; do sleep 1; done\n");
     const std::string argv = nlohmann::json(std::vector<std::string>{prog.string(), "{settings}"}).dump();
     const pid_t harness = ::fork();
     ASSERT_GE(harness, 0);
@@ -161,9 +161,10 @@ TEST(CommandLeash, SigtermEndsProgramAndRemovesWorkFolder)
     EXPECT_FALSE(process_exists(program)) << "the program " << program << " outlived the harness";
     if (process_exists(program)) ::kill(program, SIGKILL);
     EXPECT_TRUE(fs::is_empty(tmp)) << "work folder left in " << tmp;
-    EXPECT_NE(slurp(d / "harness.err").find("command: Terminated received: the program's process group was "
-                                            "signalled, its work folder removed: " +
-                                            tmp.string() + "/contactbench-command-"),
+    EXPECT_NE(slurp(d / "harness.err")
+                  .find("command: Terminated received: the program's process group was "
+                        "signalled, its work folder removed: " +
+                        tmp.string() + "/contactbench-command-"),
               std::string::npos)
         << slurp(d / "harness.err");
 }
@@ -185,14 +186,16 @@ TEST(CommandLeash, StderrEscapesStripped)
 {
     const fs::path d = fresh_dir("ansi");
     const fs::path snap = plane_snapshot(d);
-    write_program(d / "ansi.sh", "printf '\\033[2J\\033[31mFAKE: all runs converged\\033[0m\\a,\"q\"\\n' >&2\nexit 3\n");
+    write_program(d / "ansi.sh",
+                  "printf '\\033[2J\\033[31mFAKE: all runs converged\\033[0m\\a,\"q\"\\n' >&2\nexit 3\n");
     const Output o = run_in(d, "solve " + q(snap) + " --solver command --json rec.json --set " +
                                    argv_setting({(d / "ansi.sh").string(), "{settings}"}));
     EXPECT_EQ(o.out.find('\x1b'), std::string::npos) << o.out;
     EXPECT_EQ(o.err.find('\x1b'), std::string::npos) << o.err;
     const nlohmann::json rec = read_json_file((d / "rec.json").string());
-    EXPECT_EQ(rec["message"], "command: the program exited with status 3; stderr: FAKE: all runs converged ,\"q\"; solver "
-                              "returned x of size 0, measured at x0");
+    EXPECT_EQ(rec["message"],
+              "command: the program exited with status 3; stderr: FAKE: all runs converged ,\"q\"; solver "
+              "returned x of size 0, measured at x0");
 }
 
 // C10: a program that touches ~200 MiB shows in the record's peak.
@@ -222,7 +225,8 @@ TEST(CommandLeash, RelativeWritesStayInTheWorkFolder)
     const fs::path d = fresh_dir("relative");
     const fs::path snap = plane_snapshot(d);
     write_program(d / "relative.sh", "echo written > escaped_by_command.txt\npwd > \"$1/../cwd.txt\"\n"
-                                     "cp \"$1/../cwd.txt\" " + q(d / "cwd_seen.txt") + "\nexit 1\n");
+                                     "cp \"$1/../cwd.txt\" " +
+                                         q(d / "cwd_seen.txt") + "\nexit 1\n");
     const Output o = run_in(d, "solve " + q(snap) + " --solver command --json rec.json --set " +
                                    argv_setting({"./relative.sh", "{out}", "{snapshot}"}));
     EXPECT_EQ(o.status, 0) << o.err;

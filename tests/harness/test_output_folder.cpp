@@ -140,3 +140,31 @@ TEST(OutputFolder, SubfolderRules)
     }
     EXPECT_NO_THROW(check_output_entry((d / "missing").string()));
 }
+
+// solve --save-solution: a planted x.mtx link is refused before the solve; its target is untouched.
+TEST(OutputFolder, SaveSolutionRefusesPlantedLink)
+{
+    const fs::path d = fresh_dir("save_solution");
+    write_suite(d);
+    std::ofstream(d / "victim.txt") << "precious\n";
+    fs::create_directories(d / "sol");
+    fs::create_symlink(d / "victim.txt", d / "sol" / "x.mtx");
+    const Output o = run_in(d, "solve a.qpsnap --solver pgs --save-solution sol");
+    EXPECT_EQ(o.status, 2);
+    EXPECT_EQ(o.err, "contactbench solve: error: sol/x.mtx: is a symbolic link: " + REFUSAL);
+    EXPECT_EQ(o.out, "");  // refused before the solve
+    EXPECT_EQ(slurp(d / "victim.txt"), "precious\n");
+}
+
+// stress --out: a planted runs link is refused before the first case runs.
+TEST(OutputFolder, StressRefusesPlantedRunsLink)
+{
+    const fs::path d = fresh_dir("stress");
+    fs::create_directories(d / "victim");
+    fs::create_directories(d / "st");
+    fs::create_directory_symlink(d / "victim", d / "st" / "runs");
+    const Output o = run_in(d, "stress --quick --out st");
+    EXPECT_EQ(o.status, 2);
+    EXPECT_EQ(o.err, "contactbench stress: error: st/runs: is a symbolic link: " + REFUSAL);
+    EXPECT_TRUE(fs::is_empty(d / "victim"));
+}

@@ -117,8 +117,8 @@ TEST(ProgramRun, PeakMemoryOfTheProgram)
 {
     const fs::path d = fresh_dir("peak");
     const ProgramOutcome run =
-        run_program({"/usr/bin/python3", "-c", "b = b'x' * (200 * 1024 * 1024); print(len(b))"},
-                    (d / "o.txt").string(), (d / "e.txt").string(), ProgramOptions{60, "", PROGRAM_OUTPUT_CAP_BYTES, 2.0});
+        run_program({"/usr/bin/python3", "-c", "b = b'x' * (200 * 1024 * 1024); print(len(b))"}, (d / "o.txt").string(),
+                    (d / "e.txt").string(), ProgramOptions{60, "", PROGRAM_OUTPUT_CAP_BYTES, 2.0});
     ASSERT_EQ(run.failure(), "") << test::slurp(d / "e.txt");
     EXPECT_GE(run.peak_rss_bytes, 200L * 1024 * 1024);
 }
@@ -137,10 +137,9 @@ TEST(ProgramRun, TimeLimitKillsTheGroup)
 // C7: a substituted value is never scanned again for placeholders.
 TEST(CommandPlaceholders, ExpandedOnce)
 {
-    const std::vector<std::pair<std::string, std::string>> values = {
-        {"{snapshot}", "/t/ph{out}x/problem.qpsnap"},
-        {"{settings}", "/t/ph{settings}y/settings.json"},
-        {"{out}", "/t/ph{out}x/out"}};
+    const std::vector<std::pair<std::string, std::string>> values = {{"{snapshot}", "/t/ph{out}x/problem.qpsnap"},
+                                                                     {"{settings}", "/t/ph{settings}y/settings.json"},
+                                                                     {"{out}", "/t/ph{out}x/out"}};
     EXPECT_EQ(expand_placeholders("{settings}", values), "/t/ph{settings}y/settings.json");
     EXPECT_EQ(expand_placeholders("{snapshot}", values), "/t/ph{out}x/problem.qpsnap");
     EXPECT_EQ(expand_placeholders("--o={out}/x,{unknown},{", values), "--o=/t/ph{out}x/out/x,{unknown},{");
@@ -151,7 +150,11 @@ TEST(PrintableText, EscapesStrippedControlsReplaced)
 {
     EXPECT_EQ(printable_text("\x1b[2J\x1b[31mFAKE: all runs converged\x1b[0m\a,\"q\"\n"),
               "FAKE: all runs converged ,\"q\"\n");
-    EXPECT_EQ(printable_text("a\x1b]0;title\x07" "b\x1b]2;t\x1b\\c\rd\te"), "abc d\te");
-    EXPECT_EQ(printable_text("caf\xc3\xa9 \xc2\x9b" "1m \xff\xfe"), "caf\xc3\xa9 ?1m ??");  // C1 CSI, bad UTF-8
+    EXPECT_EQ(printable_text("a\x1b]0;title\x07"
+                             "b\x1b]2;t\x1b\\c\rd\te"),
+              "abc d\te");
+    EXPECT_EQ(printable_text("caf\xc3\xa9 \xc2\x9b"
+                             "1m \xff\xfe"),
+              "caf\xc3\xa9 ?1m ??");  // C1 CSI, bad UTF-8
     EXPECT_EQ(printable_text("tail\x1b["), "tail");
 }
