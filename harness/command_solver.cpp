@@ -389,6 +389,8 @@ SolverResult CommandSolver::solve(const QpView& qp, const SolveContext& context)
         {"signal", run.signal},
         {"time_limit_s", time_limit_s},
         {"peak_rss_mb", run.peak_rss_bytes >= 0 ? nlohmann::json(run.peak_rss_bytes / 1048576.0) : nlohmann::json()},
+        {"peak_floor_mb",
+         run.start_rss_bytes >= 0 ? nlohmann::json(run.start_rss_bytes / 1048576.0) : nlohmann::json()},
         {"orphans_killed", run.orphans_killed},
         {"stdout_bytes", run.stdout_bytes},
         {"stderr_bytes", run.stderr_bytes},

@@ -14,6 +14,8 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <fstream>
+#include <sstream>
 #include <stdexcept>
 
 namespace cb {
@@ -326,6 +328,20 @@ private:
     struct sigaction m_old[3];
 };
 
+/// VmRSS of this process in bytes, or -1.
+long resident_bytes()
+{
+    std::ifstream status("/proc/self/status");
+    std::string line;
+    while (std::getline(status, line))
+        if (line.rfind("VmRSS:", 0) == 0) {
+            long kib = -1;
+            std::istringstream(line.substr(6)) >> kib;
+            return kib >= 0 ? kib * 1024 : -1;
+        }
+    return -1;
+}
+
 /// Closes the descriptors it holds unless released.
 struct Fds {
     std::vector<int> fds;
@@ -379,6 +395,7 @@ ProgramOutcome run_program(const std::vector<std::string>& argv, const std::stri
                                options.time_limit_s,
                                options.grace_s,
                                ::getpid()};
+    const long start_rss = resident_bytes();
     const SignalForwarding forwarding(wake_pipe[1]);
     // The guard must not run our handler before it installs its own: block the signals over fork.
     sigset_t block, old_mask;
@@ -471,6 +488,7 @@ ProgramOutcome run_program(const std::vector<std::string>& argv, const std::stri
     outcome.timed_out = report.timed_out != 0;
     outcome.orphans_killed = report.orphans;
     outcome.peak_rss_bytes = report.maxrss_kb >= 0 ? report.maxrss_kb * 1024L : -1;  // kB on Linux
+    outcome.start_rss_bytes = start_rss;
     if (report.exec_stage != 0) {
         outcome.exec_failed = true;
         outcome.exec_error = std::string(report.exec_stage == 1 ? "chdir " + options.workdir : "exec " + argv[0]) +

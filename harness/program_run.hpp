@@ -10,7 +10,7 @@
 ///    the group (setsid) are re-parented to it when their parent ends, and are killed and reaped
 ///    once the program has ended, so nothing the program started outlives it;
 ///  - reaps the program with wait4, so its peak resident memory (and that of every descendant)
-///    is known;
+///    is known (with a floor: ProgramOutcome::start_rss_bytes);
 ///  - tells exec failures (a CLOEXEC pipe carries errno) from a program that itself exits 127.
 /// The harness reads the program's stdout and stderr through pipes into two files, each capped
 /// at PROGRAM_OUTPUT_CAP_BYTES: beyond it the bytes are drained and counted, not stored, and the
@@ -43,6 +43,10 @@ struct ProgramOutcome {
     int interrupted = 0;       ///< SIGINT/SIGTERM/SIGHUP the harness received and forwarded (0: none)
     double wall_s = 0.0;       ///< fork to reaping, on the guard's clock
     long peak_rss_bytes = -1;  ///< largest peak resident set of the program and its descendants
+    /// This process's resident memory when the program was started. Linux counts the pages a
+    /// forked child holds before exec in its peak, so peak_rss_bytes is at least about this much
+    /// even for a tiny program: a peak at this floor means the program's own peak is at most it.
+    long start_rss_bytes = -1;
     int orphans_killed = 0;    ///< descendants still running after the program ended, killed
     std::uint64_t stdout_bytes = 0, stderr_bytes = 0;  ///< as written by the program
     bool stdout_capped = false, stderr_capped = false;

@@ -121,6 +121,8 @@ TEST(ProgramRun, PeakMemoryOfTheProgram)
                     (d / "e.txt").string(), ProgramOptions{60, "", PROGRAM_OUTPUT_CAP_BYTES, 2.0});
     ASSERT_EQ(run.failure(), "") << test::slurp(d / "e.txt");
     EXPECT_GE(run.peak_rss_bytes, 200L * 1024 * 1024);
+    EXPECT_GT(run.start_rss_bytes, 0);  // the floor: this test process's resident memory
+    EXPECT_LT(run.start_rss_bytes, run.peak_rss_bytes);
 }
 
 // The time limit kills a program that ignores SIGTERM.
