@@ -328,15 +328,16 @@ private:
     struct sigaction m_old[3];
 };
 
-/// VmRSS of this process in bytes, or -1.
+/// RssAnon of this process in bytes, or -1: the part of its resident memory a forked child holds
+/// page tables for (file-backed pages are faulted in afresh), so the part that counts in its peak.
 long resident_bytes()
 {
     std::ifstream status("/proc/self/status");
     std::string line;
     while (std::getline(status, line))
-        if (line.rfind("VmRSS:", 0) == 0) {
+        if (line.rfind("RssAnon:", 0) == 0) {
             long kib = -1;
-            std::istringstream(line.substr(6)) >> kib;
+            std::istringstream(line.substr(8)) >> kib;
             return kib >= 0 ? kib * 1024 : -1;
         }
     return -1;

@@ -43,8 +43,8 @@ struct ProgramOutcome {
     int interrupted = 0;       ///< SIGINT/SIGTERM/SIGHUP the harness received and forwarded (0: none)
     double wall_s = 0.0;       ///< fork to reaping, on the guard's clock
     long peak_rss_bytes = -1;  ///< largest peak resident set of the program and its descendants
-    /// This process's resident memory when the program was started. Linux counts the pages a
-    /// forked child holds before exec in its peak, so peak_rss_bytes is at least about this much
+    /// This process's anonymous resident memory (RssAnon) when the program was started. Linux
+    /// counts the pages a forked child holds before exec in its peak, so peak_rss_bytes is at least about this much
     /// even for a tiny program: a peak at this floor means the program's own peak is at most it.
     long start_rss_bytes = -1;
     int orphans_killed = 0;    ///< descendants still running after the program ended, killed
