@@ -154,7 +154,9 @@ void choose_out_and_shard(const CommandLine& cl, const Suite& suite, std::string
 /// planted DIR/runs link would send the run files, and --fresh's deletions, elsewhere.
 void open_out_dir(const std::string& out, bool fresh)
 {
-    make_output_folder(out);
+    std::error_code ec;
+    fs::create_directories(out, ec);
+    if (ec) throw_input_error(out, "--out", "cannot create the results folder: " + ec.message());
     make_output_subfolder(out, "runs");
     for (const char* name : TOP_FILES) check_output_entry((fs::path(out) / name).string());
     check_output_entries((fs::path(out) / "runs").string(),
