@@ -2,6 +2,7 @@
 //                     [--h SECONDS] [--decouple-seed S]
 // The price of decoupling along whole chains (docs/simulator.md "The price of decoupling").
 #include "harness/cli.hpp"
+#include "harness/command_solver.hpp"
 #include "harness/commands.hpp"
 #include "harness/sim_step_solver.hpp"
 #include "harness/suite.hpp"
@@ -23,10 +24,10 @@ int cmd_chains(const Args& args)
 {
     const CommandLine cl("chains", args,
                          {"--frames", "--out", "--data", "--exact", "--orders", "--h", "--decouple-seed"},
-                         {"--control"});
+                         {"--control", "--allow-commands"});
     const std::string usage =
         "usage: contactbench chains SCENE.json [--frames N] [--out DIR] [--data DIR] [--exact NAME]\n"
-        "       [--orders LIST] [--h SECONDS] [--decouple-seed S] [--control]\n"
+        "       [--orders LIST] [--h SECONDS] [--decouple-seed S] [--control] [--allow-commands]\n"
         "Steps the scene from the same start with several chains at once and compares them frame by frame:\n"
         "  exact          the exact solver on every detected row, tol 1e-8 (the reference)\n"
         "  exact-tol1e-6  the same at tol 1e-6: its distance to the reference is the noise floor\n"
@@ -50,7 +51,9 @@ int cmd_chains(const Args& args)
         "  --decouple-seed S  seed of the random order (step s uses S + s; default 0)\n"
         "  --control      one more chain, authors-exact: the exact solver (tol 1e-8) on the rows the\n"
         "                 authors' order keeps, which separates the price of the dropped rows from the\n"
-        "                 decoupled solver's own error\n";
+        "                 decoupled solver's own error\n"
+        "  --allow-commands  run a `command` solver (an external program) that the scene names; the scene\n"
+        "                 must also say \"allow_commands\": true\n";
     if (cl.help()) {
         std::cout << usage;
         return 0;
@@ -92,6 +95,8 @@ int cmd_chains(const Args& args)
         if (opt.render_chain.empty() || order == "authors") opt.render_chain = order;
     }
     if (cl.has("--control")) opt.chains.push_back({"authors-exact", exact, {{"tol", REFERENCE_TOL}}, "authors"});
+    for (const auto& chain : opt.chains)
+        require_command_opt_in(chain.solver, scene_path, scene.allow_commands, cl.has("--allow-commands"));
     std::cerr << scene.name << ": chains exact (" << exact << ", tol 1e-8), exact-tol1e-6 (" << exact << ")";
     for (size_t c = 2; c < opt.chains.size(); ++c)
         std::cerr << ", " << opt.chains[c].label << " (" << opt.chains[c].solver << ")";

@@ -7,6 +7,7 @@
 #include "harness/suite.hpp"   // fnv1a_hex
 #include "harness/timing_hygiene.hpp"
 #include "problems/io_util.hpp"
+#include "problems/output_folder.hpp"
 #include "solvers/solver.hpp"  // solve_status_from_string
 
 #include <filesystem>
@@ -212,7 +213,7 @@ int cmd_merge(const Args& args)
     refuse_foreign_out(out, first);
 
     std::error_code ec;
-    fs::create_directories(fs::path(out) / "runs", ec);
+    make_output_subfolder(out, "runs");  // issue 40: never through a planted OUT/runs link
     if (ec) throw_input_error(out, "", "cannot create the folder: " + ec.message());
     nlohmann::json merged_from = nlohmann::json::array();
     size_t copied = 0, duplicates = 0;

@@ -24,6 +24,7 @@
 #include "harness/slurm.hpp"
 #include "harness/suite.hpp"
 #include "problems/format_sniff.hpp"
+#include "problems/output_folder.hpp"
 #include "problems/qpsnap.hpp"
 #include "solvers/registry.hpp"
 
@@ -105,16 +106,19 @@ nlohmann::json suite_in(const std::string& out)
     return nullptr;
 }
 
-/// --fresh: removes what `run` writes in DIR (and nothing else).
+/// The files `run` writes at DIR's top level.
+const char* const TOP_FILES[] = {"summary.csv", "suite.json", "suite.pending.json", "provenance.json", "jobs.json"};
+
+/// --fresh: removes what `run` writes in DIR (and nothing else). open_out_dir has checked that
+/// none of it is a link or a special file, and that DIR/runs is a real folder.
 void clear_out_dir(const std::string& out)
 {
     std::error_code ec;
     const fs::path runs = fs::path(out) / "runs";
-    if (fs::is_directory(runs))
+    if (fs::symlink_status(runs, ec).type() == fs::file_type::directory)
         for (const auto& entry : fs::directory_iterator(runs))
             if (entry.path().extension() == ".json") fs::remove(entry.path(), ec);
-    for (const char* name : {"summary.csv", "suite.json", "suite.pending.json", "provenance.json", "jobs.json"})
-        fs::remove(fs::path(out) / name, ec);
+    for (const char* name : TOP_FILES) fs::remove(fs::path(out) / name, ec);
 }
 
 std::string sci(double v)
@@ -146,12 +150,18 @@ void choose_out_and_shard(const CommandLine& cl, const Suite& suite, std::string
     }
 }
 
-/// Creates DIR/runs, locks DIR, and with --fresh clears what an earlier run wrote.
+/// Creates DIR/runs, locks DIR, and with --fresh clears what an earlier run wrote. Nothing `run`
+/// writes or deletes in DIR may be a link or a special file (problems/output_folder.hpp): a
+/// planted DIR/runs link would send the run files, and --fresh's deletions, elsewhere.
 void open_out_dir(const std::string& out, bool fresh)
 {
     std::error_code ec;
-    fs::create_directories(fs::path(out) / "runs", ec);
+    fs::create_directories(out, ec);
     if (ec) throw_input_error(out, "--out", "cannot create the results folder: " + ec.message());
+    make_output_subfolder(out, "runs");
+    for (const char* name : TOP_FILES) check_output_entry((fs::path(out) / name).string());
+    check_output_entries((fs::path(out) / "runs").string(),
+                         [](const std::string& name) { return fs::path(name).extension() == ".json"; });
     lock_out_dir(out);
     if (fresh) clear_out_dir(out);
 }

@@ -1,6 +1,7 @@
 // contactbench simulate SCENE.json [--frames N] [--out DIR] [--data DIR] [--solver NAME] [--decouple ORDER]
 //                       [--decouple-seed S] [--h SECONDS] [--no-snapshots]
 #include "harness/cli.hpp"
+#include "harness/command_solver.hpp"
 #include "harness/commands.hpp"
 #include "harness/sim_step_solver.hpp"
 #include "harness/suite.hpp"
@@ -14,10 +15,10 @@ int cmd_simulate(const Args& args)
 {
     const CommandLine cl("simulate", args,
                          {"--frames", "--out", "--data", "--solver", "--decouple", "--decouple-seed", "--h"},
-                         {"--no-snapshots", "--version"});
+                         {"--no-snapshots", "--version", "--allow-commands"});
     const std::string usage =
         "usage: contactbench simulate SCENE.json [--frames N] [--out DIR] [--data DIR] [--solver NAME]\n"
-        "       [--decouple ORDER] [--decouple-seed S] [--h SECONDS] [--no-snapshots]\n"
+        "       [--decouple ORDER] [--decouple-seed S] [--h SECONDS] [--no-snapshots] [--allow-commands]\n"
         "  SCENE.json     a scene (keys: scenes/README.md), or one of the authors' .ini scene files\n"
         "  --frames N     simulate N frames instead of the scene's \"frames\"\n"
         "  --out DIR      output folder (default results/sim/<scene name>): snapshots/*.qpsnap (one per\n"
@@ -34,6 +35,8 @@ int cmd_simulate(const Args& args)
         "  --h SECONDS    time step instead of the scene's; a frame keeps its duration, so it must be a\n"
         "                 whole number of steps (e.g. half the scene's step: two steps per frame)\n"
         "  --no-snapshots write no .qpsnap files\n"
+        "  --allow-commands  run a `command` solver (an external program) that the scene names; the scene\n"
+        "                 must also say \"allow_commands\": true\n"
         "  --version      print the simulator version (the key of cached simulations) and exit\n"
         "A simulation into an existing DIR replaces the earlier one's files. While it runs the tables are\n"
         "steps.csv.partial and frames.csv.partial (rows appended a whole frame at a time); at the end they\n"
@@ -67,6 +70,8 @@ int cmd_simulate(const Args& args)
         }
         scene.solver_settings = replaced.settings;
     }
+    require_command_opt_in(cl.value("--solver", scene.solver), scene_path, scene.allow_commands,
+                           cl.has("--allow-commands"));
     if (no_data)  // said once the scene is known to be valid, so that an input error stands alone
         std::cerr << "simulate: no authors' data in " << paper_data_cache()
                   << " (`make paper-data` writes it); \"data:\" meshes use their stand-ins\n";

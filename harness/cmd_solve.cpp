@@ -6,6 +6,7 @@
 #include "harness/runner.hpp"
 #include "harness/set_arguments.hpp"
 #include "problems/format_sniff.hpp"
+#include "problems/output_folder.hpp"
 #include "problems/qpsnap.hpp"
 #include "solvers/registry.hpp"
 
@@ -94,6 +95,8 @@ int cmd_solve(const Args& args)
     if (!solution_dir.empty() && std::filesystem::exists(solution_dir) && !std::filesystem::is_directory(solution_dir))
         throw_input_error(solution_dir, "--save-solution",
                           "exists and is not a folder (x.mtx and lambda.mtx are written into a folder)");
+    if (!solution_dir.empty())  // never written through a planted link (problems/output_folder.hpp)
+        for (const char* file : {"/x.mtx", "/lambda.mtx"}) check_output_entry(solution_dir + file);
 
     RunOptions options;
     options.record_history = cl.has("--history");

@@ -2,6 +2,7 @@
 #include "harness/cli.hpp"
 #include "harness/commands.hpp"
 #include "harness/stress.hpp"
+#include "problems/output_folder.hpp"
 
 #include <iostream>
 #include <sstream>
@@ -51,6 +52,10 @@ int cmd_stress(const Args& args)
         return 0;
     }
     options.out_dir = cl.path("--out", "results/stress");
+    if (!options.out_dir.empty()) {  // checked before the first case, not after it (problems/output_folder.hpp)
+        make_output_subfolder(options.out_dir, "runs");
+        for (const char* file : {"/stability.csv", "/stability.md"}) check_output_entry(options.out_dir + file);
+    }
     options.time_limit_s = cl.number("--time-limit", 5.0);
     if (!(options.time_limit_s > 0)) throw_input_error("stress", "--time-limit", "must be > 0");
     options.tol = cl.number("--tol", 1e-6);

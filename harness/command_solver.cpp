@@ -2,17 +2,21 @@
 #include "harness/command_solver.hpp"
 #include "harness/temp_folder.hpp"
 
+#include "harness/printable_text.hpp"
 #include "harness/program_run.hpp"
 #include "harness/results.hpp"
 #include "problems/io_util.hpp"
 #include "problems/matrix_market.hpp"
 #include "problems/qpsnap.hpp"
 #include "problems/solution_io.hpp"
+#include "solvers/peak_memory.hpp"
 
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
+#include <iostream>
 #include <limits>
 #include <optional>
 
@@ -75,14 +79,29 @@ std::vector<std::string> read_argv(const nlohmann::json& settings)
     return out;
 }
 
-std::string replace_all(std::string s, const std::string& from, const std::string& to)
+/// Arguments that name an existing file or folder relative to where contactbench was started
+/// are made absolute, since the program starts in its work folder (argv[0] only when it has a
+/// '/': a bare name is looked up in PATH). Arguments with a placeholder become absolute paths
+/// or numbers anyway.
+std::vector<std::string> absolute_arguments(const std::vector<std::string>& argv)
 {
-    for (size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size()))
-        s.replace(at, from.size(), to);
-    return s;
+    std::vector<std::string> out;
+    for (size_t i = 0; i < argv.size(); ++i) {
+        const std::string& a = argv[i];
+        std::error_code ec;
+        const bool candidate = !a.empty() && a[0] != '/' && a.find('{') == std::string::npos &&
+                               (i > 0 || a.find('/') != std::string::npos);
+        if (candidate && fs::exists(fs::symlink_status(a, ec))) {
+            const fs::path absolute = fs::absolute(a, ec);
+            out.push_back(ec ? a : absolute.lexically_normal().string());
+        } else {
+            out.push_back(a);
+        }
+    }
+    return out;
 }
 
-/// The last `max_chars` of a text file on one line (for messages).
+/// The last `max_chars` of a text file on one line, made printable (for messages and records).
 std::string tail_of(const fs::path& path, size_t max_chars = 300)
 {
     std::string text;
@@ -91,8 +110,13 @@ std::string tail_of(const fs::path& path, size_t max_chars = 300)
     } catch (const InputError&) {
         return "";
     }
+    text = printable_text(text);
     while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
-    if (text.size() > max_chars) text = "..." + text.substr(text.size() - max_chars);
+    if (text.size() > max_chars) {  // cut at a character boundary, not inside a UTF-8 sequence
+        size_t from = text.size() - max_chars;
+        while (from < text.size() && (static_cast<unsigned char>(text[from]) & 0xC0) == 0x80) ++from;
+        text = "..." + text.substr(from);
+    }
     for (auto& ch : text)
         if (ch == '\n' || ch == '\r' || ch == '\t') ch = ' ';
     return text;
@@ -164,7 +188,7 @@ ProgramReport read_report(const fs::path& path)
     if (j.contains("message")) {
         if (!j["message"].is_string())
             throw_input_error(where, "/message", "expected a string, got " + j["message"].dump());
-        report.message = j["message"].get<std::string>();
+        report.message = printable_text(j["message"].get<std::string>());
     }
     if (j.contains("history")) {
         if (!j["history"].is_array()) throw_input_error(where, "/history", "expected an array of objects");
@@ -231,6 +255,24 @@ void write_text_vector(const fs::path& path, const Vec& v)
 
 }  // namespace
 
+std::string expand_placeholders(const std::string& arg, const std::vector<std::pair<std::string, std::string>>& values)
+{
+    std::string out;
+    for (size_t i = 0; i < arg.size();) {
+        bool replaced = false;
+        if (arg[i] == '{')
+            for (const auto& [name, value] : values)
+                if (arg.compare(i, name.size(), name) == 0) {
+                    out += value;  // never scanned again: a value holding "{out}" stays as it is
+                    i += name.size();
+                    replaced = true;
+                    break;
+                }
+        if (!replaced) out += arg[i++];
+    }
+    return out;
+}
+
 CommandSettings CommandSettings::from_json(const nlohmann::json& settings_in)
 {
     const nlohmann::json settings = settings_in.is_null() ? nlohmann::json::object() : settings_in;
@@ -260,6 +302,8 @@ SolverResult CommandSolver::solve(const QpView& qp, const SolveContext& context)
     SolverResult result;
     result.native_residual = std::numeric_limits<double>::quiet_NaN();
     const CommonSettings& common = m_settings.common;
+    // No limit asked for: the program still gets one, so that a hung program cannot hold the harness.
+    const double time_limit_s = common.time_limit_s > 0.0 ? common.time_limit_s : DEFAULT_COMMAND_TIME_LIMIT_S;
     std::optional<TempFolder> folder;
     try {
         folder.emplace("contactbench-command", m_settings.keep_files);
@@ -269,9 +313,10 @@ SolverResult CommandSolver::solve(const QpView& qp, const SolveContext& context)
         result.message = std::string("command: ") + e.what();
         return result;
     }
-    const TempFolder& work = *folder;
-    const fs::path snapshot = work.path() / "problem.qpsnap", settings_path = work.path() / "settings.json",
-                   out = work.path() / "out";
+    // Absolute (a relative $TMPDIR too): the program starts inside it, and argv names its files.
+    const fs::path work_dir = fs::absolute(folder->path());
+    const fs::path snapshot = work_dir / "problem.qpsnap", settings_path = work_dir / "settings.json",
+                   out = work_dir / "out";
     fs::create_directories(out);
 
     // The problem exactly as this solver is given it (decoupled rows when the harness decoupled).
@@ -285,22 +330,22 @@ SolverResult CommandSolver::solve(const QpView& qp, const SolveContext& context)
                                     {"tol", common.tol},
                                     {"stop", to_string(common.stop)},
                                     {"max_iterations", common.max_iterations},
-                                    {"time_limit_s", common.time_limit_s},
+                                    {"time_limit_s", time_limit_s},
                                     {"seed", common.seed},
                                     {"accepts", m_settings.accepts},
                                     {"x0", "the snapshot's array x0"},
                                     {"lambda0", nullptr},
                                     {"mtx", nullptr}};
     if (context.lambda0 && context.lambda0->size() == qp.m()) {
-        write_text_vector(work.path() / "lambda0.txt", *context.lambda0);
-        settings_file["lambda0"] = (work.path() / "lambda0.txt").string();
+        write_text_vector(work_dir / "lambda0.txt", *context.lambda0);
+        settings_file["lambda0"] = (work_dir / "lambda0.txt").string();
     }
     // The same problem as a Matrix Market folder, only for a program that names {mtx}.
     bool wants_mtx = false;
     for (const auto& a : m_settings.argv) wants_mtx = wants_mtx || a.find("{mtx}") != std::string::npos;
     if (wants_mtx) {
-        write_matrix_market_folder((work.path() / "problem_mtx").string(), problem);
-        settings_file["mtx"] = (work.path() / "problem_mtx").string();
+        write_matrix_market_folder((work_dir / "problem_mtx").string(), problem);
+        settings_file["mtx"] = (work_dir / "problem_mtx").string();
     }
     write_json_atomic(settings_path.string(), settings_file);
     auto number = [](double v) {
@@ -312,33 +357,49 @@ SolverResult CommandSolver::solve(const QpView& qp, const SolveContext& context)
         {"{snapshot}", snapshot.string()},
         {"{settings}", settings_path.string()},
         {"{out}", out.string()},
-        {"{mtx}", (work.path() / "problem_mtx").string()},
+        {"{mtx}", (work_dir / "problem_mtx").string()},
         {"{tol}", number(common.tol)},
         {"{max_iterations}", std::to_string(common.max_iterations)},
-        {"{time_limit_s}", number(common.time_limit_s)},
+        {"{time_limit_s}", number(time_limit_s)},
         {"{seed}", std::to_string(common.seed)}};
     std::vector<std::string> argv;
-    for (const auto& a : m_settings.argv) {
-        std::string arg = a;
-        for (const auto& [name, value] : placeholders) arg = replace_all(arg, name, value);
-        argv.push_back(arg);
-    }
+    for (const auto& a : absolute_arguments(m_settings.argv)) argv.push_back(expand_placeholders(a, placeholders));
     const double prepare_s = seconds_since(t0);
 
-    const ProgramOutcome run = run_program(argv, (work.path() / "stdout.txt").string(),
-                                           (work.path() / "stderr.txt").string(), common.time_limit_s);
-    nlohmann::json info = {{"argv", argv},
-                           {"time_child_wall_s", run.wall_s},
-                           {"time_prepare_s", prepare_s},
-                           {"time_self_s", nullptr},
-                           {"time_source", "harness"},
-                           {"exit_status", run.exit_status},
-                           {"signal", run.signal},
-                           {"crashed", false},
-                           {"garbage", false},
-                           {"timed_out", run.timed_out}};
-    if (m_settings.keep_files) info["workdir"] = work.path().string();
-    const std::string stderr_tail = tail_of(work.path() / "stderr.txt");
+    ProgramOptions options;
+    options.time_limit_s = time_limit_s;
+    options.workdir = work_dir.string();  // relative writes of the program stay in its work folder
+    const ProgramOutcome run =
+        run_program(argv, (work_dir / "stdout.txt").string(), (work_dir / "stderr.txt").string(), options);
+    if (run.interrupted != 0) {  // Ctrl-C or a kill of the harness: the program is gone, so is its folder
+        std::cerr << "command: " << strsignal(run.interrupted) << " received: the program's process group was "
+                  << "signalled, its work folder " << (m_settings.keep_files ? "kept: " : "removed: ")
+                  << work_dir.string() << "\n";
+        folder.reset();
+        end_by_signal(run.interrupted);
+    }
+    if (run.peak_rss_bytes >= 0) note_child_peak_memory(run.peak_rss_bytes);  // in the record's peak
+    nlohmann::json info = {
+        {"argv", argv},
+        {"time_child_wall_s", run.wall_s},
+        {"time_prepare_s", prepare_s},
+        {"time_self_s", nullptr},
+        {"time_source", "harness"},
+        {"exit_status", run.exit_status},
+        {"signal", run.signal},
+        {"time_limit_s", time_limit_s},
+        {"peak_rss_mb", run.peak_rss_bytes >= 0 ? nlohmann::json(run.peak_rss_bytes / 1048576.0) : nlohmann::json()},
+        {"peak_floor_mb",
+         run.start_rss_bytes >= 0 ? nlohmann::json(run.start_rss_bytes / 1048576.0) : nlohmann::json()},
+        {"orphans_killed", run.orphans_killed},
+        {"stdout_bytes", run.stdout_bytes},
+        {"stderr_bytes", run.stderr_bytes},
+        {"output_capped", run.stdout_capped || run.stderr_capped},
+        {"crashed", false},
+        {"garbage", false},
+        {"timed_out", run.timed_out}};
+    if (m_settings.keep_files) info["workdir"] = work_dir.string();
+    const std::string stderr_tail = tail_of(work_dir / "stderr.txt");
     result.setup_s = prepare_s;
     result.solve_s = run.wall_s;
     auto finish = [&](SolveStatus status, const std::string& message) {
@@ -348,9 +409,12 @@ SolverResult CommandSolver::solve(const QpView& qp, const SolveContext& context)
         return result;
     };
     if (run.timed_out)
-        return finish(SolveStatus::TIME_LIMIT, "command: killed at the time limit of " +
-                                                   nlohmann::json(common.time_limit_s).dump() +
-                                                   " s (harness wall time of the child)");
+        return finish(SolveStatus::TIME_LIMIT,
+                      "command: killed at the time limit of " + nlohmann::json(time_limit_s).dump() +
+                          " s (harness wall time of the child" +
+                          (common.time_limit_s > 0.0 ? std::string(")")
+                                                     : std::string("; the command solver's default "
+                                                                   "when time_limit_s is 0)")));
     if (!run.failure().empty()) {
         info["crashed"] = true;
         return finish(SolveStatus::DIVERGED, "command: the program " + run.failure() +
@@ -399,6 +463,16 @@ SolverResult CommandSolver::solve(const QpView& qp, const SolveContext& context)
     const SolveStatus status = report.has_status ? report.status : SolveStatus::CONVERGED;
     if (status == SolveStatus::CONVERGED) result.criterion = StopCriterion::PROGRAM;
     return finish(status, message.empty() ? "command: the program exited normally" : message);
+}
+
+void require_command_opt_in(const std::string& solver, const std::string& scene_file, bool scene_allows,
+                            bool flag_given)
+{
+    if (solver != "command" || (scene_allows && flag_given)) return;
+    const std::string rule = "'command' runs an external program: it runs only when the scene says "
+                             "\"allow_commands\": true and the command line gives --allow-commands";
+    if (!scene_allows) throw_input_error(scene_file, "/allow_commands", "missing; " + rule);
+    throw_input_error(scene_file, "/solver", rule + " (--allow-commands not given)");
 }
 
 SolverEntry command_entry()

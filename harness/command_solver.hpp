@@ -16,6 +16,7 @@
 #include "solvers/solver.hpp"
 
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace cb {
@@ -30,6 +31,16 @@ struct CommandSettings {
     static CommandSettings from_json(const nlohmann::json& settings);
     nlohmann::json to_json() const;
 };
+
+/// The time limit of a command solver whose time_limit_s is 0 (none): 600 s. A registry solver
+/// without a limit ends by its iteration cap; an external program may never end, and a suite of
+/// them must not wait forever on one. Ten minutes is long for one QP solve and short enough that
+/// a hang is noticed; set time_limit_s for longer runs.
+inline constexpr double DEFAULT_COMMAND_TIME_LIMIT_S = 600.0;
+
+/// argv's placeholders ("{snapshot}", ...) replaced by their values in one left-to-right pass:
+/// a value is never scanned again, so a path holding "{out}" stays as it is.
+std::string expand_placeholders(const std::string& arg, const std::vector<std::pair<std::string, std::string>>& values);
 
 /// The protocol version written into settings.json.
 inline constexpr int COMMAND_PROTOCOL_VERSION = 1;
@@ -47,6 +58,13 @@ private:
 };
 
 SolverEntry command_entry();
+
+/// simulate and chains run a `command` solver (an external program) only when the scene says
+/// "allow_commands": true and the command line gives --allow-commands: a scene file alone, which
+/// may come from anywhere, never starts a program, nor does a habitual flag start one that the
+/// scene did not declare. InputError naming the scene file and its field otherwise.
+void require_command_opt_in(const std::string& solver, const std::string& scene_file, bool scene_allows,
+                            bool flag_given);
 
 /// Adds `command` to builtin_registry() (add_builtin_registration); call before its first use.
 /// Idempotent.

@@ -354,6 +354,12 @@ Scene load_scene_json(const nlohmann::json& j, const std::string& file, const Pa
     s.step.a_M = r.number("a_M", 0.0, -1e-300);
     s.step.a_K = r.number("a_K", 0.0, -1e-300);
     s.solver = r.string("solver", "mprgp");
+    // A scene is data that travels (downloaded, shared): naming a program to run is opt-in, here
+    // and on the command line (--allow-commands of simulate and chains), as for suites.
+    s.allow_commands = r.boolean("allow_commands", false);
+    if (s.solver == "command" && !s.allow_commands)
+        r.fail("solver", "'command' runs an external program; the scene must opt in with \"allow_commands\": "
+                         "true (and the command line with --allow-commands)");
     if (const auto* st = r.find("solver_settings")) {
         if (!st->is_object()) r.fail("solver_settings", "expected an object, got " + json_type(*st));
         s.solver_settings = *st;

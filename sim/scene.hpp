@@ -57,6 +57,7 @@ struct Scene {
     int newton_iterations = 1;
     std::string solver = "mprgp";
     nlohmann::json solver_settings = nlohmann::json::object();
+    bool allow_commands = false;  ///< the scene opts in to a `command` solver (external program)
     DetectionSettings detection;
     std::string detect_at = "start";  ///< "start" (the authors') or "predicted" (x + h v)
     double blowup_speed = 100.0;      ///< m/s: a faster vertex flags the frame as blown up
