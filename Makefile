@@ -109,6 +109,7 @@ perf-gate-selftest:
 
 demo: deps build
 	$(CB) simulate scenes/demo.json --out results/demo/sim
+	$(PY) -m plots.strip results/demo/sim
 	$(CB) run suites/demo.json --out results/demo
 	$(PY) -m plots.convergence results/demo
 	$(PY) -m plots.profiles results/demo

@@ -196,6 +196,31 @@ def figures(folder: str) -> List[str]:
     return found[:MAX_FIGURES]
 
 
+def simulations(folder: str) -> List[str]:
+    """Simulation folders (simulation.json beside a picture strip) under the folder, relative."""
+    found = []
+    for top, dirs, files in os.walk(folder):
+        dirs[:] = sorted(d for d in dirs if d not in ("report", "snapshots", "frames", "runs") and not d.startswith("."))
+        if "simulation.json" in files and any(f.endswith("_strip.png") for f in files):
+            found.append(os.path.relpath(top, folder))
+    return found[:50]
+
+
+def write_strips(folder: str, sims: List[str], dest: str) -> List[tuple]:
+    """Each simulation's strip with frame numbers, times and its largest penetration
+    (plots/strip.py), written into the report folder: [(page-relative path, simulation folder)]."""
+    from plots import strip
+    out = []
+    for k, rel in enumerate(sims):
+        name = f"strip_{k}.png"
+        try:
+            if strip.annotate(os.path.join(folder, rel), os.path.join(dest, name)):
+                out.append((name, rel))
+        except (OSError, ValueError, KeyError) as err:  # a strip that cannot be read is only noted
+            print(f"html_report: {os.path.join(folder, rel)}: strip not annotated: {err}", file=sys.stderr)
+    return out
+
+
 def claims(folder: str) -> List[dict]:
     path = os.path.join(folder, "claims.json")
     if not os.path.isfile(path):
@@ -247,6 +272,8 @@ def collect(folder: str) -> dict:
                                    "snapshots drawn (the table lists every run)")
     model["claims"] = claims(folder)
     model["figures"] = figures(folder)
+    model["simulations"] = simulations(folder)
+    model["strips"] = []
     return model
 
 
@@ -307,6 +334,8 @@ def render(model: dict) -> str:
     figs = "".join(f'<figure><a href="../{esc(f, quote=True)}"><img src="../{esc(f, quote=True)}" alt="{esc(f)}" '
                    f'loading="lazy"></a><figcaption>{esc(f)}</figcaption></figure>' for f in model["figures"])
     notes = "".join(f"<li>{esc(e)}</li>" for e in model["errors"])
+    strips = "".join(f'<figure class="strip"><img src="{esc(name, quote=True)}" alt="{esc(rel)}">'
+                     f'<figcaption>{esc(rel)}</figcaption></figure>' for name, rel in model.get("strips", []))
     data = {k: model[k] for k in ("rows", "histories", "profiles", "sets")}
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8">
@@ -335,6 +364,7 @@ Click a legend entry to hide or show a line; hover a line for its label.</p><div
 the share of the problems a solver reaches the tier on within tau times the best solver's time. Shifted
 geometric mean of the time to each tier (a run that never reaches it counts at the penalty time).</p>
 <div id="profile-plots"></div></section>
+{f'<section id="strips"><h2>Scenes simulated</h2>{strips}</section>' if strips else ''}
 <section id="figures"><h2>Figures</h2><div class="gallery">{figs or '<p>No figures in this folder.</p>'}</div></section>
 <script type="application/json" id="report-data">{safe_json(data)}</script>
 <script src="d3.min.js"></script>
@@ -356,14 +386,15 @@ def write_report(folder: str) -> str:
     if not os.path.isdir(folder):
         raise ReportError(f"{folder}: not a folder")
     d3 = find_d3()
-    page = render(collect(folder))
+    model = collect(folder)
     dest = os.path.join(folder, "report")
     if os.path.lexists(dest) and (os.path.islink(dest) or not os.path.isdir(dest)):
         raise ReportError(f"{dest}: exists and is not a folder; remove it or report another folder")
     tmp = tempfile.mkdtemp(prefix=".report-", dir=folder)
     try:
+        model["strips"] = write_strips(folder, model["simulations"], tmp)
         with open(os.path.join(tmp, "index.html"), "w", encoding="utf-8") as f:
-            f.write(page)
+            f.write(render(model))
         shutil.copyfile(d3, os.path.join(tmp, "d3.min.js"))
         for name in ("report.js", "report.css"):
             shutil.copyfile(os.path.join(ASSETS, name), os.path.join(tmp, name))

@@ -137,6 +137,32 @@ class TestHtmlReport(unittest.TestCase):
                          "reproduction (no runs/<suite>/ results folders)")
         self.assertEqual(os.listdir(self.tmp), [])  # nothing written
 
+    def test_strip_frames_and_caption(self):
+        import pandas as pd
+        from plots import strip
+        self.assertEqual(strip.strip_frames(20, 5), [0, 5, 10, 14, 19])  # sim/simulator.cpp's rule
+        self.assertEqual(strip.strip_frames(3, 6), [0, 1, 2])
+        frames = pd.DataFrame({"frame": [0, 1, 2, 3, 4, 5, 6], "time_s": [0.1 * k for k in range(7)],
+                               "max_penetration_rel": [0, 0.02, 0.5, 0.01, 0, 0.03, 0.11]})
+        # frame 2's 50% is not pictured: the caption states what the strip shows
+        self.assertEqual(strip.largest_penetration(frames, [0, 3, 6]), (0.11, 6))
+        sim = os.path.join(self.tmp, "sim")
+        os.makedirs(sim)
+        frames.to_csv(os.path.join(sim, "frames.csv"), index=False)
+        with open(os.path.join(sim, "simulation.json"), "w") as f:
+            json.dump({"scene": "cubes", "frames": 7, "frames_done": 7, "solver": "mprgp", "decouple": "auto"}, f)
+        from plots.figutil import plt
+        import numpy as np
+        plt.imsave(os.path.join(sim, "cubes_strip.png"), np.ones((20, 120, 3)))  # six 20x20 tiles
+        out = os.path.join(self.tmp, "demo")
+        self._results(out)
+        os.rename(sim, os.path.join(out, "sim"))
+        path = html_report.write_report(out)
+        with open(path, encoding="utf-8") as f:
+            page = f.read()
+        self.assertIn('<img src="strip_0.png" alt="sim">', page)
+        self.assertTrue(os.path.isfile(os.path.join(out, "report", "strip_0.png")))
+
     def test_rewrite_replaces_the_page_whole(self):
         folder = self._results(os.path.join(self.tmp, "demo"))
         html_report.write_report(folder)
