@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 import os
 import sys
+import textwrap
 import zlib
 from typing import Dict, Iterable, List, Optional
 
@@ -277,7 +278,8 @@ def legend_outside(fig, axes: Iterable, title: Optional[str] = None, notes: Iter
             labels.append(h.get_label())
     if not handles:
         return
-    # below the panels, so that the figure keeps its page-column width
+    # below the panels, so that the figure keeps its page-column width (long entries wrapped)
+    labels = [textwrap.fill(lab, 48) for lab in labels]
     fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 0.0), fontsize=7, title=title,
                frameon=False, ncol=max(1, min(3, len(handles))))
 

@@ -106,9 +106,10 @@
     var x = (o.xlog ? d3.scale.log().base(o.xbase || 10) : d3.scale.linear()).domain(xd).range([0, W]);
     var y = (o.ylog ? d3.scale.log() : d3.scale.linear()).domain(yd).range([H, 0]);
     var xAxis = d3.svg.axis().scale(x).orient("bottom").ticks(5);
-    if (o.xlog) xAxis.tickFormat(o.xbase === 2 ? d3.format("g") : logLabel(x));
+    if (o.xlog && o.xbase === 2) xAxis.tickFormat(d3.format("g"));
+    else if (o.xlog) xAxis.tickValues(decades(xd, 5)).tickFormat(expFormat);
     var yAxis = d3.svg.axis().scale(y).orient("left").ticks(5);
-    if (o.ylog) yAxis.tickFormat(logLabel(y)); else yAxis.tickFormat(d3.format(".1f"));
+    if (o.ylog) yAxis.tickValues(decades(yd, 8)).tickFormat(expFormat); else yAxis.tickFormat(d3.format(".1f"));
     g.append("g").attr("class", "axis x").attr("transform", "translate(0," + H + ")").call(xAxis);
     g.append("g").attr("class", "axis y").call(yAxis);
     g.append("text").attr("x", W / 2).attr("y", H + 36).attr("text-anchor", "middle").text(o.xlabel);
@@ -153,12 +154,13 @@
     return box;
   }
 
-  // Labels of log-axis ticks at whole decades only (no "0", no crowding).
-  function logLabel(scale) {
-    return function (v) {
-      var e = Math.log(v) / Math.LN10;
-      return Math.abs(e - Math.round(e)) < 1e-9 ? expFormat(v) : "";
-    };
+  // Ticks of a log axis: whole decades inside the domain, every k-th so that at most `most` are
+  // labelled (no "0" on a log axis, no crowding).
+  function decades(domain, most) {
+    var lo = Math.ceil(Math.log(domain[0]) / Math.LN10 - 1e-9), hi = Math.floor(Math.log(domain[1]) / Math.LN10 + 1e-9);
+    var step = Math.max(1, Math.ceil((hi - lo + 1) / most)), out = [];
+    for (var e = hi; e >= lo; e -= step) out.unshift(Math.pow(10, e));
+    return out;
   }
 
   var hroot = d3.select("#history-plots");
