@@ -20,8 +20,9 @@ import sys
 import tempfile
 
 SKIP = 77
-CHROMIUM = "/usr/bin/chromium"
-DRIVER = "/usr/bin/chromedriver"
+# Debian's paths (CB_CHROMIUM / CB_CHROMEDRIVER override them: the skip path is tested that way)
+CHROMIUM = os.environ.get("CB_CHROMIUM", "/usr/bin/chromium")
+DRIVER = os.environ.get("CB_CHROMEDRIVER", "/usr/bin/chromedriver")
 HOSTILE_LABEL = "<script>window.__cb_pwned=1;alert(1)</script>"
 HOSTILE_MESSAGE = "<img src=x onerror=\"window.__cb_pwned=2;alert(2)\"></script><b>bold</b>"
 
