@@ -279,9 +279,11 @@ def legend_outside(fig, axes: Iterable, title: Optional[str] = None, notes: Iter
     if not handles:
         return
     # below the panels, so that the figure keeps its page-column width (long entries wrapped)
-    labels = [textwrap.fill(lab, 48) for lab in labels]
+    labels = [textwrap.fill(lab, 44) for lab in labels]
+    widest = max(len(line) for lab in labels for line in lab.splitlines())
+    cols = 3 if widest <= 30 else 2 if widest <= 44 else 1  # about 7 in of 7 pt text a row
     fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 0.0), fontsize=7, title=title,
-               frameon=False, ncol=max(1, min(3, len(handles))))
+               frameon=False, ncol=max(1, min(cols, len(handles))))
 
 
 #: the one legend entry for the mark on a run whose status is not `converged` (every figure)
