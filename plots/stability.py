@@ -21,6 +21,7 @@ import json
 import math
 import os
 import sys
+import textwrap
 from typing import List, Optional
 
 
@@ -92,7 +93,9 @@ def plot_stability(df: pd.DataFrame, out_dir: str, stem: str = "stability") -> L
                  "solved_relaxation": "rel",
                  "unconfirmed": ""}.get(status, status[:3])
         text[i][j] = (short + cell_marks(row, cols)) if np.isfinite(err) else ("NaN" + cell_marks(row, cols))
-    fig, ax = plt.subplots(figsize=(max(5, 0.55 * len(cases) + 2.5), max(2.5, 0.45 * len(solvers) + 1.5)))
+    # at most a page column wide (plots/figure_checks.py)
+    width = min(7.0, max(5, 0.55 * len(cases) + 2.5))
+    fig, ax = plt.subplots(figsize=(width, max(2.5, 0.45 * len(solvers) + 1.5)))
     masked = np.ma.masked_invalid(grid)
     cmap = plt.get_cmap("RdYlGn_r").copy()
     cmap.set_bad("#555555")
@@ -106,11 +109,11 @@ def plot_stability(df: pd.DataFrame, out_dir: str, stem: str = "stability") -> L
     ax.set_xticklabels(cases, rotation=60, ha="right", fontsize=7)
     ax.set_yticks(range(len(solvers)))
     ax.set_yticklabels(solvers, fontsize=8)
-    fig.colorbar(im, ax=ax, label=f"log10 {cols['error']} reached")
-    ax.set_title("stability (error e on the original QP): ! = 'converged' not confirmed by the measure, "
-                 "rel = solved_relaxation,\nN = NaN/Inf seen, ~ = non-monotone, it/t/st/div/inf/inv = "
-                 "max_iterations/time_limit/stalled/diverged/infeasible/invalid; grey = no finite error",
-                 fontsize=7)
+    fig.colorbar(im, ax=ax, label=f"log10 {cols['error']} reached [1]")
+    ax.set_title(textwrap.fill("stability (error e on the original QP): ! = 'converged' not confirmed by the measure, "
+                               "rel = solved_relaxation, N = NaN/Inf seen, ~ = non-monotone, it/t/st/div/inf/inv = "
+                               "max_iterations/time_limit/stalled/diverged/infeasible/invalid; grey = no finite error",
+                               int(12 * width), break_long_words=False), fontsize=7)
     fig.tight_layout()
     return figutil.save_figure(fig, out_dir, stem)
 
