@@ -91,7 +91,26 @@ std::string run_summary_table(const std::vector<nlohmann::json>& runs, double pe
 void print_run_end(const std::string& dir, double time_limit_s, std::ostream& out)
 {
     try {
-        out << run_summary_table(read_runs(dir), time_limit_s);
+        std::vector<nlohmann::json> runs = read_runs(dir);
+        // The suite's order of labels (file names sort "mprgp-box" before "mprgp").
+        std::map<std::string, size_t> order;
+        nlohmann::json suite = nlohmann::json::object();
+        try {
+            suite = read_json_file(dir + "/suite.json");
+        } catch (const std::exception&) {  // no suite.json: the runs' own order
+        }
+        for (const nlohmann::json& sv : suite.value("solvers", nlohmann::json::array()))
+            if (sv.is_object() && sv.contains("label") && sv["label"].is_string())
+                order.emplace(sv["label"].get<std::string>(), order.size());
+            else if (sv.is_string())
+                order.emplace(sv.get<std::string>(), order.size());
+        auto rank = [&](const nlohmann::json& run) {
+            const auto it = order.find(run.value("label", std::string()));
+            return it == order.end() ? order.size() : it->second;
+        };
+        std::stable_sort(runs.begin(), runs.end(),
+                         [&](const nlohmann::json& a, const nlohmann::json& b) { return rank(a) < rank(b); });
+        out << run_summary_table(runs, time_limit_s);
     } catch (const std::exception& e) {  // the runs are written; a table that cannot be made is only noted
         out << "summary: not shown: " << e.what() << "\n";
     }
