@@ -171,5 +171,33 @@ class TestDemoFigures(unittest.TestCase):
         self.assertTrue(written[0].endswith(".png"))
 
 
+class TestPaperFigures(unittest.TestCase):
+    """The quick reproduction's figures with the checks enforced, on the stand-in contactbench
+    (tests/python/fixtures/fake_contactbench.py): fig6, fig9, fig10 and every profile pass. (fig8 and
+    fig11 are left out: their scripts are changed by issue 43 and do not pass yet.)"""
+
+    def test_fig6_fig9_fig10_pass(self):
+        from plots import reproduce
+        tmp = tempfile.mkdtemp(prefix="cb_paper_figures_")
+        os.environ["CB_FIGURE_CHECKS"] = "1"
+        try:
+            scenes = os.path.join(tmp, "scenes")
+            os.makedirs(scenes)
+            for name in ("two_dinos_1303", "two_dinos_1493", "longcube"):
+                with open(os.path.join(scenes, name + ".json"), "w") as f:
+                    f.write("{}")
+            out = os.path.join(tmp, "out")
+            fake = os.path.join(HERE, "fixtures", "fake_contactbench.py")
+            with redirect_stdout(io.StringIO()) as log, redirect_stderr(io.StringIO()):
+                self.assertEqual(reproduce.main(["--contactbench", fake, "--out", out, "--scenes", scenes,
+                                                 "--quick"]), 0)
+            for stem in ("fig6_decoupling_time", "fig9_preconditioning", "fig10_mprgp_vs_ica"):
+                self.assertTrue(os.path.isfile(os.path.join(out, "figures", stem + ".png")), log.getvalue()[-3000:])
+            self.assertNotIn("FigureCheckError: " + os.path.join(out, "runs"), log.getvalue())  # the profiles
+        finally:
+            os.environ.pop("CB_FIGURE_CHECKS", None)
+            shutil.rmtree(tmp, ignore_errors=True)
+
+
 if __name__ == "__main__":
     unittest.main()

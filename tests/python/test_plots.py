@@ -538,6 +538,9 @@ class TestReproduce(TempDirCase):
         self.assertIn(loader.UNCONFIRMED_MEANING, text)
         self.assertNotIn("KKT", text)  # the measure is the accuracy error e (docs/accuracy.md)
         self.assertIn("quick", log.getvalue())
+        # issue 46: the reproduction's HTML page, its path said at the end
+        self.assertTrue(os.path.isfile(os.path.join(out, "report", "index.html")))
+        self.assertIn(f"report: {os.path.join(out, 'report', 'index.html')}", log.getvalue())
 
     def test_missing_binary_reports_reason(self):
         out = os.path.join(self.tmp, "out")
