@@ -327,6 +327,15 @@ def _provenance(model: dict) -> str:
         f"<tr><th>{html.escape(str(k))}</th><td>{html.escape(_str(v))}</td></tr>" for k, v in items) + "</table>"
 
 
+def _which_solver(model: dict) -> str:
+    """A ladder's which-solver map (plots/which_solver.py), shown whole above the gallery."""
+    maps = [f for f in model["figures"] if os.path.basename(f) == "which_solver.png"]
+    esc = html.escape
+    return "".join(f'<section id="which-solver"><h2>Which solver when</h2><a href="../{esc(f, quote=True)}">'
+                   f'<img class="map" src="../{esc(f, quote=True)}" alt="which solver when"></a></section>'
+                   for f in maps[:1])
+
+
 def render(model: dict) -> str:
     """The page: static sections rendered here (escaped), the interactive ones drawn by report.js
     from the embedded JSON."""
@@ -364,6 +373,7 @@ Click a legend entry to hide or show a line; hover a line for its label.</p><div
 the share of the problems a solver reaches the tier on within tau times the best solver's time. Shifted
 geometric mean of the time to each tier (a run that never reaches it counts at the penalty time).</p>
 <div id="profile-plots"></div></section>
+{_which_solver(model)}
 {f'<section id="strips"><h2>Scenes simulated</h2>{strips}</section>' if strips else ''}
 <section id="figures"><h2>Figures</h2><div class="gallery">{figs or '<p>No figures in this folder.</p>'}</div></section>
 <script type="application/json" id="report-data">{safe_json(data)}</script>

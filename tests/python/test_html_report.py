@@ -163,6 +163,16 @@ class TestHtmlReport(unittest.TestCase):
         self.assertIn('<img src="strip_0.png" alt="sim">', page)
         self.assertTrue(os.path.isfile(os.path.join(out, "report", "strip_0.png")))
 
+    def test_ladder_shows_the_which_solver_map(self):
+        folder = self._results(os.path.join(self.tmp, "resolution"))
+        os.makedirs(os.path.join(folder, "figures"))
+        with open(os.path.join(folder, "figures", "which_solver.png"), "wb") as f:
+            f.write(b"\x89PNG\r\n\x1a\n")
+        with open(html_report.write_report(folder), encoding="utf-8") as f:
+            page = f.read()
+        self.assertIn('<section id="which-solver"><h2>Which solver when</h2><a href="../figures/which_solver.png">'
+                      '<img class="map" src="../figures/which_solver.png"', page)
+
     def test_rewrite_replaces_the_page_whole(self):
         folder = self._results(os.path.join(self.tmp, "demo"))
         html_report.write_report(folder)
