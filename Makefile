@@ -22,7 +22,7 @@ export MPLBACKEND ?= Agg
 DEB_PACKAGES := build-essential cmake git zlib1g-dev libeigen3-dev libsuitesparse-dev nlohmann-json3-dev \
   libgtest-dev libbenchmark-dev libopenblas0-pthread \
   python3-numpy python3-pandas python3-matplotlib python3-scipy python3-pyflakes clang-format libcgal-demo \
-  ccache valgrind \
+  ccache valgrind libjs-d3 chromium chromium-driver python3-selenium \
   pkg-config coinor-libipopt-dev libsiconos-numerics-dev libfclib-dev libbullet-dev
 # PEERS=all: also PETSc (about 180 MB) for the TAO peers (docs/peers.md); not in the default set.
 ifeq ($(PEERS),all)
@@ -109,12 +109,15 @@ perf-gate-selftest:
 
 demo: deps build
 	$(CB) simulate scenes/demo.json --out results/demo/sim
+	$(PY) -m plots.strip results/demo/sim
 	$(CB) run suites/demo.json --out results/demo
 	$(PY) -m plots.convergence results/demo
 	$(PY) -m plots.profiles results/demo
+	$(PY) -m plots.html_report results/demo
 	$(PY) -m plots.reproduce --contactbench $(CB) --data $(DATA) --out results/paper --quick
 	@echo "demo: simulation pictures in results/demo/sim/, solver figures and profiles in results/demo/figures/,"
 	@echo "      the paper's figures and claims (quick mode) in results/paper/report.md"
+	@echo "      open in a browser (offline): results/demo/report/index.html, results/paper/report/index.html"
 
 # The paths reach the command through the environment, never spliced into the shell line.
 paper-data: export CB_CACHE := $(CB_CACHE)
@@ -161,6 +164,7 @@ decoupling: build
 stress: build
 	$(CB) stress --out results/stress
 	$(PY) -m plots.stability results/stress
+	$(PY) -m plots.html_report results/stress
 
 # Each reader on its own corpus: FUZZ_SECONDS per target (FUZZ_TARGETS to pick some).
 FUZZ_TARGETS ?= qpsnap suite scene fclib

@@ -20,6 +20,7 @@
 #include "harness/results.hpp"
 #include "harness/run_plan.hpp"
 #include "harness/run_record.hpp"
+#include "harness/run_summary_table.hpp"
 #include "harness/runner.hpp"
 #include "harness/slurm.hpp"
 #include "harness/suite.hpp"
@@ -417,6 +418,7 @@ int cmd_run(const Args& args)
     std::error_code ec;
     fs::remove(fs::path(out) / "suite.pending.json", ec);
     std::cerr << "ran " << ran << " of " << plan.total() << " jobs; " << runs << " runs in " << out << "/summary.csv\n";
+    print_run_end(out, suite.time_limit_s, std::cout);  // the table per solver and the HTML report
     return 0;
 }
 

@@ -1,6 +1,7 @@
 // `contactbench stress`: every solver x every stress case, a stability table (harness/stress.hpp).
 #include "harness/cli.hpp"
 #include "harness/commands.hpp"
+#include "harness/html_report.hpp"
 #include "harness/stress.hpp"
 #include "problems/output_folder.hpp"
 
@@ -69,6 +70,7 @@ int cmd_stress(const Args& args)
     for (const StressRow& r : report.rows) wrong += r.honest() ? 0 : 1;
     std::cout << "stress: " << report.rows.size() << " runs in " << report.wall_s << " s; " << wrong
               << " wrong statuses; wrote " << options.out_dir << "/stability.csv and stability.md\n";
+    report_at_end(options.out_dir, std::cout);
     return 0;
 }
 

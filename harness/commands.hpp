@@ -17,6 +17,7 @@ int cmd_merge(const Args& args);
 int cmd_simulate(const Args& args);
 int cmd_chains(const Args& args);  // issue 25: the price of decoupling along chains
 int cmd_stress(const Args& args);
+int cmd_report(const Args& args);  // issue 46: the HTML report of a results folder
 int cmd_compare(const Args& args);
 int cmd_generate(const Args& args);
 int cmd_solvers(const Args& args);

@@ -35,6 +35,8 @@ const std::map<std::string, Command>& commands()
         {"solvers",
          {cb::cmd_solvers, "solvers [--json]: every registered solver, one line each, with what it applies to"}},
         {"stress", {cb::cmd_stress, "stress [--out DIR]: the stress suite and its stability table"}},
+        {"report",
+         {cb::cmd_report, "report OUT: OUT/report/index.html, every run, its histories and profiles (offline)"}},
         {"compare", {cb::cmd_compare, "compare BASE NEW: regression judge between two result sets"}},
         {"cluster",
          {cb::cmd_cluster, "cluster slurm SUITE.json --out DIR --shards N: sbatch files of a job array + merge"}},

@@ -24,9 +24,11 @@ from plots.loader import UNMEASURED_STATUSES, Results, history_time, load_result
 from plots.record_schema import current_column_names  # noqa: E402
 
 AXES = (("time_s", "time [s] (setup + solve)", "time"),
-        ("iteration", "iterations", "iterations"),
-        ("a_products", "A-products", "a_products"),
-        ("work", "work units (A-product equivalents)", "work"))
+        ("iteration", "iterations (count)", "iterations"),
+        ("a_products", "A-products (count)", "a_products"),
+        ("work", "work [A-product equivalents]", "work"))
+#: the y label of the accuracy error (a relative measure: docs/accuracy.md)
+E_LABEL = "e on the original QP [1]"
 
 #: final run columns standing in for a history column when a run has no history
 _FINAL = {"time_s": "time_s", "iteration": "iterations", "a_products": "a_products", "work": "work"}
@@ -44,6 +46,7 @@ def plot_convergence(results: Results, out_dir: str, column: str = "accuracy",
     shown = snapshots[:max_panels]
     solvers = figutil.label_solvers(results.runs)
     display = {label: figutil.display_label(label, results.runs) for label in labels}
+    styles = figutil.assign_styles(labels, solvers)
     runs = results.runs.set_index(["snapshot", "label"], drop=False)
     tol = float(np.nanmax(results.runs["accuracy_tol"])) if "accuracy_tol" in results.runs and \
         results.runs["accuracy_tol"].notna().any() else float("nan")
@@ -56,7 +59,8 @@ def plot_convergence(results: Results, out_dir: str, column: str = "accuracy",
         if x == "time_s" and not include_setup:
             xlabel = "time [s] (solve only)"
         rows, cols = figutil.grid(max(1, len(shown)))
-        fig, axes = plt.subplots(rows, cols, figsize=(4.0 * cols, 3.1 * rows), squeeze=False)
+        # a page column wide (7 in at 300 dpi), two panels a row
+        fig, axes = plt.subplots(rows, cols, figsize=(7.0 if cols > 1 else 3.5, 2.6 * rows), squeeze=False)
         for ax in axes.flat[len(shown):]:
             ax.axis("off")
         for ax, snap in zip(axes.flat, shown):
@@ -72,28 +76,31 @@ def plot_convergence(results: Results, out_dir: str, column: str = "accuracy",
                     continue  # n/a, refused or never run: there is no curve to draw
                 if x == "work" and label in no_work:
                     continue  # its work is not counted in full: a curve would understate it
-                style = figutil.solver_style(label, solvers.get(label))
+                style = styles[label]
                 h = results.history(snap, label)
                 if h.empty or x not in h or column not in h:
                     xv, yv = [run.get(_FINAL[x])], figutil.positive([run.get(column)])
-                    ax.plot(xv, yv, ls="none", marker=style["marker"], color=style["color"], label=display[label])
+                    ax.plot(xv, yv, ls="none", marker=style["marker"], color=style["color"], label=display[label],
+                            clip_on=False)
                 else:
                     xv = history_time(h, run, include_setup) if x == "time_s" else h[x].to_numpy(dtype=float)
                     yv = figutil.positive(h[column])
                     ax.plot(xv, yv, color=style["color"], ls=style["linestyle"], lw=1.3, label=display[label],
-                            marker=style["marker"], markevery=[len(yv) - 1], markersize=5)
+                            marker=style["marker"], markevery=[len(yv) - 1], markersize=4)
+                    # the final point's marker is drawn whole, even at the axes' edge
+                    ax.plot([np.asarray(xv, dtype=float)[-1]], [yv[-1]], ls="none", marker=style["marker"],
+                            color=style["color"], markersize=4, clip_on=False)
                 if not _converged(run) and len(yv):
                     ax.plot([np.asarray(xv, dtype=float)[-1]], [yv[-1]], ls="none", marker="x", color="black",
-                            markersize=7, zorder=5)
+                            markersize=6, zorder=5, clip_on=False)
             ax.set_yscale("log")
             if x == "time_s":
-                ax.set_xscale("symlog", linthresh=1e-4)
-                ax.set_xlim(left=0)
+                ax.set_xscale("log")  # times from the start of setup are > 0: no "0" tick
             if column == "accuracy":
                 figutil.draw_tol(ax, tol)
-            ax.set_title(figutil.panel_title(snap, n, m), fontsize=8)
+            ax.set_title(figutil.panel_title(snap, n, m, width=32), fontsize=7)
             ax.set_xlabel(xlabel)
-            ax.set_ylabel("error e on the original QP" if column == "accuracy" else column)
+            ax.set_ylabel(E_LABEL if column == "accuracy" else f"{column} [1]")
             ax.grid(True, which="both", alpha=0.3)
         title = f"{results.suite.get('name', os.path.basename(os.path.normpath(results.path)))}: {column} vs {xlabel}"
         if len(snapshots) > len(shown):
@@ -101,7 +108,7 @@ def plot_convergence(results: Results, out_dir: str, column: str = "accuracy",
         if x == "work" and no_work:
             title += ("\nleft out, their work is not counted in full (docs/work.md \"Figures\"): "
                       + ", ".join(no_work))
-        fig.suptitle(title, fontsize=10)
+        fig.suptitle(title, fontsize=8)
         fig.tight_layout()
         figutil.legend_outside(fig, axes.flat, notes=[figutil.failed_mark()])
         written += figutil.save_figure_outside(fig, out_dir, f"convergence_{stem}")

@@ -76,8 +76,11 @@ def produce(ctx: PaperContext) -> FigureOutcome:
     out = FigureOutcome("fig6", "Fig. 6: time per frame, decoupled vs coupled constraints")
     authors = ctx.authors_csv("fig6_decoupling_time.csv")
     panels = [("as published (coupled: precond none)", PUBLISHED), ("fair (both Jacobi, same tol)", FAIR)]
-    fig, axes = plt.subplots(1, 3 if authors is not None else 2, figsize=(14 if authors is not None else 10, 3.6),
-                             squeeze=False)
+    # a page column wide: two panels a row (the authors' panel below when their data is there)
+    rows = 2 if authors is not None else 1
+    fig, axes = plt.subplots(rows, 2, figsize=(7.0, 2.8 * rows), squeeze=False)
+    if authors is not None:
+        axes[1, 1].axis("off")
     rounds = ctx.round_results(SUITE) or [res]
     shown = median_over_rounds(rounds)
     for ax, (title, label) in zip(axes.flat, panels):
@@ -98,9 +101,9 @@ def produce(ctx: PaperContext) -> FigureOutcome:
             ax.axvspan(contact["frame"].min() - 0.5, contact["frame"].max() + 0.5, color="grey", alpha=0.1,
                        label="frames with contact rows (judged)")
         ax.set_yscale("log")
-        ax.set_xlabel("frame")
-        ax.set_ylabel(f"time, setup + solve [s] (median of {len(rounds)})")
-        ax.set_title("ours, " + title, fontsize=9)
+        ax.set_xlabel("frame (index)")
+        ax.set_ylabel(f"setup + solve [s] (median of {len(rounds)})")
+        ax.set_title("ours, " + title, fontsize=8)
         ax.grid(True, which="both", alpha=0.3)
     authors_ratio = authors_ratio_all = float("nan")
     if authors is not None:
@@ -110,8 +113,9 @@ def produce(ctx: PaperContext) -> FigureOutcome:
         ax.plot(authors["frame"], authors["coupled_time_s"], ".-", color=figutil.solver_colour("mprgp-coupled"),
                 label="coupled (no precond)", lw=1)
         ax.set_yscale("log")
-        ax.set_xlabel("frame")
-        ax.set_title("authors' data (2009 machine)", fontsize=9)
+        ax.set_xlabel("frame (index)")
+        ax.set_ylabel("time [s]")
+        ax.set_title("authors' data (2009 machine)", fontsize=8)
         ax.grid(True, which="both", alpha=0.3)
         contact = authors[authors["frame"] >= AUTHORS_FIRST_CONTACT_FRAME].dropna()
         authors_ratio = float(contact["coupled_time_s"].sum() / contact["decoupled_time_s"].sum())

@@ -31,15 +31,15 @@ def produce(ctx: PaperContext) -> FigureOutcome:
     if hj.empty or hn.empty or not {MPRGP, MPRGP_NONE} <= ran:
         raise NotProduced(f"suite '{SUITE}': histories of '{MPRGP}' and '{MPRGP_NONE}' needed on {snap}")
     out = FigureOutcome("fig9", "Fig. 9: ||phi + beta|| with and without preconditioning")
-    fig, axes = plt.subplots(1, 2, figsize=(10, 3.6), squeeze=False)
-    for ax, x, xlabel in ((axes[0, 0], "iteration", "iterations"), (axes[0, 1], "time_s", "time [s]")):
+    fig, axes = plt.subplots(1, 2, figsize=(7.0, 2.8), squeeze=False)
+    for ax, x, xlabel in ((axes[0, 0], "iteration", "iterations (count)"), (axes[0, 1], "time_s", "time [s] (solve)")):
         ax.plot(hj[x], figutil.positive(hj["native_residual"]), "-", color=figutil.solver_colour("mprgp"),
                 label="mprgp, Jacobi")
         ax.plot(hn[x], figutil.positive(hn["native_residual"]), "--", color=figutil.solver_colour("mprgp"),
                 label="mprgp, no precond")
         ax.set_yscale("log")
         ax.set_xlabel(xlabel)
-        ax.set_ylabel("||phi + beta||_2")
+        ax.set_ylabel("||phi + beta||_2 [units of b]")  # the QP's gradient: b's unit
         ax.grid(True, which="both", alpha=0.3)
     run0 = res.runs[res.runs["snapshot"] == snap].iloc[0]
     mrun = res.runs[(res.runs["snapshot"] == snap) & (res.runs["label"] == MPRGP)].iloc[0]

@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import math
 import os
+import sys
+import textwrap
 import zlib
 from typing import Dict, Iterable, List, Optional
 
@@ -21,13 +23,38 @@ import pandas as pd  # noqa: E402
 TIERS = (1e-2, 1e-4, 1e-6, 1e-8)
 
 
+#: figures are saved at this resolution: a page column (figure_checks.COLUMN_WIDTH_IN) at 300 dpi
+DPI = 300
+# Text of every figure at least 7 pt at the printed size (figure_checks.MIN_FONT_PT).
+matplotlib.rcParams.update({"font.size": 8, "axes.titlesize": 8, "axes.labelsize": 8, "xtick.labelsize": 7,
+                            "ytick.labelsize": 7, "legend.fontsize": 7, "legend.title_fontsize": 7,
+                            "figure.titlesize": 9})
+
+
+def _finish(fig, folder: str, stem: str, tight: bool) -> None:
+    """Before saving: overlapping tick labels thinned, then the figure rules checked
+    (plots/figure_checks.py): a problem raises with CB_FIGURE_CHECKS=1, else it is printed."""
+    from plots import figure_checks
+    figure_checks.tidy_ticks(fig)
+    found = figure_checks.problems(fig, tight=tight)
+    if not found:
+        return
+    where = os.path.join(folder, stem)
+    if os.environ.get("CB_FIGURE_CHECKS") == "1":
+        plt.close(fig)
+        raise figure_checks.FigureCheckError(f"{where}: " + "; ".join(found))
+    for problem in found:
+        print(f"figure check: {where}: {problem}", file=sys.stderr)
+
+
 def save_figure(fig, folder: str, stem: str) -> List[str]:
-    """Writes folder/stem.png and folder/stem.pdf; returns both paths."""
+    """Writes folder/stem.png (at DPI) and folder/stem.pdf; returns both paths."""
     os.makedirs(folder, exist_ok=True)
+    _finish(fig, folder, stem, tight=False)
     paths = []
     for ext in ("png", "pdf"):
         path = os.path.join(folder, f"{stem}.{ext}")
-        fig.savefig(path, dpi=110 if ext == "png" else None)
+        fig.savefig(path, dpi=DPI if ext == "png" else None)
         paths.append(path)
     plt.close(fig)
     return paths
@@ -86,19 +113,18 @@ def fmt(value, digits: int = 3) -> str:
     return f"{v:.{digits}g}"
 
 
-def grid(count: int, max_cols: int = 4):
-    """(rows, cols) for `count` panels."""
+def grid(count: int, max_cols: int = 2):
+    """(rows, cols) for `count` panels (two columns fit a page column at 7 pt)."""
     cols = max(1, min(max_cols, count))
     rows = max(1, math.ceil(count / cols))
     return rows, cols
 
 
 #: one colour and marker per registered solver (`contactbench solvers --json`), the same in every
-#: figure. Colours: Okabe-Ito's colour-blind-safe palette for the first six, then Tol's and greys
-#: chosen one by one to stay apart from those already taken, in CIELAB and under simulated
-#: deuteranopia; every solver also has a marker of its own, so that no two solvers depend on
-#: colour alone. A label that is not a solver's name takes its solver's colour and marker and a
-#: dashed line style of its own.
+#: figure. Colours: Okabe-Ito's colour-blind-safe palette, then Tol's, chosen one by one to stay
+#: apart (CIELAB distance > 25 between any two; tests/python/test_plots.py) -- siconos-lemke's
+#: old near-black brown beside bullet-dantzig's black was one such pair. Every solver also has a
+#: marker of its own, so that no two solvers depend on colour alone.
 SOLVER_STYLES: Dict[str, tuple] = {
     "mprgp": ("#0072B2", "o"),            # Okabe-Ito blue
     "mprgp-coupled": ("#E69F00", "s"),    # orange
@@ -108,18 +134,22 @@ SOLVER_STYLES: Dict[str, tuple] = {
     "active-set": ("#56B4E9", "P"),       # sky blue
     "cg": ("#555555", "p"),               # dark grey
     "ipopt": ("#332288", "*"),            # Tol indigo
-    "siconos-lemke": ("#661100", "h"),    # Tol dark brown-red
+    "siconos-lemke": ("#882255", "h"),    # Tol wine
     "siconos-nsn": ("#DDCC77", "<"),      # Tol sand
     "bullet-dantzig": ("#000000", ">"),   # black
     "tao-pdipm": ("#F0E442", "X"),        # Okabe-Ito yellow
     "tao-tron": ("#AA4499", "d"),         # Tol purple
 }
-#: a solver without a fixed style (a new one) gets a marker no registered solver has, chosen by a
-#: hash of its name, and a colour of this spare list: its style is one that no fixed style has
-#: (add it to SOLVER_STYLES when it is registered)
+#: a label without a fixed style (a user's own solver or a `command` label) gets a (colour, marker)
+#: pair of these lists, the first free one from a place chosen by a hash of its name: its colour is
+#: at CIELAB distance > 20 from every fixed colour (a user's label once got a light blue beside
+#: active-set's sky blue) and its marker is one no registered solver has. A label of a known solver
+#: (e.g. "mprgp-ichol" of mprgp) keeps the solver's colour, takes a spare marker and a dashed line.
 SPARE_MARKERS = ("H", "8", "1", "2", "3", "4", "+")
-SPARE_COLOURS = ("#117733", "#88CCEE", "#CC6677", "#999933", "#6699CC", "#44AA99")
+SPARE_COLOURS = ("#661100", "#BBBBBB", "#EE8866", "#997700", "#117733", "#CC6677", "#999933", "#004488")
 _VARIANT_STYLES = ("--", ":", "-.", (0, (5, 1, 1, 1)))
+#: styles given to labels without a fixed one in this process: no two labels share a pair
+_ASSIGNED: Dict[str, dict] = {}
 
 
 def _hash(name: str) -> int:
@@ -128,17 +158,42 @@ def _hash(name: str) -> int:
 
 def solver_style(label: str, solver: Optional[str] = None) -> dict:
     """Matplotlib keyword arguments (color, marker, linestyle) of a solver label: the fixed style
-    of SOLVER_STYLES for a solver's own name; its solver's colour and marker with a dashed style
-    for another label of a known solver (e.g. "mprgp-ichol"); a spare marker and colour otherwise."""
+    of SOLVER_STYLES for a solver's own name; else the first (colour, marker) pair not yet given
+    to another label, searched from a place chosen by a hash of the label (the same pair every time
+    unless two labels of one figure want the same one: assign_styles settles that by name order)."""
     if label in SOLVER_STYLES:
         colour, marker = SOLVER_STYLES[label]
         return {"color": colour, "marker": marker, "linestyle": "-"}
+    if label in _ASSIGNED:
+        return dict(_ASSIGNED[label])
+    taken = {(s["color"], s["marker"]) for s in _ASSIGNED.values()}
+    used_colours = {s["color"] for s in _ASSIGNED.values()}
+    h = _hash(label)
     if solver in SOLVER_STYLES:
-        colour, marker = SOLVER_STYLES[solver]
-        return {"color": colour, "marker": marker, "linestyle": _VARIANT_STYLES[_hash(label) % len(_VARIANT_STYLES)]}
-    h = _hash(solver or label)
-    return {"color": SPARE_COLOURS[h % len(SPARE_COLOURS)], "marker": SPARE_MARKERS[(h >> 8) % len(SPARE_MARKERS)],
-            "linestyle": "-"}
+        colour = SOLVER_STYLES[solver][0]
+        pairs = [(colour, SPARE_MARKERS[(h + k) % len(SPARE_MARKERS)]) for k in range(len(SPARE_MARKERS))]
+        linestyle = _VARIANT_STYLES[h % len(_VARIANT_STYLES)]
+    else:
+        nc, nm = len(SPARE_COLOURS), len(SPARE_MARKERS)
+        pairs = [(SPARE_COLOURS[(h + k) % nc], SPARE_MARKERS[((h >> 8) + k // nc) % nm]) for k in range(nc * nm)]
+        fresh = [p for p in pairs if p[0] not in used_colours]  # a colour of its own while there is one
+        pairs = fresh + pairs
+        linestyle = "-"
+    free = [p for p in pairs if p not in taken] or pairs
+    style = {"color": free[0][0], "marker": free[0][1], "linestyle": linestyle}
+    _ASSIGNED[label] = style
+    return dict(style)
+
+
+def assign_styles(labels: Iterable[str], solvers: Optional[Dict[str, str]] = None) -> Dict[str, dict]:
+    """label -> style for the labels of one figure or page, distinct (colour, marker) pairs; the
+    labels without a fixed style are settled in name order, so the result does not depend on the
+    order the labels come in."""
+    solvers = solvers or {}
+    labels = list(dict.fromkeys(str(lab) for lab in labels))
+    for lab in sorted(labels):
+        solver_style(lab, solvers.get(lab))
+    return {lab: solver_style(lab, solvers.get(lab)) for lab in labels}
 
 
 #: solvers whose work the harness cannot count in full (docs/work.md, docs/peers.md): they are left
@@ -204,11 +259,12 @@ def draw_tol(ax, tol, label: str = "tol") -> None:
     except (TypeError, ValueError):
         return
     if math.isfinite(t) and t > 0:
-        ax.axhline(t, color="black", lw=0.8, ls="--", alpha=0.6, label=label, zorder=1)
+        ax.axhline(t, color="black", lw=0.8, ls="--", alpha=0.6, label=f"{label} = {t:g}" if label == "tol" else label,
+                   zorder=1)
 
 
 def legend_outside(fig, axes: Iterable, title: Optional[str] = None, notes: Iterable = ()) -> None:
-    """One legend for the whole figure, right of the panels (entries of every panel, each once).
+    """One legend for the whole figure, below the panels (entries of every panel, each once).
     `notes` are extra legend handles (e.g. the failed-run mark). Call after drawing, before saving."""
     handles, labels = [], []
     for ax in axes:
@@ -222,8 +278,12 @@ def legend_outside(fig, axes: Iterable, title: Optional[str] = None, notes: Iter
             labels.append(h.get_label())
     if not handles:
         return
-    fig.legend(handles, labels, loc="center left", bbox_to_anchor=(1.0, 0.5), fontsize=8, title=title,
-               frameon=False)
+    # below the panels, so that the figure keeps its page-column width (long entries wrapped)
+    labels = [textwrap.fill(lab, 44) for lab in labels]
+    widest = max(len(line) for lab in labels for line in lab.splitlines())
+    cols = 3 if widest <= 30 else 2 if widest <= 44 else 1  # about 7 in of 7 pt text a row
+    fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 0.0), fontsize=7, title=title,
+               frameon=False, ncol=max(1, min(cols, len(handles))))
 
 
 #: the one legend entry for the mark on a run whose status is not `converged` (every figure)
@@ -241,10 +301,11 @@ def failed_mark(**kwargs):
 def save_figure_outside(fig, folder: str, stem: str) -> List[str]:
     """save_figure with the bounding box grown to hold a legend placed outside the panels."""
     os.makedirs(folder, exist_ok=True)
+    _finish(fig, folder, stem, tight=True)
     paths = []
     for ext in ("png", "pdf"):
         path = os.path.join(folder, f"{stem}.{ext}")
-        fig.savefig(path, dpi=110 if ext == "png" else None, bbox_inches="tight")
+        fig.savefig(path, dpi=DPI if ext == "png" else None, bbox_inches="tight")
         paths.append(path)
     plt.close(fig)
     return paths

@@ -239,7 +239,12 @@ relaxation_matrix = excluded_matrix
 def _draw_profiles(numbers: dict, labels: List[str], solvers: Dict[str, str], display: Dict[str, str],
                    column: str, xlabel: str, title: str, out_dir: str, stem: str) -> List[str]:
     tt, tiers = numbers["tiers"], sorted(numbers["tier_values"], reverse=True)
-    fig, axes = plt.subplots(1, max(1, len(tiers)), figsize=(3.6 * max(1, len(tiers)), 3.2), squeeze=False)
+    # a grid a page column wide (two panels a row, figutil.grid)
+    rows, cols = figutil.grid(max(1, len(tiers)))
+    fig, axes = plt.subplots(rows, cols, figsize=(7.0 if cols > 1 else 3.5, 2.5 * rows), squeeze=False)
+    for ax in axes.flat[len(tiers):]:
+        ax.axis("off")
+    styles = figutil.assign_styles(labels, solvers)
     for ax, tier in zip(axes.flat, tiers):
         cost = cost_matrix(tt, tier, column).reindex(columns=labels)
         excluded = excluded_matrix(tt, tier).reindex(columns=labels)
@@ -262,17 +267,17 @@ def _draw_profiles(numbers: dict, labels: List[str], solvers: Dict[str, str], di
                 continue  # its work is not counted in full (figutil.WORK_NOT_COUNTED): said in profiles.md
             if len(cost) - (int(excluded[label].fillna(False).astype(bool).sum()) if label in excluded else 0) <= 0:
                 continue  # every run of the label is n/a: nothing to draw
-            style = figutil.solver_style(label, solvers.get(label))
+            style = styles[label]
             ax.step(xs, prof[label], where="post", color=style["color"], ls=style["linestyle"], lw=1.4,
-                    marker=style["marker"], markevery=[len(xs) - 1], markersize=5,
+                    marker=style["marker"], markevery=[len(xs) - 1], markersize=4, clip_on=False,
                     label=f"{display.get(label, label)} ({judged[label]} judged)")
         ax.set_xscale("log")
         ax.xaxis.set_minor_formatter(NullFormatter())  # short ranges would label every minor tick
         ax.set_ylim(-0.02, 1.02)
         ax.set_xlabel(xlabel)
-        ax.set_title(f"{title}, error e <= {tier:g}", fontsize=9)
+        ax.set_title(f"{title}, error e <= {tier:g}", fontsize=8)
         ax.grid(True, alpha=0.3)
-    axes.flat[0].set_ylabel("share of problems" + (" solved" if column != "time_s" else ""))
+        ax.set_ylabel("share of problems" + (" solved" if column != "time_s" else "") + " [1]")
     fig.tight_layout()
     figutil.legend_outside(fig, axes.flat[:1], title="solver (problems judged; n/a left out)")
     return figutil.save_figure_outside(fig, out_dir, stem)
@@ -283,7 +288,7 @@ def plot_profiles(numbers: dict, out_dir: str, runs: Optional[pd.DataFrame] = No
     solvers = figutil.label_solvers(runs) if runs is not None else {}
     display = {label: figutil.display_label(label, runs) for label in labels} if runs is not None else {}
     clock = "setup + solve" if numbers.get("include_setup", True) else "solve only"
-    written = _draw_profiles(numbers, labels, solvers, display, "time_s", f"tau (time / best time; {clock})",
+    written = _draw_profiles(numbers, labels, solvers, display, "time_s", f"tau [1] (time / best time; {clock})",
                              "performance profile", out_dir, "profiles_performance")
     unit = "work units (A-product equivalents)" if numbers.get("work_column") == "work" else "A-products"
     written += _draw_profiles(numbers, labels, solvers, display, numbers.get("work_column", "work"),

@@ -451,6 +451,7 @@ def main(argv=None) -> int:
     parser.add_argument("--force", action="store_true", help="re-simulate and re-run even when cached")
     parser.add_argument("--no-profiles", action="store_true", help="skip profiles.md per suite (faster)")
     args = parser.parse_args(argv)
+    os.environ.setdefault("CB_REPORT", "0")  # one HTML page for the whole reproduction, at the end: none per suite
 
     out = os.path.abspath(args.out)
     os.makedirs(out, exist_ok=True)
@@ -598,6 +599,8 @@ def main(argv=None) -> int:
     runner.say(f"wrote {path}; produced: {', '.join(produced) or 'none'}")
     if missing:
         runner.say("not produced: " + "; ".join(missing))
+    from plots import html_report  # issue 46: the reproduction's HTML page, claims and figures linked
+    html_report.report_at_end(out, runner.say)
     return 0
 
 

@@ -21,6 +21,7 @@ import json
 import math
 import os
 import sys
+import textwrap
 from typing import List, Optional
 
 
@@ -92,7 +93,9 @@ def plot_stability(df: pd.DataFrame, out_dir: str, stem: str = "stability") -> L
                  "solved_relaxation": "rel",
                  "unconfirmed": ""}.get(status, status[:3])
         text[i][j] = (short + cell_marks(row, cols)) if np.isfinite(err) else ("NaN" + cell_marks(row, cols))
-    fig, ax = plt.subplots(figsize=(max(5, 0.55 * len(cases) + 2.5), max(2.5, 0.45 * len(solvers) + 1.5)))
+    # at most a page column wide (plots/figure_checks.py)
+    width = min(7.0, max(5, 0.55 * len(cases) + 2.5))
+    fig, ax = plt.subplots(figsize=(width, max(2.5, 0.45 * len(solvers) + 1.5)))
     masked = np.ma.masked_invalid(grid)
     cmap = plt.get_cmap("RdYlGn_r").copy()
     cmap.set_bad("#555555")
@@ -106,11 +109,11 @@ def plot_stability(df: pd.DataFrame, out_dir: str, stem: str = "stability") -> L
     ax.set_xticklabels(cases, rotation=60, ha="right", fontsize=7)
     ax.set_yticks(range(len(solvers)))
     ax.set_yticklabels(solvers, fontsize=8)
-    fig.colorbar(im, ax=ax, label=f"log10 {cols['error']} reached")
-    ax.set_title("stability (error e on the original QP): ! = 'converged' not confirmed by the measure, "
-                 "rel = solved_relaxation,\nN = NaN/Inf seen, ~ = non-monotone, it/t/st/div/inf/inv = "
-                 "max_iterations/time_limit/stalled/diverged/infeasible/invalid; grey = no finite error",
-                 fontsize=7)
+    fig.colorbar(im, ax=ax, label=f"log10 {cols['error']} reached [1]")
+    ax.set_title(textwrap.fill("stability (error e on the original QP): ! = 'converged' not confirmed by the measure, "
+                               "rel = solved_relaxation, N = NaN/Inf seen, ~ = non-monotone, it/t/st/div/inf/inv = "
+                               "max_iterations/time_limit/stalled/diverged/infeasible/invalid; grey = no finite error",
+                               int(12 * width), break_long_words=False), fontsize=7)
     fig.tight_layout()
     return figutil.save_figure(fig, out_dir, stem)
 
@@ -158,31 +161,36 @@ def plot_stiff_family(histories: dict, out_dir: str, tol: Optional[float] = None
     if not histories:
         return []
     cases = sorted(histories, key=_case_key)
-    ncol = min(3, len(cases))
-    nrow = (len(cases) + ncol - 1) // ncol
-    fig, axes = plt.subplots(nrow, ncol, figsize=(4.2 * ncol, 3.2 * nrow), squeeze=False)
+    nrow, ncol = figutil.grid(len(cases))  # a page column wide, two panels a row
+    fig, axes = plt.subplots(nrow, ncol, figsize=(7.0 if ncol > 1 else 3.5, 2.5 * nrow), squeeze=False)
     labels = sorted({lab for h in histories.values() for lab in h})
-    cmap = plt.cm.tab10 if len(labels) <= 10 else plt.cm.tab20  # one colour per solver
-    colours = {lab: cmap(i % cmap.N) for i, lab in enumerate(labels)}
+    # the solvers' fixed colours and markers (a label "cg:precond=ichol" is a variant of cg)
+    styles = figutil.assign_styles(labels, {lab: lab.split(":")[0] for lab in labels})
+    colours = {lab: styles[lab]["color"] for lab in labels}
     for k, case in enumerate(cases):
         ax = axes[k // ncol][k % ncol]
         for lab, curve in sorted(histories[case].items()):
             y = curve["error"].clip(lower=1e-17)
             ax.step(curve["time_s"].clip(lower=1e-6), y, where="post", label=lab, color=colours[lab],
-                    linestyle="-" if "ichol" in lab else "--", linewidth=1.1)
+                    linestyle="-" if "ichol" in lab else "--", linewidth=1.1, marker=styles[lab]["marker"],
+                    markevery=[len(y) - 1], markersize=4, clip_on=False)
         if tol:
             ax.axhline(tol, color="black", linewidth=0.6, linestyle=":")
+            ax.annotate(f"tol = {tol:g}", (1.0, tol), xycoords=("axes fraction", "data"), ha="right", va="bottom",
+                        fontsize=7)
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.set_title(case, fontsize=9)
-        ax.set_xlabel("time (s, setup included)", fontsize=8)
-        ax.set_ylabel("error e", fontsize=8)
+        ax.set_title(case, fontsize=8)
+        ax.set_xlabel("time [s] (setup included)", fontsize=8)
+        ax.set_ylabel("e on the original QP [1]", fontsize=8)
     for k in range(len(cases), nrow * ncol):
         axes[k // ncol][k % ncol].axis("off")
-    handles = [plt.Line2D([], [], color=colours[lab], linestyle="-" if "ichol" in lab else "--") for lab in labels]
-    fig.legend(handles, labels, loc="lower center", ncol=min(6, len(labels)), fontsize=7, frameon=False)
-    fig.tight_layout(rect=(0, 0.06, 1, 1))
-    return figutil.save_figure(fig, out_dir, stem)
+    handles = [plt.Line2D([], [], color=colours[lab], linestyle="-" if "ichol" in lab else "--",
+                          marker=styles[lab]["marker"]) for lab in labels]
+    fig.tight_layout()
+    fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 0.0), ncol=min(3, len(labels)),
+               fontsize=7, frameon=False)
+    return figutil.save_figure_outside(fig, out_dir, stem)
 
 
 def main(argv=None) -> int:

@@ -116,7 +116,7 @@ def markdown(rows, fits, axis: str, source: str) -> str:
 
 def figure(rows, fits, axis: str, folder: str, title: str):
     import matplotlib.pyplot as plt
-    fig, (ax_t, ax_m) = plt.subplots(1, 2, figsize=(11, 4.2))
+    fig, (ax_t, ax_m) = plt.subplots(1, 2, figsize=(7.0, 3.0))  # a page column (plots/figure_checks.py)
     caps = [r["cap_s"] for r in rows if r["cap_s"]]
     cap = max(caps) if caps else None
     for label in sorted({r["label"] for r in rows}):
@@ -139,8 +139,8 @@ def figure(rows, fits, axis: str, folder: str, title: str):
         if mem:
             ax_m.plot([r[axis] for r in mem], [r["peak_rss_mb"] for r in mem], **style)
     if cap:
-        ax_t.axhline(cap, color="0.6", lw=0.8, ls=":")
-    unit = "unknowns n" if axis == "n" else "rows m of J"
+        ax_t.axhline(cap, color="0.6", lw=0.8, ls=":", label=f"cap {cap:g} s")
+    unit = "unknowns n (count)" if axis == "n" else "rows m of J (count)"
     for ax in (ax_t, ax_m):
         ax.set_xlabel(unit)
         ax.grid(True, which="both", alpha=0.3)
@@ -150,11 +150,12 @@ def figure(rows, fits, axis: str, folder: str, title: str):
         else:
             ax.text(0.5, 0.5, "no data (records without `memory`?)", ha="center", va="center",
                     transform=ax.transAxes, fontsize=9)
-    ax_t.set_ylabel("time to e <= tol, setup included (s)")
-    ax_m.set_ylabel("peak resident memory (MiB)")
-    ax_t.set_title("time (at the cap: x did not reach tol, square refused at its row cap)", fontsize=9)
-    ax_m.set_title("peak memory, every run that started", fontsize=9)
-    fig.suptitle(title, fontsize=10)
+    ax_t.set_ylabel("time to e <= tol, with setup [s]")
+    ax_m.set_ylabel("peak resident memory [MiB]")
+    ax_t.set_title("time (at the cap: x did not reach tol,\nsquare refused at its row cap)", fontsize=8)
+    ax_m.set_title("peak memory, every run that started", fontsize=8)
+    fig.suptitle(title, fontsize=9)
+    fig.tight_layout()
     from matplotlib.lines import Line2D
     not_reached = Line2D([], [], color="black", marker="x", ls="none", label="did not reach tol (at the cap)")
     row_capped = Line2D([], [], color="black", marker="s", markerfacecolor="none", ls="none",

@@ -29,3 +29,5 @@ for s in "${scenes[@]}"; do
 done
 "$cb" run "suites/ladder_$ladder.json" --out "$out/$ladder"
 /usr/bin/python3 -m plots.which_solver "$out/$ladder" --axis "$axis"
+# the page again, now with the which-solver map among its figures
+/usr/bin/python3 -m plots.html_report "$out/$ladder"

@@ -342,9 +342,11 @@ class TestFigureRules(unittest.TestCase):
         # hashed colour was within 10 of mprgp's blue)
         for (a, ca), (b, cb) in itertools.combinations([(s, figutil.SOLVER_STYLES[s][0]) for s in figutil.SOLVER_STYLES], 2):
             self.assertGreater(math.dist(_lab(ca), _lab(cb)), 15.0, (a, b))
-        # a label of a known solver keeps the solver's colour and marker, with a dashed style
+        # a label of a known solver keeps the solver's colour, with a marker and line style of its own
+        # (issue 46: every label a distinct (colour, marker) pair)
         variant = figutil.solver_style("mprgp-ichol", "mprgp")
-        self.assertEqual((variant["color"], variant["marker"]), figutil.SOLVER_STYLES["mprgp"])
+        self.assertEqual(variant["color"], figutil.SOLVER_STYLES["mprgp"][0])
+        self.assertNotIn(variant["marker"], markers)
         self.assertNotEqual(variant["linestyle"], "-")
         # a new solver: the same style every time, with a marker no registered solver has
         for name in ("my-solver", "another-qp", "x"):
@@ -536,6 +538,9 @@ class TestReproduce(TempDirCase):
         self.assertIn(loader.UNCONFIRMED_MEANING, text)
         self.assertNotIn("KKT", text)  # the measure is the accuracy error e (docs/accuracy.md)
         self.assertIn("quick", log.getvalue())
+        # issue 46: the reproduction's HTML page, its path said at the end
+        self.assertTrue(os.path.isfile(os.path.join(out, "report", "index.html")))
+        self.assertIn(f"report: {os.path.join(out, 'report', 'index.html')}", log.getvalue())
 
     def test_missing_binary_reports_reason(self):
         out = os.path.join(self.tmp, "out")
