@@ -530,6 +530,7 @@ def main(argv):
     if getattr(args, "repeats", 1) < 1 or getattr(args, "rounds", 1) < 1:
         parser.error("--repeats and --rounds must be >= 1")
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+    os.environ.setdefault("CB_REPORT", "0")  # the suite runs it starts need no HTML page
     try:
         return {"gate": cmd_gate, "check": cmd_check, "measure": cmd_measure, "record": cmd_record}[args.command](args)
     except GateError as e:
