@@ -51,6 +51,15 @@ Vec a_product(const SpMat& A, const Vec& x)
     return y;
 }
 
+void a_product(const AOperator& A, const Vec& x, Vec& y) { a_product(A.csr(), x, y); }
+
+double a_product_dots(const AOperator& A, const Vec& x, Vec& y, const Vec& w, double& xw)
+{
+    return a_product_dots(A.csr(), x, y, w, xw);
+}
+
+Vec a_product(const AOperator& A, const Vec& x) { return a_product(A.csr(), x); }
+
 long a_product_count() { return g_a_products.load(std::memory_order_relaxed); }
 
 }  // namespace cb

@@ -94,7 +94,7 @@ std::string fmt(double v)
 class MprgpRun {
 public:
     MprgpRun(const QpView& qp, const MprgpSettings& settings, const SolveContext& context)
-        : m_qp(qp), m_A(qp.A), m_J(qp.J), m_b(qp.b), m_c(qp.c), m_st(settings), m_ctx(context), m_n(qp.n()),
+        : m_qp(qp), m_A(qp.A), m_a_op(qp.A), m_J(qp.J), m_b(qp.b), m_c(qp.c), m_st(settings), m_ctx(context), m_n(qp.n()),
           m_m(qp.m()), m_loop("mprgp", qp, settings.common, context)
     {
     }
@@ -105,7 +105,7 @@ private:
     // --- products and objective ---
     void product(const Vec& v, Vec& out)
     {
-        a_product(m_A, v, out);
+        a_product(m_a_op, v, out);
         ++m_cnt.a_products;
     }
     /// out = A v; returns v'Av and sets vg = v'g (one pass over A).
@@ -173,6 +173,7 @@ private:
 
     const QpView& m_qp;
     const SpMat& m_A;
+    AOperator m_a_op;  // the product with A
     const SpMat& m_J;
     const Vec& m_b;
     const Vec& m_c;
@@ -621,7 +622,7 @@ SolverResult MprgpRun::run()
     if (warm) eigenvector = *m_ctx.eigenvector;
     const PowerRule rule = m_st.alpha == "authors" ? PowerRule::AUTHORS : PowerRule::POWER;
     const long power_max = rule == PowerRule::AUTHORS ? 1001 : m_st.power_max;
-    const PowerResult power = power_method(m_A, eigenvector, rule, power_max, common.tol, warm, common.seed,
+    const PowerResult power = power_method(m_a_op, eigenvector, rule, power_max, common.tol, warm, common.seed,
                                            &SolveLoop::time_up_callback, &m_loop);
     m_cnt.power_products = power.products;
     m_cnt.a_products += power.products;
