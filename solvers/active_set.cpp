@@ -174,7 +174,8 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
         counters.work_flops += cholmod_solve_flops(chol.cholmod());
         return chol.solve(rhs);
     };
-    const AOperator a_op(qp.A);  // the product with A, prepared once in the setup
+    AOperator a_op(qp.A);  // the product with A: 3x3 blocks when A has them, built in the setup
+    a_op.prepare(AFormat::BSR);
     if (!loop.end_setup()) {
         result.x = qp.x0;
         result.lambda = Vec::Zero(m);

@@ -111,21 +111,8 @@ private:
     /// out = A v; returns v'Av and sets vg = v'g (one pass over A).
     double product_dot(const Vec& v, Vec& out, double& vg)
     {
-        const int* __restrict outer = m_A.outerIndexPtr();
-        const int* __restrict inner = m_A.innerIndexPtr();
-        const double* __restrict val = m_A.valuePtr();
-        const double* __restrict pv = v.data();
-        const double* __restrict pg = m_g.data();
-        const char* __restrict in_row = m_rows.dof_in_row.data();
-        double* __restrict po = out.data();
-        double vav = 0.0, dot_g = 0.0;
-        for (Eigen::Index i = 0; i < m_n; ++i) {
-            double s = 0.0;
-            for (int k = outer[i]; k < outer[i + 1]; ++k) s += val[k] * pv[inner[k]];
-            po[i] = s;
-            vav += pv[i] * s;
-            if (!in_row[i]) dot_g += pv[i] * pg[i];
-        }
+        double dot_g = 0.0;
+        const double vav = a_product_dots(m_a_op, v, out, m_g, m_rows.dof_in_row.data(), dot_g);
         ++m_cnt.a_products;
         vg = dot_g + m_pg_rows;  // the row DOFs' part comes from evaluate_rows (face form, no cancellation)
         return vav;
@@ -173,7 +160,7 @@ private:
 
     const QpView& m_qp;
     const SpMat& m_A;
-    AOperator m_a_op;  // the product with A
+    AOperator m_a_op;  // the product with A (prepared in the setup)
     const SpMat& m_J;
     const Vec& m_b;
     const Vec& m_c;
@@ -617,6 +604,7 @@ SolverResult MprgpRun::run()
             return m_loop.finish(result, result.status);
         }
     }
+    m_a_op.prepare(AFormat::BSR);  // 3x3 blocks when A has them
     Vec eigenvector;
     const bool warm = m_ctx.eigenvector != nullptr && m_ctx.eigenvector->size() == m_n;
     if (warm) eigenvector = *m_ctx.eigenvector;

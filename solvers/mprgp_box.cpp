@@ -109,7 +109,8 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
         if (rl >= 0) tol_lower[j] = active_tolerance(qp.c[rl]) / std::abs(row_coef[rl]);
         if (ru >= 0) tol_upper[j] = active_tolerance(qp.c[ru]) / std::abs(row_coef[ru]);
     }
-    const AOperator a_op(qp.A);  // the product with A, prepared once in the setup
+    AOperator a_op(qp.A);  // the product with A: 3x3 blocks when A has them, built in the setup
+    a_op.prepare(AFormat::BSR);
     Vec eigenvector;
     const bool warm = context.eigenvector && context.eigenvector->size() == n;
     if (warm) eigenvector = *context.eigenvector;

@@ -475,7 +475,7 @@ private:
     std::unique_ptr<ScaledVariables> m_scaled;  // precond = scaled: the QP in y = D^1/2 x, else null
     const QpView m_qp;                          // the QP iterated on: m_original or m_scaled's
     const SpMat& m_A;
-    AOperator m_a_op;  // the product with A
+    AOperator m_a_op;  // the product with A (prepared in the setup)
     const SpMat& m_J;
     const Vec& m_c;
     const MprgpCoupledSettings& m_st;
@@ -847,6 +847,7 @@ SolverResult CoupledRun::run()
             result.message = "mprgp-coupled: row " + std::to_string(i) + " is zero but c > 0: empty feasible set";
             return m_loop.finish(result, result.status);
         }
+    m_a_op.prepare(AFormat::BSR);  // 3x3 blocks when A has them
     Vec eigenvector;
     const bool warm = m_ctx.eigenvector && m_ctx.eigenvector->size() == m_n;
     if (warm) eigenvector = *m_ctx.eigenvector;

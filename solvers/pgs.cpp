@@ -116,7 +116,8 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
     S = 0.5 * (S + S.transpose()).eval();  // exact symmetry (the solves leave O(eps) asymmetry)
     const Vec S_diag = S.diagonal();
     result.info["y_stored"] = keep_y;
-    const AOperator a_op(qp.A);  // the product with A, prepared once in the setup
+    AOperator a_op(qp.A);  // the product with A: 3x3 blocks when A has them, built in the setup
+    a_op.prepare(AFormat::BSR);
     if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT);
     const AccuracyScale scale = accuracy_scale(qp);
     counters.a_products += scale.a_products;

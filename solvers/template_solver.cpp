@@ -49,7 +49,8 @@ SolverResult TemplateSolver::solve(const QpView& qp, const SolveContext& context
         norm_inf = std::max(norm_inf, row);
     }
     const double step = norm_inf > 0 ? m_settings.step_scale / norm_inf : 1.0;
-    const AOperator a_op(qp.A);  // the product with A, prepared once in the setup
+    AOperator a_op(qp.A);  // the product with A: 3x3 blocks when A has them, built in the setup
+    a_op.prepare(AFormat::BSR);
     const AccuracyScale scale = accuracy_scale(qp);
     counters.a_products += scale.a_products;
     // time_limit_s counts setup: a limit reached here ends the solve before any iteration.
