@@ -63,8 +63,8 @@ double block_product(const BlockRows& B, const double* __restrict px, double* __
 
 /// The CSR loop of the fused product (compressed A): row i's sum, then x_i y_i and x_i w_i.
 template <Dots D>
-double csr_product_dots(const SpMat& A, const double* __restrict px, double* __restrict py,
-                        const double* __restrict pw, const char* __restrict skip, double& xw)
+double csr_product_dots(const SpMat& A, const double* __restrict px, double* __restrict py, const double* __restrict pw,
+                        const char* __restrict skip, double& xw)
 {
     const int* __restrict outer = A.outerIndexPtr();
     const int* __restrict inner = A.innerIndexPtr();

@@ -53,8 +53,7 @@ double thread_cpu_s()
     return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
-template <typename F>
-double seconds(F&& f)
+template <typename F> double seconds(F&& f)
 {
     const double t0 = thread_cpu_s();
     f();
@@ -72,7 +71,8 @@ void measure(benchmark::State& state, const cb::Qp& qp)
     const cb::Vec x = cb::Vec::LinSpaced(n, -1.0, 1.0);
     cb::Vec y_csr(n), y_bsr(n);
     // The triad on arrays as large as A's CSR storage (at least 3 x 32 MB): beyond the caches.
-    const Eigen::Index t = std::max<Eigen::Index>(Eigen::Index{1} << 22, static_cast<Eigen::Index>(csr.matrix_bytes() / 24));
+    const Eigen::Index t =
+        std::max<Eigen::Index>(Eigen::Index{1} << 22, static_cast<Eigen::Index>(csr.matrix_bytes() / 24));
     cb::Vec a = cb::Vec::Zero(t), b = cb::Vec::Constant(t, 1.0), c = cb::Vec::Constant(t, 2.0);
     const int reps = repetitions();
     std::vector<double> t_csr, t_bsr, t_triad, ratio;
@@ -131,10 +131,12 @@ void measure(benchmark::State& state, const cb::Qp& qp)
     state.counters["csr_over_bsr_max"] = *std::max_element(ratio.begin(), ratio.end());
     state.counters["csr_over_bsr_best"] =
         *std::min_element(t_csr.begin(), t_csr.end()) / *std::min_element(t_bsr.begin(), t_bsr.end());
-    state.counters["bsr_of_triad_best"] = (bsr.matrix_bytes() + vectors) / *std::min_element(t_bsr.begin(), t_bsr.end()) /
-                                          (24.0 * static_cast<double>(t) / *std::min_element(t_triad.begin(), t_triad.end()));
-    state.counters["csr_of_triad_best"] = (csr.matrix_bytes() + vectors) / *std::min_element(t_csr.begin(), t_csr.end()) /
-                                          (24.0 * static_cast<double>(t) / *std::min_element(t_triad.begin(), t_triad.end()));
+    state.counters["bsr_of_triad_best"] =
+        (bsr.matrix_bytes() + vectors) / *std::min_element(t_bsr.begin(), t_bsr.end()) /
+        (24.0 * static_cast<double>(t) / *std::min_element(t_triad.begin(), t_triad.end()));
+    state.counters["csr_of_triad_best"] =
+        (csr.matrix_bytes() + vectors) / *std::min_element(t_csr.begin(), t_csr.end()) /
+        (24.0 * static_cast<double>(t) / *std::min_element(t_triad.begin(), t_triad.end()));
     state.counters["same_y"] = (y_csr - y_bsr).lpNorm<Eigen::Infinity>() == 0.0 ? 1.0 : 0.0;
     state.SetLabel(bsr.format() == cb::AFormat::BSR ? "bsr" : "csr fallback: " + bsr.why_csr());
 }

@@ -130,7 +130,7 @@ TEST(BlockProduct, StoresPartlyFilledBlocksWithZerosAndSumsInColumnOrder)
     ASSERT_EQ(op.prepare(AFormat::BSR), AFormat::BSR);
     EXPECT_EQ(op.blocks().column, (std::vector<int>{0, 1, 0, 1}));
     EXPECT_DOUBLE_EQ(op.fill(), 36.0 / 34.0);
-    EXPECT_EQ(op.blocks().value[9 * 1 + 3 * 1 + 0], 0.0);  // block (0, 1), entry (0, 4)
+    EXPECT_EQ(op.blocks().value[9 * 1 + 3 * 1 + 0], 0.0);            // block (0, 1), entry (0, 4)
     EXPECT_EQ(op.blocks().value[9 * 1 + 3 * 0 + 1], A.coeff(1, 3));  // column-major within the block
     const Vec x = varied(6, 9);
     Vec y;
