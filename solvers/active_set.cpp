@@ -174,8 +174,9 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
         counters.work_flops += cholmod_solve_flops(chol.cholmod());
         return chol.solve(rhs);
     };
-    AOperator a_op(qp.A);  // the product with A: 3x3 blocks when A has them, built in the setup
-    a_op.prepare(AFormat::BSR);
+    // CSR: a few products (the stop test's gradients) would not repay a block copy of A.
+    AOperator a_op(qp.A);
+    a_op.prepare(AFormat::CSR);
     if (!loop.end_setup()) {
         result.x = qp.x0;
         result.lambda = Vec::Zero(m);

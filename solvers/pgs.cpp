@@ -116,8 +116,9 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
     S = 0.5 * (S + S.transpose()).eval();  // exact symmetry (the solves leave O(eps) asymmetry)
     const Vec S_diag = S.diagonal();
     result.info["y_stored"] = keep_y;
-    AOperator a_op(qp.A);  // the product with A: 3x3 blocks when A has them, built in the setup
-    a_op.prepare(AFormat::BSR);
+    // CSR: a few products (the stop test's gradients) would not repay a block copy of A.
+    AOperator a_op(qp.A);
+    a_op.prepare(AFormat::CSR);
     if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT);
     const AccuracyScale scale = accuracy_scale(qp);
     counters.a_products += scale.a_products;
