@@ -1,21 +1,80 @@
 #pragma once
 /// The counted product with A: y = A x through one non-inline function that also bumps a
-/// process-wide counter. Solvers use it for their plain `A * v` products, so the harness can
-/// count A-products itself (around each solve) instead of trusting the solver's own count.
-/// Work that bypasses it (CHOLMOD, fused kernels) shows up in instruction counts instead.
+/// process-wide counter. Solvers multiply by A through an AOperator, prepared once in their setup,
+/// so the harness can count A-products itself (around each solve) instead of trusting the
+/// solver's own count, and so A's storage for the product is chosen in one place.
+/// Work that bypasses it (CHOLMOD, sparse partial products) shows up in instruction counts instead.
 #include "solvers/types.hpp"
+
+#include <string>
+#include <vector>
 
 namespace cb {
 
+/// How an AOperator stores A for its products.
+enum class AFormat {
+    CSR,  ///< A itself (Eigen's compressed rows: a value and a 32-bit column per nonzero)
+    BSR,  ///< 3x3 blocks (a vertex's three DOFs): nine values and one 32-bit block column per block
+};
+
+/// A's 3x3 block rows: block row I holds rows 3I, 3I+1, 3I+2. A block is stored column by column
+/// (value (r, c) at 9k + 3c + r) so that a column's three entries meet three partial sums at once.
+/// Entries absent from A are stored as zeros.
+struct BlockRows {
+    std::vector<int> start;     ///< block row I's blocks are start[I] .. start[I + 1] - 1
+    std::vector<int> column;    ///< block column per block, increasing within a block row
+    std::vector<double> value;  ///< 9 per block
+};
+
+/// The operator x -> A x that a solver multiplies by. It refers to A (no copy of the CSR); A must
+/// outlive it. prepare() may build a block copy; products then read it instead of A.
+class AOperator {
+public:
+    explicit AOperator(const SpMat& A) : m_csr(&A) {}
+    /// Chooses the storage of the products: BSR when asked and A has the block structure (n a
+    /// multiple of 3, compressed, sorted columns, at most 25% stored zeros), else CSR; why_csr()
+    /// says why. Both sum each row in column order, so y is the same to the last bit.
+    AFormat prepare(AFormat wanted);
+    AFormat format() const { return m_format; }
+    /// Why the products read CSR (empty when BSR, or when BSR was not asked for).
+    const std::string& why_csr() const { return m_why_csr; }
+    /// Stored block entries per nonzero of A (>= 1; 0 when CSR).
+    double fill() const { return m_fill; }
+    /// Bytes one product streams from A's storage (values, indices, row starts).
+    double matrix_bytes() const;
+    /// A itself (CSR): for sparse partial products, diagonals and factorizations.
+    const SpMat& csr() const { return *m_csr; }
+    const BlockRows& blocks() const { return m_blocks; }
+    Eigen::Index rows() const { return m_csr->rows(); }
+
+private:
+    const SpMat* m_csr;
+    AFormat m_format = AFormat::CSR;
+    BlockRows m_blocks;
+    std::string m_why_csr;
+    double m_fill = 0.0;
+};
+
+/// Builds A's block rows; false (with `why`) when A has no usable 3x3 block structure.
+bool build_block_rows(const SpMat& A, BlockRows& out, double max_fill, double& fill, std::string& why);
+
 /// y = A x, counted. y is resized; it must not alias x.
-void a_product(const SpMat& A, const Vec& x, Vec& y);
+void a_product(const AOperator& A, const Vec& x, Vec& y);
 
 /// y = A x with x'y and x'w summed in the same pass over A, counted as one product: the CG step's
 /// p'Ap and p'g without two more passes over vectors the product has just pushed out of cache.
 /// y is resized; it must not alias x or w. @return x'y; xw receives x'w.
-double a_product_dots(const SpMat& A, const Vec& x, Vec& y, const Vec& w, double& xw);
+double a_product_dots(const AOperator& A, const Vec& x, Vec& y, const Vec& w, double& xw);
+
+/// As above with x'w summed only where skip[i] == 0 (mprgp's p'g over the DOFs outside its rows).
+double a_product_dots(const AOperator& A, const Vec& x, Vec& y, const Vec& w, const char* skip, double& xw);
 
 /// A x, counted (for expressions such as `b - a_product(A, x)`).
+Vec a_product(const AOperator& A, const Vec& x);
+
+/// One-off products outside a solver's iterations (the harness's measure, peers' reports): CSR, counted.
+void a_product(const SpMat& A, const Vec& x, Vec& y);
+double a_product_dots(const SpMat& A, const Vec& x, Vec& y, const Vec& w, double& xw);
 Vec a_product(const SpMat& A, const Vec& x);
 
 /// A-products done through a_product() by this process so far (all threads).

@@ -174,6 +174,9 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
         counters.work_flops += cholmod_solve_flops(chol.cholmod());
         return chol.solve(rhs);
     };
+    // CSR: a few products (the stop test's gradients) would not repay a block copy of A.
+    AOperator a_op(qp.A);
+    a_op.prepare(AFormat::CSR);
     if (!loop.end_setup()) {
         result.x = qp.x0;
         result.lambda = Vec::Zero(m);
@@ -381,7 +384,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
         double best_error = INF;
         Vec best_x = x, best_lambda = lambda;
         for (long round = 0; round <= m_settings.polish_rounds; ++round) {
-            const Vec g = a_product(qp.A, x) - qp.b;
+            const Vec g = a_product(a_op, x) - qp.b;
             ++counters.a_products;
             const double error = accuracy_from_gradient(qp, scale, x, g, lambda).max();
             if (error < best_error) {
@@ -429,7 +432,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
     }
 
     if (!x_polished) x = apply_a_inverse(qp.b + Jt(lambda));
-    const Vec g = a_product(qp.A, x) - qp.b;
+    const Vec g = a_product(a_op, x) - qp.b;
     ++counters.a_products;
     const double rel = accuracy_from_gradient(qp, scale, x, g, lambda).max();
     const double stationarity_abs = (g - Jt(lambda)).lpNorm<Eigen::Infinity>();

@@ -185,12 +185,14 @@ SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
         result.info["start_solve_s"] = loop.elapsed_s() - start_begin_s;
         result.info["start_solver"] = "cholmod";
     }
+    AOperator a_op(qp.A);  // the product with A: 3x3 blocks when A has them, built in the setup
+    a_op.prepare(AFormat::BSR);
     Vec lambda = Vec::Zero(m);
     if (context.lambda0 && context.lambda0->size() == m) lambda = context.lambda0->cwiseMax(0.0);
     if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT);
     const AccuracyScale scale = accuracy_scale(qp);
     counters.a_products += scale.a_products;
-    Vec Ax = a_product(qp.A, x);
+    Vec Ax = a_product(a_op, x);
     ++counters.a_products;
     Vec f = qp.b + qp.J.transpose() * lambda;
     double native = (Ax - f).norm();
@@ -257,7 +259,7 @@ SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
         block_gauss_seidel_sweep(qp.A, d, f, x);
         ++counters.a_products;
         // 4. the native residual (its A x is reused by the next anticipation).
-        a_product(qp.A, x, Ax);
+        a_product(a_op, x, Ax);
         ++counters.a_products;
         g = Ax - qp.b;
         native = (Ax - f).norm();

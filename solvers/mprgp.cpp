@@ -94,8 +94,8 @@ std::string fmt(double v)
 class MprgpRun {
 public:
     MprgpRun(const QpView& qp, const MprgpSettings& settings, const SolveContext& context)
-        : m_qp(qp), m_A(qp.A), m_J(qp.J), m_b(qp.b), m_c(qp.c), m_st(settings), m_ctx(context), m_n(qp.n()),
-          m_m(qp.m()), m_loop("mprgp", qp, settings.common, context)
+        : m_qp(qp), m_A(qp.A), m_a_op(qp.A), m_J(qp.J), m_b(qp.b), m_c(qp.c), m_st(settings), m_ctx(context),
+          m_n(qp.n()), m_m(qp.m()), m_loop("mprgp", qp, settings.common, context)
     {
     }
 
@@ -105,27 +105,14 @@ private:
     // --- products and objective ---
     void product(const Vec& v, Vec& out)
     {
-        a_product(m_A, v, out);
+        a_product(m_a_op, v, out);
         ++m_cnt.a_products;
     }
     /// out = A v; returns v'Av and sets vg = v'g (one pass over A).
     double product_dot(const Vec& v, Vec& out, double& vg)
     {
-        const int* __restrict outer = m_A.outerIndexPtr();
-        const int* __restrict inner = m_A.innerIndexPtr();
-        const double* __restrict val = m_A.valuePtr();
-        const double* __restrict pv = v.data();
-        const double* __restrict pg = m_g.data();
-        const char* __restrict in_row = m_rows.dof_in_row.data();
-        double* __restrict po = out.data();
-        double vav = 0.0, dot_g = 0.0;
-        for (Eigen::Index i = 0; i < m_n; ++i) {
-            double s = 0.0;
-            for (int k = outer[i]; k < outer[i + 1]; ++k) s += val[k] * pv[inner[k]];
-            po[i] = s;
-            vav += pv[i] * s;
-            if (!in_row[i]) dot_g += pv[i] * pg[i];
-        }
+        double dot_g = 0.0;
+        const double vav = a_product_dots(m_a_op, v, out, m_g, m_rows.dof_in_row.data(), dot_g);
         ++m_cnt.a_products;
         vg = dot_g + m_pg_rows;  // the row DOFs' part comes from evaluate_rows (face form, no cancellation)
         return vav;
@@ -173,6 +160,7 @@ private:
 
     const QpView& m_qp;
     const SpMat& m_A;
+    AOperator m_a_op;  // the product with A (prepared in the setup)
     const SpMat& m_J;
     const Vec& m_b;
     const Vec& m_c;
@@ -616,12 +604,13 @@ SolverResult MprgpRun::run()
             return m_loop.finish(result, result.status);
         }
     }
+    m_a_op.prepare(AFormat::BSR);  // 3x3 blocks when A has them
     Vec eigenvector;
     const bool warm = m_ctx.eigenvector != nullptr && m_ctx.eigenvector->size() == m_n;
     if (warm) eigenvector = *m_ctx.eigenvector;
     const PowerRule rule = m_st.alpha == "authors" ? PowerRule::AUTHORS : PowerRule::POWER;
     const long power_max = rule == PowerRule::AUTHORS ? 1001 : m_st.power_max;
-    const PowerResult power = power_method(m_A, eigenvector, rule, power_max, common.tol, warm, common.seed,
+    const PowerResult power = power_method(m_a_op, eigenvector, rule, power_max, common.tol, warm, common.seed,
                                            &SolveLoop::time_up_callback, &m_loop);
     m_cnt.power_products = power.products;
     m_cnt.a_products += power.products;

@@ -109,11 +109,13 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
         if (rl >= 0) tol_lower[j] = active_tolerance(qp.c[rl]) / std::abs(row_coef[rl]);
         if (ru >= 0) tol_upper[j] = active_tolerance(qp.c[ru]) / std::abs(row_coef[ru]);
     }
+    AOperator a_op(qp.A);  // the product with A: 3x3 blocks when A has them, built in the setup
+    a_op.prepare(AFormat::BSR);
     Vec eigenvector;
     const bool warm = context.eigenvector && context.eigenvector->size() == n;
     if (warm) eigenvector = *context.eigenvector;
     const PowerResult power =
-        power_method(qp.A, eigenvector, PowerRule::POWER, m_settings.power_max, common.tol, warm, common.seed);
+        power_method(a_op, eigenvector, PowerRule::POWER, m_settings.power_max, common.tol, warm, common.seed);
     if (context.eigenvector) *context.eigenvector = eigenvector;
     cnt.power_products = power.products;
     cnt.a_products += power.products;
@@ -127,7 +129,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
     // --- the MPRGP loop ---
     Vec x = qp.x0.cwiseMax(lower).cwiseMin(upper);
     ++cnt.projections;
-    Vec g = a_product(qp.A, x) - qp.b;
+    Vec g = a_product(a_op, x) - qp.b;
     ++cnt.a_products;
     Vec phi(n), beta(n), z(n), p(n), Ap(n), lambda = Vec::Zero(m);
     std::vector<char> at_lower(static_cast<size_t>(n)), at_upper(static_cast<size_t>(n));
@@ -177,7 +179,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
         error = accuracy_from_gradient(qp, scale, x, g, lambda).max();
         bool converged = loop.criterion_met(native_residual, error);
         if (converged) {  // confirm at an exact gradient
-            g = a_product(qp.A, x) - qp.b;
+            g = a_product(a_op, x) - qp.b;
             ++cnt.a_products;
             gradients();
             multipliers();
@@ -202,7 +204,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
         if (status != SolveStatus::NOT_RUN) break;
         ++cnt.iterations;
         if (beta.squaredNorm() <= m_settings.gamma * m_settings.gamma * phitilde_dot_phi()) {
-            a_product(qp.A, p, Ap);
+            a_product(a_op, p, Ap);
             ++cnt.a_products;
             const double pap = p.dot(Ap);
             if (!(pap > 0.0)) {
@@ -240,7 +242,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
                 gradients();
                 x = (x - alpha_bar * phi).cwiseMax(lower).cwiseMin(upper);
                 ++cnt.projections;
-                g = a_product(qp.A, x) - qp.b;
+                g = a_product(a_op, x) - qp.b;
                 ++cnt.a_products;
                 classify();
                 gradients();
@@ -249,7 +251,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
                 last = StepKind::EXPANSION;
             }
         } else {
-            a_product(qp.A, beta, Ap);
+            a_product(a_op, beta, Ap);
             ++cnt.a_products;
             const double dad = beta.dot(Ap);
             if (!(dad > 0.0)) {
@@ -267,7 +269,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
             last = StepKind::PROPORTIONING;
         }
     }
-    g = a_product(qp.A, x) - qp.b;
+    g = a_product(a_op, x) - qp.b;
     ++cnt.a_products;
     classify();
     gradients();

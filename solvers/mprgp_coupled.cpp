@@ -214,7 +214,7 @@ public:
         : m_loop("mprgp-coupled", qp, st.common, context), m_original(qp), m_choice(PrecondChoice::make(qp, st)),
           m_scaled(ScaledVariables::make(qp, m_choice.name, st)),
           m_qp(m_scaled ? QpView{m_scaled->A, m_scaled->b, m_scaled->J, qp.c, m_scaled->y0} : qp), m_A(m_qp.A),
-          m_J(m_qp.J), m_c(m_qp.c), m_st(st), m_ctx(context), m_n(qp.n()), m_m(qp.m()),
+          m_a_op(m_A), m_J(m_qp.J), m_c(m_qp.c), m_st(st), m_ctx(context), m_n(qp.n()), m_m(qp.m()),
           m_unscale(m_scaled ? &m_scaled->unscale : nullptr)
     {
     }
@@ -234,7 +234,7 @@ private:
     void exact_gradient()
     {
         m_tmp = m_x - m_x_ref;
-        a_product(m_A, m_tmp, m_g);
+        a_product(m_a_op, m_tmp, m_g);
         m_g += m_g_ref;
         ++m_cnt.a_products;
     }
@@ -475,6 +475,7 @@ private:
     std::unique_ptr<ScaledVariables> m_scaled;  // precond = scaled: the QP in y = D^1/2 x, else null
     const QpView m_qp;                          // the QP iterated on: m_original or m_scaled's
     const SpMat& m_A;
+    AOperator m_a_op;  // the product with A (prepared in the setup)
     const SpMat& m_J;
     const Vec& m_c;
     const MprgpCoupledSettings& m_st;
@@ -743,7 +744,7 @@ bool CoupledRun::expansion(double cg_alpha)
         // The face direction z with its exact step: alpha_bar = 2/||A|| moves the soft DOFs by
         // almost nothing, so the face grows by a row or two per expansion; this step reaches
         // the rows the CG chain was heading for (Alg. 3's safeguard still guarantees descent).
-        a_product(m_A, direction(), m_Ap);
+        a_product(m_a_op, direction(), m_Ap);
         ++m_cnt.a_products;
         const double zaz = direction().dot(m_Ap), zg = direction().dot(m_phi);
         if (zaz > 0.0 && zg > 0.0 && std::isfinite(zaz)) {
@@ -846,11 +847,12 @@ SolverResult CoupledRun::run()
             result.message = "mprgp-coupled: row " + std::to_string(i) + " is zero but c > 0: empty feasible set";
             return m_loop.finish(result, result.status);
         }
+    m_a_op.prepare(AFormat::BSR);  // 3x3 blocks when A has them
     Vec eigenvector;
     const bool warm = m_ctx.eigenvector && m_ctx.eigenvector->size() == m_n;
     if (warm) eigenvector = *m_ctx.eigenvector;
     const PowerResult power =
-        power_method(m_A, eigenvector, PowerRule::POWER, m_st.power_max, common.tol, warm, common.seed);
+        power_method(m_a_op, eigenvector, PowerRule::POWER, m_st.power_max, common.tol, warm, common.seed);
     if (m_ctx.eigenvector) *m_ctx.eigenvector = eigenvector;
     m_cnt.power_products = power.products;
     m_cnt.a_products += power.products;
@@ -881,7 +883,7 @@ SolverResult CoupledRun::run()
     m_x = m_qp.x0;
     project_x(true);
     m_x_ref = m_x;
-    a_product(m_A, m_x, m_g_ref);
+    a_product(m_a_op, m_x, m_g_ref);
     ++m_cnt.a_products;
     m_g_ref -= m_qp.b;
     m_g = m_g_ref;
@@ -939,7 +941,7 @@ SolverResult CoupledRun::run()
         if (proportional) {
             // --- CG trial step (Alg. 2), F(P(y)) - F(P(x)) in difference form ---
             double pg = 0.0;  // p'phi = p'g on the chain's face, summed in the product's pass
-            const double pap = a_product_dots(m_A, m_p, m_Ap, m_phi, pg);
+            const double pap = a_product_dots(m_a_op, m_p, m_Ap, m_phi, pg);
             ++m_cnt.a_products;
             if (!(pap > 0.0) || !std::isfinite(pap)) {
                 status = pap == 0.0 ? SolveStatus::STALLED : SolveStatus::DIVERGED;

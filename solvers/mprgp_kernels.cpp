@@ -111,7 +111,7 @@ void jacobi_face_precondition(const SpMat& J, const DecoupledRows& rows, const s
     }
 }
 
-PowerResult power_method(const SpMat& A, Vec& v, PowerRule rule, long max_products, double tol, bool warm,
+PowerResult power_method(const AOperator& A, Vec& v, PowerRule rule, long max_products, double tol, bool warm,
                          std::uint64_t seed, bool (*deadline_check)(void*), void* deadline_data)
 {
     PowerResult result;

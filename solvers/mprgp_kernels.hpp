@@ -4,6 +4,7 @@
 /// Ref: Li et al., "Deformable Objects Collision Handling with Fast Convergence", CGF 2015,
 ///      eq. (13) reduced free gradient, eq. (15)-(16) free gradient, eq. (17)-(18) chopped
 ///      gradient, eq. (19)-(20) projection; Alg. 1-3.
+#include "solvers/a_product.hpp"
 #include "solvers/types.hpp"
 
 #include <cstdint>
@@ -86,7 +87,7 @@ struct PowerResult {
 /// Estimates ||A||_2 for SPD A.
 /// @param[in,out] v  start vector when warm (size n, nonzero); on output the last unit iterate
 /// @param deadline_check  called every product; returns true to stop early (time limit)
-PowerResult power_method(const SpMat& A, Vec& v, PowerRule rule, long max_products, double tol, bool warm,
+PowerResult power_method(const AOperator& A, Vec& v, PowerRule rule, long max_products, double tol, bool warm,
                          std::uint64_t seed, bool (*deadline_check)(void*) = nullptr, void* deadline_data = nullptr);
 
 }  // namespace cb

@@ -116,6 +116,9 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
     S = 0.5 * (S + S.transpose()).eval();  // exact symmetry (the solves leave O(eps) asymmetry)
     const Vec S_diag = S.diagonal();
     result.info["y_stored"] = keep_y;
+    // CSR: a few products (the stop test's gradients) would not repay a block copy of A.
+    AOperator a_op(qp.A);
+    a_op.prepare(AFormat::CSR);
     if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT);
     const AccuracyScale scale = accuracy_scale(qp);
     counters.a_products += scale.a_products;
@@ -178,7 +181,7 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
     auto accuracy_error = [&]() -> double {
         if (dual_space_error() > dual_threshold) return std::numeric_limits<double>::infinity();
         primal_point(true);
-        const Vec g = a_product(qp.A, x) - qp.b;
+        const Vec g = a_product(a_op, x) - qp.b;
         ++counters.a_products;
         const double e = accuracy_from_gradient(qp, scale, x, g, lambda).max();
         if (!(e <= s.common.tol)) dual_threshold *= 0.5;  // the solve's error showed up: ask more of the dual estimate

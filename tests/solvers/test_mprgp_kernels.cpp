@@ -175,8 +175,9 @@ TEST(MprgpKernels, JacobiPreconditionerKeepsTheFace)
 
 TEST(MprgpKernels, PowerMethodEstimatesTheNormFromBelowAndWarmStartHelps)
 {
-    const cb::SpMat A = cb::fem_like_matrix({3, 3, 3, 0.1, 1e6, 0.4, 1000.0, 0.01});
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig{Eigen::MatrixXd(A)};
+    const cb::SpMat A_csr = cb::fem_like_matrix({3, 3, 3, 0.1, 1e6, 0.4, 1000.0, 0.01});
+    const cb::AOperator A(A_csr);
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig{Eigen::MatrixXd(A_csr)};
     const double norm = eig.eigenvalues().maxCoeff();
     Vec v;
     const cb::PowerResult cold = cb::power_method(A, v, cb::PowerRule::POWER, 1000, 0.0, false, 1);

@@ -1,0 +1,140 @@
+// The block product (solvers/a_product, AFormat::BSR) against Eigen's CSR product, the oracle:
+// the same y, x'y and x'w on every synthetic family and every stress family, and an honest CSR
+// fallback when A has no 3x3 block structure (n not a multiple of 3, scattered nonzeros).
+#include "harness/stress_families.hpp"
+#include "problems/synthetic.hpp"
+#include "solvers/a_product.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <set>
+
+using namespace cb;
+
+namespace {
+
+Vec varied(Eigen::Index n, std::uint64_t seed)
+{
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    Vec v(n);
+    for (Eigen::Index i = 0; i < n; ++i) v[i] = u(rng) * std::pow(10.0, 3.0 * u(rng));
+    return v;
+}
+
+/// Every product of `op` against Eigen's on A: y, the fused dots and the masked dots.
+void expect_same_products(const AOperator& op, const SpMat& A, const std::string& what)
+{
+    SCOPED_TRACE(what);
+    const Vec x = varied(A.cols(), 3), w = varied(A.cols(), 4);
+    std::vector<char> skip(static_cast<size_t>(A.rows()));
+    for (size_t i = 0; i < skip.size(); ++i) skip[i] = static_cast<char>(i % 5 == 1);
+    const Vec oracle = A * x;
+    // The block sums follow the CSR sums' order and add exact zeros: equal to the last bit.
+    const double tol = 0.0;
+    const long before = a_product_count();
+    Vec y;
+    a_product(op, x, y);
+    ASSERT_EQ(y.size(), A.rows());
+    EXPECT_LE((y - oracle).lpNorm<Eigen::Infinity>(), tol);
+    double xw = 0.0;
+    Vec y2;
+    const double xy = a_product_dots(op, x, y2, w, xw);
+    EXPECT_LE((y2 - oracle).lpNorm<Eigen::Infinity>(), tol);
+    EXPECT_NEAR(xy, x.dot(oracle), 1e-13 * x.cwiseAbs().dot(A.cwiseAbs() * x.cwiseAbs()));
+    EXPECT_NEAR(xw, x.dot(w), 1e-13 * x.cwiseAbs().dot(w.cwiseAbs()));
+    double xw_masked = 0.0, expected_masked = 0.0;
+    for (Eigen::Index i = 0; i < A.rows(); ++i)
+        if (!skip[static_cast<size_t>(i)]) expected_masked += x[i] * w[i];
+    Vec y3;
+    a_product_dots(op, x, y3, w, skip.data(), xw_masked);
+    EXPECT_LE((y3 - oracle).lpNorm<Eigen::Infinity>(), tol);
+    EXPECT_NEAR(xw_masked, expected_masked, 1e-13 * x.cwiseAbs().dot(w.cwiseAbs()));
+    EXPECT_EQ(a_product_count() - before, 3);  // each product counted once, whatever the storage
+}
+
+}  // namespace
+
+TEST(BlockProduct, EqualsTheCsrProductOnEverySyntheticFamily)
+{
+    for (const std::string& family : synthetic_families()) {
+        const Qp qp = make_synthetic(family, nlohmann::json::object(), 7);
+        AOperator op(qp.A);
+        const AFormat format = op.prepare(AFormat::BSR);
+        if (qp.n() % 3 == 0) {
+            EXPECT_EQ(format, AFormat::BSR) << family << ": " << op.why_csr();
+            EXPECT_LE(op.fill(), 1.25) << family;
+            EXPECT_LT(op.matrix_bytes(), static_cast<double>(qp.A.nonZeros()) * 12.0) << family;
+        }
+        expect_same_products(op, qp.A, family);
+    }
+}
+
+TEST(BlockProduct, EqualsTheCsrProductOnEveryStressFamily)
+{
+    std::set<std::string> done;
+    std::vector<std::string> csr;
+    for (const StressCase& c : stress_cases()) {
+        if (!done.insert(c.family).second) continue;  // the first case of each family
+        const Qp qp = make_stress_qp(c);
+        AOperator op(qp.A);
+        if (op.prepare(AFormat::BSR) == AFormat::CSR) csr.push_back(c.id + ": " + op.why_csr());
+        expect_same_products(op, qp.A, c.id);
+    }
+    EXPECT_GE(done.size(), 10u);
+    // Every stress family's A is made of vertex blocks: none falls back to CSR.
+    EXPECT_EQ(csr, (std::vector<std::string>{}));
+}
+
+TEST(BlockProduct, FallsBackToCsrWhenNIsNotAMultipleOfThree)
+{
+    const Qp qp = make_synthetic("plane", {{"nx", 2}, {"ny", 2}, {"nz", 2}}, 3);
+    const Eigen::Index n = qp.n() - 1;  // drop the last DOF: n is no longer a multiple of 3
+    const SpMat A = qp.A.topLeftCorner(n, n);
+    AOperator op(A);
+    EXPECT_EQ(op.prepare(AFormat::BSR), AFormat::CSR);
+    EXPECT_EQ(op.why_csr(), "the DOF count " + std::to_string(n) + " is not a positive multiple of 3");
+    EXPECT_EQ(op.fill(), 0.0);
+    expect_same_products(op, A, "n = " + std::to_string(n));
+}
+
+TEST(BlockProduct, FallsBackToCsrWhenTheNonzerosFormNoBlocks)
+{
+    // A diagonal A stores one entry per 3x3 block: blocks would read 3x its values.
+    const Eigen::Index n = 30;
+    SpMat A(n, n);
+    for (Eigen::Index i = 0; i < n; ++i) A.insert(i, i) = 1.0 + static_cast<double>(i);
+    A.makeCompressed();
+    AOperator op(A);
+    EXPECT_EQ(op.prepare(AFormat::BSR), AFormat::CSR);
+    EXPECT_EQ(op.why_csr(), "A's nonzeros do not form 3x3 blocks (3.000000 stored entries per nonzero)");
+    expect_same_products(op, A, "diagonal");
+    // CSR asked for: no block copy.
+    AOperator csr(A);
+    EXPECT_EQ(csr.prepare(AFormat::CSR), AFormat::CSR);
+    EXPECT_TRUE(csr.why_csr().empty());
+    EXPECT_TRUE(csr.blocks().value.empty());
+}
+
+TEST(BlockProduct, StoresPartlyFilledBlocksWithZerosAndSumsInColumnOrder)
+{
+    // A 6x6 with one entry missing from each off-diagonal block: the blocks store zeros there,
+    // and every y entry equals the CSR sum bit for bit.
+    Eigen::MatrixXd dense = Eigen::MatrixXd::Random(6, 6);
+    dense = (dense * dense.transpose()).eval();
+    dense(0, 4) = dense(4, 0) = 0.0;
+    const SpMat A = dense.sparseView();
+    AOperator op(A);
+    ASSERT_EQ(op.prepare(AFormat::BSR), AFormat::BSR);
+    EXPECT_EQ(op.blocks().column, (std::vector<int>{0, 1, 0, 1}));
+    EXPECT_DOUBLE_EQ(op.fill(), 36.0 / 34.0);
+    EXPECT_EQ(op.blocks().value[9 * 1 + 3 * 1 + 0], 0.0);            // block (0, 1), entry (0, 4)
+    EXPECT_EQ(op.blocks().value[9 * 1 + 3 * 0 + 1], A.coeff(1, 3));  // column-major within the block
+    const Vec x = varied(6, 9);
+    Vec y;
+    a_product(op, x, y);
+    const Vec oracle = A * x;
+    for (Eigen::Index i = 0; i < 6; ++i) EXPECT_EQ(y[i], oracle[i]) << i;
+}
