@@ -41,6 +41,8 @@ bool safe_name(const std::string& s)
 
 std::string type_name(const nlohmann::json& v) { return v.type_name(); }
 
+constexpr double MAX_TIME_LIMIT_S = 1e6;
+
 double get_number(const nlohmann::json& j, const std::string& key, const std::string& where, double fallback,
                   double min_exclusive)
 {
@@ -264,6 +266,11 @@ Suite parse_suite(const nlohmann::json& j, const std::string& where)
     s.time_limit_s = get_number(j, "time_limit_s", where, s.time_limit_s, -1.0);
     if (s.time_limit_s < 0)
         throw_input_error(where, "/time_limit_s", "must be >= 0 (0 disables), got " + j["time_limit_s"].dump());
+    // The limit becomes a clock deadline (int64 nanoseconds overflow past 292 years, and 1e308
+    // failed every run): more than a million seconds (11.6 days) is a typo, not a budget.
+    if (s.time_limit_s > MAX_TIME_LIMIT_S)
+        throw_input_error(where, "/time_limit_s",
+                          "must be <= 1e6 seconds (11.6 days; 0 disables), got " + j["time_limit_s"].dump());
     s.repeat = static_cast<int>(get_integer(j, "repeat", where, 1, 1));
     if (s.repeat > 1000 || get_integer(j, "repeat", where, 1, 1) > 1000)  // no int wrap-around
         throw_input_error(where, "/repeat", "must be <= 1000, got " + j["repeat"].dump());
@@ -316,7 +323,8 @@ std::vector<SuiteSnapshot> resolve_snapshots(const Suite& suite, const std::stri
         const std::string& pattern = suite.snapshots[i];
         const fs::path full = fs::path(pattern).is_absolute() ? fs::path(pattern) : base / pattern;
         const std::string field = "/snapshots/" + std::to_string(i);
-        if (fs::is_directory(full)) {
+        std::error_code ec;  // a link loop is no folder: named below as one
+        if (fs::is_directory(full, ec)) {
             std::vector<fs::path> files;
             for (const auto& entry : fs::directory_iterator(full))
                 if (entry.is_regular_file() && entry.path().extension() == ".qpsnap") files.push_back(entry.path());
@@ -336,8 +344,10 @@ std::vector<SuiteSnapshot> resolve_snapshots(const Suite& suite, const std::stri
                 throw_input_error(suite.path, field, "pattern '" + full.string() + "' matches no file");
             for (const auto& m : matches) add(m);
         } else {
-            if (!fs::is_regular_file(full))
+            const std::string problem = regular_file_problem(full.string());
+            if (problem == "not found")
                 throw_input_error(suite.path, field, "no such file '" + full.string() + "'");
+            if (!problem.empty()) throw_input_error(suite.path, field, "'" + full.string() + "': " + problem);
             add(full);
         }
     }
