@@ -169,10 +169,10 @@ MtxFile parse_mtx(const std::string& path, const MtxLimits& limits = {})
         expected = long(size[2]);
     else
         expected = symmetric ? f.rows * (f.rows + 1) / 2 : f.rows * f.cols;
-    // Entries are distinct positions: more than the matrix holds is an error known now, before
-    // the entries are read and stored.
-    const long capacity_cap = symmetric ? f.rows * (f.rows + 1) / 2 : f.rows * f.cols;
-    if (f.format == "coordinate" && expected > capacity_cap)
+    // A vector bounded by the size wanted: its entries are distinct positions, so more than it
+    // holds is an error known now, before the entries are read and stored.
+    const long positions = symmetric ? f.rows * (f.rows + 1) / 2 : f.rows * f.cols;
+    if (limits.vector_size && f.format == "coordinate" && expected > positions)
         throw_input_error(path, line_field(lines.line()),
                           "declares " + std::to_string(expected) + " entries, more than the " + std::to_string(f.rows) +
                               " x " + std::to_string(f.cols) + " matrix holds");

@@ -261,11 +261,14 @@ Vec read_text_vector(const std::string& path, const std::string& field, long exp
     long count = 0;
     for_each_text_token(path, field, [&](const std::string& token, long line) {
         char* end = nullptr;
-        std::strtod(token.c_str(), &end);
+        const double v = std::strtod(token.c_str(), &end);
         // A NUL inside the token stops strtod short of its end: refused like any other garbage.
         if (end != token.c_str() + token.size())
             throw_input_error(path, "line " + std::to_string(line),
                               "expected a number of " + field + ", got '" + printable(token) + "'");
+        if (!std::isfinite(v))
+            throw_input_error(path, field + "[" + std::to_string(count) + "]",
+                              std::string("not finite (") + (std::isnan(v) ? "nan" : "inf") + ")");
         ++count;
     });
     require_count(count, expected, path, field);
