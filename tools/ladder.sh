@@ -20,32 +20,10 @@ fi
 # this simulator version, and the scene file has not changed since; anything else is simulated
 # again (a planted or stale folder once gave the ladder another scene's snapshots).
 simver=$("$cb" --version --json | /usr/bin/python3 -c 'import json, sys; print(json.load(sys.stdin)["simulator_version"])')
-stale_reason() {  # stale_reason SIMULATION_JSON SCENE_FILE: prints why the folder is not reusable
-    /usr/bin/python3 - "$1" "$2" "$simver" <<'PY'
-import json, os, sys
-path, scene_file, version = sys.argv[1], sys.argv[2], int(sys.argv[3])
-try:
-    rec = json.load(open(path, encoding="utf-8"))
-    name = json.load(open(scene_file, encoding="utf-8"))["name"]
-except (OSError, ValueError, KeyError) as err:
-    print(f"unreadable ({err})")
-    sys.exit()
-why = []
-if rec.get("scene") != name:
-    why.append(f"scene {rec.get('scene')!r}, not {name!r}")
-if rec.get("simulator_version") != version:
-    why.append(f"simulator version {rec.get('simulator_version')!r}, not {version}")
-if rec.get("frames_done") != 2 or rec.get("blow_up") is not False or rec.get("solver") != "mprgp":
-    why.append("not a whole two-frame mprgp run")
-if os.path.getmtime(scene_file) > os.path.getmtime(path):
-    why.append("the scene file changed since")
-print("; ".join(why))
-PY
-}
 for s in "${scenes[@]}"; do
     dir="$out/sim/$s"
     if [ -f "$dir/simulation.json" ]; then
-        why=$(stale_reason "$dir/simulation.json" "scenes/ladder/$s.json")
+        why=$(/usr/bin/python3 tools/ladder_reuse.py "$dir/simulation.json" "scenes/ladder/$s.json" "$simver")
         if [ -z "$why" ]; then
             echo "ladder: $s: simulated already ($dir)"
             continue
