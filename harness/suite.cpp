@@ -308,9 +308,18 @@ std::vector<SuiteSnapshot> resolve_snapshots(const Suite& suite, const std::stri
     std::vector<std::pair<std::string, std::string>> found;  // (stem, path)
     std::set<std::string> seen_paths;
     auto add = [&](const fs::path& p) {
-        const std::string key = fs::weakly_canonical(p).string();
+        std::error_code ec;  // a link loop has no canonical name: its run names the loop
+        std::string key = fs::weakly_canonical(p, ec).string();
+        if (ec) key = p.string();
         if (!seen_paths.insert(key).second) return;
         found.emplace_back(p.stem().string(), p.string());
+    };
+    // A FIFO, a device or a link loop named by the suite directly is refused by name (it once
+    // read as "no such file").
+    auto add_regular = [&](const fs::path& p, const std::string& field) {
+        const std::string problem = regular_file_problem(p.string());
+        if (!problem.empty()) throw_input_error(suite.path, field, "'" + p.string() + "': " + problem);
+        add(p);
     };
     auto add_simulations_at = [&](size_t position) {
         for (const auto& sim : suite.simulations)
@@ -326,8 +335,9 @@ std::vector<SuiteSnapshot> resolve_snapshots(const Suite& suite, const std::stri
         std::error_code ec;  // a link loop is no folder: named below as one
         if (fs::is_directory(full, ec)) {
             std::vector<fs::path> files;
+            // As for a pattern, a FIFO or a link loop among them fails its own runs (by name).
             for (const auto& entry : fs::directory_iterator(full))
-                if (entry.is_regular_file() && entry.path().extension() == ".qpsnap") files.push_back(entry.path());
+                if (entry.path().extension() == ".qpsnap" && !entry.is_directory(ec)) files.push_back(entry.path());
             std::sort(files.begin(), files.end());
             if (files.empty())
                 throw_input_error(suite.path, field, "folder '" + full.string() + "' holds no .qpsnap file");
@@ -344,11 +354,9 @@ std::vector<SuiteSnapshot> resolve_snapshots(const Suite& suite, const std::stri
                 throw_input_error(suite.path, field, "pattern '" + full.string() + "' matches no file");
             for (const auto& m : matches) add(m);
         } else {
-            const std::string problem = regular_file_problem(full.string());
-            if (problem == "not found")
+            if (regular_file_problem(full.string()) == "not found")
                 throw_input_error(suite.path, field, "no such file '" + full.string() + "'");
-            if (!problem.empty()) throw_input_error(suite.path, field, "'" + full.string() + "': " + problem);
-            add(full);
+            add_regular(full, field);
         }
     }
     std::vector<SuiteSnapshot> out;

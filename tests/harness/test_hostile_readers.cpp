@@ -291,6 +291,17 @@ TEST(HostileReaders, SuiteDuplicateKeysAndHugeTimeLimitAreRefused)
     EXPECT_EQ(o.err, "contactbench run: error: " + (dir / "fifo.json").string() + ": /snapshots/0: '" +
                          (dir / "fifo.qpsnap").string() + "': not a regular file (a FIFO)\n");
     EXPECT_FALSE(fs::exists(dir / "out" / "runs"));
+    // A link loop in a snapshot folder fails its own run by name (was "internal error: filesystem error").
+    fs::create_directories(dir / "loops");
+    fs::create_symlink("self.qpsnap", dir / "loops" / "self.qpsnap");
+    fs::copy_file(dir / "plane.qpsnap", dir / "loops" / "a.qpsnap");
+    write_bytes(dir / "loops.json", R"({"name": "l", "snapshots": ["loops"], "solvers": ["pgs"]})");
+    o = run("run " + q(dir / "loops.json") + " --out " + q(dir / "lo"));
+    EXPECT_EQ(o.status, 0) << o.err;
+    EXPECT_NE(o.err.find("self x pgs: invalid_input: " + (dir / "loops" / "self.qpsnap").string() +
+                         ": cannot open: Too many levels of symbolic links"),
+              std::string::npos)
+        << o.err;
 }
 
 TEST(HostileReaders, MeshSizesAreBoundedBeforeAllocation)
