@@ -128,7 +128,8 @@ Judgement judge_point(const Qp& qp, const SolutionPoint& point, const JudgeOptio
                                       "expected a string, got " + std::string(order_json.type_name()));
                 const std::string order = order_json.get<std::string>();
                 const nlohmann::json seed_json = decouple.value("seed", nlohmann::json(0));
-                if (!seed_json.is_number_unsigned() && !(seed_json.is_number_integer() && seed_json.get<long long>() >= 0))
+                if (!seed_json.is_number_unsigned() &&
+                    !(seed_json.is_number_integer() && seed_json.get<long long>() >= 0))
                     throw_input_error(options.record_path, "/decouple/seed",
                                       "expected a non-negative integer, got " + seed_json.dump());
                 const auto seed = seed_json.get<std::uint64_t>();

@@ -7,10 +7,10 @@
 #include <fcntl.h>
 #include <filesystem>
 #include <set>
-#include <vector>
 #include <stdio.h>  // renameat2
 #include <sys/stat.h>
 #include <unistd.h>
+#include <vector>
 
 namespace cb {
 

@@ -150,7 +150,8 @@ Vec read_npy(const std::string& path, const std::string& field, long expected)
     else if (descr == "'<f4'")
         item = 4;
     else
-        throw_input_error(path, field, "dtype " + printable(descr) + " not supported; write float64 (numpy: x.astype(float))");
+        throw_input_error(path, field,
+                          "dtype " + printable(descr) + " not supported; write float64 (numpy: x.astype(float))");
     if (fortran != "True" && fortran != "False")
         throw_input_error(path, "fortran_order", "expected True or False, got " + printable(fortran));
     // Shape: "(k,)", "(k, 1)" or "(1, k)"; at most one dimension other than 1.
@@ -182,9 +183,9 @@ Vec read_npy(const std::string& path, const std::string& field, long expected)
     const size_t data_bytes = bytes.size() - offset - header_len;
     if (data_bytes % item != 0 || count != data_bytes / item)
         throw_input_error(path, field,
-                          "shape " + printable(shape) + " declares " + std::to_string(count) + " entries, the file holds " +
-                              std::to_string(data_bytes) + " bytes of data (" + std::to_string(data_bytes / item) +
-                              " entries of " + std::to_string(item) + " bytes)");
+                          "shape " + printable(shape) + " declares " + std::to_string(count) +
+                              " entries, the file holds " + std::to_string(data_bytes) + " bytes of data (" +
+                              std::to_string(data_bytes / item) + " entries of " + std::to_string(item) + " bytes)");
     require_count(long(count), expected, path, field);
     const char* data = bytes.data() + offset + header_len;
     Vec v(static_cast<Eigen::Index>(count));
@@ -204,8 +205,7 @@ Vec read_npy(const std::string& path, const std::string& field, long expected)
 
 /// Calls on_token(token, line) for every token of a plain-text vector, reading the file in
 /// pieces: numbers separated by white space or commas, `#` comments to the end of a line.
-template <class OnToken>
-void for_each_text_token(const std::string& path, const std::string& field, OnToken&& on_token)
+template <class OnToken> void for_each_text_token(const std::string& path, const std::string& field, OnToken&& on_token)
 {
     // A token longer than any number is refused rather than grown without bound.
     constexpr size_t MAX_TOKEN = 256;

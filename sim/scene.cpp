@@ -196,8 +196,8 @@ MeshChoice load_body_mesh(Reader& body, const PathRoots& roots)
         b.finish();
         const Vec3 cell(size.x() / cells[0], size.y() / cells[1], size.z() / cells[2]);
         try {
-            out.mesh = make_box_mesh(static_cast<int>(cells[0]), static_cast<int>(cells[1]),
-                                     static_cast<int>(cells[2]), cell, center ? Vec3(-0.5 * size) : Vec3::Zero());
+            out.mesh = make_box_mesh(static_cast<int>(cells[0]), static_cast<int>(cells[1]), static_cast<int>(cells[2]),
+                                     cell, center ? Vec3(-0.5 * size) : Vec3::Zero());
         } catch (const InputError& e) {  // "box mesh: tet 1: degenerate": say which scene and field
             char edges[96];
             std::snprintf(edges, sizeof edges, "%g x %g x %g", cell.x(), cell.y(), cell.z());

@@ -160,7 +160,8 @@ TEST(HostileReaders, SolutionReadersAllocateByTheSnapshotNotTheFile)
     EXPECT_EQ(o.err, error + (dir / "many.mtx").string() +
                          ": line 2: declares 100000000 entries, more than the 3 x 1 matrix holds\n");
     // J3: a shape of 2^61 entries: count * 8 wrapped to 0 bytes and passed the size check.
-    write_bytes(dir / "wrap.npy", npy("{'descr': '<f8', 'fortran_order': False, 'shape': (2305843009213693952,), }", ""));
+    write_bytes(dir / "wrap.npy",
+                npy("{'descr': '<f8', 'fortran_order': False, 'shape': (2305843009213693952,), }", ""));
     o = run(judge + q(dir / "wrap.npy"), LIMIT);
     EXPECT_EQ(o.status, 2) << o.err;
     EXPECT_EQ(o.err, error + (dir / "wrap.npy").string() +
@@ -194,24 +195,23 @@ TEST(HostileReaders, NpyHeaderIsParsedAsADict)
     EXPECT_EQ(o.status, 2) << o.err;
     EXPECT_EQ(o.err, "contactbench judge: error: " + (dir / "decoy.npy").string() +
                          ": note: unknown key in the .npy header (descr, fortran_order, shape)\n");
-    write_bytes(dir / "i8.npy",
-                npy("{'descr': '<i8', 'fortran_order': False, 'shape': (" + std::to_string(n) + ",), }",
-                    doubles(n, 0.0)));
+    write_bytes(dir / "i8.npy", npy("{'descr': '<i8', 'fortran_order': False, 'shape': (" + std::to_string(n) + ",), }",
+                                    doubles(n, 0.0)));
     o = run(judge + q(dir / "i8.npy"));
     EXPECT_EQ(o.status, 2) << o.err;
     EXPECT_EQ(o.err, "contactbench judge: error: " + (dir / "i8.npy").string() +
                          ": x: dtype '<i8' not supported; write float64 (numpy: x.astype(float))\n");
-    write_bytes(dir / "twice.npy", npy("{'descr': '<i8', 'descr': '<f8', 'fortran_order': False, 'shape': (" +
-                                           std::to_string(n) + ",), }",
-                                       doubles(n, 0.0)));
+    write_bytes(dir / "twice.npy",
+                npy("{'descr': '<i8', 'descr': '<f8', 'fortran_order': False, 'shape': (" + std::to_string(n) + ",), }",
+                    doubles(n, 0.0)));
     o = run(judge + q(dir / "twice.npy"));
     EXPECT_EQ(o.status, 2) << o.err;
     EXPECT_EQ(o.err, "contactbench judge: error: " + (dir / "twice.npy").string() +
                          ": descr: given twice in the .npy header\n");
     // A well-formed one still reads.
-    write_bytes(dir / "good.npy",
-                npy("{'descr': '<f8', 'fortran_order': False, 'shape': (" + std::to_string(n) + ",), }",
-                    doubles(n, 0.0)));
+    write_bytes(
+        dir / "good.npy",
+        npy("{'descr': '<f8', 'fortran_order': False, 'shape': (" + std::to_string(n) + ",), }", doubles(n, 0.0)));
     o = run(judge + q(dir / "good.npy"));
     EXPECT_EQ(o.status, 0) << o.err;
 }
@@ -221,17 +221,17 @@ TEST(HostileReaders, JudgeCommandLineAndRecordChecks)
     const fs::path dir = fresh_dir("judge_checks");
     plane(dir / "plane.qpsnap");
     const std::string snap = q(dir / "plane.qpsnap");
-    ASSERT_EQ(run("solve " + snap + " --solver pgs --json " + q(dir / "rec.json") + " --save-solution " +
-                  q(dir / "sol"))
-                  .status,
-              0);
+    ASSERT_EQ(
+        run("solve " + snap + " --solver pgs --json " + q(dir / "rec.json") + " --save-solution " + q(dir / "sol"))
+            .status,
+        0);
     const std::string judge = "judge " + snap + " " + q(dir / "sol");
     // J9: --tol inf and 1e999 (once "converged at tol inf").
     for (const char* tol : {"inf", "1e999", "nan"}) {
         const Output o = run(judge + " --tol " + tol);
         EXPECT_EQ(o.status, 2) << tol;
-        EXPECT_EQ(o.err, std::string("contactbench judge: error: judge: --tol: expected a finite number, got '") +
-                             tol + "'\n");
+        EXPECT_EQ(o.err, std::string("contactbench judge: error: judge: --tol: expected a finite number, got '") + tol +
+                             "'\n");
     }
     // J8 / J7: the record must name this snapshot by a hash string.
     nlohmann::json rec = read_json_file((dir / "rec.json").string());
@@ -328,9 +328,8 @@ TEST(HostileReaders, MeshSizesAreBoundedBeforeAllocation)
                                    R"("size": [1e-300, 1e-300, 1e-300]}}]})");
     o = run("simulate " + q(dir / "tiny.json") + " --frames 0 --no-snapshots --out " + q(dir / "t"));
     EXPECT_EQ(o.status, 2) << o.err;
-    EXPECT_EQ(o.err.rfind("contactbench simulate: error: " + (dir / "tiny.json").string() + ": /bodies/0/box/size: ",
-                          0),
-              0u)
+    EXPECT_EQ(
+        o.err.rfind("contactbench simulate: error: " + (dir / "tiny.json").string() + ": /bodies/0/box/size: ", 0), 0u)
         << o.err;
 }
 
