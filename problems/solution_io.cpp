@@ -313,9 +313,9 @@ Vec read_vector_file_sized(const std::string& path, const std::string& field, lo
 
 }  // namespace
 
-Vec read_vector_file(const std::string& path, const std::string& field)
+Vec read_vector_file(const std::string& path, const std::string& field, long expected)
 {
-    return read_vector_file_sized(path, field, -1);
+    return read_vector_file_sized(path, field, expected);
 }
 
 std::string find_vector_file(const std::string& dir, const std::string& stem)
