@@ -51,7 +51,7 @@ struct TimeStats {
     double min = 0.0, noise = -1.0;
 };
 
-TimeStats time_stats(const nlohmann::json& run)
+TimeStats time_stats(const nlohmann::json& run, const std::string& source)
 {
     TimeStats stats;
     if (!run.contains("time") || !run["time"].is_object()) return stats;
@@ -60,7 +60,7 @@ TimeStats time_stats(const nlohmann::json& run)
         std::vector<double> samples;
         for (const auto& v : t["samples_total_s"]) {
             if (!v.is_number())
-                throw_input_error(run.value("_file", std::string("run record")), "/time/samples_total_s",
+                throw_input_error(source, run.value("_file", std::string("run record")) + ": /time/samples_total_s",
                                   "expected numbers (seconds), got " + v.dump());
             samples.push_back(v.get<double>());
         }
@@ -271,7 +271,7 @@ CompareReport compare_inputs(const CompareInput& base_input, const CompareInput&
         for (const auto& c : compared_counters()) row.base[c] = counter(*b, c);
         row.base["accuracy"] = accuracy_of(*b, base_input.source);
         row.base["instructions"] = instructions(*b);
-        const TimeStats bt = time_stats(*b);
+        const TimeStats bt = time_stats(*b, base_input.source);
         row.base["time_min_s"] = bt.min;
         if (it == new_by_key.end()) {
             row.verdict = "missing";
@@ -286,7 +286,7 @@ CompareReport compare_inputs(const CompareInput& base_input, const CompareInput&
         for (const auto& c : compared_counters()) row.next[c] = counter(n, c);
         row.next["accuracy"] = accuracy_of(n, next_input.source);
         row.next["instructions"] = instructions(n);
-        const TimeStats nt = time_stats(n);
+        const TimeStats nt = time_stats(n, next_input.source);
         row.next["time_min_s"] = nt.min;
 
         for (const auto& c : compared_counters()) {

@@ -410,6 +410,15 @@ TEST(HostileReaders, ResultsFoldersAreReadOnlyWhenWhole)
     EXPECT_EQ(o.status, 2) << o.err;
     EXPECT_EQ(o.err, "contactbench compare: error: " + (fifo / "runs" / "zz__pgs.json").string() + ": not a job of " +
                          (fifo / "jobs.json").string() + ": a stray or stale file (remove it, or run again)\n");
+    // R7: a type confused in a record is named with its folder, file and field (was a raw type_error).
+    const fs::path typed = copy_of_base("typed");
+    nlohmann::json strings = read_json_file((typed / "runs" / "plane__pgs.json").string());
+    strings["time"]["samples_total_s"] = {"a", "b"};
+    write_json_atomic((typed / "runs" / "plane__pgs.json").string(), strings);
+    o = run("compare " + q(base) + " " + q(typed));
+    EXPECT_EQ(o.status, 2) << o.err;
+    EXPECT_EQ(o.err, "contactbench compare: error: " + typed.string() +
+                         ": plane__pgs.json: /time/samples_total_s: expected numbers (seconds), got \"a\"\n");
     // The whole folders still compare.
     o = run("compare " + q(base) + " " + q(copy_of_base("same")));
     EXPECT_EQ(o.status, 0) << o.out << o.err;
