@@ -51,7 +51,7 @@ help:
 	@echo "make lint       pyflakes on every Python file, clang-format on C++ lines changed against main (LINT_BASE=main)"
 	@echo "make stress     the stress suite and its stability table in results/stress/"
 	@echo "make ladder     which solver when: LADDER=resolution (8k-1M DOFs) or density (8-8840 rows), results/ladder/"
-	@echo "make fuzz       fuzz the snapshot, suite, scene and FCLIB readers (FUZZ_SECONDS=60 each)"
+	@echo "make fuzz       fuzz the snapshot, suite, scene, solution and FCLIB readers (FUZZ_SECONDS=60 each)"
 
 deps:
 	@missing=""; for p in $(DEB_PACKAGES); do \
@@ -167,7 +167,7 @@ stress: build
 	$(PY) -m plots.html_report results/stress
 
 # Each reader on its own corpus: FUZZ_SECONDS per target (FUZZ_TARGETS to pick some).
-FUZZ_TARGETS ?= qpsnap suite scene fclib
+FUZZ_TARGETS ?= qpsnap suite scene solution fclib
 fuzz: deps
 	cmake -S . -B $(BUILD)-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DCB_FUZZ=ON \
 	  -DCB_BUILD_TESTS=OFF -DCB_BUILD_BENCH=OFF

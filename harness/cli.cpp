@@ -2,6 +2,7 @@
 
 #include <cerrno>
 #include <climits>
+#include <cmath>
 #include <cstdlib>
 
 namespace cb {
@@ -69,6 +70,8 @@ double CommandLine::number(const std::string& option, double fallback) const
     char* end = nullptr;
     const double d = std::strtod(v.c_str(), &end);
     if (v.empty() || *end != '\0') throw_input_error(m_command, option, "expected a number, got '" + v + "'");
+    // inf, nan and 1e999 parse, and no option means them: a tolerance or limit of inf is a typo.
+    if (!std::isfinite(d)) throw_input_error(m_command, option, "expected a finite number, got '" + v + "'");
     return d;
 }
 

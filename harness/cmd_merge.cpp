@@ -3,6 +3,7 @@
 #include "harness/commands.hpp"
 #include "harness/provenance.hpp"
 #include "harness/results.hpp"
+#include "harness/results_folder.hpp"
 #include "harness/runner.hpp"  // the harness's own statuses
 #include "harness/suite.hpp"   // fnv1a_hex
 #include "harness/timing_hygiene.hpp"
@@ -63,6 +64,10 @@ Shard read_shard(const std::string& folder)
     shard.dir = folder;
     if (!fs::is_directory(shard.dir / "runs"))
         throw_input_error(folder, "runs/", "missing: not a results folder of `contactbench run`");
+    require_unlocked(folder);  // a run still writing the shard: not finished
+    if (fs::exists(fs::symlink_status(shard.dir / "suite.pending.json")))
+        throw_input_error((shard.dir / "suite.pending.json").string(), "",
+                          "present: the shard's `contactbench run` was interrupted or is still running (run it again)");
     const std::string jobs_path = shard.jobs_path();
     if (!fs::exists(jobs_path))
         throw_input_error(jobs_path, "", "missing: the shard's `contactbench run` did not finish (run it again)");
@@ -111,12 +116,13 @@ Shard read_shard(const std::string& folder)
         const std::string name = f.get<std::string>();
         if (!seen.insert(name).second) throw_input_error(jobs_path, "jobs", name + " listed twice");
         const fs::path path = shard.dir / "runs" / name;
-        if (!fs::is_regular_file(path))
+        std::error_code ec;  // present but a FIFO or link loop: read_regular_file names it below
+        if (!fs::exists(fs::symlink_status(path, ec)))
             throw_input_error(path.string(), "",
                               "missing: shard " + std::to_string(shard.index) + " is incomplete (run it again)");
         RunFile run{name, read_regular_file(path.string(), std::uint64_t(256) << 20)};
         const nlohmann::json record = parse_json_text(run.bytes, path.string());
-        if (!record.is_object()) throw_input_error(path.string(), "", "expected a run record (a JSON object)");
+        check_run_record(record, path.string(), name);  // its own job's, and final
         if (record.value("suite", nlohmann::json()) != jobs["suite"])
             throw_input_error(path.string(), "suite",
                               "expected \"" + shard.suite + "\" (the shard's suite), got " +
@@ -210,11 +216,14 @@ int cmd_merge(const Args& args)
         throw_input_error("merge", "shards",
                           "the shards hold " + std::to_string(shard_of_file.size()) + " jobs, the suite has " +
                               std::to_string(first.all_jobs));
-    refuse_foreign_out(out, first);
-
+    // OUT under DIR/.lock, as `run` holds it: a run writing OUT and this merge never mix.
     std::error_code ec;
+    const bool existed = fs::exists(fs::symlink_status(out, ec));
+    if (existed) lock_results_folder(out);
+    refuse_foreign_out(out, first);
     make_output_subfolder(out, "runs");  // issue 40: never through a planted OUT/runs link
     if (ec) throw_input_error(out, "", "cannot create the folder: " + ec.message());
+    if (!existed) lock_results_folder(out);
     nlohmann::json merged_from = nlohmann::json::array();
     size_t copied = 0, duplicates = 0;
     for (const Shard& shard : shards) {

@@ -3,6 +3,7 @@
 #include "harness/cli.hpp"
 #include "harness/commands.hpp"
 #include "harness/provenance.hpp"
+#include "sim/simulator.hpp"  // SIMULATOR_VERSION
 
 #include <nlohmann/json.hpp>
 #include <iostream>
@@ -31,6 +32,7 @@ int cmd_version(const Args& args)
                               {"eigen", text("eigen")},           {"suitesparse", text("suitesparse")},
                               {"nlohmann_json", json_version},    {"blas", text("blas")}};
         out["blas_threads"] = p.value("blas_threads", 0);
+        out["simulator_version"] = sim::SIMULATOR_VERSION;  // what simulation.json records (tools/ladder.sh)
         out["peers"] = p.value("peers", nlohmann::json::object());
         std::cout << out.dump(1) << "\n";
         return 0;

@@ -3,6 +3,7 @@
 #include "harness/perf_record.hpp"
 #include "harness/record_schema.hpp"
 #include "harness/results.hpp"
+#include "harness/results_folder.hpp"
 #include "solvers/types.hpp"
 
 #include <algorithm>
@@ -50,13 +51,19 @@ struct TimeStats {
     double min = 0.0, noise = -1.0;
 };
 
-TimeStats time_stats(const nlohmann::json& run)
+TimeStats time_stats(const nlohmann::json& run, const std::string& source)
 {
     TimeStats stats;
     if (!run.contains("time") || !run["time"].is_object()) return stats;
     const auto& t = run["time"];
     if (t.contains("samples_total_s") && t["samples_total_s"].is_array() && t["samples_total_s"].size() > 1) {
-        std::vector<double> samples = t["samples_total_s"].get<std::vector<double>>();
+        std::vector<double> samples;
+        for (const auto& v : t["samples_total_s"]) {
+            if (!v.is_number())
+                throw_input_error(source, run.value("_file", std::string("run record")) + ": /time/samples_total_s",
+                                  "expected numbers (seconds), got " + v.dump());
+            samples.push_back(v.get<double>());
+        }
         std::sort(samples.begin(), samples.end());
         const size_t mid = samples.size() / 2;
         const double median = samples.size() % 2 ? samples[mid] : 0.5 * (samples[mid - 1] + samples[mid]);
@@ -66,7 +73,8 @@ TimeStats time_stats(const nlohmann::json& run)
     }
     if (t.contains("min_total_s") && t["min_total_s"].is_number()) {  // a compact record
         stats.min = t["min_total_s"].get<double>();
-        if (t.contains("noise") && t["noise"].is_number() && t.value("samples", 0) > 1)
+        if (t.contains("noise") && t["noise"].is_number() && t.contains("samples") && t["samples"].is_number() &&
+            t["samples"].get<double>() > 1)
             stats.noise = t["noise"].get<double>();
         return stats;
     }
@@ -147,12 +155,18 @@ void require_finite(const std::string& source, const Key& key, const nlohmann::j
                       "every judged quantity: regenerate it)");
 }
 
-bool is_results_folder(const std::string& path) { return std::filesystem::is_directory(path); }
+bool is_results_folder(const std::string& path)
+{
+    std::error_code ec;  // a link loop is no folder; read_compare_input names it
+    return std::filesystem::is_directory(path, ec);
+}
 
 nlohmann::json folder_machine(const std::string& dir, const std::vector<nlohmann::json>& runs)
 {
     const std::filesystem::path provenance = std::filesystem::path(dir) / "provenance.json";
-    if (std::filesystem::is_regular_file(provenance)) return machine_fingerprint(read_json_file(provenance.string()));
+    std::error_code ec;  // present but a FIFO or a link loop: read_json_file names it
+    if (std::filesystem::exists(std::filesystem::symlink_status(provenance, ec)))
+        return machine_fingerprint(read_json_file(provenance.string()));
     for (const auto& r : runs)
         if (r.contains("provenance") && r["provenance"].is_object()) return machine_fingerprint(r["provenance"]);
     return nlohmann::json::object();
@@ -189,11 +203,12 @@ CompareInput read_compare_input(const std::string& path)
     CompareInput input;
     input.source = path;
     if (is_results_folder(path)) {
-        input.runs = read_runs(path);
+        input.runs = read_finished_runs(path);  // complete, final, one record per job
         input.machine = folder_machine(path, input.runs);
         return input;
     }
-    if (!std::filesystem::exists(path))
+    std::error_code ec;
+    if (!std::filesystem::exists(std::filesystem::symlink_status(path, ec)))
         throw_input_error(path, "", "no such results folder or performance record (.csv)");
     if (std::filesystem::path(path).extension() != ".csv")
         throw_input_error(path, "", "expected a results folder or a performance record (.csv)");
@@ -256,7 +271,7 @@ CompareReport compare_inputs(const CompareInput& base_input, const CompareInput&
         for (const auto& c : compared_counters()) row.base[c] = counter(*b, c);
         row.base["accuracy"] = accuracy_of(*b, base_input.source);
         row.base["instructions"] = instructions(*b);
-        const TimeStats bt = time_stats(*b);
+        const TimeStats bt = time_stats(*b, base_input.source);
         row.base["time_min_s"] = bt.min;
         if (it == new_by_key.end()) {
             row.verdict = "missing";
@@ -271,7 +286,7 @@ CompareReport compare_inputs(const CompareInput& base_input, const CompareInput&
         for (const auto& c : compared_counters()) row.next[c] = counter(n, c);
         row.next["accuracy"] = accuracy_of(n, next_input.source);
         row.next["instructions"] = instructions(n);
-        const TimeStats nt = time_stats(n);
+        const TimeStats nt = time_stats(n, next_input.source);
         row.next["time_min_s"] = nt.min;
 
         for (const auto& c : compared_counters()) {

@@ -75,8 +75,10 @@ HtmlReportOutcome write_html_report(const std::string& folder)
     ::setenv("MPLBACKEND", "Agg", 0);
     TempFolder temp("cb-report");
     const fs::path out = temp.path() / "stdout", err = temp.path() / "stderr";
+    ProgramOptions options;
+    options.time_limit_s = 600.0;
     const ProgramOutcome run = run_program({PYTHON, "-m", "plots.html_report", fs::absolute(folder, ec).string()},
-                                           out.string(), err.string(), 600.0);
+                                           out.string(), err.string(), options);
     const std::string said = trimmed(read_all(err));
     if (run.failure().empty()) {
         outcome.written = true;

@@ -24,6 +24,25 @@ std::string record_string(const JudgeOptions& options, const char* key)
     return it->get<std::string>();
 }
 
+/// The record must name the snapshot it ran on, and it must be this one: a record without
+/// /snapshot/hash proves nothing about the point (and a number there is a wrong record, not a
+/// skipped check).
+void check_record_snapshot(const JudgeOptions& options)
+{
+    const auto snap = options.record.find("snapshot");
+    if (snap == options.record.end() || !snap->is_object())
+        throw_input_error(options.record_path, "/snapshot",
+                          "missing or not an object: is this a run record (solve --json, a suite's runs/*.json)?");
+    const auto hash = snap->find("hash");
+    if (hash == snap->end() || !hash->is_string() || hash->get<std::string>().empty())
+        throw_input_error(options.record_path, "/snapshot/hash",
+                          "missing or not a non-empty string: the record does not say which snapshot it ran on");
+    const std::string h = hash->get<std::string>();
+    if (!options.snapshot_hash.empty() && h != options.snapshot_hash)
+        throw_input_error(options.record_path, "/snapshot/hash",
+                          "the run was on another snapshot (hash " + h + ", this one " + options.snapshot_hash + ")");
+}
+
 /// `runner.cpp`'s rule: a solver's own arithmetic may round the last digit differently.
 bool within(double e, double tol) { return std::isfinite(e) && e <= tol * (1.0 + 1e-9); }
 
@@ -53,13 +72,7 @@ Judgement judge_point(const Qp& qp, const SolutionPoint& point, const JudgeOptio
     const bool have_record = !options.record.is_null();
     if (have_record && !options.record.is_object())
         throw_input_error(options.record_path, "", "expected a run record (a JSON object)");
-    if (have_record && !options.snapshot_hash.empty() && options.record.contains("snapshot")) {
-        const std::string hash = options.record["snapshot"].value("hash", "");
-        if (!hash.empty() && hash != options.snapshot_hash)
-            throw_input_error(options.record_path, "/snapshot/hash",
-                              "the run was on another snapshot (hash " + hash + ", this one " + options.snapshot_hash +
-                                  ")");
-    }
+    if (have_record) check_record_snapshot(options);
     Judgement out;
     out.tol = options.tol;
     if (!(out.tol > 0.0) && have_record) {
@@ -92,7 +105,12 @@ Judgement judge_point(const Qp& qp, const SolutionPoint& point, const JudgeOptio
         } else {
             // The solver said converged and the point misses tol on the original QP: on the
             // problem it solved (when it changed the problem) it may still have met it.
-            const std::string solved = options.record.value("solved_problem", "");
+            const auto solved_it = options.record.find("solved_problem");
+            if (solved_it != options.record.end() && !solved_it->is_string() && !solved_it->is_null())
+                throw_input_error(options.record_path, "/solved_problem",
+                                  "expected a string, got " + std::string(solved_it->type_name()));
+            const std::string solved =
+                solved_it != options.record.end() && solved_it->is_string() ? solved_it->get<std::string>() : "";
             if (solved == "unconstrained") {
                 const SpMat no_rows(0, qp.n());
                 const Vec no_c(0);
@@ -101,9 +119,28 @@ Judgement judge_point(const Qp& qp, const SolutionPoint& point, const JudgeOptio
                 out.have_solved = true;
             } else if (solved == "decoupled") {
                 const nlohmann::json decouple = options.record.value("decouple", nlohmann::json::object());
-                const std::string order = decouple.value("order", "");
-                const auto seed = decouple.value("seed", std::uint64_t(0));
-                const DecoupleReport report = decouple_rows(view, qp.contacts, decouple_order_from_string(order), seed);
+                if (!decouple.is_object())
+                    throw_input_error(options.record_path, "/decouple",
+                                      "expected an object, got " + std::string(decouple.type_name()));
+                const nlohmann::json order_json = decouple.value("order", nlohmann::json(""));
+                if (!order_json.is_string())
+                    throw_input_error(options.record_path, "/decouple/order",
+                                      "expected a string, got " + std::string(order_json.type_name()));
+                const std::string order = order_json.get<std::string>();
+                const nlohmann::json seed_json = decouple.value("seed", nlohmann::json(0));
+                if (!seed_json.is_number_unsigned() &&
+                    !(seed_json.is_number_integer() && seed_json.get<long long>() >= 0))
+                    throw_input_error(options.record_path, "/decouple/seed",
+                                      "expected a non-negative integer, got " + seed_json.dump());
+                const auto seed = seed_json.get<std::uint64_t>();
+                DecoupleOrder decouple_order{};
+                try {
+                    decouple_order = decouple_order_from_string(order);
+                } catch (const InputError&) {
+                    throw_input_error(options.record_path, "/decouple/order",
+                                      "expected one of authors, random, depth, got '" + order + "'");
+                }
+                const DecoupleReport report = decouple_rows(view, qp.contacts, decouple_order, seed);
                 const Qp reduced = select_rows(qp, report.kept_rows);
                 Vec lambda_kept(static_cast<Eigen::Index>(report.kept_rows.size()));
                 for (size_t k = 0; k < report.kept_rows.size(); ++k)

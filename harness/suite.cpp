@@ -41,6 +41,8 @@ bool safe_name(const std::string& s)
 
 std::string type_name(const nlohmann::json& v) { return v.type_name(); }
 
+constexpr double MAX_TIME_LIMIT_S = 1e6;
+
 double get_number(const nlohmann::json& j, const std::string& key, const std::string& where, double fallback,
                   double min_exclusive)
 {
@@ -264,6 +266,11 @@ Suite parse_suite(const nlohmann::json& j, const std::string& where)
     s.time_limit_s = get_number(j, "time_limit_s", where, s.time_limit_s, -1.0);
     if (s.time_limit_s < 0)
         throw_input_error(where, "/time_limit_s", "must be >= 0 (0 disables), got " + j["time_limit_s"].dump());
+    // The limit becomes a clock deadline (int64 nanoseconds overflow past 292 years, and 1e308
+    // failed every run): more than a million seconds (11.6 days) is a typo, not a budget.
+    if (s.time_limit_s > MAX_TIME_LIMIT_S)
+        throw_input_error(where, "/time_limit_s",
+                          "must be <= 1e6 seconds (11.6 days; 0 disables), got " + j["time_limit_s"].dump());
     s.repeat = static_cast<int>(get_integer(j, "repeat", where, 1, 1));
     if (s.repeat > 1000 || get_integer(j, "repeat", where, 1, 1) > 1000)  // no int wrap-around
         throw_input_error(where, "/repeat", "must be <= 1000, got " + j["repeat"].dump());
@@ -301,9 +308,18 @@ std::vector<SuiteSnapshot> resolve_snapshots(const Suite& suite, const std::stri
     std::vector<std::pair<std::string, std::string>> found;  // (stem, path)
     std::set<std::string> seen_paths;
     auto add = [&](const fs::path& p) {
-        const std::string key = fs::weakly_canonical(p).string();
+        std::error_code ec;  // a link loop has no canonical name: its run names the loop
+        std::string key = fs::weakly_canonical(p, ec).string();
+        if (ec) key = p.string();
         if (!seen_paths.insert(key).second) return;
         found.emplace_back(p.stem().string(), p.string());
+    };
+    // A FIFO, a device or a link loop named by the suite directly is refused by name (it once
+    // read as "no such file").
+    auto add_regular = [&](const fs::path& p, const std::string& field) {
+        const std::string problem = regular_file_problem(p.string());
+        if (!problem.empty()) throw_input_error(suite.path, field, "'" + p.string() + "': " + problem);
+        add(p);
     };
     auto add_simulations_at = [&](size_t position) {
         for (const auto& sim : suite.simulations)
@@ -316,10 +332,12 @@ std::vector<SuiteSnapshot> resolve_snapshots(const Suite& suite, const std::stri
         const std::string& pattern = suite.snapshots[i];
         const fs::path full = fs::path(pattern).is_absolute() ? fs::path(pattern) : base / pattern;
         const std::string field = "/snapshots/" + std::to_string(i);
-        if (fs::is_directory(full)) {
+        std::error_code ec;  // a link loop is no folder: named below as one
+        if (fs::is_directory(full, ec)) {
             std::vector<fs::path> files;
+            // As for a pattern, a FIFO or a link loop among them fails its own runs (by name).
             for (const auto& entry : fs::directory_iterator(full))
-                if (entry.is_regular_file() && entry.path().extension() == ".qpsnap") files.push_back(entry.path());
+                if (entry.path().extension() == ".qpsnap" && !entry.is_directory(ec)) files.push_back(entry.path());
             std::sort(files.begin(), files.end());
             if (files.empty())
                 throw_input_error(suite.path, field, "folder '" + full.string() + "' holds no .qpsnap file");
@@ -336,9 +354,9 @@ std::vector<SuiteSnapshot> resolve_snapshots(const Suite& suite, const std::stri
                 throw_input_error(suite.path, field, "pattern '" + full.string() + "' matches no file");
             for (const auto& m : matches) add(m);
         } else {
-            if (!fs::is_regular_file(full))
+            if (regular_file_problem(full.string()) == "not found")
                 throw_input_error(suite.path, field, "no such file '" + full.string() + "'");
-            add(full);
+            add_regular(full, field);
         }
     }
     std::vector<SuiteSnapshot> out;

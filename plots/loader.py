@@ -17,7 +17,9 @@ from __future__ import annotations
 
 import json
 import math
+import fcntl
 import os
+import stat
 import struct
 from dataclasses import dataclass, field
 from typing import Dict, List, Optional
@@ -258,24 +260,108 @@ def history_frame(record: dict, source: str = "run record") -> pd.DataFrame:
     return df
 
 
+def _require_regular(file: str) -> None:
+    """A FIFO would block open() forever and a device would be read as data: refused by name."""
+    try:
+        mode = os.stat(file).st_mode
+    except OSError as err:  # a dangling link or a link loop
+        raise ValueError(f"{file}: cannot open: {err.strerror}") from err
+    if not stat.S_ISREG(mode):
+        kind = ("a folder" if stat.S_ISDIR(mode) else "a FIFO" if stat.S_ISFIFO(mode) else
+                "a socket" if stat.S_ISSOCK(mode) else "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode)
+                else "not a plain file")
+        raise ValueError(f"{file}: not a regular file ({kind})")
+
+
+def _require_finished(path: str, run_names: List[str]) -> bool:
+    """The rules of harness/results_folder.hpp: a folder that `contactbench run` is writing (it holds
+    .lock) or that a killed run left (suite.pending.json) is incomplete, and with jobs.json the run
+    files are exactly the jobs listed. Returns True for a folder of `run` (it has jobs.json)."""
+    lock = os.path.join(path, ".lock")
+    try:
+        fd = os.open(lock, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
+    except OSError:
+        fd = None
+    if fd is not None:
+        try:
+            if stat.S_ISREG(os.fstat(fd).st_mode):
+                try:
+                    fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+                except BlockingIOError:
+                    raise ValueError(f"{path}: being written by `contactbench run` (holding .lock): "
+                                     "not a finished result; wait for it to finish") from None
+        finally:
+            os.close(fd)
+    if os.path.lexists(os.path.join(path, "suite.pending.json")):
+        raise ValueError(f"{path}: suite.pending.json: present: the folder's `contactbench run` was interrupted "
+                         "or is still running, so its results are incomplete (run it again to finish)")
+    jobs_path = os.path.join(path, "jobs.json")
+    if not os.path.lexists(jobs_path):
+        return False
+    _require_regular(jobs_path)
+    with open(jobs_path, encoding="utf-8") as f:
+        try:
+            jobs = json.load(f)
+        except json.JSONDecodeError as err:
+            raise ValueError(f"{jobs_path}: not valid JSON: {err}") from err
+    listed = jobs.get("jobs") if isinstance(jobs, dict) else None
+    if not isinstance(listed, list) or not all(isinstance(j, str) for j in listed):
+        raise ValueError(f"{jobs_path}: /jobs: missing or not a list of run files")
+    if jobs.get("complete", True) is not True:
+        raise ValueError(f"{jobs_path}: /complete: {json.dumps(jobs.get('complete'))}: some jobs have no run file "
+                         "(run the suite again)")
+    for name in run_names:
+        if name not in listed:
+            raise ValueError(f"{os.path.join(path, 'runs', name)}: not a job of {jobs_path}: a stray or stale file "
+                             "(remove it, or run again)")
+    for name in listed:
+        if name not in run_names:
+            raise ValueError(f"{os.path.join(path, 'runs', name)}: missing: the results are incomplete "
+                             "(run the suite again)")
+    return True
+
+
+def _check_job_record(record, file: str, name: str) -> None:
+    """In a folder of `run`: the record is its own job's (run_file_name(snapshot.id, label)) and final."""
+    snap = record.get("snapshot") if isinstance(record, dict) else None
+    sid = snap.get("id") if isinstance(snap, dict) else None
+    label = record.get("label") if isinstance(record, dict) else None
+    if not isinstance(sid, str) or not isinstance(label, str):
+        raise ValueError(f"{file}: /snapshot/id, /label: missing or not strings: not a run record of "
+                         "`contactbench run`")
+    if f"{sid}__{label}.json" != name:
+        raise ValueError(f"{file}: /snapshot/id, /label: the record is of job {sid}__{label}.json, not of this "
+                         "file: a copy or another job's record (remove it, or run again)")
+    if record.get("final", True) is False:
+        raise ValueError(f"{file}: /final: false: the run ended in an error to be retried, not a result "
+                         "(run the suite again)")
+
+
 def load_results(path: str, with_history: bool = True) -> Results:
-    """Load a results folder. Raises FileNotFoundError naming the folder when it holds no runs."""
+    """Load a results folder. Raises FileNotFoundError naming the folder when it holds no runs, and
+    ValueError naming the file when the folder is not a finished result (_require_finished) or a run
+    file is not a regular file holding its job's record."""
     runs_dir = os.path.join(path, "runs")
     summary_path = os.path.join(path, "summary.csv")
     if not os.path.isdir(runs_dir) and not os.path.isfile(summary_path):
         raise FileNotFoundError(f"{path}: not a results folder (no runs/ and no summary.csv)")
     records: Dict[tuple, dict] = {}
     rows, hists = [], []
+    names = sorted(n for n in os.listdir(runs_dir) if n.endswith(".json")) if os.path.isdir(runs_dir) else []
+    run_folder = _require_finished(path, names)
     if os.path.isdir(runs_dir):
-        for name in sorted(os.listdir(runs_dir)):
-            if not name.endswith(".json"):
-                continue
+        for name in names:
             file = os.path.join(runs_dir, name)
+            _require_regular(file)
             with open(file, encoding="utf-8") as f:
                 try:
                     record = json.load(f)
                 except json.JSONDecodeError as err:
                     raise ValueError(f"{file}: not valid JSON: {err}") from err
+            if run_folder:
+                _check_job_record(record, file, name)
+            elif not isinstance(record, dict):
+                raise ValueError(f"{file}: expected a run record (a JSON object)")
             row = flatten_run(record, file)
             row["file"] = name
             stem_label = os.path.splitext(name)[0].partition("__")[2]
@@ -310,8 +396,9 @@ def load_results(path: str, with_history: bool = True) -> Results:
 
 
 def _read_json(path: str) -> dict:
-    if not os.path.isfile(path):
+    if not os.path.lexists(path):
         return {}
+    _require_regular(path)
     with open(path, encoding="utf-8") as f:
         return json.load(f)
 

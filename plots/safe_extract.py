@@ -182,6 +182,9 @@ def _copy_members(archive, raw, wanted, open_sink) -> Copied:
             problem = _member_problem(m)
             if problem:
                 raise Refused(f"{where}: {problem} (only regular files and folders are accepted)")
+            if m.size < 0:  # a pax "size" record may say anything; tarfile would seek backwards
+                raise Refused(f"{where}: a negative size ({m.size} bytes) in its header; refused before "
+                              "reading further")
             declared += m.size
             if declared > MAX_ARCHIVE_BYTES:
                 raise Refused(f"{where}: the members declare {declared} bytes so far, more than the "

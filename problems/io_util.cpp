@@ -6,9 +6,11 @@
 #include <cstring>
 #include <fcntl.h>
 #include <filesystem>
+#include <set>
 #include <stdio.h>  // renameat2
 #include <sys/stat.h>
 #include <unistd.h>
+#include <vector>
 
 namespace cb {
 
@@ -44,6 +46,14 @@ int open_regular_file(const std::string& path)
 }
 
 void require_regular_file(const std::string& path) { ::close(open_regular_file(path)); }
+
+std::string regular_file_problem(const std::string& path)
+{
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0)
+        return errno == ENOENT || errno == ENOTDIR ? "not found" : std::string("cannot open: ") + std::strerror(errno);
+    return S_ISREG(st.st_mode) ? "" : "not a regular file (" + kind_of(st.st_mode) + ")";
+}
 
 std::string read_regular_file(const std::string& path, std::uint64_t max_bytes)
 {
@@ -103,11 +113,69 @@ void check_json_depth(const char* begin, const char* end, const std::string& whe
     }
 }
 
+namespace {
+
+/// Refuses a key given twice in one object (nlohmann keeps the last silently, so a second
+/// "solvers" or "time_limit_s" would override the first unseen). Tracks the open objects and
+/// arrays to name the place as a JSON pointer ("/solvers/2/name").
+class DuplicateKeyCheck {
+public:
+    explicit DuplicateKeyCheck(const std::string& where) : m_where(where) {}
+    bool operator()(int, nlohmann::json::parse_event_t event, const nlohmann::json& parsed)
+    {
+        using E = nlohmann::json::parse_event_t;
+        switch (event) {
+        case E::object_start:
+        case E::array_start:
+            m_frames.push_back({event == E::object_start, {}, "", 0});
+            break;
+        case E::key: {
+            Frame& f = m_frames.back();
+            f.key = parsed.get<std::string>();
+            if (!f.keys.insert(f.key).second)
+                throw_input_error(m_where, pointer(), "key given twice in one object (each key once)");
+            break;
+        }
+        case E::object_end:
+        case E::array_end:
+            m_frames.pop_back();
+            next_element();
+            break;
+        case E::value:
+            next_element();
+            break;
+        }
+        return true;
+    }
+
+private:
+    struct Frame {
+        bool object;
+        std::set<std::string> keys;
+        std::string key;
+        size_t index;
+    };
+    void next_element()
+    {
+        if (!m_frames.empty() && !m_frames.back().object) ++m_frames.back().index;
+    }
+    std::string pointer() const
+    {
+        std::string p;
+        for (const auto& f : m_frames) p += "/" + (f.object ? f.key : std::to_string(f.index));
+        return p;
+    }
+    std::string m_where;
+    std::vector<Frame> m_frames;
+};
+
+}  // namespace
+
 nlohmann::json parse_json_text(const std::string& text, const std::string& where, bool allow_comments)
 {
     check_json_depth(text.data(), text.data() + text.size(), where);
     try {
-        return nlohmann::json::parse(text, nullptr, true, allow_comments);
+        return nlohmann::json::parse(text, DuplicateKeyCheck(where), true, allow_comments);
     } catch (const nlohmann::json::exception& e) {
         throw_input_error(where, "", std::string("not valid JSON: ") + e.what());
     }

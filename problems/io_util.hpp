@@ -21,6 +21,11 @@ constexpr int MAX_JSON_DEPTH = 64;
 /// the descriptor. "cannot open: Too many levels of symbolic links", "not a regular file (a FIFO)".
 int open_regular_file(const std::string& path);
 
+/// "" when `path` is a regular file (links followed), else what it is, for messages that name
+/// an input: "not found", "not a regular file (a FIFO)", "cannot open: Too many levels of
+/// symbolic links". Never opens it.
+std::string regular_file_problem(const std::string& path);
+
 /// The same check for readers that open the file themselves (std::ifstream would block on a FIFO).
 void require_regular_file(const std::string& path);
 

@@ -169,6 +169,13 @@ MtxFile parse_mtx(const std::string& path, const MtxLimits& limits = {})
         expected = long(size[2]);
     else
         expected = symmetric ? f.rows * (f.rows + 1) / 2 : f.rows * f.cols;
+    // A vector bounded by the size wanted: its entries are distinct positions, so more than it
+    // holds is an error known now, before the entries are read and stored.
+    const long positions = symmetric ? f.rows * (f.rows + 1) / 2 : f.rows * f.cols;
+    if (limits.vector_size && f.format == "coordinate" && expected > positions)
+        throw_input_error(path, line_field(lines.line()),
+                          "declares " + std::to_string(expected) + " entries, more than the " + std::to_string(f.rows) +
+                              " x " + std::to_string(f.cols) + " matrix holds");
     if (limits.vector_size) {
         const long got = (f.cols == 1 || f.rows == 0) ? f.rows : f.cols;
         if (got > limits.max_rows) throw_input_error(path, "size", limits.why_rows + ", got " + std::to_string(got));
@@ -277,7 +284,18 @@ SpMat read_mtx_matrix_bounded(const std::string& path, const MtxLimits& limits)
 
 }  // namespace
 
-Vec read_mtx_vector(const std::string& path) { return read_mtx_vector_bounded(path, {}); }
+Vec read_mtx_vector(const std::string& path, long expected_size, const std::string& what)
+{
+    MtxLimits limits;
+    if (expected_size >= 0) {
+        // A coordinate vector may declare any size with no entries: bound it by the size wanted.
+        limits.max_rows = limits.max_cols = std::max(expected_size, 1L);
+        limits.why_rows = limits.why_cols = "expected " + std::to_string(expected_size) + " entries (" +
+                                            (what.empty() ? std::string("size") : what) + " of the snapshot)";
+        limits.vector_size = true;
+    }
+    return read_mtx_vector_bounded(path, limits);
+}
 
 namespace {
 

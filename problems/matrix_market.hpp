@@ -16,8 +16,11 @@ namespace cb {
 /// symmetric, symmetric expanded). Rows sorted; duplicates are an InputError naming the line.
 SpMat read_mtx_matrix(const std::string& path);
 
-/// A vector from a .mtx file: array k x 1 (or 1 x k), or coordinate k x 1 / 1 x k.
-Vec read_mtx_vector(const std::string& path);
+/// A vector from a .mtx file: array k x 1 (or 1 x k), or coordinate k x 1 / 1 x k. With
+/// `expected_size` >= 0 a size line declaring more entries is refused before anything is
+/// allocated ("size: expected 12 entries (n of the snapshot), got 300000000"; `what` names the
+/// snapshot's dimension).
+Vec read_mtx_vector(const std::string& path, long expected_size = -1, const std::string& what = "");
 
 /// Coordinate real general, 1-based, every stored entry (both triangles of A).
 void write_mtx_matrix(const std::string& path, const SpMat& M, const std::string& comment = "");

@@ -204,6 +204,7 @@ nlohmann::json parse_header(const std::string& path, const unsigned char* bytes,
         if (v.get<std::uint64_t>() > MAX_INT32)
             throw_input_error(path, key, "too large: " + v.dump() + " > 2147483647 (indices are 32-bit)");
     }
+    require_unknowns(path, h["n"].get<std::uint64_t>());
     if (!h.contains("arrays") || !h["arrays"].is_object())
         throw_input_error(path, "arrays", "missing or not an object");
     if (h.contains("meta") && !h["meta"].is_object())
@@ -473,9 +474,16 @@ void check_diagonal(const std::string& path, const SpMat& A)
 
 }  // namespace
 
+void require_unknowns(const std::string& where, std::uint64_t n)
+{
+    // The solvers index x[0] and build factors of A: an empty problem is no problem to solve.
+    if (n == 0) throw_input_error(where, "n", "no unknowns (n = 0): an empty problem has nothing to solve");
+}
+
 void validate_qp(const std::string& where, Qp& qp)
 {
     const Eigen::Index n = qp.A.rows(), m = qp.J.rows();
+    require_unknowns(where, std::uint64_t(std::max<Eigen::Index>(n, 0)));
     auto size_error = [&](const std::string& field, const std::string& what, Eigen::Index expected, Eigen::Index got) {
         throw_input_error(where, field,
                           "expected " + what + " = " + str(std::int64_t(expected)) + ", got " + str(std::int64_t(got)));

@@ -36,6 +36,10 @@ void write_qpsnap(const std::string& path, const Qp& qp, const SnapshotExtras* e
 /// exactly), positive diagonal. Throws InputError("where: field: problem").
 void validate_qp(const std::string& where, Qp& qp);
 
+/// The one rule on a QP's size shared by every reader (.qpsnap header, validate_qp): n >= 1.
+/// InputError("where: n: no unknowns (n = 0): ...") otherwise; m = 0 is a valid problem.
+void require_unknowns(const std::string& where, std::uint64_t n);
+
 /// Content hash of a snapshot file (hex of a 64-bit FNV-1a over the whole file), the key of
 /// the reference-solution cache.
 std::string qpsnap_content_hash(const std::string& path);

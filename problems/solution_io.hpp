@@ -21,9 +21,11 @@ struct SolutionPoint {
     std::string lambda_path;  ///< empty when there is no lambda
 };
 
-/// One vector from a file (format by extension, as above); `field` names it in messages.
-/// Sizes are not checked here; values must be finite.
-Vec read_vector_file(const std::string& path, const std::string& field);
+/// One vector from a file (format by extension, as above); `field` names it in messages; values
+/// must be finite. With `expected` >= 0 (n for x, m for lambda) a file holding or declaring
+/// another count is refused before anything is allocated; with -1 the size is not checked and a
+/// .mtx coordinate vector may declare any size (callers that know n should pass it).
+Vec read_vector_file(const std::string& path, const std::string& field, long expected = -1);
 
 /// The file `stem`.{mtx,npy,txt} in `dir`; "" when none exists. Two of them is an error (which
 /// one the program meant is unknown).

@@ -412,7 +412,9 @@ SurfaceMesh read_off(const std::string& path)
     const long nv = in.integer(tok[0]), nf = in.integer(tok[1]);
     if (nv <= 0 || nf <= 0) in.fail("vertex and face counts must be > 0, got '" + in.text() + "'");
     std::vector<Vec3> v;
-    v.reserve(static_cast<size_t>(nv));
+    // The count is a declaration, not memory present: grow with the vertices actually read (a
+    // 30-byte file declaring 2e9 vertices once reserved 48 GB).
+    v.reserve(static_cast<size_t>(std::min(nv, 1L << 16)));
     for (long i = 0; i < nv; ++i) {
         if (!in.next(tok)) in.fail_eof("expected " + std::to_string(nv) + " vertices, got " + std::to_string(i));
         if (tok.size() < 3) in.fail("expected 'x y z', got '" + in.text() + "'");

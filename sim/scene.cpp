@@ -22,12 +22,6 @@ std::string fmt_count(double v)
     return buf;
 }
 
-bool file_exists(const std::string& path)
-{
-    struct stat st {};
-    return ::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
-}
-
 std::string json_type(const nlohmann::json& j) { return std::string(j.type_name()) + " " + j.dump().substr(0, 60); }
 
 /// Strict reader of one JSON object: typed getters with defaults, JSON pointers in errors,
@@ -165,9 +159,10 @@ std::string resolve(const std::string& path, const PathRoots& roots, bool& avail
         full = path;
     else
         full = (roots.scene_dir.empty() ? std::string(".") : roots.scene_dir) + "/" + path;
-    if (!file_exists(full)) {
+    const std::string problem = regular_file_problem(full);  // a FIFO is named as one, not "not found"
+    if (!problem.empty()) {
         available = false;
-        why = full + " (not found)";
+        why = full + " (" + problem + ")";
     }
     return full;
 }
@@ -200,8 +195,15 @@ MeshChoice load_body_mesh(Reader& body, const PathRoots& roots)
         const bool center = b.boolean("center", true);
         b.finish();
         const Vec3 cell(size.x() / cells[0], size.y() / cells[1], size.z() / cells[2]);
-        out.mesh = make_box_mesh(static_cast<int>(cells[0]), static_cast<int>(cells[1]), static_cast<int>(cells[2]),
-                                 cell, center ? Vec3(-0.5 * size) : Vec3::Zero());
+        try {
+            out.mesh = make_box_mesh(static_cast<int>(cells[0]), static_cast<int>(cells[1]), static_cast<int>(cells[2]),
+                                     cell, center ? Vec3(-0.5 * size) : Vec3::Zero());
+        } catch (const InputError& e) {  // "box mesh: tet 1: degenerate": say which scene and field
+            char edges[96];
+            std::snprintf(edges, sizeof edges, "%g x %g x %g", cell.x(), cell.y(), cell.z());
+            b.fail("size", std::string("cells of ") + edges + " give degenerate tets (" + e.what() +
+                               "): make the box larger or its cells less flat");
+        }
         out.source =
             "box " + std::to_string(cells[0]) + "x" + std::to_string(cells[1]) + "x" + std::to_string(cells[2]);
         return out;
@@ -236,6 +238,7 @@ MeshChoice load_body_mesh(Reader& body, const PathRoots& roots)
             const SurfaceMesh s = read_surface_mesh(full);
             TetrahedralizeOptions opt;
             opt.resolution = static_cast<int>(resolution);
+            opt.max_tets = roots.max_tets;
             out.mesh = tetrahedralize(s, opt, full);
             out.quality = mesh_quality(out.mesh).to_string();
             out.source = full + " (tetrahedralised, resolution " + std::to_string(resolution) + ")";

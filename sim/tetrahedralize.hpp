@@ -11,7 +11,8 @@
 namespace cb::sim {
 
 struct TetrahedralizeOptions {
-    int resolution = 16;  ///< grid cells along the longest bounding-box axis (>= 1)
+    int resolution = 16;      ///< grid cells along the longest bounding-box axis (>= 1)
+    long max_tets = 6000000;  ///< more tets inside the surface: InputError (memory follows the kept tets)
 };
 
 /// Throws InputError(`where`) when the surface encloses no tet at this resolution.

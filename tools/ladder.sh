@@ -16,11 +16,19 @@ if [ "$out" != results/ladder ]; then
     echo "ladder: the suites read snapshots from results/ladder/sim; OUT must be results/ladder" >&2
     exit 2
 fi
+# A folder is reused only when its simulation.json says it is this scene's whole two-frame run by
+# this simulator version, and the scene file has not changed since; anything else is simulated
+# again (a planted or stale folder once gave the ladder another scene's snapshots).
+simver=$("$cb" --version --json | /usr/bin/python3 -c 'import json, sys; print(json.load(sys.stdin)["simulator_version"])')
 for s in "${scenes[@]}"; do
     dir="$out/sim/$s"
     if [ -f "$dir/simulation.json" ]; then
-        echo "ladder: $s: simulated already ($dir)"
-        continue
+        why=$(/usr/bin/python3 tools/ladder_reuse.py "$dir/simulation.json" "scenes/ladder/$s.json" "$simver")
+        if [ -z "$why" ]; then
+            echo "ladder: $s: simulated already ($dir)"
+            continue
+        fi
+        echo "ladder: $s: $dir is stale ($why): simulating again"
     fi
     # The stepping solver only moves frame 0 (no contact yet); frame 1's snapshot is the QP.
     start=$SECONDS

@@ -301,6 +301,20 @@ class HostileArchives(Hostile):
         self.assert_refused(archive, f"{archive}: a 'x' header of {64 * MiB} bytes, more than the {MiB} accepted; "
                                      f"refused before reading it (after member '{members[1][0].name}')")
 
+    def test_negative_pax_size_is_refused_at_its_member(self):
+        # tarfile takes a pax "size" as given and seeks backwards by it: the archive read short and
+        # the refusal said "tree lacks N files" instead of naming the member
+        members = self.genuine_members()
+        neg = tarfile.TarInfo("MPRGP/neg.bin")
+        neg.pax_headers = {"size": "-512"}
+        archive = os.path.join(self.root, "pax_negative.tar.gz")
+        with tarfile.open(archive, "w:gz", format=tarfile.PAX_FORMAT) as t:
+            t.addfile(neg, io.BytesIO(b""))
+            for info, data in members:
+                t.addfile(info, io.BytesIO(data) if data is not None else None)
+        self.assert_refused(archive, f"{archive}: member 'MPRGP/neg.bin': a negative size (-512 bytes) in its "
+                                     "header; refused before reading further")
+
     def test_too_many_members(self):
         with mock.patch.object(safe_extract, "MAX_MEMBERS", 20):
             archive = self.archive(self.genuine_members())
