@@ -72,11 +72,10 @@ std::string sci(double v)
 
 int cmd_solve(const Args& args)
 {
-    const CommandLine cl(
-        "solve", args,
-        {"--solver", "--set", "--json", "--save-solution", "--decouple", "--decouple-seed", "--repeat", "--time-limit",
-         "--length-scale"},
-        {"--history"});
+    const CommandLine cl("solve", args,
+                         {"--solver", "--set", "--json", "--save-solution", "--decouple", "--decouple-seed", "--repeat",
+                          "--time-limit", "--length-scale"},
+                         {"--history"});
     if (cl.help()) {
         if (cl.has("--solver"))
             print_solver_settings(std::cout, cl.value("--solver"));

@@ -15,9 +15,9 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <limits>
 #include <optional>
+#include <sstream>
 
 namespace cb {
 
@@ -239,8 +239,8 @@ double check_times(const ProgramReport& report, const fs::path& path, double wal
 {
     const std::string where = path.string();
     auto wall = [&] { return seconds(wall_s); };
-    const double self = (std::isfinite(report.solve_s) ? report.solve_s : 0.0) +
-                        (std::isfinite(report.setup_s) ? report.setup_s : 0.0);
+    const double self =
+        (std::isfinite(report.solve_s) ? report.solve_s : 0.0) + (std::isfinite(report.setup_s) ? report.setup_s : 0.0);
     if (self > wall_s)
         throw_input_error(where, std::isfinite(report.solve_s) ? "/solve_s" : "/setup_s",
                           "setup_s + solve_s = " + seconds(self) +

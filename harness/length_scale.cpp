@@ -26,8 +26,7 @@ double load_displacement(const Qp& qp)
     return std::isfinite(widest) ? widest : 0.0;
 }
 
-template <class M>
-void append_matrix(std::string& bytes, const M& a)
+template <class M> void append_matrix(std::string& bytes, const M& a)
 {
     const SpMat s = a;  // compressed
     bytes.append(reinterpret_cast<const char*>(s.outerIndexPtr()), sizeof(*s.outerIndexPtr()) * (s.outerSize() + 1));

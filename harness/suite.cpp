@@ -7,9 +7,9 @@
 
 #include <algorithm>
 #include <climits>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cmath>
 #include <filesystem>
 #include <fnmatch.h>
 #include <glob.h>
@@ -24,10 +24,10 @@ namespace {
 
 const std::set<std::string>& known_keys()
 {
-    static const std::set<std::string> keys = {"name",          "snapshots",     "generate",    "solvers",   "tol",
-                                               "time_limit_s",  "repeat",        "history_max", "reference", "decouple",
-                                               "decouple_seed", "chain",         "description", "tiers",     "comment",
-                                               "timed",         "allow_commands", "length_scale"};
+    static const std::set<std::string> keys = {
+        "name",        "snapshots", "generate",       "solvers",       "tol",   "time_limit_s", "repeat",
+        "history_max", "reference", "decouple",       "decouple_seed", "chain", "description",  "tiers",
+        "comment",     "timed",     "allow_commands", "length_scale"};
     return keys;
 }
 

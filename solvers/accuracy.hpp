@@ -45,7 +45,7 @@ struct AccuracyScale {
     Vec length_per_multiplier;  ///< n_i / k_i: the displacement a unit multiplier causes along row i
     double length = 1.0;        ///< the scene size l, in the problem's length unit
     double inv_length = 1.0;
-    std::string length_source;  ///< x0_extent | x0_range | unconstrained_extent | constraint_gap | unit, or a FixedLength's
+    std::string length_source;       ///< x0_extent | ... | unit, or a FixedLength's source (docs/accuracy.md)
     double stiffness = 1.0;          ///< d_ref = mean of D: the energy scale is d_ref * l^2
     double inv_energy = 1.0;         ///< 1 / (d_ref l^2)
     long a_products = 0;             ///< A-products spent computing this scale
