@@ -135,6 +135,20 @@ class Measured(unittest.TestCase):
         r = run(["compare", folders[0], folders[1]])
         self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
 
+    def test_compact_record_accepts_work_not_counted(self):
+        # The perf gate's CSV: a row with work_counted 0 has empty work cells; compare does not
+        # judge them. The same empty cells without it are a counter that vanished: a regression.
+        header = "snapshot,label,status,iterations,a_products,work,accuracy,tol,work_counted\n"
+        base = os.path.join(self.tmp, "base.csv")
+        with open(base, "w") as f:
+            f.write(header + "plane,prog,converged,4,0,0,1e-07,1e-06,\n")
+        for cell, rc in (("0", 0), ("", 3)):
+            new = os.path.join(self.tmp, "new.csv")
+            with open(new, "w") as f:
+                f.write(header + "plane,prog,converged,4,,,1e-07,1e-06,%s\n" % cell)
+            r = run(["compare", base, new])
+            self.assertEqual(r.returncode, rc, r.stdout + r.stderr)
+
     # 2. times
     def test_solve_s_beyond_the_wall_time_is_refused(self):
         rec = self.solve("self_solve_s", "1000", self.exact)
