@@ -3,6 +3,7 @@
 #include "harness/cli.hpp"
 #include "harness/commands.hpp"
 #include "harness/judge.hpp"
+#include "harness/length_scale.hpp"
 #include "harness/results.hpp"
 #include "problems/format_sniff.hpp"
 #include "problems/qpsnap.hpp"
@@ -20,6 +21,7 @@ namespace {
 
 const char* const USAGE =
     "contactbench judge SNAP SOLUTION [--lambda FILE] [--tol T] [--record RUN.json] [--json FILE]\n"
+    "                    [--length-scale L]\n"
     "  SOLUTION: a folder with x.{mtx,npy,txt} and optionally lambda.{mtx,npy,txt} (solve --save-solution),\n"
     "            or one file holding x: .npy, .mtx, or plain text (numbers separated by white space)";
 
@@ -34,7 +36,7 @@ std::string sci(double v)
 
 int cmd_judge(const Args& args)
 {
-    const CommandLine cl("judge", args, {"--lambda", "--tol", "--record", "--json"}, {});
+    const CommandLine cl("judge", args, {"--lambda", "--tol", "--record", "--json", "--length-scale"}, {});
     if (cl.help()) {
         std::cout << "usage: " << USAGE << "\n";
         return 0;
@@ -51,8 +53,20 @@ int cmd_judge(const Args& args)
     }
 
     expect_qpsnap(snap, "judge");
-    const Qp qp = read_qpsnap(snap);
+    Qp qp = read_qpsnap(snap);
     options.snapshot_hash = qpsnap_content_hash(snap);
+    // The run's scene size when the user gave it to the run; else the problem's own (the same
+    // rule as solve and run: harness/length_scale.hpp).
+    GivenLength given;
+    if (cl.has("--length-scale")) {
+        given = {parse_length_scale("judge", cl.value("--length-scale")), "given"};
+    } else if (options.record.is_object()) {
+        const std::string source = options.record.value("length_scale_source", std::string());
+        const nlohmann::json l = options.record.value("length_scale", nlohmann::json());
+        if ((source == "given" || source == "suite") && l.is_number() && l.get<double>() > 0.0)
+            given = {l.get<double>(), source};
+    }
+    fix_length_scale(qp, snap, options.snapshot_hash, given);
     const SolutionPoint point = read_solution(solution, qp.n(), qp.m(), cl.value("--lambda"));
     const Judgement j = judge_point(qp, point, options);
 

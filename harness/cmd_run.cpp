@@ -13,6 +13,7 @@
 // runs in shard i iff j % N == i-1.
 #include "harness/cli.hpp"
 #include "harness/commands.hpp"
+#include "harness/length_scale.hpp"
 #include "harness/process_pool.hpp"
 #include "harness/provenance.hpp"
 #include "harness/reference.hpp"
@@ -51,7 +52,8 @@ namespace fs = std::filesystem;
 namespace {
 
 const char* const USAGE =
-    "contactbench run SUITE.json [--out DIR] [--shard i/N] [--force] [--fresh] [--jobs N [--jobs-timed]]";
+    "contactbench run SUITE.json [--out DIR] [--shard i/N] [--force] [--fresh] [--jobs N [--jobs-timed]]\n"
+    "                 [--length-scale L]";
 
 const char* const HELP = "\n\nRuns every (snapshot, solver label) of a suite; writes DIR/runs/<id>__<label>.json,\n"
                          "DIR/summary.csv, DIR/suite.json and DIR/provenance.json (DIR defaults to\n"
@@ -199,12 +201,15 @@ struct LoadedSnapshot {
     std::string error;
 };
 
-LoadedSnapshot load_snapshot(const SuiteSnapshot& snap, const nlohmann::json& hash)
+LoadedSnapshot load_snapshot(const SuiteSnapshot& snap, const nlohmann::json& hash, const Suite& suite)
 {
     LoadedSnapshot loaded;
     try {
         expect_qpsnap(snap.path, "run");
         loaded.qp = std::make_unique<Qp>(read_qpsnap(snap.path));
+        // The scene size, fixed before any of the snapshot's jobs (the children of --jobs inherit it).
+        const std::string key = hash.is_string() ? hash.get<std::string>() : qpsnap_content_hash(snap.path);
+        fix_length_scale(*loaded.qp, snap.path, key, GivenLength{suite.length_scale, suite.length_scale_source});
         loaded.info = {{"id", snap.id},
                        {"path", snap.path},
                        {"hash", hash.is_string() ? hash : nlohmann::json(qpsnap_content_hash(snap.path))},
@@ -302,7 +307,7 @@ size_t run_jobs(const RunPlan& plan, ProcessPool& pool, long jobs)
     size_t done = 0, ran = 0;
     for (size_t s = 0; s < plan.snapshots().size(); ++s) {
         const SuiteSnapshot& snap = plan.snapshots()[s];
-        const LoadedSnapshot snapshot = plan.any_todo(s) ? load_snapshot(snap, plan.hash(s)) : LoadedSnapshot{};
+        const LoadedSnapshot snapshot = plan.any_todo(s) ? load_snapshot(snap, plan.hash(s), suite) : LoadedSnapshot{};
         for (size_t v = 0; v < plan.labels(); ++v) {
             if (!plan.in_shard(s, v)) continue;
             ++done;
@@ -372,13 +377,18 @@ void write_jobs_file(const RunPlan& plan, const std::string& out)
 
 int cmd_run(const Args& args)
 {
-    const CommandLine cl("run", args, {"--out", "--shard", "--jobs"}, {"--force", "--fresh", "--jobs-timed"});
+    const CommandLine cl("run", args, {"--out", "--shard", "--jobs", "--length-scale"},
+                         {"--force", "--fresh", "--jobs-timed"});
     if (cl.help()) {
         std::cout << "usage: " << USAGE << HELP;
         return 0;
     }
     cl.expect_positional(1, 1, USAGE);
     Suite suite = load_suite(cl.positional()[0]);
+    if (cl.has("--length-scale")) {
+        suite.length_scale = parse_length_scale("run", cl.value("--length-scale"));
+        suite.length_scale_source = "given";
+    }
     for (const std::string& notice : drop_unbuilt_optional_solvers(suite, builtin_registry().names()))
         std::cerr << "run: " << notice << "\n";
     std::string out;

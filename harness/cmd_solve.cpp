@@ -2,6 +2,7 @@
 // optionally the per-run JSON (--json) and the solution (--save-solution).
 #include "harness/cli.hpp"
 #include "harness/commands.hpp"
+#include "harness/length_scale.hpp"
 #include "harness/results.hpp"
 #include "harness/runner.hpp"
 #include "harness/set_arguments.hpp"
@@ -23,7 +24,7 @@ namespace {
 const char* const USAGE =
     "contactbench solve SNAP --solver NAME [--set key=value ...] [--json FILE] [--save-solution DIR]\n"
     "                   [--history] [--decouple auto|none|authors|random|depth] [--decouple-seed S]\n"
-    "                   [--repeat k] [--time-limit SECONDS]";
+    "                   [--repeat k] [--time-limit SECONDS] [--length-scale L]";
 
 /// A dense vector in Matrix Market array format (%.17g), written atomically.
 void write_mtx_vector(const std::string& path, const Vec& v)
@@ -73,10 +74,10 @@ std::string sci(double v)
 
 int cmd_solve(const Args& args)
 {
-    const CommandLine cl(
-        "solve", args,
-        {"--solver", "--set", "--json", "--save-solution", "--decouple", "--decouple-seed", "--repeat", "--time-limit"},
-        {"--history"});
+    const CommandLine cl("solve", args,
+                         {"--solver", "--set", "--json", "--save-solution", "--decouple", "--decouple-seed", "--repeat",
+                          "--time-limit", "--length-scale"},
+                         {"--history"});
     if (cl.help()) {
         if (cl.has("--solver"))
             print_solver_settings(std::cout, cl.value("--solver"));
@@ -115,9 +116,12 @@ int cmd_solve(const Args& args)
     options.time_limit_s = cl.number("--time-limit", 0.0);
     if (options.time_limit_s < 0) throw_input_error("solve", "--time-limit", "must be >= 0");
     const nlohmann::json settings = settings_from_assignments(cl.values("--set"));
+    GivenLength given;
+    if (cl.has("--length-scale")) given = {parse_length_scale("solve", cl.value("--length-scale")), "given"};
 
     expect_qpsnap(snap, "solve");  // an FCLIB, .dat or .npy file is named, with how to convert it
-    const Qp qp = read_qpsnap(snap);
+    Qp qp = read_qpsnap(snap);
+    fix_length_scale(qp, snap, qpsnap_content_hash(snap), given);
     const nlohmann::json info = {{"id", std::filesystem::path(snap).stem().string()},
                                  {"path", snap},
                                  {"hash", qpsnap_content_hash(snap)},

@@ -11,14 +11,17 @@
 #include "problems/solution_io.hpp"
 #include "solvers/peak_memory.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <limits>
 #include <optional>
+#include <sstream>
 
 namespace cb {
 
@@ -122,6 +125,18 @@ std::string tail_of(const fs::path& path, size_t max_chars = 300)
     return text;
 }
 
+/// More history rows than this is garbage: a program's record of its iterations is not a way to
+/// make the harness work (each row with x costs a read and a measure).
+constexpr size_t HISTORY_ROWS_MAX = 20000;
+
+/// "2.5 s" in messages.
+std::string seconds(double s)
+{
+    char buffer[40];
+    std::snprintf(buffer, sizeof buffer, "%.6g s", s);
+    return buffer;
+}
+
 double seconds_since(std::chrono::steady_clock::time_point t0)
 {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -192,6 +207,10 @@ ProgramReport read_report(const fs::path& path)
     }
     if (j.contains("history")) {
         if (!j["history"].is_array()) throw_input_error(where, "/history", "expected an array of objects");
+        if (j["history"].size() > HISTORY_ROWS_MAX)
+            throw_input_error(where, "/history",
+                              std::to_string(j["history"].size()) + " rows, more than the " +
+                                  std::to_string(HISTORY_ROWS_MAX) + " a program may report");
         for (size_t k = 0; k < j["history"].size(); ++k) {
             const auto& row = j["history"][k];
             const std::string at = where + ": /history/" + std::to_string(k);
@@ -213,12 +232,71 @@ ProgramReport read_report(const fs::path& path)
     return report;
 }
 
+/// A Matrix Market x or lambda whose size line declares other than `expected` entries is refused
+/// before it is read: a coordinate file of a few bytes may declare 2^31 rows, which the reader
+/// would allocate (zeroed) before finding that the length is wrong.
+void check_declared_size(const fs::path& path, long expected, const char* field)
+{
+    if (expected == 0 || !fs::is_regular_file(path)) return;
+    std::ifstream in(path);
+    std::string line;
+    long number = 0;
+    while (std::getline(in, line) && number < 10000) {
+        ++number;
+        if (line.empty() || line[0] == '%') continue;
+        std::istringstream sizes(line);
+        long long rows = -1, cols = -1;
+        sizes >> rows >> cols;
+        const bool column = rows == expected && cols == 1, row = rows == 1 && cols == expected;
+        if (!sizes || !(column || row))
+            throw_input_error(path.string(), std::string(field) + ": line " + std::to_string(number),
+                              "the size line declares '" + line + "', expected " + std::to_string(expected) +
+                                  " x 1 (refused before reading)");
+        return;
+    }
+}
+
+/// The program's own times cannot exceed the child's wall time measured by the harness: a
+/// setup_s + solve_s or a history time_s beyond it is refused (InputError naming the field).
+/// Returns the latest history time_s (0 without one).
+double check_times(const ProgramReport& report, const fs::path& path, double wall_s)
+{
+    const std::string where = path.string();
+    auto wall = [&] { return seconds(wall_s); };
+    const double self =
+        (std::isfinite(report.solve_s) ? report.solve_s : 0.0) + (std::isfinite(report.setup_s) ? report.setup_s : 0.0);
+    if (self > wall_s)
+        throw_input_error(where, std::isfinite(report.solve_s) ? "/solve_s" : "/setup_s",
+                          "setup_s + solve_s = " + seconds(self) +
+                              " exceeds the child's wall time measured by the harness, " + wall());
+    double latest = 0.0;
+    for (size_t k = 0; k < report.history.size(); ++k) {
+        const double t = report.history[k].value("time_s", 0.0);
+        const double bound = std::isfinite(report.solve_s) ? report.solve_s : wall_s;
+        if (t > bound)
+            throw_input_error(where, "/history/" + std::to_string(k) + "/time_s",
+                              seconds(t) + " is beyond " +
+                                  (std::isfinite(report.solve_s) ? "the program's solve_s, " + seconds(bound)
+                                                                 : "the child's wall time, " + wall()));
+        latest = std::max(latest, t);
+    }
+    return latest;
+}
+
 /// The program's iterates, measured by the harness's monitor (time axis: the program's time_s).
 /// `offset_s` moves the program's time_s (from the start of its solve) onto the run's clock.
+/// Replaying stops at the run's time limit (`deadline`, on the harness's clock since `t0`; 0: none):
+/// the history is cut there and the output refused (an InputError), however many rows remain.
 void replay_history(const ProgramReport& report, const fs::path& out, const QpView& qp, const SolveContext& context,
-                    double offset_s, nlohmann::json& program_history)
+                    double offset_s, nlohmann::json& program_history, std::chrono::steady_clock::time_point t0,
+                    double deadline)
 {
     for (const auto& row : report.history) {
+        if (deadline > 0.0 && seconds_since(t0) > deadline)
+            throw_input_error((out / "result.json").string(), "/history",
+                              "replaying its " + std::to_string(report.history.size()) +
+                                  " rows passed the time limit of " + seconds(deadline) + " after " +
+                                  std::to_string(program_history.size()) + " rows (cut there)");
         program_history.push_back({{"iteration", row.value("iteration", 0L)},
                                    {"time_s", row.contains("time_s") ? row["time_s"] : nlohmann::json()},
                                    {"residual", row.contains("residual") ? row["residual"] : nlohmann::json()}});
@@ -320,7 +398,7 @@ SolverResult CommandSolver::solve(const QpView& qp, const SolveContext& context)
     fs::create_directories(out);
 
     // The problem exactly as this solver is given it (decoupled rows when the harness decoupled).
-    Qp problem{qp.A, qp.b, qp.J, qp.c, qp.x0, {}, {{"source", "contactbench command solver"}}};
+    Qp problem{qp.A, qp.b, qp.J, qp.c, qp.x0, {}, {{"source", "contactbench command solver"}}, {}};
     write_qpsnap(snapshot.string(), problem);
     nlohmann::json settings_file = {{"protocol", COMMAND_PROTOCOL_VERSION},
                                     {"snapshot", snapshot.string()},
@@ -425,17 +503,26 @@ SolverResult CommandSolver::solve(const QpView& qp, const SolveContext& context)
     nlohmann::json program_history = nlohmann::json::array();
     try {
         report = read_report(out / "result.json");
+        check_declared_size(out / "x.mtx", qp.n(), "x");
+        check_declared_size(out / "lambda.mtx", qp.m(), "lambda");
         point = read_solution(out.string(), qp.n(), qp.m());
         // On the harness's clock the program's solve ends with the child (start-up before it);
         // on its own clock, after its setup.
+        // Its times never beyond the child's wall time: refused otherwise (check_times). On the
+        // harness's clock the solve ends with the child, so the latest reported time lands at
+        // prepare_s + wall_s.
+        const double latest = check_times(report, out / "result.json", run.wall_s);
         const bool self_time = m_settings.time == "self" && std::isfinite(report.solve_s);
         const double offset_s =
-            self_time
-                ? (std::isfinite(report.setup_s) ? report.setup_s : 0.0)
-                : (std::isfinite(report.solve_s) ? prepare_s + std::max(0.0, run.wall_s - report.solve_s) : prepare_s);
-        replay_history(report, out, qp, context, offset_s, program_history);
-    } catch (const InputError& e) {
+            self_time ? (std::isfinite(report.setup_s) ? report.setup_s : 0.0)
+                      : prepare_s + run.wall_s - (std::isfinite(report.solve_s) ? report.solve_s : latest);
+        replay_history(report, out, qp, context, offset_s, program_history, t0, common.time_limit_s);
+    } catch (const std::exception& e) {
+        // Unusable output (an InputError naming the file and field, or a size that exhausts memory)
+        // is the program's failure, final: never an internal error retried on every resume.
         info["garbage"] = true;
+        info["garbage_reason"] = e.what();
+        info["program_history"] = program_history;
         result.x = Vec();
         return finish(SolveStatus::DIVERGED, std::string("command: the program's output is unusable: ") + e.what());
     }

@@ -289,9 +289,12 @@ CompareReport compare_inputs(const CompareInput& base_input, const CompareInput&
         const TimeStats nt = time_stats(n, next_input.source);
         row.next["time_min_s"] = nt.min;
 
+        // An external program's work is not counted (null): shown, never judged on either side.
+        const bool uncounted = !b->value("work_counted", true) || !n.value("work_counted", true);
         for (const auto& c : compared_counters()) {
             const auto& bv = row.base[c];
             const auto& nv = row.next[c];
+            if (uncounted && c != "iterations") continue;
             if (bv.is_null()) {
                 if (base_input.compact && nv.is_number()) unjudged(base_input.source, key, c);
                 continue;  // not recorded by BASE (an older binary): shown, not judged

@@ -114,7 +114,7 @@ Judgement judge_point(const Qp& qp, const SolutionPoint& point, const JudgeOptio
             if (solved == "unconstrained") {
                 const SpMat no_rows(0, qp.n());
                 const Vec no_c(0);
-                const QpView relaxed{qp.A, qp.b, no_rows, no_c, qp.x0};
+                const QpView relaxed{qp.A, qp.b, no_rows, no_c, qp.x0, &qp.length};
                 out.accuracy_solved = accuracy_from_gradient(relaxed, accuracy_scale(relaxed), x, g, Vec(0));
                 out.have_solved = true;
             } else if (solved == "decoupled") {

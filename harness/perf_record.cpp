@@ -36,7 +36,8 @@ const std::map<std::string, Kind>& column_kinds()
                                                       {"instructions", Kind::INTEGER},
                                                       {"time_min_s", Kind::REAL},
                                                       {"time_noise", Kind::REAL},
-                                                      {"time_samples", Kind::INTEGER}};
+                                                      {"time_samples", Kind::INTEGER},
+                                                      {"work_counted", Kind::INTEGER}};
     return kinds;
 }
 
@@ -88,7 +89,8 @@ const std::vector<std::string>& perf_record_columns()
                                                      "instructions",
                                                      "time_min_s",
                                                      "time_noise",
-                                                     "time_samples"};
+                                                     "time_samples",
+                                                     "work_counted"};
     return columns;
 }
 
@@ -145,6 +147,9 @@ std::vector<nlohmann::json> read_perf_record(const std::string& csv_path)
             if (row.count(c) && !row[c].is_null()) counters[c] = row[c];
         run["counters"] = counters;
         if (row.count("iterations") && !row["iterations"].is_null()) run["iterations"] = row["iterations"];
+        // 0: an external program's run, whose work is not counted (empty work cells are not a loss).
+        if (row.count("work_counted") && !row["work_counted"].is_null())
+            run["work_counted"] = row["work_counted"].get<long>() != 0;
         if (row.count("accuracy") && !row["accuracy"].is_null()) run["accuracy"] = {{"max", row["accuracy"]}};
         if (row.count("tol") && !row["tol"].is_null()) run["tol"] = row["tol"];
         if (row.count("instructions") && !row["instructions"].is_null()) run["instructions"] = row["instructions"];

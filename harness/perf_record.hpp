@@ -22,8 +22,9 @@ constexpr std::size_t MAX_PERF_RECORD_LINE = 4096;
 
 /// Reads a compact CSV into run records shaped like results JSON (label, snapshot.id, status,
 /// iterations, counters{...}, accuracy.max, tol, instructions, time{min_total_s, noise,
-/// samples}). InputError naming the file, line and column on anything malformed: an unknown or
-/// repeated column, a cell that is not a count or a finite number, too many runs or a long line.
+/// samples}, work_counted: false where its cell is 0). InputError naming the file, line and
+/// column on anything malformed: an unknown or repeated column, a cell that is not a count or a
+/// finite number, too many runs or a long line.
 std::vector<nlohmann::json> read_perf_record(const std::string& csv_path);
 
 /// The fingerprint file beside a record: "dir/ci.csv" -> "dir/ci-machine.json".

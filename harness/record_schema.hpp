@@ -9,6 +9,10 @@
 ///   CSV / history column "kkt_rel"        -> "accuracy"
 ///   CSV column "kkt_rel_solved"           -> "accuracy_solved"
 /// Nothing writes an old name.
+///
+/// Fields added later (nothing renamed; an older record lacks them and means the default):
+///   "work_counted" (issue 41): false for an external program's run, whose work counters are
+///   null; absent: true (compare reads it so).
 #include <nlohmann/json.hpp>
 #include <string>
 

@@ -4,6 +4,7 @@
 #include "harness/results.hpp"
 #include "harness/runner.hpp"
 #include "harness/suite.hpp"
+#include "solvers/accuracy.hpp"
 
 #include <cmath>
 #include <filesystem>
@@ -78,6 +79,11 @@ nlohmann::json reference_solution(const Qp& qp, const std::string& key, const st
     const bool usable = run.status == to_string(SolveStatus::CONVERGED) ||
                         (run.result.status == SolveStatus::STALLED && std::isfinite(error) && error <= 1e-7);
     ref["objective"] = usable ? run.record["objective"] : nlohmann::json();
+    // The size of the solution region: the scene size of a problem without geometry
+    // (harness/length_scale.hpp), measured like x0's extent.
+    std::string extent_kind;
+    const double extent = usable && run.result.x.size() == qp.n() ? point_extent(run.result.x, extent_kind) : NAN;
+    ref["solution_extent"] = std::isfinite(extent) ? nlohmann::json(extent) : nlohmann::json();
     ref["accepted_stalled"] = usable && run.result.status != SolveStatus::CONVERGED;
     ref["message"] = run.record["message"];
     write_json_atomic(path, ref);

@@ -11,12 +11,14 @@ namespace cb {
 
 /// Bump when the reference computation changes in a way its settings do not show (cached
 /// references of another version are recomputed).
-constexpr int REFERENCE_VERSION = 2;
+/// 3: the record holds solution_extent (the scene size of a problem without geometry).
+constexpr int REFERENCE_VERSION = 3;
 
-/// {"objective": F*, "objective_x0": F(x0), "source": "active-set", "status", "accuracy": {...},
-///  "key", "cached": bool}. `key` is the snapshot hash. Pass the QP in
-/// the file, never a decoupled one: F* is the original problem's optimum for every solver.
-/// A failed reference solve is still cached, with its status, and "objective" null.
+/// {"objective": F*, "objective_x0": F(x0), "solution_extent": extent of x* (null when unusable),
+///  "source": "active-set", "status", "accuracy": {...}, "key", "cached": bool}. `key` is the
+/// snapshot hash. Pass the QP in the file, never a decoupled one: F* is the original problem's
+/// optimum for every solver. A failed reference solve is still cached, with its status, and
+/// "objective" null.
 nlohmann::json reference_solution(const Qp& qp, const std::string& key, const std::string& cache = "");
 
 /// The cached reference of snapshot `key`, or null when none is cached (nothing is computed).

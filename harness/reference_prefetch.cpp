@@ -1,5 +1,6 @@
 #include "harness/reference_prefetch.hpp"
 
+#include "harness/length_scale.hpp"
 #include "harness/process_pool.hpp"
 #include "harness/reference.hpp"
 #include "problems/qpsnap.hpp"
@@ -10,11 +11,16 @@ namespace cb {
 
 namespace {
 
-void prefetch_snapshot(const SuiteSnapshot& snap)
+void prefetch_snapshot(const SuiteSnapshot& snap, const Suite& suite)
 {
     try {
-        // The reference is the ORIGINAL QP's (docs/accuracy.md), whatever a solver keeps of it.
-        reference_solution(read_qpsnap(snap.path), qpsnap_content_hash(snap.path));
+        // The reference is the ORIGINAL QP's (docs/accuracy.md), whatever a solver keeps of it,
+        // solved with the scale the runs will use (a problem without geometry: its own reference
+        // extent, harness/length_scale.hpp, which computes and caches the reference first).
+        Qp qp = read_qpsnap(snap.path);
+        const std::string key = qpsnap_content_hash(snap.path);
+        fix_length_scale(qp, snap.path, key, GivenLength{suite.length_scale, suite.length_scale_source});
+        reference_solution(qp, key);
     } catch (const InputError&) {
         // the runs of this snapshot fail with the message
     }
@@ -33,7 +39,7 @@ size_t prefetch_references(const Suite& suite, const std::vector<SuiteSnapshot>&
         if (!any) continue;
         ++handled;
         if (pool.delegate()) continue;  // a child computes this snapshot's references
-        prefetch_snapshot(snapshots[s]);
+        prefetch_snapshot(snapshots[s], suite);
         pool.job_done();
     }
     if (const size_t failed = pool.wait_all())

@@ -44,6 +44,9 @@ RunPlan::RunPlan(const Suite& suite, std::vector<SuiteSnapshot> snapshots, Shard
       m_hashes(m_snapshots.size()), m_stale(m_snapshots.size(), std::vector<std::string>(labels())),
       m_todo(m_snapshots.size(), std::vector<bool>(labels(), false))
 {
+    // Only when given, so that the identities of runs without it stay what they were.
+    if (suite.length_scale > 0.0)
+        m_options_entry["length_scale"] = {{"value", suite.length_scale}, {"source", suite.length_scale_source}};
 }
 
 bool RunPlan::in_shard(size_t s, size_t v) const

@@ -94,6 +94,18 @@ nlohmann::json run_record(const RunOutcome& out, const RunFacts& facts, int repe
     rec["memory"] = memory_json(facts.peak);
     rec["info"] = result.info.is_null() ? nlohmann::json::object() : result.info;
     if (!facts.history.is_null()) rec["history"] = facts.history;
+    // An external program works in its own process: its work is not counted (null), never 0,
+    // which would draw it as solving every problem for free (docs/work.md).
+    rec["work_counted"] = !(result.info.is_object() && result.info.contains("command"));
+    if (!rec["work_counted"].get<bool>()) {
+        for (const char* key : {"a_products", "work", "work_flops"}) rec["counters"][key] = nullptr;
+        if (rec.contains("history")) {
+            const nlohmann::json& columns = rec["history"]["columns"];
+            for (size_t c = 0; c < columns.size(); ++c)
+                if (columns[c] == "a_products" || columns[c] == "work")
+                    for (auto& row : rec["history"]["rows"]) row[c] = nullptr;
+        }
+    }
     rec["provenance"] = provenance();
     return rec;
 }

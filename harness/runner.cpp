@@ -157,7 +157,9 @@ void measure_outcome(RunOutcome& out, RunFacts& facts, const CommonSettings& com
     }
     const Vec g = original.A * x - original.b;  // decoupling keeps A and b
     facts.tol = common.tol;
-    facts.native = result.criterion == StopCriterion::NATIVE;
+    // stop=native: tol is in the solver's (or program's) own units, whatever it says it stopped
+    // on, so every such run, the command solver's included, must reach the default accuracy.
+    facts.native = result.criterion == StopCriterion::NATIVE || common.stops_on_native();
     facts.accuracy_tol = facts.native ? DEFAULT_ACCURACY_TOL : facts.tol;
     const bool own_valid = !result.lambda_fitted && result.lambda.size() == problem.qp->m();
     const Vec own_full = own_multipliers(result, original, problem);
@@ -180,7 +182,7 @@ void measure_outcome(RunOutcome& out, RunFacts& facts, const CommonSettings& com
     } else if (facts.ignores_constraints) {
         const SpMat no_rows(0, original.n());
         const Vec no_c(0);
-        const QpView relaxed{original.A, original.b, no_rows, no_c, original.x0};
+        const QpView relaxed{original.A, original.b, no_rows, no_c, original.x0, &original.length};
         out.accuracy_solved = accuracy_from_gradient(relaxed, accuracy_scale(relaxed), x, g, Vec(0));
     } else {
         Vec lambda_solved;

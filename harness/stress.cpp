@@ -1,5 +1,6 @@
 #include "harness/stress.hpp"
 
+#include "harness/length_scale.hpp"
 #include "harness/results.hpp"
 #include "harness/runner.hpp"
 #include "harness/set_arguments.hpp"
@@ -382,6 +383,7 @@ StressReport run_stress(const StressOptions& options)
         std::string generation_error;
         try {
             qp = make_stress_qp(c);
+            fix_length_scale(qp, c.id, qp_content_key(qp), GivenLength{});  // before any solver, as `run` does
         } catch (const std::exception& e) {
             generation_error = e.what();
         }

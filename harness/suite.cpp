@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <climits>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -23,10 +24,10 @@ namespace {
 
 const std::set<std::string>& known_keys()
 {
-    static const std::set<std::string> keys = {"name",          "snapshots",     "generate",    "solvers",   "tol",
-                                               "time_limit_s",  "repeat",        "history_max", "reference", "decouple",
-                                               "decouple_seed", "chain",         "description", "tiers",     "comment",
-                                               "timed",         "allow_commands"};
+    static const std::set<std::string> keys = {
+        "name",        "snapshots", "generate",       "solvers",       "tol",   "time_limit_s", "repeat",
+        "history_max", "reference", "decouple",       "decouple_seed", "chain", "description",  "tiers",
+        "comment",     "timed",     "allow_commands", "length_scale"};
     return keys;
 }
 
@@ -283,6 +284,9 @@ Suite parse_suite(const nlohmann::json& j, const std::string& where)
                           "expected one of auto, none, authors, random, depth, got '" + s.decouple + "'");
     s.decouple_seed = static_cast<std::uint64_t>(get_integer(j, "decouple_seed", where, 0, 0));
     s.chain = get_bool(j, "chain", where, false);
+    s.length_scale = get_number(j, "length_scale", where, 0.0, 0.0);
+    if (!std::isfinite(s.length_scale))
+        throw_input_error(where, "/length_scale", "must be a finite number > 0, got " + j["length_scale"].dump());
     s.timed = get_bool(j, "timed", where, true);
     // Running a program named in a suite file is the suite author's explicit choice.
     s.allow_commands = get_bool(j, "allow_commands", where, false);

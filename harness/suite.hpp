@@ -55,6 +55,8 @@ struct Suite {
     std::string decouple = "auto";
     std::uint64_t decouple_seed = 0;
     bool chain = false;
+    double length_scale = 0.0;  ///< > 0: the scene size l of every snapshot (docs/accuracy.md); 0: each its own
+    std::string length_scale_source = "suite";  ///< "suite", or "given" when `run --length-scale` set it
     bool timed = true;            ///< false: times are not judged (counters only); `run --jobs` runs it in parallel
     bool allow_commands = false;  ///< true: `command` solvers (external programs) may run; without it they are refused
     nlohmann::json raw;           ///< the file as read

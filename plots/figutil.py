@@ -205,6 +205,7 @@ WORK_NOT_COUNTED: Dict[str, str] = {
     "siconos-lemke": "the pivots inside Siconos's Lemke are not counted (only forming W = J A^-1 J')",
     "siconos-nsn": "the Newton iterations inside Siconos are not counted (only forming W = J A^-1 J')",
     "bullet-dantzig": "the pivots inside Bullet's Dantzig solver are not counted (only forming W = J A^-1 J')",
+    "command": "an external program works in its own process: its work is not counted (null in its record)",
 }
 
 

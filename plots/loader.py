@@ -27,7 +27,7 @@ from typing import Dict, List, Optional
 import numpy as np
 import pandas as pd
 
-from plots.record_schema import accuracy_of, current_column_names, with_current_columns
+from plots.record_schema import accuracy_of, current_column_names, with_current_columns, work_counted
 
 #: history columns (harness/history.cpp); used when a record omits "columns". `accuracy` is the
 #: error e of docs/accuracy.md on the original QP (old files' names are read by record_schema).
@@ -181,6 +181,7 @@ def flatten_run(record: dict, source: str = "run record") -> dict:
         row["counters." + key] = _number(value)
     row["a_products"] = _number(counters.get("a_products"))
     row["work"] = _number(counters.get("work"))  # A-product equivalents (docs/work.md); NaN in older files
+    row["work_counted"] = work_counted(record)  # false: an external program's (null counters)
     for key, value in (record.get("settings") or {}).items():
         if isinstance(value, (str, int, float, bool)) or value is None:
             row["settings." + key] = value

@@ -10,6 +10,10 @@ Files of the previous release are read for one release, with an OldNameWarning p
     column "kkt_rel" / "kkt_rel_solved"        -> "accuracy" / "accuracy_solved"
     stability.csv column "kkt" / "kkt_solved"  -> "accuracy" / "accuracy_solved"
 Nothing here writes an old name.
+
+Fields added later (nothing renamed; an older file lacks them and means the default):
+    run record "work_counted" (issue 41): false for an external program's run, whose work
+    counters are null; absent: true
 """
 from __future__ import annotations
 
@@ -22,7 +26,15 @@ OLD_STABILITY_COLUMNS = {"kkt": "accuracy", "kkt_solved": "accuracy_solved"}
 #: old run-record key -> current key
 OLD_KEYS = {"kkt_relative": "accuracy"}
 
+#: added field -> what an older record that lacks it means
+ADDED_FIELDS = {"work_counted": True}
+
 _told = set()
+
+
+def work_counted(record: dict) -> bool:
+    """False for a run whose work is not counted (a `command` run: its counters are null)."""
+    return record.get("work_counted", ADDED_FIELDS["work_counted"]) is not False
 
 
 class OldNameWarning(FutureWarning):

@@ -20,8 +20,10 @@ double sanitize(double v) { return std::isfinite(v) ? v : INF; }
 
 nlohmann::json finite_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
 
+}  // namespace
+
 /// Largest axis extent of x read as 3-D points (n a multiple of 3), else the range of its entries.
-double extent(const Vec& x, std::string& source)
+double point_extent(const Vec& x, std::string& source)
 {
     if (x.size() == 0) return 0.0;
     if (x.size() % 3 == 0) {
@@ -40,8 +42,6 @@ double extent(const Vec& x, std::string& source)
     source = "x0_range";
     return x.maxCoeff() - x.minCoeff();
 }
-
-}  // namespace
 
 double AccuracyParts::max() const
 {
@@ -108,7 +108,14 @@ AccuracyScale accuracy_scale(const QpView& qp)
     // length unit. A degenerate start (a point, e.g. x0 = 0) falls back on lengths of the
     // problem itself that share those invariances (docs/accuracy.md).
     std::string source;
-    double l = extent(qp.x0, source);
+    double l = 0.0;
+    if (qp.length != nullptr && qp.length->value > 0.0 && std::isfinite(qp.length->value)) {
+        // Fixed for the problem before any solver ran (given, or the harness's reference extent).
+        l = qp.length->value;
+        source = qp.length->source;
+    } else {
+        l = point_extent(qp.x0, source);
+    }
     if (!(l > 0.0) || !std::isfinite(l)) {
         // Where the unconstrained problem would move a point-like start: the extent of its
         // minimiser, estimated by Jacobi-PCG from x0 (it follows x0 under every map (a)-(d)).
@@ -135,7 +142,7 @@ AccuracyScale accuracy_scale(const QpView& qp)
             rz = rz_next;
         }
         std::string unused;
-        l = extent(x, unused);
+        l = point_extent(x, unused);
     }
     if ((!(l > 0.0) || !std::isfinite(l)) && m > 0) {
         source = "constraint_gap";

@@ -45,7 +45,7 @@ struct AccuracyScale {
     Vec length_per_multiplier;  ///< n_i / k_i: the displacement a unit multiplier causes along row i
     double length = 1.0;        ///< the scene size l, in the problem's length unit
     double inv_length = 1.0;
-    std::string length_source;       ///< x0_extent | x0_range | unconstrained_extent | constraint_gap | unit
+    std::string length_source;       ///< x0_extent | ... | unit, or a FixedLength's source (docs/accuracy.md)
     double stiffness = 1.0;          ///< d_ref = mean of D: the energy scale is d_ref * l^2
     double inv_energy = 1.0;         ///< 1 / (d_ref l^2)
     long a_products = 0;             ///< A-products spent computing this scale
@@ -63,7 +63,12 @@ struct AccuracyScale {
 /// finite), the same extent of the unconstrained minimiser (Jacobi-PCG from x0 to a relative
 /// residual of 1e-3, at most 200 iterations; its A-products are counted), then
 /// max_i |c_i - J_i x0| / n_i, then 1.
+/// A scene size fixed on the view (qp.length, docs/accuracy.md) is used as is, before all of these.
 AccuracyScale accuracy_scale(const QpView& qp);
+
+/// The largest axis extent of x read as 3-D points when its size is a multiple of 3 (source
+/// "x0_extent"), else the range of its entries ("x0_range"); 0 for an empty x.
+double point_extent(const Vec& x, std::string& source);
 
 /// The measure at (x, lambda) with the gradient g = Ax - b already known (no A-product).
 /// A lambda whose size is not m counts as lambda = 0 on stationarity and adds no dual or

@@ -130,6 +130,7 @@ Qp select_rows(const Qp& qp, const std::vector<int>& rows)
     out.b = qp.b;
     out.x0 = qp.x0;
     out.meta = qp.meta;
+    out.length = qp.length;  // A, b and x0 are kept: so is the scene size
     std::vector<Triplet> triplets;
     out.c.resize(static_cast<Eigen::Index>(rows.size()));
     for (size_t r = 0; r < rows.size(); ++r) {

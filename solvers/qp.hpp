@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace cb {
@@ -20,6 +21,14 @@ struct ContactRows {
     bool empty() const { return kind.empty() && depth.empty() && vertex.empty(); }
 };
 
+/// A scene size l fixed for the problem before any solver runs (docs/accuracy.md "Length scale"),
+/// so that every solver's stop test and the harness's measure use the same one. value 0: none
+/// fixed, accuracy_scale derives l from x0 (and its fallbacks).
+struct FixedLength {
+    double value = 0.0;
+    std::string source;  ///< length_scale_source: given | suite | snapshot | reference_extent | load_displacement
+};
+
 /// Const views of a QP; no ownership. A: n x n SPD (full, both triangles), J: m x n.
 struct QpView {
     const SpMat& A;
@@ -27,6 +36,7 @@ struct QpView {
     const SpMat& J;
     const Vec& c;
     const Vec& x0;  ///< start point (may be infeasible)
+    const FixedLength* length = nullptr;  ///< the problem's fixed scene size, if any
     Eigen::Index n() const { return A.rows(); }
     Eigen::Index m() const { return J.rows(); }
 };
@@ -40,8 +50,9 @@ struct Qp {
     Vec x0;
     ContactRows contacts;
     nlohmann::json meta = nlohmann::json::object();
+    FixedLength length;  ///< set by the harness (harness/length_scale.hpp) before any solver runs
 
-    QpView view() const { return QpView{A, b, J, c, x0}; }
+    QpView view() const { return QpView{A, b, J, c, x0, &length}; }
     Eigen::Index n() const { return A.rows(); }
     Eigen::Index m() const { return J.rows(); }
 };

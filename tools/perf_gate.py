@@ -40,7 +40,7 @@ SOURCE_PATHS = ["solvers", "problems", "harness", "cmake", "CMakeLists.txt"]
 TOGGLES = ["cb::*Solver::solve(cb::QpView const&, cb::SolveContext const&)", "cb::notify_monitor(*)"]
 COLUMNS = ["snapshot", "label", "status", "iterations", "a_products", "a_products_harness",
            "cholmod_factorizations", "precond_applications", "work", "accuracy", "tol", "instructions",
-           "time_min_s", "time_noise", "time_samples"]
+           "time_min_s", "time_noise", "time_samples", "work_counted"]
 # work: A-product equivalents counting factorisations and triangular solves (docs/work.md), the
 # one counter in which pgs's and active-set's CHOLMOD work shows.
 COUNTERS = ["a_products", "a_products_harness", "cholmod_factorizations", "precond_applications", "work"]
@@ -195,6 +195,9 @@ def row_from_record(job, rec, samples):
            "iterations": rec.get("iterations")}
     for c in COUNTERS:
         row[c] = counters.get(c)
+    # An external program's work is not counted (null counters): written as 0, only then, so that
+    # the column appears only in records that have such a run.
+    row["work_counted"] = 0 if rec.get("work_counted") is False else None
     accuracy = (accuracy_object(rec, job.key()) or {}).get("max")
     row["accuracy"] = "%.3g" % accuracy if isinstance(accuracy, (int, float)) else None
     row["tol"] = "%g" % rec["tol"] if isinstance(rec.get("tol"), (int, float)) else None
