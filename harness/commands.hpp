@@ -20,6 +20,7 @@ int cmd_stress(const Args& args);
 int cmd_compare(const Args& args);
 int cmd_generate(const Args& args);
 int cmd_solvers(const Args& args);
+int cmd_friction_solve(const Args& args);  // issue 48: FCLIB local problems with friction
 int cmd_version(const Args& args);
 // Slurm job arrays (issue 19).
 int cmd_cluster(const Args& args);

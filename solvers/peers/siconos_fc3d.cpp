@@ -18,6 +18,8 @@
 #include <fc3d_compute_error.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <cstring>
 #endif
 
@@ -81,21 +83,21 @@ struct Fc3dReport {
 
 }  // namespace
 
-FrictionRun siconos_fc3d_solve(const FrictionLocal& p, const std::string& method, long max_iterations, double tol,
-                               double time_limit_s)
+namespace {
+
+/// One fc3d_driver call in a child, from r (Siconos' solvers start from the reaction given).
+FrictionRun siconos_round(const FrictionLocal& p, const std::string& method, long max_iterations, double tol,
+                          double time_limit_s, const Vec& start)
 {
-    if (method != "nsgs" && method != "nsn")
-        throw InputError("siconos fc3d: unknown method '" + method + "' (nsgs or nsn)");
     const Eigen::Index n = 3 * p.contacts();
     FrictionRun run;
-    run.solver = "siconos-" + method;
-    run.r = Vec::Zero(n);
+    run.r = start;
     Stopwatch watch;
     watch.start();
     const ChildOutcome child = run_in_child(
         [&]() {
             SiconosProblem sp(p);
-            std::vector<double> r(size_t(n), 0.0), u(size_t(n), 0.0);
+            std::vector<double> r(start.data(), start.data() + n), u(size_t(n), 0.0);
             SolverOptions* options =
                 solver_options_create(method == "nsgs" ? SICONOS_FRICTION_3D_NSGS : SICONOS_FRICTION_3D_NSN_AC);
             options->iparam[SICONOS_IPARAM_MAX_ITER] = static_cast<int>(std::min<long>(max_iterations, 1L << 30));
@@ -121,7 +123,6 @@ FrictionRun siconos_fc3d_solve(const FrictionLocal& p, const std::string& method
                        : "Siconos child " + (child.failed ? child.failure
                                                           : "sent " + std::to_string(child.bytes.size()) +
                                                                 " bytes, expected " + std::to_string(expected));
-        run.error = fclib_relative_error(p, run.r, &run.u);
         return run;
     }
     std::memcpy(run.r.data(), child.bytes.data(), size_t(n) * sizeof(double));
@@ -129,14 +130,67 @@ FrictionRun siconos_fc3d_solve(const FrictionLocal& p, const std::string& method
     std::memcpy(&report, child.bytes.data() + size_t(n) * sizeof(double), sizeof report);
     run.iterations = report.iterations;
     run.native_error = report.residual;
-    run.note = "fc3d_driver info " + std::to_string(report.info) + " (0: Siconos says solved)";
-    if (!run.r.allFinite()) {
-        run.status = "diverged";
-        run.error = INFINITY;
-        return run;
+    run.note = "fc3d_driver info " + std::to_string(report.info);
+    return run;
+}
+
+}  // namespace
+
+FrictionRun siconos_fc3d_solve(const FrictionLocal& p, const std::string& method, long max_iterations, double tol,
+                               double time_limit_s)
+{
+    if (method != "nsgs" && method != "nsn")
+        throw InputError("siconos fc3d: unknown method '" + method + "' (nsgs or nsn)");
+    FrictionRun run;
+    run.solver = "siconos-" + method;
+    run.r = Vec::Zero(3 * p.contacts());
+    // Siconos stops on its error scaled by max(||q||, ||u||, ||r||), which can be far below the
+    // FCLIB error (/ ||q||): on LMGC_100_PR_PerioBox ||r|| >> ||q||, and NSN stopped at 3.6e-9 of its
+    // own with 2.3e-3 of FCLIB's. So it is called again from its r with its tolerance scaled by
+    // the ratio seen, at most 4 rounds; iterations and times are summed.
+    double siconos_tol = tol;
+    std::string notes;
+    for (int round = 0; round < 4; ++round) {
+        const double left = time_limit_s > 0.0 ? time_limit_s - run.seconds : 0.0;
+        if (time_limit_s > 0.0 && left <= 0.0) {
+            run.status = "time_limit";
+            break;
+        }
+        const long iterations_left = max_iterations - run.iterations;
+        if (iterations_left <= 0) break;
+        FrictionRun one = siconos_round(p, method, iterations_left, siconos_tol, left, run.r);
+        run.seconds += one.seconds;
+        run.iterations += one.iterations;
+        char tol_text[32];
+        std::snprintf(tol_text, sizeof tol_text, "%.3g", siconos_tol);
+        notes += (notes.empty() ? "" : "; ") + std::string("round ") + std::to_string(round + 1) + ": tol " + tol_text +
+                 ", " + one.note;
+        if (!one.status.empty()) {  // the child failed: its status stands
+            run.status = one.status;
+            break;
+        }
+        if (!one.r.allFinite()) {
+            if (round == 0) run.r = one.r, run.status = "diverged";
+            if (round > 0) notes += " (non-finite r: the previous round's r is kept)";
+            break;
+        }
+        const double error = fclib_relative_error(p, one.r);
+        if (round > 0 && !(error < fclib_relative_error(p, run.r))) {  // a round that made it worse
+            notes += " (FCLIB error " + std::to_string(error) + ": the previous round's r is kept)";
+            break;
+        }
+        run.r = one.r;
+        run.native_error = one.native_error;
+        if (error <= tol) break;
+        const double ratio = siconos_relative_error(p, run.r) / error;  // Siconos' error per FCLIB's
+        if (!(ratio > 0.0) || !std::isfinite(ratio)) break;
+        siconos_tol = std::min(0.1 * siconos_tol, tol * ratio);
+        if (siconos_tol < 1e-300) break;
     }
-    run.error = fclib_relative_error(p, run.r, &run.u);
-    run.status = run.error <= tol ? "converged" : report.iterations >= max_iterations ? "max_iterations" : "stalled";
+    run.note = notes;
+    run.error = run.r.allFinite() ? fclib_relative_error(p, run.r, &run.u) : INFINITY;
+    if (run.status.empty())
+        run.status = run.error <= tol ? "converged" : run.iterations >= max_iterations ? "max_iterations" : "stalled";
     return run;
 }
 

@@ -15,7 +15,10 @@ namespace cb {
 bool siconos_fc3d_built();
 
 /// method "nsgs" or "nsn"; tol is Siconos' own tolerance (its relative error), max_iterations its
-/// cap; the child is killed at time_limit_s (0: none). Starts from r = 0.
+/// cap; the child is killed at time_limit_s (0: none). Starts from r = 0. Siconos' own stop is
+/// on its scaling of the error (friction_error.hpp); while the FCLIB error is above tol, it is
+/// called again from its r with a tolerance scaled down by the ratio of the two (at most 4
+/// rounds; iterations and times summed, each round's tolerance in `note`).
 FrictionRun siconos_fc3d_solve(const FrictionLocal& problem, const std::string& method, long max_iterations, double tol,
                                double time_limit_s);
 

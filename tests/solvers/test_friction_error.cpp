@@ -1,6 +1,6 @@
 // Issue 48: the natural-map error computed by the harness (solvers/friction_error.hpp) equals
 // Siconos' own fc3d_compute_error to 1e-12 (relative) on the two real local files of
-// tests/data/fclib (at r = 0, at random points, at Siconos' solution) and on random
+// tests/data/fclib (at r = 0, at random points, at Siconos' and our solutions) and on random
 // problems, in Siconos 4.4's scaling (/ max(||q||, ||u||, ||r||)); Acary et al.'s (/ ||q||) shares the
 // numerator and differs from it exactly by that scale. Agreement: 1e-12 relative, plus 1e-16
 // absolute near solutions, where the error is of the order of the rounding of u = W r + q (summed
@@ -8,6 +8,7 @@
 // projection.
 #include "problems/fclib_io.hpp"
 #include "solvers/friction_error.hpp"
+#include "solvers/friction_nsgs.hpp"
 #include "solvers/peers/siconos_fc3d.hpp"
 
 #include <gtest/gtest.h>
@@ -73,6 +74,10 @@ TEST(FrictionError, MatchesSiconosOnRealLocalFiles)
                 expect_same_error(p, random_point(m, scale, rng),
                                   std::string(name) + " random scale " + std::to_string(scale));
         // Near solutions (where the error is small and cancellation would show).
+        cb::FrictionNsgsSettings s;
+        s.max_iterations = 2000;
+        const cb::FrictionRun ours = cb::friction_nsgs(p, s);
+        expect_same_error(p, ours.r, std::string(name) + " at nsgs's r");
         const cb::FrictionRun nsn = cb::siconos_fc3d_solve(p, "nsn", 200, 1e-10, 60.0);
         expect_same_error(p, nsn.r, std::string(name) + " at siconos-nsn's r");
     }
