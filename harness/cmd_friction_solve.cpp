@@ -51,6 +51,10 @@ int cmd_friction_solve(const Args& args)
         if (s != "nsgs" && s != "siconos-nsgs" && s != "siconos-nsn")
             throw InputError("--solver: unknown frictional solver '" + s + "' (nsgs, siconos-nsgs, siconos-nsn)");
     if (cl.has("--json")) cl.path("--json");
+    for (const std::string& s : solvers)
+        if (s != "nsgs" && !siconos_fc3d_built())
+            throw InputError("--solver: " + s +
+                             " is not built (install libsiconos-numerics-dev and reconfigure with CB_PEERS=ON)");
 
     const FrictionLocal problem = read_fclib_local_friction(path);
     nlohmann::json out = {{"file", path},
@@ -62,8 +66,13 @@ int cmd_friction_solve(const Args& args)
                           {"siconos_scaled_error_definition", "the same numerator / max(||q||, ||u||, ||r||) "
                                                               "(Siconos 4.4's fc3d_compute_error)"},
                           {"runs", nlohmann::json::array()}};
-    std::printf("%-14s %-15s %8s %10s %12s %12s\n", "solver", "status", "iters", "time_s", "fclib_error",
-                "siconos_err");
+    // The table is printed whole at the end: a solver that refuses the problem (nsgs on a W_ii
+    // that is not positive definite) leaves no partial output.
+    std::string table;
+    char line[256];
+    std::snprintf(line, sizeof line, "%-14s %-15s %8s %10s %12s %12s\n", "solver", "status", "iters", "time_s",
+                  "fclib_error", "siconos_err");
+    table += line;
     for (const std::string& s : solvers) {
         FrictionRun run;
         if (s == "nsgs") {
@@ -76,8 +85,9 @@ int cmd_friction_solve(const Args& args)
             run = siconos_fc3d_solve(problem, s.substr(8), max_iterations, tol, time_limit);
         }
         const double siconos_scaled = siconos_relative_error(problem, run.r);
-        std::printf("%-14s %-15s %8ld %10.4f %12.3e %12.3e\n", s.c_str(), run.status.c_str(), run.iterations,
-                    run.seconds, run.error, siconos_scaled);
+        std::snprintf(line, sizeof line, "%-14s %-15s %8ld %10.4f %12.3e %12.3e\n", s.c_str(), run.status.c_str(),
+                      run.iterations, run.seconds, run.error, siconos_scaled);
+        table += line;
         nlohmann::json row = {{"solver", s},
                               {"status", run.status},
                               {"iterations", run.iterations},
@@ -88,6 +98,7 @@ int cmd_friction_solve(const Args& args)
         out["runs"].push_back(row);
     }
     if (cl.has("--json")) write_json_atomic(cl.path("--json"), out);
+    std::cout << table;
     return 0;
 }
 

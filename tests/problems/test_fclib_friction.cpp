@@ -134,6 +134,33 @@ TEST(FclibFriction, HostileFrictionalFilesEndInExitTwoNamingTheField)
                          "problems only\n");
 }
 
+TEST(FclibFriction, NsgsRefusesABlockThatIsNotPositiveDefiniteWithoutPartialOutput)
+{
+    if (cb::fclib_version().empty()) GTEST_SKIP() << "FCLIB import not built (libfclib-dev missing)";
+    const fs::path dir = cb::test::make_test_work_dir("friction_not_pd");
+    const fs::path file = dir / "one.hdf5";
+    {
+        cb::test::Hdf5Edit f(file.string(), true);  // one contact, W = diag(-1, 1, 1) as CSR
+        f.put_ints("/fclib_local/spacedim", {3});
+        f.put_ints("/fclib_local/W/nzmax", {3});
+        f.put_ints("/fclib_local/W/m", {3});
+        f.put_ints("/fclib_local/W/n", {3});
+        f.put_ints("/fclib_local/W/nz", {-2});
+        f.put_ints("/fclib_local/W/p", {0, 1, 2, 3});
+        f.put_ints("/fclib_local/W/i", {0, 1, 2});
+        f.put_reals("/fclib_local/W/x", {-1.0, 1.0, 1.0});
+        f.put_reals("/fclib_local/vectors/q", {-1.0, 0.0, 0.0});
+        f.put_reals("/fclib_local/vectors/mu", {0.5});
+    }
+    const cb::test::Output o =
+        run_captured(cb::test::contactbench_binary() + " friction-solve '" + file.string() + "' --solver nsgs", dir);
+    EXPECT_EQ(o.status, 2);
+    EXPECT_EQ(o.out, "");
+    EXPECT_EQ(o.err, "contactbench friction-solve: error: " + file.string() +
+                         ": W: the diagonal block of contact 0 is not positive definite (smallest eigenvalue of its "
+                         "symmetric part -1.000000): nsgs needs each one-contact problem to have a unique solution\n");
+}
+
 TEST(FclibFriction, CommandPrintsTheTableAndWritesJson)
 {
     if (cb::fclib_version().empty()) GTEST_SKIP() << "FCLIB import not built (libfclib-dev missing)";
