@@ -21,6 +21,7 @@ int cmd_report(const Args& args);  // issue 46: the HTML report of a results fol
 int cmd_compare(const Args& args);
 int cmd_generate(const Args& args);
 int cmd_solvers(const Args& args);
+int cmd_friction_solve(const Args& args);  // issue 48: FCLIB local problems with friction
 int cmd_version(const Args& args);
 // Slurm job arrays (issue 19).
 int cmd_cluster(const Args& args);

@@ -45,6 +45,12 @@ Qp read_fclib_global(const std::string& path, SnapshotExtras* extras, const Fcli
     return read_fclib(path, extras, options);
 }
 
+FrictionLocal read_fclib_local_friction(const std::string& path)
+{
+    read_fclib(path);
+    return {};
+}
+
 std::string fclib_kind(const std::string&) { return ""; }
 
 nlohmann::json describe_fclib(const std::string& path)
@@ -748,6 +754,35 @@ Qp read_fclib_global(const std::string& path, SnapshotExtras* extras, const Fcli
     Qp qp = read_global(file, extras, options);
     validate_qp(path + ": /fclib_global as the QP", qp);
     return qp;
+}
+
+FrictionLocal read_fclib_local_friction(const std::string& path)
+{
+    FclibReader file(path);
+    const std::string L = "/fclib_local";
+    if (!file.exists(L)) {
+        if (file.exists("/fclib_global"))
+            file.fail(L, "missing: this is an fclib_global problem; friction-solve takes fclib_local problems only");
+        file.fail(L, "missing: not an HDF5 file with an FCLIB local problem");
+    }
+    const long long d = spacedim_of(file, L + "/spacedim");
+    if (d != 3) file.fail(L + "/spacedim", "is 2: only 3-D frictional problems (spacedim 3) are solved");
+    for (const char* mixed : {"/V", "/R"})
+        if (file.exists(L + mixed) && file.integer(L + mixed + "/n") != 0)
+            file.fail(L + mixed, "equality constraints (a mixed problem) are not supported");
+    const SparseSizes ws = read_sizes(file, L + "/W");
+    if (ws.m != ws.n) file.fail(L + "/W", "not square: m = " + std::to_string(ws.m) + ", n = " + std::to_string(ws.n));
+    if (ws.m == 0) file.fail(L + "/W/n", "the problem has no contacts (n = 0)");
+    if (ws.m % 3 != 0) file.fail(L + "/W/n", std::to_string(ws.m) + " rows: not 3 per contact (spacedim 3)");
+    const std::vector<double> q = file.reals(L + "/vectors/q", {ws.m}, L + "/W/m");
+    const std::vector<double> mu = file.reals(L + "/vectors/mu", {ws.m / 3}, L + "/W/m / spacedim", false);
+    check_mu(file, L + "/vectors/mu", mu, true, "fclib_local");
+    FrictionLocal problem;
+    problem.W = read_matrix(file, L + "/W", ws);
+    problem.q = Eigen::Map<const Vec>(q.data(), Eigen::Index(q.size()));
+    problem.mu = Eigen::Map<const Vec>(mu.data(), Eigen::Index(mu.size()));
+    problem.name = path;
+    return problem;
 }
 
 std::string fclib_kind(const std::string& path)

@@ -25,6 +25,7 @@
 /// Built only when CMake finds pkg-config `fclib`; otherwise every function throws InputError
 /// saying so.
 #include "problems/qpsnap.hpp"
+#include "solvers/friction_problem.hpp"
 
 #include <string>
 
@@ -49,6 +50,11 @@ Qp read_fclib(const std::string& path, SnapshotExtras* extras = nullptr, const F
 
 /// read_fclib for a file that must hold an `fclib_global` problem.
 Qp read_fclib_global(const std::string& path, SnapshotExtras* extras = nullptr, const FclibReadOptions& options = {});
+
+/// Reads an `fclib_local` problem as the frictional problem it is (W, q, mu; friction kept), for
+/// the frictional solvers (friction-solve). Same hostile-file rules as read_fclib: spacedim must
+/// be 3, W square with 3 rows per contact, q of its size, every mu finite and >= 0, no V/R.
+FrictionLocal read_fclib_local_friction(const std::string& path);
 
 /// "fclib_global", "fclib_local" or "" for an HDF5 file holding neither (or when not built).
 /// Opens no external file; throws InputError only when the file cannot be opened as HDF5.
