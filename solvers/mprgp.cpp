@@ -9,6 +9,7 @@
 
 #include "solvers/a_product.hpp"
 #include "solvers/accuracy.hpp"
+#include "solvers/accuracy_rows.hpp"
 #include "solvers/decouple.hpp"
 #include "solvers/ichol.hpp"
 #include "solvers/mprgp_deflation.hpp"
@@ -372,7 +373,8 @@ void MprgpRun::evaluate_rows()
     // no DOF), never as ||g||^2 minus the active part: that difference cancels catastrophically
     // when the active rows carry almost all of g near the solution.
     double beta2 = 0.0, pb2 = m_gg_out, phi2 = m_gg_out, ptp_corr = 0.0;
-    double stat = m_ginf_free, primal = 0.0, compl_ = 0.0, gap = 0.0, pg_rows = 0.0;
+    double stat = m_ginf_free, pg_rows = 0.0;
+    RowParts rows;  // the accuracy measure's row parts
     bool infeasible = false;
     long active_count = 0;
     for (Eigen::Index i = 0; i < m_m; ++i) {
@@ -409,12 +411,7 @@ void MprgpRun::evaluate_rows()
             pg_rows += m_p[inner[k]] * r_phi;
             stat = std::max(stat, std::abs(r_pb) * m_scale.inv_diag[inner[k]]);
         }
-        // The accuracy measure's row parts (solvers/accuracy.hpp): lengths along the unit normal.
-        const double inv_norm = m_scale.inv_row_norm[i];
-        primal = std::max(primal, (m_c[i] - jx) * inv_norm);
-        compl_ =
-            std::max(compl_, std::min(lambda * m_scale.length_per_multiplier[i], std::abs(jx - m_c[i]) * inv_norm));
-        if (inv_norm > 0.0) gap += std::abs(lambda * (jx - m_c[i]));
+        rows.add_row(m_c[i], jx - m_c[i], lambda, m_scale.inv_row_norm[i], m_scale.length_per_multiplier[i]);
     }
     m_beta2 = beta2;
     m_pg_rows = pg_rows;
@@ -423,8 +420,10 @@ void MprgpRun::evaluate_rows()
     m_native = std::sqrt(pb2);
     m_infeasible = infeasible;
     m_active_count = active_count;
-    const double face = std::max(std::max(stat, compl_) * m_scale.inv_length, gap * m_scale.inv_energy);
-    const double error = std::max(face, std::max(0.0, primal) * m_scale.inv_length);
+    const RowParts parts = rows.scaled(m_scale.inv_length, m_scale.inv_energy);
+    const double face =
+        std::max(std::max(stat * m_scale.inv_length, std::max(parts.dual, parts.complementarity)), parts.gap);
+    const double error = std::max(face, parts.primal);
     m_error = std::isfinite(error) ? error : std::numeric_limits<double>::infinity();
     m_face_error = std::isfinite(face) ? face : std::numeric_limits<double>::infinity();
 }

@@ -10,6 +10,7 @@
 
 #include "solvers/a_product.hpp"
 #include "solvers/accuracy.hpp"
+#include "solvers/accuracy_rows.hpp"
 #include "solvers/coupled_face_operators.hpp"
 #include "solvers/coupled_preconditioner.hpp"
 #include "solvers/mprgp_kernels.hpp"
@@ -533,15 +534,15 @@ void CoupledRun::evaluate(bool exact)
     double stat_phi = stat_free;
     for (int j : m_face_dofs) stat_phi = std::max(stat_phi, std::abs(m_phi[j]) * m_scale.inv_diag[j]);
     m_face_error = stat_phi * m_scale.inv_length;
-    m_primal = 0.0;
+    RowParts feasibility;
     for (Eigen::Index i = 0; i < m_m; ++i) {
         const double inv_norm = m_scale.inv_row_norm[i];
-        if (inv_norm == 0.0) {
-            if (!(m_c[i] <= 0.0)) m_primal = std::numeric_limits<double>::infinity();
-            continue;
-        }
-        m_primal = std::max(m_primal, std::max(m_c[i] - m_jx[i], 0.0) * inv_norm);
+        if (inv_norm == 0.0)
+            feasibility.add_zero_row(m_c[i]);
+        else
+            feasibility.add_primal(m_jx[i] - m_c[i], inv_norm);
     }
+    m_primal = feasibility.primal;
     // beta'beta = min over mu >= 0 of ||J_A'(nu - mu)||^2 <= its value at mu = max(nu, 0).
     for (Eigen::Index i = 0; i < m_m; ++i) m_q[i] = std::min(m_nu[i], 0.0);
     build_d(m_q);
@@ -605,19 +606,16 @@ void CoupledRun::chopped_gradient(Counters& cnt, bool solver_work)
         stat = std::max(stat, std::abs(r) * m_scale.inv_diag[j]);
         m_beta[j] = 0.0;  // all of m_beta is 0 again
     }
-    double dual = 0.0, comp = 0.0, gap = 0.0;
+    RowParts rows;  // the multiplier's parts; the primal part is evaluate's (m_primal)
     for (Eigen::Index i = 0; i < m_m; ++i) {
-        const double slack = m_jx[i] - m_c[i];
         const double inv_norm = m_scale.inv_row_norm[i];
-        if (inv_norm == 0.0) continue;
-        const double push = m_mu[i] * m_scale.length_per_multiplier[i];
-        dual = std::max(dual, std::max(-push, 0.0));
-        comp = std::max(comp, std::min(std::abs(push), std::abs(slack) * inv_norm));
-        gap += std::abs(m_mu[i] * slack);
+        if (inv_norm != 0.0) rows.add_multiplier(m_jx[i] - m_c[i], m_mu[i], inv_norm, m_scale.length_per_multiplier[i]);
     }
     m_native = std::sqrt(pb2);
-    const double error = std::max(std::max(std::max(stat, m_primal), std::max(dual, comp)) * m_scale.inv_length,
-                                  gap * m_scale.inv_energy);
+    const RowParts parts = rows.scaled(m_scale.inv_length, m_scale.inv_energy);
+    const double error =
+        std::max(std::max(std::max(stat, m_primal) * m_scale.inv_length, std::max(parts.dual, parts.complementarity)),
+                 parts.gap);
     m_error = std::isfinite(error) ? error : std::numeric_limits<double>::infinity();
     m_chopped_exact = true;
 }
