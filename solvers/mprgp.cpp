@@ -11,6 +11,7 @@
 #include "solvers/accuracy.hpp"
 #include "solvers/accuracy_rows.hpp"
 #include "solvers/decouple.hpp"
+#include "solvers/format_number.hpp"
 #include "solvers/ichol.hpp"
 #include "solvers/mprgp_deflation.hpp"
 #include "solvers/mprgp_kernels.hpp"
@@ -82,14 +83,6 @@ SolverEntry mprgp_entry()
 }
 
 namespace {
-
-std::string fmt(double v)
-{
-    std::ostringstream s;
-    s.precision(3);
-    s << std::scientific << v;
-    return s.str();
-}
 
 /// One solve: the workspace is allocated once, before the loop.
 class MprgpRun {
@@ -847,10 +840,10 @@ SolverResult MprgpRun::run()
     const std::string error =
         status == SolveStatus::CONVERGED
             ? std::string()
-            : "accuracy error " + fmt(std::max(m_error, m_scale.body_motion(m_x, m_lambda))) + ", ";
-    const std::string figures = error + "||phi+beta|| " + fmt(m_native) + "; " + std::to_string(m_cnt.cg_steps) +
-                                " cg, " + std::to_string(m_cnt.expansion_steps) + " expansion, " +
-                                std::to_string(m_cnt.proportioning_steps) + " proportioning steps";
+            : "accuracy error " + format_e(std::max(m_error, m_scale.body_motion(m_x, m_lambda)), 3) + ", ";
+    const std::string figures = error + "||phi+beta|| " + format_e(m_native, 3) + "; " +
+                                std::to_string(m_cnt.cg_steps) + " cg, " + std::to_string(m_cnt.expansion_steps) +
+                                " expansion, " + std::to_string(m_cnt.proportioning_steps) + " proportioning steps";
     const std::string detail = !m_loop.owns(status) ? "mprgp: not converged: " + why + " (" + figures + ")"
                                                     : (why.empty() ? "" : why + "; ") + figures;
     result.x = m_x;

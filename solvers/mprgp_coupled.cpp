@@ -13,6 +13,7 @@
 #include "solvers/accuracy_rows.hpp"
 #include "solvers/coupled_face_operators.hpp"
 #include "solvers/coupled_preconditioner.hpp"
+#include "solvers/format_number.hpp"
 #include "solvers/mprgp_kernels.hpp"
 #include "solvers/row_components.hpp"
 #include "solvers/work_units.hpp"
@@ -99,14 +100,6 @@ SolverEntry mprgp_coupled_entry()
 }
 
 namespace {
-
-std::string fmt(double v)
-{
-    std::ostringstream s;
-    s.precision(3);
-    s << std::scientific << v;
-    return s.str();
-}
 
 /// Projected coordinate-descent sweeps tried on the chopped problem's upper bound before its LCP.
 constexpr int BOUND_SWEEPS = 8;
@@ -1068,7 +1061,8 @@ SolverResult CoupledRun::run()
     // converged run's message already states it.
     std::string detail = "safeguard firings " + std::to_string(m_cnt.safeguard_steps);
     if (status != SolveStatus::CONVERGED)
-        detail = "accuracy error " + fmt(std::max(m_error, m_scale.body_motion(original_x(m_x), m_mu))) + ", " + detail;
+        detail = "accuracy error " + format_e(std::max(m_error, m_scale.body_motion(original_x(m_x), m_mu)), 3) + ", " +
+                 detail;
     if (!m_loop.owns(status)) detail = "mprgp-coupled: not converged: " + why + " (" + detail + ")";
     if (m_ops->lcp_failures() > 0)
         detail += "; " + std::to_string(m_ops->lcp_failures()) + " LCP solves missed their tolerance";
