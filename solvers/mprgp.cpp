@@ -179,6 +179,7 @@ private:
     DecoupledRows m_rows;
     Vec m_dinv;
     bool m_ichol = false;
+    bool m_precond_expansion = false;  // expansion = precond, resolved at setup
     IncompleteCholeskyPreconditioner m_ic;
     std::vector<char> m_face_factored;  // active set the ichol factor was built for
     bool m_face_factor_failed = false;
@@ -505,7 +506,7 @@ bool MprgpRun::expansion()
         refresh_gradient();
     }
     active_rows(m_J, m_c, m_rows, m_x, m_active);
-    if (m_st.expansion == "precond") {
+    if (m_precond_expansion) {
         // The preconditioned free gradient with its exact step: on stiff problems alpha_bar =
         // 2/||A|| moves the soft DOFs by almost nothing, so the face grows by a few rows per
         // expansion; this step reaches the rows the CG chain was heading for.
@@ -595,6 +596,7 @@ SolverResult MprgpRun::run()
         }
     }
     m_ichol = m_st.precond == "ichol";
+    m_precond_expansion = m_st.expansion == "precond";
     if (m_st.deflation == "rigid") {
         m_deflate = m_defl.build(m_A, m_J, m_qp.x0, RigidDeflation::SLOW_RAYLEIGH);
         m_cnt.a_products += m_defl.build_products();
