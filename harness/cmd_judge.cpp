@@ -8,6 +8,7 @@
 #include "problems/format_sniff.hpp"
 #include "problems/qpsnap.hpp"
 #include "problems/solution_io.hpp"
+#include "solvers/format_number.hpp"
 
 #include <cstdio>
 #include <filesystem>
@@ -24,13 +25,6 @@ const char* const USAGE =
     "                    [--length-scale L]\n"
     "  SOLUTION: a folder with x.{mtx,npy,txt} and optionally lambda.{mtx,npy,txt} (solve --save-solution),\n"
     "            or one file holding x: .npy, .mtx, or plain text (numbers separated by white space)";
-
-std::string sci(double v)
-{
-    char buffer[32];
-    std::snprintf(buffer, sizeof(buffer), "%.3g", v);
-    return buffer;
-}
 
 }  // namespace
 
@@ -79,23 +73,23 @@ int cmd_judge(const Args& args)
                                              : "; lambda fitted (the given one missed tol, the fit did better)")
                 : "")
         << "\n";
-    out << "error       " << sci(j.accuracy.max()) << " of the scene size l = " << sci(j.scale.length) << " ("
-        << j.scale.length_source << "); stationarity " << sci(j.accuracy.stationarity) << ", primal "
-        << sci(j.accuracy.primal) << ", dual " << sci(j.accuracy.dual) << ", complementarity "
-        << sci(j.accuracy.complementarity) << ", gap " << sci(j.accuracy.gap) << "\n";
+    out << "error       " << format_g(j.accuracy.max(), 3) << " of the scene size l = " << format_g(j.scale.length, 3)
+        << " (" << j.scale.length_source << "); stationarity " << format_g(j.accuracy.stationarity, 3) << ", primal "
+        << format_g(j.accuracy.primal, 3) << ", dual " << format_g(j.accuracy.dual, 3) << ", complementarity "
+        << format_g(j.accuracy.complementarity, 3) << ", gap " << format_g(j.accuracy.gap, 3) << "\n";
     out << "units       stationarity, primal, dual, complementarity: lengths / l; gap: energy / (d_ref l^2), d_ref "
-        << sci(j.scale.stiffness) << "\n";
-    out << "verdict     " << (j.meets_tol ? "converged" : "not converged") << " at tol " << sci(j.tol) << " (e "
+        << format_g(j.scale.stiffness, 3) << "\n";
+    out << "verdict     " << (j.meets_tol ? "converged" : "not converged") << " at tol " << format_g(j.tol, 3) << " (e "
         << (j.meets_tol ? "<=" : ">") << " tol)\n";
     if (!j.status.empty()) {
         out << "status      " << j.status << " (with the run's record " << options.record_path << ")";
-        if (j.have_solved) out << "; error on the problem it solved " << sci(j.accuracy_solved.max());
+        if (j.have_solved) out << "; error on the problem it solved " << format_g(j.accuracy_solved.max(), 3);
         out << "\n";
     }
-    out << "objective   " << std::setprecision(10) << j.objective << ", violation " << sci(j.violation) << "\n";
+    out << "objective   " << std::setprecision(10) << j.objective << ", violation " << format_g(j.violation, 3) << "\n";
     if (j.reference.is_object() && j.reference["objective"].is_number())
         out << "reference   F* " << std::setprecision(10) << j.reference["objective"].get<double>() << ", energy gap "
-            << sci(j.energy_gap) << " (|F - F*| / (d_ref l^2))\n";
+            << format_g(j.energy_gap, 3) << " (|F - F*| / (d_ref l^2))\n";
     else
         out << "reference   none cached (a suite with \"reference\": true computes one)\n";
     std::cout << out.str();

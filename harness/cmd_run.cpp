@@ -28,6 +28,7 @@
 #include "problems/format_sniff.hpp"
 #include "problems/output_folder.hpp"
 #include "problems/qpsnap.hpp"
+#include "solvers/format_number.hpp"
 #include "solvers/registry.hpp"
 
 #include <algorithm>
@@ -122,13 +123,6 @@ void clear_out_dir(const std::string& out)
         for (const auto& entry : fs::directory_iterator(runs))
             if (entry.path().extension() == ".json") fs::remove(entry.path(), ec);
     for (const char* name : TOP_FILES) fs::remove(fs::path(out) / name, ec);
-}
-
-std::string sci(double v)
-{
-    char buffer[32];
-    std::snprintf(buffer, sizeof(buffer), "%.2g", v);
-    return buffer;
 }
 
 /// Warm state of one label along a chain.
@@ -285,8 +279,9 @@ std::string progress_line(const std::string& prefix, const nlohmann::json& recor
 {
     std::string line = prefix + record["status"].get<std::string>();
     if (record["accuracy"]["max"].is_number()) {
-        line += " in " + record["iterations"].dump() + " it, accuracy " + sci(record["accuracy"]["max"].get<double>()) +
-                ", " + sci(record["time"]["total_s"].get<double>()) + " s";
+        line += " in " + record["iterations"].dump() + " it, accuracy " +
+                format_g(record["accuracy"]["max"].get<double>(), 2) + ", " +
+                format_g(record["time"]["total_s"].get<double>(), 2) + " s";
         if (!record.value("status_confirmed", true)) line += " (NOT CONFIRMED)";
     } else {
         line += ": " + record["message"].get<std::string>();

@@ -9,6 +9,7 @@
 #include "problems/format_sniff.hpp"
 #include "problems/output_folder.hpp"
 #include "problems/qpsnap.hpp"
+#include "solvers/format_number.hpp"
 #include "solvers/registry.hpp"
 
 #include <cstdio>
@@ -61,13 +62,6 @@ void print_solver_settings(std::ostream& out, const std::string& name)
     for (const auto& d : docs)
         out << "  " << std::left << std::setw(static_cast<int>(width) + 2) << (d.key + " [" + d.default_value + "]")
             << d.doc << "\n";
-}
-
-std::string sci(double v)
-{
-    char buffer[32];
-    std::snprintf(buffer, sizeof(buffer), "%.3g", v);
-    return buffer;
 }
 
 }  // namespace
@@ -147,19 +141,20 @@ int cmd_solve(const Args& args)
     if (!run.status_confirmed) out << "  NOT CONFIRMED by the accuracy measure";
     out << "\n";
     out << "iterations  " << run.result.iterations << ", A-products " << run.result.counters.a_products << "\n";
-    out << "error       " << sci(run.accuracy.max()) << " of the scene size l = " << sci(run.scale.length) << " ("
-        << run.scale.length_source << "); stationarity " << sci(run.accuracy.stationarity) << ", primal "
-        << sci(run.accuracy.primal) << ", dual " << sci(run.accuracy.dual) << ", complementarity "
-        << sci(run.accuracy.complementarity) << ", gap " << sci(run.accuracy.gap)
-        << (r["lambda_fitted"].get<bool>() ? ", lambda fitted" : "") << "; tol " << sci(r["accuracy_tol"].get<double>())
-        << "\n";
+    out << "error       " << format_g(run.accuracy.max(), 3)
+        << " of the scene size l = " << format_g(run.scale.length, 3) << " (" << run.scale.length_source
+        << "); stationarity " << format_g(run.accuracy.stationarity, 3) << ", primal "
+        << format_g(run.accuracy.primal, 3) << ", dual " << format_g(run.accuracy.dual, 3) << ", complementarity "
+        << format_g(run.accuracy.complementarity, 3) << ", gap " << format_g(run.accuracy.gap, 3)
+        << (r["lambda_fitted"].get<bool>() ? ", lambda fitted" : "") << "; tol "
+        << format_g(r["accuracy_tol"].get<double>(), 3) << "\n";
     if (r.contains("accuracy_solved"))
-        out << "solved QP   error " << sci(run.accuracy_solved.max()) << " on the "
+        out << "solved QP   error " << format_g(run.accuracy_solved.max(), 3) << " on the "
             << r["solved_problem"].get<std::string>() << " QP (" << run.m_solved << " of " << qp.m() << " rows)\n";
-    out << "objective   " << std::setprecision(10) << run.objective << ", violation " << sci(run.violation)
-        << ", native residual " << sci(run.result.native_residual) << "\n";
-    out << "time        setup " << sci(r["time"]["setup_s"].get<double>()) << " s, solve "
-        << sci(r["time"]["solve_s"].get<double>()) << " s";
+    out << "objective   " << std::setprecision(10) << run.objective << ", violation " << format_g(run.violation, 3)
+        << ", native residual " << format_g(run.result.native_residual, 3) << "\n";
+    out << "time        setup " << format_g(r["time"]["setup_s"].get<double>(), 3) << " s, solve "
+        << format_g(r["time"]["solve_s"].get<double>(), 3) << " s";
     if (options.repeat > 1) out << " (median of " << options.repeat << ")";
     out << "\n";
     if (run.nonfinite) out << "warning     NaN/Inf seen in an iterate\n";

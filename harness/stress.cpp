@@ -4,6 +4,7 @@
 #include "harness/results.hpp"
 #include "harness/runner.hpp"
 #include "harness/set_arguments.hpp"
+#include "solvers/format_number.hpp"
 #include "solvers/registry.hpp"
 
 #include <algorithm>
@@ -294,14 +295,8 @@ std::pair<StressRow, json> run_isolated(const Qp& qp, const StressCase& c, const
     }
 }
 
-std::string format_number(double v)
-{
-    if (std::isnan(v)) return "nan";
-    if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
-    std::ostringstream s;
-    s << std::setprecision(6) << v;
-    return s.str();
-}
+/// The stress tables print NaN as nan whatever its sign bit (printf writes -nan for x86's default NaN).
+std::string csv_number(double v) { return std::isnan(v) ? "nan" : format_g(v); }
 
 std::string csv_field(const std::string& s)
 {
@@ -338,13 +333,7 @@ std::string short_status(const StressRow& r)
     return it == names.end() ? r.status : it->second;
 }
 
-std::string sci(double v)
-{
-    if (!std::isfinite(v)) return format_number(v);
-    std::ostringstream s;
-    s << std::scientific << std::setprecision(1) << v;
-    return s.str();
-}
+std::string sci(double v) { return std::isnan(v) ? "nan" : format_e(v, 1); }
 
 std::string md_cell(const std::string& s)
 {
@@ -446,13 +435,12 @@ std::string stability_csv(const std::vector<StressRow>& rows)
          "message,family,n,m,criterion,m_solved,solver_status,accuracy_solved,primal,energy_gap\n";
     for (const StressRow& r : rows) {
         s << csv_field(r.solver) << ',' << csv_field(r.case_id) << ',' << r.severity << ',' << r.status << ','
-          << format_number(r.accuracy) << ',' << format_number(r.tol) << ',' << format_number(r.violation) << ','
-          << (r.nonfinite ? "true" : "false") << ',' << (r.monotone ? "true" : "false") << ','
-          << format_number(r.time_s) << ',' << r.iterations << ',' << (r.status_confirmed ? "true" : "false") << ','
-          << csv_field(r.message) << ',' << csv_field(r.family) << ',' << r.n << ',' << r.m << ','
-          << csv_field(r.criterion) << ',' << r.m_solved << ',' << csv_field(r.solver_status) << ','
-          << format_number(r.accuracy_solved) << ',' << format_number(r.primal) << ',' << format_number(r.energy_gap)
-          << '\n';
+          << csv_number(r.accuracy) << ',' << csv_number(r.tol) << ',' << csv_number(r.violation) << ','
+          << (r.nonfinite ? "true" : "false") << ',' << (r.monotone ? "true" : "false") << ',' << csv_number(r.time_s)
+          << ',' << r.iterations << ',' << (r.status_confirmed ? "true" : "false") << ',' << csv_field(r.message) << ','
+          << csv_field(r.family) << ',' << r.n << ',' << r.m << ',' << csv_field(r.criterion) << ',' << r.m_solved
+          << ',' << csv_field(r.solver_status) << ',' << csv_number(r.accuracy_solved) << ',' << csv_number(r.primal)
+          << ',' << csv_number(r.energy_gap) << '\n';
     }
     return s.str();
 }

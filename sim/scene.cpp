@@ -3,6 +3,7 @@
 #include "problems/io_util.hpp"
 #include "sim/mesh_io.hpp"
 #include "sim/tetrahedralize.hpp"
+#include "solvers/format_number.hpp"
 
 #include <cstdio>
 #include <cstdlib>
@@ -55,7 +56,8 @@ public:
         if (!v->is_number()) fail(key, "expected a number, got " + json_type(*v));
         const double x = v->get<double>();
         if (!(x > min_exclusive) || !(x <= max_inclusive))
-            fail(key, "must be in (" + fmt(min_exclusive) + ", " + fmt(max_inclusive) + "], got " + fmt(x));
+            fail(key,
+                 "must be in (" + format_g(min_exclusive) + ", " + format_g(max_inclusive) + "], got " + format_g(x));
         return x;
     }
     long integer(const std::string& key, long fallback, long min_inclusive, long max_inclusive = 1L << 40)
@@ -131,12 +133,6 @@ public:
     }
 
 private:
-    static std::string fmt(double x)
-    {
-        char buf[64];
-        std::snprintf(buf, sizeof buf, "%g", x);
-        return buf;
-    }
     const nlohmann::json& m_j;
     std::string m_file, m_ptr;
     std::set<std::string> m_read;

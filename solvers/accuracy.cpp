@@ -1,5 +1,6 @@
 #include "solvers/accuracy.hpp"
 #include "solvers/a_product.hpp"
+#include "solvers/accuracy_rows.hpp"
 
 #include <Eigen/SparseCholesky>
 #include <limits>
@@ -185,30 +186,24 @@ AccuracyParts accuracy_from_gradient(const QpView& qp, const AccuracyScale& scal
     const Eigen::Index m = qp.m();
     const bool has_lambda = m > 0 && lambda.size() == m;
     const Vec r = has_lambda ? Vec(g - qp.J.transpose() * lambda) : g;
-    double primal = 0.0, dual = 0.0, comp = 0.0, gap = 0.0;
+    RowParts rows;
     for (Eigen::Index i = 0; i < m; ++i) {
         double jx = 0.0;
         for (SpMat::InnerIterator it(qp.J, i); it; ++it) jx += it.value() * x[it.col()];
         const double slack = jx - qp.c[i];
         const double inv_norm = scale.inv_row_norm[i];
         if (inv_norm == 0.0) {
-            // A zero row: J_i x = 0 whatever x, so it holds iff c_i <= 0, and exerts no force.
-            if (!(qp.c[i] <= 0.0)) primal = INF;
+            rows.add_zero_row(qp.c[i]);
             continue;
         }
-        // std::max(-slack, 0.0), not (0.0, -slack): the first argument is returned when the comparison
-        // fails, so a NaN slack stays NaN and sanitize makes it INF (a NaN point is not feasible).
-        primal = std::max(primal, sanitize(std::max(-slack, 0.0) * inv_norm));
-        if (!has_lambda) continue;
-        const double push = lambda[i] * scale.length_per_multiplier[i];
-        dual = std::max(dual, sanitize(std::max(-push, 0.0)));
-        comp = std::max(comp, sanitize(std::min(std::abs(push), std::abs(slack) * inv_norm)));
-        gap += std::abs(lambda[i] * slack);
+        rows.add_primal(slack, inv_norm);
+        if (has_lambda) rows.add_multiplier(slack, lambda[i], inv_norm, scale.length_per_multiplier[i]);
     }
-    e.primal = primal * scale.inv_length;
-    e.dual = dual * scale.inv_length;
-    e.complementarity = comp * scale.inv_length;
-    e.gap = sanitize(gap * scale.inv_energy);
+    const RowParts parts = rows.scaled(scale.inv_length, scale.inv_energy);
+    e.primal = parts.primal;
+    e.dual = parts.dual;
+    e.complementarity = parts.complementarity;
+    e.gap = parts.gap;
     e.stationarity = scale.stationarity(r, x, has_lambda ? lambda : Vec(0));
     return e;
 }

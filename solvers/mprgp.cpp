@@ -9,7 +9,9 @@
 
 #include "solvers/a_product.hpp"
 #include "solvers/accuracy.hpp"
+#include "solvers/accuracy_rows.hpp"
 #include "solvers/decouple.hpp"
+#include "solvers/format_number.hpp"
 #include "solvers/ichol.hpp"
 #include "solvers/mprgp_deflation.hpp"
 #include "solvers/mprgp_kernels.hpp"
@@ -81,14 +83,6 @@ SolverEntry mprgp_entry()
 }
 
 namespace {
-
-std::string fmt(double v)
-{
-    std::ostringstream s;
-    s.precision(3);
-    s << std::scientific << v;
-    return s.str();
-}
 
 /// One solve: the workspace is allocated once, before the loop.
 class MprgpRun {
@@ -173,6 +167,7 @@ private:
     DecoupledRows m_rows;
     Vec m_dinv;
     bool m_ichol = false;
+    bool m_precond_expansion = false;  // expansion = precond, resolved at setup
     IncompleteCholeskyPreconditioner m_ic;
     std::vector<char> m_face_factored;  // active set the ichol factor was built for
     bool m_face_factor_failed = false;
@@ -360,7 +355,8 @@ void MprgpRun::evaluate_rows()
     // no DOF), never as ||g||^2 minus the active part: that difference cancels catastrophically
     // when the active rows carry almost all of g near the solution.
     double beta2 = 0.0, pb2 = m_gg_out, phi2 = m_gg_out, ptp_corr = 0.0;
-    double stat = m_ginf_free, primal = 0.0, compl_ = 0.0, gap = 0.0, pg_rows = 0.0;
+    double stat = m_ginf_free, pg_rows = 0.0;
+    RowParts rows;  // the accuracy measure's row parts
     bool infeasible = false;
     long active_count = 0;
     for (Eigen::Index i = 0; i < m_m; ++i) {
@@ -397,12 +393,7 @@ void MprgpRun::evaluate_rows()
             pg_rows += m_p[inner[k]] * r_phi;
             stat = std::max(stat, std::abs(r_pb) * m_scale.inv_diag[inner[k]]);
         }
-        // The accuracy measure's row parts (solvers/accuracy.hpp): lengths along the unit normal.
-        const double inv_norm = m_scale.inv_row_norm[i];
-        primal = std::max(primal, (m_c[i] - jx) * inv_norm);
-        compl_ =
-            std::max(compl_, std::min(lambda * m_scale.length_per_multiplier[i], std::abs(jx - m_c[i]) * inv_norm));
-        if (inv_norm > 0.0) gap += std::abs(lambda * (jx - m_c[i]));
+        rows.add_row(m_c[i], jx - m_c[i], lambda, m_scale.inv_row_norm[i], m_scale.length_per_multiplier[i]);
     }
     m_beta2 = beta2;
     m_pg_rows = pg_rows;
@@ -411,8 +402,10 @@ void MprgpRun::evaluate_rows()
     m_native = std::sqrt(pb2);
     m_infeasible = infeasible;
     m_active_count = active_count;
-    const double face = std::max(std::max(stat, compl_) * m_scale.inv_length, gap * m_scale.inv_energy);
-    const double error = std::max(face, std::max(0.0, primal) * m_scale.inv_length);
+    const RowParts parts = rows.scaled(m_scale.inv_length, m_scale.inv_energy);
+    const double face =
+        std::max(std::max(stat * m_scale.inv_length, std::max(parts.dual, parts.complementarity)), parts.gap);
+    const double error = std::max(face, parts.primal);
     m_error = std::isfinite(error) ? error : std::numeric_limits<double>::infinity();
     m_face_error = std::isfinite(face) ? face : std::numeric_limits<double>::infinity();
 }
@@ -501,7 +494,7 @@ bool MprgpRun::expansion()
         refresh_gradient();
     }
     active_rows(m_J, m_c, m_rows, m_x, m_active);
-    if (m_st.expansion == "precond") {
+    if (m_precond_expansion) {
         // The preconditioned free gradient with its exact step: on stiff problems alpha_bar =
         // 2/||A|| moves the soft DOFs by almost nothing, so the face grows by a few rows per
         // expansion; this step reaches the rows the CG chain was heading for.
@@ -591,6 +584,7 @@ SolverResult MprgpRun::run()
         }
     }
     m_ichol = m_st.precond == "ichol";
+    m_precond_expansion = m_st.expansion == "precond";
     if (m_st.deflation == "rigid") {
         m_deflate = m_defl.build(m_A, m_J, m_qp.x0, RigidDeflation::SLOW_RAYLEIGH);
         m_cnt.a_products += m_defl.build_products();
@@ -837,10 +831,10 @@ SolverResult MprgpRun::run()
     const std::string error =
         status == SolveStatus::CONVERGED
             ? std::string()
-            : "accuracy error " + fmt(std::max(m_error, m_scale.body_motion(m_x, m_lambda))) + ", ";
-    const std::string figures = error + "||phi+beta|| " + fmt(m_native) + "; " + std::to_string(m_cnt.cg_steps) +
-                                " cg, " + std::to_string(m_cnt.expansion_steps) + " expansion, " +
-                                std::to_string(m_cnt.proportioning_steps) + " proportioning steps";
+            : "accuracy error " + format_e(std::max(m_error, m_scale.body_motion(m_x, m_lambda)), 3) + ", ";
+    const std::string figures = error + "||phi+beta|| " + format_e(m_native, 3) + "; " +
+                                std::to_string(m_cnt.cg_steps) + " cg, " + std::to_string(m_cnt.expansion_steps) +
+                                " expansion, " + std::to_string(m_cnt.proportioning_steps) + " proportioning steps";
     const std::string detail = !m_loop.owns(status) ? "mprgp: not converged: " + why + " (" + figures + ")"
                                                     : (why.empty() ? "" : why + "; ") + figures;
     result.x = m_x;

@@ -8,6 +8,7 @@
 #include "solvers/a_product.hpp"
 #include "solvers/accuracy.hpp"
 #include "solvers/bounds.hpp"
+#include "solvers/format_number.hpp"
 #include "solvers/mprgp_kernels.hpp"
 
 #include <cmath>
@@ -59,14 +60,6 @@ SolverEntry mprgp_box_entry()
 }
 
 namespace {
-
-std::string fmt(double v)
-{
-    std::ostringstream s;
-    s.precision(3);
-    s << std::scientific << v;
-    return s.str();
-}
 
 }  // namespace
 
@@ -281,7 +274,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
     result.counters = cnt;
     result.native_residual = native_residual;
     // The loop writes the reason of its own exits; a breakdown is the solver's word.
-    const std::string figures = "accuracy error " + fmt(error);
+    const std::string figures = "accuracy error " + format_e(error, 3);
     return loop.finish(result, status,
                        !loop.owns(status) ? "mprgp-box: not converged: " + why + " (" + figures + ")" : figures);
 }

@@ -10,8 +10,10 @@
 
 #include "solvers/a_product.hpp"
 #include "solvers/accuracy.hpp"
+#include "solvers/accuracy_rows.hpp"
 #include "solvers/coupled_face_operators.hpp"
 #include "solvers/coupled_preconditioner.hpp"
+#include "solvers/format_number.hpp"
 #include "solvers/mprgp_kernels.hpp"
 #include "solvers/row_components.hpp"
 #include "solvers/work_units.hpp"
@@ -65,13 +67,6 @@ const SettingsTable<MprgpCoupledSettings>& mprgp_coupled_settings_table()
             .integer("sparse_max_updates", &MprgpCoupledSettings::sparse_max_updates, 1, 100000000,
                      "operators = components, components above dense_max_rows: a face or LCP set that changes in "
                      "more rows than this is refactored; fewer are CHOLMOD row additions / deletions")
-            .choice("trial", &MprgpCoupledSettings::trial, {"chain", "project"},
-                    "a CG trial y that left the set with F(P(y)) < F(P(x)): chain (Alg. 2: the chain goes on from the "
-                    "infeasible y) | project: x = P(y) and the chain restarts on its face")
-            .choice("expansion", &MprgpCoupledSettings::expansion, {"paper", "precond", "feasible_step"},
-                    "paper: x = P(x - alpha_bar phi) (Alg. 1) | precond: x = P(x - a z) with z the preconditioned "
-                    "face direction and a = z'g / z'Az (one more A-product) | feasible_step: after a CG trial left "
-                    "the set from a feasible x, first the largest feasible step along p (Dostal), then paper's step")
             .choice(
                 "expansion_projection", &MprgpCoupledSettings::expansion_projection, {"face", "all"},
                 "the expansion's projections (of an infeasible chain iterate and of x - alpha_bar phi): face (onto "
@@ -98,14 +93,6 @@ SolverEntry mprgp_coupled_entry()
 }
 
 namespace {
-
-std::string fmt(double v)
-{
-    std::ostringstream s;
-    s.precision(3);
-    s << std::scientific << v;
-    return s.str();
-}
 
 /// Projected coordinate-descent sweeps tried on the chopped problem's upper bound before its LCP.
 constexpr int BOUND_SWEEPS = 8;
@@ -147,6 +134,38 @@ struct LcpPivotsByUse {
     nlohmann::json to_json() const
     {
         return {{"chopped", chopped}, {"reduced_gradient", reduced_gradient}, {"trial", trial}, {"iterate", iterate}};
+    }
+};
+
+/// The chopped gradient's LCP: solved, or deferred because bounds decided without it.
+struct ChoppedCounts {
+    long solved = 0;                     ///< chopped LCPs solved for the solver
+    long deferred = 0;                   ///< evaluations that stopped at the bounds
+    long proportional_by_bound = 0;      ///< proportionality decided by beta'beta's upper bound
+    long proportional_without_beta = 0;  ///< no negative face multiplier at a feasible x
+    long proportional_by_sweeps = 0;     ///< decided by the projected sweeps' bound
+    long bound_sweeps = 0;               ///< those sweeps, counted
+    nlohmann::json to_json() const
+    {
+        return {{"solved", solved},
+                {"deferred", deferred},
+                {"proportional_by_bound", proportional_by_bound},
+                {"proportional_without_beta", proportional_without_beta},
+                {"proportional_by_sweeps", proportional_by_sweeps},
+                {"bound_sweeps", bound_sweeps}};
+    }
+};
+
+/// The research counters of one run, in one place; they fill `info` and change no decision.
+struct ResearchStats {
+    ChainCounts chain;
+    LcpPivotsByUse lcp_by_use;
+    ChoppedCounts chopped;
+    void fill(nlohmann::json& info) const
+    {
+        info["chain"] = chain.to_json();
+        info["lcp_pivots_by_use"] = lcp_by_use.to_json();
+        info["chopped_lcp"] = chopped.to_json();
     }
 };
 
@@ -327,7 +346,7 @@ private:
         const long pivots_before = m_cnt.lcp_iterations;
         const long solved =
             m_ops->projection_multipliers(m_q, m_violated, m_lam, m_cnt, keep_face ? &m_active : nullptr);
-        m_lcp_by_use.iterate += m_cnt.lcp_iterations - pivots_before;
+        m_stats.lcp_by_use.iterate += m_cnt.lcp_iterations - pivots_before;
         if (solved == 0) return false;
         build_d(m_lam);
         for (int j : m_touched) m_x[j] += m_d[j];
@@ -455,8 +474,8 @@ private:
     /// phitilde'phi = phi'phi - lam'(J phi) / alpha_bar with lam of P(x - alpha_bar phi) (eq. 13).
     double reduced_free_gradient_dot();
     bool safeguard(double f_before, double& f_now);
-    /// @param cg_alpha  > 0 after a rejected CG trial from a feasible x (m_Ap, m_jp hold that trial)
-    bool expansion(double cg_alpha);
+    /// x = P(x - alpha_bar phi) (Alg. 1), from P(x) of an infeasible chain iterate.
+    bool expansion();
     bool proportioning();
 
     /// The preconditioned face direction z: m_z, or phi itself without a preconditioner.
@@ -484,8 +503,7 @@ private:
     const Vec* m_unscale;  // precond = scaled: D^-1/2 (x = D^-1/2 y), else null
     Vec m_x_out;           // original_x's result
     Counters m_cnt;
-    ChainCounts m_chain;
-    LcpPivotsByUse m_lcp_by_use;
+    ResearchStats m_stats;
     std::unique_ptr<CoupledFaceOperators> m_ops;
     std::unique_ptr<CoupledPreconditioner> m_precond;  // precond = ichol or deflation = rigid only
     bool m_jacobi = false;
@@ -497,10 +515,8 @@ private:
     std::vector<char> m_active, m_violated, m_mark;
     std::vector<int> m_touched;
     long m_last_drift = 0;
-    long m_feasible_half_steps = 0, m_projected_restarts = 0;
-    bool m_project_trials = false;
     bool m_keep_face = false;
-    double m_f_x = 0.0, m_corr_x = 0.0, m_cg_alpha = 0.0;
+    double m_f_x = 0.0, m_corr_x = 0.0;
     double m_zphi = 0.0, m_zap = 0.0;  // z'phi and z'Ap of face_gradient
     bool m_x_feasible = true;
     double m_native = 0.0, m_error = 0.0, m_face_error = 0.0, m_beta2 = 0.0, m_phi2 = 0.0;
@@ -513,8 +529,6 @@ private:
     Vec m_free_weight;             // the measure's D^-1 on DOFs no face row touches, 0 on m_face_dofs
     std::vector<int> m_face_dofs;
     bool m_face_dofs_known = false;
-    long m_chopped_solved = 0, m_chopped_deferred = 0, m_proportional_by_bound = 0, m_proportional_without_beta = 0;
-    long m_proportional_by_sweeps = 0, m_bound_sweeps = 0;
     Vec m_mu_bound, m_w_bound;
     SpMat m_gram;  // J J' (symmetric: row i is column i), for the proportioning test's sweeps
 };
@@ -534,15 +548,15 @@ void CoupledRun::evaluate(bool exact)
     double stat_phi = stat_free;
     for (int j : m_face_dofs) stat_phi = std::max(stat_phi, std::abs(m_phi[j]) * m_scale.inv_diag[j]);
     m_face_error = stat_phi * m_scale.inv_length;
-    m_primal = 0.0;
+    RowParts feasibility;
     for (Eigen::Index i = 0; i < m_m; ++i) {
         const double inv_norm = m_scale.inv_row_norm[i];
-        if (inv_norm == 0.0) {
-            if (!(m_c[i] <= 0.0)) m_primal = std::numeric_limits<double>::infinity();
-            continue;
-        }
-        m_primal = std::max(m_primal, std::max(m_c[i] - m_jx[i], 0.0) * inv_norm);
+        if (inv_norm == 0.0)
+            feasibility.add_zero_row(m_c[i]);
+        else
+            feasibility.add_primal(m_jx[i] - m_c[i], inv_norm);
     }
+    m_primal = feasibility.primal;
     // beta'beta = min over mu >= 0 of ||J_A'(nu - mu)||^2 <= its value at mu = max(nu, 0).
     for (Eigen::Index i = 0; i < m_m; ++i) m_q[i] = std::min(m_nu[i], 0.0);
     build_d(m_q);
@@ -564,7 +578,7 @@ void CoupledRun::evaluate(bool exact)
     m_beta2 = m_beta2_upper;
     m_native = std::sqrt(m_phi2 + m_beta2_upper);
     m_error = std::isfinite(error_lower) ? error_lower : std::numeric_limits<double>::infinity();
-    ++m_chopped_deferred;
+    ++m_stats.chopped.deferred;
 }
 
 void CoupledRun::chopped_gradient(Counters& cnt, bool solver_work)
@@ -577,8 +591,8 @@ void CoupledRun::chopped_gradient(Counters& cnt, bool solver_work)
             m_cnt.cholmod_factorizations += m_monitor_chopped.cholmod_factorizations;
             m_cnt.cholmod_solves += m_monitor_chopped.cholmod_solves;
             m_cnt.work_flops += m_monitor_chopped.work_flops;
-            m_lcp_by_use.chopped += m_monitor_chopped.lcp_iterations;
-            ++m_chopped_solved;
+            m_stats.lcp_by_use.chopped += m_monitor_chopped.lcp_iterations;
+            ++m_stats.chopped.solved;
             m_chopped_by_monitor = false;
         }
         return;
@@ -588,8 +602,8 @@ void CoupledRun::chopped_gradient(Counters& cnt, bool solver_work)
     const long pivots_before = cnt.lcp_iterations;
     m_ops->chopped_multipliers(m_q, m_nu, m_mu, cnt);
     if (solver_work) {
-        m_lcp_by_use.chopped += cnt.lcp_iterations - pivots_before;
-        ++m_chopped_solved;
+        m_stats.lcp_by_use.chopped += cnt.lcp_iterations - pivots_before;
+        ++m_stats.chopped.solved;
     }
     // beta = J_A'(nu - mu) lives on the face rows' DOFs (nu and mu are 0 off the face), so phi + beta =
     // g - J'mu differs from phi only there: ||phi + beta||^2 = phi'phi + sum beta_j (2 phi_j + beta_j)
@@ -606,19 +620,16 @@ void CoupledRun::chopped_gradient(Counters& cnt, bool solver_work)
         stat = std::max(stat, std::abs(r) * m_scale.inv_diag[j]);
         m_beta[j] = 0.0;  // all of m_beta is 0 again
     }
-    double dual = 0.0, comp = 0.0, gap = 0.0;
+    RowParts rows;  // the multiplier's parts; the primal part is evaluate's (m_primal)
     for (Eigen::Index i = 0; i < m_m; ++i) {
-        const double slack = m_jx[i] - m_c[i];
         const double inv_norm = m_scale.inv_row_norm[i];
-        if (inv_norm == 0.0) continue;
-        const double push = m_mu[i] * m_scale.length_per_multiplier[i];
-        dual = std::max(dual, std::max(-push, 0.0));
-        comp = std::max(comp, std::min(std::abs(push), std::abs(slack) * inv_norm));
-        gap += std::abs(m_mu[i] * slack);
+        if (inv_norm != 0.0) rows.add_multiplier(m_jx[i] - m_c[i], m_mu[i], inv_norm, m_scale.length_per_multiplier[i]);
     }
     m_native = std::sqrt(pb2);
-    const double error = std::max(std::max(std::max(stat, m_primal), std::max(dual, comp)) * m_scale.inv_length,
-                                  gap * m_scale.inv_energy);
+    const RowParts parts = rows.scaled(m_scale.inv_length, m_scale.inv_energy);
+    const double error =
+        std::max(std::max(std::max(stat, m_primal) * m_scale.inv_length, std::max(parts.dual, parts.complementarity)),
+                 parts.gap);
     m_error = std::isfinite(error) ? error : std::numeric_limits<double>::infinity();
     m_chopped_exact = true;
 }
@@ -628,7 +639,7 @@ bool CoupledRun::proportional_test(double gamma2)
     // No face multiplier negative: beta = 0, and at a feasible x phitilde'phi >= ||phitilde||^2 >= 0
     // (P is a projection onto a convex set), so the test holds without the projection of eq. (13).
     if (m_beta2_upper == 0.0 && m_x_feasible) {
-        ++m_proportional_without_beta;
+        ++m_stats.chopped.proportional_without_beta;
         return true;
     }
     const double reduced = reduced_free_gradient_dot();
@@ -636,11 +647,11 @@ bool CoupledRun::proportional_test(double gamma2)
     // beta'beta <= any ||J_A'(nu - mu)||^2 with mu >= 0 decides without the chopped LCP when the
     // bound passes. Tried first even when a monitor had mu computed: a monitor changes no decision.
     if (m_beta2_upper <= bound) {
-        ++m_proportional_by_bound;
+        ++m_stats.chopped.proportional_by_bound;
         return true;
     }
     if (projected_sweeps_bound(bound)) {
-        ++m_proportional_by_sweeps;
+        ++m_stats.chopped.proportional_by_sweeps;
         return true;
     }
     chopped_gradient(m_cnt, true);
@@ -678,7 +689,7 @@ bool CoupledRun::projected_sweeps_bound(double bound)
         double r2 = 0.0;
         for (Eigen::Index i = 0; i < m_m; ++i)
             if (m_active[static_cast<size_t>(i)]) r2 += (m_nu[i] - m_mu_bound[i]) * m_w_bound[i];
-        ++m_bound_sweeps;
+        ++m_stats.chopped.bound_sweeps;
         decided = r2 <= bound;
     }
     return decided;
@@ -692,7 +703,7 @@ double CoupledRun::reduced_free_gradient_dot()
     const long pivots_before = m_cnt.lcp_iterations;
     const long solved =
         m_ops->projection_multipliers(m_q, m_violated, m_lam, m_cnt, nullptr, ProjectionUse::REDUCED_GRADIENT);
-    m_lcp_by_use.reduced_gradient += m_cnt.lcp_iterations - pivots_before;
+    m_stats.lcp_by_use.reduced_gradient += m_cnt.lcp_iterations - pivots_before;
     if (solved == 0) return m_phi2;
     double lj = 0.0;
     for (Eigen::Index i = 0; i < m_m; ++i) lj += m_lam[i] * m_jphi[i];
@@ -715,51 +726,22 @@ bool CoupledRun::safeguard(double f_before, double& f_now)
     return true;
 }
 
-bool CoupledRun::expansion(double cg_alpha)
+bool CoupledRun::expansion()
 {
     const double f_before = m_f_x + m_corr_x;  // F(P(x))
-    if (m_st.expansion == "feasible_step" && m_x_feasible && cg_alpha > 0.0) {
-        // Dostal's half step: the largest feasible step along p first (F decreases on it, the
-        // trial's alpha being the line minimiser), so that the blocking row joins the face; the
-        // fixed step alpha_bar alone moves stiff DOFs by little and adds a row or two per expansion.
-        double step = cg_alpha;
-        for (Eigen::Index i = 0; i < m_m; ++i) {
-            if (m_active[static_cast<size_t>(i)] || !(m_s[i] > 0.0) || !(m_jp[i] > 0.0)) continue;
-            step = std::min(step, std::max(0.0, (m_jx[i] - m_c[i]) / m_jp[i]));
-        }
-        if (step > 0.0) {
-            m_x -= step * m_p;
-            m_g -= step * m_Ap;
-            ++m_feasible_half_steps;
-        }
-    }
     // y = P(x) of the infeasible chain iterate, g(y) = g + A J'lam; with `face` the chain's frozen
     // face stays active here too (the safeguard below keeps F(P(x)) as the bound).
     if (!m_x_feasible) project_x(false, m_keep_face);
     const std::vector<char> face_before = m_active;
-    restart(false, m_st.expansion == "precond");  // the face of P(x) and phi(P(x)); z only to step along it
-    double step = m_alpha_bar;
-    const Vec* dir = &m_phi;
-    if (m_st.expansion == "precond") {
-        // The face direction z with its exact step: alpha_bar = 2/||A|| moves the soft DOFs by
-        // almost nothing, so the face grows by a row or two per expansion; this step reaches
-        // the rows the CG chain was heading for (Alg. 3's safeguard still guarantees descent).
-        a_product(m_a_op, direction(), m_Ap);
-        ++m_cnt.a_products;
-        const double zaz = direction().dot(m_Ap), zg = direction().dot(m_phi);
-        if (zaz > 0.0 && zg > 0.0 && std::isfinite(zaz)) {
-            step = zg / zaz;
-            dir = &direction();
-        }
-    }
-    m_x -= step * *dir;
+    restart(false, false);  // the face of P(x) and phi(P(x)); z is not needed to step along phi
+    m_x -= m_alpha_bar * m_phi;
     project_x(false, m_keep_face);
     exact_gradient();
     double f_now = objective_from_gradient();
     ++m_cnt.expansion_steps;
     const bool ok = safeguard(f_before, f_now);
     restart(true);
-    if (m_active == face_before) ++m_chain.expansions_same_face;
+    if (m_active == face_before) ++m_stats.chain.expansions_same_face;
     return ok;
 }
 
@@ -808,7 +790,6 @@ SolverResult CoupledRun::run()
         return m_loop.finish(result, result.status);
     }
     m_jacobi = m_choice.name == "jacobi";
-    m_project_trials = m_st.trial == "project";
     m_keep_face = m_st.expansion_projection == "face";
     m_dinv = Vec::Ones(m_n);
     if (m_jacobi) {
@@ -949,45 +930,28 @@ SolverResult CoupledRun::run()
                 break;
             }
             const double alpha = m_zphi / pap;  // z'g = z'phi (z in null(J_A)), without cancellation
-            m_cg_alpha = alpha;
             const double df = -alpha * pg + 0.5 * alpha * alpha * pap;  // F(x - alpha p) - F(x)
             rows_times(m_p, m_jp);
             for (Eigen::Index i = 0; i < m_m; ++i) m_q[i] = m_c[i] - m_jx[i] + alpha * m_jp[i];
             ++m_cnt.projections;
             const long violated_rows = flag_violated(m_q, false);
             bool moved = violated_rows > 0;
-            if (!moved && m_last_drift > 0) ++m_chain.drift_only_trials;
+            if (!moved && m_last_drift > 0) ++m_stats.chain.drift_only_trials;
             double corr_y = 0.0;
             if (moved) {
                 const long pivots_before = m_cnt.lcp_iterations;
                 moved = m_ops->projection_multipliers(m_q, m_violated, m_lam, m_cnt, nullptr, ProjectionUse::TRIAL) > 0;
-                m_lcp_by_use.trial += m_cnt.lcp_iterations - pivots_before;
+                m_stats.lcp_by_use.trial += m_cnt.lcp_iterations - pivots_before;
             }
             if (moved) {
                 // F(y + d) - F(y) = d'(g - alpha Ap) + 1/2 d'Ad, d = J' lam sparse.
                 build_d(m_lam);
                 double dg = 0.0;
                 for (int j : m_touched) dg += m_d[j] * (m_g[j] - alpha * m_Ap[j]);
-                corr_y = dg + 0.5 * d_a_d();  // d is kept for the projected restart below
+                corr_y = dg + 0.5 * d_a_d();
             }
             const double delta = df + corr_y - m_corr_x;
             const bool accept = moved ? delta < 0.0 : delta <= 0.0;
-            if (accept && moved && m_project_trials) {
-                // trial=project: x = P(y) (feasible, F decreased) and the chain restarts on the face of
-                // P(y), which holds every row P moved at once; g(P(y)) = g(y) + A d, sparse.
-                m_x -= alpha * m_p;
-                m_g -= alpha * m_Ap;
-                for (int j : m_touched) m_x[j] += m_d[j];
-                add_a_d(m_g);
-                clear_d();
-                restart();
-                ++m_chain.accepted_infeasible_trials;
-                m_chain.violated_rows_accepted += violated_rows;
-                ++m_projected_restarts;
-                ++m_cnt.cg_steps;
-                last = StepKind::CG;
-                continue;
-            }
             clear_d();
             if (accept) {
                 face_gradient(true, &m_Ap, alpha);  // x -= alpha p, g -= alpha Ap, then phi and z
@@ -997,27 +961,27 @@ SolverResult CoupledRun::run()
                 m_corr_x = corr_y;
                 m_x_feasible = !moved;
                 if (moved) {
-                    ++m_chain.accepted_infeasible_trials;
-                    m_chain.violated_rows_accepted += violated_rows;
+                    ++m_stats.chain.accepted_infeasible_trials;
+                    m_stats.chain.violated_rows_accepted += violated_rows;
                 }
                 ++m_cnt.cg_steps;
                 last = StepKind::CG;
                 continue;
             }
-            ++(moved ? m_chain.rejected_infeasible_trials : m_chain.rejected_feasible_trials);
+            ++(moved ? m_stats.chain.rejected_infeasible_trials : m_stats.chain.rejected_feasible_trials);
             if (moved) {
-                m_chain.violated_rows_rejected += violated_rows;
-                m_chain.rejected_gain -= df;
-                m_chain.rejected_cost += corr_y;
+                m_stats.chain.violated_rows_rejected += violated_rows;
+                m_stats.chain.rejected_gain -= df;
+                m_stats.chain.rejected_cost += corr_y;
             }
             do_expansion = true;
         } else if (!m_x_feasible) {
-            ++(face_done ? m_chain.face_done_expansions : m_chain.infeasible_not_proportional);
+            ++(face_done ? m_stats.chain.face_done_expansions : m_stats.chain.infeasible_not_proportional);
             do_expansion = true;
         }
         bool ok = true;
         if (do_expansion) {
-            ok = expansion(proportional ? m_cg_alpha : 0.0);
+            ok = expansion();
             last = StepKind::EXPANSION;
         } else {
             if (!proportioning()) {
@@ -1052,27 +1016,18 @@ SolverResult CoupledRun::run()
                    {"precond", m_choice.name},
                    {"preconditioner", m_precond ? m_precond->stats() : nlohmann::json{{"precond", m_choice.name}}},
                    {"components", m_ops->stats()},
-                   {"chain", m_chain.to_json()},
-                   {"lcp_pivots_by_use", m_lcp_by_use.to_json()},
-                   {"chopped_lcp",
-                    {{"solved", m_chopped_solved},
-                     {"deferred", m_chopped_deferred},
-                     {"proportional_by_bound", m_proportional_by_bound},
-                     {"proportional_without_beta", m_proportional_without_beta},
-                     {"proportional_by_sweeps", m_proportional_by_sweeps},
-                     {"bound_sweeps", m_bound_sweeps}}},
-                   {"feasible_half_steps", m_feasible_half_steps},
-                   {"projected_restarts", m_projected_restarts},
                    {"lcp_failures", m_ops->lcp_failures()},
                    {"safeguard_firings", m_cnt.safeguard_steps},
                    {"dependent_rows", "handled by a shift 1e-12 of the unit-diagonal-scaled Gram matrices"}};
+    m_stats.fill(result.info);
     if (!m_choice.rule.empty()) result.info["precond_rule"] = m_choice.rule;
     // The loop writes the reason of its own exits; a breakdown is the solver's word.
     // The whole measure at the returned point (m_error leaves out the bodies' rigid motion); a
     // converged run's message already states it.
     std::string detail = "safeguard firings " + std::to_string(m_cnt.safeguard_steps);
     if (status != SolveStatus::CONVERGED)
-        detail = "accuracy error " + fmt(std::max(m_error, m_scale.body_motion(original_x(m_x), m_mu))) + ", " + detail;
+        detail = "accuracy error " + format_e(std::max(m_error, m_scale.body_motion(original_x(m_x), m_mu)), 3) + ", " +
+                 detail;
     if (!m_loop.owns(status)) detail = "mprgp-coupled: not converged: " + why + " (" + detail + ")";
     if (m_ops->lcp_failures() > 0)
         detail += "; " + std::to_string(m_ops->lcp_failures()) + " LCP solves missed their tolerance";

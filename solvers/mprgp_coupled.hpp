@@ -29,8 +29,6 @@ struct MprgpCoupledSettings {
     std::string operators = "components";  ///< components (per row-graph component) | global (one CHOLMOD problem)
     long dense_max_rows = 128;  ///< largest component with dense factors (larger: CHOLMOD; measured crossover 100-200)
     long sparse_max_updates = 64;     ///< larger set changes of a large component refactor (fewer: row updates)
-    std::string trial = "chain";      ///< chain (Alg. 2) | project (x = P(y), restart on its face)
-    std::string expansion = "paper";  ///< paper (x = P(x - alpha_bar phi)) | feasible_step (half step first)
     std::string expansion_projection = "face";  ///< face (the face rows stay equalities) | all (P of Alg. 1)
 
     static MprgpCoupledSettings from_json(const nlohmann::json& settings);

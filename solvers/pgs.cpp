@@ -1,6 +1,7 @@
 // Ref: Li et al., CGF 2015, eq. (2) (the dual LCP of the contact QP); ALGORITHMS.md §7.
 #include "solvers/pgs.hpp"
 #include "solvers/a_product.hpp"
+#include "solvers/accuracy_rows.hpp"
 #include "solvers/solve_loop.hpp"
 #include "solvers/work_units.hpp"
 
@@ -150,15 +151,15 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
     // The accuracy measure in dual space: stationarity is 0 at x(lambda), dual feasibility holds
     // (lambda >= 0); the row parts as in solvers/accuracy.cpp.
     auto dual_space_error = [&]() {
-        double primal = 0.0, comp = 0.0, gap = 0.0;
+        RowParts rows;
         for (Eigen::Index i = 0; i < m; ++i) {
             const double inv_norm = scale.inv_row_norm[i];
             if (inv_norm == 0.0) continue;  // zero rows: checked at the exact primal point
-            primal = std::max(primal, -w[i] * inv_norm);
-            comp = std::max(comp, std::min(lambda[i] * scale.length_per_multiplier[i], std::abs(w[i]) * inv_norm));
-            gap += std::abs(lambda[i] * w[i]);
+            rows.add_primal(w[i], inv_norm);
+            rows.add_multiplier(w[i], lambda[i], inv_norm, scale.length_per_multiplier[i]);
         }
-        return std::max(std::max(primal, comp) * scale.inv_length, gap * scale.inv_energy);
+        const RowParts e = rows.scaled(scale.inv_length, scale.inv_energy);
+        return std::max(std::max(e.primal, std::max(e.dual, e.complementarity)), e.gap);
     };
 
     double native = natural_residual();

@@ -1,0 +1,69 @@
+#pragma once
+/// The row parts of the accuracy measure (docs/accuracy.md), one constraint row at a time: the one
+/// home of that arithmetic. solvers/accuracy.cpp and the solvers' fused evaluations (mprgp,
+/// mprgp-coupled, pgs) call it, so a solver's own stop test and the harness's recomputation are the
+/// same code. Inline: it runs inside the solvers' per-row passes.
+///
+/// Per row i with slack s_i = J_i x - c_i, inv_norm = 1 / n_i and length_per_multiplier = n_i / k_i
+/// (AccuracyScale):
+///   primal           max(0, -s_i) / n_i
+///   dual             max(0, -lambda_i) n_i / k_i
+///   complementarity  min(|lambda_i| n_i / k_i, |s_i| / n_i)
+///   gap              |lambda_i s_i|        (summed over rows; the others are maxima)
+/// A new kind of row (a friction cone, say) adds its own add_* function here and, if it brings a
+/// new part, a member here and in AccuracyParts.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace cb {
+
+/// The row parts accumulated over rows, in the problem's units: primal, dual and complementarity
+/// are lengths, gap an energy. NaN reads as +inf (a NaN point is neither feasible nor
+/// complementary): std::max would drop a NaN second argument.
+struct RowParts {
+    double primal = 0.0;
+    double dual = 0.0;
+    double complementarity = 0.0;
+    double gap = 0.0;
+
+    static double sanitize(double v) { return std::isfinite(v) ? v : std::numeric_limits<double>::infinity(); }
+
+    /// A row with n_i = 0: J_i x = 0 whatever x, so it holds iff c_i <= 0; its multiplier exerts
+    /// no force (no dual, complementarity or gap part).
+    void add_zero_row(double c)
+    {
+        if (!(c <= 0.0)) primal = std::numeric_limits<double>::infinity();
+    }
+    /// The feasibility of a row with n_i > 0. std::max(-slack, 0.0) keeps a NaN slack (the first
+    /// argument is returned when the comparison fails) for sanitize to make +inf.
+    void add_primal(double slack, double inv_norm)
+    {
+        primal = std::max(primal, sanitize(std::max(-slack, 0.0) * inv_norm));
+    }
+    /// The multiplier's parts of a row with n_i > 0.
+    void add_multiplier(double slack, double lambda, double inv_norm, double length_per_multiplier)
+    {
+        const double push = lambda * length_per_multiplier;
+        dual = std::max(dual, sanitize(std::max(-push, 0.0)));
+        complementarity = std::max(complementarity, sanitize(std::min(std::abs(push), std::abs(slack) * inv_norm)));
+        gap += std::abs(lambda * slack);
+    }
+    /// Every part of row i (c = c_i tells a zero row's feasibility).
+    void add_row(double c, double slack, double lambda, double inv_norm, double length_per_multiplier)
+    {
+        if (inv_norm == 0.0) {
+            add_zero_row(c);
+            return;
+        }
+        add_primal(slack, inv_norm);
+        add_multiplier(slack, lambda, inv_norm, length_per_multiplier);
+    }
+    /// The parts in the measure's units (AccuracyParts): lengths / l, gap / (d_ref l^2).
+    RowParts scaled(double inv_length, double inv_energy) const
+    {
+        return {primal * inv_length, dual * inv_length, complementarity * inv_length, sanitize(gap * inv_energy)};
+    }
+};
+
+}  // namespace cb
