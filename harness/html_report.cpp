@@ -76,7 +76,7 @@ HtmlReportOutcome write_html_report(const std::string& folder)
     TempFolder temp("cb-report");
     const fs::path out = temp.path() / "stdout", err = temp.path() / "stderr";
     const ProgramOutcome run = run_program({PYTHON, "-m", "plots.html_report", fs::absolute(folder, ec).string()},
-                                           out.string(), err.string(), 600.0);
+                                           out.string(), err.string(), ProgramOptions{600.0});
     const std::string said = trimmed(read_all(err));
     if (run.failure().empty()) {
         outcome.written = true;
