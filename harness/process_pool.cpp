@@ -90,4 +90,12 @@ long concurrent_jobs(long jobs, bool suite_timed, bool chain, bool jobs_timed, s
     return jobs;
 }
 
+std::string oversubscription_warning(long jobs, long threads, long cores)
+{
+    if (cores <= 0 || jobs * threads <= cores) return "";
+    return "warning: " + std::to_string(jobs) + " job(s) at a time x " + std::to_string(threads) +
+           " thread(s) = " + std::to_string(jobs * threads) + " threads on " + std::to_string(cores) +
+           " core(s): runs share cores, so their times are slower than on a machine to themselves";
+}
+
 }  // namespace cb

@@ -42,4 +42,9 @@ namespace cb {
 /// a timed suite (its runs share no core) and for a chain (each job needs the previous one's state).
 long concurrent_jobs(long jobs, bool suite_timed, bool chain, bool jobs_timed, std::string& note);
 
+/// A warning when `jobs` runs at a time, each with up to `threads` threads (the solvers' common
+/// setting), ask for more than the machine's `cores`: their times then measure the sharing, not
+/// the solvers. Empty when they fit (or cores is unknown, 0).
+std::string oversubscription_warning(long jobs, long threads, long cores);
+
 }  // namespace cb

@@ -2,6 +2,7 @@
 
 #include "harness/blas_threads.hpp"
 #include "harness/slurm.hpp"
+#include "solvers/a_product.hpp"
 #include "solvers/registry.hpp"
 
 #include <Eigen/Core>
@@ -115,6 +116,8 @@ nlohmann::json compute()
                        std::to_string(SUITESPARSE_SUBSUB_VERSION) + " (CHOLMOD " + CB_CHOLMOD_VERSION + ")";
     p["blas"] = blas_in_use();
     p["blas_threads"] = blas_threads();  // 0: not OpenBLAS (harness/blas_threads.hpp)
+    // How the solvers' `threads` setting runs (each run records its own threads in its settings).
+    p["a_product_threads"] = a_product_parallel_build() ? "openmp" : "serial";
     // The external peers compiled in, with their libraries' versions (docs/peers.md).
     nlohmann::json peers = nlohmann::json::object();
     const SolverRegistry& registry = builtin_registry();

@@ -20,16 +20,16 @@ enum class Dots { NONE, ALL, MASKED };
 /// y = A x on the block rows; with D != NONE also x'y and x'w (masked: where skip[i] == 0).
 /// Each row's sum runs over its columns in increasing order, as the CSR loop's does, and the
 /// stored zeros add exact zeros: y, x'y and x'w equal the CSR kernels' to the last bit (finite x).
+/// Block rows first .. last - 1 only (a thread's range); their dots are that range's partial sums.
 template <Dots D>
-double block_product(const BlockRows& B, const double* __restrict px, double* __restrict py,
-                     const double* __restrict pw, const char* __restrict skip, double& xw)
+double block_product(const BlockRows& B, std::ptrdiff_t first, std::ptrdiff_t last, const double* __restrict px,
+                     double* __restrict py, const double* __restrict pw, const char* __restrict skip, double& xw)
 {
     const int* __restrict start = B.start.data();
     const int* __restrict column = B.column.data();
     const double* __restrict val = B.value.data();
-    const std::ptrdiff_t nb = static_cast<std::ptrdiff_t>(B.start.size()) - 1;
     double xy = 0.0, dot_w = 0.0;
-    for (std::ptrdiff_t I = 0; I < nb; ++I) {
+    for (std::ptrdiff_t I = first; I < last; ++I) {
         double s0 = 0.0, s1 = 0.0, s2 = 0.0;
         for (int k = start[I]; k < start[I + 1]; ++k) {
             const double* __restrict b = val + 9 * static_cast<std::ptrdiff_t>(k);
@@ -61,24 +61,76 @@ double block_product(const BlockRows& B, const double* __restrict px, double* __
     return xy;
 }
 
-/// The CSR loop of the fused product (compressed A): row i's sum, then x_i y_i and x_i w_i.
+/// The CSR loop of the fused product (compressed A) over rows first .. last - 1: row i's sum, then
+/// x_i y_i and x_i w_i (D == NONE: the sums only, as Eigen's row-major product does them).
 template <Dots D>
-double csr_product_dots(const SpMat& A, const double* __restrict px, double* __restrict py, const double* __restrict pw,
-                        const char* __restrict skip, double& xw)
+double csr_product_dots(const SpMat& A, Eigen::Index first, Eigen::Index last, const double* __restrict px,
+                        double* __restrict py, const double* __restrict pw, const char* __restrict skip, double& xw)
 {
     const int* __restrict outer = A.outerIndexPtr();
     const int* __restrict inner = A.innerIndexPtr();
     const double* __restrict val = A.valuePtr();
     double xy = 0.0, dot_w = 0.0;
-    for (Eigen::Index i = 0; i < A.rows(); ++i) {
+    for (Eigen::Index i = first; i < last; ++i) {
         double s = 0.0;
         for (int k = outer[i]; k < outer[i + 1]; ++k) s += val[k] * px[inner[k]];
         py[i] = s;
-        xy += px[i] * s;
-        if (D == Dots::ALL || !skip[i]) dot_w += px[i] * pw[i];
+        if constexpr (D != Dots::NONE) {
+            xy += px[i] * s;
+            if (D == Dots::ALL || !skip[i]) dot_w += px[i] * pw[i];
+        }
     }
     xw = dot_w;
     return xy;
+}
+
+/// Runs the product over the operator's row ranges, on up to parts() threads, and sums the ranges'
+/// dots in range order: which thread runs a range changes nothing in y or the dots.
+template <Dots D>
+double product_by_parts(const AOperator& A, const double* px, double* py, const double* pw, const char* skip,
+                        double& xw)
+{
+    const int parts = A.parts();
+    const int* bound = A.part_start().data();
+    std::vector<double> part_xy(static_cast<size_t>(parts), 0.0), part_xw(static_cast<size_t>(parts), 0.0);
+    const bool blocks = A.format() == AFormat::BSR;
+    const auto run = [&](int p) {
+        double& w = part_xw[static_cast<size_t>(p)];
+        part_xy[static_cast<size_t>(p)] =
+            blocks ? block_product<D>(A.blocks(), bound[p], bound[p + 1], px, py, pw, skip, w)
+                   : csr_product_dots<D>(A.csr(), bound[p], bound[p + 1], px, py, pw, skip, w);
+    };
+#ifdef CB_HAVE_OPENMP
+#pragma omp parallel for num_threads(parts) schedule(static, 1)
+    for (int p = 0; p < parts; ++p) run(p);
+#else
+    for (int p = 0; p < parts; ++p) run(p);
+#endif
+    double xy = 0.0, dot_w = 0.0;
+    for (int p = 0; p < parts; ++p) {
+        xy += part_xy[static_cast<size_t>(p)];
+        dot_w += part_xw[static_cast<size_t>(p)];
+    }
+    xw = dot_w;
+    return xy;
+}
+
+/// Bounds of `parts` ranges over the rows whose nonzeros (or blocks) start at start[0..rows]:
+/// range p ends at the first row whose prefix reaches p/parts of the total, so each range holds
+/// about the same work. Empty ranges are dropped.
+std::vector<int> split_rows(const int* start, std::ptrdiff_t rows, int parts)
+{
+    std::vector<int> bound{0};
+    const double total = static_cast<double>(start[rows] - start[0]);
+    std::ptrdiff_t row = 0;
+    for (int p = 1; p < parts; ++p) {
+        const double target = total * p / parts;
+        while (row < rows && static_cast<double>(start[row] - start[0]) < target) ++row;
+        if (row > bound.back()) bound.push_back(static_cast<int>(row));
+    }
+    if (rows > bound.back()) bound.push_back(static_cast<int>(rows));
+    if (bound.size() == 1) bound.push_back(0);
+    return bound;
 }
 
 }  // namespace
@@ -165,7 +217,7 @@ bool build_block_rows(const SpMat& A, BlockRows& out, double max_fill, double& f
     return true;
 }
 
-AFormat AOperator::prepare(AFormat wanted)
+AFormat AOperator::prepare(AFormat wanted, int threads)
 {
     m_format = AFormat::CSR;
     m_blocks = BlockRows{};
@@ -180,7 +232,29 @@ AFormat AOperator::prepare(AFormat wanted)
             m_blocks = BlockRows{};
         }
     }
+    // Threads only where the raw loops run (compressed A); each range keeps enough nonzeros to
+    // repay waking its thread. The ranges depend on A and threads only, never on the machine.
+    const SpMat& A = *m_csr;
+    const long nnz = static_cast<long>(A.nonZeros());
+    int parts = std::max(1, threads);
+    parts = static_cast<int>(std::min<long>(parts, std::max(1L, nnz / MIN_NONZEROS_PER_PART)));
+    if (!A.isCompressed()) parts = 1;
+    if (m_format == AFormat::BSR)
+        m_part_start = split_rows(m_blocks.start.data(), static_cast<std::ptrdiff_t>(m_blocks.start.size()) - 1, parts);
+    else if (A.isCompressed())
+        m_part_start = split_rows(A.outerIndexPtr(), A.rows(), parts);
+    else
+        m_part_start = {0, static_cast<int>(A.rows())};
     return m_format;
+}
+
+bool a_product_parallel_build()
+{
+#ifdef CB_HAVE_OPENMP
+    return true;
+#else
+    return false;
+#endif
 }
 
 double AOperator::matrix_bytes() const
@@ -206,7 +280,7 @@ double a_product_dots(const SpMat& A, const Vec& x, Vec& y, const Vec& w, double
         return x.dot(y);
     }
     y.resize(A.rows());
-    const double xy = csr_product_dots<Dots::ALL>(A, x.data(), y.data(), w.data(), nullptr, xw);
+    const double xy = csr_product_dots<Dots::ALL>(A, 0, A.rows(), x.data(), y.data(), w.data(), nullptr, xw);
     g_a_products.fetch_add(1, std::memory_order_relaxed);
     return xy;
 }
@@ -220,18 +294,31 @@ Vec a_product(const SpMat& A, const Vec& x)
 
 void a_product(const AOperator& A, const Vec& x, Vec& y)
 {
+    if (A.parts() > 1) {  // threads: the raw loops by row range
+        y.resize(A.rows());
+        double unused = 0.0;
+        product_by_parts<Dots::NONE>(A, x.data(), y.data(), nullptr, nullptr, unused);
+        g_a_products.fetch_add(1, std::memory_order_relaxed);
+        return;
+    }
     if (A.format() != AFormat::BSR) return a_product(A.csr(), x, y);
     y.resize(A.rows());
     double unused = 0.0;
-    block_product<Dots::NONE>(A.blocks(), x.data(), y.data(), nullptr, nullptr, unused);
+    block_product<Dots::NONE>(A.blocks(), 0, A.rows() / 3, x.data(), y.data(), nullptr, nullptr, unused);
     g_a_products.fetch_add(1, std::memory_order_relaxed);
 }
 
 double a_product_dots(const AOperator& A, const Vec& x, Vec& y, const Vec& w, double& xw)
 {
+    if (A.parts() > 1) {
+        y.resize(A.rows());
+        const double xy = product_by_parts<Dots::ALL>(A, x.data(), y.data(), w.data(), nullptr, xw);
+        g_a_products.fetch_add(1, std::memory_order_relaxed);
+        return xy;
+    }
     if (A.format() != AFormat::BSR) return a_product_dots(A.csr(), x, y, w, xw);
     y.resize(A.rows());
-    const double xy = block_product<Dots::ALL>(A.blocks(), x.data(), y.data(), w.data(), nullptr, xw);
+    const double xy = block_product<Dots::ALL>(A.blocks(), 0, A.rows() / 3, x.data(), y.data(), w.data(), nullptr, xw);
     g_a_products.fetch_add(1, std::memory_order_relaxed);
     return xy;
 }
@@ -240,10 +327,12 @@ double a_product_dots(const AOperator& A, const Vec& x, Vec& y, const Vec& w, co
 {
     y.resize(A.rows());
     double xy = 0.0;
-    if (A.format() == AFormat::BSR)
-        xy = block_product<Dots::MASKED>(A.blocks(), x.data(), y.data(), w.data(), skip, xw);
+    if (A.parts() > 1)
+        xy = product_by_parts<Dots::MASKED>(A, x.data(), y.data(), w.data(), skip, xw);
+    else if (A.format() == AFormat::BSR)
+        xy = block_product<Dots::MASKED>(A.blocks(), 0, A.rows() / 3, x.data(), y.data(), w.data(), skip, xw);
     else if (A.csr().isCompressed())
-        xy = csr_product_dots<Dots::MASKED>(A.csr(), x.data(), y.data(), w.data(), skip, xw);
+        xy = csr_product_dots<Dots::MASKED>(A.csr(), 0, A.rows(), x.data(), y.data(), w.data(), skip, xw);
     else {
         y.noalias() = A.csr() * x;
         xy = x.dot(y);

@@ -34,7 +34,15 @@ public:
     /// Chooses the storage of the products: BSR when asked and A has the block structure (n a
     /// multiple of 3, compressed, sorted columns, at most 25% stored zeros), else CSR; why_csr()
     /// says why. Both sum each row in column order, so y is the same to the last bit.
-    AFormat prepare(AFormat wanted);
+    /// `threads` (the common setting, >= 1) splits the products into that many fixed row ranges of
+    /// about equal nonzeros (fewer when A is small: at least MIN_NONZEROS_PER_PART each); the same
+    /// A and threads give the same ranges, so y is the same to the last bit and the fused dots,
+    /// summed range by range in range order, the same on every run (docs/a_product.md).
+    AFormat prepare(AFormat wanted, int threads = 1);
+    /// Row ranges the products are split into (1: one thread, today's loops).
+    int parts() const { return static_cast<int>(m_part_start.size()) - 1; }
+    /// Range p covers rows (BSR: block rows) part_start()[p] .. part_start()[p + 1] - 1.
+    const std::vector<int>& part_start() const { return m_part_start; }
     AFormat format() const { return m_format; }
     /// Why the products read CSR (empty when BSR, or when BSR was not asked for).
     const std::string& why_csr() const { return m_why_csr; }
@@ -53,7 +61,16 @@ private:
     BlockRows m_blocks;
     std::string m_why_csr;
     double m_fill = 0.0;
+    std::vector<int> m_part_start{0, 0};
 };
+
+/// Fewest nonzeros of A per row range of a threaded product: below about this many a range's
+/// work is shorter than waking a thread for it.
+constexpr long MIN_NONZEROS_PER_PART = 32768;
+
+/// Whether threaded products can run in parallel in this build (OpenMP found); without it the
+/// ranges run one after the other, with the same results.
+bool a_product_parallel_build();
 
 /// Builds A's block rows; false (with `why`) when A has no usable 3x3 block structure.
 bool build_block_rows(const SpMat& A, BlockRows& out, double max_fill, double& fill, std::string& why);

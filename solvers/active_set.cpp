@@ -176,7 +176,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
     };
     // CSR: a few products (the stop test's gradients) would not repay a block copy of A.
     AOperator a_op(qp.A);
-    a_op.prepare(AFormat::CSR);
+    a_op.prepare(AFormat::CSR, static_cast<int>(common.threads));
     if (!loop.end_setup()) {
         result.x = qp.x0;
         result.lambda = Vec::Zero(m);

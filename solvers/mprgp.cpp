@@ -598,7 +598,7 @@ SolverResult MprgpRun::run()
             return m_loop.finish(result, result.status);
         }
     }
-    m_a_op.prepare(AFormat::BSR);  // 3x3 blocks when A has them
+    m_a_op.prepare(AFormat::BSR, static_cast<int>(m_st.common.threads));  // 3x3 blocks when A has them
     Vec eigenvector;
     const bool warm = m_ctx.eigenvector != nullptr && m_ctx.eigenvector->size() == m_n;
     if (warm) eigenvector = *m_ctx.eigenvector;

@@ -103,7 +103,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
         if (ru >= 0) tol_upper[j] = active_tolerance(qp.c[ru]) / std::abs(row_coef[ru]);
     }
     AOperator a_op(qp.A);  // the product with A: 3x3 blocks when A has them, built in the setup
-    a_op.prepare(AFormat::BSR);
+    a_op.prepare(AFormat::BSR, static_cast<int>(common.threads));
     Vec eigenvector;
     const bool warm = context.eigenvector && context.eigenvector->size() == n;
     if (warm) eigenvector = *context.eigenvector;

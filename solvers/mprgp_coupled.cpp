@@ -828,7 +828,7 @@ SolverResult CoupledRun::run()
             result.message = "mprgp-coupled: row " + std::to_string(i) + " is zero but c > 0: empty feasible set";
             return m_loop.finish(result, result.status);
         }
-    m_a_op.prepare(AFormat::BSR);  // 3x3 blocks when A has them
+    m_a_op.prepare(AFormat::BSR, static_cast<int>(m_st.common.threads));  // 3x3 blocks when A has them
     Vec eigenvector;
     const bool warm = m_ctx.eigenvector && m_ctx.eigenvector->size() == m_n;
     if (warm) eigenvector = *m_ctx.eigenvector;

@@ -119,7 +119,7 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
     result.info["y_stored"] = keep_y;
     // CSR: a few products (the stop test's gradients) would not repay a block copy of A.
     AOperator a_op(qp.A);
-    a_op.prepare(AFormat::CSR);
+    a_op.prepare(AFormat::CSR, static_cast<int>(s.common.threads));
     if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT);
     const AccuracyScale scale = accuracy_scale(qp);
     counters.a_products += scale.a_products;

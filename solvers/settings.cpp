@@ -33,7 +33,10 @@ const SettingsTable<CommonSettings>& common_settings_table()
                 [](SettingsReader& reader, C& s) {
                     s.seed = static_cast<std::uint64_t>(reader.integer("seed", static_cast<long>(s.seed), 0));
                 },
-                [](const C& s, nlohmann::json& j) { j["seed"] = s.seed; });
+                [](const C& s, nlohmann::json& j) { j["seed"] = s.seed; })
+            .integer("threads", &C::threads, 1, MAX_THREADS,
+                     "threads of the products with A, over fixed row ranges (same settings, same iterates; "
+                     "threads > 1 may differ from 1 in the dots' last bits): docs/a_product.md");
     return table;
 }
 

@@ -23,6 +23,8 @@ inline const char* to_string(StopRule rule) { return rule == StopRule::NATIVE ? 
 /// Largest accepted max_iterations: counters stay far from overflow (a larger value is an error
 /// naming the key, not a silent clamp).
 constexpr long MAX_ITERATIONS_LIMIT = 1000000000000L;
+/// Largest accepted `threads` (a larger value is an error naming the key).
+constexpr long MAX_THREADS = 1024;
 
 /// The default `tol`: the accuracy error e of a converged run (a millionth of the scene size).
 /// The harness's verdict on a stop=native run uses it too (harness/runner.hpp).
@@ -37,6 +39,7 @@ struct CommonSettings {
     long max_iterations = 10000;  ///< outer iterations
     double time_limit_s = 0.0;    ///< 0 disables the limit
     std::uint64_t seed = 0;       ///< every random choice is seeded
+    long threads = 1;             ///< threads of the A-products (solvers/a_product.hpp); 1 = one core
 
     /// stop=native. For a peer that passes `tol` to its library as that library's own tolerance;
     /// whether a solve converged is SolveLoop's decision, never the solver's.
@@ -66,7 +69,7 @@ class SettingsReader {
 public:
     SettingsReader(const nlohmann::json& settings, std::string where);
 
-    /// Reads the common block (tol, stop, max_iterations, time_limit_s, seed); a key not given
+    /// Reads the common block (tol, stop, max_iterations, time_limit_s, seed, threads); a key not given
     /// keeps its value in `defaults` (a solver's own defaults: active-set's tol is 1e-10).
     CommonSettings common(CommonSettings defaults = CommonSettings{});
 

@@ -50,7 +50,7 @@ SolverResult TemplateSolver::solve(const QpView& qp, const SolveContext& context
     }
     const double step = norm_inf > 0 ? m_settings.step_scale / norm_inf : 1.0;
     AOperator a_op(qp.A);  // the product with A: 3x3 blocks when A has them, built in the setup
-    a_op.prepare(AFormat::BSR);
+    a_op.prepare(AFormat::BSR, static_cast<int>(common.threads));
     const AccuracyScale scale = accuracy_scale(qp);
     counters.a_products += scale.a_products;
     // time_limit_s counts setup: a limit reached here ends the solve before any iteration.
