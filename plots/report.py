@@ -161,6 +161,16 @@ def render(ctx: PaperContext, outcomes: List[FigureOutcome], meta: Optional[dict
         for key, path in meta["strips"].items():
             lines.append(f"- {key}: ![{key}]({os.path.relpath(path, ctx.out)})")
         lines.append("")
+    if meta.get("judged"):
+        lines += ["## Snapshots judged", "",
+                  "Every suite's snapshots as its runs were made or reused (a cached run is reused only for the same "
+                  "content, source, suite and build):", "", "| suite | snapshot | sha256 (16 hex) | source |",
+                  "|---|---|---|---|"]
+        for suite, snaps in sorted(meta["judged"].items()):
+            for path, key in snaps.items():
+                lines.append(f"| {_cell(suite)} | {_cell(os.path.basename(path))} | {key.get('sha256') or '—'} | "
+                             f"{_cell(key.get('source', '—'))} |")
+        lines.append("")
     if meta.get("steps"):
         lines += ["## What ran", ""]
         for s in meta["steps"]:
