@@ -534,7 +534,9 @@ nlohmann::json Simulator::resume_identity() const
     nlohmann::json meshes = nlohmann::json::object();
     for (const auto& b : m_scene.bodies)
         if (!b.mesh_file.empty()) meshes[b.mesh_file] = qpsnap_content_hash(b.mesh_file);
-    return {{"scene_file", m_scene.file.empty() ? std::string() : qpsnap_content_hash(m_scene.file)},
+    std::error_code ec;  // a scene built in memory (tests, stress) names no file to hash
+    const bool scene_file = !m_scene.file.empty() && std::filesystem::is_regular_file(m_scene.file, ec);
+    return {{"scene_file", scene_file ? qpsnap_content_hash(m_scene.file) : "not a file: " + m_scene.file},
             {"meshes", meshes},
             {"data", m_opt.data_dir},
             {"solver", m_solver_name},

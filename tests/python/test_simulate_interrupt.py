@@ -215,5 +215,50 @@ class TestResume(unittest.TestCase):
         self.assertEqual(len(os.listdir(os.path.join(out, "snapshots"))), 3)
 
 
+
+@unittest.skipUnless(CB and os.access(CB, os.X_OK), "CB_CONTACTBENCH not set")
+class TestChainsLockAndStop(unittest.TestCase):
+    """`chains` takes the folder's lock, never deletes an earlier run without --fresh, and stops on
+    SIGTERM after a whole frame of every chain (no resume: it says so)."""
+
+    def test_busy_earlier_and_stopped(self):
+        scene = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
+                             "scenes", "demo.json")
+        with tempfile.TemporaryDirectory() as tmp:
+            out = os.path.join(tmp, "ch")
+            first = subprocess.Popen([CB, "chains", scene, "--frames", "100000", "--out", out],
+                                     stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+            try:
+                deadline = time.time() + 120
+                while time.time() < deadline and first.poll() is None and not os.path.isfile(os.path.join(out, ".lock")):
+                    time.sleep(0.01)
+                time.sleep(0.5)
+                second = subprocess.run([CB, "chains", scene, "--frames", "2", "--out", out, "--fresh"],
+                                        capture_output=True, text=True)
+                self.assertEqual(second.returncode, 2)
+                self.assertEqual(second.stderr.strip().splitlines()[-1],
+                                 f"contactbench chains: error: {out}: another `contactbench chains` (pid {first.pid}) is "
+                                 "writing to this folder; wait for it to finish or use another --out")
+            finally:
+                first.send_signal(signal.SIGTERM)
+                _, err = first.communicate()
+            self.assertEqual(first.returncode, 143, err)
+            m = re.search(r"chains: stopped by signal 15 after frame (\d+): (.*)/chains.csv holds frames 0 to (\d+) "
+                          r"of every chain; no chains.json \(--fresh runs them again\)", err)
+            self.assertIsNotNone(m, err[-500:])
+            self.assertEqual(m.group(2), out)
+            with open(os.path.join(out, "chains.csv")) as f:
+                rows = list(csv.DictReader(f))
+            frames = sorted({int(r["frame"]) for r in rows})
+            self.assertEqual(frames, list(range(int(m.group(1)) + 1)))
+            self.assertEqual(len(rows), 5 * len(frames))  # every chain's row of every whole frame
+            again = subprocess.run([CB, "chains", scene, "--frames", "2", "--out", out], capture_output=True, text=True)
+            self.assertEqual(again.returncode, 2)
+            self.assertEqual(again.stderr.strip().splitlines()[-1],
+                             f"contactbench chains: error: {out}: --out: holds an earlier chains run's output "
+                             "(chains.csv); --fresh discards it, or use another --out")
+            self.assertEqual(len(open(os.path.join(out, "chains.csv")).read().splitlines()), len(rows) + 1)
+
+
 if __name__ == "__main__":
     unittest.main()
