@@ -108,7 +108,8 @@ int cmd_chains(const Args& args)
     opt.stop = catch_stop_signals();
     long frames_done = 0;
     sim::run_chains([&] { return sim::load_scene(scene_path, roots); }, opt, &frames_done);
-    if (*opt.stop != 0 && !std::filesystem::exists(opt.out_dir + "/chains.json")) {  // not a signal after the last frame
+    if (*opt.stop != 0 &&
+        !std::filesystem::exists(opt.out_dir + "/chains.json")) {  // not a signal after the last frame
         std::cerr << "chains: stopped by signal " << *opt.stop << " after frame " << frames_done - 1 << ": "
                   << opt.out_dir << "/chains.csv holds frames 0 to " << frames_done - 1
                   << " of every chain; no chains.json (--fresh runs them again)\n";

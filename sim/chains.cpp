@@ -154,7 +154,8 @@ bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& op
     // Never mix runs, and never delete one without --fresh.
     std::string found;
     for (const std::string& p : {json_path, csv_path, png_path, pen_png_path})
-        if (fs::exists(fs::symlink_status(p, ec))) found += (found.empty() ? "" : ", ") + fs::path(p).filename().string();
+        if (fs::exists(fs::symlink_status(p, ec)))
+            found += (found.empty() ? "" : ", ") + fs::path(p).filename().string();
     if (!found.empty() && !opt.fresh)
         throw_input_error(opt.out_dir, "--out",
                           "holds an earlier chains run's output (" + found +
@@ -226,8 +227,9 @@ bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& op
         if (opt.progress) {
             const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             char line[160];
-            std::snprintf(line, sizeof line, "%s frame %04ld (%ld of %ld)  elapsed %.1fs ETA %.1fs\n", scene.name.c_str(),
-                          f, f + 1, frames, elapsed, elapsed / static_cast<double>(f + 1) * static_cast<double>(frames - f - 1));
+            std::snprintf(line, sizeof line, "%s frame %04ld (%ld of %ld)  elapsed %.1fs ETA %.1fs\n",
+                          scene.name.c_str(), f, f + 1, frames, elapsed,
+                          elapsed / static_cast<double>(f + 1) * static_cast<double>(frames - f - 1));
             *opt.progress << line << std::flush;
         }
         if (opt.stop && *opt.stop != 0 && f + 1 < frames) {  // a signal: every chain's whole frames, no record

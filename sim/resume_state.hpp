@@ -17,13 +17,13 @@
 namespace cb::sim {
 
 struct ResumeState {
-    nlohmann::json identity;     ///< the inputs: resuming with other inputs is refused
-    long frames_done = 0;        ///< frames 0 .. frames_done-1 are whole in the tables
-    long steps_done = 0;         ///< time steps taken (the random decoupling order's seed offset)
-    bool finished = false;       ///< the run ended (all frames, or a blow-up): simulation.json written
-    bool blow_up = false;        ///< it ended in a blow-up
-    bool peak_reset = true;      ///< the kernel accepted the stage peak resets so far
-    Vec x, v, eigenvector;       ///< positions, velocities, the power method's warm start
+    nlohmann::json identity;         ///< the inputs: resuming with other inputs is refused
+    long frames_done = 0;            ///< frames 0 .. frames_done-1 are whole in the tables
+    long steps_done = 0;             ///< time steps taken (the random decoupling order's seed offset)
+    bool finished = false;           ///< the run ended (all frames, or a blow-up): simulation.json written
+    bool blow_up = false;            ///< it ended in a blow-up
+    bool peak_reset = true;          ///< the kernel accepted the stage peak resets so far
+    Vec x, v, eigenvector;           ///< positions, velocities, the power method's warm start
     std::vector<long> strip_frames;  ///< frames pictured so far, and their positions
     std::vector<Vec> strip_x;
 };

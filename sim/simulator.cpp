@@ -132,7 +132,8 @@ public:
         const std::string source = partial ? m_partial : path;
         const std::string text = read_regular_file(source);
         if (text.compare(0, header.size(), header) != 0)
-            throw_input_error(source, "", "another header than this simulator writes: not resumed (--fresh discards it)");
+            throw_input_error(source, "",
+                              "another header than this simulator writes: not resumed (--fresh discards it)");
         std::string kept = header;
         std::set<long> frames;
         for (size_t at = header.size(); at < text.size();) {
@@ -203,8 +204,8 @@ std::string old_output(const std::string& dir, const std::string& scene_name)
     std::error_code ec;
     std::string found;
     const auto add = [&found](const std::string& what) { found += (found.empty() ? "" : ", ") + what; };
-    for (const char* name : {"simulation.json", "steps.csv", "frames.csv", "steps.csv.partial", "frames.csv.partial",
-                             "resume.state"})
+    for (const char* name :
+         {"simulation.json", "steps.csv", "frames.csv", "steps.csv.partial", "frames.csv.partial", "resume.state"})
         if (fs::exists(fs::symlink_status(fs::path(dir) / name, ec))) add(name);
     if (fs::exists(fs::symlink_status(fs::path(dir) / (scene_name + "_strip.png"), ec))) add(scene_name + "_strip.png");
     using Kind = std::pair<const char*, const char*>;  // (folder, extension)
@@ -214,7 +215,8 @@ std::string old_output(const std::string& dir, const std::string& scene_name)
         if (fs::is_directory(fs::path(dir) / sub, ec))
             for (const auto& entry : fs::directory_iterator(fs::path(dir) / sub, ec))
                 count += entry.path().extension() == ext;
-        if (count > 0) add(std::to_string(count) + " " + (std::string(sub) == "snapshots" ? "snapshots" : "OBJ frames"));
+        if (count > 0)
+            add(std::to_string(count) + " " + (std::string(sub) == "snapshots" ? "snapshots" : "OBJ frames"));
     }
     return found;
 }
@@ -246,8 +248,8 @@ void remove_old_output(const std::string& dir, const std::string& scene_name)
 {
     namespace fs = std::filesystem;
     std::error_code ec;
-    for (const char* name : {"simulation.json", "steps.csv", "frames.csv", "steps.csv.partial", "frames.csv.partial",
-                             "resume.state"})
+    for (const char* name :
+         {"simulation.json", "steps.csv", "frames.csv", "steps.csv.partial", "frames.csv.partial", "resume.state"})
         fs::remove(fs::path(dir) / name, ec);
     fs::remove(fs::path(dir) / (scene_name + "_strip.png"), ec);
     using Kind = std::pair<const char*, const char*>;  // (folder, extension)
@@ -759,7 +761,8 @@ bool Simulator::run_frames(long frames, bool write, PartialTable& steps_csv, Par
         }
         // This session's mean time per frame times the frames left (a resumed run counts its own).
         const double elapsed = now_s() - start_s;
-        const double eta = elapsed / static_cast<double>(m_frame + 1 - first_frame) * static_cast<double>(frames - m_frame - 1);
+        const double eta =
+            elapsed / static_cast<double>(m_frame + 1 - first_frame) * static_cast<double>(frames - m_frame - 1);
         if (m_opt.progress) {
             // The last step's verdict, as `solve` would print it: e on the original QP, and on the
             // kept rows when rows were dropped.
@@ -772,8 +775,8 @@ bool Simulator::run_frames(long frames, bool write, PartialTable& steps_csv, Par
                           "elapsed %.1fs ETA %.1fs%s\n",
                           m_scene.name.c_str(), m_frame, m_frame + 1, frames, fr.rows, rows_solved,
                           m_solver_name.c_str(), status.c_str(), iters, e, solved, fr.max_penetration,
-                          100.0 * fr.max_penetration_rel, ta, td, tsn, tsv, peaks.text().c_str(), elapsed,
-                          eta, fr.blow_up ? "  BLOW-UP" : "");
+                          100.0 * fr.max_penetration_rel, ta, td, tsn, tsv, peaks.text().c_str(), elapsed, eta,
+                          fr.blow_up ? "  BLOW-UP" : "");
             *m_opt.progress << line << std::flush;
         }
         if (write) {

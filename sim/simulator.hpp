@@ -182,9 +182,9 @@ private:
     bool m_peak_reset =
         true;  ///< false once the kernel refused a high-water mark reset (stage peaks are then cumulative)
     bool m_interrupted = false;
-    nlohmann::json m_identity;           ///< resume_identity(), once per run
-    std::vector<long> m_strip_frames;    ///< frames pictured so far ...
-    std::vector<Vec> m_strip_x;          ///< ... and their positions
+    nlohmann::json m_identity;         ///< resume_identity(), once per run
+    std::vector<long> m_strip_frames;  ///< frames pictured so far ...
+    std::vector<Vec> m_strip_x;        ///< ... and their positions
 };
 
 }  // namespace cb::sim
