@@ -108,7 +108,7 @@ perf-gate-selftest:
 	tests/perf/selftest.sh
 
 demo: deps build
-	$(CB) simulate scenes/demo.json --out results/demo/sim
+	$(CB) simulate scenes/demo.json --out results/demo/sim --fresh
 	$(PY) -m plots.strip results/demo/sim
 	$(CB) run suites/demo.json --out results/demo
 	$(PY) -m plots.convergence results/demo

@@ -1,14 +1,17 @@
 // contactbench chains SCENE.json [--frames N] [--out DIR] [--data DIR] [--exact NAME] [--orders LIST]
-//                     [--h SECONDS] [--decouple-seed S]
+//                     [--h SECONDS] [--decouple-seed S] [--fresh]
 // The price of decoupling along whole chains (docs/simulator.md "The price of decoupling").
 #include "harness/cli.hpp"
 #include "harness/command_solver.hpp"
 #include "harness/commands.hpp"
+#include "harness/run_lock.hpp"
 #include "harness/sim_step_solver.hpp"
+#include "harness/stop_signals.hpp"
 #include "harness/suite.hpp"
 #include "sim/chains.hpp"
 #include "solvers/registry.hpp"
 
+#include <filesystem>
 #include <iostream>
 #include <sstream>
 
@@ -24,10 +27,10 @@ int cmd_chains(const Args& args)
 {
     const CommandLine cl("chains", args,
                          {"--frames", "--out", "--data", "--exact", "--orders", "--h", "--decouple-seed"},
-                         {"--control", "--allow-commands"});
+                         {"--control", "--allow-commands", "--fresh"});
     const std::string usage =
         "usage: contactbench chains SCENE.json [--frames N] [--out DIR] [--data DIR] [--exact NAME]\n"
-        "       [--orders LIST] [--h SECONDS] [--decouple-seed S] [--control] [--allow-commands]\n"
+        "       [--orders LIST] [--h SECONDS] [--decouple-seed S] [--control] [--allow-commands] [--fresh]\n"
         "Steps the scene from the same start with several chains at once and compares them frame by frame:\n"
         "  exact          the exact solver on every detected row, tol 1e-8 (the reference)\n"
         "  exact-tol1e-6  the same at tol 1e-6: its distance to the reference is the noise floor\n"
@@ -53,7 +56,11 @@ int cmd_chains(const Args& args)
         "                 authors' order keeps, which separates the price of the dropped rows from the\n"
         "                 decoupled solver's own error\n"
         "  --allow-commands  run a `command` solver (an external program) that the scene names; the scene\n"
-        "                 must also say \"allow_commands\": true\n";
+        "                 must also say \"allow_commands\": true\n"
+        "  --fresh        discard an earlier chains run's outputs in DIR (without it they are refused, exit 2)\n"
+        "DIR is locked while the chains run (a second command into it exits 2). SIGINT or SIGTERM stop them\n"
+        "after the frame being stepped: chains.csv then holds every chain's whole frames, no chains.json is\n"
+        "written, and the exit status is 128 + the signal (chains do not resume: --fresh runs them again).\n";
     if (cl.help()) {
         std::cout << usage;
         return 0;
@@ -78,6 +85,7 @@ int cmd_chains(const Args& args)
     opt.solve_step = harness_step_solver();
     opt.progress = &std::cerr;
     opt.data_dir = data;
+    opt.fresh = cl.has("--fresh");
 
     const std::string exact = cl.value("--exact", "mprgp-coupled");
     if (!builtin_registry().contains(exact))
@@ -101,7 +109,17 @@ int cmd_chains(const Args& args)
     for (size_t c = 2; c < opt.chains.size(); ++c)
         std::cerr << ", " << opt.chains[c].label << " (" << opt.chains[c].solver << ")";
     std::cerr << "; output in " << opt.out_dir << "\n";
-    sim::run_chains([&] { return sim::load_scene(scene_path, roots); }, opt);
+    lock_output_folder(opt.out_dir, "chains");
+    opt.stop = catch_stop_signals();
+    long frames_done = 0;
+    sim::run_chains([&] { return sim::load_scene(scene_path, roots); }, opt, &frames_done);
+    if (*opt.stop != 0 &&
+        !std::filesystem::exists(opt.out_dir + "/chains.json")) {  // not a signal after the last frame
+        std::cerr << "chains: stopped by signal " << *opt.stop << " after frame " << frames_done - 1 << ": "
+                  << opt.out_dir << "/chains.csv holds frames 0 to " << frames_done - 1
+                  << " of every chain; no chains.json (--fresh runs them again)\n";
+        return stopped_exit_status(*opt.stop);
+    }
     return 0;
 }
 

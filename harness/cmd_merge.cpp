@@ -4,6 +4,7 @@
 #include "harness/provenance.hpp"
 #include "harness/results.hpp"
 #include "harness/results_folder.hpp"
+#include "harness/run_lock.hpp"
 #include "harness/runner.hpp"  // the harness's own statuses
 #include "harness/suite.hpp"   // fnv1a_hex
 #include "harness/timing_hygiene.hpp"
@@ -219,11 +220,11 @@ int cmd_merge(const Args& args)
     // OUT under DIR/.lock, as `run` holds it: a run writing OUT and this merge never mix.
     std::error_code ec;
     const bool existed = fs::exists(fs::symlink_status(out, ec));
-    if (existed) lock_results_folder(out);
+    if (existed) lock_output_folder(out, "merge");
     refuse_foreign_out(out, first);
     make_output_subfolder(out, "runs");  // issue 40: never through a planted OUT/runs link
     if (ec) throw_input_error(out, "", "cannot create the folder: " + ec.message());
-    if (!existed) lock_results_folder(out);
+    if (!existed) lock_output_folder(out, "merge");
     nlohmann::json merged_from = nlohmann::json::array();
     size_t copied = 0, duplicates = 0;
     for (const Shard& shard : shards) {

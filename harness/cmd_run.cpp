@@ -19,6 +19,7 @@
 #include "harness/reference.hpp"
 #include "harness/reference_prefetch.hpp"
 #include "harness/results.hpp"
+#include "harness/run_lock.hpp"
 #include "harness/run_plan.hpp"
 #include "harness/run_record.hpp"
 #include "harness/run_summary_table.hpp"
@@ -69,36 +70,6 @@ const char* const HELP = "\n\nRuns every (snapshot, solver label) of a suite; wr
                          "--jobs N runs N jobs at a time in child processes when the suite's times are not judged\n"
                          "(\"timed\": false); timed suites still run one at a time unless --jobs-timed. With\n"
                          "\"reference\": true, the reference solutions are computed N snapshots at a time first.\n";
-
-/// Holds an exclusive flock on DIR/.lock for the life of the process (released by the kernel
-/// when the process ends, however it ends).
-void lock_out_dir(const std::string& out)
-{
-    const std::string path = (fs::path(out) / ".lock").string();
-    // O_NOFOLLOW: a symlink planted as .lock would make the ftruncate below empty its target.
-    const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC, 0644);
-    if (fd < 0) throw_input_error(path, "", std::string("cannot create the lock file: ") + std::strerror(errno));
-    struct stat st {};
-    if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-        ::close(fd);
-        throw_input_error(path, "", "not a regular file: not used as the lock");
-    }
-    if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
-        char holder[32] = {0};
-        const ssize_t got = ::pread(fd, holder, sizeof holder - 1, 0);
-        std::string pid = got > 0 ? std::string(holder, size_t(got)) : std::string("?");
-        while (!pid.empty() && (pid.back() == '\n' || pid.back() == ' ')) pid.pop_back();
-        ::close(fd);
-        throw_input_error(out, "",
-                          "another `contactbench run` (pid " + pid +
-                              ") is writing to this folder; wait for it to finish or use another --out");
-    }
-    const std::string me = std::to_string(::getpid()) + "\n";
-    if (::ftruncate(fd, 0) == 0 && ::pwrite(fd, me.data(), me.size(), 0) < 0) {
-        // the pid is only for the message of a second run
-    }
-    // fd stays open (and locked) until exit
-}
 
 /// The suite that DIR holds results of: DIR/suite.json, else DIR/suite.pending.json (a run that
 /// was interrupted), else null.
@@ -160,7 +131,7 @@ void open_out_dir(const std::string& out, bool fresh)
     for (const char* name : TOP_FILES) check_output_entry((fs::path(out) / name).string());
     check_output_entries((fs::path(out) / "runs").string(),
                          [](const std::string& name) { return fs::path(name).extension() == ".json"; });
-    lock_out_dir(out);
+    lock_output_folder(out, "run");
     if (fresh) clear_out_dir(out);
 }
 

@@ -1,9 +1,11 @@
 // contactbench simulate SCENE.json [--frames N] [--out DIR] [--data DIR] [--solver NAME] [--decouple ORDER]
-//                       [--decouple-seed S] [--h SECONDS] [--no-snapshots]
+//                       [--decouple-seed S] [--h SECONDS] [--no-snapshots] [--fresh]
 #include "harness/cli.hpp"
 #include "harness/command_solver.hpp"
 #include "harness/commands.hpp"
+#include "harness/run_lock.hpp"
 #include "harness/sim_step_solver.hpp"
+#include "harness/stop_signals.hpp"
 #include "harness/suite.hpp"
 #include "sim/simulator.hpp"
 
@@ -15,10 +17,10 @@ int cmd_simulate(const Args& args)
 {
     const CommandLine cl("simulate", args,
                          {"--frames", "--out", "--data", "--solver", "--decouple", "--decouple-seed", "--h"},
-                         {"--no-snapshots", "--version", "--allow-commands"});
+                         {"--no-snapshots", "--version", "--allow-commands", "--fresh"});
     const std::string usage =
         "usage: contactbench simulate SCENE.json [--frames N] [--out DIR] [--data DIR] [--solver NAME]\n"
-        "       [--decouple ORDER] [--decouple-seed S] [--h SECONDS] [--no-snapshots] [--allow-commands]\n"
+        "       [--decouple ORDER] [--decouple-seed S] [--h SECONDS] [--no-snapshots] [--allow-commands] [--fresh]\n"
         "  SCENE.json     a scene (keys: scenes/README.md), or one of the authors' .ini scene files\n"
         "  --frames N     simulate N frames instead of the scene's \"frames\"\n"
         "  --out DIR      output folder (default results/sim/<scene name>): snapshots/*.qpsnap (one per\n"
@@ -37,10 +39,16 @@ int cmd_simulate(const Args& args)
         "  --no-snapshots write no .qpsnap files\n"
         "  --allow-commands  run a `command` solver (an external program) that the scene names; the scene\n"
         "                 must also say \"allow_commands\": true\n"
+        "  --fresh        discard an earlier simulation's output in DIR first\n"
         "  --version      print the simulator version (the key of cached simulations) and exit\n"
-        "A simulation into an existing DIR replaces the earlier one's files. While it runs the tables are\n"
-        "steps.csv.partial and frames.csv.partial (rows appended a whole frame at a time); at the end they\n"
-        "are renamed and simulation.json (scene, mesh files, data folder, frames, version) is written last.\n"
+        "DIR is locked while the simulation runs (a second one into it exits 2). Without --fresh an earlier\n"
+        "output in DIR is never deleted: a run of the same inputs interrupted (or with fewer frames) is\n"
+        "resumed from its last whole frame (DIR/resume.state), giving the frames of an uninterrupted run\n"
+        "bit for bit; one of the same frames is left as it is; anything else is refused (exit 2).\n"
+        "While it runs the tables are steps.csv.partial and frames.csv.partial (rows appended a whole frame\n"
+        "at a time); at the end they are renamed and simulation.json (scene, mesh files, data folder,\n"
+        "frames, version) is written last. SIGINT or SIGTERM stop it after the frame being stepped, which\n"
+        "says where it stopped (exit 128 + the signal): the same command resumes it.\n"
         "The progress line of a frame gives each stage's time and peak resident memory (detection,\n"
         "assembly, snapshot writing, solve; steps.csv has them per Newton step: docs/INTERFACES.md).\n"
         "Each step is judged as `solve` judges a snapshot: status converged only when the error e on the\n"
@@ -82,6 +90,7 @@ int cmd_simulate(const Args& args)
     opt.snapshots = !cl.has("--no-snapshots");
     opt.frames = cl.integer("--frames", -1);
     if (cl.has("--frames") && opt.frames < 0) throw_input_error("--frames", "", "must be >= 0");
+    opt.fresh = cl.has("--fresh");
     opt.progress = &std::cerr;
     opt.solve_step = harness_step_solver();
     opt.decouple = cl.value("--decouple", "auto");
@@ -103,7 +112,16 @@ int cmd_simulate(const Args& args)
     std::cerr << simulator.scene().name << ": " << simulator.vertices() << " vertices, " << simulator.dofs()
               << " DOFs, " << simulator.tets() << " tets, solver " << simulator.solver_name() << ", output in "
               << opt.out_dir << "\n";
+    lock_output_folder(opt.out_dir, "simulate");
+    const volatile std::sig_atomic_t* stop = catch_stop_signals();
+    simulator.set_stop(stop);
     simulator.run();
+    if (simulator.interrupted()) {
+        std::cerr << "simulate: stopped by signal " << *stop << " after frame " << simulator.frames_done() - 1 << ": "
+                  << simulator.frames_done() << " whole frames in " << opt.out_dir
+                  << " (steps.csv.partial, frames.csv.partial); the same command resumes it\n";
+        return stopped_exit_status(*stop);
+    }
     return 0;
 }
 

@@ -57,31 +57,6 @@ void require_unlocked(const std::string& dir)
     ::close(fd);
 }
 
-void lock_results_folder(const std::string& dir)
-{
-    const std::string path = (fs::path(dir) / ".lock").string();
-    // O_NOFOLLOW: a symlink planted as .lock would make the ftruncate below empty its target.
-    const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC, 0644);
-    if (fd < 0) throw_input_error(path, "", std::string("cannot create the lock file: ") + std::strerror(errno));
-    struct stat st {};
-    if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-        ::close(fd);
-        throw_input_error(path, "", "not a regular file: not used as the lock");
-    }
-    if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
-        const std::string pid = holder_pid(fd);
-        ::close(fd);
-        throw_input_error(dir, "",
-                          "another contactbench process (pid " + pid +
-                              ") is writing to this folder; wait for it to finish or use another folder");
-    }
-    const std::string me = std::to_string(::getpid()) + "\n";
-    if (::ftruncate(fd, 0) == 0 && ::pwrite(fd, me.data(), me.size(), 0) < 0) {
-        // the pid is only for the message of a second process
-    }
-    // fd stays open (and locked) until exit
-}
-
 void check_run_record(const nlohmann::json& record, const std::string& path, const std::string& file_name)
 {
     if (!record.is_object()) throw_input_error(path, "", "expected a run record (a JSON object)");

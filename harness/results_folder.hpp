@@ -13,10 +13,6 @@ namespace cb {
 /// process holds DIR/.lock; nothing is created.
 void require_unlocked(const std::string& dir);
 
-/// Takes DIR/.lock for the life of the process, as `contactbench run` does, so that no run
-/// writes DIR while this process does (InputError naming the holder otherwise).
-void lock_results_folder(const std::string& dir);
-
 /// The run records of a finished results folder, sorted by file name, each with "_file". Refused
 /// (InputError naming the file and the field) unless:
 ///  - no process holds DIR/.lock and DIR/suite.pending.json is absent (a run still going, or

@@ -13,7 +13,10 @@ Verdicts, one vocabulary for the whole report:
 - inconclusive: measured, but the interval straddles the threshold (or there is one timing only):
   `reason` says which;
 - not measured: nothing to judge on (no runs, or no case that exercises the claim, e.g. no frame
-  with contact rows in QUICK): `reason` says why.
+  with contact rows in QUICK): `reason` says why;
+- inconclusive (quick): quick mode only, a verdict a full run could reverse (its interval or count
+  within QUICK_MARGIN of the threshold, or a figure's own reason: resolutions too close, a final
+  error crossing its level by a hair): `reason` says which, and what the quick run found.
 """
 from __future__ import annotations
 
@@ -29,8 +32,15 @@ HOLDS_NATIVE_ONLY = "holds only on native residuals"
 DOES_NOT_HOLD = "does not hold"
 INCONCLUSIVE = "inconclusive"
 NOT_MEASURED = "not measured"
+INCONCLUSIVE_QUICK = "inconclusive (quick)"
 #: every verdict a claim row may carry
-VERDICTS = (HOLDS, HOLDS_AS_PUBLISHED, HOLDS_NATIVE_ONLY, DOES_NOT_HOLD, INCONCLUSIVE, NOT_MEASURED)
+VERDICTS = (HOLDS, HOLDS_AS_PUBLISHED, HOLDS_NATIVE_ONLY, DOES_NOT_HOLD, INCONCLUSIVE, NOT_MEASURED, INCONCLUSIVE_QUICK)
+#: verdicts that decide the claim one way or the other (quick mode may withdraw them)
+DECIDED = (HOLDS, HOLDS_AS_PUBLISHED, HOLDS_NATIVE_ONLY, DOES_NOT_HOLD)
+#: quick mode: a decided quantity (its interval's nearer end, or a count) within this factor of its
+#: threshold is one that a full run, on other problems (coarse stand-ins, few frames), could put on
+#: the other side
+QUICK_MARGIN = 1.25
 #: how the threshold is read: the claim holds when the quantity is above it, or below it
 ABOVE, BELOW = "above", "below"
 
@@ -171,6 +181,34 @@ def combined_reason(published: Judgement, fair: Judgement) -> str:
     """The reason of a row judged on two readings: each reading's, named."""
     parts = [f"fair: {fair.reason}" if fair.reason else "", f"as published: {published.reason}" if published.reason else ""]
     return "; ".join(p for p in parts if p)
+
+
+def withdraw_quick(claim: "Claim", reason: str) -> "Claim":
+    """Quick mode: the row's decided verdict becomes "inconclusive (quick)", the reason naming why a
+    full run could reverse it and what the quick run found."""
+    if claim.verdict in DECIDED:
+        claim.reason = f"{reason}; the quick run found '{claim.verdict}'"
+        claim.verdict = INCONCLUSIVE_QUICK
+    return claim
+
+
+def quick_margin_guard(claim: "Claim", margin: float = QUICK_MARGIN) -> "Claim":
+    """Quick mode, any row: a decided verdict whose deciding quantity (the interval's nearer end,
+    else the estimate) lies within `margin`x of a positive threshold is withdrawn (withdraw_quick)."""
+    if claim.verdict not in DECIDED or claim.threshold is None or not claim.threshold > 0:
+        return claim
+    values = list(claim.interval) if claim.interval is not None else \
+        [claim.estimate] if claim.estimate is not None else []
+    values = [float(v) for v in values if v is not None and math.isfinite(float(v)) and float(v) > 0]
+    if not values:
+        return claim
+    nearest = min(max(v / claim.threshold, claim.threshold / v) for v in values)
+    if nearest < margin:
+        what = (f"the interval [{claim.interval[0]:.3g}, {claim.interval[1]:.3g}]" if claim.interval is not None
+                else f"the count {claim.estimate:.3g}")
+        withdraw_quick(claim, f"quick mode: {what} lies within {margin:g}x of the threshold {claim.threshold:g}, "
+                              "a margin a full run could cross")
+    return claim
 
 
 def verdict_published_fair(published_ok: Optional[bool], fair_ok: Optional[bool]) -> str:

@@ -208,7 +208,7 @@ def _numbers(s: dict) -> str:
 def claim_rows(summaries: Dict[str, Dict[str, dict]]) -> List[dict]:
     """The claim rows' data, judged on the runs at the scene's step (summaries[scene]["h"]): key,
     claim, source, paper, problem judged on, numbers, ours, verdict (holds | does not hold |
-    inconclusive | not measured) and the rule. plots/claims.py can build a Claim from each
+    inconclusive | not measured), the rule and, when not measured, the reason. plots/claims.py can build a Claim from each
     (key, claim, source, paper, ours, verdict, rule; notes = [problem] + numbers)."""
     at_h = {scene: runs["h"] for scene, runs in summaries.items() if "h" in runs}
     rule_price = (f"noticeable price: the authors' chain's max penetration > {_pct(NOTICEABLE)} of the body size L "
@@ -264,7 +264,8 @@ def claim_rows(summaries: Dict[str, Dict[str, dict]]) -> List[dict]:
         reduced += xd <= xa / 2
         failed += xd >= xa
     n = len(with_price)
-    verdict5 = INCONCLUSIVE if n == 0 else HOLDS if reduced > n / 2 else DOES_NOT_HOLD if failed > n / 2 \
+    # no scene with a price to reduce is no case of the claim: not measured (plots/claims.py's vocabulary)
+    verdict5 = NOT_MEASURED if n == 0 else HOLDS if reduced > n / 2 else DOES_NOT_HOLD if failed > n / 2 \
         else INCONCLUSIVE
     rows.append({"key": "sec5-depth-sorted-selection", "source": "Sec. 5",
                  "claim": "a depth-sorted selection of the rows to keep reduces the price of decoupling",
@@ -273,6 +274,8 @@ def claim_rows(summaries: Dict[str, Dict[str, dict]]) -> List[dict]:
                  "numbers": with_price,
                  "ours": f"depth halves the excess on {reduced} of {n}, does not reduce it on {failed}",
                  "verdict": verdict5,
+                 "reason": (f"no scene's authors'-order excess penetration is > {_pct(PRICE_TO_REDUCE)} of L: no case "
+                            "of the claim") if n == 0 else "",
                  "rule": "excess X = max penetration - the exact chains' max; depth reduces the price on a scene when "
                          "X_depth <= X_authors / 2; holds when it does on more than half of the scenes with "
                          f"X_authors > {_pct(PRICE_TO_REDUCE)}, does not hold when X_depth >= X_authors on more "

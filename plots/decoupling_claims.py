@@ -21,7 +21,7 @@ def produce(ctx: PaperContext) -> FigureOutcome:
     out = FigureOutcome("decoupling_claims", "The price of collision decoupling (chains)")
     for r in decoupling.claim_rows(summaries):
         out.claims.append(Claim(key=r["key"], claim=r["claim"], source=r["source"], paper=r["paper"], ours=r["ours"],
-                                verdict=r["verdict"], rule=r["rule"], judged_on=r["problem"],
+                                verdict=r["verdict"], rule=r["rule"], judged_on=r["problem"], reason=r.get("reason", ""),
                                 notes=list(r["numbers"])))
     out.notes.append(f"chains read from {folder} (docs/simulator.md \"The price of decoupling\")")
     return out

@@ -100,8 +100,10 @@ def fair_judgement(mprgp_its: float, cg_its: float, mprgp_e: float, cg_e: float)
     m_ok, c_ok = np.isfinite(mprgp_its), np.isfinite(cg_its)
     if m_ok and c_ok:
         return judge_count(mprgp_its / cg_its if cg_its else float("nan"), SIMILAR, BELOW)
-    if m_ok:
-        return Judgement(HOLDS, estimate=0.0, samples=1, reason="")
+    if m_ok:  # no ratio to state: the estimate stays empty (a 0.0 would read as a measured ratio)
+        return Judgement(HOLDS, samples=1,
+                         reason=f"only mprgp brought e below {LEVEL:g} on the original QP ({fmt(mprgp_its)} iterations); "
+                                f"cg-jacobi never did (final e {fmt(cg_e)})")
     if c_ok:
         return Judgement(DOES_NOT_HOLD, samples=1,
                          reason=f"mprgp never brought e below {LEVEL:g} on the original QP (final e {fmt(mprgp_e)})")

@@ -67,6 +67,8 @@ class PaperContext:
     notes: Dict[str, List[str]] = field(default_factory=dict)  #: suite -> notes (e.g. substitutions)
     #: timed suite -> its rounds' results folders, round 1 (= results[suite]) first (reproduce.py)
     rounds: Dict[str, List[str]] = field(default_factory=dict)
+    #: suite -> {snapshot path: {"sha256", "source"}} the suite was run (or found cached) on (reproduce.py)
+    judged: Dict[str, Dict[str, dict]] = field(default_factory=dict)
     _round_cache: Dict[str, list] = field(default_factory=dict, repr=False)
 
     @property

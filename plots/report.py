@@ -14,7 +14,8 @@ import sys
 from typing import Dict, List, Optional
 
 
-from plots.claims import ABOVE, INCONCLUSIVE, NOT_MEASURED, Claim  # noqa: E402
+from plots.claims import ABOVE, INCONCLUSIVE, INCONCLUSIVE_QUICK, NOT_MEASURED, QUICK_MARGIN, Claim, \
+    quick_margin_guard  # noqa: E402
 from plots.loader import STATUS_MEANINGS  # noqa: E402
 from plots.paper_context import FigureOutcome, NotProduced, PaperContext, round_folders  # noqa: E402
 
@@ -54,6 +55,9 @@ def produce_all(ctx: PaperContext, log=print) -> List[FigureOutcome]:
         name = module.__name__.rsplit(".", 1)[-1]  # "fig6": the name EXPECTED_CLAIMS gives its rows
         try:
             outcome = module.produce(ctx)
+            if ctx.quick:  # a verdict on a thin margin is one a full run could reverse
+                for claim in outcome.claims:
+                    quick_margin_guard(claim)
             log(f"[report] {name}: {len(outcome.files)} files, {len(outcome.claims)} claims")
         except NotProduced as err:
             outcome = FigureOutcome(name, name, missing=str(err))
@@ -89,7 +93,11 @@ VERDICT_LEGEND = (
     "published** / **holds only on native residuals**: the fair reading (the same preconditioner and tolerance "
     "for both, the accuracy error e on the original QP, setup timed) does not hold or was not measured, while "
     "the authors' setting or measure does. **inconclusive**: measured, but the interval straddles the threshold "
-    "(reason given). **not measured**: nothing exercised the claim (reason given). The column \"judged on\" "
+    "(reason given). **not measured**: nothing exercised the claim (reason given). **inconclusive (quick)**: quick "
+    f"mode only, a verdict a full run could reverse (a margin within {QUICK_MARGIN:g}x of the threshold, resolutions "
+    "too close, a "
+    "final error crossing its level by a hair; the reason names it and what the quick run found). The column "
+    "\"judged on\" "
     "names the problem each verdict is judged on.")
 
 
@@ -125,7 +133,8 @@ def render(ctx: PaperContext, outcomes: List[FigureOutcome], meta: Optional[dict
               "stated per row.", "", "## Claims", "",
               "| claim | judged on | paper | authors' data | ours | verdict |", "|---|---|---|---|---|---|"]
     for c in claims:
-        why = f" ({_cell(c.reason)})" if c.reason and c.verdict in (INCONCLUSIVE, NOT_MEASURED) else ""
+        why = f" ({_cell(c.reason)})" if c.reason and c.verdict in (INCONCLUSIVE, NOT_MEASURED, INCONCLUSIVE_QUICK) \
+            else ""
         lines.append(f"| {_cell(c.claim)} ({_cell(c.source)}) | {_cell(c.judged_on or '—')} | {_cell(c.paper)} | "
                      f"{_cell(c.authors)} | {_cell(c.ours)} | **{_cell(c.verdict)}**{why} |")
     lines += ["", VERDICT_LEGEND, "", status_legend(), "", "Verdict rules:", ""]
@@ -160,6 +169,16 @@ def render(ctx: PaperContext, outcomes: List[FigureOutcome], meta: Optional[dict
         lines += ["## Scenes simulated", ""]
         for key, path in meta["strips"].items():
             lines.append(f"- {key}: ![{key}]({os.path.relpath(path, ctx.out)})")
+        lines.append("")
+    if meta.get("judged"):
+        lines += ["## Snapshots judged", "",
+                  "Every suite's snapshots as its runs were made or reused (a cached run is reused only for the same "
+                  "content, source, suite and build):", "", "| suite | snapshot | sha256 (16 hex) | source |",
+                  "|---|---|---|---|"]
+        for suite, snaps in sorted(meta["judged"].items()):
+            for path, key in snaps.items():
+                lines.append(f"| {_cell(suite)} | {_cell(os.path.basename(path))} | {key.get('sha256') or '—'} | "
+                             f"{_cell(key.get('source', '—'))} |")
         lines.append("")
     if meta.get("steps"):
         lines += ["## What ran", ""]

@@ -10,7 +10,9 @@ Steps (each printed as it runs):
    scene file content, data source and simulator version, with >= N frames and unchanged mesh files;
 2. pick the snapshots each figure needs and instantiate suites/paper/*.json into OUT/suites/;
 3. contactbench run OUT/suites/<name>.json --out OUT/runs/<name>, skipped when that folder already
-   holds the results of the identical suite from the same contactbench binary (after a rebuild the
+   holds the results of the identical suite from the same contactbench binary on snapshots of the
+   same content (sha256 of each file) and data source (a simulation redone at the same paths, e.g.
+   with the authors' meshes after `make demo`'s stand-ins, runs again; after a rebuild the
    harness resumes and redoes the runs whose identity changed; it caches reference solutions by
    snapshot content and reference method, so a rebuild does not redo them); a timed suite
    (TIMED_SUITES: fig6 5 rounds, fig10 and fig11 8) runs in rounds, round k > 1 into
@@ -158,9 +160,50 @@ class Runner:
         return rc, err
 
 
+_SHA_CACHE: Dict[tuple, str] = {}
+
+
 def file_sha(path: str) -> str:
+    """sha256 (16 hex digits) of a file's content; memoised on (path, size, mtime) within the
+    process, since a timed suite's rounds key on the same snapshots."""
+    st = os.stat(path)
+    memo = (os.path.abspath(path), st.st_size, st.st_mtime_ns)
+    if memo not in _SHA_CACHE:
+        _SHA_CACHE[memo] = _sha_of_content(path)
+    return _SHA_CACHE[memo]
+
+
+def _sha_of_content(path: str) -> str:
+    digest = hashlib.sha256()
     with open(path, "rb") as f:
-        return hashlib.sha256(f.read()).hexdigest()[:16]
+        for block in iter(lambda: f.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()[:16]
+
+
+def snapshot_source(path: str) -> str:
+    """Where a simulated snapshot's meshes came from, read from its simulation's simulation.json
+    (OUT/sim/<key>/snapshots/<file> -> OUT/sim/<key>/simulation.json): "authors' data DIR" or
+    "stand-in meshes"; "unknown" for a snapshot outside a simulation folder."""
+    record = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(path))), "simulation.json")
+    try:
+        with open(record, encoding="utf-8") as f:
+            data = json.load(f).get("data") or ""
+    except (OSError, ValueError, AttributeError):
+        return "unknown"
+    return f"authors' data {data}" if data else "stand-in meshes"
+
+
+def snapshot_key(paths: List[str]) -> Dict[str, dict]:
+    """The cache key of a suite's inputs beyond the suite file: per snapshot path, its content's
+    sha256 and its source (a path holds other content after a simulation is redone)."""
+    key = {}
+    for p in paths:
+        try:
+            key[p] = {"sha256": file_sha(p), "source": snapshot_source(p)}
+        except OSError as err:
+            key[p] = {"sha256": None, "source": f"unreadable: {err.strerror}"}
+    return key
 
 
 def read_marker(folder: str) -> dict:
@@ -337,15 +380,20 @@ def run_round(runner: Runner, ctx: PaperContext, name: str, template: str, snaps
             ctx.notes.setdefault(name, []).append(f"round {round_index} of {rounds}: contactbench run exited {rc}")
         return
     marker = read_marker(folder)
-    # The suite and the build: contactbench itself redoes a run whose snapshot, settings or build
-    # changed (run identity), and keys reference solutions on content and method, not the binary.
+    # The suite, the snapshots' content and source, and the build: contactbench itself redoes a
+    # run whose snapshot, settings or build changed (run identity), and keys reference solutions
+    # on content and method, not the binary.
     build = file_sha(runner.cb) if os.path.isfile(runner.cb) else None
+    inputs = snapshot_key(suite.get("snapshots", []))
+    ctx.judged[name] = inputs
     if not force and marker.get("suite") == suite and marker.get("build") == build and \
-            os.path.isfile(os.path.join(folder, "summary.csv")):
+            marker.get("snapshots") == inputs and os.path.isfile(os.path.join(folder, "summary.csv")):
         runner.say(f"run {name}: cached ({folder})")
         runner.steps.append(f"run {name}: cached")
         ctx.results[name] = folder
         return
+    if marker.get("suite") == suite and marker.get("snapshots") not in (None, inputs):
+        runner.say(f"run {name}: not reused, changed: snapshot content or source")
     if os.path.isdir(folder) and (force or marker.get("suite") != suite):
         shutil.rmtree(folder)  # another suite: start over; same suite, new build: resume (identity decides)
     rc, err = runner.call(["run", suite_path, "--out", folder], f"run {name}")
@@ -354,7 +402,7 @@ def run_round(runner: Runner, ctx: PaperContext, name: str, template: str, snaps
         n.endswith(".json") for n in os.listdir(os.path.join(folder, "runs")))
     refused = unmeasured_count(folder)
     if rc == 0 and has_runs and not refused:
-        write_marker(folder, {"suite": suite, "build": build})
+        write_marker(folder, {"suite": suite, "build": build, "snapshots": inputs})
     elif has_runs and refused:
         # not cached: a solver that is missing today may be registered by the next build
         ctx.notes.setdefault(name, []).append(f"{refused} run(s) refused by contactbench (see the notes below); "
@@ -366,11 +414,12 @@ def run_round(runner: Runner, ctx: PaperContext, name: str, template: str, snaps
 
 
 def _run_cached(runner: Runner, suite: dict, suite_path: str, folder: str, what: str, force: bool) -> (int, str):
-    """A repeat round of a suite, cached like round 1 (same suite, same binary)."""
+    """A repeat round of a suite, cached like round 1 (same suite, snapshot content and binary)."""
     marker = read_marker(folder)
     build = file_sha(runner.cb) if os.path.isfile(runner.cb) else None
+    inputs = snapshot_key(suite.get("snapshots", []))
     if not force and marker.get("suite") == suite and marker.get("build") == build and \
-            os.path.isfile(os.path.join(folder, "summary.csv")):
+            marker.get("snapshots") == inputs and os.path.isfile(os.path.join(folder, "summary.csv")):
         runner.steps.append(f"run {what}: cached")
         return 0, ""
     if os.path.isdir(folder):
@@ -378,7 +427,7 @@ def _run_cached(runner: Runner, suite: dict, suite_path: str, folder: str, what:
     os.makedirs(os.path.dirname(folder), exist_ok=True)
     rc, err = runner.call(["run", suite_path, "--out", folder], f"run {what}")
     if rc == 0 and os.path.isfile(os.path.join(folder, "summary.csv")):
-        write_marker(folder, {"suite": suite, "build": build})
+        write_marker(folder, {"suite": suite, "build": build, "snapshots": inputs})
     return rc, err
 
 
@@ -588,7 +637,7 @@ def main(argv=None) -> int:
     meta = {"quick": args.quick, "elapsed_s": elapsed, "cpu_s": runner.cpu(), "strips": strips, "full_run_s": full_run_s,
             "full_run_cpu_s": full_run_cpu_s, "steps": runner.steps,
             "reasons": ctx.reasons, "profiles": profile_paths, "provenance": provenance,
-            "contactbench": runner.cb, "data": data}
+            "contactbench": runner.cb, "data": data, "judged": ctx.judged}
     if full_run_s is None:
         meta["steps"] = meta["steps"] + ["no full run recorded yet in this folder (make reproduce without QUICK)"]
     path = report.write_report(ctx, outcomes, meta)

@@ -5,6 +5,7 @@
 #include "sim/render.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -114,7 +115,7 @@ struct PictureAtMax {
 
 }  // namespace
 
-bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& opt)
+bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& opt, long* frames_done)
 {
     namespace fs = std::filesystem;
     if (opt.chains.empty()) throw_input_error("chains", "", "no chain to run");
@@ -150,7 +151,16 @@ bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& op
     const std::string csv_path = opt.out_dir + "/chains.csv", json_path = opt.out_dir + "/chains.json";
     const std::string png_path = opt.out_dir + "/" + scene.name + "_largest_difference.png";
     const std::string pen_png_path = opt.out_dir + "/" + scene.name + "_largest_penetration.png";
-    for (const std::string& p : {json_path, csv_path, png_path, pen_png_path}) fs::remove(p, ec);  // never mix runs
+    // Never mix runs, and never delete one without --fresh.
+    std::string found;
+    for (const std::string& p : {json_path, csv_path, png_path, pen_png_path})
+        if (fs::exists(fs::symlink_status(p, ec)))
+            found += (found.empty() ? "" : ", ") + fs::path(p).filename().string();
+    if (!found.empty() && !opt.fresh)
+        throw_input_error(opt.out_dir, "--out",
+                          "holds an earlier chains run's output (" + found +
+                              "); --fresh discards it, or use another --out");
+    for (const std::string& p : {json_path, csv_path, png_path, pen_png_path}) fs::remove(p, ec);
     // Through the one output path (problems/safe_output.hpp): a fresh temporary (no planted link
     // followed), appended frame by frame, renamed at the end; an interrupted run leaves no chains.csv.
     AtomicFile csv(csv_path);
@@ -163,6 +173,7 @@ bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& op
     PictureAtMax difference, penetration;  // of the shown chain against the reference
     std::vector<double> pen_of(sims.size(), 0.0);
     bool ok = true;
+    const auto start = std::chrono::steady_clock::now();
     for (long f = 0; f < frames; ++f) {
         std::ostringstream rows;
         for (size_t c = 0; c < sims.size(); ++c) {
@@ -213,8 +224,22 @@ bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& op
             penetration.offer(pen_of[shown], f, sims);
         }
         csv.write(rows.str());  // fails with an InputError naming the file (disk full, ...)
+        if (opt.progress) {
+            const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            char line[160];
+            std::snprintf(line, sizeof line, "%s frame %04ld (%ld of %ld)  elapsed %.1fs ETA %.1fs\n",
+                          scene.name.c_str(), f, f + 1, frames, elapsed,
+                          elapsed / static_cast<double>(f + 1) * static_cast<double>(frames - f - 1));
+            *opt.progress << line << std::flush;
+        }
+        if (opt.stop && *opt.stop != 0 && f + 1 < frames) {  // a signal: every chain's whole frames, no record
+            csv.commit();
+            if (frames_done) *frames_done = f + 1;
+            return ok;
+        }
     }
     csv.commit();
+    if (frames_done) *frames_done = frames;
     if (!difference.surfaces.empty()) render_side_by_side(png_path, scene, difference.surfaces);
     if (!penetration.surfaces.empty()) render_side_by_side(pen_png_path, scene, penetration.surfaces);
 

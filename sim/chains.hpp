@@ -5,6 +5,7 @@
 /// and the energies. docs/simulator.md "The price of decoupling" says what each figure means.
 #include "sim/simulator.hpp"
 
+#include <csignal>
 #include <functional>
 #include <iosfwd>
 #include <string>
@@ -31,6 +32,10 @@ struct ChainOptions {
     StepSolver solve_step;
     std::ostream* progress = nullptr;
     std::string data_dir;  ///< recorded in chains.json
+    bool fresh = false;    ///< discard an earlier run's outputs in out_dir (without it: refused)
+    /// Set (to the signal's number) by a SIGINT/SIGTERM handler: the chains stop after the frame
+    /// being stepped; chains.csv then holds every chain's whole frames and no chains.json is written.
+    const volatile std::sig_atomic_t* stop = nullptr;
 };
 
 /// Bump when what `chains` writes for the same inputs changes (caches key on it with the
@@ -47,7 +52,8 @@ ChainDistance chain_distance(const Vec& a, const Vec& b);
 /// Runs every chain in lockstep, each on its own copy of the scene from `load_scene` (scenes own
 /// their obstacles, so they are loaded, not copied), and writes the outputs (through AtomicFile: temporaries
 /// until whole, then renamed; chains.json last). Returns false when some chain blew up (it stops;
-/// the rest go on).
-bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& options);
+/// the rest go on). An earlier run's outputs in out_dir are refused unless options.fresh. Stopped
+/// by options.stop, it sets `frames_done` to the frames whole in chains.csv (else to all of them).
+bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& options, long* frames_done = nullptr);
 
 }  // namespace cb::sim

@@ -4,6 +4,7 @@
 #include "problems/qpsnap.hpp"
 #include "sim/mesh_io.hpp"
 #include "sim/render.hpp"
+#include "sim/resume_state.hpp"
 #include "solvers/accuracy.hpp"
 #include "solvers/decouple.hpp"
 #include "solvers/peak_memory.hpp"
@@ -14,6 +15,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fcntl.h>
 #include <filesystem>
@@ -21,6 +23,7 @@
 #include <iomanip>
 #include <limits>
 #include <ostream>
+#include <set>
 #include <sstream>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -116,6 +119,47 @@ public:
         }
         append(header);
     }
+    /// Reopens the table of an interrupted (or finished, to be extended) run for appending, with
+    /// the rows of frames >= keep_frames dropped (a frame stepped after the last resume state).
+    /// Refused (InputError) when the header differs or a frame below keep_frames has no row.
+    void resume(const std::string& path, const std::string& header, long keep_frames)
+    {
+        m_path = path;
+        m_partial = path + ".partial";
+        namespace fs = std::filesystem;
+        std::error_code ec;
+        const bool partial = fs::exists(fs::symlink_status(m_partial, ec));
+        const std::string source = partial ? m_partial : path;
+        const std::string text = read_regular_file(source);
+        if (text.compare(0, header.size(), header) != 0)
+            throw_input_error(source, "",
+                              "another header than this simulator writes: not resumed (--fresh discards it)");
+        std::string kept = header;
+        std::set<long> frames;
+        for (size_t at = header.size(); at < text.size();) {
+            size_t end = text.find('\n', at);
+            if (end == std::string::npos) break;  // a row cut short by the interruption
+            const long frame = std::strtol(text.c_str() + at, nullptr, 10);
+            if (frame < keep_frames) {
+                kept.append(text, at, end + 1 - at);
+                frames.insert(frame);
+            }
+            at = end + 1;
+        }
+        if (static_cast<long>(frames.size()) != keep_frames)
+            throw_input_error(source, "",
+                              "has rows of " + std::to_string(frames.size()) + " frames where the resume state says " +
+                                  std::to_string(keep_frames) + " are whole: not resumed (--fresh discards it)");
+        write_file_atomic(m_partial, kept);
+        if (!partial) fs::remove(path, ec);  // a finished table being extended is .partial again
+        const int fd = ::open(m_partial.c_str(), O_WRONLY | O_APPEND | O_NOFOLLOW | O_CLOEXEC);
+        m_file = fd < 0 ? nullptr : ::fdopen(fd, "a");
+        if (!m_file) {
+            const int err = errno;
+            if (fd >= 0) ::close(fd);
+            throw_input_error(m_path, "", std::string("cannot write: ") + std::strerror(err));
+        }
+    }
     void append(const std::string& rows)
     {
         if (std::fwrite(rows.data(), 1, rows.size(), m_file) != rows.size() || std::fflush(m_file) != 0) fail();
@@ -152,13 +196,60 @@ private:
 
 namespace {
 
-/// Removes the files of an earlier simulation in `dir` (and only those): a new simulation into
+/// What an earlier simulation left in `dir` ("simulation.json, steps.csv.partial, 188 snapshots"),
+/// empty when nothing: the files remove_old_output removes.
+std::string old_output(const std::string& dir, const std::string& scene_name)
+{
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    std::string found;
+    const auto add = [&found](const std::string& what) { found += (found.empty() ? "" : ", ") + what; };
+    for (const char* name :
+         {"simulation.json", "steps.csv", "frames.csv", "steps.csv.partial", "frames.csv.partial", "resume.state"})
+        if (fs::exists(fs::symlink_status(fs::path(dir) / name, ec))) add(name);
+    if (fs::exists(fs::symlink_status(fs::path(dir) / (scene_name + "_strip.png"), ec))) add(scene_name + "_strip.png");
+    using Kind = std::pair<const char*, const char*>;  // (folder, extension)
+    for (const Kind& kind : {Kind{"snapshots", ".qpsnap"}, Kind{"frames", ".obj"}}) {
+        const auto& [sub, ext] = kind;
+        long count = 0;
+        if (fs::is_directory(fs::path(dir) / sub, ec))
+            for (const auto& entry : fs::directory_iterator(fs::path(dir) / sub, ec))
+                count += entry.path().extension() == ext;
+        if (count > 0)
+            add(std::to_string(count) + " " + (std::string(sub) == "snapshots" ? "snapshots" : "OBJ frames"));
+    }
+    return found;
+}
+
+/// Removes the temporaries (NAME.tmp.<pid>) a killed run left in `dir`, snapshots/ and frames/:
+/// the caller holds the folder's lock (harness/run_lock.hpp), so no live writer owns them.
+long remove_killed_runs_temporaries(const std::string& dir)
+{
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    long removed = 0;
+    for (const fs::path& folder : {fs::path(dir), fs::path(dir) / "snapshots", fs::path(dir) / "frames"}) {
+        if (!fs::is_directory(folder, ec)) continue;
+        for (const auto& entry : fs::directory_iterator(folder, ec)) {
+            const std::string name = entry.path().filename().string();
+            const size_t at = name.rfind(".tmp.");
+            if (at == std::string::npos || at + 5 >= name.size() ||
+                name.find_first_not_of("0123456789", at + 5) != std::string::npos)
+                continue;
+            removed += fs::remove(entry.path(), ec) ? 1 : 0;
+        }
+    }
+    return removed;
+}
+
+/// Removes the files of an earlier simulation in `dir` (and only those): `simulate --fresh` into
 /// an old --out replaces it instead of mixing its snapshots with the old ones.
 void remove_old_output(const std::string& dir, const std::string& scene_name)
 {
     namespace fs = std::filesystem;
     std::error_code ec;
-    for (const char* name : {"simulation.json", "steps.csv", "frames.csv", "steps.csv.partial", "frames.csv.partial"})
+    for (const char* name :
+         {"simulation.json", "steps.csv", "frames.csv", "steps.csv.partial", "frames.csv.partial", "resume.state"})
         fs::remove(fs::path(dir) / name, ec);
     fs::remove(fs::path(dir) / (scene_name + "_strip.png"), ec);
     using Kind = std::pair<const char*, const char*>;  // (folder, extension)
@@ -428,18 +519,109 @@ double Simulator::penetration_now() const
     return depth;
 }
 
-std::vector<SurfaceMesh> Simulator::body_surfaces() const
+std::vector<SurfaceMesh> Simulator::body_surfaces() const { return surfaces_at(m_x); }
+
+namespace {
+const char* const STEPS_HEADER =
+    "frame,step,newton_iteration,solver,status,solver_status,iterations,accuracy,accuracy_solved,"
+    "time_assembly_s,time_detection_s,time_solve_s,rows,rows_solved,snapshot,time_snapshot_s,"
+    "time_solve_stage_s,peak_detection_mb,peak_assembly_mb,peak_snapshot_mb,peak_solve_mb\n";
+const char* const FRAMES_HEADER =
+    "frame,time_s,max_penetration,max_penetration_rel,max_detected_depth,max_detected_depth_rel,"
+    "kinetic_energy,elastic_energy,max_speed,rows,rows_solved,blow_up\n";
+}  // namespace
+
+nlohmann::json Simulator::resume_identity() const
 {
-    std::vector<SurfaceMesh> out;
-    for (size_t b = 0; b < m_scene.bodies.size(); ++b) {
-        SurfaceMesh s;
-        const long nv = m_scene.bodies[b].mesh.vertices();
-        s.positions.resize(nv, 3);
-        for (long i = 0; i < nv; ++i) s.positions.row(i) = m_x.segment<3>(3 * (m_body_first[b] + i)).transpose();
-        s.faces = m_body_faces[b];
-        out.push_back(std::move(s));
+    nlohmann::json meshes = nlohmann::json::object();
+    for (const auto& b : m_scene.bodies)
+        if (!b.mesh_file.empty()) meshes[b.mesh_file] = qpsnap_content_hash(b.mesh_file);
+    std::error_code ec;  // a scene built in memory (tests, stress) names no file to hash
+    const bool scene_file = !m_scene.file.empty() && std::filesystem::is_regular_file(m_scene.file, ec);
+    return {{"scene_file", scene_file ? qpsnap_content_hash(m_scene.file) : "not a file: " + m_scene.file},
+            {"meshes", meshes},
+            {"data", m_opt.data_dir},
+            {"solver", m_solver_name},
+            {"settings", m_scene.solver_settings},
+            {"decouple", m_opt.decouple},
+            {"decouple_seed", m_opt.decouple_seed},
+            {"h", m_scene.step.h},
+            {"steps_per_frame", m_scene.steps_per_frame},
+            {"snapshots", m_opt.snapshots},
+            {"simulator_version", SIMULATOR_VERSION}};
+}
+
+void Simulator::save_resume_state(long frames_done, bool finished, bool blow_up) const
+{
+    ResumeState s;
+    s.identity = m_identity;
+    s.frames_done = frames_done;
+    s.steps_done = m_step;
+    s.finished = finished;
+    s.blow_up = blow_up;
+    s.peak_reset = m_peak_reset;
+    s.x = m_x;
+    s.v = m_v;
+    s.eigenvector = m_eigenvector;
+    s.strip_frames = m_strip_frames;
+    s.strip_x = m_strip_x;
+    write_resume_state(m_opt.out_dir, s);
+}
+
+std::optional<bool> Simulator::prepare_output(long frames, PartialTable& steps_csv, PartialTable& frames_csv)
+{
+    const std::string& out = m_opt.out_dir;
+    m_identity = resume_identity();
+    if (m_opt.fresh) remove_old_output(out, m_scene.name);
+    if (const long removed = remove_killed_runs_temporaries(out); removed > 0 && m_opt.progress)
+        *m_opt.progress << "simulate: removed " << removed << " temporary file(s) of an interrupted run in " << out
+                        << "\n";
+    const std::optional<ResumeState> state = read_resume_state(out);
+    const std::string fresh = "; --fresh discards it, or use another --out";
+    if (!state) {
+        const std::string found = old_output(out, m_scene.name);
+        if (!found.empty())
+            throw_input_error(out, "--out", "holds an earlier simulation's output (" + found + ")" + fresh);
+        steps_csv.open(out + "/steps.csv", STEPS_HEADER);
+        frames_csv.open(out + "/frames.csv", FRAMES_HEADER);
+        return std::nullopt;
     }
-    return out;
+    if (state->identity != m_identity) {
+        std::string changed;
+        for (const auto& [key, value] : m_identity.items())
+            if (!state->identity.contains(key) || state->identity[key] != value)
+                changed += (changed.empty() ? "" : ", ") + key;
+        throw_input_error(out, "--out", "holds a simulation of other inputs (changed: " + changed + ")" + fresh);
+    }
+    m_frame = state->frames_done;
+    if (state->finished && (state->frames_done == frames || (state->blow_up && state->frames_done < frames))) {
+        if (m_opt.progress)
+            *m_opt.progress << "simulate: " << out << " already holds this simulation, " << m_frame << " frames"
+                            << (state->blow_up ? " ending in a blow-up" : "") << " (--fresh simulates again)\n";
+        return !state->blow_up;
+    }
+    if (state->frames_done > frames)
+        throw_input_error(out, "--out",
+                          "holds " + std::to_string(state->frames_done) + " frames of this simulation, more than the " +
+                              std::to_string(frames) + " asked" + fresh);
+    // An interrupted run (or a finished one to extend): its state and tables from the last whole frame.
+    m_step = state->steps_done;
+    m_x = state->x;
+    m_v = state->v;
+    m_eigenvector = state->eigenvector;
+    m_peak_reset = state->peak_reset;
+    m_strip_frames = state->strip_frames;
+    m_strip_x = state->strip_x;
+    if (m_x.size() != dofs() || m_v.size() != dofs())
+        throw_input_error(resume_state_path(out), "", "positions of another size than the scene's" + fresh);
+    steps_csv.resume(out + "/steps.csv", STEPS_HEADER, m_frame);
+    frames_csv.resume(out + "/frames.csv", FRAMES_HEADER, m_frame);
+    std::error_code ec;
+    std::filesystem::remove(out + "/simulation.json", ec);  // written again when the run is whole
+    if (m_opt.progress)
+        *m_opt.progress << "simulate: resuming " << out << " after frame " << m_frame - 1 << " (" << m_frame << " of "
+                        << frames << " frames whole)\n";
+    return std::nullopt;
 }
 
 bool Simulator::run()
@@ -447,21 +629,18 @@ bool Simulator::run()
     const long frames = m_opt.frames >= 0 ? m_opt.frames : m_scene.frames;
     const bool write = !m_opt.out_dir.empty();
     PartialTable steps_csv, frames_csv;
+    m_interrupted = false;
+    m_frame = 0;
+    m_strip_frames.clear();
+    m_strip_x.clear();
     if (write) {
         make_dirs(m_opt.out_dir);
-        remove_old_output(m_opt.out_dir, m_scene.name);
+        if (const std::optional<bool> done = prepare_output(frames, steps_csv, frames_csv)) return *done;
         if (m_opt.snapshots && m_scene.output.snapshots) make_dirs(m_opt.out_dir + "/snapshots");
-        steps_csv.open(m_opt.out_dir + "/steps.csv",
-                       "frame,step,newton_iteration,solver,status,solver_status,iterations,accuracy,accuracy_solved,"
-                       "time_assembly_s,time_detection_s,time_solve_s,rows,rows_solved,snapshot,time_snapshot_s,"
-                       "time_solve_stage_s,peak_detection_mb,peak_assembly_mb,peak_snapshot_mb,peak_solve_mb\n");
-        frames_csv.open(m_opt.out_dir + "/frames.csv",
-                        "frame,time_s,max_penetration,max_penetration_rel,max_detected_depth,max_detected_depth_rel,"
-                        "kinetic_energy,elastic_energy,max_speed,rows,rows_solved,blow_up\n");
     }
     try {
         const bool ok = run_frames(frames, write, steps_csv, frames_csv);
-        if (write) {
+        if (write && !m_interrupted) {
             steps_csv.finish();
             frames_csv.finish();
             // Written last: its presence says the folder holds a whole simulation, and of what.
@@ -485,13 +664,32 @@ bool Simulator::run()
                                            {"body_size", m_body_size},
                                            {"stage_peak_reset", m_peak_reset}};
             write_file_atomic(m_opt.out_dir + "/simulation.json", record.dump(1) + "\n");
+            save_resume_state(m_frame, true, !ok);  // a longer run of the same inputs goes on from here
         }
         return ok;
     } catch (...) {
+        // No partial output on an error (a full disk, a file-size limit): the tables go, and with
+        // them the resume state that refers to them; the snapshots written stay, as earlier output.
         steps_csv.abandon();
         frames_csv.abandon();
+        std::error_code ec;
+        if (write) std::filesystem::remove(resume_state_path(m_opt.out_dir), ec);
         throw;
     }
+}
+
+std::vector<SurfaceMesh> Simulator::surfaces_at(const Vec& x) const
+{
+    std::vector<SurfaceMesh> out;
+    for (size_t b = 0; b < m_scene.bodies.size(); ++b) {
+        SurfaceMesh s;
+        const long nv = m_scene.bodies[b].mesh.vertices();
+        s.positions.resize(nv, 3);
+        for (long i = 0; i < nv; ++i) s.positions.row(i) = x.segment<3>(3 * (m_body_first[b] + i)).transpose();
+        s.faces = m_body_faces[b];
+        out.push_back(std::move(s));
+    }
+    return out;
 }
 
 bool Simulator::run_frames(long frames, bool write, PartialTable& steps_csv, PartialTable& frames_csv)
@@ -504,13 +702,13 @@ bool Simulator::run_frames(long frames, bool write, PartialTable& steps_csv, Par
             ns == 1 ? frames - 1 : static_cast<long>(std::llround(static_cast<double>(i) * (frames - 1) / (ns - 1)));
         if (strip.empty() || strip.back() != f) strip.push_back(f);
     }
-    std::vector<std::vector<SurfaceMesh>> strip_meshes;
-    std::vector<long> strip_done;
+    const long first_frame = m_frame;  // > 0 when resumed
+    const double start_s = now_s();
     double sum_asm = 0, sum_det = 0, sum_snap = 0, sum_solve = 0;
     StagePeaks run_peaks;  // the largest peak of each stage over the run
     long nsteps = 0;
     bool ok = true;
-    for (m_frame = 0; m_frame < frames; ++m_frame) {
+    for (; m_frame < frames; ++m_frame) {
         std::vector<StepRecord> recs;
         for (int s = 0; s < m_scene.steps_per_frame; ++s) {
             auto r = step();
@@ -561,6 +759,10 @@ bool Simulator::run_frames(long frames, bool write, PartialTable& steps_csv, Par
             steps_csv.append(step_rows.str());
             frames_csv.append(frame_row.str());
         }
+        // This session's mean time per frame times the frames left (a resumed run counts its own).
+        const double elapsed = now_s() - start_s;
+        const double eta =
+            elapsed / static_cast<double>(m_frame + 1 - first_frame) * static_cast<double>(frames - m_frame - 1);
         if (m_opt.progress) {
             // The last step's verdict, as `solve` would print it: e on the original QP, and on the
             // kept rows when rows were dropped.
@@ -569,17 +771,18 @@ bool Simulator::run_frames(long frames, bool write, PartialTable& steps_csv, Par
             char line[400];
             std::snprintf(line, sizeof line,
                           "%s frame %04ld (%ld of %ld)  rows %ld solved %ld  %s %s  it %ld  e %.1e%s  pen %.2e "
-                          "(%.2g%% of body)  asm %.3fs det %.3fs snap %.3fs solve %.3fs  peak MiB %s%s\n",
+                          "(%.2g%% of body)  asm %.3fs det %.3fs snap %.3fs solve %.3fs  peak MiB %s  "
+                          "elapsed %.1fs ETA %.1fs%s\n",
                           m_scene.name.c_str(), m_frame, m_frame + 1, frames, fr.rows, rows_solved,
                           m_solver_name.c_str(), status.c_str(), iters, e, solved, fr.max_penetration,
-                          100.0 * fr.max_penetration_rel, ta, td, tsn, tsv, peaks.text().c_str(),
+                          100.0 * fr.max_penetration_rel, ta, td, tsn, tsv, peaks.text().c_str(), elapsed, eta,
                           fr.blow_up ? "  BLOW-UP" : "");
             *m_opt.progress << line << std::flush;
         }
         if (write) {
             if (std::find(strip.begin(), strip.end(), m_frame) != strip.end()) {
-                strip_meshes.push_back(body_surfaces());
-                strip_done.push_back(m_frame);
+                m_strip_frames.push_back(m_frame);
+                m_strip_x.push_back(m_x);
             }
             const auto& ex = m_scene.output.export_frames;
             if (std::find(ex.begin(), ex.end(), m_frame) != ex.end()) {
@@ -592,8 +795,14 @@ bool Simulator::run_frames(long frames, bool write, PartialTable& steps_csv, Par
                 }
             }
         }
+        if (write) save_resume_state(m_frame + 1, false, false);  // after the frame's rows and files
         if (fr.blow_up) {
             ok = false;
+            ++m_frame;
+            break;
+        }
+        if (m_opt.stop && *m_opt.stop != 0 && m_frame + 1 < frames) {  // a signal: stop on a whole frame
+            m_interrupted = true;
             ++m_frame;
             break;
         }
@@ -609,7 +818,9 @@ bool Simulator::run_frames(long frames, bool write, PartialTable& steps_csv, Par
                       ok ? "" : " (stopped: blow-up)");
         *m_opt.progress << line;
     }
-    if (write && !strip_meshes.empty()) {
+    std::vector<std::vector<SurfaceMesh>> strip_meshes;
+    for (const Vec& x : m_strip_x) strip_meshes.push_back(surfaces_at(x));
+    if (write && !m_interrupted && !strip_meshes.empty()) {
         // Common framing over every pictured frame.
         Box3 box;
         for (const auto& frame : strip_meshes)

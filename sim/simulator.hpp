@@ -13,10 +13,12 @@
 #include "sim/scene.hpp"
 #include "solvers/solver.hpp"
 
+#include <csignal>
 #include <cstdint>
 #include <functional>
 #include <iosfwd>
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace cb::sim {
@@ -60,6 +62,13 @@ struct SimulatorOptions {
         "auto";  ///< --decouple: auto (authors' order when the solver needs it) | none | authors | random | depth
     std::uint64_t decouple_seed = 0;  ///< --decouple-seed; step s uses seed + s
     double h = 0;  ///< --h: time step (s) when > 0; the frame keeps its duration (steps per frame scaled)
+    /// --fresh: discard an earlier simulation's output in out_dir first. Without it, out_dir must
+    /// hold nothing of a simulation, or an interrupted (or shorter) run of the same inputs, which
+    /// is resumed from its last complete frame (sim/resume_state.hpp); anything else is refused.
+    bool fresh = false;
+    /// Set (to the signal's number) by a SIGINT/SIGTERM handler: the run stops after the frame
+    /// being stepped, its tables a complete prefix, resumable (interrupted() is then true).
+    const volatile std::sig_atomic_t* stop = nullptr;
 };
 
 /// Bump when a change alters what a simulation of the same scene writes (physics, detection,
@@ -106,8 +115,15 @@ class Simulator {
 public:
     Simulator(Scene scene, SimulatorOptions options);
     ~Simulator();
-    /// Runs all frames (stops early after a blow-up); writes the outputs. Returns false on blow-up.
+    /// Runs all frames (stops early after a blow-up, or at options.stop); writes the outputs.
+    /// Returns false on blow-up.
     bool run();
+    /// Sets options.stop (after construction: the caller installs its handlers once the inputs are valid).
+    void set_stop(const volatile std::sig_atomic_t* stop) { m_opt.stop = stop; }
+    /// The last run() stopped at options.stop before its last frame (the outputs are resumable).
+    bool interrupted() const { return m_interrupted; }
+    /// Frames whole in the output (after run(): done before it plus in it).
+    long frames_done() const { return m_frame; }
     /// Advances one time step; returns its records (one per Newton step).
     std::vector<StepRecord> step();
     /// Frame statistics at the current state (after a step).
@@ -138,6 +154,14 @@ public:
 
 private:
     bool run_frames(long frames, bool write, PartialTable& steps_csv, PartialTable& frames_csv);
+    /// Every input of what the simulation writes (scene and mesh file contents, solver and its
+    /// settings, decoupling, step, data folder, simulator version): a resume needs the same.
+    nlohmann::json resume_identity() const;
+    /// Checks out_dir before a run (resume or refuse, see SimulatorOptions::fresh) and restores
+    /// the state of a resumed run; returns run()'s result when there is nothing left to do.
+    std::optional<bool> prepare_output(long frames, PartialTable& steps_csv, PartialTable& frames_csv);
+    void save_resume_state(long frames_done, bool finished, bool blow_up) const;
+    std::vector<SurfaceMesh> surfaces_at(const Vec& x) const;
     std::string snapshot_path(long frame, int newton) const;
     Scene m_scene;
     SimulatorOptions m_opt;
@@ -157,6 +181,10 @@ private:
     nlohmann::json m_material;
     bool m_peak_reset =
         true;  ///< false once the kernel refused a high-water mark reset (stage peaks are then cumulative)
+    bool m_interrupted = false;
+    nlohmann::json m_identity;         ///< resume_identity(), once per run
+    std::vector<long> m_strip_frames;  ///< frames pictured so far ...
+    std::vector<Vec> m_strip_x;        ///< ... and their positions
 };
 
 }  // namespace cb::sim

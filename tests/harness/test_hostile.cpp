@@ -415,14 +415,22 @@ fs::path tiny_scene(const fs::path& dir, long frames)
 
 }  // namespace
 
-TEST(Writes, SimulateReplacesAnOldOutAndFinishesItsTables)
+TEST(Writes, SimulateReplacesAnOldOutOnlyWithFreshAndFinishesItsTables)
 {
     const fs::path dir = fresh_dir("simulate");
     const fs::path scene = tiny_scene(dir, 4), out = dir / "out";
     ASSERT_EQ(run("simulate " + q(scene) + " --out " + q(out)).status, 0);
     EXPECT_EQ(count_matching(out / "snapshots", ".qpsnap"), 4u);
-    // Again with fewer frames: the old snapshots do not survive next to the new ones.
-    const Output again = run("simulate " + q(scene) + " --out " + q(out) + " --frames 2");
+    // Fewer frames than the folder holds: refused, nothing deleted (issue 43).
+    const Output refused = run("simulate " + q(scene) + " --out " + q(out) + " --frames 2");
+    EXPECT_EQ(refused.status, 2);
+    EXPECT_EQ(refused.err.substr(refused.err.find("contactbench simulate: error:")),
+              "contactbench simulate: error: " + out.string() +
+                  ": --out: holds 4 frames of this simulation, more than the 2 asked; --fresh discards it, or use "
+                  "another --out\n");
+    EXPECT_EQ(count_matching(out / "snapshots", ".qpsnap"), 4u);
+    // With --fresh: the old snapshots do not survive next to the new ones.
+    const Output again = run("simulate " + q(scene) + " --out " + q(out) + " --frames 2 --fresh");
     ASSERT_EQ(again.status, 0) << again.err;
     EXPECT_EQ(count_matching(out / "snapshots", ".qpsnap"), 2u);
     const std::string steps = slurp(out / "steps.csv"), frames = slurp(out / "frames.csv");

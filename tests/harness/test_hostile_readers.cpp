@@ -396,8 +396,8 @@ TEST(HostileReaders, ResultsFoldersAreReadOnlyWhenWhole)
     ASSERT_EQ(::pwrite(fd, me.data(), me.size(), 0), ssize_t(me.size()));
     o = run("merge " + q(busy) + " " + q(base));
     EXPECT_EQ(o.status, 2) << o.err;
-    EXPECT_EQ(o.err, "contactbench merge: error: " + busy.string() + ": another contactbench process (pid " + me +
-                         ") is writing to this folder; wait for it to finish or use another folder\n");
+    EXPECT_EQ(o.err, "contactbench merge: error: " + busy.string() + ": another `contactbench merge` (pid " + me +
+                         ") is writing to this folder; wait for it to finish or use another --out\n");
     o = run("compare " + q(base) + " " + q(busy));
     EXPECT_EQ(o.status, 2) << o.err;
     EXPECT_EQ(o.err, "contactbench compare: error: " + busy.string() + ": being written by `contactbench run` (pid " +

@@ -14,6 +14,32 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(HERE)))
 from plots import claims, intervals  # noqa: E402
 
 
+class TestQuickMargin(unittest.TestCase):
+    """Quick mode withdraws a decided verdict a full run could reverse (issue 43)."""
+
+    def claim(self, verdict, threshold, direction=claims.ABOVE, estimate=None, interval=None):
+        return claims.Claim(key="k", claim="c", source="s", paper="p", verdict=verdict, threshold=threshold,
+                            direction=direction, estimate=estimate, interval=interval)
+
+    def test_an_interval_near_its_threshold_is_withdrawn_with_the_reason(self):
+        c = claims.quick_margin_guard(self.claim(claims.HOLDS, 1.0, estimate=1.2, interval=[1.1, 1.3]))
+        self.assertEqual(c.verdict, claims.INCONCLUSIVE_QUICK)
+        self.assertEqual(c.reason, "quick mode: the interval [1.1, 1.3] lies within 1.25x of the threshold 1, a margin "
+                                   "a full run could cross; the quick run found 'holds'")
+        below = claims.quick_margin_guard(self.claim(claims.DOES_NOT_HOLD, 10.0, estimate=8.5, interval=[8.2, 9.0]))
+        self.assertEqual(below.verdict, claims.INCONCLUSIVE_QUICK)  # 10 / 9.0 = 1.11
+
+    def test_a_wide_margin_a_count_and_undecided_rows(self):
+        wide = claims.quick_margin_guard(self.claim(claims.HOLDS, 1.0, estimate=3.0, interval=[2.0, 4.0]))
+        self.assertEqual(wide.verdict, claims.HOLDS)
+        count = claims.quick_margin_guard(self.claim(claims.HOLDS, 40, claims.BELOW, estimate=38))
+        self.assertEqual(count.verdict, claims.INCONCLUSIVE_QUICK)
+        self.assertIn("the count 38 lies within 1.25x of the threshold 40", count.reason)
+        for verdict in (claims.INCONCLUSIVE, claims.NOT_MEASURED):
+            self.assertEqual(claims.quick_margin_guard(self.claim(verdict, 1.0, estimate=1.01)).verdict, verdict)
+        self.assertIn(claims.INCONCLUSIVE_QUICK, claims.VERDICTS)
+
+
 class TestMedianInterval(unittest.TestCase):
     def test_coverage_by_hand(self):
         # 5 rounds: P(all 5 on one side of the median) = 2 / 32, so [min, max] covers it with 30/32
@@ -170,7 +196,11 @@ class TestClaimRulesOnConstructedRuns(unittest.TestCase):
         j = fig8.fair_judgement(float("nan"), float("nan"), 7.4e-3, 5e-2)
         self.assertEqual(j.verdict, claims.NOT_MEASURED)
         self.assertIn("neither run brought e below 0.0001 on the original QP (final e: mprgp 0.0074", j.reason)
-        self.assertEqual(fig8.fair_judgement(30, float("nan"), 1e-6, 5e-2).verdict, claims.HOLDS)
+        only = fig8.fair_judgement(30, float("nan"), 1e-6, 5e-2)
+        self.assertEqual(only.verdict, claims.HOLDS)
+        self.assertIsNone(only.estimate)  # no ratio: not a made-up 0.0 in the claim row
+        self.assertEqual(only.reason, "only mprgp brought e below 0.0001 on the original QP (30 iterations); "
+                                      "cg-jacobi never did (final e 0.05)")
         self.assertEqual(fig8.fair_judgement(float("nan"), 40, 7.4e-3, 1e-6).verdict, claims.DOES_NOT_HOLD)
         self.assertEqual(fig8.fair_judgement(50, 40, 1e-6, 1e-6).verdict, claims.HOLDS)      # 1.25 <= 1.5
         self.assertEqual(fig8.fair_judgement(70, 40, 1e-6, 1e-6).verdict, claims.DOES_NOT_HOLD)  # 1.75

@@ -1,6 +1,8 @@
 """tools/iteration_instructions.py: issue 31's iteration-cost ratio counted in instructions. The dumps'
-parser on synthetic callgrind files; a run on a small coupled QP, whose counts must be positive, equal
-on a second run (the point of counting) and give the printed ratio; bad input exits 2 naming the file."""
+parser on synthetic callgrind files; a run on a small coupled QP, whose counts must be positive, repeat on
+a second run (iterations and status exactly, instructions to RELATIVE) and give the printed ratio; bad
+input exits 2 naming the file. Without valgrind or cb_bench the runs are skipped, and ctest reports the
+module Skipped (tests/python/unittest_runner.py)."""
 import os
 import shutil
 import subprocess
@@ -15,6 +17,13 @@ BINARY = os.environ.get("CB_CONTACTBENCH", os.path.join(ROOT, "build", "bin", "c
 BENCH = os.path.join(os.path.dirname(BINARY), "cb_bench")
 sys.path.insert(0, os.path.join(ROOT, "tools"))
 import iteration_instructions  # noqa: E402
+
+#: instructions per iteration of two runs of one binary agree to this, relative: the count is exact
+#: within a process, but two processes have differed by one instruction per iteration (182178 vs
+#: 182177, a fresh `make test` under load), as the heap's layout, and with it the alignment-dependent
+#: paths of memcpy and of Eigen's vector loops, may differ between processes. 1e-4 is 18 instructions
+#: per iteration here, far below the changes the tool measures (a 1% cost is 1800).
+RELATIVE = 1e-4
 
 
 def tool(*args):
@@ -77,9 +86,18 @@ class SmallCoupledQp(unittest.TestCase):
         self.assertEqual(len(lines), 1, r.stdout)
         return lines[0]
 
+    def assert_same_counts(self, a, b, columns):
+        """Iterations (columns 1, 3) exactly; instructions per iteration (2, 4) to RELATIVE."""
+        for k in columns:
+            if k in (1, 3):
+                self.assertEqual(a[k], b[k], (k, a, b))
+            else:
+                self.assertLessEqual(abs(int(a[k]) - int(b[k])), RELATIVE * int(a[k]), (k, a, b))
+
     def test_counts_are_positive_repeatable_and_the_ratio_is_theirs(self):
         first, second = self.rows(), self.rows()
-        self.assertEqual(first, second)  # instructions: the same on every run of one binary
+        self.assertEqual((first[0], first[6]), (second[0], second[6]))
+        self.assert_same_counts(first, second, (1, 2, 3, 4))  # the same on every run of one binary
         stem, it_c, per_c, it_d, per_d, ratio = first[0], int(first[1]), int(first[2]), int(first[3]), \
             int(first[4]), float(first[5])
         self.assertEqual(stem, "coupled_small")
@@ -93,7 +111,7 @@ class SmallCoupledQp(unittest.TestCase):
     def test_coupled_settings_reach_the_coupled_solver_only(self):
         default, scaled = self.rows(), self.rows("--coupled-settings", '{"precond": "scaled"}')
         self.assertEqual(scaled[6], "converged")
-        self.assertEqual(default[3:5], scaled[3:5])  # decoupled mprgp: the same run
+        self.assert_same_counts(default, scaled, (3, 4))  # decoupled mprgp: the same run
         self.assertNotEqual(default[1:3], scaled[1:3])  # mprgp-coupled: another preconditioner, other counts
 
 

@@ -3,6 +3,7 @@
 Run from tests/python with PYTHONPATH=plots and MPLBACKEND=Agg:
     /usr/bin/python3 -m unittest
 """
+import hashlib
 import io
 import itertools
 import json
@@ -22,7 +23,7 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 
 import make_fixture as mf  # noqa: E402
 from plots import claims, convergence, loader, profiles, report, reproduce, stability  # noqa: E402
-from plots.paper_context import PaperContext  # noqa: E402
+from plots.paper_context import PaperContext, round_folders  # noqa: E402
 
 FAKE_CB = os.path.join(HERE, "fixtures", "fake_contactbench.py")
 
@@ -509,10 +510,14 @@ class TestReproduce(TempDirCase):
         rows = [l for l in text.splitlines() if l.startswith("| ") and "**" in l]
         self.assertEqual(len(rows), len(report.EXPECTED_CLAIMS))
         allowed = {claims.HOLDS, claims.HOLDS_AS_PUBLISHED, claims.HOLDS_NATIVE_ONLY, claims.DOES_NOT_HOLD,
-                   claims.NOT_MEASURED}
+                   claims.NOT_MEASURED, claims.INCONCLUSIVE_QUICK}
         for r in rows:
             verdict = r.rsplit("**", 2)[1]
             self.assertIn(verdict, allowed)
+            if verdict == claims.INCONCLUSIVE_QUICK:  # with the reason a full run could reverse it
+                self.assertIn("** (quick mode: ", r)
+        # the quick resolutions (7818 and 8958 DOF) are too close for the growth claim
+        self.assertIn("**inconclusive (quick)** (quick mode: the resolutions judged are 1.15x apart", text)
         with open(os.path.join(out, "claims.json"), encoding="utf-8") as f:
             saved = json.load(f)
         self.assertEqual([c["key"] for c in saved][:len(report.EXPECTED_CLAIMS)],
@@ -615,6 +620,52 @@ class TestReproduce(TempDirCase):
         kinds = [s.split(":")[1].strip().split(" ")[0] for s in runner.steps]
         self.assertEqual(kinds, ["exit", "cached", "exit", "exit", "cached"])
         self.assertTrue(runner2.steps[0].startswith("simulate two_dinos_1303: exit 0"))
+
+    def test_readme_sequence_judges_no_run_on_the_stand_in_meshes(self):
+        """README's sequence (issue 43): `make demo` (reproduce --quick without the authors' data: stand-in
+        meshes), then `make paper-data`, then `make reproduce QUICK=1`. The scenes are simulated again into
+        the same paths with other content, so no suite's cached results may be reused: every judged run's
+        snapshot hash is that of the authors'-data snapshot now at its path, and the report names them."""
+        out = os.path.join(self.tmp, "out")
+        data = os.path.join(self.tmp, "paper-data")
+        os.makedirs(os.path.join(data, "figures"))
+        args = ["--contactbench", FAKE_CB, "--out", out, "--scenes", self.scenes, "--quick", "--no-profiles"]
+        with redirect_stdout(io.StringIO()):
+            self.assertEqual(reproduce.main(args + ["--data", os.path.join(self.tmp, "absent")]), 0)  # make demo
+            with open(os.path.join(out, "reproduce.json"), encoding="utf-8") as f:
+                demo = json.load(f)
+            self.assertEqual(reproduce.main(args + ["--data", data]), 0)  # after make paper-data
+        with open(os.path.join(out, "reproduce.json"), encoding="utf-8") as f:
+            meta = json.load(f)
+        self.assertFalse([s for s in meta["steps"] if s.startswith("run ") and s.endswith(": cached")], meta["steps"])
+        judged = 0
+        for suite, snaps in meta["judged"].items():
+            self.assertNotEqual(snaps, demo["judged"][suite], suite)  # same paths, other content
+            for path, key in snaps.items():
+                self.assertEqual(key["source"], f"authors' data {data}", path)
+                self.assertEqual(key["sha256"], reproduce.file_sha(path), path)
+            folders = [os.path.join(out, "runs", suite)] + round_folders(out, suite)
+            for folder in folders:
+                for run in os.listdir(os.path.join(folder, "runs")):
+                    with open(os.path.join(folder, "runs", run), encoding="utf-8") as f:
+                        snap = json.load(f)["snapshot"]
+                    with open(snap["path"], "rb") as f:  # the record's hash is that of the file judged now
+                        self.assertEqual(snap["hash"], hashlib.sha256(f.read()).hexdigest()[:16], run)
+                    self.assertEqual(snap["meta"]["data"], data, run)
+                    judged += 1
+        self.assertGreater(judged, 50)
+        with open(os.path.join(out, "report.md"), encoding="utf-8") as f:
+            text = f.read()
+        self.assertIn("## Snapshots judged", text)
+        table = text.split("## Snapshots judged")[1].split("##")[0]
+        self.assertNotIn("stand-in meshes", table)
+        first = next(iter(meta["judged"]["fig11"].items()))
+        self.assertIn(f"| fig11 | {os.path.basename(first[0])} | {first[1]['sha256']} | authors' data {data} |", table)
+        with redirect_stdout(io.StringIO()):  # the same content again: every suite is reused
+            self.assertEqual(reproduce.main(args + ["--data", data]), 0)
+        with open(os.path.join(out, "reproduce.json"), encoding="utf-8") as f:
+            again = json.load(f)
+        self.assertEqual([s for s in again["steps"] if s.startswith("run ") and not s.endswith(": cached")], [])
 
     def test_suite_cache_is_keyed_on_the_binary(self):
         """A rebuilt contactbench resumes the suite (the harness redoes runs whose identity changed)."""

@@ -15,7 +15,7 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 sys.path.insert(0, ROOT)
 os.environ.setdefault("MPLBACKEND", "Agg")
 
-from plots import fig11, report, reproduce  # noqa: E402
+from plots import claims, fig11, report, reproduce, table1  # noqa: E402
 from plots.paper_context import PaperContext, round_folders, standalone_context, standalone_rounds  # noqa: E402
 
 FAKE_CB = os.path.join(HERE, "fixtures", "fake_contactbench.py")
@@ -84,6 +84,56 @@ class TestStandaloneRounds(unittest.TestCase):
         for key, c in want.items():
             self.assertEqual((got[key].verdict, got[key].estimate, got[key].interval, got[key].samples),
                              (c.verdict, c.estimate, c.interval, c.samples), key)
+
+    def test_quick_fig11_on_close_resolutions_is_inconclusive_with_its_reason(self):
+        # issue 43: the quick mode's two coarsest resolutions (7818 and 8958 DOF, 1.15x apart) cannot
+        # show a growth a full run could not reverse; the full-mode verdict on the same runs is decided
+        out = os.path.join(self.tmp, "out")
+        ctx = PaperContext(out=out, quick=True)
+        runner = reproduce.Runner(FAKE_CB, None, os.path.join(self.tmp, "log"))
+        snaps = []
+        with redirect_stdout(io.StringIO()):
+            for key in ("two_dinos_1303", "two_dinos_1493"):
+                scene = os.path.join(self.tmp, key + ".json")
+                with open(scene, "w") as f:
+                    f.write("{}")
+                reproduce.simulate(runner, ctx, key, scene, 12, None, False)
+                snaps += reproduce.pick_frame(reproduce.snapshots_of(ctx, key), 11)
+            reproduce.run_suite(runner, ctx, "fig11", os.path.join(ROOT, "suites", "paper", "fig11.json"), snaps, False)
+            quick = {c.key: c for c in fig11.produce(ctx).claims}
+            ctx.quick = False
+            full = {c.key: c for c in fig11.produce(ctx).claims}
+        grows = quick["fig11-advantage-grows"]
+        self.assertEqual(grows.verdict, claims.INCONCLUSIVE_QUICK)
+        self.assertIn(full["fig11-advantage-grows"].verdict, claims.DECIDED)
+        self.assertEqual(grows.reason, "quick mode: the resolutions judged are 1.15x apart (7818 and 8958 DOF), under "
+                                       f"2x; the quick run found '{full['fig11-advantage-grows'].verdict}'")
+        # every ratio is stated: at the smallest DOF count, at the largest, and the growth between
+        self.assertRegex(grows.ours, r"^published: ICA/MPRGP at 7818 DOF [0-9.]+ \[[0-9.]+, [0-9.]+\]x, at 8958 DOF "
+                                     r"[0-9.]+ \[[0-9.]+, [0-9.]+\]x, growth [0-9.]+ \[[0-9.]+, [0-9.]+\]x; fair: ")
+        # the low-resolution claim rests on one resolution: not withdrawn by the span
+        self.assertEqual(quick["fig11-ica-low-res"].verdict, full["fig11-ica-low-res"].verdict)
+
+    def test_quick_fig11_final_error_within_a_margin_of_the_level(self):
+        import pandas as pd
+        runs = pd.DataFrame([
+            {"label": "mprgp-fair", "n": 7818, "accuracy": 1e-7, "status": "converged", "snapshot": "a"},
+            {"label": "ica-fair", "n": 7818, "accuracy": 0.00999, "status": "converged", "snapshot": "a"},
+            {"label": "mprgp-fair", "n": 81000, "accuracy": 1e-7, "status": "converged", "snapshot": "b"},
+            {"label": "ica-fair", "n": 81000, "accuracy": 0.05, "status": "max_iterations", "snapshot": "b"}])
+        why = fig11.quick_reasons(runs)
+        text = "quick mode: ica-fair at 7818 DOF ends at e 0.00999, within 2x of the level 0.01 its fair time is measured to"
+        self.assertEqual(why, {"grows": [text], "low": [text]})  # 10.4x apart: the span is wide enough
+
+
+    def test_table1_quotes_the_authors_cold_starts_from_their_data(self):
+        data = os.path.join(self.tmp, "paper-data")
+        os.makedirs(os.path.join(data, "figures"))
+        with open(os.path.join(data, "figures", "fig11_mprgp_vs_ica.csv"), "w") as f:
+            f.write("dofs,power_iterations\n7818,700\n24000,655\n81000,980\n")
+        self.assertEqual(table1.authors_cold_starts(PaperContext(out=self.tmp, data=data)),
+                         "— (Fig. 11 data: cold starts of 655-980 products)")
+        self.assertEqual(table1.authors_cold_starts(PaperContext(out=self.tmp, data=None)), "—")
 
 
 if __name__ == "__main__":

@@ -87,20 +87,69 @@ TEST(FemCorotated, StiffnessEqualsHessianAtRotatedRest)
     EXPECT_LT((Kd - Kd.transpose()).lpNorm<Eigen::Infinity>(), 1e-9 * Kd.lpNorm<Eigen::Infinity>());
 }
 
+namespace {
+/// The linear elastic energy with every tet's rotation held at R_t (the test's own, from the
+/// mesh, not CorotatedFem's): sum vol (mu |sym(R' F(y)) - I|^2 + lambda/2 tr(R' F(y) - I)^2).
+/// Its gradient is minus the fixed-rotation force, and its Hessian is K(x).
+double fixed_rotation_energy(const TetMesh& mesh, const Material& m, const CorotatedFem& fem, const Vec& y)
+{
+    double e = 0;
+    for (long t = 0; t < mesh.tet_count(); ++t) {
+        Eigen::Matrix3d Dm, Ds;
+        const auto v = [&](int k) { return static_cast<long>(mesh.tets(t, k)); };
+        for (int k = 0; k < 3; ++k) {
+            Dm.col(k) = (mesh.positions.row(v(k + 1)) - mesh.positions.row(v(0))).transpose();
+            Ds.col(k) = y.segment<3>(3 * v(k + 1)) - y.segment<3>(3 * v(0));
+        }
+        const Eigen::Matrix3d G = fem.rotation(t).transpose() * Ds * Dm.inverse() - Eigen::Matrix3d::Identity();
+        const Eigen::Matrix3d eps = 0.5 * (G + G.transpose());
+        e += Dm.determinant() / 6.0 * (m.mu() * eps.squaredNorm() + 0.5 * m.lambda() * G.trace() * G.trace());
+    }
+    return e;
+}
+
+/// Central differences of fixed_rotation_energy: exact for a quadratic but for rounding.
+Vec fixed_rotation_gradient(const TetMesh& mesh, const Material& m, const CorotatedFem& fem, const Vec& y)
+{
+    const double h = 1e-4;
+    Vec g(y.size());
+    for (long i = 0; i < y.size(); ++i) {
+        Vec yp = y, ym = y;
+        yp[i] += h;
+        ym[i] -= h;
+        g[i] = (fixed_rotation_energy(mesh, m, fem, yp) - fixed_rotation_energy(mesh, m, fem, ym)) / (2 * h);
+    }
+    return g;
+}
+}  // namespace
+
 TEST(FemCorotated, StiffnessIsJacobianOfForceWithRotationsFixed)
 {
-    // Deformed state: K(x) x - grad E(x) is the rest-force term f0 of the fixed-R linear force,
-    // so grad_R(y) = K y - f0 must match grad E at y = x, and K must be symmetric PSD.
+    // Deformed state: with the rotations of x held fixed the elastic force is linear, grad_R(y) =
+    // K y - f0, so finite differences of the fixed-rotation energy must give K (y - x) between two
+    // states y and x, and grad E(x) at y = x; K is symmetric PSD with translations in its null space.
     const TetMesh mesh = small_box();
-    CorotatedFem fem(mesh.positions, mesh.tets, {Material{1e6, 0.4, 1000}});
+    const Material material{1e6, 0.4, 1000};
+    CorotatedFem fem(mesh.positions, mesh.tets, {material});
     const Vec x = flat(mesh.positions) + random_perturbation(3 * mesh.vertices(), 0.03, 7);
     fem.update(x);
     SpMat K;
     fem.assemble(0.0, 1.0, K);
     const Eigen::MatrixXd Kd = Eigen::MatrixXd(K);
+    const Vec gx = fixed_rotation_gradient(mesh, material, fem, x);
+    const double scale = fem.gradient().lpNorm<Eigen::Infinity>();
+    ASSERT_GT(scale, 1.0);  // a real deformation
+    EXPECT_LT((gx - fem.gradient()).lpNorm<Eigen::Infinity>(), 1e-6 * scale);
+    for (unsigned seed : {11u, 12u}) {
+        const Vec d = random_perturbation(x.size(), 0.01, seed);
+        const Vec force_change = fixed_rotation_gradient(mesh, material, fem, x + d) - gx;
+        const Vec Kd_y = K * d;
+        ASSERT_GT(Kd_y.lpNorm<Eigen::Infinity>(), 1.0);
+        EXPECT_LT((force_change - Kd_y).lpNorm<Eigen::Infinity>(), 1e-6 * Kd_y.lpNorm<Eigen::Infinity>()) << seed;
+    }
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Kd);
     EXPECT_GT(es.eigenvalues().minCoeff(), -1e-8 * es.eigenvalues().maxCoeff());
-    // Rigid translations are in the null space of K.
+    EXPECT_LT((Kd - Kd.transpose()).lpNorm<Eigen::Infinity>(), 1e-9 * Kd.lpNorm<Eigen::Infinity>());
     Vec t(x.size());
     for (long i = 0; i < mesh.vertices(); ++i) t.segment<3>(3 * i) = Vec3(1, -2, 0.5);
     EXPECT_LT((K * t).norm(), 1e-8 * Kd.norm());

