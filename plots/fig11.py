@@ -37,6 +37,8 @@ QUICK_SPAN = 2.0
 #: quick mode: a fair run whose final e is within this factor of FAIR_LEVEL (either side) crossed or
 #: missed the level by a margin another problem could turn around
 QUICK_E_MARGIN = 2.0
+#: the x axis of every panel
+DOF_LABEL = "degrees of freedom n (count)"
 
 
 def by_dof(runs, label):
@@ -105,6 +107,16 @@ def quick_reasons(runs) -> dict:
     return out
 
 
+def _annotate_rows(ax, m):
+    """The decoupled row count at each mprgp point, at 7 pt (figure_checks.MIN_FONT_PT), centred on
+    it and in turn above and below, so that the counts of two close resolutions do not overlap."""
+    for k, (_, r) in enumerate(m.sort_values("n").iterrows()):
+        above = k % 2 == 0
+        ax.annotate(fmt(r["rows_after"] if np.isfinite(r["rows_after"]) else r["m"]), (r["n"], r["time_s"]),
+                    fontsize=7, xytext=(0, 5 if above else -5), textcoords="offset points", ha="center",
+                    va="bottom" if above else "top")
+
+
 def _draw(ax, df, label, y, filled, marks):
     """One series in its solver's style (published filled markers, fair open ones), with the
     not-converged mark on its runs whose status is not `converged`."""
@@ -128,7 +140,8 @@ def produce(ctx: PaperContext) -> FigureOutcome:
     out = FigureOutcome("fig11", "Fig. 11: scaling of MPRGP and ICA with the number of DOFs")
     out.notes += unmeasured_notes(runs)
     out.notes += status_notes(runs)
-    fig, axes = plt.subplots(1, 4, figsize=(19, 4), squeeze=False)
+    # a page column wide: two panels a row, the legend below (figure_checks: 7 in, 7 pt, units)
+    fig, axes = plt.subplots(2, 2, figsize=(7.0, 5.6), squeeze=False)
     for ax, (mode, (ml, il)) in zip(axes.flat[:2], PAIRS.items()):
         m, i = by_dof(shown, ml), by_dof(shown, il)
         filled = mode == "published"  # fair series: dashed, open markers, in every panel
@@ -136,9 +149,7 @@ def produce(ctx: PaperContext) -> FigureOutcome:
             _draw(ax, m, ml, "time_s", filled, True)
             ax.plot(m["n"], figutil.positive(m["setup_s"]), ":", color=figutil.solver_colour("mprgp"), alpha=0.6,
                     label=f"{ml}: setup (power method)")
-            for _, r in m.iterrows():
-                ax.annotate(fmt(r["rows_after"] if np.isfinite(r["rows_after"]) else r["m"]), (r["n"], r["time_s"]),
-                            fontsize=6, xytext=(3, 3), textcoords="offset points")
+            _annotate_rows(ax, m)
         if not i.empty:
             _draw(ax, i, il, "time_s", filled, True)
         if authors is not None and mode == "published":
@@ -148,9 +159,9 @@ def produce(ctx: PaperContext) -> FigureOutcome:
                     alpha=0.7, label="authors: ica")
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.set_xlabel("DOFs")
+        ax.set_xlabel(DOF_LABEL)
         ax.set_ylabel("time, setup + solve [s]")
-        ax.set_title(f"{mode}: time, median of {len(rounds)} rounds (numbers: decoupled rows)", fontsize=9)
+        ax.set_title(f"{mode}: time, median of {len(rounds)} rounds\n(numbers: decoupled rows)")
         ax.grid(True, which="both", alpha=0.3)
     ax = axes.flat[2]
     for mode, (ml, il) in PAIRS.items():
@@ -164,9 +175,9 @@ def produce(ctx: PaperContext) -> FigureOutcome:
             _draw(ax, i, il, "a_products", mode == "published", False)
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel("DOFs")
-    ax.set_ylabel("A-products")
-    ax.set_title("ours: A-products (power method apart)", fontsize=9)
+    ax.set_xlabel(DOF_LABEL)
+    ax.set_ylabel("A-products (count)")
+    ax.set_title("ours: A-products (power method apart)")
     ax.grid(True, which="both", alpha=0.3)
     ax = axes.flat[3]
     for mode, (ml, il) in PAIRS.items():
@@ -183,9 +194,9 @@ def produce(ctx: PaperContext) -> FigureOutcome:
                 alpha=0.7, label="authors: ica iterations")
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel("DOFs")
-    ax.set_ylabel("iterations")
-    ax.set_title("iterations (ours and the authors')", fontsize=9)
+    ax.set_xlabel(DOF_LABEL)
+    ax.set_ylabel("iterations (count)")
+    ax.set_title("iterations (ours and the authors')")
     ax.grid(True, which="both", alpha=0.3)
     fig.tight_layout()
     figutil.legend_outside(fig, axes.flat, notes=[figutil.failed_mark()])

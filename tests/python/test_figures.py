@@ -1,7 +1,8 @@
 """Figures a referee accepts (issue 46): plots/figure_checks.py's rules hold on the figures of the
 demo's scripts (convergence, profiles, the stiff-family figure) drawn from fixture folders with 16
-labels, the checks catch each broken rule on a figure built to break it, and every one of 16
-labels gets a distinct, deterministic (colour, marker) pair.
+labels and on every figure of the quick reproduction (fig6, fig8, fig9, fig10, fig11), the checks
+catch each broken rule on a figure built to break it, and every one of 16 labels gets a distinct,
+deterministic (colour, marker) pair.
 
 Run from tests/python: /usr/bin/python3 -m unittest test_figures
 """
@@ -173,30 +174,75 @@ class TestDemoFigures(unittest.TestCase):
 
 class TestPaperFigures(unittest.TestCase):
     """The quick reproduction's figures with the checks enforced, on the stand-in contactbench
-    (tests/python/fixtures/fake_contactbench.py): fig6, fig9, fig10 and every profile pass. (fig8 and
-    fig11 are left out: their scripts are changed by issue 43 and do not pass yet.)"""
+    (tests/python/fixtures/fake_contactbench.py): fig6, fig8, fig9, fig10, fig11 and every profile
+    pass, each at most a page column wide; fig8 and fig11 pass again with the authors' data drawn
+    beside ours (more legend entries, fig11's DOF axis over more than a decade)."""
 
-    def test_fig6_fig9_fig10_pass(self):
-        from plots import reproduce
-        tmp = tempfile.mkdtemp(prefix="cb_paper_figures_")
+    STEMS = ("fig6_decoupling_time", "fig8_mprgp_vs_cg", "fig9_preconditioning", "fig10_mprgp_vs_ica",
+             "fig11_scaling")
+
+    def setUp(self):
+        self.tmp = tempfile.mkdtemp(prefix="cb_paper_figures_")
         os.environ["CB_FIGURE_CHECKS"] = "1"
-        try:
-            scenes = os.path.join(tmp, "scenes")
-            os.makedirs(scenes)
-            for name in ("two_dinos_1303", "two_dinos_1493", "longcube"):
-                with open(os.path.join(scenes, name + ".json"), "w") as f:
-                    f.write("{}")
-            out = os.path.join(tmp, "out")
-            fake = os.path.join(HERE, "fixtures", "fake_contactbench.py")
-            with redirect_stdout(io.StringIO()) as log, redirect_stderr(io.StringIO()):
-                self.assertEqual(reproduce.main(["--contactbench", fake, "--out", out, "--scenes", scenes,
-                                                 "--quick"]), 0)
-            for stem in ("fig6_decoupling_time", "fig9_preconditioning", "fig10_mprgp_vs_ica"):
-                self.assertTrue(os.path.isfile(os.path.join(out, "figures", stem + ".png")), log.getvalue()[-3000:])
-            self.assertNotIn("FigureCheckError: " + os.path.join(out, "runs"), log.getvalue())  # the profiles
-        finally:
-            os.environ.pop("CB_FIGURE_CHECKS", None)
-            shutil.rmtree(tmp, ignore_errors=True)
+
+    def tearDown(self):
+        os.environ.pop("CB_FIGURE_CHECKS", None)
+        shutil.rmtree(self.tmp, ignore_errors=True)
+
+    def _width_in(self, png):
+        import matplotlib.image as mpimg
+        return mpimg.imread(png).shape[1] / figutil.DPI
+
+    def _authors_data(self):
+        """Made-up authors' files in the columns `make paper-data` writes (plots/paper_data.py)."""
+        from plots import paper_data
+        data = os.path.join(self.tmp, "paper-data")
+        os.makedirs(os.path.join(data, "figures"))
+        with open(os.path.join(data, "figures", "fig8_objective_history.csv"), "w") as f:
+            f.write("iteration,mprgp_objective,cg_objective\n")
+            for k in range(60):
+                f.write(f"{k},{-10 - 5 * (1 - 0.8 ** k)!r},{(-10 - 5.5 * (1 - 0.7 ** k)) if k < 45 else ''}\n")
+        with open(os.path.join(data, "figures", "fig11_mprgp_vs_ica.csv"), "w") as f:
+            f.write(",".join(paper_data.FIG11_COLUMNS) + "\n")
+            for k, dofs in enumerate((7818, 15000, 24000, 45000, 81000)):
+                row = {c: 1 for c in paper_data.FIG11_COLUMNS}
+                row.update(snapshot=f"s{k}", dofs=dofs, rows_decoupled=100 + 10 * k, power_iterations=700 + 60 * k,
+                           mprgp_iterations=45 + 5 * k, mprgp_time_s=0.2 * dofs / 7818,
+                           ica_time_s=0.5 * (dofs / 7818) ** 1.5, ica_iterations=2000 + 400 * k)
+                f.write(",".join(str(row[c]) for c in paper_data.FIG11_COLUMNS) + "\n")
+        return data
+
+    def test_every_paper_figure_passes(self):
+        from plots import fig8, fig11, reproduce
+        from plots.paper_context import standalone_context
+        scenes = os.path.join(self.tmp, "scenes")
+        os.makedirs(scenes)
+        for name in ("two_dinos_1303", "two_dinos_1493", "longcube"):
+            with open(os.path.join(scenes, name + ".json"), "w") as f:
+                f.write("{}")
+        out = os.path.join(self.tmp, "out")
+        fake = os.path.join(HERE, "fixtures", "fake_contactbench.py")
+        with redirect_stdout(io.StringIO()) as log, redirect_stderr(io.StringIO()):
+            self.assertEqual(reproduce.main(["--contactbench", fake, "--out", out, "--scenes", scenes,
+                                             "--quick", "--data", os.path.join(self.tmp, "no-data")]), 0)
+        broken = [line for line in log.getvalue().splitlines() if "FigureCheckError" in line]
+        self.assertEqual(broken, [])  # every figure script and the profiles
+        for stem in self.STEMS:
+            png = os.path.join(out, "figures", stem + ".png")
+            self.assertTrue(os.path.isfile(png), log.getvalue()[-3000:])
+            self.assertLessEqual(self._width_in(png), 7.3, stem)  # 7 in plus the tight box's few points
+        data = self._authors_data()
+        for module, suite, stem, authors in ((fig8, "fig8", "fig8_mprgp_vs_cg", "fig8_objective_history.csv"),
+                                             (fig11, "fig11", "fig11_scaling", "fig11_mprgp_vs_ica.csv")):
+            ctx = standalone_context([os.path.join(out, "runs", suite), "--data", data,
+                                      "--out", os.path.join(self.tmp, "with-data")], suite, suite)
+            self.assertIsNotNone(ctx.authors_csv(authors))  # the authors' series are drawn
+            figutil._ASSIGNED.clear()
+            with redirect_stdout(io.StringIO()), redirect_stderr(io.StringIO()):
+                files = module.produce(ctx).files  # raises FigureCheckError on a broken rule
+            png = [f for f in files if f.endswith(".png")]
+            self.assertEqual([os.path.basename(f) for f in png], [stem + ".png"])
+            self.assertLessEqual(self._width_in(png[0]), 7.3, stem)
 
 
 if __name__ == "__main__":
