@@ -196,7 +196,7 @@ TEST(MprgpKernels, PowerMethodEstimatesTheNormFromBelowAndWarmStartHelps)
     // by the cap of 1001: one more product moves the returned vector by about the tolerance.
     EXPECT_LT(authors.products, 1001);
     EXPECT_GT(authors.products, 10);
-    const Vec next = A * u;
+    const Vec next = A_csr * u;
     EXPECT_LT((next / next.norm() - u).norm(), 1e-7);
     const cb::PowerResult capped = cb::power_method(A, u, cb::PowerRule::POWER, 2, 0.0, false, 1);
     EXPECT_EQ(capped.products, 2);
