@@ -223,7 +223,6 @@ int cmd_merge(const Args& args)
     if (existed) lock_output_folder(out, "merge");
     refuse_foreign_out(out, first);
     make_output_subfolder(out, "runs");  // issue 40: never through a planted OUT/runs link
-    if (ec) throw_input_error(out, "", "cannot create the folder: " + ec.message());
     if (!existed) lock_output_folder(out, "merge");
     nlohmann::json merged_from = nlohmann::json::array();
     size_t copied = 0, duplicates = 0;

@@ -22,14 +22,14 @@ namespace fs = std::filesystem;
 
 namespace {
 
-/// The pid a lock holder wrote into DIR/.lock ("?" when unreadable).
+/// The pid a lock holder wrote into DIR/.lock, its first word ("?" when unreadable).
 std::string holder_pid(int fd)
 {
     char holder[32] = {0};
     const ssize_t got = ::pread(fd, holder, sizeof holder - 1, 0);
-    std::string pid = got > 0 ? std::string(holder, size_t(got)) : std::string("?");
-    while (!pid.empty() && (pid.back() == '\n' || pid.back() == ' ')) pid.pop_back();
-    return pid;
+    const std::string text = got > 0 ? std::string(holder, size_t(got)) : std::string();
+    const std::string pid = text.substr(0, text.find_first_of(" \n"));  // "<pid> <command>\n" (run_lock.cpp)
+    return pid.empty() ? std::string("?") : pid;
 }
 
 /// lstat without following: true when something (a file, a link, a FIFO) is at `path`.

@@ -13,6 +13,16 @@
 
 namespace cb {
 
+namespace {
+int g_lock_fd = -1;  // the descriptor holding the flock of lock_output_folder
+}  // namespace
+
+void release_output_folder_lock()
+{
+    if (g_lock_fd >= 0) ::close(g_lock_fd);  // closing the last descriptor drops the flock
+    g_lock_fd = -1;
+}
+
 void lock_output_folder(const std::string& out, const std::string& command)
 {
     namespace fs = std::filesystem;
@@ -44,7 +54,7 @@ void lock_output_folder(const std::string& out, const std::string& command)
     if (::ftruncate(fd, 0) == 0 && ::pwrite(fd, me.data(), me.size(), 0) < 0) {
         // the pid is only for the message of a second command
     }
-    // fd stays open (and locked) until exit
+    g_lock_fd = fd;  // stays open (and locked) until exit or release_output_folder_lock()
 }
 
 }  // namespace cb

@@ -12,4 +12,9 @@ namespace cb {
 /// A .lock that is not a regular file (a planted symlink) is refused, never followed.
 void lock_output_folder(const std::string& out, const std::string& command);
 
+/// Releases the lock this process took with lock_output_folder (no-op without one): for a
+/// command whose output is whole before it ends, so that readers that refuse a locked folder
+/// (the HTML report of `run`, plots/loader.py) can read it while the command finishes.
+void release_output_folder_lock();
+
 }  // namespace cb

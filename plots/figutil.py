@@ -34,7 +34,10 @@ matplotlib.rcParams.update({"font.size": 8, "axes.titlesize": 8, "axes.labelsize
 def _finish(fig, folder: str, stem: str, tight: bool) -> None:
     """Before saving: overlapping tick labels thinned, then the figure rules checked
     (plots/figure_checks.py): a problem raises with CB_FIGURE_CHECKS=1, else it is printed."""
-    from plots import figure_checks
+    try:  # figutil is imported both as plots.figutil and, by scripts run as files, as figutil
+        from plots import figure_checks
+    except ImportError:
+        import figure_checks
     figure_checks.tidy_ticks(fig)
     found = figure_checks.problems(fig, tight=tight)
     if not found:

@@ -112,6 +112,10 @@ def main(argv):
         record["label"], record["message"] = HOSTILE_LABEL, HOSTILE_MESSAGE
         with open(hostile, "w", encoding="utf-8") as f:
             json.dump(record, f)
+        # A folder of `run` (with jobs.json) holds each job's own record only, and a label with '/'
+        # cannot name a run file: without jobs.json the folder reads as a hand-assembled one, whose
+        # records may carry any label (plots/loader.py's rules).
+        os.remove(os.path.join(out, "jobs.json"))
         rep = subprocess.run([cb, "report", out], capture_output=True, text=True, timeout=600)
         check(rep.returncode == 0 and rep.stdout.strip() == index,
               f"contactbench report prints the page's path (stdout {rep.stdout!r}, stderr {rep.stderr[-2000:]!r})")

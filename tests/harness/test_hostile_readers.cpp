@@ -393,10 +393,12 @@ TEST(HostileReaders, ResultsFoldersAreReadOnlyWhenWhole)
     ASSERT_GE(fd, 0);
     ASSERT_EQ(::flock(fd, LOCK_EX), 0);
     const std::string me = std::to_string(::getpid());
-    ASSERT_EQ(::pwrite(fd, me.data(), me.size(), 0), ssize_t(me.size()));
+    const std::string holder = me + " run\n";  // as `run` writes it: "<pid> <command>"
+    ASSERT_EQ(::ftruncate(fd, 0), 0);
+    ASSERT_EQ(::pwrite(fd, holder.data(), holder.size(), 0), ssize_t(holder.size()));
     o = run("merge " + q(busy) + " " + q(base));
     EXPECT_EQ(o.status, 2) << o.err;
-    EXPECT_EQ(o.err, "contactbench merge: error: " + busy.string() + ": another `contactbench merge` (pid " + me +
+    EXPECT_EQ(o.err, "contactbench merge: error: " + busy.string() + ": another `contactbench run` (pid " + me +
                          ") is writing to this folder; wait for it to finish or use another --out\n");
     o = run("compare " + q(base) + " " + q(busy));
     EXPECT_EQ(o.status, 2) << o.err;
