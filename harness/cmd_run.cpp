@@ -404,7 +404,7 @@ int cmd_run(const Args& args)
     std::error_code ec;
     fs::remove(fs::path(out) / "suite.pending.json", ec);
     std::cerr << "ran " << ran << " of " << plan.total() << " jobs; " << runs << " runs in " << out << "/summary.csv\n";
-    release_output_folder_lock();  // the folder is whole: the report may read it
+    release_output_folder_lock();                       // the folder is whole: the report may read it
     print_run_end(out, suite.time_limit_s, std::cout);  // the table per solver and the HTML report
     return 0;
 }

@@ -47,7 +47,7 @@ struct ProgramOutcome {
     /// counts the pages a forked child holds before exec in its peak, so peak_rss_bytes is at least about this much
     /// even for a tiny program: a peak at this floor means the program's own peak is at most it.
     long start_rss_bytes = -1;
-    int orphans_killed = 0;    ///< descendants still running after the program ended, killed
+    int orphans_killed = 0;                            ///< descendants still running after the program ended, killed
     std::uint64_t stdout_bytes = 0, stderr_bytes = 0;  ///< as written by the program
     bool stdout_capped = false, stderr_capped = false;
     std::string failure() const;  ///< "" for exit 0, else "exited with status 3", "was killed by signal 11 (...)"

@@ -28,7 +28,7 @@ struct MprgpCoupledSettings {
     long safeguard_max = 100;              ///< max repeats of Alg. 3's safeguard after one step
     std::string operators = "components";  ///< components (per row-graph component) | global (one CHOLMOD problem)
     long dense_max_rows = 128;  ///< largest component with dense factors (larger: CHOLMOD; measured crossover 100-200)
-    long sparse_max_updates = 64;     ///< larger set changes of a large component refactor (fewer: row updates)
+    long sparse_max_updates = 64;  ///< larger set changes of a large component refactor (fewer: row updates)
     std::string expansion_projection = "face";  ///< face (the face rows stay equalities) | all (P of Alg. 1)
 
     static MprgpCoupledSettings from_json(const nlohmann::json& settings);
