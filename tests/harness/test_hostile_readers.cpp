@@ -421,6 +421,35 @@ TEST(HostileReaders, ResultsFoldersAreReadOnlyWhenWhole)
     EXPECT_EQ(o.status, 2) << o.err;
     EXPECT_EQ(o.err, "contactbench compare: error: " + typed.string() +
                          ": plane__pgs.json: /time/samples_total_s: expected numbers (seconds), got \"a\"\n");
+    // R7: every field compare reads is type-checked in one place: a string counter (once skipped
+    // as "not recorded"), an object where a number is expected, a number where a string is.
+    auto confused = [&](const std::string& name, const nlohmann::json::json_pointer& field, const nlohmann::json& v) {
+        const fs::path to = copy_of_base(name);
+        nlohmann::json record = read_json_file((to / "runs" / "plane__pgs.json").string());
+        record[field] = v;
+        write_json_atomic((to / "runs" / "plane__pgs.json").string(), record);
+        return run("compare " + q(base) + " " + q(to));
+    };
+    o = confused("t1", nlohmann::json::json_pointer("/counters/iterations"), "12");
+    EXPECT_EQ(o.status, 2) << o.out << o.err;
+    EXPECT_EQ(o.err, "contactbench compare: error: " + (dir / "t1").string() +
+                         ": plane__pgs.json: /counters/iterations: expected a number, got \"12\"\n");
+    o = confused("t2", nlohmann::json::json_pointer("/accuracy/max"), {{"v", 1}});
+    EXPECT_EQ(o.status, 2) << o.out << o.err;
+    EXPECT_EQ(o.err, "contactbench compare: error: " + (dir / "t2").string() +
+                         ": plane__pgs.json: /accuracy/max: expected a number or null, got {\"v\":1}\n");
+    o = confused("t3", nlohmann::json::json_pointer("/snapshot/hash"), 7);
+    EXPECT_EQ(o.status, 2) << o.out << o.err;
+    EXPECT_EQ(o.err, "contactbench compare: error: " + (dir / "t3").string() +
+                         ": plane__pgs.json: /snapshot/hash: expected a string, got 7\n");
+    o = confused("t4", nlohmann::json::json_pointer("/status"), 0);
+    EXPECT_EQ(o.status, 2) << o.out << o.err;
+    EXPECT_EQ(o.err, "contactbench compare: error: " + (dir / "t4").string() +
+                         ": plane__pgs.json: /status: expected a string, got 0\n");
+    o = confused("t5", nlohmann::json::json_pointer("/counters/a_products"), nullptr);  // null: work_counted is true
+    EXPECT_EQ(o.status, 2) << o.out << o.err;
+    EXPECT_EQ(o.err, "contactbench compare: error: " + (dir / "t5").string() +
+                         ": plane__pgs.json: /counters/a_products: expected a number, got null\n");
     // The whole folders still compare.
     o = run("compare " + q(base) + " " + q(copy_of_base("same")));
     EXPECT_EQ(o.status, 0) << o.out << o.err;
