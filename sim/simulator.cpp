@@ -521,6 +521,16 @@ double Simulator::penetration_now() const
 
 std::vector<SurfaceMesh> Simulator::body_surfaces() const { return surfaces_at(m_x); }
 
+void Simulator::restore_state(const Vec& x, const Vec& v, const Vec& eigenvector, long steps_done)
+{
+    if (x.size() != dofs() || v.size() != dofs())
+        throw_input_error("restore_state", "", "positions of another size than the scene's");
+    m_x = x;
+    m_v = v;
+    m_eigenvector = eigenvector;
+    m_step = steps_done;
+}
+
 namespace {
 const char* const STEPS_HEADER =
     "frame,step,newton_iteration,solver,status,solver_status,iterations,accuracy,accuracy_solved,"
