@@ -4,6 +4,7 @@
 #include "problems/qpsnap.hpp"
 #include "problems/safe_output.hpp"
 #include "sim/chains_state.hpp"
+#include "sim/partial_table.hpp"
 #include "sim/render.hpp"
 
 #include <algorithm>
@@ -181,12 +182,14 @@ bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& op
     const std::string csv_path = opt.out_dir + "/chains.csv", json_path = opt.out_dir + "/chains.json";
     const std::string png_path = opt.out_dir + "/" + scene.name + "_largest_difference.png";
     const std::string pen_png_path = opt.out_dir + "/" + scene.name + "_largest_penetration.png";
-    const std::string state_path = chains_state_path(opt.out_dir);
+    const std::string state_path = chains_state_path(opt.out_dir), partial_path = csv_path + ".partial";
     const std::string fresh = "; --fresh discards it, or use another --out";
     if (opt.fresh)
-        for (const std::string& p : {json_path, csv_path, png_path, pen_png_path, state_path}) fs::remove(p, ec);
+        for (const std::string& p : {json_path, csv_path, partial_path, png_path, pen_png_path, state_path})
+            fs::remove(p, ec);
     // Never mix runs, and never delete one without --fresh: an interrupted run of the same inputs
-    // (chains.state and chains.csv, no chains.json) is resumed from its last whole frame.
+    // (chains.state and chains.csv, or chains.csv.partial when killed; no chains.json) is resumed
+    // from its last whole frame.
     std::optional<ChainsState> state = read_chains_state(opt.out_dir);
     if (state && state->identity != identity) {
         std::string changed;
@@ -197,8 +200,8 @@ bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& op
                           "holds a chains run of other inputs (changed: " + changed + ")" + fresh);
     }
     std::string found;
-    for (const std::string& p : {json_path, csv_path, png_path, pen_png_path})
-        if ((!state || p != csv_path) && fs::exists(fs::symlink_status(p, ec)))
+    for (const std::string& p : {json_path, csv_path, partial_path, png_path, pen_png_path})
+        if ((!state || (p != csv_path && p != partial_path)) && fs::exists(fs::symlink_status(p, ec)))
             found += (found.empty() ? "" : ", ") + fs::path(p).filename().string();
     if (!found.empty())
         throw_input_error(opt.out_dir, "--out", "holds an earlier chains run's output (" + found + ")" + fresh);
@@ -206,30 +209,25 @@ bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& op
                   state->eigenvector.size() != sims.size() || state->steps_done.size() != sims.size() ||
                   state->stopped.size() != sims.size()))
         throw_input_error(state_path, "", "does not match these chains" + fresh);
-    // Through the one output path (problems/safe_output.hpp): a fresh temporary (no planted link
-    // followed), appended frame by frame, renamed at the end or at a signal; a resumed run starts
-    // it with the whole frames of the earlier one.
-    std::string earlier;
-    if (state) {
-        earlier = fs::exists(fs::symlink_status(csv_path, ec)) ? read_regular_file(csv_path) : std::string();
-        if (earlier.size() < static_cast<size_t>(state->csv_bytes))
-            throw_input_error(csv_path, "",
-                              "shorter than the " + std::to_string(state->frames_done) +
-                                  " whole frames chains.state records" + fresh);
-        earlier.resize(static_cast<size_t>(state->csv_bytes));
-    }
-    AtomicFile csv(csv_path);
+    // chains.csv.partial, appended and flushed frame by frame, renamed to chains.csv at the end or
+    // at a signal; a resumed run keeps the whole frames its state records and appends after them.
+    const std::string header =
+        "frame,time_s,chain,solver,decouple,status,steps_not_solved,accuracy,rows,rows_solved,rows_dropped,"
+        "penetration,penetration_rel,vertices_inside,violation_rel,rms_distance_rel,max_distance_rel,"
+        "kinetic_energy,elastic_energy,blow_up\n";
+    PartialTable csv;
     long csv_bytes = 0;
+    if (state) {
+        csv.resume_prefix(csv_path, header, static_cast<size_t>(state->csv_bytes));
+        csv_bytes = state->csv_bytes;
+    } else {
+        csv.open(csv_path, header);
+        csv_bytes = static_cast<long>(header.size());
+    }
     const auto write_csv = [&csv, &csv_bytes](const std::string& text) {
-        csv.write(text);  // fails with an InputError naming the file (disk full, ...)
+        csv.append(text);  // fails with an InputError naming the file (disk full, ...)
         csv_bytes += static_cast<long>(text.size());
     };
-    if (state)
-        write_csv(earlier);
-    else
-        write_csv("frame,time_s,chain,solver,decouple,status,steps_not_solved,accuracy,rows,rows_solved,rows_dropped,"
-                  "penetration,penetration_rel,vertices_inside,violation_rel,rms_distance_rel,max_distance_rel,"
-                  "kinetic_energy,elastic_energy,blow_up\n");
 
     std::vector<bool> stopped(sims.size(), false);
     PicturedFrame difference, penetration;  // of the shown chain against the reference
@@ -325,12 +323,12 @@ bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& op
             *opt.progress << line << std::flush;
         }
         if (opt.stop && *opt.stop != 0 && f + 1 < frames) {  // a signal: every chain's whole frames, no record
-            csv.commit();
+            csv.finish();
             if (frames_done) *frames_done = f + 1;
             return ok;
         }
     }
-    csv.commit();
+    csv.finish();
     if (frames_done) *frames_done = frames;
     if (!difference.x.empty()) render_side_by_side(png_path, scene, surfaces_of(difference, sims));
     if (!penetration.x.empty()) render_side_by_side(pen_png_path, scene, surfaces_of(penetration, sims));

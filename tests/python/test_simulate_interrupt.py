@@ -320,6 +320,39 @@ class TestChainsLockAndStop(unittest.TestCase):
             self.assertIn("holds an earlier chains run's output (chains.json, chains.csv, demo_largest_difference.png,"
                           " demo_largest_penetration.png)", done.stderr)
 
+    def test_killed_chains_resume_equal_an_uninterrupted_run(self):
+        """SIGKILL: chains.csv.partial and chains.state are left; the same command resumes them."""
+        scene = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
+                             "scenes", "demo.json")
+        with tempfile.TemporaryDirectory() as tmp:
+            whole, out = os.path.join(tmp, "whole"), os.path.join(tmp, "killed")
+            cmd = [CB, "chains", scene, "--frames", "150"]
+            subprocess.run(cmd + ["--out", whole], check=True, capture_output=True)
+            first = subprocess.Popen(cmd + ["--out", out], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            state = os.path.join(out, "chains.state")
+            try:
+                deadline = time.time() + 120
+                while time.time() < deadline and first.poll() is None:
+                    try:
+                        with open(state, "rb") as f:
+                            if json.loads(f.read().split(b"\n")[1])["frames_done"] >= 3:
+                                break
+                    except (OSError, ValueError, IndexError):
+                        pass
+                    time.sleep(0.002)
+            finally:
+                first.kill()
+                first.wait()
+            self.assertEqual(first.returncode, -signal.SIGKILL)
+            self.assertTrue(os.path.isfile(os.path.join(out, "chains.csv.partial")))
+            self.assertFalse(os.path.exists(os.path.join(out, "chains.csv")))
+            again = subprocess.run(cmd + ["--out", out], capture_output=True, text=True)
+            self.assertEqual(again.returncode, 0, again.stderr[-500:])
+            self.assertIn(f"chains: resuming {out} after frame ", again.stderr)
+            for name in ["chains.csv", "chains.json", "demo_largest_difference.png", "demo_largest_penetration.png"]:
+                self.assertTrue(filecmp.cmp(os.path.join(whole, name), os.path.join(out, name), shallow=False), name)
+            self.assertFalse(os.path.exists(os.path.join(out, "chains.csv.partial")))
+
 
 if __name__ == "__main__":
     unittest.main()
