@@ -58,9 +58,14 @@ int cmd_chains(const Args& args)
         "  --allow-commands  run a `command` solver (an external program) that the scene names; the scene\n"
         "                 must also say \"allow_commands\": true\n"
         "  --fresh        discard an earlier chains run's outputs in DIR (without it they are refused, exit 2)\n"
-        "DIR is locked while the chains run (a second command into it exits 2). SIGINT or SIGTERM stop them\n"
-        "after the frame being stepped: chains.csv then holds every chain's whole frames, no chains.json is\n"
-        "written, and the exit status is 128 + the signal (chains do not resume: --fresh runs them again).\n";
+        "DIR is locked while the chains run (a second command into it exits 2). While they run the table is\n"
+        "DIR/chains.csv.partial, and after each whole frame every chain's state is saved in DIR/chains.state\n"
+        "(removed once chains.json is written), so a killed run resumes too. SIGINT or SIGTERM\n"
+        "stop them after the frame being stepped: chains.csv then holds every chain's whole frames, no\n"
+        "chains.json is written, and the exit status is 128 + the signal. The same command resumes them from\n"
+        "the last whole frame, giving chains.csv and chains.json bit for bit as an uninterrupted run; a run\n"
+        "of other inputs (scene file content, frames, orders, h, seed, exact solver) in DIR is refused with\n"
+        "exit 2 naming what changed, and so is a finished run (chains.json): --fresh runs them again.\n";
     if (cl.help()) {
         std::cout << usage;
         return 0;
@@ -117,7 +122,7 @@ int cmd_chains(const Args& args)
         !std::filesystem::exists(opt.out_dir + "/chains.json")) {  // not a signal after the last frame
         std::cerr << "chains: stopped by signal " << *opt.stop << " after frame " << frames_done - 1 << ": "
                   << opt.out_dir << "/chains.csv holds frames 0 to " << frames_done - 1
-                  << " of every chain; no chains.json (--fresh runs them again)\n";
+                  << " of every chain; no chains.json (the same command resumes them)\n";
         return stopped_exit_status(*opt.stop);
     }
     return 0;

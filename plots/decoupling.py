@@ -89,17 +89,24 @@ def read_json(path: str) -> dict:
 def run_chains(cb: str, scene: str, folder: str, frames: int, h: Optional[float] = None,
                data: Optional[str] = None, force: bool = False, control: bool = False) -> Tuple[bool, str]:
     """Runs `contactbench chains` into folder unless a finished run of the same inputs is there
-    (its key.json, written after chains.json). control adds the authors-exact chain. Returns (ok,
-    what happened)."""
+    (its key.json, written after chains.json); an interrupted run of the same inputs (key.pending.json,
+    written before it started, and chains.state) is resumed by chains from its last whole frame.
+    control adds the authors-exact chain. Returns (ok, what happened)."""
     key = chains_key(cb, scene, frames, h, data)
     if control:
         key["control"] = True
     if not force and read_json(os.path.join(folder, "key.json")) == key and \
             os.path.isfile(os.path.join(folder, "chains.json")):
         return True, f"cached ({folder})"
-    if os.path.isdir(folder):
-        shutil.rmtree(folder)
-    os.makedirs(folder)
+    pending = os.path.join(folder, "key.pending.json")
+    resume = not force and read_json(pending) == key and os.path.isfile(os.path.join(folder, "chains.state"))
+    if not resume:
+        if os.path.isdir(folder):
+            shutil.rmtree(folder)
+        os.makedirs(folder)
+        with open(pending + ".partial", "w", encoding="utf-8") as f:
+            json.dump(key, f, indent=1)
+        os.replace(pending + ".partial", pending)
     args = [cb, "chains", scene, "--frames", str(frames), "--out", folder]
     if h is not None:
         args += ["--h", repr(h)]
@@ -107,7 +114,7 @@ def run_chains(cb: str, scene: str, folder: str, frames: int, h: Optional[float]
         args += ["--data", data]
     if control:
         args.append("--control")
-    with open(os.path.join(folder, "chains.log"), "w", encoding="utf-8") as log:
+    with open(os.path.join(folder, "chains.log"), "a" if resume else "w", encoding="utf-8") as log:
         rc = subprocess.run(args, stdout=log, stderr=subprocess.STDOUT).returncode
     if rc != 0 or not os.path.isfile(os.path.join(folder, "chains.json")):
         return False, f"contactbench chains failed (exit {rc}; {folder}/chains.log)"
@@ -115,7 +122,8 @@ def run_chains(cb: str, scene: str, folder: str, frames: int, h: Optional[float]
     with open(tmp, "w", encoding="utf-8") as f:
         json.dump(key, f, indent=1)
     os.replace(tmp, os.path.join(folder, "key.json"))
-    return True, f"ran ({folder})"
+    os.remove(pending)
+    return True, f"{'resumed' if resume else 'ran'} ({folder})"
 
 
 # ----------------------------------------------------------------------------- reading, numbers

@@ -1,7 +1,10 @@
 #include "sim/chains.hpp"
 
 #include "problems/io_util.hpp"
+#include "problems/qpsnap.hpp"
 #include "problems/safe_output.hpp"
+#include "sim/chains_state.hpp"
+#include "sim/partial_table.hpp"
 #include "sim/render.hpp"
 
 #include <algorithm>
@@ -13,6 +16,7 @@
 #include <iomanip>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <ostream>
 #include <sstream>
 
@@ -98,20 +102,24 @@ EndContacts end_contacts(const Simulator& sim)
     return end;
 }
 
-/// Every chain's surfaces at the frame where a figure of the shown chain is largest so far.
-struct PictureAtMax {
-    long frame = -1;
-    double value = -1;
+/// Keeps every chain's positions at the frame where a figure of the shown chain is largest so far
+/// (positions, not surfaces: they are what a resumed run restores).
+void offer(PicturedFrame& p, double v, long f, const std::vector<std::unique_ptr<Simulator>>& sims)
+{
+    if (!std::isfinite(v) || v <= p.value) return;
+    p.value = v;
+    p.frame = f;
+    p.x.clear();
+    for (const auto& sim : sims) p.x.push_back(sim->positions());
+}
+
+std::vector<std::vector<SurfaceMesh>> surfaces_of(const PicturedFrame& p,
+                                                  const std::vector<std::unique_ptr<Simulator>>& sims)
+{
     std::vector<std::vector<SurfaceMesh>> surfaces;
-    void offer(double v, long f, const std::vector<std::unique_ptr<Simulator>>& sims)
-    {
-        if (!std::isfinite(v) || v <= value) return;
-        value = v;
-        frame = f;
-        surfaces.clear();
-        for (const auto& sim : sims) surfaces.push_back(sim->body_surfaces());
-    }
-};
+    for (size_t c = 0; c < p.x.size(); ++c) surfaces.push_back(sims[c]->surfaces_at(p.x[c]));
+    return surfaces;
+}
 
 }  // namespace
 
@@ -144,37 +152,118 @@ bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& op
     const long frames = opt.frames >= 0 ? opt.frames : scene.frames;
     const double size = first.body_size();
 
+    nlohmann::json chains = nlohmann::json::array();
+    for (const ChainSpec& spec : opt.chains)
+        chains.push_back(
+            {{"label", spec.label}, {"solver", spec.solver}, {"settings", spec.settings}, {"decouple", spec.decouple}});
+    // Every input of what the chains write: a resume needs the same (file contents, not names).
+    nlohmann::json meshes = nlohmann::json::object();
+    for (const auto& b : scene.bodies)
+        if (!b.mesh_file.empty()) meshes[b.mesh_file] = qpsnap_content_hash(b.mesh_file);
     std::error_code ec;
+    const bool scene_file = !scene.file.empty() && fs::is_regular_file(scene.file, ec);
+    const nlohmann::json identity = {
+        {"scene_file", scene_file ? qpsnap_content_hash(scene.file) : "not a file: " + scene.file},
+        {"meshes", meshes},
+        {"data", opt.data_dir},
+        {"frames", frames},
+        {"h", first.step_h()},
+        {"steps_per_frame", first.steps_per_frame()},
+        {"decouple_seed", opt.decouple_seed},
+        {"chains", chains},
+        {"reference", opt.reference},
+        {"render", opt.render_chain},
+        {"chains_version", CHAINS_VERSION},
+        {"simulator_version", SIMULATOR_VERSION}};
+
     fs::create_directories(opt.out_dir, ec);
     if (!fs::is_directory(opt.out_dir))
         throw_input_error(opt.out_dir, "--out", "cannot create the output folder: " + ec.message());
     const std::string csv_path = opt.out_dir + "/chains.csv", json_path = opt.out_dir + "/chains.json";
     const std::string png_path = opt.out_dir + "/" + scene.name + "_largest_difference.png";
     const std::string pen_png_path = opt.out_dir + "/" + scene.name + "_largest_penetration.png";
-    // Never mix runs, and never delete one without --fresh.
-    std::string found;
-    for (const std::string& p : {json_path, csv_path, png_path, pen_png_path})
-        if (fs::exists(fs::symlink_status(p, ec)))
-            found += (found.empty() ? "" : ", ") + fs::path(p).filename().string();
-    if (!found.empty() && !opt.fresh)
+    const std::string state_path = chains_state_path(opt.out_dir), partial_path = csv_path + ".partial";
+    const std::string fresh = "; --fresh discards it, or use another --out";
+    if (opt.fresh)
+        for (const std::string& p : {json_path, csv_path, partial_path, png_path, pen_png_path, state_path})
+            fs::remove(p, ec);
+    // Never mix runs, and never delete one without --fresh: an interrupted run of the same inputs
+    // (chains.state and chains.csv, or chains.csv.partial when killed; no chains.json) is resumed
+    // from its last whole frame.
+    std::optional<ChainsState> state = read_chains_state(opt.out_dir);
+    if (state && state->identity != identity) {
+        std::string changed;
+        for (const auto& [key, value] : identity.items())
+            if (!state->identity.contains(key) || state->identity[key] != value)
+                changed += (changed.empty() ? "" : ", ") + key;
         throw_input_error(opt.out_dir, "--out",
-                          "holds an earlier chains run's output (" + found +
-                              "); --fresh discards it, or use another --out");
-    for (const std::string& p : {json_path, csv_path, png_path, pen_png_path}) fs::remove(p, ec);
-    // Through the one output path (problems/safe_output.hpp): a fresh temporary (no planted link
-    // followed), appended frame by frame, renamed at the end; an interrupted run leaves no chains.csv.
-    AtomicFile csv(csv_path);
-    csv.write(
+                          "holds a chains run of other inputs (changed: " + changed + ")" + fresh);
+    }
+    std::string found;
+    for (const std::string& p : {json_path, csv_path, partial_path, png_path, pen_png_path})
+        if ((!state || (p != csv_path && p != partial_path)) && fs::exists(fs::symlink_status(p, ec)))
+            found += (found.empty() ? "" : ", ") + fs::path(p).filename().string();
+    if (!found.empty())
+        throw_input_error(opt.out_dir, "--out", "holds an earlier chains run's output (" + found + ")" + fresh);
+    if (state && (state->frames_done > frames || state->x.size() != sims.size() || state->v.size() != sims.size() ||
+                  state->eigenvector.size() != sims.size() || state->steps_done.size() != sims.size() ||
+                  state->stopped.size() != sims.size()))
+        throw_input_error(state_path, "", "does not match these chains" + fresh);
+    // chains.csv.partial, appended and flushed frame by frame, renamed to chains.csv at the end or
+    // at a signal; a resumed run keeps the whole frames its state records and appends after them.
+    const std::string header =
         "frame,time_s,chain,solver,decouple,status,steps_not_solved,accuracy,rows,rows_solved,rows_dropped,"
-        "penetration,penetration_rel,vertices_inside,violation_rel,rms_distance_rel,max_distance_rel,kinetic_energy,"
-        "elastic_energy,blow_up\n");
+        "penetration,penetration_rel,vertices_inside,violation_rel,rms_distance_rel,max_distance_rel,"
+        "kinetic_energy,elastic_energy,blow_up\n";
+    PartialTable csv;
+    long csv_bytes = 0;
+    if (state) {
+        csv.resume_prefix(csv_path, header, static_cast<size_t>(state->csv_bytes));
+        csv_bytes = state->csv_bytes;
+    } else {
+        csv.open(csv_path, header);
+        csv_bytes = static_cast<long>(header.size());
+    }
+    const auto write_csv = [&csv, &csv_bytes](const std::string& text) {
+        csv.append(text);  // fails with an InputError naming the file (disk full, ...)
+        csv_bytes += static_cast<long>(text.size());
+    };
 
     std::vector<bool> stopped(sims.size(), false);
-    PictureAtMax difference, penetration;  // of the shown chain against the reference
+    PicturedFrame difference, penetration;  // of the shown chain against the reference
     std::vector<double> pen_of(sims.size(), 0.0);
     bool ok = true;
+    long first_frame = 0;
+    if (state) {
+        for (size_t c = 0; c < sims.size(); ++c)
+            sims[c]->restore_state(state->x[c], state->v[c], state->eigenvector[c], state->steps_done[c]);
+        stopped = state->stopped;
+        ok = std::find(stopped.begin(), stopped.end(), true) == stopped.end();
+        difference = state->difference;
+        penetration = state->penetration;
+        first_frame = state->frames_done;
+        if (opt.progress)
+            *opt.progress << "chains: resuming " << opt.out_dir << " after frame " << first_frame - 1 << " ("
+                          << first_frame << " of " << frames << " frames whole)\n";
+    }
+    const auto save_state = [&](long whole) {
+        ChainsState s;
+        s.identity = identity;
+        s.frames_done = whole;
+        s.csv_bytes = csv_bytes;
+        s.stopped = stopped;
+        for (const auto& sim : sims) {
+            s.steps_done.push_back(sim->steps_done());
+            s.x.push_back(sim->positions());
+            s.v.push_back(sim->velocities());
+            s.eigenvector.push_back(sim->eigenvector());
+        }
+        s.difference = difference;
+        s.penetration = penetration;
+        write_chains_state(opt.out_dir, s);
+    };
     const auto start = std::chrono::steady_clock::now();
-    for (long f = 0; f < frames; ++f) {
+    for (long f = first_frame; f < frames; ++f) {
         std::ostringstream rows;
         for (size_t c = 0; c < sims.size(); ++c) {
             if (stopped[c]) continue;
@@ -220,33 +309,29 @@ bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& op
         }
         // Every chain has stepped this frame: keep the pictures when the shown chain is farthest yet.
         if (shown != ref && !stopped[shown]) {
-            difference.offer(chain_distance(sims[shown]->positions(), sims[ref]->positions()).max, f, sims);
-            penetration.offer(pen_of[shown], f, sims);
+            offer(difference, chain_distance(sims[shown]->positions(), sims[ref]->positions()).max, f, sims);
+            offer(penetration, pen_of[shown], f, sims);
         }
-        csv.write(rows.str());  // fails with an InputError naming the file (disk full, ...)
+        write_csv(rows.str());
+        save_state(f + 1);  // after the frame's rows: a resume starts from here
         if (opt.progress) {
             const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             char line[160];
             std::snprintf(line, sizeof line, "%s frame %04ld (%ld of %ld)  elapsed %.1fs ETA %.1fs\n",
                           scene.name.c_str(), f, f + 1, frames, elapsed,
-                          elapsed / static_cast<double>(f + 1) * static_cast<double>(frames - f - 1));
+                          elapsed / static_cast<double>(f + 1 - first_frame) * static_cast<double>(frames - f - 1));
             *opt.progress << line << std::flush;
         }
         if (opt.stop && *opt.stop != 0 && f + 1 < frames) {  // a signal: every chain's whole frames, no record
-            csv.commit();
+            csv.finish();
             if (frames_done) *frames_done = f + 1;
             return ok;
         }
     }
-    csv.commit();
+    csv.finish();
     if (frames_done) *frames_done = frames;
-    if (!difference.surfaces.empty()) render_side_by_side(png_path, scene, difference.surfaces);
-    if (!penetration.surfaces.empty()) render_side_by_side(pen_png_path, scene, penetration.surfaces);
-
-    nlohmann::json chains = nlohmann::json::array();
-    for (const ChainSpec& spec : opt.chains)
-        chains.push_back(
-            {{"label", spec.label}, {"solver", spec.solver}, {"settings", spec.settings}, {"decouple", spec.decouple}});
+    if (!difference.x.empty()) render_side_by_side(png_path, scene, surfaces_of(difference, sims));
+    if (!penetration.x.empty()) render_side_by_side(pen_png_path, scene, surfaces_of(penetration, sims));
     const nlohmann::json record = {
         {"scene", scene.name},
         {"scene_file", scene.file},
@@ -262,15 +347,16 @@ bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& op
          {{"chain", opt.chains[shown].label},
           {"frame", difference.frame},
           {"max_distance_rel", difference.value >= 0 ? nlohmann::json(difference.value / size) : nlohmann::json()},
-          {"file", difference.surfaces.empty() ? nlohmann::json() : nlohmann::json(fs::path(png_path).filename())},
+          {"file", difference.x.empty() ? nlohmann::json() : nlohmann::json(fs::path(png_path).filename())},
           {"penetration_frame", penetration.frame},
           {"penetration_rel", penetration.value >= 0 ? nlohmann::json(penetration.value / size) : nlohmann::json()},
           {"penetration_file",
-           penetration.surfaces.empty() ? nlohmann::json() : nlohmann::json(fs::path(pen_png_path).filename())}}},
+           penetration.x.empty() ? nlohmann::json() : nlohmann::json(fs::path(pen_png_path).filename())}}},
         {"blow_up", !ok},
         {"chains_version", CHAINS_VERSION},
         {"simulator_version", SIMULATOR_VERSION}};
     write_file_atomic(json_path, record.dump(1) + "\n");
+    fs::remove(state_path, ec);  // the run is whole: chains.json now refuses a rerun without --fresh
     return ok;
 }
 

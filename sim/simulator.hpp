@@ -139,6 +139,14 @@ public:
     long tets() const { return m_fem->tet_count(); }
     /// Surface of every body at the current positions (global vertex ids renumbered per body).
     std::vector<SurfaceMesh> body_surfaces() const;
+    /// The same at other positions of this scene.
+    std::vector<SurfaceMesh> surfaces_at(const Vec& x) const;
+    /// What a step reads besides the scene and the positions and velocities: the steps taken (the
+    /// random order's seed offset) and the power method's warm start. `chains` saves them with x
+    /// and v after each frame and restores them to resume bit for bit (sim/chains_state.hpp).
+    long steps_done() const { return m_step; }
+    const Vec& eigenvector() const { return m_eigenvector; }
+    void restore_state(const Vec& x, const Vec& v, const Vec& eigenvector, long steps_done);
     const std::string& solver_name() const { return m_solver_name; }
     /// The rows of the last detection.
     const std::vector<ContactRow>& last_rows() const { return m_rows; }
@@ -161,7 +169,6 @@ private:
     /// the state of a resumed run; returns run()'s result when there is nothing left to do.
     std::optional<bool> prepare_output(long frames, PartialTable& steps_csv, PartialTable& frames_csv);
     void save_resume_state(long frames_done, bool finished, bool blow_up) const;
-    std::vector<SurfaceMesh> surfaces_at(const Vec& x) const;
     std::string snapshot_path(long frame, int newton) const;
     Scene m_scene;
     SimulatorOptions m_opt;

@@ -3,9 +3,11 @@ the summary numbers, and (with CB_CONTACTBENCH) a cached `chains` run of the dem
 import json
 import math
 import os
+import signal
 import subprocess
 import sys
 import tempfile
+import time
 import unittest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "plots"))
@@ -162,6 +164,46 @@ class DemoChains(unittest.TestCase):
                 self.assertEqual(len(json.load(f)["claims"]), 3)
             self.assertTrue(os.path.isfile(os.path.join(out, "figures", "decoupling_demo_h.png")))
             self.assertFalse(math.isnan(s["exact_max_penetration_rel"]))
+
+    def test_interrupted_run_is_resumed(self):
+        """A chains folder interrupted after run_chains started it (key.pending.json and chains.state)
+        is resumed, and its table equals an uninterrupted run's bit for bit."""
+        cb = os.environ["CB_CONTACTBENCH"]
+        scene = os.path.join(ROOT, "scenes", "demo.json")
+        with tempfile.TemporaryDirectory() as out:
+            whole, folder = os.path.join(out, "whole"), os.path.join(out, "cut")
+            ok, what = decoupling.run_chains(cb, scene, whole, 60)
+            self.assertTrue(ok, what)
+            os.makedirs(folder)
+            with open(os.path.join(folder, "key.pending.json"), "w", encoding="utf-8") as f:
+                json.dump(decoupling.chains_key(cb, scene, 60, None, None), f)
+            # The run as run_chains starts it, stopped by SIGINT once three frames are whole.
+            first = subprocess.Popen([cb, "chains", scene, "--frames", "60", "--out", folder],
+                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            state = os.path.join(folder, "chains.state")
+            try:
+                deadline = time.time() + 120
+                while time.time() < deadline and first.poll() is None:
+                    try:
+                        with open(state, "rb") as f:
+                            if json.loads(f.read().split(b"\n")[1])["frames_done"] >= 3:
+                                break
+                    except (OSError, ValueError, IndexError):
+                        pass
+                    time.sleep(0.002)
+            finally:
+                first.send_signal(signal.SIGINT)
+                first.wait()
+            self.assertEqual(first.returncode, 130)
+            self.assertFalse(os.path.exists(os.path.join(folder, "chains.json")))
+            ok, what = decoupling.run_chains(cb, scene, folder, 60)
+            self.assertTrue(ok, what)
+            self.assertEqual(what, f"resumed ({folder})")
+            for name in ("chains.csv", "chains.json"):
+                with open(os.path.join(whole, name), "rb") as a, open(os.path.join(folder, name), "rb") as b:
+                    self.assertEqual(a.read(), b.read(), name)
+            self.assertFalse(os.path.exists(os.path.join(folder, "key.pending.json")))
+            self.assertTrue(decoupling.run_chains(cb, scene, folder, 60)[1].startswith("cached"))
 
 
 if __name__ == "__main__":

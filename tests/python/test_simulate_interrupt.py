@@ -218,8 +218,9 @@ class TestResume(unittest.TestCase):
 
 @unittest.skipUnless(CB and os.access(CB, os.X_OK), "CB_CONTACTBENCH not set")
 class TestChainsLockAndStop(unittest.TestCase):
-    """`chains` takes the folder's lock, never deletes an earlier run without --fresh, and stops on
-    SIGTERM after a whole frame of every chain (no resume: it says so)."""
+    """`chains` takes the folder's lock, never deletes an earlier run without --fresh, stops on
+    SIGTERM after a whole frame of every chain and says the same command resumes it; the resumed
+    run's outputs equal an uninterrupted run's bit for bit; other inputs are refused naming them."""
 
     def test_busy_earlier_and_stopped(self):
         scene = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
@@ -244,7 +245,7 @@ class TestChainsLockAndStop(unittest.TestCase):
                 _, err = first.communicate()
             self.assertEqual(first.returncode, 143, err)
             m = re.search(r"chains: stopped by signal 15 after frame (\d+): (.*)/chains.csv holds frames 0 to (\d+) "
-                          r"of every chain; no chains.json \(--fresh runs them again\)", err)
+                          r"of every chain; no chains.json \(the same command resumes them\)", err)
             self.assertIsNotNone(m, err[-500:])
             self.assertEqual(m.group(2), out)
             with open(os.path.join(out, "chains.csv")) as f:
@@ -255,9 +256,102 @@ class TestChainsLockAndStop(unittest.TestCase):
             again = subprocess.run([CB, "chains", scene, "--frames", "2", "--out", out], capture_output=True, text=True)
             self.assertEqual(again.returncode, 2)
             self.assertEqual(again.stderr.strip().splitlines()[-1],
-                             f"contactbench chains: error: {out}: --out: holds an earlier chains run's output "
-                             "(chains.csv); --fresh discards it, or use another --out")
+                             f"contactbench chains: error: {out}: --out: holds a chains run of other inputs "
+                             "(changed: frames); --fresh discards it, or use another --out")
             self.assertEqual(len(open(os.path.join(out, "chains.csv")).read().splitlines()), len(rows) + 1)
+
+    def test_resumed_chains_equal_an_uninterrupted_run(self):
+        scene = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
+                             "scenes", "demo.json")
+        outputs = ["chains.csv", "chains.json", "demo_largest_difference.png", "demo_largest_penetration.png"]
+        with tempfile.TemporaryDirectory() as tmp:
+            whole, out = os.path.join(tmp, "whole"), os.path.join(tmp, "resumed")
+            cmd = [CB, "chains", scene, "--frames", "150"]
+            subprocess.run(cmd + ["--out", whole], check=True, capture_output=True)
+            first = subprocess.Popen(cmd + ["--out", out], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                     text=True)
+            state = os.path.join(out, "chains.state")
+            try:  # SIGINT once three frames are whole (the header's frames_done)
+                deadline = time.time() + 120
+                while time.time() < deadline and first.poll() is None:
+                    try:
+                        with open(state, "rb") as f:
+                            head = json.loads(f.read().split(b"\n")[1])
+                        if head["frames_done"] >= 3:
+                            break
+                    except (OSError, ValueError, IndexError):
+                        pass
+                    time.sleep(0.002)
+            finally:
+                first.send_signal(signal.SIGINT)
+                _, err = first.communicate()
+            self.assertEqual(first.returncode, 130, err[-500:])
+            m = re.search(r"chains: stopped by signal 2 after frame (\d+): ", err)
+            self.assertIsNotNone(m, err[-500:])
+            stopped = int(m.group(1))
+            self.assertLess(stopped, 149)
+            self.assertFalse(os.path.exists(os.path.join(out, "chains.json")))
+            # Other inputs are refused, naming what changed, and leave the run as it was.
+            changed = os.path.join(tmp, "demo.json")
+            with open(scene) as f:
+                text = f.read()
+            with open(changed, "w") as f:
+                f.write(text + "\n")
+            for extra, what in [(["--h", "0.005"], "h, steps_per_frame"), (["--orders", "authors"], "chains"),
+                                (["--decouple-seed", "3"], "decouple_seed"), (["--exact", "pgs"], "chains")]:
+                r = subprocess.run(cmd + ["--out", out] + extra, capture_output=True, text=True)
+                self.assertEqual(r.returncode, 2, r.stderr)
+                self.assertEqual(r.stderr.strip().splitlines()[-1],
+                                 f"contactbench chains: error: {out}: --out: holds a chains run of other inputs "
+                                 f"(changed: {what}); --fresh discards it, or use another --out")
+            r = subprocess.run([CB, "chains", changed, "--frames", "150", "--out", out], capture_output=True, text=True)
+            self.assertEqual(r.returncode, 2, r.stderr)
+            self.assertIn("(changed: scene_file)", r.stderr.strip().splitlines()[-1])
+            again = subprocess.run(cmd + ["--out", out], capture_output=True, text=True)
+            self.assertEqual(again.returncode, 0, again.stderr[-500:])
+            self.assertIn(f"chains: resuming {out} after frame {stopped} ({stopped + 1} of 150 frames whole)",
+                          again.stderr)
+            for name in outputs:
+                self.assertTrue(filecmp.cmp(os.path.join(whole, name), os.path.join(out, name), shallow=False), name)
+            self.assertFalse(os.path.exists(state))  # removed once chains.json is written
+            # A finished run is refused without --fresh.
+            done = subprocess.run(cmd + ["--out", out], capture_output=True, text=True)
+            self.assertEqual(done.returncode, 2)
+            self.assertIn("holds an earlier chains run's output (chains.json, chains.csv, demo_largest_difference.png,"
+                          " demo_largest_penetration.png)", done.stderr)
+
+    def test_killed_chains_resume_equal_an_uninterrupted_run(self):
+        """SIGKILL: chains.csv.partial and chains.state are left; the same command resumes them."""
+        scene = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
+                             "scenes", "demo.json")
+        with tempfile.TemporaryDirectory() as tmp:
+            whole, out = os.path.join(tmp, "whole"), os.path.join(tmp, "killed")
+            cmd = [CB, "chains", scene, "--frames", "150"]
+            subprocess.run(cmd + ["--out", whole], check=True, capture_output=True)
+            first = subprocess.Popen(cmd + ["--out", out], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            state = os.path.join(out, "chains.state")
+            try:
+                deadline = time.time() + 120
+                while time.time() < deadline and first.poll() is None:
+                    try:
+                        with open(state, "rb") as f:
+                            if json.loads(f.read().split(b"\n")[1])["frames_done"] >= 3:
+                                break
+                    except (OSError, ValueError, IndexError):
+                        pass
+                    time.sleep(0.002)
+            finally:
+                first.kill()
+                first.wait()
+            self.assertEqual(first.returncode, -signal.SIGKILL)
+            self.assertTrue(os.path.isfile(os.path.join(out, "chains.csv.partial")))
+            self.assertFalse(os.path.exists(os.path.join(out, "chains.csv")))
+            again = subprocess.run(cmd + ["--out", out], capture_output=True, text=True)
+            self.assertEqual(again.returncode, 0, again.stderr[-500:])
+            self.assertIn(f"chains: resuming {out} after frame ", again.stderr)
+            for name in ["chains.csv", "chains.json", "demo_largest_difference.png", "demo_largest_penetration.png"]:
+                self.assertTrue(filecmp.cmp(os.path.join(whole, name), os.path.join(out, name), shallow=False), name)
+            self.assertFalse(os.path.exists(os.path.join(out, "chains.csv.partial")))
 
 
 if __name__ == "__main__":
