@@ -2,6 +2,7 @@
 /// A CSV table written as PATH.partial while a run (`simulate`, `chains`) goes on, renamed to PATH
 /// when whole; an interrupted run's table is reopened for appending after its whole frames.
 #include "problems/io_util.hpp"
+#include "problems/output_folder.hpp"
 
 #include <cerrno>
 #include <cstdio>
@@ -23,8 +24,7 @@ class PartialTable {
 public:
     void open(const std::string& path, const std::string& header)
     {
-        m_path = path;
-        m_partial = path + ".partial";
+        set_paths(path);
         // Created fresh: an entry of that name is removed, never followed (O_EXCL | O_NOFOLLOW).
         ::unlink(m_partial.c_str());
         const int fd = ::open(m_partial.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
@@ -41,8 +41,7 @@ public:
     /// Refused (InputError) when the header differs or a frame below keep_frames has no row.
     void resume(const std::string& path, const std::string& header, long keep_frames)
     {
-        m_path = path;
-        m_partial = path + ".partial";
+        set_paths(path);
         namespace fs = std::filesystem;
         std::error_code ec;
         const bool partial = fs::exists(fs::symlink_status(m_partial, ec));
@@ -81,8 +80,7 @@ public:
     /// bytes as whole (PATH.partial when a run was killed, else PATH), for appending after them.
     void resume_prefix(const std::string& path, const std::string& header, size_t keep_bytes)
     {
-        m_path = path;
-        m_partial = path + ".partial";
+        set_paths(path);
         namespace fs = std::filesystem;
         std::error_code ec;
         const bool partial = fs::exists(fs::symlink_status(m_partial, ec));
@@ -128,6 +126,15 @@ public:
     }
 
 private:
+    /// The table and its .partial are replaced by rename and unlink: neither may be a link or a
+    /// special file (the output-folder rule, problems/output_folder.hpp), refused before any write.
+    void set_paths(const std::string& path)
+    {
+        check_output_entry(path);
+        check_output_entry(path + ".partial");
+        m_path = path;
+        m_partial = path + ".partial";
+    }
     [[noreturn]] void fail()
     {
         const std::string why = std::strerror(errno);
