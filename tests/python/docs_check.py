@@ -17,6 +17,9 @@ Also checked: every repository path a document or a comment cites (`harness/runn
 braces expanded, globs matching at least one file) exists, relative to the root or to the citing
 file; and, when a built contactbench is at hand ($CB_CONTACTBENCH or build/bin/contactbench),
 the counts the code prints match what the documents say (check_counts below).
+Also checked, in a git checkout: a document's "Measured at <commit> with `<command>`" line is not
+older than a change to the code it describes, unless its paragraph says why the figures still stand
+(stale_figures.py).
 Also reported: any file outside .ci/ that mentions the shared folder beside the checkout (the
 string is assembled below so that this file does not mention it itself).
 
@@ -28,6 +31,8 @@ import re
 import subprocess
 import sys
 from typing import Dict, List, Optional, Tuple
+
+import stale_figures
 
 #: the folder beside the checkout that only CI may name
 SHARED = ".." + "/" + "shared"
@@ -282,9 +287,16 @@ def check(repo: str, binary: Optional[str] = None) -> List[str]:
     """Every problem found in REPO; the counts only with a contactbench binary (find_binary)."""
     cache: Dict[str, List[str]] = {}
     problems: List[str] = []
+    dated = stale_figures.is_git_checkout(repo)
+    if not dated:
+        print("docs-check: not a git checkout: measured figures are not checked against later changes",
+              file=sys.stderr)
     for rel in repo_files(repo):
         if is_text(rel) and rel not in EXAMPLES:
             problems += check_file(repo, rel, cache)
+            if dated and rel.endswith(".md"):
+                with open(os.path.join(repo, rel), encoding="utf-8", errors="replace") as f:
+                    problems += stale_figures.check_measured(repo, rel, f.read().split("\n"))
     if binary:
         problems += check_counts(repo, binary)
     return problems

@@ -133,5 +133,85 @@ class ReportsDanglingReferences(unittest.TestCase):
         self.assertEqual(run.stdout, "a.md:1: cites ALGORITHMS.md §7, which has no heading numbered 7\n")
 
 
+class ReportsStaleFigures(unittest.TestCase):
+    """A figure measured at a commit goes stale when the code it describes changes after it."""
+
+    def setUp(self):
+        self.tmp = tempfile.TemporaryDirectory()
+        self.root = self.tmp.name
+        self.git("init", "-q")
+        write(self.root, "solvers/mprgp.cpp", "int iterations = 224;\n")
+        write(self.root, "plots/fig.py", "print(1)\n")
+        self.commit("first")
+        self.measured = self.git("rev-parse", "--short=10", "HEAD").strip()
+
+    def tearDown(self):
+        self.tmp.cleanup()
+
+    def git(self, *args):
+        return subprocess.run(["git", "-c", "user.name=t", "-c", "user.email=t@t", *args], cwd=self.root,
+                              check=True, capture_output=True, text=True).stdout
+
+    def commit(self, message):
+        self.git("add", "-A")
+        self.git("commit", "-q", "-m", message)
+
+    def doc(self, tail=""):
+        write(self.root, "docs/work.md", f"# Work\n\n224 iterations. Measured at {self.measured} with "
+                                         f"`contactbench solve f.qpsnap`.{tail}\n")
+        self.commit("doc")
+
+    def test_fresh_figures_pass(self):
+        self.doc()
+        self.assertEqual(stale_figures_problems(self.root), [])
+
+    def test_a_later_change_to_another_folder_leaves_them_fresh(self):
+        self.doc()
+        write(self.root, "plots/fig.py", "print(2)\n")
+        self.commit("plots only")
+        self.assertEqual(stale_figures_problems(self.root), [])
+
+    def test_a_planted_solver_change_makes_them_stale(self):
+        self.doc()
+        write(self.root, "solvers/mprgp.cpp", "int iterations = 317;\n")
+        self.commit("solver")
+        self.assertEqual(stale_figures_problems(self.root), [
+            f"docs/work.md:3: figures measured at {self.measured} with `contactbench solve f.qpsnap` predate "
+            "changes to solvers/mprgp.cpp: re-measure, or say why they still stand (\"Still stands: ...\") or that "
+            "they were not re-measured (\"Not re-measured: ...\")"])
+
+    def test_a_stated_reason_keeps_them(self):
+        self.doc("\nStill stands: the change after it renames a variable.")
+        write(self.root, "solvers/mprgp.cpp", "int iterations_ = 224;\n")
+        self.commit("solver")
+        self.assertEqual(stale_figures_problems(self.root), [])
+
+    def test_saying_they_were_not_re_measured_keeps_them_visible(self):
+        self.doc("\nNot re-measured: the solver changed after it; `make ladder` gives today's figures.")
+        write(self.root, "solvers/mprgp.cpp", "int iterations = 317;\n")
+        self.commit("solver")
+        self.assertEqual(stale_figures_problems(self.root), [])
+
+    def test_covers_narrows_what_they_describe(self):
+        write(self.root, "docs/work.md", f"Measured at {self.measured} with `make x` (covers plots/*.py).\n")
+        write(self.root, "solvers/mprgp.cpp", "int iterations = 1;\n")
+        self.commit("solver and doc")
+        self.assertEqual(stale_figures_problems(self.root), [])
+        write(self.root, "plots/fig.py", "print(3)\n")
+        self.commit("plot")
+        self.assertEqual(len(stale_figures_problems(self.root)), 1)
+
+    def test_an_unknown_commit_is_reported(self):
+        write(self.root, "docs/work.md", "Measured at 0123456789 with `make x`.\n")
+        self.commit("doc")
+        self.assertEqual(stale_figures_problems(self.root), [
+            "docs/work.md:1: figures measured at 0123456789, a commit this clone does not have (cannot tell "
+            "whether `make x` would still give them)"])
+
+
+def stale_figures_problems(root):
+    return [p for p in docs_check.check(root) if "measured at" in p]
+
+
 if __name__ == "__main__":
     unittest.main()

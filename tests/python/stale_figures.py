@@ -1,0 +1,85 @@
+"""Figures a document quotes from a run, tied to the commit and command that measured them.
+
+A measured block in a Markdown document carries one visible line of this form:
+
+    Measured at <commit> with `<command>`.
+    Measured at <commit> with `<command>` (covers solvers/mprgp.cpp solvers/a_product.*).
+
+It is stale when the code it describes changed after <commit>: by default the solver, problem and
+simulator sources (DEFAULT_COVERS), or the paths it names after "covers". A stale block fails the
+docs-check unless its paragraph says why the figures still stand ("Still stands: <reason>") or says
+openly that they were not measured again ("Not re-measured: <what changed, what to run>"), so a change
+to the code cannot leave a quoted figure behind without a word. A commit this clone does not
+have (a shallow clone, a tarball) is reported too: the claim cannot be checked there.
+"""
+import fnmatch
+import os
+import re
+import subprocess
+from typing import List, Optional, Sequence
+
+#: what a measured figure describes unless its line names other paths
+DEFAULT_COVERS = ("solvers/", "problems/", "sim/")
+MEASURED_RE = re.compile(r"Measured at ([0-9a-f]{7,40}) with `([^`]+)`(?:\s*\(covers ([^)]*)\))?")
+STILL_STANDS_RE = re.compile(r"(?:Still stands|Not re-measured):\s*\S")
+
+
+def git(repo: str, *args: str) -> Optional[str]:
+    """stdout of `git ARGS` in REPO, or None when git or the repository is not there."""
+    try:
+        done = subprocess.run(["git", *args], cwd=repo, capture_output=True, text=True)
+    except OSError:
+        return None
+    return done.stdout if done.returncode == 0 else None
+
+
+def paragraph(lines: List[str], index: int) -> str:
+    """The blank-line-delimited paragraph around lines[index]."""
+    start = index
+    while start > 0 and lines[start - 1].strip():
+        start -= 1
+    end = index
+    while end + 1 < len(lines) and lines[end + 1].strip():
+        end += 1
+    return "\n".join(lines[start:end + 1])
+
+
+def changed_since(repo: str, commit: str, covers: Sequence[str]) -> Optional[List[str]]:
+    """Files under COVERS (folders end in '/', else globs) changed between COMMIT and HEAD; None
+    when COMMIT is not in this clone."""
+    if git(repo, "cat-file", "-e", commit + "^{commit}") is None:
+        return None
+    out = git(repo, "diff", "--name-only", commit, "HEAD")
+    if out is None:
+        return None
+    changed = []
+    for path in out.splitlines():
+        for cover in covers:
+            if (cover.endswith("/") and path.startswith(cover)) or fnmatch.fnmatch(path, cover):
+                changed.append(path)
+                break
+    return changed
+
+
+def check_measured(repo: str, rel: str, lines: List[str]) -> List[str]:
+    """One problem per stale or uncheckable measured block of document REL."""
+    problems: List[str] = []
+    for i, line in enumerate(lines):
+        for m in MEASURED_RE.finditer(line):
+            commit, command = m.group(1), m.group(2)
+            covers = m.group(3).split() if m.group(3) else list(DEFAULT_COVERS)
+            changed = changed_since(repo, commit, covers)
+            where = f"{rel}:{i + 1}"
+            if changed is None:
+                problems.append(f"{where}: figures measured at {commit}, a commit this clone does not have "
+                                f"(cannot tell whether `{command}` would still give them)")
+            elif changed and not STILL_STANDS_RE.search(paragraph(lines, i)):
+                shown = ", ".join(changed[:3]) + (f" and {len(changed) - 3} more" if len(changed) > 3 else "")
+                problems.append(f"{where}: figures measured at {commit} with `{command}` predate changes to "
+                                f"{shown}: re-measure, or say why they still stand (\"Still stands: ...\") or that they were not "
+                                f"re-measured (\"Not re-measured: ...\")")
+    return problems
+
+
+def is_git_checkout(repo: str) -> bool:
+    return os.path.exists(os.path.join(repo, ".git")) and git(repo, "rev-parse", "HEAD") is not None
