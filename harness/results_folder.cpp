@@ -1,6 +1,7 @@
 // A results folder judged whole: finished, unlocked, one final record per job.
 #include "harness/results_folder.hpp"
 
+#include "harness/record_types.hpp"
 #include "harness/results.hpp"
 #include "problems/io_util.hpp"
 #include "solvers/types.hpp"
@@ -72,6 +73,7 @@ void check_run_record(const nlohmann::json& record, const std::string& path, con
         throw_input_error(path, "/snapshot/id, /label",
                           "the record is of job " + expected +
                               ", not of this file: a copy or another job's record (remove it, or run again)");
+    check_record_file_types(record, path);  // counters, times and accuracy of the types their readers take
     const auto final = record.find("final");
     if (final != record.end() && !final->is_boolean())
         throw_input_error(path, "/final", "expected true or false, got " + final->dump());

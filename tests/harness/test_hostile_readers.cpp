@@ -386,6 +386,16 @@ TEST(HostileReaders, ResultsFoldersAreReadOnlyWhenWhole)
     EXPECT_EQ(o.err, "contactbench merge: error: " + (other / "runs" / "plane__pgs.json").string() +
                          ": /snapshot/id, /label: the record is of job plane__cg.json, not of this file: a copy or "
                          "another job's record (remove it, or run again)\n");
+    // merge read a string counter as it came (compare refused it): now both check the types.
+    const fs::path stringly = copy_of_base("str");
+    nlohmann::json counted = read_json_file((stringly / "runs" / "plane__pgs.json").string());
+    ASSERT_TRUE(counted["counters"].contains("a_products"));
+    counted["counters"]["a_products"] = "12";
+    write_json_atomic((stringly / "runs" / "plane__pgs.json").string(), counted);
+    o = run("merge " + q(dir / "m") + " " + q(stringly));
+    EXPECT_EQ(o.status, 2) << o.err;
+    EXPECT_EQ(o.err, "contactbench merge: error: " + (stringly / "runs" / "plane__pgs.json").string() +
+                         ": /counters/a_products: expected a number, got \"12\"\n");
     EXPECT_FALSE(fs::exists(dir / "m"));
     // R3: merge into a folder a run is writing (the run holds OUT/.lock); compare of it too.
     const fs::path busy = copy_of_base("busy");
@@ -412,15 +422,15 @@ TEST(HostileReaders, ResultsFoldersAreReadOnlyWhenWhole)
     EXPECT_EQ(o.status, 2) << o.err;
     EXPECT_EQ(o.err, "contactbench compare: error: " + (fifo / "runs" / "zz__pgs.json").string() + ": not a job of " +
                          (fifo / "jobs.json").string() + ": a stray or stale file (remove it, or run again)\n");
-    // R7: a type confused in a record is named with its folder, file and field (was a raw type_error).
+    // R7: a type confused in a record is named with its file and field (was a raw type_error).
     const fs::path typed = copy_of_base("typed");
     nlohmann::json strings = read_json_file((typed / "runs" / "plane__pgs.json").string());
     strings["time"]["samples_total_s"] = {"a", "b"};
     write_json_atomic((typed / "runs" / "plane__pgs.json").string(), strings);
     o = run("compare " + q(base) + " " + q(typed));
     EXPECT_EQ(o.status, 2) << o.err;
-    EXPECT_EQ(o.err, "contactbench compare: error: " + typed.string() +
-                         ": plane__pgs.json: /time/samples_total_s: expected numbers (seconds), got \"a\"\n");
+    EXPECT_EQ(o.err, "contactbench compare: error: " + (typed / "runs" / "plane__pgs.json").string() +
+                         ": /time/samples_total_s: expected numbers (seconds), got \"a\"\n");
     // R7: every field compare reads is type-checked in one place: a string counter (once skipped
     // as "not recorded"), an object where a number is expected, a number where a string is.
     auto confused = [&](const std::string& name, const nlohmann::json::json_pointer& field, const nlohmann::json& v) {
@@ -432,24 +442,24 @@ TEST(HostileReaders, ResultsFoldersAreReadOnlyWhenWhole)
     };
     o = confused("t1", nlohmann::json::json_pointer("/counters/iterations"), "12");
     EXPECT_EQ(o.status, 2) << o.out << o.err;
-    EXPECT_EQ(o.err, "contactbench compare: error: " + (dir / "t1").string() +
-                         ": plane__pgs.json: /counters/iterations: expected a number, got \"12\"\n");
+    EXPECT_EQ(o.err, "contactbench compare: error: " + (dir / "t1" / "runs" / "plane__pgs.json").string() +
+                         ": /counters/iterations: expected a number, got \"12\"\n");
     o = confused("t2", nlohmann::json::json_pointer("/accuracy/max"), {{"v", 1}});
     EXPECT_EQ(o.status, 2) << o.out << o.err;
-    EXPECT_EQ(o.err, "contactbench compare: error: " + (dir / "t2").string() +
-                         ": plane__pgs.json: /accuracy/max: expected a number or null, got {\"v\":1}\n");
+    EXPECT_EQ(o.err, "contactbench compare: error: " + (dir / "t2" / "runs" / "plane__pgs.json").string() +
+                         ": /accuracy/max: expected a number or null, got {\"v\":1}\n");
     o = confused("t3", nlohmann::json::json_pointer("/snapshot/hash"), 7);
     EXPECT_EQ(o.status, 2) << o.out << o.err;
-    EXPECT_EQ(o.err, "contactbench compare: error: " + (dir / "t3").string() +
-                         ": plane__pgs.json: /snapshot/hash: expected a string, got 7\n");
+    EXPECT_EQ(o.err, "contactbench compare: error: " + (dir / "t3" / "runs" / "plane__pgs.json").string() +
+                         ": /snapshot/hash: expected a string, got 7\n");
     o = confused("t4", nlohmann::json::json_pointer("/status"), 0);
     EXPECT_EQ(o.status, 2) << o.out << o.err;
-    EXPECT_EQ(o.err, "contactbench compare: error: " + (dir / "t4").string() +
-                         ": plane__pgs.json: /status: expected a string, got 0\n");
+    EXPECT_EQ(o.err, "contactbench compare: error: " + (dir / "t4" / "runs" / "plane__pgs.json").string() +
+                         ": /status: expected a string, got 0\n");
     o = confused("t5", nlohmann::json::json_pointer("/counters/a_products"), nullptr);  // null: work_counted is true
     EXPECT_EQ(o.status, 2) << o.out << o.err;
-    EXPECT_EQ(o.err, "contactbench compare: error: " + (dir / "t5").string() +
-                         ": plane__pgs.json: /counters/a_products: expected a number, got null\n");
+    EXPECT_EQ(o.err, "contactbench compare: error: " + (dir / "t5" / "runs" / "plane__pgs.json").string() +
+                         ": /counters/a_products: expected a number, got null\n");
     // The whole folders still compare.
     o = run("compare " + q(base) + " " + q(copy_of_base("same")));
     EXPECT_EQ(o.status, 0) << o.out << o.err;
