@@ -45,7 +45,7 @@ int cmd_cluster(const Args& args)
                      "the shards into DIR/summary.csv), then prints the sbatch commands that submit them, the\n"
                      "merge after the array has succeeded. DIR must be on a file system every node sees.\n"
                      "  --partition P, --time T, --mem M   passed to #SBATCH (per array task)\n"
-                     "  --cpus-per-task C                  cores per task (default 1; solvers are single-threaded)\n"
+                     "  --cpus-per-task C                  cores per task (default: the most `threads` a label asks for, 1)\n"
                      "  --exclusive                        whole nodes per task (quietest clock, costs nodes)\n"
                      "  --first-index K                    the array runs K..K+N-1 (default 0)\n"
                      "  --max-parallel K                   at most K tasks at once (%K)\n"
@@ -67,7 +67,13 @@ int cmd_cluster(const Args& args)
     while (o.out.size() > 1 && o.out.back() == '/') o.out.pop_back();
     o.shards = cl.integer("--shards", 1);
     o.first_index = cl.integer("--first-index", 0);
-    o.cpus_per_task = cl.integer("--cpus-per-task", 1);
+    // A task gets the cores its most threaded label uses (the `threads` setting), unless told more.
+    const long threads = most_threads(suite);
+    o.cpus_per_task = cl.integer("--cpus-per-task", threads);
+    if (o.cpus_per_task >= 1 && o.cpus_per_task < threads)
+        throw_input_error("cluster", "--cpus-per-task",
+                          std::to_string(o.cpus_per_task) + " is fewer than the " + std::to_string(threads) +
+                              " threads a label of " + suite.path + " asks for (setting `threads`)");
     o.max_parallel = cl.integer("--max-parallel", 0);
     o.partition = cl.value("--partition");
     o.time = cl.value("--time");

@@ -367,14 +367,8 @@ int cmd_run(const Args& args)
     ProcessPool pool(concurrent_jobs(jobs, suite.timed, suite.chain, cl.has("--jobs-timed"), jobs_note));
     if (!jobs_note.empty()) std::cerr << "run: " << jobs_note << "\n";
     RunPlan plan(suite, resolve_snapshots(suite), shard, out);
-    long threads = 1;  // the most any label asks for (the common setting `threads`)
-    for (size_t v = 0; v < plan.labels(); ++v) {
-        const nlohmann::json settings = plan.settings_of(v);
-        if (settings.contains("threads") && settings["threads"].is_number_integer())
-            threads = std::max(threads, settings["threads"].get<long>());
-    }
     const std::string crowded =
-        oversubscription_warning(pool.parallel() ? jobs : 1, threads, std::thread::hardware_concurrency());
+        oversubscription_warning(pool.parallel() ? jobs : 1, most_threads(suite), std::thread::hardware_concurrency());
     if (!crowded.empty()) std::cerr << "run: " << crowded << "\n";
     open_out_dir(out, cl.has("--fresh"));
     refuse_foreign_results(plan, out, cl.value("--shard"));

@@ -114,6 +114,15 @@ bool matches_any(const std::vector<std::string>& patterns, const std::string& id
 
 }  // namespace
 
+long most_threads(const Suite& suite)
+{
+    long threads = 1;
+    for (const SuiteSolver& s : suite.solvers)
+        if (s.settings.contains("threads") && s.settings["threads"].is_number_integer())
+            threads = std::max(threads, s.settings["threads"].get<long>());
+    return threads;
+}
+
 std::vector<std::string> drop_unbuilt_optional_solvers(Suite& suite, const std::vector<std::string>& registered)
 {
     const std::set<std::string> built(registered.begin(), registered.end());

@@ -68,6 +68,9 @@ Suite load_suite(const std::string& path);
 /// against `base_dir`).
 Suite parse_suite(const nlohmann::json& j, const std::string& where);
 
+/// The most threads any label of the suite asks for (the common setting `threads`), 1 when none does.
+long most_threads(const Suite& suite);
+
 /// Removes the `optional` solver entries whose solver is not in `registered` (this build's
 /// registry) and returns one notice per removed entry, naming its label and solver.
 std::vector<std::string> drop_unbuilt_optional_solvers(Suite& suite, const std::vector<std::string>& registered);

@@ -235,6 +235,26 @@ TEST(RunEnv, ClusterSlurmWritesFilesAndPrintsCommands)
     EXPECT_FALSE(fs::exists(spaced));
 }
 
+TEST(RunEnv, ClusterSlurmGivesEachTaskTheThreadsItsLabelsUse)
+{
+    nlohmann::json suite = read_json_file(write_suite("threaded", true));
+    suite["solvers"] = {"pgs", {{"label", "mprgp-2t"}, {"solver", "mprgp"}, {"settings", {{"threads", 2}}}}};
+    const fs::path path = work_dir() / "threaded.json";
+    write_json_atomic(path.string(), suite);
+    const fs::path out = work_dir() / "cluster-threads";
+    const Output o = run("cluster slurm '" + path.string() + "' --out '" + out.string() + "' --shards 2");
+    ASSERT_EQ(o.status, 0) << o.err;
+    const std::string text = slurp(out / "slurm" / "array.sbatch");
+    EXPECT_NE(text.find("\n#SBATCH --cpus-per-task=2\n"), std::string::npos) << text;
+    EXPECT_NE(text.find("\nsrun --ntasks=1 --cpus-per-task=2 "), std::string::npos) << text;
+    const Output few = run("cluster slurm '" + path.string() + "' --out '" + (work_dir() / "few").string() +
+                           "' --shards 2 --cpus-per-task 1");
+    EXPECT_EQ(few.status, 2);
+    EXPECT_EQ(few.err, "contactbench cluster: error: cluster: --cpus-per-task: 1 is fewer than the 2 threads a label of " +
+                           path.string() + " asks for (setting `threads`)\n");
+    EXPECT_FALSE(fs::exists(work_dir() / "few"));
+}
+
 TEST(RunEnv, JobsComputeReferencesBeforeTheTimedRuns)
 {
     const nlohmann::json suite = {
