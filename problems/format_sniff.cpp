@@ -138,7 +138,9 @@ void expect_qpsnap(const std::string& path, const std::string& command)
                                                             "frictional problem)");
         break;
     case FileFormat::SICONOS_DAT:
-        how = "contactbench does not read it: write the problem as FCLIB (HDF5) with Siconos, then convert that";
+        how = "convert a local problem first: contactbench convert " + path +
+              " OUT.qpsnap --drop-friction (its normal part), or solve it with its friction: contactbench "
+              "friction-solve " + path;
         break;
     case FileFormat::MATRIX_MARKET_FILE:
         how = "a problem is a folder of them (A.mtx b.mtx J.mtx c.mtx x0.mtx): convert the folder";
@@ -151,8 +153,9 @@ void expect_qpsnap(const std::string& path, const std::string& command)
         break;
     }
     const std::string reads =
-        command == "convert" ? "convert reads .qpsnap snapshots, Matrix Market folders and FCLIB files"
-        : command == "info"  ? "info reads .qpsnap snapshots and Matrix Market folders, and summarises FCLIB files"
+        command == "convert" ? "convert reads .qpsnap snapshots, Matrix Market folders, FCLIB files and Siconos .dat files"
+        : command == "info"  ? "info reads .qpsnap snapshots and Matrix Market folders, and summarises FCLIB and "
+                               "Siconos .dat files"
                              : command + " reads .qpsnap snapshots";
     throw_input_error(path, "format", format_name(format) + ", not a .qpsnap snapshot (" + reads + "); " + how);
 }
