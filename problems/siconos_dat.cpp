@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
 #include <string_view>
 #include <vector>
 
@@ -52,8 +53,9 @@ public:
     void expect_room(const std::string& field, std::uint64_t count, const std::string& what) const
     {
         if (count > values_left())
-            fail(field, "declares " + std::to_string(count) + " " + what + ", but only " +
-                            std::to_string(m_end - m_at) + " bytes remain (a truncated file or a wrong count)");
+            fail(field, "declares " + std::to_string(count) + " " + what +
+                            ", more than the rest of the file can hold (" + std::to_string(m_end - m_at) +
+                            " bytes: a wrong count or a truncated file)");
     }
 
     /// Counts the tokens left without consuming them.
@@ -94,8 +96,10 @@ public:
         const auto [ptr, ec] = std::from_chars(t.data(), t.data() + t.size(), value);
         if (ec != std::errc() || ptr != t.data() + t.size()) fail(field, "'" + printable(t) + "' is not an integer");
         if (value < lo || value > hi)
-            fail(field, "is " + std::to_string(value) + ", must be in [" + std::to_string(lo) + ", " +
-                            std::to_string(hi) + "]");
+            fail(field, "is " + std::to_string(value) +
+                            (hi == std::numeric_limits<long long>::max()
+                                 ? ", must be >= " + std::to_string(lo)
+                                 : ", must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]"));
         return value;
     }
 
@@ -110,6 +114,18 @@ public:
         // subnormal or zero (1e-400), as fscanf would read it.
         if (ec == std::errc::result_out_of_range) value = std::strtod(std::string(t).c_str(), nullptr);
         if (!std::isfinite(value)) fail(field, "is " + printable(t) + " (values must be finite)");
+        return value;
+    }
+
+    /// A count or size: >= lo, and no more than the rest of the file can hold (every count
+    /// stands for values that follow), so nothing of a declared size outgrows the file.
+    long long count(const std::string& field, long long lo)
+    {
+        const std::uint64_t room = values_left();
+        const long long value = integer(field, lo, std::numeric_limits<long long>::max());
+        if (std::uint64_t(value) > room)
+            fail(field, "is " + std::to_string(value) + ", more than the rest of the file can hold (" +
+                            std::to_string(m_end - m_at) + " bytes: a wrong count or a truncated file)");
         return value;
     }
 
@@ -191,9 +207,8 @@ std::vector<long long> block_bounds(DatText& t, const std::string& field, long l
 
 void read_dense(DatText& t, const std::string& name, DatMatrix& M)
 {
-    const long long big = (long long)(t.values_left());
-    const long long rows = t.integer(name + ".size0 (dense)", 0, big);
-    const long long cols = t.integer(name + ".size1 (dense)", 0, big);
+    const long long rows = t.count(name + ".size0 (dense)", 0);
+    const long long cols = t.count(name + ".size1 (dense)", 0);
     if (rows != M.rows || cols != M.cols)
         t.fail(name + ".size0 (dense)", "the dense block is " + std::to_string(rows) + " x " + std::to_string(cols) +
                                             ", the header says " + std::to_string(M.rows) + " x " +
@@ -208,8 +223,7 @@ void read_dense(DatText& t, const std::string& name, DatMatrix& M)
 
 void read_sparse_block(DatText& t, const std::string& name, DatMatrix& M)
 {
-    const long long big = (long long)(t.values_left());
-    const long long nbblocks = t.integer(name + ".nbblocks", 0, big);
+    const long long nbblocks = t.count(name + ".nbblocks", 0);
     if (nbblocks == 0) return;  // Siconos writes nothing more for a matrix without blocks
     const long long rows_b = t.integer(name + ".blocknumber0", 1, std::max(M.rows, 1LL));
     const long long cols_b = t.integer(name + ".blocknumber1", 1, std::max(M.cols, 1LL));
@@ -241,7 +255,10 @@ void read_sparse_block(DatText& t, const std::string& name, DatMatrix& M)
                        "block column " + std::to_string(c) + " appears twice in block row " + std::to_string(r));
             seen_in_row[size_t(c)] = r;
             const long long c0 = c == 0 ? 0 : col_end[size_t(c - 1)], nc = col_end[size_t(c)] - c0;
-            t.integer(at + " number", b, b);
+            const long long number = t.integer(at + " number", 0, std::numeric_limits<long long>::max());
+            if (number != b)
+                t.fail(at + " number", "is " + std::to_string(number) +
+                                           ", the blocks are numbered in order (expected " + std::to_string(b) + ")");
             t.expect_room(at, std::uint64_t(nr) * std::uint64_t(nc), "values");
             for (long long k = 0; k < nr * nc; ++k) {
                 const double v = t.real(at + "[" + std::to_string(k) + "]");
@@ -255,20 +272,19 @@ DatMatrix read_matrix(DatText& t, const std::string& name)
 {
     DatMatrix M;
     const long long storage = t.integer(name + ".storageType", 0, 2);
-    // Each size is the length of a vector that follows (q, b), so the file must have room for it.
-    const long long bound = (long long)(t.values_left());
-    M.rows = t.integer(name + ".size0", 1, bound);
-    M.cols = t.integer(name + ".size1", 1, bound);
-    if (storage == 0) {
-        M.storage = "dense";
-        read_dense(t, name, M);
-    } else if (storage == 1) {
-        M.storage = "sparse block";
-        read_sparse_block(t, name, M);
-    } else {
+    if (storage == 2)
         t.fail(name + ".storageType", "is 2 (NM_SPARSE: CSparse's text print, values with 6 significant digits), "
                                       "which does not hold the problem to double precision; write it dense or "
                                       "sparse-block (NM_SPARSE_BLOCK), or as FCLIB (HDF5)");
+    // Each size is the length of a vector that follows (q, b), so the file must have room for it.
+    M.rows = t.count(name + ".size0", 1);
+    M.cols = t.count(name + ".size1", 1);
+    if (storage == 0) {
+        M.storage = "dense";
+        read_dense(t, name, M);
+    } else {
+        M.storage = "sparse block";
+        read_sparse_block(t, name, M);
     }
     return M;
 }
@@ -298,7 +314,7 @@ DatProblem read_dat(const std::string& path)
     DatText t(path);
     DatProblem p;
     p.dimension = t.integer("dimension", 2, 3);
-    p.contacts = t.integer("numberOfContacts", 0, (long long)(t.values_left()));
+    p.contacts = t.count("numberOfContacts", 0);
     if (p.contacts == 0) t.fail("numberOfContacts", "is 0: the problem has no contacts");
     const long long rows = p.dimension * p.contacts;
     p.W = read_matrix(t, "M");
