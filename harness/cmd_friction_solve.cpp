@@ -59,7 +59,7 @@ int cmd_friction_solve(const Args& args)
                              " is not built (install libsiconos-numerics-dev and reconfigure with CB_PEERS=ON)");
 
     const FrictionLocal problem = sniff_format(path) == FileFormat::SICONOS_DAT ? read_siconos_dat_friction(path)
-                                                                               : read_fclib_local_friction(path);
+                                                                                : read_fclib_local_friction(path);
     nlohmann::json out = {{"file", path},
                           {"contacts", problem.contacts()},
                           {"mu_min", problem.mu.minCoeff()},

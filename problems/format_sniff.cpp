@@ -50,7 +50,8 @@ bool integer_line(const std::string& head, size_t& pos)
 bool looks_like_siconos_dat(const std::string& head)
 {
     for (const char ch : head)
-        if (!std::isprint(static_cast<unsigned char>(ch)) && !std::isspace(static_cast<unsigned char>(ch))) return false;
+        if (!std::isprint(static_cast<unsigned char>(ch)) && !std::isspace(static_cast<unsigned char>(ch)))
+            return false;
     size_t pos = 0;
     for (int line = 0; line < 4; ++line)
         if (!integer_line(head, pos)) return false;
@@ -141,7 +142,8 @@ void expect_qpsnap(const std::string& path, const std::string& command)
     case FileFormat::SICONOS_DAT:
         how = "convert a local problem first: contactbench convert " + path +
               " OUT.qpsnap --drop-friction (its normal part), or solve it with its friction: contactbench "
-              "friction-solve " + path;
+              "friction-solve " +
+              path;
         break;
     case FileFormat::MATRIX_MARKET_FILE:
         how = "a problem is a folder of them (A.mtx b.mtx J.mtx c.mtx x0.mtx): convert the folder";
@@ -154,10 +156,11 @@ void expect_qpsnap(const std::string& path, const std::string& command)
         break;
     }
     const std::string reads =
-        command == "convert" ? "convert reads .qpsnap snapshots, Matrix Market folders, FCLIB files and Siconos .dat files"
-        : command == "info"  ? "info reads .qpsnap snapshots and Matrix Market folders, and summarises FCLIB and "
-                               "Siconos .dat files"
-                             : command + " reads .qpsnap snapshots";
+        command == "convert"
+            ? "convert reads .qpsnap snapshots, Matrix Market folders, FCLIB files and Siconos .dat files"
+        : command == "info" ? "info reads .qpsnap snapshots and Matrix Market folders, and summarises FCLIB and "
+                              "Siconos .dat files"
+                            : command + " reads .qpsnap snapshots";
     throw_input_error(path, "format", format_name(format) + ", not a .qpsnap snapshot (" + reads + "); " + how);
 }
 

@@ -78,7 +78,8 @@ TEST(FormatSniff, CommandsNameTheFormatAndSuggestConvert)
     EXPECT_EQ(solve_dat.err, "contactbench solve: error: " + dat +
                                  ": format: a Siconos numerics text dump (.dat), not a .qpsnap snapshot (solve reads "
                                  ".qpsnap snapshots); convert a local problem first: contactbench convert " +
-                                 dat + " OUT.qpsnap --drop-friction (its normal part), or solve it with its friction: "
+                                 dat +
+                                 " OUT.qpsnap --drop-friction (its normal part), or solve it with its friction: "
                                  "contactbench friction-solve " +
                                  dat + "\n");
     std::ofstream(work / "x.npy") << "\x93NUMPY\x01\x00v\x00{'descr': '<f8', 'fortran_order': False, 'shape': (3,), }";
