@@ -1,5 +1,5 @@
 // Siconos numerics .dat import (siconos_dat.hpp): a bounded tokenizer, the NumericsMatrix
-// storages, and the local/global problem layouts.
+// storages, and the local, global and LCP problem layouts.
 #include "problems/siconos_dat.hpp"
 
 #include "problems/io_util.hpp"
@@ -299,20 +299,32 @@ void check_mu(DatText& t, const std::vector<double>& mu)
                                   " (a friction coefficient is finite and >= 0)");
 }
 
-/// What a .dat file holds: a local problem (W, q, mu) or a global one (M, H, q, b, mu).
+/// What a .dat file holds: a local problem (W, q, mu), a global one (M, H, q, b, mu) or an LCP
+/// (n, M, q: Siconos' linearComplementarity_printInFile).
 struct DatProblem {
-    bool global = false;
-    long long dimension = 0, contacts = 0;
-    DatMatrix W;  ///< local: W; global: M
-    DatMatrix H;  ///< global only
+    enum class Kind { LOCAL, GLOBAL, LCP } kind = Kind::LOCAL;
+    long long dimension = 0, contacts = 0;  ///< LCP: contacts = n
+    DatMatrix W;                            ///< local: W; global and LCP: M
+    DatMatrix H;                            ///< global only
     std::vector<double> q, b, mu;
-    std::uint64_t ignored_tokens = 0;  ///< after mu
+    std::uint64_t ignored_tokens = 0;  ///< after the last field (mu, or the LCP's q)
 };
 
 DatProblem read_dat(const std::string& path)
 {
     DatText t(path);
     DatProblem p;
+    // An LCP starts n, storageType, n, n; a friction-contact problem d, m, storageType, d m (the
+    // two agree only for d = 2, m = 1, storage 2, which is refused as a friction problem anyway).
+    const std::vector<long long> head = t.peek_integers(4);
+    if (head.size() == 4 && head[0] >= 1 && head[1] >= 0 && head[1] <= 2 && head[2] == head[0] && head[3] == head[0]) {
+        p.kind = DatProblem::Kind::LCP;
+        p.contacts = t.count("size", 1);
+        p.W = read_matrix(t, "M");
+        p.q = t.reals("q", std::uint64_t(p.contacts));
+        p.ignored_tokens = t.tokens_left();
+        return p;
+    }
     p.dimension = t.integer("dimension", 2, 3);
     p.contacts = t.count("numberOfContacts", 0);
     if (p.contacts == 0) t.fail("numberOfContacts", "is 0: the problem has no contacts");
@@ -322,8 +334,9 @@ DatProblem read_dat(const std::string& path)
     // a local one has q and mu, written with %e (a hand-written q of integers is told apart by
     // the three values).
     const std::vector<long long> next = t.peek_integers(3);
-    p.global = next.size() == 3 && next[0] >= 0 && next[0] <= 2 && next[1] == p.W.rows && next[2] == rows;
-    if (p.global) {
+    if (next.size() == 3 && next[0] >= 0 && next[0] <= 2 && next[1] == p.W.rows && next[2] == rows)
+        p.kind = DatProblem::Kind::GLOBAL;
+    if (p.kind == DatProblem::Kind::GLOBAL) {
         if (p.W.rows != p.W.cols)
             t.fail("M", "is " + std::to_string(p.W.rows) + " x " + std::to_string(p.W.cols) + ": not square");
         p.H = read_matrix(t, "H");
@@ -347,12 +360,19 @@ DatProblem read_dat(const std::string& path)
     return p;
 }
 
-[[noreturn]] void refuse_global(const std::string& path)
+/// A global problem is not imported by any command; an LCP is by convert only.
+void refuse_kind(const std::string& path, const DatProblem& p, bool lcp_taken)
 {
-    throw_input_error(path, "H",
-                      "a global friction-contact problem (Siconos GlobalFrictionContactProblem: M, H, q, b, mu), "
-                      "not a local one (W, q, mu); contactbench imports local .dat problems only (write it as "
-                      "FCLIB fclib_global with Siconos, then `contactbench convert` it)");
+    if (p.kind == DatProblem::Kind::GLOBAL)
+        throw_input_error(path, "H",
+                          "a global friction-contact problem (Siconos GlobalFrictionContactProblem: M, H, q, b, mu), "
+                          "not a local one (W, q, mu); contactbench imports local .dat problems only (write it as "
+                          "FCLIB fclib_global with Siconos, then `contactbench convert` it)");
+    if (p.kind == DatProblem::Kind::LCP && !lcp_taken)
+        throw_input_error(path, "size",
+                          "a linear complementarity problem (Siconos LinearComplementarityProblem: n, M, q), not a "
+                          "friction-contact one; `contactbench convert` takes it as a QP (A = M, b = -q, J = I, "
+                          "c = 0)");
 }
 
 }  // namespace
@@ -360,7 +380,7 @@ DatProblem read_dat(const std::string& path)
 FrictionLocal read_siconos_dat_friction(const std::string& path)
 {
     DatProblem p = read_dat(path);
-    if (p.global) refuse_global(path);
+    refuse_kind(path, p, false);
     if (p.dimension != 3)
         throw_input_error(path, "dimension",
                           "is " + std::to_string(p.dimension) +
@@ -376,8 +396,15 @@ FrictionLocal read_siconos_dat_friction(const std::string& path)
 Qp read_siconos_dat_qp(const std::string& path, const FclibReadOptions& options)
 {
     DatProblem p = read_dat(path);
-    if (p.global) refuse_global(path);
+    refuse_kind(path, p, true);
+    const bool lcp = p.kind == DatProblem::Kind::LCP;
+    // An LCP is its own normal block: one "contact" per unknown, no friction.
+    if (lcp) {
+        p.dimension = 1;
+        p.mu.assign(size_t(p.contacts), 0.0);
+    }
     const long long d = p.dimension, m = p.contacts;
+    const std::string block = lcp ? "the LCP matrix M" : "the normal block W_NN (indexed by contact)";
     double mu_min = p.mu[0], mu_max = p.mu[0];
     for (size_t i = 0; i < p.mu.size(); ++i) {
         if (p.mu[i] != 0.0 && !options.drop_friction)
@@ -396,9 +423,17 @@ Qp read_siconos_dat_qp(const std::string& path, const FclibReadOptions& options)
     A.setFromTriplets(normal.begin(), normal.end());
     A.makeCompressed();
     nlohmann::json provenance = {
-        {"format", "siconos_dat"}, {"file", std::filesystem::path(path).filename().string()},
-        {"dimension", d},          {"contacts", m},
-        {"storage", p.W.storage},  {"mapping", "A = W_NN, b = -q_N, J = I, c = 0 (x = r_N, lambda = u_N)"}};
+        {"format", "siconos_dat"}, {"file", std::filesystem::path(path).filename().string()}, {"storage", p.W.storage}};
+    if (lcp) {
+        provenance["problem"] = "lcp";
+        provenance["size"] = m;
+        provenance["mapping"] = "A = M, b = -q, J = I, c = 0 (x = z, lambda = w = M z + q)";
+    } else {
+        provenance["problem"] = "local friction-contact";
+        provenance["dimension"] = d;
+        provenance["contacts"] = m;
+        provenance["mapping"] = "A = W_NN, b = -q_N, J = I, c = 0 (x = r_N, lambda = u_N)";
+    }
     // Symmetric to rounding, else refused (or averaged when asked), as FCLIB's W_NN is.
     const SpMat At = A.transpose();
     const SpMat diff = A - At;
@@ -417,13 +452,14 @@ Qp read_siconos_dat_qp(const std::string& path, const FclibReadOptions& options)
     if (worst > 1e-12 * max_abs) {
         if (!options.symmetrise)
             throw_input_error(path, "M",
-                              "the normal block W_NN (indexed by contact) is not symmetric: (" + std::to_string(wi) +
-                                  ", " + std::to_string(wj) + ") = " + exact(A.coeff(wi, wj)) + " but (" +
-                                  std::to_string(wj) + ", " + std::to_string(wi) + ") = " + exact(A.coeff(wj, wi)) +
-                                  " (beyond 1e-12 max|W_NN|); `convert --symmetrise` averages it with its transpose");
+                              block + " is not symmetric: (" + std::to_string(wi) + ", " + std::to_string(wj) +
+                                  ") = " + exact(A.coeff(wi, wj)) + " but (" + std::to_string(wj) + ", " +
+                                  std::to_string(wi) + ") = " + exact(A.coeff(wj, wi)) +
+                                  " (beyond 1e-12 of its largest entry); `convert --symmetrise` averages it with its "
+                                  "transpose");
         qp.A = SpMat(0.5 * (A + At));
-        provenance["matrices"] = {
-            {"M", "W_NN not symmetric (largest difference " + exact(worst) + "): replaced by (W_NN + W_NN')/2"}};
+        provenance["matrices"] = {{"M", block + " not symmetric (largest difference " + exact(worst) +
+                                            "): replaced by its average with its transpose"}};
     } else {
         qp.A = A;
     }
@@ -442,28 +478,38 @@ Qp read_siconos_dat_qp(const std::string& path, const FclibReadOptions& options)
             {"kept", "the normal block W_NN: a frictionless problem, not the file's frictional one"}};
     qp.meta = nlohmann::json::object();
     qp.meta["provenance"] = provenance;
-    validate_qp(path + ": the normal block as the QP", qp);
+    validate_qp(path + (lcp ? ": the LCP as the QP" : ": the normal block as the QP"), qp);
     return qp;
 }
 
 nlohmann::json describe_siconos_dat(const std::string& path)
 {
     const DatProblem p = read_dat(path);
+    if (p.kind == DatProblem::Kind::LCP)
+        return {{"format", "siconos_dat"},
+                {"problem", "linear complementarity (w = M z + q, 0 <= z ⊥ w >= 0)"},
+                {"size", p.contacts},
+                {"storage", p.W.storage},
+                {"nnz_M", p.W.entries.size()},
+                {"ignored_after_q", p.ignored_tokens},
+                {"imported", true},
+                {"convert", "contactbench convert " + path + " OUT.qpsnap"}};
     double mu_min = p.mu[0], mu_max = p.mu[0];
     for (const double mu : p.mu) {
         mu_min = std::min(mu_min, mu);
         mu_max = std::max(mu_max, mu);
     }
     nlohmann::json out = {{"format", "siconos_dat"},
-                          {"problem", p.global ? "global friction-contact (M v = q + H r, u = H'v + b)"
-                                               : "local friction-contact (u = W r + q)"},
+                          {"problem", p.kind == DatProblem::Kind::GLOBAL
+                                          ? "global friction-contact (M v = q + H r, u = H'v + b)"
+                                          : "local friction-contact (u = W r + q)"},
                           {"dimension", p.dimension},
                           {"contacts", p.contacts},
                           {"storage", p.W.storage},
                           {"mu_min", mu_min},
                           {"mu_max", mu_max},
                           {"ignored_after_mu", p.ignored_tokens}};
-    if (p.global) {
+    if (p.kind == DatProblem::Kind::GLOBAL) {
         out["unknowns"] = p.W.rows;
         out["nnz_M"] = p.W.entries.size();
         out["nnz_H"] = p.H.entries.size();

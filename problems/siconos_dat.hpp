@@ -13,7 +13,8 @@
 ///   q (size0 values), mu (m values). Whatever follows mu is ignored, as Siconos' reader does
 ///   (its test files append solver settings there).
 /// A global problem (GlobalFrictionContactProblem: d, m, M, H, q, b, mu) is recognised and
-/// described, not imported. Storage 2 (CSparse's print, values with 6 significant digits) is
+/// described, not imported. An LCP (linearComplementarity_printInFile: n, M, q) is imported by
+/// read_siconos_dat_qp only. Storage 2 (CSparse's print, values with 6 significant digits) is
 /// refused: it does not hold the problem to double precision.
 ///
 /// Hostile files: every count is checked against the bytes that remain before anything is
@@ -34,7 +35,8 @@ FrictionLocal read_siconos_dat_friction(const std::string& path);
 
 /// The local problem's normal block as a QP, as FCLIB's local files are taken (fclib_io.hpp):
 /// A = W_NN, b = -q_N, J = I, c = 0, x0 = 0. mu != 0 needs options.drop_friction (recorded in
-/// meta.provenance); a W_NN not symmetric to 1e-12 max|W_NN| needs options.symmetrise.
+/// meta.provenance); a W_NN not symmetric to 1e-12 max|W_NN| needs options.symmetrise. An LCP
+/// (w = M z + q, 0 <= z ⊥ w >= 0) is the same with A = M, b = -q.
 Qp read_siconos_dat_qp(const std::string& path, const FclibReadOptions& options = {});
 
 /// A summary for `info`: local or global, dimension, contacts, storage, sizes, mu range, and

@@ -154,8 +154,8 @@ TEST(SiconosDat, ConvertKeepsTheNormalBlockAsFclibLocalDoes)
     EXPECT_EQ(o.status, 2);
     EXPECT_EQ(o.err, "contactbench convert: error: " + in +
                          ": M: the normal block W_NN (indexed by contact) is not symmetric: (146, 216) = "
-                         "0.018958977152198325 but (216, 146) = 0.017250599635300901 (beyond 1e-12 max|W_NN|); "
-                         "`convert --symmetrise` averages it with its transpose\n");
+                         "0.018958977152198325 but (216, 146) = 0.017250599635300901 (beyond 1e-12 of its largest "
+                         "entry); `convert --symmetrise` averages it with its transpose\n");
     EXPECT_FALSE(fs::exists(out));
     o = run_captured(bin + " convert '" + in + "' '" + out + "' --drop-friction --symmetrise", dir);
     ASSERT_EQ(o.status, 0) << o.err;
@@ -230,6 +230,41 @@ TEST(SiconosDat, FrictionSolveAndInfoTakeDatFiles)
                          ": H: a global friction-contact problem (Siconos GlobalFrictionContactProblem: M, H, q, b, "
                          "mu), not a local one (W, q, mu); contactbench imports local .dat problems only (write it "
                          "as FCLIB fclib_global with Siconos, then `contactbench convert` it)\n");
+    fs::remove_all(dir);
+}
+
+TEST(SiconosDat, AnLcpConvertsAsAQpAndIsNotAFrictionProblem)
+{
+    const fs::path dir = cb::test::make_test_work_dir("siconos_dat_lcp");
+    const std::string bin = cb::test::contactbench_binary();
+    // Siconos' linearComplementarity_printInFile layout: n, M (dense here), q; text after q ignored.
+    const std::string lcp = (dir / "lcp.dat").string();
+    write(lcp, "2\n0\n2\n2\n2\t2\n2 1\n1 2\n-5 -6\n\nRemark: z = (4/3, 7/3), w = 0\n");
+    EXPECT_EQ(cb::sniff_format(lcp), cb::FileFormat::SICONOS_DAT);
+    const nlohmann::json d = cb::describe_siconos_dat(lcp);
+    EXPECT_EQ(d.at("size"), 2);
+    EXPECT_EQ(d.at("ignored_after_q"), 8);
+    const cb::Qp qp = cb::read_siconos_dat_qp(lcp);
+    EXPECT_EQ(Eigen::MatrixXd(qp.A), (Eigen::MatrixXd(2, 2) << 2, 1, 1, 2).finished());
+    EXPECT_EQ(qp.b, (cb::Vec(2) << 5, 6).finished());
+    EXPECT_EQ(qp.meta.at("provenance").at("mapping"), "A = M, b = -q, J = I, c = 0 (x = z, lambda = w = M z + q)");
+    cb::test::Output o = run_captured(bin + " convert '" + lcp + "' '" + (dir / "lcp.qpsnap").string() + "'", dir);
+    ASSERT_EQ(o.status, 0) << o.err;
+    o = run_captured(bin + " solve '" + (dir / "lcp.qpsnap").string() + "' --solver active-set", dir);
+    ASSERT_EQ(o.status, 0) << o.err;
+    EXPECT_NE(o.out.find("objective   -10.33333333,"), std::string::npos) << o.out;  // -1/2 q'z = -31/3
+    o = run_captured(bin + " friction-solve '" + lcp + "'", dir);
+    EXPECT_EQ(o.status, 2);
+    EXPECT_EQ(o.err, "contactbench friction-solve: error: " + lcp +
+                         ": size: a linear complementarity problem (Siconos LinearComplementarityProblem: n, M, q), "
+                         "not a friction-contact one; `contactbench convert` takes it as a QP (A = M, b = -q, J = I, "
+                         "c = 0)\n");
+    // A non-symmetric M is not a QP: refused naming the pair (column-major: M(1,0) = 2).
+    write(dir / "asym.dat", "3\n0\n3\n3\n3\t3\n1 2 2\n0 1 2\n0 0 1\n-1 -1 -1\n");
+    EXPECT_EQ(error_of([&] { cb::read_siconos_dat_qp((dir / "asym.dat").string()); }),
+              (dir / "asym.dat").string() +
+                  ": M: the LCP matrix M is not symmetric: (0, 1) = 0 but (1, 0) = 2 (beyond 1e-12 of its largest "
+                  "entry); `convert --symmetrise` averages it with its transpose");
     fs::remove_all(dir);
 }
 
