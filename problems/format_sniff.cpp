@@ -49,9 +49,10 @@ bool integer_line(const std::string& head, size_t& pos)
 /// type and first size). The values are not judged here: the .dat reader names a bad one.
 bool looks_like_siconos_dat(const std::string& head)
 {
-    for (const char ch : head)
-        if (!std::isprint(static_cast<unsigned char>(ch)) && !std::isspace(static_cast<unsigned char>(ch)))
-            return false;
+    for (const char ch : head) {  // text: no control byte but white space (UTF-8 remarks allowed)
+        const unsigned char c = static_cast<unsigned char>(ch);
+        if ((c < 32 || c == 127) && !std::isspace(c)) return false;
+    }
     size_t pos = 0;
     for (int line = 0; line < 4; ++line)
         if (!integer_line(head, pos)) return false;

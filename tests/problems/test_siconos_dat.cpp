@@ -239,7 +239,7 @@ TEST(SiconosDat, AnLcpConvertsAsAQpAndIsNotAFrictionProblem)
     const std::string bin = cb::test::contactbench_binary();
     // Siconos' linearComplementarity_printInFile layout: n, M (dense here), q; text after q ignored.
     const std::string lcp = (dir / "lcp.dat").string();
-    write(lcp, "2\n0\n2\n2\n2\t2\n2 1\n1 2\n-5 -6\n\nRemark: z = (4/3, 7/3), w = 0\n");
+    write(lcp, "2\n0\n2\n2\n2\t2\n2 1\n1 2\n-5 -6\n\nRemark: z ⊥ w, z = (4/3, 7/3)\n");  // UTF-8 text after q
     EXPECT_EQ(cb::sniff_format(lcp), cb::FileFormat::SICONOS_DAT);
     const nlohmann::json d = cb::describe_siconos_dat(lcp);
     EXPECT_EQ(d.at("size"), 2);
