@@ -1,5 +1,5 @@
 // `contactbench convert IN OUT`: IN is read by its content (format_sniff.hpp: a .qpsnap, a Matrix
-// Market folder or an FCLIB file); OUT by its name: .qpsnap, .hdf5/.h5 (FCLIB), else a folder.
+// Market folder, an FCLIB file or a Siconos .dat); OUT by its name: .qpsnap, .hdf5/.h5 (FCLIB), else a folder.
 // Every output is written atomically.
 #include "harness/cli.hpp"
 #include "harness/commands.hpp"
@@ -8,6 +8,7 @@
 #include "problems/format_sniff.hpp"
 #include "problems/matrix_market.hpp"
 #include "problems/qpsnap.hpp"
+#include "problems/siconos_dat.hpp"
 
 #include <filesystem>
 #include <iostream>
@@ -23,8 +24,10 @@ const char* const USAGE =
     "  IN.qpsnap  -> OUT.hdf5 / .h5: an FCLIB fclib_global problem (mu = 0; /solution when known)\n"
     "  IN FCLIB   -> OUT: an fclib_global or fclib_local file as Siconos, LMGC90 or libfclib write it\n"
     "               (global: A = M, b = f, J = H's normal columns', c = -w_N; local: A = W_NN, b = -q_N, J = I)\n"
-    "  --drop-friction  a frictional FCLIB problem (mu != 0) keeps its normal part (recorded in meta.provenance)\n"
-    "  --symmetrise     an FCLIB matrix not symmetric to rounding is averaged with its transpose (recorded)\n"
+    "  IN.dat     -> OUT: a Siconos numerics text dump: a local friction-contact problem (dense or sparse-block W)\n"
+    "               as FCLIB local, or an LCP (A = M, b = -q, J = I)\n"
+    "  --drop-friction  a frictional FCLIB or .dat problem (mu != 0) keeps its normal part (in meta.provenance)\n"
+    "  --symmetrise     an FCLIB or .dat matrix not symmetric to rounding is averaged with its transpose (recorded)\n"
     "  --length-scale L stores the problem's scene size l in the snapshot (meta.length_scale)\n"
     "IN is recognised by its content, not its name. Values are written with %.17g: .qpsnap -> folder ->\n"
     ".qpsnap keeps every array bit for bit; FCLIB keeps A, b, x0, J, c bit for bit but not per-row contact\n"
@@ -53,14 +56,15 @@ int cmd_convert(const Args& args)
     options.drop_friction = cl.has("--drop-friction");
     options.symmetrise = cl.has("--symmetrise");
     if ((options.drop_friction || options.symmetrise) && format != FileFormat::FCLIB_GLOBAL &&
-        format != FileFormat::FCLIB_LOCAL)
+        format != FileFormat::FCLIB_LOCAL && format != FileFormat::SICONOS_DAT)
         throw_input_error(in, options.drop_friction ? "--drop-friction" : "--symmetrise",
-                          "applies to FCLIB files only; this is " + format_name(format));
+                          "applies to FCLIB and Siconos .dat files only; this is " + format_name(format));
     if (format == FileFormat::MATRIX_MARKET_FOLDER || format == FileFormat::FOLDER) {
         qp = read_matrix_market_folder(in, &extras);
     } else if (format == FileFormat::FCLIB_GLOBAL || format == FileFormat::FCLIB_LOCAL || format == FileFormat::HDF5 ||
+               format == FileFormat::SICONOS_DAT ||
                (format == FileFormat::UNKNOWN && is_fclib_path(in))) {  // a damaged .hdf5: the HDF5 reader says why
-        qp = read_fclib(in, &extras, options);
+        qp = format == FileFormat::SICONOS_DAT ? read_siconos_dat_qp(in, options) : read_fclib(in, &extras, options);
         const nlohmann::json provenance = qp.meta.value("provenance", nlohmann::json::object());
         if (provenance.contains("dropped_friction"))
             std::cout << "dropped friction: mu in [" << provenance["dropped_friction"]["mu_min"] << ", "

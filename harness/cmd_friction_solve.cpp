@@ -4,6 +4,8 @@
 #include "harness/commands.hpp"
 #include "harness/results.hpp"
 #include "problems/fclib_io.hpp"
+#include "problems/format_sniff.hpp"
+#include "problems/siconos_dat.hpp"
 #include "solvers/friction_error.hpp"
 #include "solvers/friction_nsgs.hpp"
 #include "solvers/peers/siconos_fc3d.hpp"
@@ -56,7 +58,8 @@ int cmd_friction_solve(const Args& args)
             throw InputError("--solver: " + s +
                              " is not built (install libsiconos-numerics-dev and reconfigure with CB_PEERS=ON)");
 
-    const FrictionLocal problem = read_fclib_local_friction(path);
+    const FrictionLocal problem = sniff_format(path) == FileFormat::SICONOS_DAT ? read_siconos_dat_friction(path)
+                                                                                : read_fclib_local_friction(path);
     nlohmann::json out = {{"file", path},
                           {"contacts", problem.contacts()},
                           {"mu_min", problem.mu.minCoeff()},

@@ -6,6 +6,7 @@
 #include "problems/format_sniff.hpp"
 #include "problems/matrix_market.hpp"
 #include "problems/qpsnap.hpp"
+#include "problems/siconos_dat.hpp"
 
 #include <chrono>
 #include <ctime>
@@ -18,7 +19,7 @@ namespace {
 
 const char* const USAGE = "contactbench info SNAP [--json] [--time]\n"
                           "  SNAP: a .qpsnap file or a Matrix Market folder (A.mtx b.mtx J.mtx c.mtx x0.mtx);\n"
-                          "        an FCLIB file (HDF5) is summarised (kind, contacts, mu), other formats named\n"
+                          "        an FCLIB file (HDF5) or Siconos .dat is summarised (kind, contacts, mu)\n"
                           "  --json: print one JSON object instead of text\n"
                           "  --time: also time the validated load (read_qpsnap / the folder reader), wall and CPU";
 
@@ -61,11 +62,13 @@ int cmd_info(const Args& args)
     const std::string path = cl.positional()[0];
     // By content: an FCLIB file is summarised (convert makes it a snapshot), other formats named.
     const FileFormat format = sniff_format(path);
-    if (format == FileFormat::FCLIB_GLOBAL || format == FileFormat::FCLIB_LOCAL || format == FileFormat::HDF5) {
-        nlohmann::json fclib = describe_fclib(path);
+    if (format == FileFormat::FCLIB_GLOBAL || format == FileFormat::FCLIB_LOCAL || format == FileFormat::HDF5 ||
+        format == FileFormat::SICONOS_DAT) {
+        nlohmann::json fclib = format == FileFormat::SICONOS_DAT ? describe_siconos_dat(path) : describe_fclib(path);
         fclib["path"] = path;
-        fclib["convert"] = "contactbench convert " + path + " OUT.qpsnap" +
-                           (fclib.value("mu_max", 0.0) > 0.0 ? " --drop-friction" : "");
+        if (!fclib.contains("convert"))
+            fclib["convert"] = "contactbench convert " + path + " OUT.qpsnap" +
+                               (fclib.value("mu_max", 0.0) > 0.0 ? " --drop-friction" : "");
         if (cl.has("--json")) {
             std::cout << fclib.dump(2) << "\n";
             return 0;

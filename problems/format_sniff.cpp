@@ -27,32 +27,35 @@ std::string bytes_at(int fd, off_t offset, size_t count)
 
 const char HDF5_SIGNATURE[] = "\x89HDF\r\n\x1a\n";
 
-/// A text file of numbers whose first line is the space dimension (2 or 3) and whose next lines
-/// are integers: Siconos numerics' printInFile layout of a friction-contact problem.
+/// One integer (signed) on the line starting at `pos`, then the line's end; advances `pos`.
+bool integer_line(const std::string& head, size_t& pos)
+{
+    pos = head.find_first_not_of(" \t\r\n", pos);
+    if (pos == std::string::npos) return false;
+    const size_t stop = head.find_first_of("\r\n", pos);
+    if (stop == std::string::npos) return false;
+    size_t k = pos;
+    if (head[k] == '-' || head[k] == '+') ++k;
+    const size_t digits = k;
+    while (k < stop && std::isdigit(static_cast<unsigned char>(head[k]))) ++k;
+    if (k == digits) return false;
+    while (k < stop && (head[k] == ' ' || head[k] == '\t')) ++k;
+    pos = stop;
+    return k == stop;
+}
+
+/// Text whose first four lines (blank ones skipped) hold one integer each: Siconos numerics'
+/// printInFile layout of a friction-contact problem (dimension, contacts, the matrix's storage
+/// type and first size). The values are not judged here: the .dat reader names a bad one.
 bool looks_like_siconos_dat(const std::string& head)
 {
-    if (head.empty()) return false;
-    for (const char ch : head)
-        if (!(std::isdigit(static_cast<unsigned char>(ch)) || std::isspace(static_cast<unsigned char>(ch)) ||
-              std::strchr("+-.eE", ch)))
-            return false;
-    size_t pos = head.find_first_not_of(" \t\r\n");
-    if (pos == std::string::npos) return false;
-    const size_t end = head.find_first_of("\r\n", pos);
-    if (end == std::string::npos) return false;
-    const std::string first = head.substr(pos, head.find_last_not_of(" \t", end - 1) + 1 - pos);
-    if (first != "2" && first != "3") return false;
-    // The next three lines hold one integer each (contacts, sizes).
-    pos = end;
-    for (int line = 0; line < 3; ++line) {
-        pos = head.find_first_not_of("\r\n", pos);
-        if (pos == std::string::npos) return false;
-        const size_t stop = head.find_first_of("\r\n", pos);
-        if (stop == std::string::npos) return false;
-        for (size_t k = pos; k < stop; ++k)
-            if (!std::isdigit(static_cast<unsigned char>(head[k])) && head[k] != ' ' && head[k] != '\t') return false;
-        pos = stop;
+    for (const char ch : head) {  // text: no control byte but white space (UTF-8 remarks allowed)
+        const unsigned char c = static_cast<unsigned char>(ch);
+        if ((c < 32 || c == 127) && !std::isspace(c)) return false;
     }
+    size_t pos = 0;
+    for (int line = 0; line < 4; ++line)
+        if (!integer_line(head, pos)) return false;
     return true;
 }
 
@@ -138,7 +141,10 @@ void expect_qpsnap(const std::string& path, const std::string& command)
                                                             "frictional problem)");
         break;
     case FileFormat::SICONOS_DAT:
-        how = "contactbench does not read it: write the problem as FCLIB (HDF5) with Siconos, then convert that";
+        how = "convert a local problem first: contactbench convert " + path +
+              " OUT.qpsnap --drop-friction (its normal part), or solve it with its friction: contactbench "
+              "friction-solve " +
+              path;
         break;
     case FileFormat::MATRIX_MARKET_FILE:
         how = "a problem is a folder of them (A.mtx b.mtx J.mtx c.mtx x0.mtx): convert the folder";
@@ -151,9 +157,11 @@ void expect_qpsnap(const std::string& path, const std::string& command)
         break;
     }
     const std::string reads =
-        command == "convert" ? "convert reads .qpsnap snapshots, Matrix Market folders and FCLIB files"
-        : command == "info"  ? "info reads .qpsnap snapshots and Matrix Market folders, and summarises FCLIB files"
-                             : command + " reads .qpsnap snapshots";
+        command == "convert"
+            ? "convert reads .qpsnap snapshots, Matrix Market folders, FCLIB files and Siconos .dat files"
+        : command == "info" ? "info reads .qpsnap snapshots and Matrix Market folders, and summarises FCLIB and "
+                              "Siconos .dat files"
+                            : command + " reads .qpsnap snapshots";
     throw_input_error(path, "format", format_name(format) + ", not a .qpsnap snapshot (" + reads + "); " + how);
 }
 

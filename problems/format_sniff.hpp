@@ -11,7 +11,7 @@ enum class FileFormat {
     FCLIB_GLOBAL,          ///< HDF5 holding /fclib_global
     FCLIB_LOCAL,           ///< HDF5 holding /fclib_local
     HDF5,                  ///< another HDF5 file (or FCLIB support not built)
-    SICONOS_DAT,           ///< Siconos numerics' text dump of a (global) friction-contact problem
+    SICONOS_DAT,           ///< Siconos numerics' text dump of a (global) friction-contact problem (siconos_dat.hpp)
     MATRIX_MARKET_FOLDER,  ///< a folder with A.mtx (problems/matrix_market.hpp)
     MATRIX_MARKET_FILE,    ///< one .mtx file
     NPY,                   ///< one NumPy array

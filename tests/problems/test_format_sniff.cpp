@@ -67,13 +67,21 @@ TEST(FormatSniff, CommandsNameTheFormatAndSuggestConvert)
     const std::string dat = (DATA / "fclib/GFC3D_OneContact.dat").string();
     auto run = [&](const std::string& args) { return cb::test::run_captured(bin + " " + args, work); };
 
-    const auto info_dat = run("info '" + dat + "'");
-    EXPECT_EQ(info_dat.status, 2);
-    EXPECT_EQ(info_dat.err,
-              "contactbench info: error: " + dat +
-                  ": format: a Siconos numerics text dump (.dat), not a .qpsnap snapshot (info reads "
-                  ".qpsnap snapshots and Matrix Market folders, and summarises FCLIB files); contactbench "
-                  "does not read it: write the problem as FCLIB (HDF5) with Siconos, then convert that\n");
+    // A Siconos .dat is summarised by info (this global one named, not imported: problems/siconos_dat.hpp);
+    // solve suggests convert or friction-solve.
+    const auto info_dat = run("info '" + dat + "' --json");
+    ASSERT_EQ(info_dat.status, 0) << info_dat.err;
+    EXPECT_EQ(nlohmann::json::parse(info_dat.out).at("format"), "siconos_dat");
+    EXPECT_EQ(nlohmann::json::parse(info_dat.out).at("imported"), false);
+    const auto solve_dat = run("solve '" + dat + "' --solver pgs");
+    EXPECT_EQ(solve_dat.status, 2);
+    EXPECT_EQ(solve_dat.err, "contactbench solve: error: " + dat +
+                                 ": format: a Siconos numerics text dump (.dat), not a .qpsnap snapshot (solve reads "
+                                 ".qpsnap snapshots); convert a local problem first: contactbench convert " +
+                                 dat +
+                                 " OUT.qpsnap --drop-friction (its normal part), or solve it with its friction: "
+                                 "contactbench friction-solve " +
+                                 dat + "\n");
     std::ofstream(work / "x.npy") << "\x93NUMPY\x01\x00v\x00{'descr': '<f8', 'fortran_order': False, 'shape': (3,), }";
     const auto judge_npy = run("judge '" + (work / "x.npy").string() + "' '" + (work / "x.npy").string() + "'");
     EXPECT_EQ(judge_npy.status, 2);
