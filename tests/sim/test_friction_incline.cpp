@@ -6,6 +6,7 @@
 // flat on an axis-aligned plane, and tilting gravity instead of the plane is the same physics in
 // the incline's frame, with the slide along one axis (x).
 #include "harness/sim_step_solver.hpp"
+#include "sim/chains.hpp"
 #include "sim/simulator.hpp"
 #include "solvers/peers/siconos_fc3d.hpp"
 #include "solvers/registry.hpp"
@@ -196,4 +197,22 @@ TEST(FrictionIncline, SceneFrictionKeysAreChecked)
     EXPECT_EQ(s.friction.max_iterations, 50);
     EXPECT_EQ(s.friction.solver, "nsgs");
     EXPECT_EQ(load_scene_json(incline_scene(0.0), "s.json", PathRoots{}).friction.mu, 0.0);
+}
+
+TEST(FrictionIncline, ChainsRefuseAFrictionalScene)
+{
+    ChainOptions opt;
+    opt.out_dir = "/nonexistent/never-written";
+    opt.chains = {ChainSpec{"exact", "active-set", json::object(), "none"}};
+    opt.reference = opt.render_chain = "exact";
+    opt.solve_step = harness_step_solver();
+    const auto load = [] { return load_scene_json(incline_scene(0.5, "nsgs"), "incline.json", PathRoots{}); };
+    std::string error = "(no error)";
+    try {
+        run_chains(load, opt);
+    } catch (const InputError& e) {
+        error = e.what();
+    }
+    EXPECT_EQ(error, "incline.json: /mu: chains compares solvers and decoupling orders on frictionless steps; this "
+                     "scene has mu = 0.5 (simulate steps it)");
 }
