@@ -13,7 +13,12 @@
 
 #include <gtest/gtest.h>
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <sstream>
+#include <unistd.h>
 
 using namespace cb;
 using namespace cb::sim;
@@ -215,4 +220,36 @@ TEST(FrictionIncline, ChainsRefuseAFrictionalScene)
     }
     EXPECT_EQ(error, "incline.json: /mu: chains compares solvers and decoupling orders on frictionless steps; this "
                      "scene has mu = 0.5 (simulate steps it)");
+}
+
+TEST(FrictionIncline, AStepMissingItsToleranceIsReported)
+{
+    // One NSGS sweep cannot reach 1e-10 on the stiff box: the step goes on and says so everywhere.
+    json j = incline_scene(0.5, "nsgs");
+    j["friction_settings"]["max_iterations"] = 1;
+    j["frames"] = 2;
+    j["output"] = {{"snapshots", false}, {"strip_frames", 0}};
+    const char* tmp = std::getenv("TMPDIR");
+    SimulatorOptions opt = options();
+    opt.out_dir = std::string(tmp ? tmp : "/tmp") + "/cb_test_friction_" + std::to_string(::getpid());
+    opt.fresh = true;
+    std::ostringstream log;
+    opt.progress = &log;
+    Simulator sim(load_scene_json(j, "incline.json", PathRoots{}), opt);
+    ASSERT_TRUE(sim.run());
+    EXPECT_EQ(sim.frictional_steps_unsolved(), 2);
+    EXPECT_NE(log.str().find("nsgs mu 0.5 max_iterations  it 1  e "), std::string::npos) << log.str();
+    EXPECT_NE(log.str().find("incline: 2 frictional step(s) did not reach FCLIB error 1.0e-10 (nsgs)"),
+              std::string::npos)
+        << log.str();
+    std::ifstream steps(opt.out_dir + "/steps.csv");
+    std::string header, row;
+    std::getline(steps, header);
+    std::getline(steps, row);
+    EXPECT_EQ(row.rfind("0,0,0,nsgs,max_iterations,max_iterations,1,", 0), 0u) << row;
+    std::ifstream record_file(opt.out_dir + "/simulation.json");
+    const json record = json::parse(record_file);
+    EXPECT_EQ(record.at("friction").at("steps_not_converged"), 2);
+    EXPECT_EQ(record.at("friction").at("mu"), 0.5);
+    std::filesystem::remove_all(opt.out_dir);
 }
