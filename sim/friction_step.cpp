@@ -42,6 +42,21 @@ SpMat frictional_rows(const std::vector<ContactRow>& rows, Eigen::Index n_dofs)
     return J;
 }
 
+SpMat tangent_rows(const std::vector<ContactRow>& rows, Eigen::Index n_dofs)
+{
+    const SpMat all = frictional_rows(rows, n_dofs);
+    std::vector<Triplet> trip;
+    trip.reserve(static_cast<size_t>(all.nonZeros()));
+    for (Eigen::Index row = 0; row < all.rows(); ++row)
+        if (row % 3 != 0)
+            for (SpMat::InnerIterator it(all, row); it; ++it)
+                trip.emplace_back(static_cast<int>(2 * (row / 3) + row % 3 - 1), static_cast<int>(it.col()),
+                                  it.value());
+    SpMat T(2 * static_cast<Eigen::Index>(rows.size()), n_dofs);
+    T.setFromTriplets(trip.begin(), trip.end());
+    return T;
+}
+
 FrictionalStepProblem frictional_step_problem(const SpMat& A, const Vec& b, const std::vector<ContactRow>& rows,
                                               const Vec& x_start, double mu, const std::string& name)
 {

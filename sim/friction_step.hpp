@@ -37,6 +37,10 @@ void tangent_frame(const Vec3& n, Vec3& t1, Vec3& t2);
 /// the vertex against the triangle's closest point).
 SpMat frictional_rows(const std::vector<ContactRow>& rows, Eigen::Index n_dofs);
 
+/// The tangent rows alone as a snapshot holds them (solvers/qp.hpp Friction::T): 2m x n_dofs, rows
+/// 2i and 2i+1 are rows 3i+1 and 3i+2 of frictional_rows.
+SpMat tangent_rows(const std::vector<ContactRow>& rows, Eigen::Index n_dofs);
+
 /// The local problem of a step: W, q and mu (named `name` in messages), with the pieces that
 /// recover x from a reaction r: x = x_free + Y r.
 struct FrictionalStepProblem {

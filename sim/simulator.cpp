@@ -310,6 +310,13 @@ std::vector<StepRecord> Simulator::step()
     m_rows = m_detector->detect(x_detect, &dstats);
     Qp qp;
     assemble_constraints(m_rows, dofs(), qp.J, qp.c, qp.contacts);
+    if (m_scene.friction.mu > 0.0 && qp.m() > 0) {  // the snapshot's frictional fields (a step without rows has none)
+        qp.friction.mu = Vec::Constant(qp.m(), m_scene.friction.mu);
+        qp.friction.T = tangent_rows(m_rows, dofs());
+        qp.friction.cT = qp.friction.T * x_n;  // slip measured from the step's start
+        qp.friction.h = h;
+        qp.friction.v0 = v_n;
+    }
     double time_detection = 0, peak_detection = 0;
     detection.stop(time_detection, peak_detection, m_peak_reset);
     m_last_depth = 0;

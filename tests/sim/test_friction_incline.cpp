@@ -6,8 +6,10 @@
 // flat on an axis-aligned plane, and tilting gravity instead of the plane is the same physics in
 // the incline's frame, with the slide along one axis (x).
 #include "harness/sim_step_solver.hpp"
+#include "problems/qpsnap.hpp"
 #include "sim/chains.hpp"
 #include "sim/simulator.hpp"
+#include "solvers/friction_nsgs.hpp"
 #include "solvers/peers/siconos_fc3d.hpp"
 #include "solvers/registry.hpp"
 
@@ -251,5 +253,71 @@ TEST(FrictionIncline, AStepMissingItsToleranceIsReported)
     const json record = json::parse(record_file);
     EXPECT_EQ(record.at("friction").at("steps_not_converged"), 2);
     EXPECT_EQ(record.at("friction").at("mu"), 0.5);
+    std::filesystem::remove_all(opt.out_dir);
+}
+
+TEST(FrictionIncline, SnapshotHoldsTheCoulombProblemOfTheStep)
+{
+    // The frictional snapshot of a step holds what a velocity-level method needs (mu, the tangent
+    // rows, cT = T x_start, h, the start velocities): its Coulomb problem, reduced here with a dense
+    // LLT of A and solved by NSGS, gives the positions the simulator stepped to.
+    json j = incline_scene(0.2, "nsgs");
+    j["frames"] = 2;
+    j["output"] = {{"strip_frames", 0}};
+    const char* tmp = std::getenv("TMPDIR");
+    SimulatorOptions opt = options();
+    opt.out_dir = std::string(tmp ? tmp : "/tmp") + "/cb_test_friction_snap_" + std::to_string(::getpid());
+    opt.fresh = true;
+    Simulator sim(load_scene_json(j, "incline.json", PathRoots{}), opt);
+    Vec x_start, v_start;
+    for (int s = 0; s < 2; ++s) {
+        x_start = sim.positions();
+        v_start = sim.velocities();
+        const auto recs = sim.step();
+        ASSERT_EQ(recs[0].status, "converged");
+    }
+    // The second step's snapshot, written by run() as the simulator stepped above would.
+    Simulator writer(load_scene_json(j, "incline.json", PathRoots{}), opt);
+    ASSERT_TRUE(writer.run());
+    const Qp qp = read_qpsnap(opt.out_dir + "/snapshots/incline_f0001_n0.qpsnap");
+    const Eigen::Index m = qp.m(), n = qp.n();
+    ASSERT_GT(m, 0);
+    ASSERT_TRUE(qp.frictional());
+    EXPECT_EQ(qp.friction.mu, Vec::Constant(m, 0.2));
+    ASSERT_EQ(qp.friction.T.rows(), 2 * m);
+    EXPECT_EQ(qp.friction.h, 0.01);
+    EXPECT_EQ(qp.friction.v0, v_start);
+    EXPECT_EQ(qp.friction.cT, Vec(qp.friction.T * x_start));
+    for (Eigen::Index i = 0; i < m; ++i) {  // each contact's frame: orthonormal, the normal first
+        const Eigen::MatrixXd frame = Eigen::MatrixXd(qp.J.row(i)).transpose();
+        const Eigen::MatrixXd t1 = Eigen::MatrixXd(qp.friction.T.row(2 * i)).transpose();
+        const Eigen::MatrixXd t2 = Eigen::MatrixXd(qp.friction.T.row(2 * i + 1)).transpose();
+        EXPECT_NEAR(frame.col(0).dot(t1.col(0)), 0.0, 1e-15);
+        EXPECT_NEAR(frame.col(0).dot(t2.col(0)), 0.0, 1e-15);
+        EXPECT_NEAR(t1.col(0).dot(t2.col(0)), 0.0, 1e-15);
+    }
+    // The local problem from the snapshot's fields alone.
+    Eigen::MatrixXd J_all(3 * m, n);
+    Vec c_all(3 * m);
+    const Eigen::MatrixXd J = Eigen::MatrixXd(qp.J), T = Eigen::MatrixXd(qp.friction.T);
+    for (Eigen::Index i = 0; i < m; ++i) {
+        J_all.row(3 * i) = J.row(i);
+        J_all.row(3 * i + 1) = T.row(2 * i);
+        J_all.row(3 * i + 2) = T.row(2 * i + 1);
+        c_all.segment<3>(3 * i) << qp.c[i], qp.friction.cT[2 * i], qp.friction.cT[2 * i + 1];
+    }
+    const Eigen::LLT<Eigen::MatrixXd> llt{Eigen::MatrixXd(qp.A)};
+    const Eigen::MatrixXd Y = llt.solve(J_all.transpose());
+    FrictionLocal local;
+    local.W = Eigen::MatrixXd(J_all * Y).sparseView(0.0, 0.0);
+    local.q = J_all * llt.solve(qp.b) - c_all;
+    local.mu = qp.friction.mu;
+    FrictionNsgsSettings settings;
+    settings.tol = 1e-10;
+    settings.max_iterations = 100000;  // as the scene's (friction_settings' default)
+    const FrictionRun run = friction_nsgs(local, settings);
+    ASSERT_EQ(run.status, "converged") << run.error;
+    const Vec x = llt.solve(qp.b) + Y * run.r;
+    EXPECT_LE((x - sim.positions()).lpNorm<Eigen::Infinity>(), 1e-9 * SIZE);
     std::filesystem::remove_all(opt.out_dir);
 }
