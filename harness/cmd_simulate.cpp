@@ -112,6 +112,10 @@ int cmd_simulate(const Args& args)
     std::cerr << simulator.scene().name << ": " << simulator.vertices() << " vertices, " << simulator.dofs()
               << " DOFs, " << simulator.tets() << " tets, solver " << simulator.solver_name() << ", output in "
               << opt.out_dir << "\n";
+    if (const sim::FrictionSettings& f = simulator.scene().friction; f.mu > 0.0)
+        std::cerr << simulator.scene().name << ": Coulomb friction mu " << f.mu << ": every step solves the contacts' "
+                  << "frictional problem with " << f.solver << " to FCLIB error " << f.tol << " (the solver "
+                  << simulator.solver_name() << ", --solver and --decouple apply to frictionless steps only)\n";
     lock_output_folder(opt.out_dir, "simulate");
     const volatile std::sig_atomic_t* stop = catch_stop_signals();
     simulator.set_stop(stop);

@@ -1,11 +1,14 @@
 #include "sim/chains.hpp"
 
+#include "solvers/format_number.hpp"
+
 #include "problems/io_util.hpp"
 #include "problems/qpsnap.hpp"
 #include "problems/safe_output.hpp"
 #include "sim/chains_state.hpp"
 #include "sim/partial_table.hpp"
 #include "sim/render.hpp"
+#include "solvers/format_number.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -138,6 +141,12 @@ bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& op
     std::vector<std::unique_ptr<Simulator>> sims;
     for (const ChainSpec& spec : opt.chains) {
         Scene s = load_scene();
+        // Every chain would step with the same frictional solver: the chains compare QP solvers and orders.
+        if (s.friction.mu > 0.0)
+            throw_input_error(s.file, "/mu",
+                              "chains compares solvers and decoupling orders on frictionless steps; this scene has "
+                              "mu = " +
+                                  format_g(s.friction.mu) + " (simulate steps it)");
         s.solver = spec.solver;
         s.solver_settings = spec.settings;
         SimulatorOptions so;  // no out_dir: the chains write their own tables

@@ -4,6 +4,7 @@
 #include "sim/mesh_io.hpp"
 #include "sim/tetrahedralize.hpp"
 #include "solvers/format_number.hpp"
+#include "solvers/peers/siconos_fc3d.hpp"
 
 #include <cstdio>
 #include <cstdlib>
@@ -364,6 +365,19 @@ Scene load_scene_json(const nlohmann::json& j, const std::string& file, const Pa
         s.solver_settings = *st;
     }
     s.blowup_speed = r.number("blowup_speed", 100.0, 0.0);
+    s.friction.mu = r.number("mu", 0.0, -1e-300, 1e6);
+    if (r.has("friction_settings")) {
+        Reader f = r.object("friction_settings");
+        if (!(s.friction.mu > 0.0)) f.fail_here("applies only to a frictional scene (\"mu\" > 0)");
+        s.friction.solver = f.string("solver", "nsgs", {"nsgs", "siconos-nsn", "siconos-nsgs"});
+        if (s.friction.solver != "nsgs" && !siconos_fc3d_built())
+            f.fail("solver",
+                   "'" + s.friction.solver + "' needs Siconos numerics, which this contactbench is built without");
+        s.friction.tol = f.number("tol", s.friction.tol, 0.0, 1.0);
+        s.friction.max_iterations = f.integer("max_iterations", s.friction.max_iterations, 1);
+        s.friction.time_limit_s = f.number("time_limit_s", 0.0, -1e-300);
+        f.finish();
+    }
     {
         Reader d = r.object("detection");
         s.detection.margin = d.number("margin", 0.0, -1e-300);

@@ -5,6 +5,7 @@
 #include "sim/collision/dcd.hpp"
 #include "sim/collision/obstacles.hpp"
 #include "sim/fem_corotated.hpp"
+#include "sim/friction_step.hpp"
 #include "sim/integrator.hpp"
 #include "sim/tet_mesh.hpp"
 
@@ -61,6 +62,7 @@ struct Scene {
     DetectionSettings detection;
     std::string detect_at = "start";  ///< "start" (the authors') or "predicted" (x + h v)
     double blowup_speed = 100.0;      ///< m/s: a faster vertex flags the frame as blown up
+    FrictionSettings friction;        ///< "mu" and "friction_settings"; mu = 0: the frictionless QP step
     std::vector<Body> bodies;
     std::vector<std::unique_ptr<Obstacle>> obstacles;
     OutputSettings output;

@@ -8,6 +8,7 @@
 #include "sim/resume_state.hpp"
 #include "solvers/accuracy.hpp"
 #include "solvers/decouple.hpp"
+#include "solvers/format_number.hpp"
 #include "solvers/peak_memory.hpp"
 #include "solvers/registry.hpp"
 
@@ -309,6 +310,13 @@ std::vector<StepRecord> Simulator::step()
     m_rows = m_detector->detect(x_detect, &dstats);
     Qp qp;
     assemble_constraints(m_rows, dofs(), qp.J, qp.c, qp.contacts);
+    if (m_scene.friction.mu > 0.0 && qp.m() > 0) {  // the snapshot's frictional fields (a step without rows has none)
+        qp.friction.mu = Vec::Constant(qp.m(), m_scene.friction.mu);
+        qp.friction.T = tangent_rows(m_rows, dofs());
+        qp.friction.cT = qp.friction.T * x_n;  // slip measured from the step's start
+        qp.friction.h = h;
+        qp.friction.v0 = v_n;
+    }
     double time_detection = 0, peak_detection = 0;
     detection.stop(time_detection, peak_detection, m_peak_reset);
     m_last_depth = 0;
@@ -357,9 +365,39 @@ std::vector<StepRecord> Simulator::step()
                   {"margin", m_scene.detection.margin},
                   {"decoupled", is_decoupled(qp.J)}}},
                 {"generator", {{"command", "simulate"}, {"scene_file", m_scene.file}, {"solver", m_solver_name}}}};
+            if (m_scene.friction.mu > 0.0)
+                qp.meta["friction"] = {{"mu", m_scene.friction.mu}, {"solver", m_scene.friction.solver}};
             rec.snapshot = snapshot_path(frame, k);
             write_qpsnap(rec.snapshot, qp);
             snapshot.stop(rec.time_snapshot_s, rec.peak_snapshot_mb, m_peak_reset);
+        }
+        if (m_scene.friction.mu > 0.0) {
+            // Coulomb friction: the contacts' local problem solved by NSGS, judged by FCLIB's error.
+            const StageMeter solve;
+            const FrictionalStepOutcome out =
+                solve_frictional_step(qp.A, qp.b, m_rows, x_n, m_scene.friction, m_scene.name);
+            solve.stop(rec.time_solve_stage_s, rec.peak_solve_mb, m_peak_reset);
+            rec.solver = out.run.solver;
+            rec.time_solve_s = out.seconds;
+            rec.status = out.run.status;
+            rec.solver_status = out.run.status;
+            rec.iterations = out.run.iterations;
+            rec.rows_solved = qp.m();
+            rec.accuracy = rec.accuracy_solved = out.run.error;
+            m_friction_last = out;
+            m_friction_last.x.resize(0);
+            if (out.run.status != "converged") ++m_friction_unsolved;
+            if (out.x.size() == dofs() && out.x.allFinite()) {
+                x_k = out.x;
+            } else {
+                m_nonfinite = true;
+                rec.accuracy = rec.accuracy_solved = std::numeric_limits<double>::quiet_NaN();
+            }
+            m_last_violation = qp.m() > 0 && x_k.allFinite() ? max_violation(qp.view(), x_k) : 0.0;
+            m_A.swap(qp.A);
+            records.push_back(rec);
+            if (m_nonfinite) break;
+            continue;
         }
         // Solved and judged by solve_step (in `simulate`, the harness's rule): decoupling, when asked
         // or needed, happens there, and e is measured on this QP with every detected row.
@@ -563,21 +601,26 @@ bool Simulator::run()
             for (const auto& b : m_scene.bodies)
                 if (!b.mesh_file.empty() && std::find(meshes.begin(), meshes.end(), b.mesh_file) == meshes.end())
                     meshes.push_back(b.mesh_file);
-            const nlohmann::json record = {{"scene", m_scene.name},
-                                           {"scene_file", m_scene.file},
-                                           {"meshes", meshes},
-                                           {"data", m_opt.data_dir},
-                                           {"frames", frames},
-                                           {"frames_done", m_frame},
-                                           {"blow_up", !ok},
-                                           {"solver", m_solver_name},
-                                           {"simulator_version", SIMULATOR_VERSION},
-                                           {"decouple", m_opt.decouple},
-                                           {"decouple_seed", m_opt.decouple_seed},
-                                           {"h", m_scene.step.h},
-                                           {"steps_per_frame", m_scene.steps_per_frame},
-                                           {"body_size", m_body_size},
-                                           {"stage_peak_reset", m_peak_reset}};
+            nlohmann::json record = {{"scene", m_scene.name},
+                                     {"scene_file", m_scene.file},
+                                     {"meshes", meshes},
+                                     {"data", m_opt.data_dir},
+                                     {"frames", frames},
+                                     {"frames_done", m_frame},
+                                     {"blow_up", !ok},
+                                     {"solver", m_solver_name},
+                                     {"simulator_version", SIMULATOR_VERSION},
+                                     {"decouple", m_opt.decouple},
+                                     {"decouple_seed", m_opt.decouple_seed},
+                                     {"h", m_scene.step.h},
+                                     {"steps_per_frame", m_scene.steps_per_frame},
+                                     {"body_size", m_body_size},
+                                     {"stage_peak_reset", m_peak_reset}};
+            if (m_scene.friction.mu > 0.0)  // this run's steps only: a resumed run counts from its resume
+                record["friction"] = {{"mu", m_scene.friction.mu},
+                                      {"solver", m_scene.friction.solver},
+                                      {"tol", m_scene.friction.tol},
+                                      {"steps_not_converged", m_friction_unsolved}};
             write_file_atomic(m_opt.out_dir + "/simulation.json", record.dump(1) + "\n");
             save_resume_state(m_frame, true, !ok);  // a longer run of the same inputs goes on from here
         }
@@ -681,17 +724,23 @@ bool Simulator::run_frames(long frames, bool write, PartialTable& steps_csv, Par
         if (m_opt.progress) {
             // The last step's verdict, as `solve` would print it: e on the original QP, and on the
             // kept rows when rows were dropped.
-            char solved[48] = "";
+            char solved[160] = "";
             if (rows_solved < fr.rows) std::snprintf(solved, sizeof solved, " (kept rows %.1e)", e_solved);
+            std::string stepper = m_solver_name;
+            if (m_scene.friction.mu > 0.0) {  // e is then FCLIB's relative error of the step's local problem
+                const FrictionalStepOutcome& f = m_friction_last;
+                stepper = m_scene.friction.solver + " mu " + format_g(m_scene.friction.mu);
+                std::snprintf(solved, sizeof solved, " (FCLIB error; contacts %ld: stick %ld slide %ld open %ld)",
+                              f.contacts, f.sticking, f.sliding, f.separated);
+            }
             char line[400];
             std::snprintf(line, sizeof line,
                           "%s frame %04ld (%ld of %ld)  rows %ld solved %ld  %s %s  it %ld  e %.1e%s  pen %.2e "
                           "(%.2g%% of body)  asm %.3fs det %.3fs snap %.3fs solve %.3fs  peak MiB %s  "
                           "elapsed %.1fs ETA %.1fs%s\n",
-                          m_scene.name.c_str(), m_frame, m_frame + 1, frames, fr.rows, rows_solved,
-                          m_solver_name.c_str(), status.c_str(), iters, e, solved, fr.max_penetration,
-                          100.0 * fr.max_penetration_rel, ta, td, tsn, tsv, peaks.text().c_str(), elapsed, eta,
-                          fr.blow_up ? "  BLOW-UP" : "");
+                          m_scene.name.c_str(), m_frame, m_frame + 1, frames, fr.rows, rows_solved, stepper.c_str(),
+                          status.c_str(), iters, e, solved, fr.max_penetration, 100.0 * fr.max_penetration_rel, ta, td,
+                          tsn, tsv, peaks.text().c_str(), elapsed, eta, fr.blow_up ? "  BLOW-UP" : "");
             *m_opt.progress << line << std::flush;
         }
         if (write) {
@@ -731,6 +780,13 @@ bool Simulator::run_frames(long frames, bool write, PartialTable& steps_csv, Par
                       sum_solve / nsteps, run_peaks.text().c_str(),
                       m_peak_reset ? "" : " (the kernel refused the reset: peaks are cumulative)",
                       ok ? "" : " (stopped: blow-up)");
+        *m_opt.progress << line;
+        if (m_scene.friction.mu > 0.0)
+            std::snprintf(line, sizeof line, "%s: %ld frictional step(s) did not reach FCLIB error %.1e (%s)\n",
+                          m_scene.name.c_str(), m_friction_unsolved, m_scene.friction.tol,
+                          m_scene.friction.solver.c_str());
+        else
+            line[0] = '\0';
         *m_opt.progress << line;
     }
     std::vector<std::vector<SurfaceMesh>> strip_meshes;

@@ -148,6 +148,10 @@ public:
     const Vec& eigenvector() const { return m_eigenvector; }
     void restore_state(const Vec& x, const Vec& v, const Vec& eigenvector, long steps_done);
     const std::string& solver_name() const { return m_solver_name; }
+    /// The last frictional step's NSGS run and contact states (mu > 0; x not kept).
+    const FrictionalStepOutcome& last_frictional_step() const { return m_friction_last; }
+    /// Frictional steps of this run that did not reach friction_settings.tol.
+    long frictional_steps_unsolved() const { return m_friction_unsolved; }
     /// The rows of the last detection.
     const std::vector<ContactRow>& last_rows() const { return m_rows; }
     /// The length penetrations are compared with: the smallest body's largest rest extent (m).
@@ -189,7 +193,9 @@ private:
     bool m_peak_reset =
         true;  ///< false once the kernel refused a high-water mark reset (stage peaks are then cumulative)
     bool m_interrupted = false;
-    nlohmann::json m_identity;         ///< resume_identity(), once per run
+    FrictionalStepOutcome m_friction_last;  ///< the last frictional step (mu > 0): its run and contact states
+    long m_friction_unsolved = 0;           ///< frictional steps of this run that missed their tolerance
+    nlohmann::json m_identity;              ///< resume_identity(), once per run
     std::vector<long> m_strip_frames;  ///< frames pictured so far ...
     std::vector<Vec> m_strip_x;        ///< ... and their positions
 };
