@@ -51,6 +51,18 @@ FrictionLocal read_fclib_local_friction(const std::string& path)
     return {};
 }
 
+FrictionGlobal read_fclib_global_friction(const std::string& path)
+{
+    read_fclib(path);
+    return {};
+}
+
+std::string read_fclib_friction(const std::string& path, FrictionLocal&, FrictionGlobal&)
+{
+    read_fclib(path);
+    return "";
+}
+
 std::string fclib_kind(const std::string&) { return ""; }
 
 nlohmann::json describe_fclib(const std::string& path)
@@ -762,7 +774,7 @@ FrictionLocal read_fclib_local_friction(const std::string& path)
     const std::string L = "/fclib_local";
     if (!file.exists(L)) {
         if (file.exists("/fclib_global"))
-            file.fail(L, "missing: this is an fclib_global problem; friction-solve takes fclib_local problems only");
+            file.fail(L, "missing: this is an fclib_global problem, not an fclib_local one");
         file.fail(L, "missing: not an HDF5 file with an FCLIB local problem");
     }
     const long long d = spacedim_of(file, L + "/spacedim");
@@ -783,6 +795,64 @@ FrictionLocal read_fclib_local_friction(const std::string& path)
     problem.mu = Eigen::Map<const Vec>(mu.data(), Eigen::Index(mu.size()));
     problem.name = path;
     return problem;
+}
+
+FrictionGlobal read_fclib_global_friction(const std::string& path)
+{
+    FclibReader file(path);
+    const std::string G = "/fclib_global";
+    if (!file.exists(G)) {
+        if (file.exists("/fclib_local"))
+            file.fail(G, "missing: this is an fclib_local problem, not an fclib_global one");
+        file.fail(G, "missing: not an HDF5 file with an FCLIB global problem");
+    }
+    const long long d = spacedim_of(file, G + "/spacedim");
+    if (d != 3)
+        file.fail(G + "/spacedim", "is 2 (one tangent per contact): only 3-D frictional problems (spacedim 3, "
+                                   "two tangents) are solved");
+    if (file.exists(G + "/G") && file.integer(G + "/G/n") != 0)
+        file.fail(G + "/G", "equality constraints are not supported");
+    // Every declared size first, checked against each other and against the vectors' lengths,
+    // before any matrix array is allocated.
+    const SparseSizes ms = read_sizes(file, G + "/M"), hs = read_sizes(file, G + "/H");
+    const long long n = ms.m;
+    if (ms.n != n) file.fail(G + "/M", "not square: m = " + std::to_string(ms.m) + ", n = " + std::to_string(ms.n));
+    if (n == 0) file.fail(G + "/M/n", "the problem has no unknowns (n = 0)");
+    if (hs.m != n) file.fail(G + "/H/m", std::to_string(hs.m) + " rows, but M has " + std::to_string(n));
+    if (hs.n == 0) file.fail(G + "/H/n", "the problem has no contacts (n = 0)");
+    if (hs.n % 3 != 0)
+        file.fail(G + "/H/n", std::to_string(hs.n) + " columns: not 3 per contact (a normal and two tangents)");
+    const long long m = hs.n / 3;
+    const std::vector<double> f = file.reals(G + "/vectors/f", {n}, G + "/M/m");
+    const std::vector<double> w = file.reals(G + "/vectors/w", {hs.n}, G + "/H/n");
+    const std::vector<double> mu = file.reals(G + "/vectors/mu", {m}, G + "/H/n / 3", false);
+    check_mu(file, G + "/vectors/mu", mu, true, "fclib_global");
+    FrictionGlobal problem;
+    nlohmann::json notes = nlohmann::json::object();
+    problem.M = symmetric_matrix(file, G + "/M", "M", read_matrix(file, G + "/M", ms), false, notes);
+    problem.H = read_matrix(file, G + "/H", hs);
+    problem.f = Eigen::Map<const Vec>(f.data(), Eigen::Index(n));
+    problem.w = Eigen::Map<const Vec>(w.data(), Eigen::Index(w.size()));
+    problem.mu = Eigen::Map<const Vec>(mu.data(), Eigen::Index(m));
+    problem.name = path;
+    return problem;
+}
+
+std::string read_fclib_friction(const std::string& path, FrictionLocal& local, FrictionGlobal& global)
+{
+    std::string kind;
+    {
+        FclibReader file(path);
+        kind = kind_of(file);
+        if (kind.empty())
+            file.fail("/fclib_global",
+                      "missing: an HDF5 file without an FCLIB problem (neither /fclib_global nor /fclib_local)");
+    }
+    if (kind == "fclib_global")
+        global = read_fclib_global_friction(path);
+    else
+        local = read_fclib_local_friction(path);
+    return kind;
 }
 
 std::string fclib_kind(const std::string& path)

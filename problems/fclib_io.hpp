@@ -25,6 +25,7 @@
 /// Built only when CMake finds pkg-config `fclib`; otherwise every function throws InputError
 /// saying so.
 #include "problems/qpsnap.hpp"
+#include "solvers/friction_global.hpp"
 #include "solvers/friction_problem.hpp"
 
 #include <string>
@@ -55,6 +56,16 @@ Qp read_fclib_global(const std::string& path, SnapshotExtras* extras = nullptr, 
 /// the frictional solvers (friction-solve). Same hostile-file rules as read_fclib: spacedim must
 /// be 3, W square with 3 rows per contact, q of its size, every mu finite and >= 0, no V/R.
 FrictionLocal read_fclib_local_friction(const std::string& path);
+
+/// Reads an `fclib_global` problem as the frictional problem it is (M, H, f, w, mu; friction kept).
+/// Same hostile-file rules: spacedim must be 3 (two tangents per contact), M square (one triangle
+/// mirrored, otherwise symmetric to 1e-12 of its largest entry), H with M's rows and 3 columns per
+/// contact, f, w and mu of those sizes, every mu finite and >= 0, no equality constraints (G).
+FrictionGlobal read_fclib_global_friction(const std::string& path);
+
+/// read_fclib_local_friction or read_fclib_global_friction, whichever the file holds: exactly one
+/// of `local` and `global` is filled; returns "fclib_local" or "fclib_global".
+std::string read_fclib_friction(const std::string& path, FrictionLocal& local, FrictionGlobal& global);
 
 /// "fclib_global", "fclib_local" or "" for an HDF5 file holding neither (or when not built).
 /// Opens no external file; throws InputError only when the file cannot be opened as HDF5.
