@@ -206,7 +206,7 @@ public:
 
     /// An integer array whose length is one of `allowed` (the first is named in errors when the
     /// others are equal to it); `declared` says who declares the length.
-    std::vector<long long> integers(const std::string& name, std::vector<long long> allowed,
+    std::vector<long long> integers(const std::string& name, const std::vector<long long>& allowed,
                                     const std::string& declared)
     {
         std::vector<long long> values;
@@ -215,8 +215,8 @@ public:
     }
 
     /// A real array as above; non-finite values are refused naming the entry when `finite`.
-    std::vector<double> reals(const std::string& name, std::vector<long long> allowed, const std::string& declared,
-                              bool finite = true)
+    std::vector<double> reals(const std::string& name, const std::vector<long long>& allowed,
+                              const std::string& declared, bool finite = true)
     {
         std::vector<double> values;
         read(name, H5T_FLOAT, allowed, declared, H5T_NATIVE_DOUBLE, values);
@@ -461,10 +461,14 @@ std::pair<double, double> check_mu(FclibReader& file, const std::string& field, 
         const std::string contact = "contact " + std::to_string(i);
         if (!(mu[i] >= 0.0) || !std::isfinite(mu[i]))  // NaN too
             file.fail(field, contact + " has mu = " + exact(mu[i]) + " (a friction coefficient is finite and >= 0)");
-        if (mu[i] != 0.0 && !drop_friction)
-            file.fail(field, contact + " has mu = " + exact(mu[i]) + ": this " + kind +
-                                 " problem has friction, which the QP cannot hold; `convert --drop-friction` keeps its "
-                                 "normal part (recorded in the snapshot)");
+        if (mu[i] != 0.0 && !drop_friction) {
+            std::string message = contact;
+            message += " has mu = " + exact(mu[i]);
+            message += ": this " + kind;
+            message += " problem has friction, which the QP cannot hold; `convert --drop-friction` keeps its normal "
+                       "part (recorded in the snapshot)";
+            file.fail(field, message);
+        }
         lo = i == 0 ? mu[i] : std::min(lo, mu[i]);
         hi = std::max(hi, mu[i]);
     }
