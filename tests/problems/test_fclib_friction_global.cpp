@@ -17,6 +17,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <random>
 
 namespace {
 
@@ -184,6 +185,103 @@ TEST(FclibFrictionGlobal, FrictionSolveTakesAGlobalFile)
     const cb::FrictionGlobalRun run = cb::friction_nsgs_global(p, reduction, s);
     EXPECT_EQ(j["runs"][0]["reduced_error"].get<double>(), cb::fclib_relative_error(reduction.local(), run.run.r));
     EXPECT_EQ(j["runs"][0]["fclib_error"].get<double>(), run.run.error);
+}
+
+}  // namespace
+
+namespace {
+
+/// The frictional snapshot's contact i, (J_i x - c_i, T_2i x - cT_2i, T_2i+1 x - cT_2i+1), as FCLIB's u.
+cb::Vec snapshot_velocity(const cb::Qp& qp, const cb::Vec& x)
+{
+    const cb::Vec n = qp.J * x - qp.c, t = qp.friction.T * x - qp.friction.cT;
+    cb::Vec u(3 * qp.m());
+    for (Eigen::Index i = 0; i < qp.m(); ++i) u.segment<3>(3 * i) << n[i], t[2 * i], t[2 * i + 1];
+    return u;
+}
+
+TEST(FclibFrictionGlobal, ConvertKeepsTheFrictionAndRoundTrips)
+{
+    if (skip_without_fclib()) GTEST_SKIP() << "FCLIB import not built (libfclib-dev missing)";
+    const fs::path dir = cb::test::make_test_work_dir("fclib_friction_convert");
+    const std::string bin = cb::test::contactbench_binary();
+    for (const char* name : {"LMGC_GlobalFrictionContactProblem00046.hdf5", "LMGC_GFC3D-i00501-4-00000.hdf5"}) {
+        const fs::path in = DATA / name, snap = dir / "p.qpsnap", back = dir / "back.hdf5", snap2 = dir / "q.qpsnap";
+        const cb::test::Output o = run_captured(bin + " convert '" + in.string() + "' '" + snap.string() + "'", dir);
+        ASSERT_EQ(o.status, 0) << o.err;
+        EXPECT_NE(o.out.find("kept friction: mu in [0.3, 0.3]"), std::string::npos) << o.out;
+        const cb::FrictionGlobal g = cb::read_fclib_global_friction(in.string());
+        const cb::Qp qp = cb::read_qpsnap(snap.string());
+        const Eigen::Index m = g.contacts();
+        // A = M, b = f, x = v; contact i's rows are H's columns 3i (J), 3i+1 and 3i+2 (T), bit for bit.
+        // (A: M made exactly symmetric by validate_qp, as every snapshot's A; LMGC_GFC3D-i00501's M is
+        // symmetric to rounding only, 2.2e-14 apart.)
+        EXPECT_LE(cb::SpMat(qp.A - g.M).norm(), 1e-15 * g.M.norm()) << name;
+        EXPECT_EQ(qp.b, g.f) << name;
+        EXPECT_EQ(qp.friction.mu, g.mu) << name;
+        ASSERT_EQ(qp.friction.T.rows(), 2 * m) << name;
+        const cb::SpMat Ht = g.H.transpose();
+        for (Eigen::Index i = 0; i < m; ++i) {
+            EXPECT_EQ(cb::Vec(qp.J.row(i).transpose()), cb::Vec(Ht.row(3 * i).transpose())) << name << " " << i;
+            EXPECT_EQ(cb::Vec(qp.friction.T.row(2 * i).transpose()), cb::Vec(Ht.row(3 * i + 1).transpose())) << name;
+            EXPECT_EQ(cb::Vec(qp.friction.T.row(2 * i + 1).transpose()), cb::Vec(Ht.row(3 * i + 2).transpose()))
+                << name;
+            EXPECT_EQ(qp.c[i], -g.w[3 * i]) << name;
+            EXPECT_EQ(qp.friction.cT[2 * i], -g.w[3 * i + 1]) << name;
+            EXPECT_EQ(qp.friction.cT[2 * i + 1], -g.w[3 * i + 2]) << name;
+        }
+        EXPECT_TRUE(qp.meta.at("provenance").contains("friction")) << name;
+        // The signs at a point: u = H'v + w is the snapshot's (Jx - c, Tx - cT), and M v - H r - f is
+        // A x - b - J'lambda - T'lambda_T with r = (lambda, lambda_T) per contact.
+        std::mt19937 rng(5);
+        std::normal_distribution<double> gauss(0.0, 1.0);
+        cb::Vec v(g.unknowns()), r(3 * m);
+        for (Eigen::Index k = 0; k < v.size(); ++k) v[k] = gauss(rng);
+        for (Eigen::Index k = 0; k < r.size(); ++k) r[k] = gauss(rng);
+        const cb::Vec u = g.H.transpose() * v + g.w;
+        EXPECT_LE((snapshot_velocity(qp, v) - u).norm(), 1e-14 * u.norm()) << name;
+        cb::Vec lambda(m), lambda_t(2 * m);
+        for (Eigen::Index i = 0; i < m; ++i) lambda[i] = r[3 * i], lambda_t.segment<2>(2 * i) = r.segment<2>(3 * i + 1);
+        const cb::Vec fclib_residual = g.M * v - g.H * r - g.f;
+        const cb::Vec ours = qp.A * v - qp.b - qp.J.transpose() * lambda - qp.friction.T.transpose() * lambda_t;
+        EXPECT_LE((ours - fclib_residual).norm(), 1e-13 * fclib_residual.norm()) << name;
+
+        // Back to FCLIB and to a snapshot again: every field bit for bit.
+        cb::test::Output b = run_captured(bin + " convert '" + snap.string() + "' '" + back.string() + "'", dir);
+        ASSERT_EQ(b.status, 0) << b.err;
+        EXPECT_NE(b.out.find("with friction"), std::string::npos) << b.out;
+        const cb::FrictionGlobal g2 = cb::read_fclib_global_friction(back.string());
+        EXPECT_EQ(cb::SpMat(g2.M - qp.A).norm(), 0.0) << name;
+        EXPECT_EQ(cb::SpMat(g2.H - g.H).norm(), 0.0) << name;
+        EXPECT_EQ(g2.f, g.f) << name;
+        EXPECT_EQ(g2.w, g.w) << name;
+        EXPECT_EQ(g2.mu, g.mu) << name;
+        b = run_captured(bin + " convert '" + back.string() + "' '" + snap2.string() + "'", dir);
+        ASSERT_EQ(b.status, 0) << b.err;
+        const cb::Qp qp2 = cb::read_qpsnap(snap2.string());
+        EXPECT_EQ(cb::SpMat(qp2.A - qp.A).norm(), 0.0) << name;
+        EXPECT_EQ(cb::SpMat(qp2.J - qp.J).norm(), 0.0) << name;
+        EXPECT_EQ(cb::SpMat(qp2.friction.T - qp.friction.T).norm(), 0.0) << name;
+        EXPECT_EQ(qp2.b, qp.b) << name;
+        EXPECT_EQ(qp2.c, qp.c) << name;
+        EXPECT_EQ(qp2.friction.cT, qp.friction.cT) << name;
+        EXPECT_EQ(qp2.friction.mu, qp.friction.mu) << name;
+        EXPECT_EQ(qp2.x0, qp.x0) << name;
+        // The harness's global error is the same number on the file and on its round trip.
+        const double e = cb::global_relative_error(g, r, v);
+        EXPECT_NEAR(cb::global_relative_error(g2, r, v), e, 1e-14 * e) << name;
+    }
+    // --drop-friction still gives the frictionless normal part (a version 1 snapshot).
+    const fs::path in = DATA / "CubeH8.hdf5", snap = dir / "drop.qpsnap";
+    const cb::test::Output o =
+        run_captured(bin + " convert '" + in.string() + "' '" + snap.string() + "' --drop-friction", dir);
+    ASSERT_EQ(o.status, 0) << o.err;
+    EXPECT_TRUE(cb::read_qpsnap(snap.string()).friction.empty());
+    // A Matrix Market folder has no friction field: the file is refused there without --drop-friction.
+    const cb::test::Output mm =
+        run_captured(bin + " convert '" + in.string() + "' '" + (dir / "mm").string() + "'", dir);
+    EXPECT_EQ(mm.status, 2);
+    EXPECT_NE(mm.err.find("this fclib_global problem has friction"), std::string::npos) << mm.err;
 }
 
 }  // namespace
