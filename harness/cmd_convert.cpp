@@ -21,12 +21,14 @@ const char* const USAGE =
     "  IN.qpsnap  -> OUT folder (A.mtx b.mtx J.mtx c.mtx x0.mtx meta.json [contact.json x_ref.mtx lambda_ref.mtx])\n"
     "  IN folder  -> OUT.qpsnap (Matrix Market files as written by scipy.io.mmwrite, Julia, MATLAB ...)\n"
     "  IN.qpsnap  -> OUT.qpsnap (rewrites; validates on the way)\n"
-    "  IN.qpsnap  -> OUT.hdf5 / .h5: an FCLIB fclib_global problem (mu = 0; /solution when known)\n"
+    "  IN.qpsnap  -> OUT.hdf5 / .h5: an FCLIB fclib_global problem (mu and tangents of a frictional snapshot,\n"
+    "                otherwise mu = 0; /solution when known and frictionless)\n"
     "  IN FCLIB   -> OUT: an fclib_global or fclib_local file as Siconos, LMGC90 or libfclib write it\n"
     "               (global: A = M, b = f, J = H's normal columns', c = -w_N; local: A = W_NN, b = -q_N, J = I)\n"
     "  IN.dat     -> OUT: a Siconos numerics text dump: a local friction-contact problem (dense or sparse-block W)\n"
     "               as FCLIB local, or an LCP (A = M, b = -q, J = I)\n"
-    "  --drop-friction  a frictional FCLIB or .dat problem (mu != 0) keeps its normal part (in meta.provenance)\n"
+    "  --drop-friction  a frictional FCLIB or .dat problem (mu != 0) keeps its normal part (in meta.provenance);\n"
+    "                   without it a global FCLIB one keeps its friction in a .qpsnap (version 2) or .hdf5\n"
     "  --symmetrise     an FCLIB or .dat matrix not symmetric to rounding is averaged with its transpose (recorded)\n"
     "  --length-scale L stores the problem's scene size l in the snapshot (meta.length_scale)\n"
     "IN is recognised by its content, not its name. Values are written with %.17g: .qpsnap -> folder ->\n"
@@ -55,6 +57,9 @@ int cmd_convert(const Args& args)
     FclibReadOptions options;
     options.drop_friction = cl.has("--drop-friction");
     options.symmetrise = cl.has("--symmetrise");
+    // A global file's friction goes into the snapshot (version 2) or an FCLIB file; a Matrix
+    // Market folder has no field for it.
+    options.keep_friction = ends_with(out, ".qpsnap") || is_fclib_path(out);
     if ((options.drop_friction || options.symmetrise) && format != FileFormat::FCLIB_GLOBAL &&
         format != FileFormat::FCLIB_LOCAL && format != FileFormat::SICONOS_DAT)
         throw_input_error(in, options.drop_friction ? "--drop-friction" : "--symmetrise",
@@ -70,6 +75,10 @@ int cmd_convert(const Args& args)
             std::cout << "dropped friction: mu in [" << provenance["dropped_friction"]["mu_min"] << ", "
                       << provenance["dropped_friction"]["mu_max"] << "] on " << provenance["contacts"]
                       << " contacts; the QP is the normal part (recorded in meta.provenance)\n";
+        if (provenance.contains("friction"))
+            std::cout << "kept friction: mu in [" << provenance["friction"]["mu_min"] << ", "
+                      << provenance["friction"]["mu_max"] << "] on " << provenance["contacts"]
+                      << " contacts; tangents T = H_T', cT = -w_T (recorded in meta.provenance)\n";
         if (provenance.contains("matrices")) std::cout << "matrices: " << provenance["matrices"].dump() << "\n";
     } else {
         expect_qpsnap(in, "convert");  // names a .dat, .npy or single .mtx
@@ -80,8 +89,8 @@ int cmd_convert(const Args& args)
     if (cl.has("--length-scale")) qp.meta["length_scale"] = parse_length_scale("convert", cl.value("--length-scale"));
     if (is_fclib_path(out)) {
         write_fclib_global(out, qp, &extras);
-        std::cout << "wrote " << out << " (FCLIB fclib_global, n = " << qp.n() << ", " << qp.m()
-                  << " contacts, mu = 0)\n";
+        std::cout << "wrote " << out << " (FCLIB fclib_global, n = " << qp.n() << ", " << qp.m() << " contacts, "
+                  << (qp.friction.mu.size() > 0 ? "with friction" : "mu = 0") << ")\n";
     } else if (ends_with(out, ".qpsnap")) {
         write_qpsnap(out, qp, &extras);
         std::cout << "wrote " << out << " (n = " << qp.n() << ", m = " << qp.m() << ", nnz(A) = " << qp.A.nonZeros()

@@ -34,7 +34,7 @@ const std::map<std::string, Command>& commands()
          {cb::cmd_chains, "chains SCENE.json [--frames N] [--out DIR]: decoupled vs exact chains of a scene"}},
         {"friction-solve",
          {cb::cmd_friction_solve,
-          "friction-solve FILE.hdf5 [--solver nsgs|siconos-nsgs|siconos-nsn]: an FCLIB local problem with friction"}},
+          "friction-solve FILE.hdf5 [--solver nsgs|siconos-nsgs|siconos-nsn|...]: an FCLIB problem with friction"}},
         {"solvers",
          {cb::cmd_solvers, "solvers [--json]: every registered solver, one line each, with what it applies to"}},
         {"stress", {cb::cmd_stress, "stress [--out DIR]: the stress suite and its stability table"}},

@@ -51,6 +51,18 @@ FrictionLocal read_fclib_local_friction(const std::string& path)
     return {};
 }
 
+FrictionGlobal read_fclib_global_friction(const std::string& path)
+{
+    read_fclib(path);
+    return {};
+}
+
+std::string read_fclib_friction(const std::string& path, FrictionLocal&, FrictionGlobal&)
+{
+    read_fclib(path);
+    return "";
+}
+
 std::string fclib_kind(const std::string&) { return ""; }
 
 nlohmann::json describe_fclib(const std::string& path)
@@ -90,6 +102,32 @@ MatrixView csr_view(const SpMat& A)
     v.m.m = static_cast<int>(A.rows());
     v.m.n = static_cast<int>(A.cols());
     v.m.nz = -2;
+    v.point();
+    return v;
+}
+
+/// H (n x 3m) as compressed columns (nz = -1): column 3i is row i of J, columns 3i+1 and 3i+2 are
+/// T's rows 2i and 2i+1 (a row-major matrix's rows are its transpose's columns).
+MatrixView h_view(const SpMat& J, const SpMat& T)
+{
+    const Eigen::Index m = J.rows();
+    MatrixView v;
+    v.p.push_back(0);
+    auto append_row = [&](const SpMat& S, Eigen::Index row) {
+        for (SpMat::InnerIterator it(S, row); it; ++it) {
+            v.i.push_back(static_cast<int>(it.col()));
+            v.x.push_back(it.value());
+        }
+        v.p.push_back(static_cast<int>(v.x.size()));
+    };
+    for (Eigen::Index r = 0; r < m; ++r) {
+        append_row(J, r);
+        append_row(T, 2 * r);
+        append_row(T, 2 * r + 1);
+    }
+    v.m.m = static_cast<int>(J.cols());
+    v.m.n = static_cast<int>(3 * m);
+    v.m.nz = -1;
     v.point();
     return v;
 }
@@ -194,7 +232,7 @@ public:
 
     /// An integer array whose length is one of `allowed` (the first is named in errors when the
     /// others are equal to it); `declared` says who declares the length.
-    std::vector<long long> integers(const std::string& name, std::vector<long long> allowed,
+    std::vector<long long> integers(const std::string& name, const std::vector<long long>& allowed,
                                     const std::string& declared)
     {
         std::vector<long long> values;
@@ -203,8 +241,8 @@ public:
     }
 
     /// A real array as above; non-finite values are refused naming the entry when `finite`.
-    std::vector<double> reals(const std::string& name, std::vector<long long> allowed, const std::string& declared,
-                              bool finite = true)
+    std::vector<double> reals(const std::string& name, const std::vector<long long>& allowed,
+                              const std::string& declared, bool finite = true)
     {
         std::vector<double> values;
         read(name, H5T_FLOAT, allowed, declared, H5T_NATIVE_DOUBLE, values);
@@ -449,10 +487,14 @@ std::pair<double, double> check_mu(FclibReader& file, const std::string& field, 
         const std::string contact = "contact " + std::to_string(i);
         if (!(mu[i] >= 0.0) || !std::isfinite(mu[i]))  // NaN too
             file.fail(field, contact + " has mu = " + exact(mu[i]) + " (a friction coefficient is finite and >= 0)");
-        if (mu[i] != 0.0 && !drop_friction)
-            file.fail(field, contact + " has mu = " + exact(mu[i]) + ": this " + kind +
-                                 " problem has friction, which the QP cannot hold; `convert --drop-friction` keeps its "
-                                 "normal part (recorded in the snapshot)");
+        if (mu[i] != 0.0 && !drop_friction) {
+            std::string message = contact;
+            message += " has mu = " + exact(mu[i]);
+            message += ": this " + kind;
+            message += " problem has friction, which the QP cannot hold; `convert --drop-friction` keeps its normal "
+                       "part (recorded in the snapshot)";
+            file.fail(field, message);
+        }
         lo = i == 0 ? mu[i] : std::min(lo, mu[i]);
         hi = std::max(hi, mu[i]);
     }
@@ -516,7 +558,12 @@ Qp read_global(FclibReader& file, SnapshotExtras* extras, const FclibReadOptions
     const std::vector<double> f = file.reals(G + "/vectors/f", {n}, G + "/M/m");
     const std::vector<double> w = file.reals(G + "/vectors/w", {d * m}, G + "/H/n");
     const std::vector<double> mu = file.reals(G + "/vectors/mu", {m}, G + "/H/n / spacedim", false);
-    const auto [mu_min, mu_max] = check_mu(file, G + "/vectors/mu", mu, options.drop_friction, "fclib_global");
+    const bool keep = options.keep_friction && !options.drop_friction;
+    const auto [mu_min, mu_max] = check_mu(file, G + "/vectors/mu", mu, options.drop_friction || keep, "fclib_global");
+    const bool friction = keep && mu_max > 0.0;
+    if (friction && d != 3)
+        file.fail(G + "/spacedim", "is 2: a frictional snapshot holds two tangents per contact (3-D); "
+                                   "`convert --drop-friction` keeps the normal part");
     const bool exact_map = mu_max == 0.0;
 
     nlohmann::json notes = nlohmann::json::object();
@@ -536,6 +583,22 @@ Qp read_global(FclibReader& file, SnapshotExtras* extras, const FclibReadOptions
     qp.J.resize(Eigen::Index(m), Eigen::Index(n));
     qp.J.setFromTriplets(jt.begin(), jt.end());
     qp.J.makeCompressed();
+    if (friction) {
+        // T's rows 2i, 2i+1 are H's tangent columns 3i+1, 3i+2; u_T = H_T' v + w_T = T x - cT.
+        std::vector<Triplet> tt;
+        qp.friction.cT.resize(2 * Eigen::Index(m));
+        for (Eigen::Index i = 0; i < m; ++i)
+            for (int k = 1; k <= 2; ++k) {
+                const Eigen::Index row = 2 * i + k - 1;
+                qp.friction.cT[row] = -w[size_t(3 * i + k)];
+                for (SpMat::InnerIterator it(Ht, 3 * i + k); it; ++it)
+                    tt.emplace_back(static_cast<int>(row), it.col(), it.value());
+            }
+        qp.friction.T.resize(2 * Eigen::Index(m), Eigen::Index(n));
+        qp.friction.T.setFromTriplets(tt.begin(), tt.end());
+        qp.friction.T.makeCompressed();
+        qp.friction.mu = Eigen::Map<const Vec>(mu.data(), Eigen::Index(m));
+    }
 
     const std::vector<double> v0 = first_guess(file, "v", n, G + "/M/n");
     qp.x0 = v0.empty() ? Vec(Vec::Zero(Eigen::Index(n))) : Vec(Eigen::Map<const Vec>(v0.data(), Eigen::Index(n)));
@@ -558,7 +621,13 @@ Qp read_global(FclibReader& file, SnapshotExtras* extras, const FclibReadOptions
                                      {"spacedim", d},
                                      {"contacts", m},
                                      {"mapping", "A = M, b = f, J = H_N' (the normal columns of H), c = -w_N"}};
-        if (!exact_map)
+        if (friction)
+            provenance["friction"] = {
+                {"mu_min", mu_min},
+                {"mu_max", mu_max},
+                {"mapping", "mu kept, T = H_T' (rows 2i, 2i+1 = H's columns 3i+1, 3i+2), cT = -w_T"},
+                {"solution", "not kept (no tangential multipliers in a snapshot's reference)"}};
+        else if (!exact_map)
             provenance["dropped_friction"] = {
                 {"mu_min", mu_min},
                 {"mu_max", mu_max},
@@ -679,13 +748,23 @@ void write_fclib_global(const std::string& path, const Qp& qp, const SnapshotExt
                          "a .qpsnap or a Matrix Market folder instead)");
     if (3 * m > MAX_INDEX || qp.A.nonZeros() > MAX_INDEX || qp.J.nonZeros() > MAX_INDEX)
         throw InputError(path + ": the QP is too large for FCLIB's int sizes");
-    MatrixView M = csr_view(qp.A), H = h_view(qp.J);
+    const Friction& fr = qp.friction;
+    const bool friction = fr.mu.size() == m && m > 0 && fr.T.rows() == 2 * m;
+    MatrixView M = csr_view(qp.A), H = friction ? h_view(qp.J, fr.T) : h_view(qp.J);
     Vec f = qp.b;
-    Vec w = Vec::Zero(3 * m), mu = Vec::Zero(m);
-    for (Eigen::Index i = 0; i < m; ++i) w[3 * i] = -qp.c[i];
+    Vec w = Vec::Zero(3 * m), mu = friction ? Vec(fr.mu) : Vec(Vec::Zero(m));
+    for (Eigen::Index i = 0; i < m; ++i) {
+        w[3 * i] = -qp.c[i];
+        if (friction && fr.cT.size() == 2 * m) {
+            w[3 * i + 1] = -fr.cT[2 * i];
+            w[3 * i + 2] = -fr.cT[2 * i + 1];
+        }
+    }
 
     std::string title = "contactbench QP", description = qp.meta.dump(),
-                math_info = "frictionless (mu = 0): minimize 1/2 x'Ax - b'x subject to Jx >= c";
+                math_info = friction ? "Coulomb friction: A x - b = J'lambda + T'lambda_T, contact i = (J_i; T_2i; "
+                                       "T_2i+1) x - (c_i; cT_2i; cT_2i+1)"
+                                     : "frictionless (mu = 0): minimize 1/2 x'Ax - b'x subject to Jx >= c";
     fclib_info info{title.data(), description.data(), math_info.data()};
     fclib_global problem{};
     problem.M = &M.m;
@@ -713,11 +792,19 @@ void write_fclib_global(const std::string& path, const Qp& qp, const SnapshotExt
     Vec x0 = qp.x0, r0 = Vec::Zero(3 * m), u0 = Vec::Zero(3 * m);
     const Vec jx0 = qp.J * qp.x0;
     for (Eigen::Index i = 0; i < m; ++i) u0[3 * i] = jx0[i] - qp.c[i];
+    if (friction) {
+        const Vec tx0 = fr.T * qp.x0;
+        for (Eigen::Index i = 0; i < m; ++i) {
+            u0[3 * i + 1] = tx0[2 * i] + w[3 * i + 1];
+            u0[3 * i + 2] = tx0[2 * i + 1] + w[3 * i + 2];
+        }
+    }
     fclib_solution guess{x0.data(), u0.data(), r0.data(), nullptr};
     if (!fclib_write_guesses(1, &guess, tmp.c_str()))
         throw InputError(path + ": libfclib could not write the start point");
 
-    if (extras && extras->x_ref.size() == n && extras->lambda_ref.size() == m) {
+    // A snapshot's reference has no tangential multipliers: a frictional problem's is not written.
+    if (!friction && extras && extras->x_ref.size() == n && extras->lambda_ref.size() == m) {
         Vec v = extras->x_ref, r = Vec::Zero(3 * m), u = Vec::Zero(3 * m);
         const Vec jx = qp.J * extras->x_ref;
         for (Eigen::Index i = 0; i < m; ++i) {
@@ -762,7 +849,7 @@ FrictionLocal read_fclib_local_friction(const std::string& path)
     const std::string L = "/fclib_local";
     if (!file.exists(L)) {
         if (file.exists("/fclib_global"))
-            file.fail(L, "missing: this is an fclib_global problem; friction-solve takes fclib_local problems only");
+            file.fail(L, "missing: this is an fclib_global problem, not an fclib_local one");
         file.fail(L, "missing: not an HDF5 file with an FCLIB local problem");
     }
     const long long d = spacedim_of(file, L + "/spacedim");
@@ -783,6 +870,64 @@ FrictionLocal read_fclib_local_friction(const std::string& path)
     problem.mu = Eigen::Map<const Vec>(mu.data(), Eigen::Index(mu.size()));
     problem.name = path;
     return problem;
+}
+
+FrictionGlobal read_fclib_global_friction(const std::string& path)
+{
+    FclibReader file(path);
+    const std::string G = "/fclib_global";
+    if (!file.exists(G)) {
+        if (file.exists("/fclib_local"))
+            file.fail(G, "missing: this is an fclib_local problem, not an fclib_global one");
+        file.fail(G, "missing: not an HDF5 file with an FCLIB global problem");
+    }
+    const long long d = spacedim_of(file, G + "/spacedim");
+    if (d != 3)
+        file.fail(G + "/spacedim", "is 2 (one tangent per contact): only 3-D frictional problems (spacedim 3, "
+                                   "two tangents) are solved");
+    if (file.exists(G + "/G") && file.integer(G + "/G/n") != 0)
+        file.fail(G + "/G", "equality constraints are not supported");
+    // Every declared size first, checked against each other and against the vectors' lengths,
+    // before any matrix array is allocated.
+    const SparseSizes ms = read_sizes(file, G + "/M"), hs = read_sizes(file, G + "/H");
+    const long long n = ms.m;
+    if (ms.n != n) file.fail(G + "/M", "not square: m = " + std::to_string(ms.m) + ", n = " + std::to_string(ms.n));
+    if (n == 0) file.fail(G + "/M/n", "the problem has no unknowns (n = 0)");
+    if (hs.m != n) file.fail(G + "/H/m", std::to_string(hs.m) + " rows, but M has " + std::to_string(n));
+    if (hs.n == 0) file.fail(G + "/H/n", "the problem has no contacts (n = 0)");
+    if (hs.n % 3 != 0)
+        file.fail(G + "/H/n", std::to_string(hs.n) + " columns: not 3 per contact (a normal and two tangents)");
+    const long long m = hs.n / 3;
+    const std::vector<double> f = file.reals(G + "/vectors/f", {n}, G + "/M/m");
+    const std::vector<double> w = file.reals(G + "/vectors/w", {hs.n}, G + "/H/n");
+    const std::vector<double> mu = file.reals(G + "/vectors/mu", {m}, G + "/H/n / 3", false);
+    check_mu(file, G + "/vectors/mu", mu, true, "fclib_global");
+    FrictionGlobal problem;
+    nlohmann::json notes = nlohmann::json::object();
+    problem.M = symmetric_matrix(file, G + "/M", "M", read_matrix(file, G + "/M", ms), false, notes);
+    problem.H = read_matrix(file, G + "/H", hs);
+    problem.f = Eigen::Map<const Vec>(f.data(), Eigen::Index(n));
+    problem.w = Eigen::Map<const Vec>(w.data(), Eigen::Index(w.size()));
+    problem.mu = Eigen::Map<const Vec>(mu.data(), Eigen::Index(m));
+    problem.name = path;
+    return problem;
+}
+
+std::string read_fclib_friction(const std::string& path, FrictionLocal& local, FrictionGlobal& global)
+{
+    std::string kind;
+    {
+        FclibReader file(path);
+        kind = kind_of(file);
+        if (kind.empty())
+            file.fail("/fclib_global",
+                      "missing: an HDF5 file without an FCLIB problem (neither /fclib_global nor /fclib_local)");
+    }
+    if (kind == "fclib_global")
+        global = read_fclib_global_friction(path);
+    else
+        local = read_fclib_local_friction(path);
+    return kind;
 }
 
 std::string fclib_kind(const std::string& path)

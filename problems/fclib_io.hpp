@@ -3,6 +3,9 @@
 /// Ref: FCLIB, fclib.h (the global problem  M v = H r + f,  u = H'v + w,  C*_mu ∋ u ⊥ r ∈ C_mu;
 /// the local one  u = W r + q,  C*_mu ∋ u ⊥ r ∈ C_mu; each contact's u and r are (normal, tangents)).
 ///
+/// Export of a frictional snapshot (qp.friction with mu): the same, with mu, H's tangent columns
+/// 3i+1, 3i+2 = T's rows 2i, 2i+1 and w_T = -cT (the inverse of keep_friction below); h and v0
+/// have no FCLIB field and are not written.
 /// Export, as a frictionless `fclib_global` problem: v = x, M = A, f = b, spacedim 3, one contact
 /// per row i of J with mu_i = 0; H is n x 3m with column 3i = row i of J (the normal) and columns
 /// 3i+1, 3i+2 (the tangents) empty; w = (-c_i, 0, 0) per contact. With mu = 0 the cone condition
@@ -20,11 +23,13 @@
 ///   local:  A = W_NN, b = -q_N, J = I, c = 0 (the normal block's LCP u_N = W_NN r_N + q_N).
 /// With mu = 0 on every contact this is exact (r_T = 0, so tangential entries carry no force).
 /// Friction is dropped only when asked (options.drop_friction), and then recorded in the QP's
-/// meta.provenance; the file's /solution is kept only when the mapping is exact.
+/// meta.provenance; a global problem's is kept with options.keep_friction (see there); the file's
+/// /solution is kept only when the mapping is exact and frictionless.
 ///
 /// Built only when CMake finds pkg-config `fclib`; otherwise every function throws InputError
 /// saying so.
 #include "problems/qpsnap.hpp"
+#include "solvers/friction_global.hpp"
 #include "solvers/friction_problem.hpp"
 
 #include <string>
@@ -39,6 +44,12 @@ void write_fclib_global(const std::string& path, const Qp& qp, const SnapshotExt
 
 struct FclibReadOptions {
     bool drop_friction = false;  ///< mu != 0 accepted: its normal part only (recorded in meta.provenance)
+    /// mu != 0 in an fclib_global problem kept as the snapshot's friction (solvers/qp.hpp Friction):
+    /// mu, T = the tangent columns of H (transposed: rows 2i, 2i+1 = columns 3i+1, 3i+2), cT = -w_T.
+    /// Then u_i = (J_i x - c_i, T_i x - cT_i) = H_i' v + w_i exactly, and r = (lambda, lambda_T).
+    /// The file's /solution is not kept (a snapshot's reference holds no tangential multipliers).
+    /// drop_friction wins when both are set; a local problem's friction is never kept (no A).
+    bool keep_friction = false;
     bool symmetrise = false;     ///< A not symmetric to rounding: (A + A')/2 (recorded) instead of refused
 };
 
@@ -55,6 +66,16 @@ Qp read_fclib_global(const std::string& path, SnapshotExtras* extras = nullptr, 
 /// the frictional solvers (friction-solve). Same hostile-file rules as read_fclib: spacedim must
 /// be 3, W square with 3 rows per contact, q of its size, every mu finite and >= 0, no V/R.
 FrictionLocal read_fclib_local_friction(const std::string& path);
+
+/// Reads an `fclib_global` problem as the frictional problem it is (M, H, f, w, mu; friction kept).
+/// Same hostile-file rules: spacedim must be 3 (two tangents per contact), M square (one triangle
+/// mirrored, otherwise symmetric to 1e-12 of its largest entry), H with M's rows and 3 columns per
+/// contact, f, w and mu of those sizes, every mu finite and >= 0, no equality constraints (G).
+FrictionGlobal read_fclib_global_friction(const std::string& path);
+
+/// read_fclib_local_friction or read_fclib_global_friction, whichever the file holds: exactly one
+/// of `local` and `global` is filled; returns "fclib_local" or "fclib_global".
+std::string read_fclib_friction(const std::string& path, FrictionLocal& local, FrictionGlobal& global);
 
 /// "fclib_global", "fclib_local" or "" for an HDF5 file holding neither (or when not built).
 /// Opens no external file; throws InputError only when the file cannot be opened as HDF5.

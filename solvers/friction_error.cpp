@@ -23,12 +23,11 @@ void project_on_coulomb_cone(double* r, double mu)
     r[2] *= mu * normal / tangent;
 }
 
-double natural_map_norm(const FrictionLocal& problem, const Vec& r, Vec* u_out)
+double natural_map_norm_at(const Vec& r, const Vec& u, const Vec& mus)
 {
-    Vec u = problem.W * r + problem.q;
     double sum = 0.0;
-    for (Eigen::Index i = 0; i < problem.contacts(); ++i) {
-        const double mu = problem.mu[i];
+    for (Eigen::Index i = 0; i < mus.size(); ++i) {
+        const double mu = mus[i];
         const double* ri = r.data() + 3 * i;
         const double* ui = u.data() + 3 * i;
         // De Saxce's modified velocity u + mu ||u_T|| e_n makes the map a plain cone projection.
@@ -36,8 +35,15 @@ double natural_map_norm(const FrictionLocal& problem, const Vec& r, Vec* u_out)
         project_on_coulomb_cone(z, mu);
         for (int k = 0; k < 3; ++k) sum += (ri[k] - z[k]) * (ri[k] - z[k]);
     }
-    if (u_out) *u_out = std::move(u);
     return std::sqrt(sum);
+}
+
+double natural_map_norm(const FrictionLocal& problem, const Vec& r, Vec* u_out)
+{
+    Vec u = problem.W * r + problem.q;
+    const double norm = natural_map_norm_at(r, u, problem.mu);
+    if (u_out) *u_out = std::move(u);
+    return norm;
 }
 
 double fclib_relative_error(const FrictionLocal& problem, const Vec& r, Vec* u)
@@ -53,6 +59,23 @@ double siconos_relative_error(const FrictionLocal& problem, const Vec& r)
     const double absolute = natural_map_norm(problem, r, &u);
     const double scale = std::max({problem.q.norm(), u.norm(), r.norm()});
     return scale > DBL_EPSILON ? absolute / scale : absolute;
+}
+
+namespace {
+
+double relative(double absolute, double scale) { return std::abs(scale) > DBL_EPSILON ? absolute / scale : absolute; }
+
+}  // namespace
+
+double global_relative_error(const FrictionGlobal& problem, const Vec& r, const Vec& v, Vec* u_out)
+{
+    const Vec Hr = problem.H * r, Mv = problem.M * v;
+    const double equilibrium =
+        relative((problem.f + Hr - Mv).norm(), std::max({problem.f.norm(), Mv.norm(), Hr.norm()}));
+    Vec u = problem.H.transpose() * v + problem.w;
+    const double complementarity = relative(natural_map_norm_at(r, u, problem.mu), std::max(u.norm(), r.norm()));
+    if (u_out) *u_out = std::move(u);
+    return equilibrium + complementarity;
 }
 
 }  // namespace cb

@@ -12,6 +12,7 @@
 /// so it reads smaller than Acary et al.'s ratio wherever ||u|| or ||r|| exceeds ||q||. Both are given: the paper's
 /// (fclib_relative_error, the one our tables report) and Siconos' (siconos_relative_error, which
 /// the test matches to 1e-12 against the library; the two share the numerator bit for bit).
+#include "solvers/friction_global.hpp"
 #include "solvers/friction_problem.hpp"
 
 namespace cb {
@@ -19,6 +20,9 @@ namespace cb {
 /// Projects the 3-vector r = (r_n, r_t1, r_t2) onto K_mu = {||r_T|| <= mu r_n} in place
 /// (Euclidean projection onto the second-order cone of aperture atan(mu)).
 void project_on_coulomb_cone(double* r, double mu);
+
+/// ||F_nat||_2 at given r and u (3m each), per contact with mu.
+double natural_map_norm_at(const Vec& r, const Vec& u, const Vec& mu);
 
 /// ||F_nat(r)||_2 (absolute); fills u = W r + q when `u` is given.
 double natural_map_norm(const FrictionLocal& problem, const Vec& r, Vec* u = nullptr);
@@ -28,5 +32,14 @@ double fclib_relative_error(const FrictionLocal& problem, const Vec& r, Vec* u =
 
 /// Siconos 4.4's scaling: natural_map_norm / max(||q||, ||u||, ||r||) (absolute when <= DBL_EPSILON).
 double siconos_relative_error(const FrictionLocal& problem, const Vec& r);
+
+/// FCLIB's relative error of the global problem (friction_global.hpp) at (r, v), as Siconos 4.4's
+/// gfc3d_compute_error defines it (with norm_q = ||f||), the error FCLIB's global benchmarks and
+/// every gfc3d solver report:
+///   ||f + H r - M v|| / max(||f||, ||M v||, ||H r||)      (equilibrium; each ratio absolute when its
+/// + ||F_nat(r; u)|| / max(||u||, ||r||),  u = H' v + w     scale <= DBL_EPSILON)
+/// Fills u when given. The reduced problem's error (fclib_relative_error on W, q of
+/// friction_global_reduction.hpp, / ||q||) is the other number reported beside it.
+double global_relative_error(const FrictionGlobal& problem, const Vec& r, const Vec& v, Vec* u = nullptr);
 
 }  // namespace cb

@@ -7,13 +7,12 @@
 
 #ifdef CB_HAVE_SICONOS
 #include "solvers/peers/child_process.hpp"
+#include "solvers/peers/siconos_numerics_matrix.hpp"
 #include "solvers/stopwatch.hpp"
 
 #include <FrictionContactProblem.h>
 #include <Friction_cst.h>
 #include <NonSmoothDrivers.h>
-#include <NumericsMatrix.h>
-#include <NumericsSparseMatrix.h>
 #include <SolverOptions.h>
 #include <fc3d_compute_error.h>
 
@@ -24,6 +23,12 @@
 #endif
 
 namespace cb {
+
+const std::vector<std::string>& siconos_fc3d_methods()
+{
+    static const std::vector<std::string> methods = {"nsgs", "nsn", "prox", "admm"};
+    return methods;
+}
 
 #ifndef CB_HAVE_SICONOS
 
@@ -47,24 +52,13 @@ bool siconos_fc3d_built() { return true; }
 
 namespace {
 
-/// W as a triplet NumericsMatrix (owned by the caller: NM_free).
-NumericsMatrix* numerics_w(const SpMat& W)
-{
-    NumericsMatrix* N = NM_create(NM_SPARSE, static_cast<int>(W.rows()), static_cast<int>(W.cols()));
-    NM_triplet_alloc(N, W.nonZeros());
-    N->matrix2->origin = NSM_TRIPLET;
-    for (int i = 0; i < W.outerSize(); ++i)
-        for (SpMat::InnerIterator it(W, i); it; ++it) NM_zentry(N, i, static_cast<int>(it.col()), it.value(), 0.0);
-    return N;
-}
-
 /// Siconos' view of the problem; q and mu are copied (Siconos takes non-const pointers).
 struct SiconosProblem {
     explicit SiconosProblem(const FrictionLocal& p) : q(p.q), mu(p.mu)
     {
         problem.dimension = 3;
         problem.numberOfContacts = static_cast<int>(p.contacts());
-        problem.M = numerics_w(p.W);
+        problem.M = numerics_triplet_matrix(p.W);
         problem.q = q.data();
         problem.mu = mu.data();
     }
@@ -85,6 +79,14 @@ struct Fc3dReport {
 
 namespace {
 
+int fc3d_solver_id(const std::string& method)
+{
+    if (method == "nsgs") return SICONOS_FRICTION_3D_NSGS;
+    if (method == "nsn") return SICONOS_FRICTION_3D_NSN_AC;
+    if (method == "prox") return SICONOS_FRICTION_3D_PROX;
+    return SICONOS_FRICTION_3D_ADMM;
+}
+
 /// One fc3d_driver call in a child, from r (Siconos' solvers start from the reaction given).
 FrictionRun siconos_round(const FrictionLocal& p, const std::string& method, long max_iterations, double tol,
                           double time_limit_s, const Vec& start)
@@ -98,8 +100,7 @@ FrictionRun siconos_round(const FrictionLocal& p, const std::string& method, lon
         [&]() {
             SiconosProblem sp(p);
             std::vector<double> r(start.data(), start.data() + n), u(size_t(n), 0.0);
-            SolverOptions* options =
-                solver_options_create(method == "nsgs" ? SICONOS_FRICTION_3D_NSGS : SICONOS_FRICTION_3D_NSN_AC);
+            SolverOptions* options = solver_options_create(fc3d_solver_id(method));
             options->iparam[SICONOS_IPARAM_MAX_ITER] = static_cast<int>(std::min<long>(max_iterations, 1L << 30));
             options->dparam[SICONOS_DPARAM_TOL] = tol;
             Fc3dReport report;
@@ -139,8 +140,9 @@ FrictionRun siconos_round(const FrictionLocal& p, const std::string& method, lon
 FrictionRun siconos_fc3d_solve(const FrictionLocal& p, const std::string& method, long max_iterations, double tol,
                                double time_limit_s)
 {
-    if (method != "nsgs" && method != "nsn")
-        throw InputError("siconos fc3d: unknown method '" + method + "' (nsgs or nsn)");
+    const std::vector<std::string>& methods = siconos_fc3d_methods();
+    if (std::find(methods.begin(), methods.end(), method) == methods.end())
+        throw InputError("siconos fc3d: unknown method '" + method + "' (nsgs, nsn, prox, admm)");
     FrictionRun run;
     run.solver = "siconos-" + method;
     run.r = Vec::Zero(3 * p.contacts());

@@ -1,7 +1,9 @@
 #pragma once
 /// Siconos numerics' solvers of the frictional local problem (fc3d) as peers: `siconos-nsgs`
-/// (SICONOS_FRICTION_3D_NSGS, its default one-contact solver) and `siconos-nsn`
-/// (SICONOS_FRICTION_3D_NSN_AC, the non-smooth Newton on Alart-Curnier's function), each run
+/// (SICONOS_FRICTION_3D_NSGS, its default one-contact solver), `siconos-nsn`
+/// (SICONOS_FRICTION_3D_NSN_AC, the non-smooth Newton on Alart-Curnier's function), `siconos-prox`
+/// (SICONOS_FRICTION_3D_PROX, proximal point around NSN) and `siconos-admm`
+/// (SICONOS_FRICTION_3D_ADMM), each run
 /// through fc3d_driver in a forked child process (Siconos can abort), like the QP peers. W is
 /// passed as a sparse (triplet) NumericsMatrix. Siconos stops on its own error (fc3d_compute_error
 /// or a cheaper estimate); the verdict is the harness's FCLIB error at the returned r.
@@ -10,11 +12,17 @@
 /// functions throw InputError saying so.
 #include "solvers/friction_problem.hpp"
 
+#include <string>
+#include <vector>
+
 namespace cb {
 
 bool siconos_fc3d_built();
 
-/// method "nsgs" or "nsn"; tol is Siconos' own tolerance (its relative error), max_iterations its
+/// The methods above: nsgs, nsn, prox, admm.
+const std::vector<std::string>& siconos_fc3d_methods();
+
+/// method one of siconos_fc3d_methods(); tol is Siconos' own tolerance (its relative error), max_iterations its
 /// cap; the child is killed at time_limit_s (0: none). Starts from r = 0. Siconos' own stop is
 /// on its scaling of the error (friction_error.hpp); while the FCLIB error is above tol, it is
 /// called again from its r with a tolerance scaled down by the ratio of the two (at most 4
