@@ -52,14 +52,7 @@ private:
         ++m_cnt.a_products;
     }
     /// out = A v; returns v'Av and sets vg = v'g (one pass over A).
-    double product_dot(const Vec& v, Vec& out, double& vg)
-    {
-        double dot_g = 0.0;
-        const double vav = a_product_dots(m_a_op, v, out, m_g, m_rows.dof_in_row.data(), dot_g);
-        ++m_cnt.a_products;
-        vg = dot_g + m_pg_rows;  // the row DOFs' part comes from evaluate_rows (face form, no cancellation)
-        return vav;
-    }
+    double product_dot(const Vec& v, Vec& out, double& vg);
     double objective_from_gradient() const { return 0.5 * (m_x.dot(m_g) - m_b.dot(m_x)); }
     void refresh_gradient()
     {

@@ -143,6 +143,15 @@ bool DecoupledMprgp::proportional()
     return !face_done && m_beta2 <= m_gamma2 * m_phitilde_phi;
 }
 
+double DecoupledMprgp::product_dot(const Vec& v, Vec& out, double& vg)
+{
+    double dot_g = 0.0;
+    const double vav = a_product_dots(m_a_op, v, out, m_g, m_rows.dof_in_row.data(), dot_g);
+    ++m_cnt.a_products;
+    vg = dot_g + m_pg_rows;  // the row DOFs' part comes from evaluate_rows (face form, no cancellation)
+    return vav;
+}
+
 Trial DecoupledMprgp::cg_trial(std::string& why)
 {
     Trial t;
