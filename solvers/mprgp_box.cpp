@@ -7,13 +7,14 @@
 
 #include "solvers/a_product.hpp"
 #include "solvers/accuracy.hpp"
+#include "solvers/bound_set.hpp"
 #include "solvers/bounds.hpp"
 #include "solvers/format_number.hpp"
+#include "solvers/mprgp_feasible.hpp"
 #include "solvers/mprgp_kernels.hpp"
+#include "solvers/mprgp_parts.hpp"
 
 #include <cmath>
-#include <limits>
-#include <sstream>
 
 namespace cb {
 
@@ -59,10 +60,6 @@ SolverEntry mprgp_box_entry()
         "bounds only (every row of J has at most one nonzero)");
 }
 
-namespace {
-
-}  // namespace
-
 SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context)
 {
     const CommonSettings& common = m_settings.common;
@@ -79,202 +76,33 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
             result, bounds.status,
             "mprgp-box: " + bounds.why +
                 (bounds.status == SolveStatus::NOT_APPLICABLE ? "; use mprgp (decoupled J) or mprgp-coupled" : ""));
-    const double inf = std::numeric_limits<double>::infinity();
-    const Vec& lower = bounds.lower;
-    const Vec& upper = bounds.upper;
-    const Vec& row_coef = bounds.coef;
-    const std::vector<Eigen::Index>& lower_row = bounds.lower_row;
-    const std::vector<Eigen::Index>& upper_row = bounds.upper_row;
     Vec dinv = Vec::Ones(n);
-    if (m_settings.precond == "jacobi") {
-        const Vec diag = qp.A.diagonal();
-        if (!(diag.minCoeff() > 0.0)) {
-            result.status = SolveStatus::INVALID_INPUT;
-            result.message = "mprgp-box: precond=jacobi needs a positive diagonal of A";
-            return loop.finish(result, result.status);
-        }
-        dinv = diag.cwiseInverse();
-    }
-    // Tolerance for "at the bound", in x units: tau_i of the row divided by |a|.
-    Vec tol_lower = Vec::Zero(n), tol_upper = Vec::Zero(n);
-    for (Eigen::Index j = 0; j < n; ++j) {
-        const int rl = lower_row[static_cast<size_t>(j)], ru = upper_row[static_cast<size_t>(j)];
-        if (rl >= 0) tol_lower[j] = active_tolerance(qp.c[rl]) / std::abs(row_coef[rl]);
-        if (ru >= 0) tol_upper[j] = active_tolerance(qp.c[ru]) / std::abs(row_coef[ru]);
-    }
+    std::string error;
+    if (m_settings.precond == "jacobi" && !jacobi_inverse_diagonal(qp.A, dinv, error))
+        return loop.finish(result, SolveStatus::INVALID_INPUT, "mprgp-box: " + error);
     AOperator a_op(qp.A);  // the product with A: 3x3 blocks when A has them, built in the setup
     a_op.prepare(AFormat::BSR, static_cast<int>(common.threads));
-    Vec eigenvector;
-    const bool warm = context.eigenvector && context.eigenvector->size() == n;
-    if (warm) eigenvector = *context.eigenvector;
-    const PowerResult power =
-        power_method(a_op, eigenvector, PowerRule::POWER, m_settings.power_max, common.tol, warm, common.seed);
-    if (context.eigenvector) *context.eigenvector = eigenvector;
-    cnt.power_products = power.products;
-    cnt.a_products += power.products;
-    const double alpha_bar = power.estimate > 0.0 ? 2.0 / (1.01 * power.estimate) : 1.0;
+    const PowerResult power = estimate_norm(a_op, context, PowerRule::POWER, m_settings.power_max, common, cnt);
+    const double alpha_bar = fixed_step_length(power);
     result.info["alpha_bar"] = alpha_bar;
     result.info["power"] = {{"products", power.products}, {"estimate", power.estimate}, {"warm_start", power.warm}};
     const AccuracyScale scale = accuracy_scale(qp);
     cnt.a_products += scale.a_products;
     if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT);
 
-    // --- the MPRGP loop ---
-    Vec x = qp.x0.cwiseMax(lower).cwiseMin(upper);
-    ++cnt.projections;
-    Vec g = a_product(a_op, x) - qp.b;
-    ++cnt.a_products;
-    Vec phi(n), beta(n), z(n), p(n), Ap(n), lambda = Vec::Zero(m);
-    std::vector<char> at_lower(static_cast<size_t>(n)), at_upper(static_cast<size_t>(n));
-    auto classify = [&]() {
-        for (Eigen::Index j = 0; j < n; ++j) {
-            at_lower[static_cast<size_t>(j)] = x[j] <= lower[j] + tol_lower[j];
-            at_upper[static_cast<size_t>(j)] = !at_lower[static_cast<size_t>(j)] && x[j] >= upper[j] - tol_upper[j];
-        }
-    };
-    auto gradients = [&]() {
-        for (Eigen::Index j = 0; j < n; ++j) {
-            const bool lo = at_lower[static_cast<size_t>(j)], up = at_upper[static_cast<size_t>(j)];
-            phi[j] = (lo || up) ? 0.0 : g[j];
-            beta[j] = lo ? std::min(g[j], 0.0) : (up ? std::max(g[j], 0.0) : 0.0);
-            z[j] = dinv[j] * phi[j];
-        }
-        ++cnt.precond_applications;
-    };
-    auto phitilde_dot_phi = [&]() {
-        double s = 0.0;
-        for (Eigen::Index j = 0; j < n; ++j) {
-            if (phi[j] > 0.0)
-                s += std::min((x[j] - lower[j]) / alpha_bar, phi[j]) * phi[j];
-            else if (phi[j] < 0.0)
-                s += std::max((x[j] - upper[j]) / alpha_bar, phi[j]) * phi[j];
-        }
-        return s;
-    };
-    auto multipliers = [&]() {
-        lambda.setZero();
-        for (Eigen::Index j = 0; j < n; ++j) {
-            const int rl = lower_row[static_cast<size_t>(j)], ru = upper_row[static_cast<size_t>(j)];
-            if (at_lower[static_cast<size_t>(j)] && rl >= 0) lambda[rl] = std::max(0.0, g[j] / row_coef[rl]);
-            if (at_upper[static_cast<size_t>(j)] && ru >= 0) lambda[ru] = std::max(0.0, g[j] / row_coef[ru]);
-        }
-    };
-    classify();
-    gradients();
-    p = z;
-    SolveStatus status = SolveStatus::NOT_RUN;
+    // --- the MPRGP iteration (solvers/mprgp_engine.hpp) over the bounds ---
+    BoundSet set(qp, bounds, scale);
+    FeasibleMprgpSteps<BoundSet> steps(set, a_op, qp.b, dinv, alpha_bar, m_settings.gamma, loop, cnt);
+    steps.start(qp.x0);
     std::string why;  // a breakdown's reason (the loop's own exits need none)
-    StepKind last = StepKind::START;
-    double native_residual = 0.0, error = 0.0;
-    while (true) {
-        multipliers();
-        native_residual = (phi + beta).norm();
-        error = accuracy_from_gradient(qp, scale, x, g, lambda).max();
-        bool converged = loop.criterion_met(native_residual, error);
-        if (converged) {  // confirm at an exact gradient
-            g = a_product(a_op, x) - qp.b;
-            ++cnt.a_products;
-            gradients();
-            multipliers();
-            native_residual = (phi + beta).norm();
-            converged = loop.criterion_met(native_residual,
-                                           [&] { return accuracy_from_gradient(qp, scale, x, g, lambda).max(); });
-            p = z;
-        }
-        IterationInfo info;
-        info.iteration = cnt.iterations;
-        info.step = last;
-        info.x = &x;
-        info.lambda = &lambda;
-        info.native_residual = native_residual;
-        info.counters = &cnt;
-        if (!loop.notify(info)) {
-            status = SolveStatus::STOPPED_BY_MONITOR;
-            break;
-        }
-        // The exit checks in the loop's order (a non-finite residual never counts as converged).
-        status = loop.check(cnt.iterations, std::isfinite(native_residual), converged);
-        if (status != SolveStatus::NOT_RUN) break;
-        ++cnt.iterations;
-        if (beta.squaredNorm() <= m_settings.gamma * m_settings.gamma * phitilde_dot_phi()) {
-            a_product(a_op, p, Ap);
-            ++cnt.a_products;
-            const double pap = p.dot(Ap);
-            if (!(pap > 0.0)) {
-                status = pap == 0.0 ? SolveStatus::STALLED : SolveStatus::DIVERGED;
-                why = "p'Ap <= 0";
-                break;
-            }
-            const double alpha_cg = z.dot(g) / pap;
-            double alpha_f = inf;  // largest feasible step along -p
-            for (Eigen::Index j = 0; j < n; ++j) {
-                if (p[j] > 0.0 && std::isfinite(lower[j]))
-                    alpha_f = std::min(alpha_f, (x[j] - lower[j]) / p[j]);
-                else if (p[j] < 0.0 && std::isfinite(upper[j]))
-                    alpha_f = std::min(alpha_f, (x[j] - upper[j]) / p[j]);
-            }
-            if (alpha_cg <= alpha_f) {
-                x -= alpha_cg * p;
-                g -= alpha_cg * Ap;
-                const std::vector<char> lo_before = at_lower, up_before = at_upper;
-                classify();
-                gradients();
-                if (lo_before == at_lower && up_before == at_upper) {
-                    p = z - (z.dot(Ap) / pap) * p;
-                } else {
-                    p = z;  // the face changed: restart the conjugate directions
-                }
-                ++cnt.cg_steps;
-                last = StepKind::CG;
-            } else {
-                // Feasible half step, then the expansion step with the fixed length alpha_bar.
-                x -= alpha_f * p;
-                g -= alpha_f * Ap;
-                x = x.cwiseMax(lower).cwiseMin(upper);  // rounding at the bound hit
-                classify();
-                gradients();
-                x = (x - alpha_bar * phi).cwiseMax(lower).cwiseMin(upper);
-                ++cnt.projections;
-                g = a_product(a_op, x) - qp.b;
-                ++cnt.a_products;
-                classify();
-                gradients();
-                p = z;
-                ++cnt.expansion_steps;
-                last = StepKind::EXPANSION;
-            }
-        } else {
-            a_product(a_op, beta, Ap);
-            ++cnt.a_products;
-            const double dad = beta.dot(Ap);
-            if (!(dad > 0.0)) {
-                status = SolveStatus::STALLED;
-                why = "beta'A beta <= 0";
-                break;
-            }
-            const double alpha_p = g.dot(beta) / dad;
-            x -= alpha_p * beta;
-            g -= alpha_p * Ap;
-            classify();
-            gradients();
-            p = z;
-            ++cnt.proportioning_steps;
-            last = StepKind::PROPORTIONING;
-        }
-    }
-    g = a_product(a_op, x) - qp.b;
-    ++cnt.a_products;
-    classify();
-    gradients();
-    multipliers();
-    native_residual = (phi + beta).norm();
-    error = accuracy_from_gradient(qp, scale, x, g, lambda).max();
-    result.x = x;
-    result.lambda = lambda;
+    const SolveStatus status = run_mprgp(steps, loop, cnt, why);
+    steps.final_evaluation();
+    result.x = steps.x();
+    result.lambda = *set.multipliers();
     result.counters = cnt;
-    result.native_residual = native_residual;
+    result.native_residual = steps.native_residual();
     // The loop writes the reason of its own exits; a breakdown is the solver's word.
-    const std::string figures = "accuracy error " + format_e(error, 3);
+    const std::string figures = "accuracy error " + format_e(steps.error(), 3);
     return loop.finish(result, status,
                        !loop.owns(status) ? "mprgp-box: not converged: " + why + " (" + figures + ")" : figures);
 }

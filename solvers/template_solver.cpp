@@ -1,5 +1,7 @@
 // `template`: projected gradient descent on bound rows, the model of a contactbench solver
 // (solvers/template_solver.hpp says what it shows; docs/STYLE.md §3 the rules it follows).
+// An MPRGP variant is not a new solver but a part of the MPRGP engine (solvers/mprgp_parts.hpp and
+// one registration line; docs/DESIGN.md "Adding an MPRGP variant").
 #include "solvers/template_solver.hpp"
 #include "solvers/a_product.hpp"
 

@@ -1,13 +1,13 @@
-# Writes OUTPUT: a copy of SOURCE (solvers/mprgp.cpp) with the planted regressions of PLANT
+# Writes OUTPUT: a copy of SOURCE (solvers/mprgp_decoupled_steps.cpp) with the planted regressions of PLANT
 # (tests/perf/mprgp_plant.inc) hooked into the CG step's A-product (product_dot). Run with
 #   cmake -DSOURCE=... -DPLANT=... -DOUTPUT=... -P plant_mprgp.cmake
-# Fails when the anchors are gone, so a refactored mprgp.cpp cannot silently lose the plants.
+# Fails when the anchors are gone, so a refactored source cannot silently lose the plants.
 file(READ "${SOURCE}" text)
 string(FIND "${text}" "namespace cb {" at_namespace)
 if(at_namespace EQUAL -1)
   message(FATAL_ERROR "plant_mprgp: no 'namespace cb {' in ${SOURCE}")
 endif()
-set(product_regex "double product_dot\\([^)]*\\)[ \t\r\n]*{")
+set(product_regex "double (DecoupledMprgp::)?product_dot\\([^)]*\\)[ \t\r\n]*{")
 string(REGEX MATCH "${product_regex}" anchor "${text}")
 if(NOT anchor)
   message(FATAL_ERROR "plant_mprgp: no 'double product_dot(...) {' in ${SOURCE}: update the anchor")

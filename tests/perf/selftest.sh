@@ -24,11 +24,11 @@ started=$(date +%s)
 git clone --quiet "$ROOT" "$WORK/clone"
 cd "$WORK/clone"
 base=$(git rev-parse HEAD)
-/usr/bin/python3 - solvers/mprgp.cpp <<'PY'
+/usr/bin/python3 - solvers/mprgp_decoupled_steps.cpp <<'PY'
 import re, sys
 path = sys.argv[1]
 text = open(path).read()
-anchor = re.search(r"double product_dot\([^)]*\)\s*\{", text)
+anchor = re.search(r"double (DecoupledMprgp::)?product_dot\([^)]*\)\s*\{", text)
 if not anchor:
     sys.exit("selftest: no product_dot(...) { in " + path)
 plant = "\n        { Vec extra; a_product(m_A, v, extra); ++m_cnt.a_products; }  // planted regression"

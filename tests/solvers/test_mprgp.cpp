@@ -165,9 +165,10 @@ TEST(Mprgp, OptionsReachTheSameSolution)
     const cb::SolverResult ref = mprgp({{"tol", 1e-10}})->solve(qp.view(), {});
     ASSERT_EQ(ref.status, SolveStatus::CONVERGED) << ref.message;
     const double f_ref = cb::objective(qp.view(), ref.x);
-    for (const nlohmann::json& s : {nlohmann::json{{"precond", "none"}}, nlohmann::json{{"alpha", "authors"}},
-                                    nlohmann::json{{"objective", "recompute"}}, nlohmann::json{{"gamma", 0.5}},
-                                    nlohmann::json{{"power_max", 5}}}) {
+    for (const nlohmann::json& s :
+         {nlohmann::json{{"precond", "none"}}, nlohmann::json{{"alpha", "authors"}},
+          nlohmann::json{{"objective", "recompute"}}, nlohmann::json{{"gamma", 0.5}}, nlohmann::json{{"power_max", 5}},
+          nlohmann::json{{"expansion", "precond"}}, nlohmann::json{{"expansion", "precond"}, {"precond", "ichol"}}}) {
         nlohmann::json settings = s;
         settings["tol"] = 1e-10;
         settings["max_iterations"] = 20000;
