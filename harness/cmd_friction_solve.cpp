@@ -6,9 +6,11 @@
 #include "problems/fclib_io.hpp"
 #include "solvers/friction_error.hpp"
 #include "solvers/friction_nsgs.hpp"
+#include "solvers/mprgp_tresca.hpp"
 #include "solvers/peers/siconos_fc3d.hpp"
 
 #include <nlohmann/json.hpp>
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 
@@ -17,7 +19,8 @@ namespace cb {
 namespace {
 
 const char* const USAGE =
-    "contactbench friction-solve FILE.hdf5 [--solver nsgs|siconos-nsgs|siconos-nsn ...] [--tol T]\n"
+    "contactbench friction-solve FILE.hdf5 [--solver nsgs|siconos-nsgs|siconos-nsn|mprgp-tresca-fp|\n"
+    "                            mprgp+ica-friction ...] [--tol T]\n"
     "                            [--max-iterations N] [--time-limit S] [--json FILE]";
 
 }  // namespace
@@ -29,12 +32,14 @@ int cmd_friction_solve(const Args& args)
     if (cl.help()) {
         std::cout << "usage: " << USAGE
                   << "\n  Solves an FCLIB fclib_local problem with its friction (u = W r + q, Coulomb's law per\n"
-                     "  contact) by each --solver (default: all three), starting from r = 0, and prints the\n"
+                     "  contact) by each --solver (default: all five), starting from r = 0, and prints the\n"
                      "  FCLIB relative natural-map error ||F_nat(r)|| / ||q|| computed by the harness (Acary et\n"
                      "  al. 2018), iterations and wall time. converged: that error <= --tol (default 1e-8).\n"
                      "  siconos_err: the same numerator over max(||q||, ||u||, ||r||), as Siconos 4.4 scales it.\n"
                      "  nsgs: ours (solvers/friction_nsgs.hpp); siconos-nsgs, siconos-nsn: Siconos' fc3d NSGS\n"
-                     "  and NSN_AC in a child process (docs/peers.md).\n";
+                     "  and NSN_AC in a child process (docs/peers.md); mprgp-tresca-fp: Coulomb as a fixed point on\n"
+                     "  Tresca's slip bounds over MPGP; mprgp+ica-friction: frictionless MPRGP on W_NN, then\n"
+                     "  nsgs from it (solvers/mprgp_tresca.hpp, docs/friction.md).\n";
         return 0;
     }
     cl.expect_positional(1, 1, USAGE);
@@ -46,13 +51,16 @@ int cmd_friction_solve(const Args& args)
     if (max_iterations < 1) throw InputError("--max-iterations: must be >= 1");
     if (!(time_limit >= 0.0)) throw InputError("--time-limit: must be >= 0");
     std::vector<std::string> solvers = cl.values("--solver");
-    if (solvers.empty()) solvers = {"nsgs", "siconos-nsgs", "siconos-nsn"};
+    const std::vector<std::string> ours = {"nsgs", "mprgp-tresca-fp", "mprgp+ica-friction"};
+    auto is_ours = [&](const std::string& s) { return std::find(ours.begin(), ours.end(), s) != ours.end(); };
+    if (solvers.empty()) solvers = {"nsgs", "siconos-nsgs", "siconos-nsn", "mprgp-tresca-fp", "mprgp+ica-friction"};
     for (const std::string& s : solvers)
-        if (s != "nsgs" && s != "siconos-nsgs" && s != "siconos-nsn")
-            throw InputError("--solver: unknown frictional solver '" + s + "' (nsgs, siconos-nsgs, siconos-nsn)");
+        if (!is_ours(s) && s != "siconos-nsgs" && s != "siconos-nsn")
+            throw InputError("--solver: unknown frictional solver '" + s +
+                             "' (nsgs, siconos-nsgs, siconos-nsn, mprgp-tresca-fp, mprgp+ica-friction)");
     if (cl.has("--json")) cl.path("--json");
     for (const std::string& s : solvers)
-        if (s != "nsgs" && !siconos_fc3d_built())
+        if (!is_ours(s) && !siconos_fc3d_built())
             throw InputError("--solver: " + s +
                              " is not built (install libsiconos-numerics-dev and reconfigure with CB_PEERS=ON)");
 
@@ -81,6 +89,19 @@ int cmd_friction_solve(const Args& args)
             settings.max_iterations = max_iterations;
             settings.time_limit_s = time_limit;
             run = friction_nsgs(problem, settings);
+        } else if (s == "mprgp-tresca-fp") {
+            MprgpTrescaSettings settings;
+            settings.tol = tol;
+            settings.max_inner = max_iterations;
+            settings.time_limit_s = time_limit;
+            run = mprgp_tresca_fp(problem, settings).run;
+        } else if (s == "mprgp+ica-friction") {
+            MprgpIcaFrictionSettings settings;
+            settings.tol = tol;
+            settings.max_mprgp = max_iterations;
+            settings.max_sweeps = max_iterations;
+            settings.time_limit_s = time_limit;
+            run = mprgp_ica_friction(problem, settings);
         } else {
             run = siconos_fc3d_solve(problem, s.substr(8), max_iterations, tol, time_limit);
         }

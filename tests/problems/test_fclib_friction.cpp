@@ -182,7 +182,7 @@ TEST(FclibFriction, CommandPrintsTheTableAndWritesJson)
         run_captured(cb::test::contactbench_binary() + " friction-solve '" + LMGC.string() + "' --solver pgs", dir);
     EXPECT_EQ(bad.status, 2);
     EXPECT_EQ(bad.err, "contactbench friction-solve: error: --solver: unknown frictional solver 'pgs' (nsgs, "
-                       "siconos-nsgs, siconos-nsn)\n");
+                       "siconos-nsgs, siconos-nsn, mprgp-tresca-fp, mprgp+ica-friction)\n");
 }
 
 }  // namespace
