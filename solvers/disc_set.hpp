@@ -1,10 +1,10 @@
 #pragma once
 /// A separable convex set of discs: x holds 2-vectors x_i = (x[2i], x[2i+1]), each constrained to
 /// |x_i| <= r_i. It is the first implementation of the MPRGP engine's constraint-set interface
-/// (issue 44): the operations the MPRGP / MPGP iteration needs from the geometry, with the
-/// iteration itself written once over them. A disc per contact is MPGP's friction set (issue 45:
-/// the tangential force within mu times the normal one); half-spaces (decoupled rows) and bounds
-/// will implement the same five operations.
+/// (solvers/mprgp_feasible.hpp): the operations the MPRGP / MPGP iteration needs from the
+/// geometry, the iteration itself written once over them (solvers/mprgp_engine.hpp). A disc per
+/// contact is MPGP's friction set (the tangential force within mu times the normal one); bounds
+/// (solvers/bound_set.hpp) implement the same operations.
 ///
 ///   contains(x)            x in the set, |x_i| <= r_i (1 + tol)
 ///   project(x)             the nearest point of the set (block by block: x_i r_i / |x_i| outside)
@@ -95,11 +95,63 @@ public:
         }
     }
 
+    // --- the engine's face interface (solvers/mprgp_feasible.hpp): the face fixed by classify ---
+
+    /// The blocks on their circle at x and their outward normals. @return whether the face changed
+    bool classify(const Vec& x)
+    {
+        m_on.resize(static_cast<size_t>(blocks()), 0);
+        m_normal.resize(size());
+        bool changed = false;
+        for (Eigen::Index i = 0; i < blocks(); ++i) {
+            const char on = active(x, i);
+            changed = changed || on != m_on[static_cast<size_t>(i)];
+            m_on[static_cast<size_t>(i)] = on;
+            const double len = norm(x, i);
+            const bool direction = on && len > 0.0;  // a zero-radius disc has no normal: no descent stays in it
+            m_normal[2 * i] = direction ? x[2 * i] / len : 0.0;
+            m_normal[2 * i + 1] = direction ? x[2 * i + 1] / len : 0.0;
+        }
+        return changed;
+    }
+    /// free_gradient and chopped_gradient on the classified face.
+    void gradients(const Vec& g, Vec& phi, Vec& beta) const
+    {
+        phi.resize(size());
+        beta.resize(size());
+        for (Eigen::Index i = 0; i < blocks(); ++i) {
+            const bool on = m_on[static_cast<size_t>(i)];
+            const double n0 = m_normal[2 * i], n1 = m_normal[2 * i + 1];
+            const double gn = std::min(g[2 * i] * n0 + g[2 * i + 1] * n1, 0.0);
+            phi[2 * i] = on ? 0.0 : g[2 * i];
+            phi[2 * i + 1] = on ? 0.0 : g[2 * i + 1];
+            beta[2 * i] = on && (n0 != 0.0 || n1 != 0.0) ? g[2 * i] - gn * n0 : 0.0;
+            beta[2 * i + 1] = on && (n0 != 0.0 || n1 != 0.0) ? g[2 * i + 1] - gn * n1 : 0.0;
+        }
+    }
+    /// phitilde'phi, phitilde = (x - P(x - alpha_bar phi)) / alpha_bar (Dostal 2009, eq. 7.8).
+    double reduced_free_gradient_dot(const Vec& x, const Vec& phi, double alpha_bar) const
+    {
+        Vec y = x - alpha_bar * phi;
+        project(y);
+        return (x - y).dot(phi) / alpha_bar;
+    }
+    /// The measure of a set without rows: the largest entry of the projected gradient phi + beta.
+    double error(const Vec&, const Vec& g) const
+    {
+        Vec phi, beta;
+        gradients(g, phi, beta);
+        return size() > 0 ? (phi + beta).cwiseAbs().maxCoeff() : 0.0;
+    }
+    const Vec* multipliers() const { return nullptr; }
+
 private:
     double norm(const Vec& x, Eigen::Index i) const { return std::hypot(x[2 * i], x[2 * i + 1]); }
 
     std::vector<double> m_radius;
     double m_tol;
+    std::vector<char> m_on;  ///< classify's face: block i on its circle
+    Vec m_normal;            ///< classify's outward unit normals (0 off the face)
 };
 
 }  // namespace cb

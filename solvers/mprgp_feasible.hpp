@@ -136,9 +136,8 @@ public:
             return SolveStatus::STALLED;
         }
         const double alpha_p = m_g.dot(m_beta) / dad;
-        m_y = m_x - alpha_p * m_beta;
-        if (m_set.contains(m_y)) {
-            m_x.swap(m_y);
+        if (alpha_p <= m_set.feasible_step(m_x, m_beta)) {
+            m_x -= alpha_p * m_beta;
             m_g -= alpha_p * m_Ap;
         } else {
             // -beta leaves a curved face (a disc's tangent) or overshoots a far bound: a projected
@@ -195,7 +194,7 @@ private:
     const double m_alpha_bar, m_gamma2;
     SolveLoop& m_loop;
     Counters& m_cnt;
-    Vec m_x, m_g, m_phi, m_beta, m_z, m_p, m_Ap, m_y;
+    Vec m_x, m_g, m_phi, m_beta, m_z, m_p, m_Ap;
     double m_native = 0.0, m_error = 0.0;
 };
 
