@@ -102,7 +102,7 @@ MprgpTrescaRun mprgp_tresca_fp(const FrictionLocal& p, const MprgpTrescaSettings
         run.seconds = watch.seconds();
         run.iterations = out.counters.iterations;
         run.error = fclib_relative_error(p, run.r, &run.u);
-        if (out.symmetrised && status != "not_applicable") {
+        if (out.symmetrised && !s.lag_skew && status != "not_applicable") {
             FrictionLocal symmetric = p;  // what the fixed point solved, to tell the two errors apart
             symmetric.W = symmetric_part(p.W);
             run.note += "; FCLIB error on (W + W')/2: " + format_e(fclib_relative_error(symmetric, run.r), 3);
@@ -114,9 +114,14 @@ MprgpTrescaRun mprgp_tresca_fp(const FrictionLocal& p, const MprgpTrescaSettings
     out.asymmetry = asymmetry(p.W);
     out.symmetrised = out.asymmetry > ROUNDING_ASYMMETRY;
     const SpMat W = out.asymmetry > 0.0 ? symmetric_part(p.W) : p.W;
-    std::string note = out.symmetrised ? "W is not symmetric (||W - W'||_F / ||W||_F = " + format_e(out.asymmetry, 2) +
-                                             "): the Tresca QPs use (W + W')/2; the error is on the given W"
-                                       : "";
+    std::string note;
+    if (out.symmetrised)
+        note = "W is not symmetric (||W - W'||_F / ||W||_F = " + format_e(out.asymmetry, 2) + "): the Tresca QPs use " +
+               (s.lag_skew ? "(W + W')/2 with the skew part (W - W')/2 r at the outer iterate in q"
+                           : "(W + W')/2 (skew part dropped); the error is on the given W");
+    // W = S + K, S = (W + W')/2, K = (W - W')/2: with K r^k in the linear term, a fixed point of the
+    // outer iteration solves u = S r + K r + q = W r + q, the given problem.
+    const SpMat skew = out.symmetrised && s.lag_skew ? SpMat(0.5 * (p.W - SpMat(p.W.transpose()))) : SpMat(n, n);
     auto with_note = [&](const std::string& more) { return note.empty() ? more : note + "; " + more; };
     if (n <= DENSE_CHECK_ROWS && n > 0) {
         if (!semidefinite(W))
@@ -148,7 +153,7 @@ MprgpTrescaRun mprgp_tresca_fp(const FrictionLocal& p, const MprgpTrescaSettings
     out.alpha_bar = power.estimate > 0.0 ? 2.0 / (1.01 * power.estimate) : 1.0;
     AOperator a_op(W);
     a_op.prepare(AFormat::BSR);
-    const Vec b = -p.q;
+    Vec b = -p.q;
     const SpMat no_rows(0, n);
     const Vec no_c = Vec::Zero(0);
     const QpView qp{W, b, no_rows, no_c, run.r};
@@ -169,6 +174,7 @@ MprgpTrescaRun mprgp_tresca_fp(const FrictionLocal& p, const MprgpTrescaSettings
         const double left = s.time_limit_s > 0.0 ? s.time_limit_s - watch.seconds() : 0.0;
         if (s.time_limit_s > 0.0 && left <= 0.0) return finish("time_limit", note);
         for (Eigen::Index i = 0; i < m; ++i) slip[i] = p.mu[i] * run.r[3 * i];
+        if (skew.nonZeros() > 0) b = -(p.q + skew * run.r);
         CommonSettings common;
         common.stop = StopRule::NATIVE;
         common.tol = s.inner_fraction * s.tol * (norm_q > 0.0 ? norm_q : 1.0);

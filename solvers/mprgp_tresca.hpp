@@ -9,11 +9,13 @@
 /// with Jacobi preconditioning, warm-started from r^k; it stops when the FCLIB error at r^{k+1}
 /// is <= tol. Starting from r = 0, the first Tresca solve is frictionless; at mu = 0 it is the
 /// only one and its iterates are mprgp-box's on (W_NN, q_N) (tests/solvers/test_mprgp_tresca.cpp).
-/// The dual QP needs W symmetric positive semidefinite: a W that is not symmetric (Capsules': by up
-/// to 1e-3) is solved through (W + W')/2, said in the note, and the status still reads the FCLIB
-/// error on the given W (so it does not claim `converged` for the symmetrised problem); a (W + W')/2
-/// with a negative pivot is refused (`not_applicable`). Sizes: W dense-checked for definiteness up
-/// to 3000 rows; beyond, the check is the engine's own (p'Wp <= 0 ends the solve, `diverged`).
+/// The dual QP needs W symmetric positive semidefinite. A W that is not symmetric (Capsules': by
+/// 3.4e-4) is split W = S + K, S = (W + W')/2: each Tresca QP is S's, with the skew part K r^k of the
+/// outer iterate moved into q (lag_skew, the default), so the fixed point is the given problem's;
+/// with lag_skew off K is dropped and the fixed point is S's problem, not the given one. Either way
+/// the note says so and the status reads the FCLIB error on the given W (never `converged` for S's
+/// problem). An S that is not positive semidefinite is refused (`not_applicable`). Sizes: W dense-checked for
+/// definiteness up to 3000 rows; beyond, the check is the engine's own (p'Wp <= 0 ends the solve, `diverged`).
 ///
 /// `mprgp+ica-friction` (the paper's suggestion after OTSG09): frictionless mprgp-box on (W_NN, q_N),
 /// then our `nsgs` started from (r_n, 0).
@@ -34,6 +36,7 @@ struct MprgpTrescaSettings {
     double gamma = 1.0;           ///< proportioning constant Gamma
     long power_max = 100;         ///< power-method products for alpha_bar = 2 / (1.01 ||W||)
     double power_tol = 1e-8;      ///< the power method's relative change
+    bool lag_skew = true;         ///< W not symmetric: its skew part at the outer iterate in q (else dropped)
     Monitor* monitor = nullptr;   ///< sees every inner MPRGP iterate (x = r, 3m); tests only
 };
 

@@ -221,16 +221,29 @@ TEST(MprgpTrescaFp, ReachesTheFclibErrorOnARandomSpdFrictionalProblem)
     }
 }
 
-TEST(MprgpTrescaFp, ANonSymmetricWIsSolvedThroughItsSymmetricPartAndNeverCalledConverged)
+TEST(MprgpTrescaFp, ANonSymmetricWIsSplitAndItsSkewPartLagged)
 {
     cb::FrictionLocal p = random_problem(10, 50, 0.3, 41);
     Eigen::MatrixXd w(p.W);
     w(0, 3) += 0.05 * w(0, 0);  // a normal row sees a neighbour more than the neighbour sees it
     w(4, 1) -= 0.05 * w(0, 0);
     p.W = w.sparseView();
-    const cb::MprgpTrescaRun fp = cb::mprgp_tresca_fp(p, {});
-    EXPECT_TRUE(fp.symmetrised);
-    EXPECT_NE(fp.run.note.find("the Tresca QPs use (W + W')/2; the error is on the given W"), std::string::npos)
+    // Default: the skew part at the outer iterate in q, so the fixed point is the given problem's.
+    const cb::MprgpTrescaRun lag = cb::mprgp_tresca_fp(p, {});
+    EXPECT_TRUE(lag.symmetrised);
+    EXPECT_EQ(lag.run.status, "converged") << lag.run.note;
+    EXPECT_LE(lag.run.error, 1e-8);
+    EXPECT_EQ(lag.run.error, cb::fclib_relative_error(p, lag.run.r));
+    EXPECT_NE(lag.run.note.find("the Tresca QPs use (W + W')/2 with the skew part (W - W')/2 r at the outer "
+                                "iterate in q"),
+              std::string::npos)
+        << lag.run.note;
+    // The skew part dropped: (W + W')/2's problem, which is not the given one; never `converged`.
+    cb::MprgpTrescaSettings drop;
+    drop.lag_skew = false;
+    const cb::MprgpTrescaRun fp = cb::mprgp_tresca_fp(p, drop);
+    EXPECT_NE(fp.run.note.find("the Tresca QPs use (W + W')/2 (skew part dropped); the error is on the given W"),
+              std::string::npos)
         << fp.run.note;
     EXPECT_EQ(fp.run.error, cb::fclib_relative_error(p, fp.run.r));
     EXPECT_GT(fp.run.error, 1e-8);
@@ -290,19 +303,25 @@ const fs::path DATA = fs::path(CB_TEST_DATA_DIR) / "fclib";
 const fs::path CAPSULES = DATA / "Capsules-i125-1213.hdf5";
 const fs::path LMGC = DATA / "LMGC_100_PR_PerioBox-i00361-60-03000.hdf5";
 
-TEST(MprgpTrescaFclib, ConvergesOnPerioBoxAndStallsHonestlyOnCapsulesNonSymmetricW)
+TEST(MprgpTrescaFclib, ConvergesOnBothFilesAndStallsOnCapsulesWithoutItsSkewPart)
 {
     if (cb::fclib_version().empty()) GTEST_SKIP() << "FCLIB import not built (libfclib-dev missing)";
     const cb::FrictionLocal lmgc = cb::read_fclib_local_friction(LMGC.string());
     const cb::MprgpTrescaRun ok = cb::mprgp_tresca_fp(lmgc, {});
     EXPECT_EQ(ok.run.status, "converged") << ok.run.note;
     EXPECT_LE(ok.run.error, 1e-8);
-    // Capsules' W is not symmetric (3.4e-4): the fixed point solves (W + W')/2's problem and stops
-    // when the FCLIB error on the given W no longer falls (measured 2.556e-5).
+    // Capsules' W is not symmetric (3.4e-4): with its skew part lagged the fixed point converges;
+    // dropped, it solves (W + W')/2's problem and stops when the FCLIB error on the given W no
+    // longer falls (measured 2.556e-5).
     const cb::FrictionLocal capsules = cb::read_fclib_local_friction(CAPSULES.string());
-    const cb::MprgpTrescaRun stuck = cb::mprgp_tresca_fp(capsules, {});
-    EXPECT_TRUE(stuck.symmetrised);
-    EXPECT_NEAR(stuck.asymmetry, 3.42e-4, 0.01e-4);
+    const cb::MprgpTrescaRun lag = cb::mprgp_tresca_fp(capsules, {});
+    EXPECT_TRUE(lag.symmetrised);
+    EXPECT_NEAR(lag.asymmetry, 3.42e-4, 0.01e-4);
+    EXPECT_EQ(lag.run.status, "converged") << lag.run.note;
+    EXPECT_LE(lag.run.error, 1e-8);
+    cb::MprgpTrescaSettings drop;
+    drop.lag_skew = false;
+    const cb::MprgpTrescaRun stuck = cb::mprgp_tresca_fp(capsules, drop);
     EXPECT_EQ(stuck.run.status, "stalled") << stuck.run.note;
     EXPECT_NEAR(stuck.run.error, 2.556e-5, 0.01e-5) << stuck.run.note;
 }
