@@ -118,6 +118,17 @@ int cmd_info(const Args& args)
     info["max_violation_at_x0"] = qp.m() ? std::max(0.0, -r.minCoeff()) : 0.0;
     info["has_x_ref"] = extras.x_ref.size() > 0;
     info["has_lambda_ref"] = extras.lambda_ref.size() > 0;
+    // Coulomb friction (snapshot version 2); a file without it is the frictionless problem, mu = 0.
+    const Friction& fr = qp.friction;
+    nlohmann::json friction = {{"mu_min", fr.mu.size() ? fr.mu.minCoeff() : 0.0},
+                               {"mu_max", fr.mu.size() ? fr.mu.maxCoeff() : 0.0},
+                               {"frictional_contacts", long((fr.mu.array() > 0).count())},
+                               {"tangent_rows", long(fr.T.rows())},
+                               {"nnz_T", long(fr.T.nonZeros())},
+                               {"has_cT", fr.cT.size() > 0},
+                               {"h", fr.h > 0 ? nlohmann::json(fr.h) : nlohmann::json()},
+                               {"has_v0", fr.v0.size() > 0}};
+    info["friction"] = friction;
     info["meta"] = qp.meta;
     if (cl.has("--json")) {
         std::cout << info.dump(2) << "\n";
@@ -140,6 +151,15 @@ int cmd_info(const Args& args)
         for (auto it = h.begin(); it != h.end(); ++it) std::cout << " " << it.key() << ":" << it.value();
         std::cout << "   (nnz:rows)\n";
     };
+    std::cout << "friction:    ";
+    if (fr.mu.size() == 0)
+        std::cout << "none (mu = 0)";
+    else
+        std::cout << "mu in [" << friction["mu_min"] << ", " << friction["mu_max"] << "], "
+                  << friction["frictional_contacts"] << " of " << qp.m() << " contacts with mu > 0, T " << fr.T.rows()
+                  << " x " << fr.T.cols() << " (" << fr.T.nonZeros() << " nonzeros)" << (fr.cT.size() ? ", cT" : "");
+    if (fr.h > 0) std::cout << ", h " << friction["h"] << (fr.v0.size() ? ", v0" : "");
+    std::cout << "\n";
     print_hist("row nnz A:  ", info["A_row_nnz_histogram"]);
     print_hist("row nnz J:  ", info["J_row_nnz_histogram"]);
     if (info.contains("arrays")) {

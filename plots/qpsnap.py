@@ -1,4 +1,4 @@
-"""Reader and writer for contactbench ``.qpsnap`` v1 snapshots (numpy only; scipy optional).
+"""Reader and writer for contactbench ``.qpsnap`` v1 and v2 snapshots (numpy only; scipy optional).
 
 Layout (DESIGN.md "Snapshot format"): 8-byte little-endian uint64 N, N bytes of UTF-8 JSON
 header, then a data buffer of little-endian arrays at 8-byte aligned offsets, each with its
@@ -11,6 +11,12 @@ file and the field: ``QpsnapError("PATH: A.indices: column 7 out of range [0, 6)
 
     # min 1/2 x'Ax - b'x  subject to  Jx >= c, from numpy/scipy arrays (A symmetric):
     write_qpsnap("mine.qpsnap", A, b, J, c, x0=None, meta={"family": "mine"})
+
+    # version 2, Coulomb friction (solvers/qp.hpp Friction): mu per contact row, T (2m x n) the two
+    # tangent rows of contact i at rows 2i, 2i+1 (FCLIB's local frame, J's row i the normal),
+    # optional cT (2m), h (time step) and v0 (n, needs h):
+    write_qpsnap("fric.qpsnap", A, b, J, c, mu=mu, T=T, h=0.01, v0=v0)
+    T = tangents(snap)               # scipy.sparse.csr_matrix or None
 """
 
 import json
@@ -18,8 +24,8 @@ import zlib
 
 import numpy as np
 
-__all__ = ["QpsnapError", "read_qpsnap", "read_header", "matrices", "content_hash", "write_qpsnap", "REQUIRED",
-           "OPTIONAL"]
+__all__ = ["QpsnapError", "read_qpsnap", "read_header", "matrices", "tangents", "content_hash", "write_qpsnap",
+           "REQUIRED", "OPTIONAL", "VERSION2"]
 
 REQUIRED = {
     "A.indptr": "int64", "A.indices": "int64", "A.data": "float64", "b": "float64", "x0": "float64",
@@ -28,7 +34,10 @@ REQUIRED = {
 OPTIONAL = {
     "contact.kind": "int64", "contact.depth": "float64", "contact.vertex": "int64",
     "x_ref": "float64", "lambda_ref": "float64",
+    # version 2: Coulomb friction
+    "mu": "float64", "T.indptr": "int64", "T.indices": "int64", "T.data": "float64", "cT": "float64", "v0": "float64",
 }
+VERSION2 = ("mu", "T.indptr", "T.indices", "T.data", "cT", "v0")  # the arrays only version 2 may hold
 _MAX_INT32 = 2147483647
 
 
@@ -61,9 +70,10 @@ def _parse_header(path, raw, file_size):
     if header["format"] != "qpsnap":
         _fail(path, "format", f'expected "qpsnap", got {json.dumps(header["format"])}')
     if "version" not in header:
-        _fail(path, "version", "missing (expected 1)")
-    if header["version"] != 1:
-        _fail(path, "version", f"unsupported version {json.dumps(header['version'])} (this reader knows version 1)")
+        _fail(path, "version", "missing (expected 1 or 2)")
+    if header["version"] not in (1, 2) or isinstance(header["version"], bool):
+        _fail(path, "version",
+              f"unsupported version {json.dumps(header['version'])} (this reader knows versions 1 and 2)")
     for key in ("n", "m"):
         if key not in header:
             _fail(path, key, "missing")
@@ -75,6 +85,12 @@ def _parse_header(path, raw, file_size):
         _fail(path, "arrays", "missing or not an object")
     if "meta" in header and not isinstance(header["meta"], dict):
         _fail(path, "meta", f"expected an object, got {json.dumps(header['meta'])}")
+    if "h" in header:
+        if header["version"] == 1:
+            _fail(path, "h", "a version 2 field in a version 1 snapshot")
+        step = header["h"]
+        if isinstance(step, bool) or not isinstance(step, (int, float)) or not (step > 0 and np.isfinite(step)):
+            _fail(path, "h", f"expected a positive finite time step, got {json.dumps(step)}")
     return header, n_header
 
 
@@ -172,6 +188,8 @@ def read_qpsnap(path):
     for name in header["arrays"]:
         if name not in REQUIRED and name not in OPTIONAL:
             _fail(path, f"arrays.{name}", "unknown array name")
+        if header["version"] == 1 and name in VERSION2:
+            _fail(path, f"arrays.{name}", "a version 2 array in a version 1 snapshot")
     a = {}
     for name, dtype in list(REQUIRED.items()) + list(OPTIONAL.items()):
         if name not in header["arrays"]:
@@ -198,14 +216,49 @@ def read_qpsnap(path):
                              ("lambda_ref", [m], mm)):
         if name in a:
             _expect_shape(path, name, a[name], shape, why)
+    # Friction: mu and the three T arrays come together; cT needs T, v0 needs h.
+    t_names = ("T.indptr", "T.indices", "T.data")
+    has_t = any(t in a for t in t_names)
+    if has_t:
+        for t in t_names:
+            if t not in a:
+                _fail(path, t, "missing (T is given as T.indptr, T.indices, T.data)")
+    if "mu" in a and not has_t:
+        _fail(path, "T", "missing: mu needs the two tangent rows per contact (T, 2m x n)")
+    if has_t and "mu" not in a:
+        _fail(path, "mu", "missing: T is given without friction coefficients")
+    if "cT" in a and not has_t:
+        _fail(path, "cT", "given without the tangent rows T")
+    if "v0" in a and "h" not in header:
+        _fail(path, "h", "missing: v0 is given without the step h")
+    if "mu" in a:
+        _expect_shape(path, "mu", a["mu"], [m], f"{mm}, one per contact row")
+    if has_t:
+        _expect_shape(path, "T.indptr", a["T.indptr"], [2 * m + 1], f"{mm}, two tangent rows per contact, 2m + 1 entries")
+        nnz_t = a["T.indices"].size
+        _expect_shape(path, "T.indices", a["T.indices"], [nnz_t], "one dimension")
+        if nnz_t > _MAX_INT32:
+            _fail(path, "T.indices", f"nnz {nnz_t} > 2147483647 (indices are 32-bit)")
+        _expect_shape(path, "T.data", a["T.data"], [nnz_t], "the length of T.indices")
+    if "cT" in a:
+        _expect_shape(path, "cT", a["cT"], [2 * m], f"{mm}, two per contact")
+    if "v0" in a:
+        _expect_shape(path, "v0", a["v0"], [n], nn)
     rows_a = _check_csr(path, "A", a["A.indptr"], a["A.indices"], n, n)
     _check_csr(path, "J", a["J.indptr"], a["J.indices"], m, n)
-    for name in ("A.data", "b", "x0", "J.data", "c", "contact.depth", "x_ref", "lambda_ref"):
+    if has_t:
+        _check_csr(path, "T", a["T.indptr"], a["T.indices"], 2 * m, n)
+    for name in ("A.data", "b", "x0", "J.data", "c", "contact.depth", "x_ref", "lambda_ref", "mu", "T.data", "cT", "v0"):
         if name in a:
             bad = np.flatnonzero(~np.isfinite(a[name].ravel()))
             if bad.size:
                 i = int(bad[0])
                 _fail(path, name, f"non-finite value {_g17(a[name].ravel()[i])} at index {i}")
+    if "mu" in a:
+        bad = np.flatnonzero(a["mu"] < 0)
+        if bad.size:
+            r = int(bad[0])
+            _fail(path, "mu", f"negative friction coefficient {_g17(a['mu'][r])} at contact {r}")
     if "contact.kind" in a:
         bad = np.flatnonzero((a["contact.kind"] < 0) | (a["contact.kind"] > 4))
         if bad.size:
@@ -299,6 +352,16 @@ def matrices(snap):
     return A, J
 
 
+def tangents(snap):
+    """T (2m x n, the two tangent rows of each contact) as scipy.sparse.csr_matrix, None when the
+    snapshot has no friction; needs scipy."""
+    import scipy.sparse as sp
+    a, n, m = snap["arrays"], snap["n"], snap["m"]
+    if "T.indptr" not in a:
+        return None
+    return sp.csr_matrix((a["T.data"], a["T.indices"], a["T.indptr"]), shape=(2 * m, n))
+
+
 def content_hash(path):
     """Hex of the 64-bit FNV-1a of the file bytes (the C++ qpsnap_content_hash)."""
     h = 0xCBF29CE484222325
@@ -341,11 +404,14 @@ def _vector(path, name, v, size):
     return arr
 
 
-def write_qpsnap(path, A, b, J=None, c=None, x0=None, meta=None, x_ref=None, lambda_ref=None):
-    """Writes min 1/2 x'Ax - b'x subject to Jx >= c as a .qpsnap v1 (the C++ writer's layout).
+def write_qpsnap(path, A, b, J=None, c=None, x0=None, meta=None, x_ref=None, lambda_ref=None, mu=None, T=None,
+                 cT=None, h=None, v0=None):
+    """Writes min 1/2 x'Ax - b'x subject to Jx >= c as a .qpsnap (the C++ writer's layout).
 
     A (n x n) and J (m x n) are scipy sparse matrices or dense arrays; J None means no
-    constraints; x0 defaults to zeros; meta is a JSON object. The file is written to a temporary
+    constraints; x0 defaults to zeros; meta is a JSON object. Friction (version 2): mu (m
+    coefficients >= 0) with T (2m x n tangent rows), optional cT (2m), h (time step > 0) and v0
+    (n, needs h); without any of them the file is version 1, as the C++ writer does. The file is written to a temporary
     name beside PATH and renamed, and read back with read_qpsnap before the rename, so a
     returned call means a snapshot the C++ reader takes (symmetric A, positive diagonal, finite
     values). Returns PATH.
@@ -371,6 +437,16 @@ def write_qpsnap(path, A, b, J=None, c=None, x0=None, meta=None, x_ref=None, lam
         arrays.append(("x_ref", "float64", _vector(path, "x_ref", x_ref, n)))
     if lambda_ref is not None:
         arrays.append(("lambda_ref", "float64", _vector(path, "lambda_ref", lambda_ref, m)))
+    if mu is not None:
+        arrays.append(("mu", "float64", _vector(path, "mu", mu, m)))
+    if T is not None:
+        t_indptr, t_indices, t_data = _csr_arrays(path, "T", T, 2 * m, n)
+        arrays += [("T.indptr", "int64", t_indptr), ("T.indices", "int64", t_indices), ("T.data", "float64", t_data)]
+    if cT is not None:
+        arrays.append(("cT", "float64", _vector(path, "cT", cT, 2 * m)))
+    if v0 is not None:
+        arrays.append(("v0", "float64", _vector(path, "v0", v0, n)))
+    version2 = any(v is not None for v in (mu, T, cT, h, v0))
     meta = {} if meta is None else meta
     if not isinstance(meta, dict):
         _fail(path, "meta", f"expected a JSON object (dict), got {type(meta).__name__}")
@@ -380,7 +456,10 @@ def write_qpsnap(path, A, b, J=None, c=None, x0=None, meta=None, x_ref=None, lam
         entries[name] = {"dtype": dtype, "shape": [int(s) for s in arr.shape], "offset": offset,
                          "nbytes": len(raw), "crc32": zlib.crc32(raw) & 0xFFFFFFFF}
         offset += len(raw)
-    header = {"format": "qpsnap", "version": 1, "n": int(n), "m": int(m), "arrays": entries, "meta": meta}
+    header = {"format": "qpsnap", "version": 2 if version2 else 1, "n": int(n), "m": int(m), "arrays": entries,
+              "meta": meta}
+    if h is not None:
+        header["h"] = float(h)
     text = json.dumps(header, separators=(",", ":"), allow_nan=False).encode("utf-8")
     text += b" " * ((8 - len(text) % 8) % 8)  # the data buffer starts 8-byte aligned
     folder = os.path.dirname(os.path.abspath(path))

@@ -1,7 +1,8 @@
-// The .qpsnap v1 reader and writer. The reader takes the whole file in one read, checks the
-// header, every array's place, size and CRC32, then the CSR structure and values, and builds the
-// Eigen matrices straight from the arrays (no triplets): a 10M-nonzero A loads in a fraction of
-// a second. Nothing is returned unless everything passed.
+// The .qpsnap reader and writer (version 1; version 2 adds the friction fields). The reader
+// takes the whole file in one read, checks the header, every array's place, size and CRC32, then
+// the CSR structure and values, and builds the Eigen matrices straight from the arrays (no
+// triplets): a 10M-nonzero A loads in a fraction of a second. Nothing is returned unless
+// everything passed.
 #include "problems/qpsnap.hpp"
 
 #include "problems/io_util.hpp"
@@ -192,10 +193,10 @@ nlohmann::json parse_header(const std::string& path, const unsigned char* bytes,
     if (!h.is_object()) throw_input_error(path, "header", "expected a JSON object, got " + std::string(h.type_name()));
     if (!h.contains("format")) throw_input_error(path, "format", "missing (expected \"qpsnap\")");
     if (h["format"] != "qpsnap") throw_input_error(path, "format", "expected \"qpsnap\", got " + h["format"].dump());
-    if (!h.contains("version")) throw_input_error(path, "version", "missing (expected 1)");
-    if (h["version"] != 1)
+    if (!h.contains("version")) throw_input_error(path, "version", "missing (expected 1 or 2)");
+    if (h["version"] != 1 && h["version"] != 2)
         throw_input_error(path, "version",
-                          "unsupported version " + h["version"].dump() + " (this reader knows version 1)");
+                          "unsupported version " + h["version"].dump() + " (this reader knows versions 1 and 2)");
     for (const char* key : {"n", "m"}) {
         if (!h.contains(key)) throw_input_error(path, key, "missing");
         const auto& v = h[key];
@@ -209,6 +210,12 @@ nlohmann::json parse_header(const std::string& path, const unsigned char* bytes,
         throw_input_error(path, "arrays", "missing or not an object");
     if (h.contains("meta") && !h["meta"].is_object())
         throw_input_error(path, "meta", "expected an object, got " + h["meta"].dump());
+    if (h.contains("h")) {
+        if (h["version"] == 1) throw_input_error(path, "h", "a version 2 field in a version 1 snapshot");
+        const auto& step = h["h"];
+        if (!step.is_number() || !(step.get<double>() > 0) || !std::isfinite(step.get<double>()))
+            throw_input_error(path, "h", "expected a positive finite time step, got " + step.dump());
+    }
     if (header_len) *header_len = N;
     return h;
 }
@@ -234,7 +241,21 @@ const ArraySpec ARRAYS[] = {
     {"contact.vertex", "int64", false},
     {"x_ref", "float64", false},
     {"lambda_ref", "float64", false},
+    // version 2: Coulomb friction (solvers/qp.hpp Friction)
+    {"mu", "float64", false},
+    {"T.indptr", "int64", false},
+    {"T.indices", "int64", false},
+    {"T.data", "float64", false},
+    {"cT", "float64", false},
+    {"v0", "float64", false},
 };
+
+/// The arrays only version 2 may hold.
+bool version2_array(const std::string& name)
+{
+    return name == "mu" || name == "T.indptr" || name == "T.indices" || name == "T.data" || name == "cT" ||
+           name == "v0";
+}
 
 /// One array, located and CRC-checked.
 struct Located {
@@ -472,6 +493,56 @@ void check_diagonal(const std::string& path, const SpMat& A)
     }
 }
 
+/// The rules of the friction fields (solvers/qp.hpp Friction) on a QP in memory, as the reader
+/// applies them to a file: mu and T together, sizes, finite values, mu >= 0, h > 0 with v0.
+void check_friction(const std::string& where, const Qp& qp)
+{
+    const Friction& f = qp.friction;
+    const std::int64_t n = qp.A.rows(), m = qp.J.rows();
+    const auto size_text = [](Eigen::Index r, Eigen::Index c) {
+        return str(std::int64_t(r)) + " x " + str(std::int64_t(c));
+    };
+    if (f.mu.size() == 0) {
+        if (f.T.rows() != 0 || f.T.cols() != 0)
+            throw_input_error(where, "mu", "missing: T is given without friction coefficients");
+        if (f.cT.size() != 0) throw_input_error(where, "cT", "given without the tangent rows T");
+    } else {
+        if (f.mu.size() != m)
+            throw_input_error(where, "mu",
+                              "expected size m = " + str(m) + " (one per contact row), got " +
+                                  str(std::int64_t(f.mu.size())));
+        if (f.T.rows() == 0 && f.T.cols() == 0 && m > 0)
+            throw_input_error(where, "T", "missing: mu needs the two tangent rows per contact (T, 2m x n)");
+        if (f.T.rows() != 2 * m || f.T.cols() != n)
+            throw_input_error(where, "T",
+                              "expected 2m x n = " + size_text(2 * m, n) + " (two tangent rows per contact), got " +
+                                  size_text(f.T.rows(), f.T.cols()));
+        if (f.cT.size() != 0 && f.cT.size() != 2 * m)
+            throw_input_error(where, "cT",
+                              "expected size 2m = " + str(2 * m) + ", got " + str(std::int64_t(f.cT.size())));
+        check_finite(where, "mu", f.mu.data(), std::uint64_t(m));
+        for (std::int64_t r = 0; r < m; ++r)
+            if (f.mu[r] < 0)
+                throw_input_error(where, "mu",
+                                  "negative friction coefficient " + fmt_double(f.mu[r]) + " at contact " + str(r));
+        for (Eigen::Index r = 0; r < f.T.outerSize(); ++r)
+            for (SpMat::InnerIterator it(f.T, r); it; ++it)
+                if (!std::isfinite(it.value()))
+                    throw_input_error(where, "T.data",
+                                      "non-finite value " + fmt_double(it.value()) + " in tangent row " +
+                                          str(std::int64_t(r)));
+        check_finite(where, "cT", f.cT.data(), std::uint64_t(f.cT.size()));
+    }
+    if (f.h != 0.0 && !(f.h > 0 && std::isfinite(f.h)))
+        throw_input_error(where, "h", "expected a positive finite time step, got " + fmt_double(f.h));
+    if (f.v0.size() != 0) {
+        if (f.h == 0.0) throw_input_error(where, "h", "missing: v0 is given without the step h");
+        if (f.v0.size() != n)
+            throw_input_error(where, "v0", "expected size n = " + str(n) + ", got " + str(std::int64_t(f.v0.size())));
+        check_finite(where, "v0", f.v0.data(), std::uint64_t(n));
+    }
+}
+
 }  // namespace
 
 void require_unknowns(const std::string& where, std::uint64_t n)
@@ -501,16 +572,21 @@ void validate_qp(const std::string& where, Qp& qp)
         size_error("contact.vertex", "size 4 m", 4 * m, Eigen::Index(qp.contacts.vertex.size()));
     qp.A.makeCompressed();
     qp.J.makeCompressed();
+    qp.friction.T.makeCompressed();
+    check_friction(where, qp);
     check_finite(where, "A.data", qp.A.valuePtr(), std::uint64_t(qp.A.nonZeros()));
     check_finite(where, "b", qp.b.data(), std::uint64_t(n));
     check_finite(where, "x0", qp.x0.data(), std::uint64_t(n));
     check_finite(where, "J.data", qp.J.valuePtr(), std::uint64_t(qp.J.nonZeros()));
     check_finite(where, "c", qp.c.data(), std::uint64_t(m));
-    for (const SpMat* M : {&qp.A, &qp.J})
+    for (const SpMat* M : {&qp.A, &qp.J, &qp.friction.T})
         for (Eigen::Index r = 0; r < M->rows(); ++r)
             for (int e = M->outerIndexPtr()[r] + 1; e < M->outerIndexPtr()[r + 1]; ++e)
                 if (M->innerIndexPtr()[e] <= M->innerIndexPtr()[e - 1])
-                    throw_input_error(where, M == &qp.A ? "A" : "J",
+                    throw_input_error(where,
+                                      M == &qp.A   ? "A"
+                                      : M == &qp.J ? "J"
+                                                   : "T",
                                       "columns not strictly increasing in row " + str(std::int64_t(r)));
     symmetrise(where, qp.A);
     check_diagonal(where, qp.A);
@@ -551,6 +627,8 @@ Qp read_qpsnap_bytes(const std::string& path, const unsigned char* bytes, std::u
         bool known = false;
         for (const auto& spec : ARRAYS) known = known || it.key() == spec.name;
         if (!known) throw_input_error(path, "arrays." + it.key(), "unknown array name");
+        if (h["version"] == 1 && version2_array(it.key()))
+            throw_input_error(path, "arrays." + it.key(), "a version 2 array in a version 1 snapshot");
     }
     std::map<std::string, Located> a;
     for (const auto& spec : ARRAYS) {
@@ -586,11 +664,42 @@ Qp read_qpsnap_bytes(const std::string& path, const unsigned char* bytes, std::u
         expect_shape(path, "contact.vertex", a["contact.vertex"], {m, 4}, mm + ", 4 vertices per row");
     if (a["x_ref"].present) expect_shape(path, "x_ref", a["x_ref"], {n}, nn);
     if (a["lambda_ref"].present) expect_shape(path, "lambda_ref", a["lambda_ref"], {m}, mm);
+    // Friction: mu and the three T arrays come together; cT needs T, v0 needs h.
+    const bool has_t = a["T.indptr"].present || a["T.indices"].present || a["T.data"].present;
+    if (has_t)
+        for (const char* name : {"T.indptr", "T.indices", "T.data"})
+            if (!a[name].present) throw_input_error(path, name, "missing (T is given as T.indptr, T.indices, T.data)");
+    if (a["mu"].present && !has_t)
+        throw_input_error(path, "T", "missing: mu needs the two tangent rows per contact (T, 2m x n)");
+    if (has_t && !a["mu"].present) throw_input_error(path, "mu", "missing: T is given without friction coefficients");
+    if (a["cT"].present && !has_t) throw_input_error(path, "cT", "given without the tangent rows T");
+    if (a["v0"].present && !h.contains("h")) throw_input_error(path, "h", "missing: v0 is given without the step h");
+    const std::uint64_t mt = 2 * m;
+    if (a["mu"].present) expect_shape(path, "mu", a["mu"], {m}, mm + ", one per contact row");
+    if (has_t) {
+        expect_shape(path, "T.indptr", a["T.indptr"], {mt + 1}, mm + ", two tangent rows per contact, 2m + 1 entries");
+        if (a["T.indices"].shape.size() != 1)
+            expect_shape(path, "T.indices", a["T.indices"], {a["T.indices"].count}, "one dimension");
+        if (a["T.indices"].count > MAX_INT32)
+            throw_input_error(path, "T.indices",
+                              "nnz " + str(a["T.indices"].count) + " > 2147483647 (indices are 32-bit)");
+        expect_shape(path, "T.data", a["T.data"], {a["T.indices"].count}, "the length of T.indices");
+    }
+    if (a["cT"].present) expect_shape(path, "cT", a["cT"], {mt}, mm + ", two per contact");
+    if (a["v0"].present) expect_shape(path, "v0", a["v0"], {n}, nn);
     // Structure and values.
     check_csr(path, "A", a["A.indptr"], a["A.indices"], n, n);
     check_csr(path, "J", a["J.indptr"], a["J.indices"], m, n);
-    for (const char* name : {"A.data", "b", "x0", "J.data", "c", "contact.depth", "x_ref", "lambda_ref"})
+    if (has_t) check_csr(path, "T", a["T.indptr"], a["T.indices"], mt, n);
+    for (const char* name :
+         {"A.data", "b", "x0", "J.data", "c", "contact.depth", "x_ref", "lambda_ref", "mu", "T.data", "cT", "v0"})
         if (a[name].present) check_finite(path, name, a[name].f64(), a[name].count);
+    if (a["mu"].present)
+        for (std::uint64_t r = 0; r < m; ++r)
+            if (a["mu"].f64()[r] < 0)
+                throw_input_error(path, "mu",
+                                  "negative friction coefficient " + fmt_double(a["mu"].f64()[r]) + " at contact " +
+                                      str(r));
     if (a["contact.kind"].present)
         for (std::uint64_t r = 0; r < m; ++r) {
             const std::int64_t k = a["contact.kind"].i64()[r];
@@ -624,6 +733,14 @@ Qp read_qpsnap_bytes(const std::string& path, const unsigned char* bytes, std::u
     if (a["contact.vertex"].present)
         qp.contacts.vertex.assign(a["contact.vertex"].i64(), a["contact.vertex"].i64() + 4 * m);
     qp.meta = h.contains("meta") ? h["meta"] : nlohmann::json::object();
+    Friction& fr = qp.friction;
+    if (a["mu"].present) {
+        fr.mu = Eigen::Map<const Vec>(a["mu"].f64(), Eigen::Index(m));
+        build_csr(fr.T, mt, n, a["T.indptr"], a["T.indices"], a["T.data"]);
+    }
+    if (a["cT"].present) fr.cT = Eigen::Map<const Vec>(a["cT"].f64(), Eigen::Index(mt));
+    if (h.contains("h")) fr.h = h["h"].get<double>();
+    if (a["v0"].present) fr.v0 = Eigen::Map<const Vec>(a["v0"].f64(), Eigen::Index(n));
     if (extras) {
         extras->x_ref = a["x_ref"].present ? Vec(Eigen::Map<const Vec>(a["x_ref"].f64(), Eigen::Index(n))) : Vec();
         extras->lambda_ref =
@@ -707,6 +824,8 @@ void write_qpsnap(const std::string& path, const Qp& qp, const SnapshotExtras* e
     if (!ct.depth.empty() && ct.depth.size() != m) bad("contact.depth", "size != m");
     if (!ct.vertex.empty() && ct.vertex.size() != 4 * m) bad("contact.vertex", "size != 4 m");
     if (!qp.meta.is_object()) bad("meta", "must be a JSON object");
+    check_friction(path + " (writing)", qp);
+    const Friction& fr = qp.friction;
 
     std::vector<OutArray> arrays;
     std::vector<std::unique_ptr<SpMat>> compressed;
@@ -735,7 +854,17 @@ void write_qpsnap(const std::string& path, const Qp& qp, const SnapshotExtras* e
         arrays.push_back(out_array<double>("lambda_ref", "float64", {m}, extras->lambda_ref.data(), m));
     }
 
-    nlohmann::json header = {{"format", "qpsnap"}, {"version", 1}, {"n", n}, {"m", m}};
+    if (fr.mu.size()) {
+        arrays.push_back(out_array<double>("mu", "float64", {m}, fr.mu.data(), m));
+        csr_arrays(arrays, "T", fr.T, compressed);
+    }
+    if (fr.cT.size()) arrays.push_back(out_array<double>("cT", "float64", {2 * m}, fr.cT.data(), 2 * m));
+    if (fr.v0.size()) arrays.push_back(out_array<double>("v0", "float64", {n}, fr.v0.data(), n));
+
+    // Version 1 unless a friction field is present: a frictionless QP's file is byte for byte
+    // what it was before version 2 (content hashes, reference caches and baselines keep).
+    nlohmann::json header = {{"format", "qpsnap"}, {"version", fr.empty() ? 1 : 2}, {"n", n}, {"m", m}};
+    if (fr.h > 0) header["h"] = fr.h;
     nlohmann::json entries = nlohmann::json::object();
     std::uint64_t offset = 0;
     for (const auto& a : arrays) {

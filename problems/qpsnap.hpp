@@ -1,9 +1,12 @@
 #pragma once
-/// The `.qpsnap` snapshot format, version 1 (DESIGN.md "Snapshot format"):
+/// The `.qpsnap` snapshot format, versions 1 and 2 (DESIGN.md "Snapshot format", INTERFACES.md):
 ///   8 bytes little-endian uint64 N, N bytes UTF-8 JSON header, then a data buffer of raw
 ///   little-endian arrays at 8-byte aligned offsets, each with its CRC32.
 /// Arrays: A.indptr A.indices A.data b x0 J.indptr J.indices J.data c (required);
-///         contact.kind contact.depth contact.vertex x_ref lambda_ref (optional).
+///         contact.kind contact.depth contact.vertex x_ref lambda_ref (optional);
+///         version 2 only: mu T.indptr T.indices T.data cT v0 and the header number h
+///         (Coulomb friction, Qp::friction). A version 1 file reads as mu = 0 (no friction); the
+///         writer writes version 1 whenever Qp::friction is empty.
 #include "solvers/qp.hpp"
 
 #include <map>

@@ -29,6 +29,24 @@ struct FixedLength {
     std::string source;  ///< length_scale_source: given | suite | snapshot | reference_extent | load_displacement
 };
 
+/// Optional Coulomb friction of the contact rows (issue 48; snapshot version 2, docs/INTERFACES.md).
+/// Contact i is J's row i (its normal) with the two tangent rows T(2i, :), T(2i + 1, :): FCLIB's
+/// local frame, normal first. At a solution of the frictional problem, with the contact's
+/// displacement u_i = (J_i x - c_i, T_i x - cT_i) and its force r_i = (lambda_N,i, lambda_T,i):
+///   A x - b = J' lambda_N + T' lambda_T,   K*_mu_i ∋ u_i + mu_i ||u_iT|| e_n  ⊥  r_i ∈ K_mu_i.
+/// All empty (mu.size() == 0): frictionless, exactly the QP above.
+struct Friction {
+    Vec mu;          ///< m coefficients, finite, >= 0; empty: frictionless
+    SpMat T;         ///< 2m x n tangent rows (row-major); 0 x 0 exactly when mu is empty
+    Vec cT;          ///< 2m tangential offsets (cT = T x at the step's start: slip measured from there); empty: 0
+    double h = 0.0;  ///< time step of a velocity-level method (time units); 0: not given
+    Vec v0;          ///< n start velocities (length / time units); empty: not given (needs h)
+    /// True when some contact has mu > 0; mu = 0 everywhere is the frictionless QP.
+    bool frictional() const { return mu.size() > 0 && mu.maxCoeff() > 0.0; }
+    /// No friction field at all (then the snapshot is written as version 1).
+    bool empty() const { return mu.size() == 0 && T.size() == 0 && cT.size() == 0 && h == 0.0 && v0.size() == 0; }
+};
+
 /// Const views of a QP; no ownership. A: n x n SPD (full, both triangles), J: m x n.
 struct QpView {
     const SpMat& A;
@@ -37,7 +55,9 @@ struct QpView {
     const Vec& c;
     const Vec& x0;  ///< start point (may be infeasible)
     const FixedLength* length = nullptr;  ///< the problem's fixed scene size, if any
+    const Friction* friction = nullptr;   ///< the rows' Coulomb friction, if any
     Eigen::Index n() const { return A.rows(); }
+    bool frictional() const { return friction && friction->frictional(); }
     Eigen::Index m() const { return J.rows(); }
 };
 
@@ -51,9 +71,11 @@ struct Qp {
     ContactRows contacts;
     nlohmann::json meta = nlohmann::json::object();
     FixedLength length;  ///< set by the harness (harness/length_scale.hpp) before any solver runs
+    Friction friction;   ///< empty: frictionless
 
-    QpView view() const { return QpView{A, b, J, c, x0, &length}; }
+    QpView view() const { return QpView{A, b, J, c, x0, &length, &friction}; }
     Eigen::Index n() const { return A.rows(); }
+    bool frictional() const { return friction.frictional(); }
     Eigen::Index m() const { return J.rows(); }
 };
 

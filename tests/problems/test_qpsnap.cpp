@@ -1,4 +1,4 @@
-// .qpsnap v1: round trip, symmetrisation, and one test per corruption with the exact message.
+// .qpsnap v1 and v2 (friction): round trip, symmetrisation, and one test per corruption with the exact message.
 // Corrupt files are written by an independent raw writer below, so that the structure checks
 // are reached with valid CRCs.
 #include "problems/qpsnap.hpp"
@@ -256,8 +256,8 @@ TEST(QpsnapCorrupt, FormatWrong)
 
 TEST(QpsnapCorrupt, VersionUnsupported)
 {
-    expect_error(write_raw("version.qpsnap", tiny_arrays(), 3, 2, [](nlohmann::json& h) { h["version"] = 2; }),
-                 "version: unsupported version 2 (this reader knows version 1)");
+    expect_error(write_raw("version.qpsnap", tiny_arrays(), 3, 2, [](nlohmann::json& h) { h["version"] = 3; }),
+                 "version: unsupported version 3 (this reader knows versions 1 and 2)");
 }
 
 TEST(QpsnapCorrupt, NMissingOrNegative)
@@ -501,3 +501,201 @@ TEST(QpsnapFuzzRegression, JsonNumberOverflowIsAnInputError)
     }
     EXPECT_THROW((void)cb::read_qpsnap_header(path), cb::InputError);
 }
+
+// ---- version 2: Coulomb friction (issue 48) ----
+
+namespace cb {
+namespace {
+
+/// tiny_arrays() with friction: mu per row, T = [0 1 0; 0 0 1; 1 0 0; 0 1 1] (2m x n), in version 2.
+std::map<std::string, Raw> tiny_friction_arrays()
+{
+    auto a = tiny_arrays();
+    a["mu"] = reals({0.3, 0.0});
+    a["T.indptr"] = ints({0, 1, 2, 3, 5});
+    a["T.indices"] = ints({1, 2, 0, 1, 2});
+    a["T.data"] = reals({1, 1, 1, 1, 1});
+    return a;
+}
+
+void version2(nlohmann::json& h) { h["version"] = 2; }
+
+/// A synthetic QP with every friction field set.
+Qp frictional_synthetic()
+{
+    Qp qp = make_synthetic("coupled", {{"nx", 3}, {"ny", 2}, {"nz", 3}}, 5);
+    const Eigen::Index m = qp.m(), n = qp.n();
+    Friction& f = qp.friction;
+    f.mu = Vec::LinSpaced(m, 0.0, 0.9);
+    std::vector<Eigen::Triplet<double>> t;
+    for (Eigen::Index i = 0; i < 2 * m; ++i) t.emplace_back(int(i), int((3 * i + 1) % n), 1.0 / double(i + 3));
+    f.T.resize(2 * m, n);
+    f.T.setFromTriplets(t.begin(), t.end());
+    f.T.makeCompressed();
+    f.cT = Vec::LinSpaced(2 * m, -1.0, 1.0 / 7.0);
+    f.h = 1.0 / 60.0;
+    f.v0 = Vec::LinSpaced(n, 0.25, -2.0 / 3.0);
+    return qp;
+}
+
+TEST(QpsnapFriction, RoundTripIsBitExactAndVersion2)
+{
+    const Qp qp = frictional_synthetic();
+    ASSERT_TRUE(qp.frictional());
+    ASSERT_TRUE(qp.view().frictional());
+    const std::string p1 = temp_path("fric1.qpsnap"), p2 = temp_path("fric2.qpsnap");
+    write_qpsnap(p1, qp);
+    EXPECT_EQ(read_qpsnap_header(p1)["version"], 2);
+    EXPECT_EQ(read_qpsnap_header(p1)["h"], 1.0 / 60.0);
+    const Qp back = read_qpsnap(p1);
+    EXPECT_TRUE(back.friction.mu == qp.friction.mu);
+    ASSERT_EQ(back.friction.T.rows(), 2 * qp.m());
+    ASSERT_EQ(back.friction.T.nonZeros(), qp.friction.T.nonZeros());
+    EXPECT_EQ(std::memcmp(back.friction.T.valuePtr(), qp.friction.T.valuePtr(), 8 * qp.friction.T.nonZeros()), 0);
+    EXPECT_EQ(std::memcmp(back.friction.T.innerIndexPtr(), qp.friction.T.innerIndexPtr(), 4 * qp.friction.T.nonZeros()),
+              0);
+    EXPECT_TRUE(back.friction.cT == qp.friction.cT);
+    EXPECT_EQ(back.friction.h, qp.friction.h);
+    EXPECT_TRUE(back.friction.v0 == qp.friction.v0);
+    EXPECT_TRUE(back.frictional());
+    write_qpsnap(p2, back);
+    EXPECT_EQ(file_bytes(p1), file_bytes(p2));
+}
+
+TEST(QpsnapFriction, FrictionlessQpIsWrittenAsVersion1Unchanged)
+{
+    // A QP without friction fields is the file it was before version 2, byte for byte.
+    Qp qp = frictional_synthetic();
+    qp.friction = Friction{};
+    const std::string p = temp_path("nofric.qpsnap");
+    write_qpsnap(p, qp);
+    EXPECT_EQ(read_qpsnap_header(p)["version"], 1);
+    EXPECT_FALSE(read_qpsnap_header(p).contains("h"));
+    const Qp back = read_qpsnap(p);
+    EXPECT_TRUE(back.friction.empty());
+    EXPECT_FALSE(back.frictional());
+    EXPECT_FALSE(back.view().frictional());
+    // mu = 0 everywhere: written (version 2), but not frictional.
+    qp = frictional_synthetic();
+    qp.friction.mu.setZero();
+    write_qpsnap(p, qp);
+    EXPECT_EQ(read_qpsnap_header(p)["version"], 2);
+    EXPECT_FALSE(read_qpsnap(p).frictional());
+}
+
+TEST(QpsnapFriction, Version1FileReadsAsFrictionless)
+{
+    const Qp qp = read_qpsnap(write_raw("v1.qpsnap", tiny_arrays()));
+    EXPECT_TRUE(qp.friction.empty());
+    EXPECT_FALSE(qp.frictional());
+    const Qp fr = read_qpsnap(write_raw("v2.qpsnap", tiny_friction_arrays(), 3, 2, version2));
+    EXPECT_TRUE(fr.frictional());
+    EXPECT_EQ(fr.friction.mu[0], 0.3);
+    EXPECT_EQ(fr.friction.T.coeff(3, 2), 1.0);
+    EXPECT_EQ(fr.friction.cT.size(), 0);
+    EXPECT_EQ(fr.friction.h, 0.0);
+}
+
+TEST(QpsnapFrictionCorrupt, MuNegativeOrNaN)
+{
+    auto a = tiny_friction_arrays();
+    a["mu"] = reals({0.3, -0.5});
+    expect_error(write_raw("mu_neg.qpsnap", a, 3, 2, version2), "mu: negative friction coefficient -0.5 at contact 1");
+    a["mu"] = reals({std::nan(""), 0.1});
+    expect_error(write_raw("mu_nan.qpsnap", a, 3, 2, version2), "mu: non-finite value nan at index 0");
+    a["mu"] = reals({0.3});
+    expect_error(write_raw("mu_size.qpsnap", a, 3, 2, version2),
+                 "mu.shape: expected [2] (m = 2, one per contact row), got [1]");
+}
+
+TEST(QpsnapFrictionCorrupt, MuWithoutTangentsAndTangentsWithoutMu)
+{
+    auto a = tiny_friction_arrays();
+    for (const char* t : {"T.indptr", "T.indices", "T.data"}) a.erase(t);
+    expect_error(write_raw("mu_no_t.qpsnap", a, 3, 2, version2),
+                 "T: missing: mu needs the two tangent rows per contact (T, 2m x n)");
+    a = tiny_friction_arrays();
+    a.erase("mu");
+    expect_error(write_raw("t_no_mu.qpsnap", a, 3, 2, version2),
+                 "mu: missing: T is given without friction coefficients");
+    a = tiny_friction_arrays();
+    a.erase("T.data");
+    expect_error(write_raw("t_part.qpsnap", a, 3, 2, version2),
+                 "T.data: missing (T is given as T.indptr, T.indices, T.data)");
+}
+
+TEST(QpsnapFrictionCorrupt, TangentRowsOfTheWrongSize)
+{
+    auto a = tiny_friction_arrays();
+    a["T.indptr"] = ints({0, 1, 2, 3});  // 3 rows, not 2m = 4
+    a["T.indices"] = ints({1, 2, 0});
+    a["T.data"] = reals({1, 1, 1});
+    expect_error(write_raw("t_rows.qpsnap", a, 3, 2, version2),
+                 "T.indptr.shape: expected [5] (m = 2, two tangent rows per contact, 2m + 1 entries), got [4]");
+    a = tiny_friction_arrays();
+    a["T.indices"] = ints({1, 2, 0, 1, 3});  // column 3 of n = 3
+    expect_error(write_raw("t_cols.qpsnap", a, 3, 2, version2), "T.indices: column 3 out of range [0, 3) in row 3");
+    a = tiny_friction_arrays();
+    a["T.data"] = reals({1, 1, 1, std::numeric_limits<double>::infinity(), 1});
+    expect_error(write_raw("t_inf.qpsnap", a, 3, 2, version2), "T.data: non-finite value inf at index 3");
+    a = tiny_friction_arrays();
+    a["cT"] = reals({0, 0, 0});
+    expect_error(write_raw("ct_size.qpsnap", a, 3, 2, version2),
+                 "cT.shape: expected [4] (m = 2, two per contact), got [3]");
+}
+
+TEST(QpsnapFrictionCorrupt, StepAndStartVelocities)
+{
+    auto a = tiny_friction_arrays();
+    a["v0"] = reals({0, 1, 2});
+    expect_error(write_raw("v0_no_h.qpsnap", a, 3, 2, version2), "h: missing: v0 is given without the step h");
+    expect_error(write_raw("h_neg.qpsnap", a, 3, 2, [](nlohmann::json& h) { h["version"] = 2, h["h"] = -0.01; }),
+                 "h: expected a positive finite time step, got -0.01");
+    expect_error(write_raw("h_str.qpsnap", a, 3, 2, [](nlohmann::json& h) { h["version"] = 2, h["h"] = "0.01"; }),
+                 "h: expected a positive finite time step, got \"0.01\"");
+    a["v0"] = reals({0, 1});
+    expect_error(write_raw("v0_size.qpsnap", a, 3, 2, [](nlohmann::json& h) { h["version"] = 2, h["h"] = 0.01; }),
+                 "v0.shape: expected [3] (n = 3), got [2]");
+}
+
+TEST(QpsnapFrictionCorrupt, Version2FieldsInAVersion1File)
+{
+    expect_error(write_raw("v1_mu.qpsnap", tiny_friction_arrays()),
+                 "arrays.T.data: a version 2 array in a version 1 snapshot");
+    expect_error(write_raw("v1_h.qpsnap", tiny_arrays(), 3, 2, [](nlohmann::json& h) { h["h"] = 0.01; }),
+                 "h: a version 2 field in a version 1 snapshot");
+}
+
+TEST(QpsnapFrictionCorrupt, WriterRefusesWhatTheReaderRefuses)
+{
+    const std::string p = temp_path("w_bad.qpsnap");
+    auto expect_write_error = [&](const Qp& qp, const std::string& tail) {
+        try {
+            write_qpsnap(p, qp);
+            ADD_FAILURE() << "no error for " << tail;
+        } catch (const InputError& e) {
+            EXPECT_EQ(std::string(e.what()), p + " (writing): " + tail);
+        }
+        EXPECT_FALSE(std::filesystem::exists(p));
+    };
+    Qp qp = frictional_synthetic();
+    qp.friction.mu[2] = -1.0;
+    expect_write_error(qp, "mu: negative friction coefficient -1 at contact 2");
+    qp = frictional_synthetic();
+    qp.friction.mu[0] = std::nan("");
+    expect_write_error(qp, "mu: non-finite value nan at index 0");
+    qp = frictional_synthetic();
+    qp.friction.T.resize(qp.m(), qp.n());
+    expect_write_error(qp, "T: expected 2m x n = " + std::to_string(2 * qp.m()) + " x " + std::to_string(qp.n()) +
+                               " (two tangent rows per contact), got " + std::to_string(qp.m()) + " x " +
+                               std::to_string(qp.n()));
+    qp = frictional_synthetic();
+    qp.friction.T = SpMat();
+    expect_write_error(qp, "T: missing: mu needs the two tangent rows per contact (T, 2m x n)");
+    qp = frictional_synthetic();
+    qp.friction.h = 0.0;
+    expect_write_error(qp, "h: missing: v0 is given without the step h");
+}
+
+}  // namespace
+}  // namespace cb

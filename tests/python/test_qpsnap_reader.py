@@ -49,6 +49,18 @@ def tiny():
             "c": np.array([0.5, -1])}
 
 
+def tiny_friction():
+    """tiny() with friction (version 2): mu per row, T = [0 1 0; 0 0 1; 1 0 0; 0 1 1] (2m x n)."""
+    a = tiny()
+    a.update({"mu": np.array([0.3, 0.0]), "T.indptr": np.array([0, 1, 2, 3, 5], dtype=np.int64),
+              "T.indices": np.array([1, 2, 0, 1, 2], dtype=np.int64), "T.data": np.ones(5)})
+    return a
+
+
+def version2(header):
+    header["version"] = 2
+
+
 def run_cb(*args):
     return subprocess.run([CONTACTBENCH, *args], check=True, capture_output=True, text=True).stdout
 
@@ -91,8 +103,8 @@ class ReaderTest(unittest.TestCase):
         a = tiny()
         del a["J.data"]
         self.expect_error(write_raw(self.path("miss.qpsnap"), a), "J.data: required array missing")
-        self.expect_error(write_raw(self.path("v.qpsnap"), tiny(), edit=lambda h: h.update(version=2)),
-                          "version: unsupported version 2 (this reader knows version 1)")
+        self.expect_error(write_raw(self.path("v.qpsnap"), tiny(), edit=lambda h: h.update(version=3)),
+                          "version: unsupported version 3 (this reader knows versions 1 and 2)")
         p = write_raw(self.path("crc.qpsnap"), tiny())
         with open(p, "rb") as f:
             raw = bytearray(f.read())
@@ -111,6 +123,64 @@ class ReaderTest(unittest.TestCase):
             f.write(b"abcde")
         self.expect_error(self.path("short.qpsnap"),
                           "header: file too short: 5 bytes, a .qpsnap starts with an 8-byte header length")
+
+    def test_friction_fields_read(self):
+        snap = qpsnap.read_qpsnap(write_raw(self.path("f.qpsnap"), tiny_friction(), edit=version2))
+        np.testing.assert_array_equal(snap["arrays"]["mu"], [0.3, 0.0])
+        np.testing.assert_array_equal(qpsnap.tangents(snap).toarray(), [[0, 1, 0], [0, 0, 1], [1, 0, 0], [0, 1, 1]])
+        self.assertIsNone(qpsnap.tangents(qpsnap.read_qpsnap(write_raw(self.path("t.qpsnap"), tiny()))))
+
+    def test_friction_corruptions_match_cpp_messages(self):
+        # The same files and messages as tests/problems/test_qpsnap.cpp's QpsnapFrictionCorrupt.
+        a = tiny_friction()
+        a["mu"] = np.array([0.3, -0.5])
+        self.expect_error(write_raw(self.path("neg.qpsnap"), a, edit=version2),
+                          "mu: negative friction coefficient -0.5 at contact 1")
+        a["mu"] = np.array([np.nan, 0.1])
+        self.expect_error(write_raw(self.path("nan.qpsnap"), a, edit=version2), "mu: non-finite value nan at index 0")
+        a = tiny_friction()
+        for t in ("T.indptr", "T.indices", "T.data"):
+            del a[t]
+        self.expect_error(write_raw(self.path("not.qpsnap"), a, edit=version2),
+                          "T: missing: mu needs the two tangent rows per contact (T, 2m x n)")
+        a = tiny_friction()
+        del a["mu"]
+        self.expect_error(write_raw(self.path("nomu.qpsnap"), a, edit=version2),
+                          "mu: missing: T is given without friction coefficients")
+        a = tiny_friction()
+        a["T.indptr"], a["T.indices"], a["T.data"] = np.array([0, 1, 2, 3]), np.array([1, 2, 0]), np.ones(3)
+        self.expect_error(write_raw(self.path("rows.qpsnap"), a, edit=version2),
+                          "T.indptr.shape: expected [5] (m = 2, two tangent rows per contact, 2m + 1 entries), got [4]")
+        a = tiny_friction()
+        a["T.indices"] = np.array([1, 2, 0, 1, 3])
+        self.expect_error(write_raw(self.path("cols.qpsnap"), a, edit=version2),
+                          "T.indices: column 3 out of range [0, 3) in row 3")
+        a = tiny_friction()
+        a["v0"] = np.array([0, 1, 2.0])
+        self.expect_error(write_raw(self.path("v0.qpsnap"), a, edit=version2), "h: missing: v0 is given without the step h")
+        self.expect_error(write_raw(self.path("h.qpsnap"), a, edit=lambda h: h.update(version=2, h=-0.01)),
+                          "h: expected a positive finite time step, got -0.01")
+        self.expect_error(write_raw(self.path("v1.qpsnap"), tiny_friction()),
+                          "arrays.T.data: a version 2 array in a version 1 snapshot")
+
+    @unittest.skipUnless(HAVE_CB, "CB_CONTACTBENCH not set")
+    def test_contactbench_refuses_hostile_friction_with_exit_2(self):
+        a = tiny_friction()
+        a["mu"] = np.array([np.nan, 0.1])
+        p = write_raw(self.path("nan_mu.qpsnap"), a, edit=version2)
+        r = subprocess.run([CONTACTBENCH, "info", p], capture_output=True, text=True)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn(f"{p}: mu: non-finite value nan at index 0", r.stderr)
+        self.assertEqual(r.stdout, "")
+        p = write_raw(self.path("ok.qpsnap"), tiny_friction(), edit=version2)
+        info = json.loads(run_cb("info", p, "--json"))
+        self.assertEqual(info["version"], 2)
+        self.assertEqual((info["friction"]["mu_min"], info["friction"]["mu_max"]), (0.0, 0.3))
+        self.assertEqual(info["friction"]["frictional_contacts"], 1)
+        self.assertIn("friction:    mu in [0.0, 0.3], 1 of 2 contacts with mu > 0, T 4 x 3 (5 nonzeros)",
+                      run_cb("info", p))
+        old = json.loads(run_cb("info", write_raw(self.path("v1.qpsnap"), tiny()), "--json"))
+        self.assertEqual((old["version"], old["friction"]["mu_max"], old["friction"]["tangent_rows"]), (1, 0.0, 0))
 
     def test_small_asymmetry_symmetrised(self):
         a = tiny()

@@ -89,6 +89,54 @@ class WriteQpsnap(unittest.TestCase):
         for name in mine:
             self.assertEqual(mine[name].tobytes(), theirs[name].tobytes(), name)
 
+    def friction(self):
+        """mu, T (2m x n), cT, h, v0 for small_qp()."""
+        T = sp.csr_matrix(np.array([[0, 1.0, 0, 0], [0, 0, 1.0 / 3.0, 0], [1.0, 0, 0, 0], [0, 0, 0, -1.0]]))
+        return {"mu": np.array([0.5, 0.0]), "T": T, "cT": np.array([0.1, -0.2, 1.0 / 7.0, 0.0]), "h": 0.01,
+                "v0": np.array([1.0, -1.0, 0.5, 2.0 / 3.0])}
+
+    def test_friction_round_trip_is_version_2(self):
+        A, b, J, c = small_qp()
+        f = self.friction()
+        path = qpsnap.write_qpsnap(os.path.join(self.tmp, "fric.qpsnap"), A, b, J, c, **f)
+        snap = qpsnap.read_qpsnap(path)
+        self.assertEqual((snap["header"]["version"], snap["header"]["h"]), (2, 0.01))
+        self.assertEqual(snap["arrays"]["mu"].tobytes(), f["mu"].tobytes())
+        self.assertEqual(snap["arrays"]["cT"].tobytes(), f["cT"].tobytes())
+        self.assertEqual(snap["arrays"]["v0"].tobytes(), f["v0"].tobytes())
+        np.testing.assert_array_equal(qpsnap.tangents(snap).toarray(), f["T"].toarray())
+        # No friction field: version 1, as before.
+        plain = qpsnap.write_qpsnap(os.path.join(self.tmp, "plain.qpsnap"), A, b, J, c)
+        self.assertEqual(qpsnap.read_qpsnap(plain)["header"]["version"], 1)
+
+    def test_bad_friction_leaves_no_file(self):
+        A, b, J, c = small_qp()
+        path = os.path.join(self.tmp, "bad.qpsnap")
+        f = self.friction()
+        f["T"] = f["T"][:3]
+        with self.assertRaises(qpsnap.QpsnapError) as e:
+            qpsnap.write_qpsnap(path, A, b, J, c, **f)
+        self.assertEqual(str(e.exception), path + ": T: expected shape (4, 4), got (3, 4)")
+        f = self.friction()
+        f["mu"] = np.array([0.5, -1.0])
+        with self.assertRaises(qpsnap.QpsnapError) as e:
+            qpsnap.write_qpsnap(path, A, b, J, c, **f)
+        self.assertIn(": mu: negative friction coefficient -1 at contact 1", str(e.exception))
+        self.assertEqual(os.listdir(self.tmp), [])
+
+    @unittest.skipUnless(CONTACTBENCH and os.path.exists(CONTACTBENCH), "CB_CONTACTBENCH not set (ctest sets it)")
+    def test_contactbench_keeps_friction_bit_for_bit(self):
+        A, b, J, c = small_qp()
+        path = qpsnap.write_qpsnap(os.path.join(self.tmp, "fric.qpsnap"), A, b, J, c, **self.friction())
+        back = os.path.join(self.tmp, "back.qpsnap")
+        out = subprocess.run([CONTACTBENCH, "convert", path, back], capture_output=True, text=True)
+        self.assertEqual(out.returncode, 0, out.stderr)
+        mine, theirs = qpsnap.read_qpsnap(path), qpsnap.read_qpsnap(back)
+        self.assertEqual(sorted(mine["arrays"]), sorted(theirs["arrays"]))
+        for name in mine["arrays"]:
+            self.assertEqual(mine["arrays"][name].tobytes(), theirs["arrays"][name].tobytes(), name)
+        self.assertEqual(theirs["header"]["h"], 0.01)
+
 
 if __name__ == "__main__":
     unittest.main()
