@@ -17,7 +17,7 @@
 /// expansion from P(x) once it does not.
 ///
 /// `Steps` provides (all called with the loop's own counters and reasons):
-///   Evaluation evaluate();                   the point's residuals; converged once confirmed
+///   Evaluation evaluate(std::string& why);   the point's residuals; converged once confirmed
 ///   bool notify(StepKind last);              the monitor's view; false: the monitor stops
 ///   bool proportional();                     the proportioning test (false at a finished face)
 ///   bool feasible() const;                   the iterate lies in the set
@@ -52,7 +52,7 @@ template <class Steps> SolveStatus run_mprgp(Steps& steps, SolveLoop& loop, Coun
 {
     StepKind last = StepKind::START;
     while (true) {
-        const Evaluation point = steps.evaluate();
+        const Evaluation point = steps.evaluate(why);
         if (point.broke != SolveStatus::NOT_RUN) return point.broke;
         if (!steps.notify(last)) return SolveStatus::STOPPED_BY_MONITOR;
         const SolveStatus exit = loop.check(cnt.iterations, point.finite, point.converged);

@@ -41,7 +41,7 @@ public:
         m_p = m_z;
     }
 
-    Evaluation evaluate()
+    Evaluation evaluate(std::string&)
     {
         Evaluation e;
         m_native = (m_phi + m_beta).norm();
