@@ -158,6 +158,7 @@ MprgpTrescaRun mprgp_tresca_fp(const FrictionLocal& p, const MprgpTrescaSettings
     const Vec no_c = Vec::Zero(0);
     const QpView qp{W, b, no_rows, no_c, run.r};
     const double norm_q = p.q.norm();
+    const bool frictionless = m == 0 || p.mu.maxCoeff() <= 0.0;
 
     // --- the fixed point on the slip bounds ---
     double error = fclib_relative_error(p, run.r);
@@ -177,7 +178,11 @@ MprgpTrescaRun mprgp_tresca_fp(const FrictionLocal& p, const MprgpTrescaSettings
         if (skew.nonZeros() > 0) b = -(p.q + skew * run.r);
         CommonSettings common;
         common.stop = StopRule::NATIVE;
-        common.tol = s.inner_fraction * s.tol * (norm_q > 0.0 ? norm_q : 1.0);
+        // Loose Tresca solves while the slip bounds still move (tightened with the outer error);
+        // without friction they never move, so the one solve is tight.
+        const double relative =
+            frictionless ? s.inner_fraction * s.tol : std::max(s.inner_fraction * s.tol, s.inner_relative * error);
+        common.tol = relative * (norm_q > 0.0 ? norm_q : 1.0);
         common.max_iterations = s.max_inner;
         common.time_limit_s = left;
         SolveContext context;

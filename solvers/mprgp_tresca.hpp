@@ -6,16 +6,16 @@
 /// CMAME 2012): outer iteration k fixes s = mu r_n^k and solves the Tresca problem
 ///     min 1/2 r'W r + q'r   s.t.  r_n >= 0,  ||r_T|| <= s   (per contact)
 /// by MPGP, the MPRGP engine (solvers/mprgp_engine.hpp) over the Tresca set (solvers/tresca_set.hpp)
-/// with Jacobi preconditioning, warm-started from r^k; it stops when the FCLIB error at r^{k+1}
-/// is <= tol. Starting from r = 0, the first Tresca solve is frictionless; at mu = 0 it is the
-/// only one and its iterates are mprgp-box's on (W_NN, q_N) (tests/solvers/test_mprgp_tresca.cpp).
-/// The dual QP needs W symmetric positive semidefinite. A W that is not symmetric (Capsules': by
-/// 3.4e-4) is split W = S + K, S = (W + W')/2: each Tresca QP is S's, with the skew part K r^k of the
-/// outer iterate moved into q (lag_skew, the default), so the fixed point is the given problem's;
-/// with lag_skew off K is dropped and the fixed point is S's problem, not the given one. Either way
-/// the note says so and the status reads the FCLIB error on the given W (never `converged` for S's
-/// problem). An S that is not positive semidefinite is refused (`not_applicable`). Sizes: W dense-checked for
-/// definiteness up to 3000 rows; beyond, the check is the engine's own (p'Wp <= 0 ends the solve, `diverged`).
+/// with Jacobi preconditioning, warm-started from r^k, to a tolerance that tightens with the outer
+/// FCLIB error e_k; it stops when the FCLIB error at r^{k+1} is <= tol. Starting from r = 0, the first Tresca solve is
+/// frictionless; at mu = 0 it is the only one and its iterates are mprgp-box's on (W_NN, q_N)
+/// (tests/solvers/test_mprgp_tresca.cpp). The dual QP needs W symmetric positive semidefinite. A W that is not
+/// symmetric (Capsules': by 3.4e-4) is split W = S + K, S = (W + W')/2: each Tresca QP is S's, with the skew part K r^k
+/// of the outer iterate moved into q (lag_skew, the default), so the fixed point is the given problem's; with lag_skew
+/// off K is dropped and the fixed point is S's problem, not the given one. Either way the note says so and the status
+/// reads the FCLIB error on the given W (never `converged` for S's problem). An S that is not positive semidefinite is
+/// refused (`not_applicable`). Sizes: W dense-checked for definiteness up to 3000 rows; beyond, the check is the
+/// engine's own (p'Wp <= 0 ends the solve, `diverged`).
 ///
 /// `mprgp+ica-friction` (the paper's suggestion after OTSG09): frictionless mprgp-box on (W_NN, q_N),
 /// then our `nsgs` started from (r_n, 0).
@@ -31,7 +31,9 @@ struct MprgpTrescaSettings {
     double tol = 1e-8;            ///< FCLIB relative error to reach
     long max_outer = 200;         ///< fixed-point iterations (Tresca solves)
     long max_inner = 100000;      ///< MPRGP iterations per Tresca solve
-    double inner_fraction = 0.5;  ///< a Tresca solve stops at ||phi + beta|| <= inner_fraction tol ||q||
+    double inner_fraction = 0.5;  ///< a Tresca solve stops at ||phi + beta|| <= max(inner_fraction tol,
+    double inner_relative = 0.1;  ///< inner_relative e_k) ||q||, e_k the FCLIB error at the outer iterate
+                                  ///< (inner_relative 0, or every mu = 0: inner_fraction tol alone)
     double time_limit_s = 0.0;    ///< 0: none (setup and every solve included)
     double gamma = 1.0;           ///< proportioning constant Gamma
     long power_max = 100;         ///< power-method products for alpha_bar = 2 / (1.01 ||W||)
