@@ -98,7 +98,9 @@ MprgpTrescaRun mprgp_tresca_fp(const FrictionLocal& p, const MprgpTrescaSettings
     auto finish = [&](const std::string& status, const std::string& note) {
         watch.pause();
         run.status = status;
-        run.note = std::to_string(out.outer) + " Tresca solves" + (note.empty() ? "" : "; " + note);
+        run.note = std::to_string(out.outer) + " Tresca solves" +
+                   (status != "not_applicable" ? ", setup " + format_e(out.setup_s, 2) + " s" : "") +
+                   (note.empty() ? "" : "; " + note);
         run.seconds = watch.seconds();
         run.iterations = out.counters.iterations;
         run.error = fclib_relative_error(p, run.r, &run.u);
@@ -158,6 +160,7 @@ MprgpTrescaRun mprgp_tresca_fp(const FrictionLocal& p, const MprgpTrescaSettings
     const Vec no_c = Vec::Zero(0);
     const QpView qp{W, b, no_rows, no_c, run.r};
     const double norm_q = p.q.norm();
+    out.setup_s = watch.seconds();
     const bool frictionless = m == 0 || p.mu.maxCoeff() <= 0.0;
 
     // --- the fixed point on the slip bounds ---

@@ -50,6 +50,7 @@ struct MprgpTrescaRun {
     bool symmetrised = false;  ///< W is not symmetric beyond rounding (> 1e-12): the QP is (W + W')/2's
     double asymmetry = 0.0;    ///< ||W - W'||_F / ||W||_F
     double alpha_bar = 0.0;
+    double setup_s = 0.0;  ///< symmetry, definiteness check, D^-1 and the power method (in run.seconds)
 };
 
 MprgpTrescaRun mprgp_tresca_fp(const FrictionLocal& problem, const MprgpTrescaSettings& settings);
