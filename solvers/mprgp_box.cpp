@@ -82,15 +82,8 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
         return loop.finish(result, SolveStatus::INVALID_INPUT, "mprgp-box: " + error);
     AOperator a_op(qp.A);  // the product with A: 3x3 blocks when A has them, built in the setup
     a_op.prepare(AFormat::BSR, static_cast<int>(common.threads));
-    Vec eigenvector;
-    const bool warm = context.eigenvector && context.eigenvector->size() == n;
-    if (warm) eigenvector = *context.eigenvector;
-    const PowerResult power =
-        power_method(a_op, eigenvector, PowerRule::POWER, m_settings.power_max, common.tol, warm, common.seed);
-    if (context.eigenvector) *context.eigenvector = eigenvector;
-    cnt.power_products = power.products;
-    cnt.a_products += power.products;
-    const double alpha_bar = power.estimate > 0.0 ? 2.0 / (1.01 * power.estimate) : 1.0;
+    const PowerResult power = estimate_norm(a_op, context, PowerRule::POWER, m_settings.power_max, common, cnt);
+    const double alpha_bar = fixed_step_length(power);
     result.info["alpha_bar"] = alpha_bar;
     result.info["power"] = {{"products", power.products}, {"estimate", power.estimate}, {"warm_start", power.warm}};
     const AccuracyScale scale = accuracy_scale(qp);

@@ -287,16 +287,9 @@ SolverResult DecoupledMprgp::run()
         }
     }
     m_a_op.prepare(AFormat::BSR, static_cast<int>(m_st.common.threads));  // 3x3 blocks when A has them
-    Vec eigenvector;
-    const bool warm = m_ctx.eigenvector != nullptr && m_ctx.eigenvector->size() == m_n;
-    if (warm) eigenvector = *m_ctx.eigenvector;
     const PowerRule rule = m_st.alpha == "authors" ? PowerRule::AUTHORS : PowerRule::POWER;
     const long power_max = rule == PowerRule::AUTHORS ? 1001 : m_st.power_max;
-    const PowerResult power = power_method(m_a_op, eigenvector, rule, power_max, common.tol, warm, common.seed,
-                                           &SolveLoop::time_up_callback, &m_loop);
-    m_cnt.power_products = power.products;
-    m_cnt.a_products += power.products;
-    if (m_ctx.eigenvector) *m_ctx.eigenvector = eigenvector;
+    const PowerResult power = estimate_norm(m_a_op, m_ctx, rule, power_max, common, m_cnt, &m_loop);
     // The power estimate approaches ||A|| from below; alpha_bar must stay <= 2 / ||A|| (Appendix B),
     // so our default rounds rho up by 1%. The authors' variant uses the estimate as is.
     const double rho = power.estimate * (rule == PowerRule::POWER ? 1.01 : 1.0);

@@ -5,6 +5,10 @@
 /// EXPANSION_VARIANTS (docs/DESIGN.md "Adding an MPRGP variant").
 /// Ref: Kruzik, Horak, Cermak, Pospisil, Pecha, "Active set expansion strategies in MPRGP
 ///      algorithm", Adv. Eng. Softw. 149 (2020): expansion directions and step lengths as parts.
+#include "solvers/mprgp_kernels.hpp"
+#include "solvers/settings.hpp"
+#include "solvers/solve_loop.hpp"
+#include "solvers/solver.hpp"
 #include "solvers/types.hpp"
 
 #include <cmath>
@@ -28,6 +32,32 @@ inline bool jacobi_inverse_diagonal(const SpMat& A, Vec& dinv, std::string& erro
         dinv[j] = 1.0 / diag[j];
     }
     return true;
+}
+
+/// ||A|| by the power method for the fixed step length alpha_bar, warm-started from the context's
+/// eigenvector when it has A's size (and leaving the last iterate there); counted in `cnt`.
+/// @param deadline  when given, the power method stops at its time limit
+inline PowerResult estimate_norm(const AOperator& a_op, const SolveContext& context, PowerRule rule, long max_products,
+                                 const CommonSettings& common, Counters& cnt, SolveLoop* deadline = nullptr)
+{
+    Vec eigenvector;
+    const bool warm = context.eigenvector != nullptr && context.eigenvector->size() == a_op.rows();
+    if (warm) eigenvector = *context.eigenvector;
+    const PowerResult power = deadline
+                                  ? power_method(a_op, eigenvector, rule, max_products, common.tol, warm, common.seed,
+                                                 &SolveLoop::time_up_callback, deadline)
+                                  : power_method(a_op, eigenvector, rule, max_products, common.tol, warm, common.seed);
+    if (context.eigenvector) *context.eigenvector = eigenvector;
+    cnt.power_products = power.products;
+    cnt.a_products += power.products;
+    return power;
+}
+
+/// alpha_bar = 2 / rho with rho the estimate rounded up 1%: the estimate approaches ||A|| from
+/// below, and alpha_bar must stay <= 2 / ||A|| for the projected steps to decrease F.
+inline double fixed_step_length(const PowerResult& power)
+{
+    return power.estimate > 0.0 ? 2.0 / (1.01 * power.estimate) : 1.0;
 }
 
 /// The direction d of the expansion step x = P(x - a d).
