@@ -9,8 +9,10 @@
 #include "solvers/mprgp_box.hpp"
 #include "solvers/mprgp_tresca.hpp"
 #include "solvers/tresca_set.hpp"
+#include "tests/harness/cli_test_util.hpp"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <filesystem>
@@ -335,6 +337,26 @@ TEST(MprgpIcaFrictionFclib, ConvergesOnBothFiles)
         EXPECT_EQ(run.status, "converged") << file << ": " << run.note;
         EXPECT_LE(run.error, 1e-8) << file;
     }
+}
+
+TEST(MprgpTrescaFclib, FrictionSolveRunsBothByName)
+{
+    if (cb::fclib_version().empty()) GTEST_SKIP() << "FCLIB import not built (libfclib-dev missing)";
+    const fs::path dir = cb::test::make_test_work_dir("mprgp_tresca_cli");
+    const cb::test::Output o =
+        cb::test::run_captured(cb::test::contactbench_binary() + " friction-solve '" + LMGC.string() +
+                                   "' --solver mprgp-tresca-fp --solver mprgp+ica-friction --tol 1e-6 --json '" +
+                                   (dir / "r.json").string() + "'",
+                               dir);
+    ASSERT_EQ(o.status, 0) << o.err;
+    const nlohmann::json j = nlohmann::json::parse(cb::test::slurp(dir / "r.json"));
+    ASSERT_EQ(j["runs"].size(), 2u);
+    for (size_t k = 0; k < 2; ++k) {
+        EXPECT_EQ(j["runs"][k]["solver"], k == 0 ? "mprgp-tresca-fp" : "mprgp+ica-friction");
+        EXPECT_EQ(j["runs"][k]["status"], "converged");
+        EXPECT_LE(j["runs"][k]["fclib_error"].get<double>(), 1e-6);
+    }
+    EXPECT_NE(j["runs"][0]["note"].get<std::string>().find(" Tresca solves, setup "), std::string::npos);
 }
 
 }  // namespace
