@@ -10,6 +10,7 @@
 #include "solvers/friction_error.hpp"
 #include "solvers/friction_global_nsgs.hpp"
 #include "solvers/friction_nsgs.hpp"
+#include "solvers/mprgp_tresca.hpp"
 #include "solvers/peers/siconos_fc3d.hpp"
 #include "solvers/peers/siconos_gfc3d.hpp"
 #include "solvers/stopwatch.hpp"
@@ -25,10 +26,17 @@ namespace cb {
 namespace {
 
 const char* const USAGE =
-    "contactbench friction-solve FILE.hdf5|FILE.dat [--solver nsgs|siconos-nsgs|siconos-nsn|siconos-prox|siconos-admm ...]\n"
+    "contactbench friction-solve FILE.hdf5|FILE.dat [--solver S ...]\n"
+    "                            (S: nsgs|mprgp-tresca-fp|mprgp+ica-friction|siconos-nsgs|siconos-nsn|siconos-prox|siconos-admm)\n"
     "                            [--tol T] [--max-iterations N] [--time-limit S] [--json FILE]";
 
-const std::vector<std::string> SOLVERS = {"nsgs", "siconos-nsgs", "siconos-nsn", "siconos-prox", "siconos-admm"};
+const std::vector<std::string> SOLVERS = {"nsgs",         "mprgp-tresca-fp", "mprgp+ica-friction", "siconos-nsgs",
+                                          "siconos-nsn",  "siconos-prox",    "siconos-admm"};
+/// Ours: built always; the rest are Siconos' (a child process each).
+bool is_ours(const std::string& solver)
+{
+    return solver == "nsgs" || solver == "mprgp-tresca-fp" || solver == "mprgp+ica-friction";
+}
 
 struct Settings {
     double tol = 1e-8;
@@ -73,9 +81,25 @@ void solve_local(const FrictionLocal& problem, const std::vector<std::string>& s
                   "fclib_error", "siconos_err");
     table += line;
     for (const std::string& solver : solvers) {
-        const FrictionRun run =
-            solver == "nsgs" ? friction_nsgs(problem, nsgs_settings(s))
-                             : siconos_fc3d_solve(problem, solver.substr(8), s.max_iterations, s.tol, s.time_limit);
+        FrictionRun run;
+        if (solver == "nsgs") {
+            run = friction_nsgs(problem, nsgs_settings(s));
+        } else if (solver == "mprgp-tresca-fp") {
+            MprgpTrescaSettings settings;
+            settings.tol = s.tol;
+            settings.max_inner = s.max_iterations;
+            settings.time_limit_s = s.time_limit;
+            run = mprgp_tresca_fp(problem, settings).run;
+        } else if (solver == "mprgp+ica-friction") {
+            MprgpIcaFrictionSettings settings;
+            settings.tol = s.tol;
+            settings.max_mprgp = s.max_iterations;
+            settings.max_sweeps = s.max_iterations;
+            settings.time_limit_s = s.time_limit;
+            run = mprgp_ica_friction(problem, settings);
+        } else {
+            run = siconos_fc3d_solve(problem, solver.substr(8), s.max_iterations, s.tol, s.time_limit);
+        }
         nlohmann::json row;
         const double siconos_scaled = siconos_relative_error(problem, run.r);
         report(solver, run, siconos_scaled, table, row);
@@ -103,7 +127,12 @@ void solve_global(const FrictionGlobal& problem, const std::vector<std::string>&
     table += line;
     for (const std::string& solver : solvers) {
         FrictionRun run;
-        if (solver == "nsgs") {
+        if (solver == "mprgp-tresca-fp" || solver == "mprgp+ica-friction") {
+            run.solver = solver;
+            run.status = "not_applicable";
+            run.error = INFINITY;
+            run.note = "takes local problems only (W, q): a global file's reduced problem is not wired to it yet";
+        } else if (solver == "nsgs") {
             run = friction_nsgs_global(problem, reduction, nsgs_settings(s)).run;
         } else {
             run = siconos_gfc3d_solve(problem, solver.substr(8), s.max_iterations, s.tol, s.time_limit).run;
@@ -124,7 +153,7 @@ int cmd_friction_solve(const Args& args)
                          {});
     if (cl.help()) {
         std::cout << "usage: " << USAGE
-                  << "\n  Solves an FCLIB frictional problem with its friction by each --solver (default: all five),\n"
+                  << "\n  Solves an FCLIB frictional problem with its friction by each --solver (default: all seven),\n"
                      "  starting from r = 0, and prints the FCLIB relative error computed by the harness, iterations\n"
                      "  and wall time. converged: that error <= --tol (default 1e-8).\n"
                      "  fclib_local (u = W r + q): fclib_error = ||F_nat(r)|| / ||q|| (Acary et al. 2018);\n"
@@ -133,6 +162,8 @@ int cmd_friction_solve(const Args& args)
                      "    (equilibrium + complementarity); reduced_err: ||F_nat(r)|| / ||q|| on the reduced problem\n"
                      "    W = H' M^-1 H, q = w + H' M^-1 f (sparse Cholesky of M).\n"
                      "  nsgs: ours (solvers/friction_nsgs.hpp; on a global file, on its reduced problem);\n"
+                     "  mprgp-tresca-fp: Coulomb as a fixed point on Tresca's slip bounds over MPGP; mprgp+ica-friction:\n"
+                     "  frictionless MPRGP on W_NN, then nsgs from it (local problems; docs/friction.md).\n"
                      "  siconos-*: Siconos' fc3d (local) or gfc3d (global) NSGS, NSN_AC, PROX and ADMM in a child\n"
                      "  process (docs/peers.md).\n";
         return 0;
@@ -151,10 +182,11 @@ int cmd_friction_solve(const Args& args)
     for (const std::string& solver : solvers)
         if (std::find(SOLVERS.begin(), SOLVERS.end(), solver) == SOLVERS.end())
             throw InputError("--solver: unknown frictional solver '" + solver +
-                             "' (nsgs, siconos-nsgs, siconos-nsn, siconos-prox, siconos-admm)");
+                             "' (nsgs, mprgp-tresca-fp, mprgp+ica-friction, siconos-nsgs, siconos-nsn, "
+                             "siconos-prox, siconos-admm)");
     if (cl.has("--json")) cl.path("--json");
     for (const std::string& solver : solvers)
-        if (solver != "nsgs" && !siconos_fc3d_built())
+        if (!is_ours(solver) && !siconos_fc3d_built())
             throw InputError("--solver: " + solver +
                              " is not built (install libsiconos-numerics-dev and reconfigure with CB_PEERS=ON)");
 

@@ -104,6 +104,12 @@ FrictionRun friction_nsgs(const FrictionLocal& p, const FrictionNsgsSettings& s)
     FrictionRun run;
     run.solver = "nsgs";
     run.r = Vec::Zero(3 * m);
+    if (s.start) {
+        if (s.start->size() != 3 * m || !s.start->allFinite())
+            throw InputError(p.name + ": nsgs start: needs " + std::to_string(3 * m) +
+                             " finite numbers (3 per contact)");
+        run.r = *s.start;
+    }
     Stopwatch watch;
     watch.start();
     // The diagonal blocks, their factors and step lengths, once.

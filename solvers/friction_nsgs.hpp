@@ -24,10 +24,12 @@ struct FrictionNsgsSettings {
     long max_iterations = 10000;   ///< sweeps
     long local_iterations = 1000;  ///< projected fixed-point steps per contact and sweep (cap)
     double time_limit_s = 0.0;     ///< 0: none
+    const Vec* start = nullptr;    ///< r to start from (3m, finite), or null: r = 0
 };
 
-/// Starts from r = 0. Throws InputError when a diagonal block W_ii is not positive definite
-/// (a one-contact problem without a unique solution), naming the contact.
+/// Starts from settings.start (e.g. MPRGP's frictionless r_n, mprgp+ica-friction) or r = 0. Throws
+/// InputError when the start is not 3m finite numbers, or when a diagonal block W_ii is not
+/// positive definite (a one-contact problem without a unique solution), naming the contact.
 FrictionRun friction_nsgs(const FrictionLocal& problem, const FrictionNsgsSettings& settings);
 
 }  // namespace cb

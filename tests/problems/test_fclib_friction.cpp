@@ -209,7 +209,7 @@ TEST(FclibFriction, CommandPrintsTheTableAndWritesJson)
         run_captured(cb::test::contactbench_binary() + " friction-solve '" + LMGC.string() + "' --solver pgs", dir);
     EXPECT_EQ(bad.status, 2);
     EXPECT_EQ(bad.err, "contactbench friction-solve: error: --solver: unknown frictional solver 'pgs' (nsgs, "
-                       "siconos-nsgs, siconos-nsn, siconos-prox, siconos-admm)\n");
+                       "mprgp-tresca-fp, mprgp+ica-friction, siconos-nsgs, siconos-nsn, siconos-prox, siconos-admm)\n");
 }
 
 }  // namespace
