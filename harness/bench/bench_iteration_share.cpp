@@ -68,7 +68,7 @@ void measure(benchmark::State& state, const cb::Qp& qp)
     cb::Vec y(qp.n());
     for (auto _ : state) {
         double total = 0.0;
-        for (const std::string name : {"mprgp", "mprgp-coupled"}) {
+        for (const std::string& name : {std::string("mprgp"), std::string("mprgp-coupled")}) {
             const auto solver = cb::builtin_registry().create(name, settings);
             ShareMonitor monitor;
             cb::SolveContext context;
