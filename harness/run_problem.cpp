@@ -7,7 +7,7 @@ namespace cb {
 void choose_solver_problem(const Qp& original, bool requires_decoupled, const RunOptions& options,
                            SolverProblem& problem)
 {
-    problem.qp = &original;
+    problem.original = &original;
     problem.kept_rows.clear();
     problem.applied = false;
     problem.decouple = {{"order", options.decouple},
@@ -30,11 +30,10 @@ void choose_solver_problem(const Qp& original, bool requires_decoupled, const Ru
     problem.decouple["already_decoupled"] = report.already_decoupled;
     if (!report.already_decoupled && static_cast<long>(report.kept_rows.size()) < original.m()) {
         problem.kept_rows = report.kept_rows;
-        problem.decoupled = select_rows(original, report.kept_rows);
-        problem.qp = &problem.decoupled;
+        select_constraint_rows(original, report.kept_rows, problem.decoupled_J, problem.decoupled_c);
         problem.applied = true;
         problem.decouple["applied"] = true;
-        problem.decouple["rows_after"] = problem.decoupled.m();
+        problem.decouple["rows_after"] = problem.decoupled_J.rows();
     }
 }
 
@@ -47,7 +46,7 @@ const Vec* warm_multipliers(const Vec* lambda0, const Qp& original, const Solver
             storage[static_cast<Eigen::Index>(k)] = (*lambda0)[problem.kept_rows[k]];
         return &storage;
     }
-    if (lambda0->size() == problem.qp->m()) return lambda0;
+    if (lambda0->size() == problem.view().m()) return lambda0;
     return nullptr;
 }
 

@@ -10,15 +10,22 @@
 
 namespace cb {
 
-/// The QP a solver sees. `qp` points at the original or at `decoupled`, so a SolverProblem is
-/// filled in place and never copied.
+/// The QP a solver sees: the original, or its kept rows of J and c with the original's A, b and
+/// x0 viewed, not copied (a copy of A was the largest array of a decoupled run's setup).
+/// Filled in place and never copied (view() refers to its members).
 struct SolverProblem {
-    const Qp* qp = nullptr;
-    Qp decoupled;                ///< the kept rows, when decoupling applied
+    const Qp* original = nullptr;
+    SpMat decoupled_J;           ///< the kept rows of J, when decoupling applied
+    Vec decoupled_c;             ///< and their c
     std::vector<int> kept_rows;  ///< rows of the original J the solver sees (empty: all of them)
-    bool applied = false;        ///< decoupling removed rows: qp == &decoupled
+    bool applied = false;        ///< decoupling removed rows: view() has decoupled_J and decoupled_c
     nlohmann::json decouple;     ///< the record's "decouple" object
     bool is_original() const { return !applied; }
+    QpView view() const
+    {
+        if (!applied) return original->view();
+        return QpView{original->A, original->b, decoupled_J, decoupled_c, original->x0, &original->length};
+    }
 };
 
 /// Decoupling as RunOptions::decouple asks: "auto" when the solver requires a decoupled J that the

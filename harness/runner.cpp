@@ -110,7 +110,7 @@ Repeats solve_repeats(const SolverRegistry& registry, const std::string& solver_
 /// none of the right size or fitted them.
 Vec own_multipliers(const SolverResult& result, const Qp& original, const SolverProblem& problem)
 {
-    if (result.lambda_fitted || result.lambda.size() != problem.qp->m()) return Vec();
+    if (result.lambda_fitted || result.lambda.size() != problem.view().m()) return Vec();
     if (problem.is_original()) return result.lambda;
     Vec full = Vec::Zero(original.m());
     for (size_t k = 0; k < problem.kept_rows.size(); ++k)
@@ -148,12 +148,12 @@ void measure_outcome(RunOutcome& out, RunFacts& facts, const CommonSettings& com
 {
     const SolverResult& result = out.result;
     const QpView original_view = original.view();
-    const QpView view = problem.qp->view();
+    const QpView view = problem.view();
     const AccuracyScale& scale = out.scale;
     Vec x = result.x;
-    if (x.size() != problem.qp->n()) {
+    if (x.size() != view.n()) {
         facts.note = "solver returned x of size " + std::to_string(x.size()) + ", measured at x0";
-        x = problem.qp->x0;
+        x = view.x0;
     }
     const Vec g = original.A * x - original.b;  // decoupling keeps A and b
     facts.tol = common.tol;
@@ -161,7 +161,7 @@ void measure_outcome(RunOutcome& out, RunFacts& facts, const CommonSettings& com
     // on, so every such run, the command solver's included, must reach the default accuracy.
     facts.native = result.criterion == StopCriterion::NATIVE || common.stops_on_native();
     facts.accuracy_tol = facts.native ? DEFAULT_ACCURACY_TOL : facts.tol;
-    const bool own_valid = !result.lambda_fitted && result.lambda.size() == problem.qp->m();
+    const bool own_valid = !result.lambda_fitted && result.lambda.size() == view.m();
     const Vec own_full = own_multipliers(result, original, problem);
     bool fitted = result.lambda_fitted;
     Vec lambda;
@@ -176,7 +176,7 @@ void measure_outcome(RunOutcome& out, RunFacts& facts, const CommonSettings& com
     // a solver that ignores J (cg's unconstrained relaxation).
     facts.ignores_constraints = result.info.is_object() && result.info.value("ignores_constraints", false);
     facts.changed = !problem.is_original() || (facts.ignores_constraints && original.m() > 0);
-    out.m_solved = facts.ignores_constraints ? 0 : problem.qp->m();
+    out.m_solved = facts.ignores_constraints ? 0 : view.m();
     if (!facts.changed) {
         out.accuracy_solved = out.accuracy;
     } else if (facts.ignores_constraints) {
@@ -224,8 +224,7 @@ RunOutcome run_solver(const SolverRegistry& registry, const Qp& original, const 
     // Decoupling: a problem transform applied before the solver sees the QP.
     SolverProblem problem;
     choose_solver_problem(original, solver->requires_decoupled(), options, problem);
-    const Qp& qp = *problem.qp;
-    const QpView view = qp.view();
+    const QpView view = problem.view();
     const QpView original_view = original.view();
     // One scale for both: decoupling keeps A, b and x0, so D and l are the original's.
     const AccuracyScale scale = accuracy_scale(original_view);

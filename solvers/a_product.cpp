@@ -61,6 +61,60 @@ double block_product(const BlockRows& B, std::ptrdiff_t first, std::ptrdiff_t la
     return xy;
 }
 
+/// y = A x on the upper block triangle of a symmetric A (block (I, J), J >= I, stands for itself
+/// and, when J > I, for its transpose at (J, I)); with D != NONE also x'y and x'w as above. Block
+/// row I adds B x_J to y_I and scatters B' x_I into y_J (J > I): when row I is reached, every
+/// block row before it has added its part to y_I, so y_I is complete there and its dots are
+/// summed in the same pass. y_I's terms come in another order than the CSR row's, so y equals
+/// CSR's to rounding, not to the bit. One thread: the scatter writes rows other threads would own.
+template <Dots D>
+double sym_block_product(const BlockRows& B, std::ptrdiff_t nb, const double* __restrict px, double* __restrict py,
+                         const double* __restrict pw, const char* __restrict skip, double& xw)
+{
+    const int* __restrict start = B.start.data();
+    const int* __restrict column = B.column.data();
+    const double* __restrict val = B.value.data();
+    std::fill(py, py + 3 * nb, 0.0);
+    double xy = 0.0, dot_w = 0.0;
+    for (std::ptrdiff_t I = 0; I < nb; ++I) {
+        const std::ptrdiff_t i = 3 * I;
+        const double xi0 = px[i], xi1 = px[i + 1], xi2 = px[i + 2];
+        double s0 = py[i], s1 = py[i + 1], s2 = py[i + 2];
+        int k = start[I];
+        const int end = start[I + 1];
+        if (k < end && column[k] == I) {  // the diagonal block: no transpose to scatter
+            const double* __restrict b = val + 9 * static_cast<std::ptrdiff_t>(k);
+            s0 += b[0] * xi0 + b[3] * xi1 + b[6] * xi2;
+            s1 += b[1] * xi0 + b[4] * xi1 + b[7] * xi2;
+            s2 += b[2] * xi0 + b[5] * xi1 + b[8] * xi2;
+            ++k;
+        }
+        for (; k < end; ++k) {
+            const double* __restrict b = val + 9 * static_cast<std::ptrdiff_t>(k);
+            const std::ptrdiff_t j = 3 * static_cast<std::ptrdiff_t>(column[k]);
+            const double x0 = px[j], x1 = px[j + 1], x2 = px[j + 2];
+            s0 += b[0] * x0 + b[3] * x1 + b[6] * x2;
+            s1 += b[1] * x0 + b[4] * x1 + b[7] * x2;
+            s2 += b[2] * x0 + b[5] * x1 + b[8] * x2;
+            py[j] += b[0] * xi0 + b[1] * xi1 + b[2] * xi2;  // column c of B is row c of B'
+            py[j + 1] += b[3] * xi0 + b[4] * xi1 + b[5] * xi2;
+            py[j + 2] += b[6] * xi0 + b[7] * xi1 + b[8] * xi2;
+        }
+        py[i] = s0;
+        py[i + 1] = s1;
+        py[i + 2] = s2;
+        if constexpr (D != Dots::NONE) {
+            xy += xi0 * s0;
+            xy += xi1 * s1;
+            xy += xi2 * s2;
+            for (std::ptrdiff_t r = i; r < i + 3; ++r)
+                if (D == Dots::ALL || !skip[r]) dot_w += px[r] * pw[r];
+        }
+    }
+    xw = dot_w;
+    return xy;
+}
+
 /// The CSR loop of the fused product (compressed A) over rows first .. last - 1: row i's sum, then
 /// x_i y_i and x_i w_i (D == NONE: the sums only, as Eigen's row-major product does them).
 template <Dots D>
@@ -135,7 +189,41 @@ std::vector<int> split_rows(const int* start, std::ptrdiff_t rows, int parts)
 
 }  // namespace
 
-bool build_block_rows(const SpMat& A, BlockRows& out, double max_fill, double& fill, std::string& why)
+namespace {
+
+/// Block row I's distinct block columns, in increasing order, from its three CSR rows (each
+/// sorted): a three-way merge of the rows' columns / 3, starting at block column `from`.
+/// `visit(J, k[3], end[3])` is called per block column with each row's first entry in it (entries
+/// up to end[r] belong to J). Returns false when a row's columns do not increase.
+template <typename Visit>
+bool merge_block_columns(const int* outer, const int* inner, std::ptrdiff_t I, int from, Visit&& visit)
+{
+    int k[3], stop[3];
+    for (int r = 0; r < 3; ++r) {
+        const std::ptrdiff_t i = 3 * I + r;
+        k[r] = outer[i];
+        stop[r] = outer[i + 1];
+        for (int q = k[r] + 1; q < stop[r]; ++q)
+            if (inner[q] <= inner[q - 1]) return false;
+        while (k[r] < stop[r] && inner[k[r]] / 3 < from) ++k[r];  // the lower triangle, when skipped
+    }
+    for (;;) {
+        int J = std::numeric_limits<int>::max();
+        for (int r = 0; r < 3; ++r)
+            if (k[r] < stop[r]) J = std::min(J, inner[k[r]] / 3);
+        if (J == std::numeric_limits<int>::max()) return true;
+        int end[3];
+        for (int r = 0; r < 3; ++r) {
+            end[r] = k[r];
+            while (end[r] < stop[r] && inner[end[r]] / 3 == J) ++end[r];
+        }
+        visit(J, k, end);
+        for (int r = 0; r < 3; ++r) k[r] = end[r];
+    }
+}
+
+/// A's 3x3 blocks (all, or with `upper` those of block column >= block row only).
+bool build_blocks(const SpMat& A, bool upper, BlockRows& out, double max_fill, double& fill, std::string& why)
 {
     out = BlockRows{};
     fill = 0.0;
@@ -151,70 +239,120 @@ bool build_block_rows(const SpMat& A, BlockRows& out, double max_fill, double& f
     const std::ptrdiff_t nb = n / 3;
     const int* outer = A.outerIndexPtr();
     const int* inner = A.innerIndexPtr();
-    // Pass 1: the distinct block columns of each block row (columns must increase along a row,
-    // or the block sums would not follow the CSR sums' order).
-    std::vector<std::ptrdiff_t> seen(static_cast<size_t>(nb), -1);
+    const double* val = A.valuePtr();
+    // Pass 1: how many blocks each block row has (columns must increase along a row, or the block
+    // sums would not follow the CSR sums' order).
     std::vector<int> start(static_cast<size_t>(nb) + 1, 0);
     long long blocks = 0;
+    long long lower_nonzeros = 0;  // entries left out by `upper`
     for (std::ptrdiff_t I = 0; I < nb; ++I) {
-        for (std::ptrdiff_t i = 3 * I; i < 3 * I + 3; ++i) {
-            for (int k = outer[i]; k < outer[i + 1]; ++k) {
-                if (k > outer[i] && inner[k] <= inner[k - 1]) {
-                    why = "A's columns are not increasing in row " + std::to_string(i);
-                    return false;
-                }
-                const std::ptrdiff_t J = inner[k] / 3;
-                if (seen[static_cast<size_t>(J)] != I) {
-                    seen[static_cast<size_t>(J)] = I;
-                    ++blocks;
-                }
-            }
+        const int from = upper ? static_cast<int>(I) : 0;
+        const bool sorted = merge_block_columns(outer, inner, I, from, [&](int, const int*, const int*) { ++blocks; });
+        if (!sorted) {
+            for (std::ptrdiff_t i = 3 * I; i < 3 * I + 3; ++i)
+                for (int k = outer[i] + 1; k < outer[i + 1]; ++k)
+                    if (inner[k] <= inner[k - 1]) {
+                        why = "A's columns are not increasing in row " + std::to_string(i);
+                        return false;
+                    }
         }
+        if (upper)
+            for (std::ptrdiff_t i = 3 * I; i < 3 * I + 3; ++i)
+                for (int k = outer[i]; k < outer[i + 1] && inner[k] < 3 * I; ++k) ++lower_nonzeros;
         if (blocks > std::numeric_limits<int>::max() / 9) {
             why = "A has too many blocks for 32-bit block offsets";
             return false;
         }
         start[static_cast<size_t>(I) + 1] = static_cast<int>(blocks);
     }
-    const double nnz = static_cast<double>(A.nonZeros());
+    // Fill: stored entries per nonzero of the part of A they stand for.
+    const double nnz = static_cast<double>(A.nonZeros() - lower_nonzeros);
     fill = nnz > 0.0 ? 9.0 * static_cast<double>(blocks) / nnz : 1.0;
     if (fill > max_fill) {
         why = "A's nonzeros do not form 3x3 blocks (" + std::to_string(fill) + " stored entries per nonzero)";
         return false;
     }
-    // Pass 2: block columns in increasing order, then the values (absent entries stay zero).
+    // Pass 2: block columns and values (absent entries stay zero), block by block in storage order.
     out.start = std::move(start);
     out.column.resize(static_cast<size_t>(blocks));
     out.value.assign(static_cast<size_t>(blocks) * 9, 0.0);
-    std::vector<int> slot(static_cast<size_t>(nb), -1);
-    const double* val = A.valuePtr();
+    int* column = out.column.data();
+    double* value = out.value.data();
     for (std::ptrdiff_t I = 0; I < nb; ++I) {
-        int* cols = out.column.data() + out.start[static_cast<size_t>(I)];
-        int count = 0;
-        for (std::ptrdiff_t i = 3 * I; i < 3 * I + 3; ++i)
-            for (int k = outer[i]; k < outer[i + 1]; ++k) {
-                const int J = inner[k] / 3;
-                if (slot[static_cast<size_t>(J)] != -2) {
-                    slot[static_cast<size_t>(J)] = -2;
-                    cols[count++] = J;
-                }
-            }
-        std::sort(cols, cols + count);
-        const int base = out.start[static_cast<size_t>(I)];
-        for (int q = 0; q < count; ++q) slot[static_cast<size_t>(cols[q])] = base + q;
-        for (std::ptrdiff_t i = 3 * I; i < 3 * I + 3; ++i) {
-            const std::ptrdiff_t r = i - 3 * I;
-            for (int k = outer[i]; k < outer[i + 1]; ++k) {
-                const int J = inner[k] / 3;
-                const std::ptrdiff_t c = inner[k] - 3 * J;
-                out.value[9 * static_cast<size_t>(slot[static_cast<size_t>(J)]) + static_cast<size_t>(3 * c + r)] =
-                    val[k];
-            }
-        }
-        for (int q = 0; q < count; ++q) slot[static_cast<size_t>(cols[q])] = -1;
+        std::ptrdiff_t q = out.start[static_cast<size_t>(I)];
+        merge_block_columns(outer, inner, I, upper ? static_cast<int>(I) : 0, [&](int J, const int* k, const int* end) {
+            column[q] = J;
+            double* b = value + 9 * q;
+            for (int r = 0; r < 3; ++r)
+                for (int e = k[r]; e < end[r]; ++e) b[3 * (inner[e] - 3 * J) + r] = val[e];
+            ++q;
+        });
     }
     why.clear();
     return true;
+}
+
+/// Whether the upper blocks U of A (build_blocks with `upper`) stand for all of A, i.e. A is
+/// symmetric to the bit: every nonzero below the block diagonal equals its mirror in U, U holds no
+/// other nonzero off its diagonal blocks, and each diagonal block is symmetric. Each block row's
+/// blocks are met in increasing block column, so a cursor per block row finds the mirrors in one
+/// pass. `why` names the first entry that differs.
+bool upper_blocks_mirror_a(const SpMat& A, const BlockRows& U, std::string& why)
+{
+    const std::ptrdiff_t nb = A.rows() / 3;
+    const int* outer = A.outerIndexPtr();
+    const int* inner = A.innerIndexPtr();
+    const double* val = A.valuePtr();
+    std::vector<int> cursor(U.start.begin(), U.start.end() - 1);
+    long long lower = 0, upper = 0;
+    const auto differs = [&](std::ptrdiff_t i, std::ptrdiff_t j) {
+        why = "A is not symmetric (entry (" + std::to_string(i) + ", " + std::to_string(j) + ") differs from (" +
+              std::to_string(j) + ", " + std::to_string(i) + "))";
+        return false;
+    };
+    for (std::ptrdiff_t I = 0; I < nb; ++I) {
+        for (int k = U.start[static_cast<size_t>(I)]; k < U.start[static_cast<size_t>(I) + 1]; ++k) {
+            const double* b = U.value.data() + 9 * static_cast<std::ptrdiff_t>(k);
+            if (U.column[static_cast<size_t>(k)] != I) {
+                for (int e = 0; e < 9; ++e) upper += b[e] != 0.0;
+                continue;
+            }
+            for (int r = 0; r < 3; ++r)
+                for (int c = r + 1; c < 3; ++c)
+                    if (b[3 * c + r] != b[3 * r + c]) return differs(3 * I + r, 3 * I + c);
+        }
+        for (std::ptrdiff_t i = 3 * I; i < 3 * I + 3; ++i)
+            for (int k = outer[i]; k < outer[i + 1] && inner[k] < 3 * I; ++k) {
+                if (val[k] == 0.0) continue;
+                ++lower;
+                const int J = inner[k] / 3;  // the mirror (inner[k], i) is in block (J, I)
+                int& q = cursor[static_cast<size_t>(J)];
+                while (q < U.start[static_cast<size_t>(J) + 1] && U.column[static_cast<size_t>(q)] < I) ++q;
+                if (q == U.start[static_cast<size_t>(J) + 1] || U.column[static_cast<size_t>(q)] != I)
+                    return differs(i, inner[k]);
+                const std::ptrdiff_t r = inner[k] - 3 * J, c = i - 3 * I;
+                if (U.value[9 * static_cast<size_t>(q) + static_cast<size_t>(3 * c + r)] != val[k])
+                    return differs(i, inner[k]);
+            }
+    }
+    if (lower != upper) {
+        why = "A is not symmetric (" + std::to_string(upper) + " nonzeros above its block diagonal, " +
+              std::to_string(lower) + " below)";
+        return false;
+    }
+    return true;
+}
+
+}  // namespace
+
+bool build_block_rows(const SpMat& A, BlockRows& out, double max_fill, double& fill, std::string& why)
+{
+    return build_blocks(A, false, out, max_fill, fill, why);
+}
+
+bool build_upper_block_rows(const SpMat& A, BlockRows& out, double max_fill, double& fill, std::string& why)
+{
+    return build_blocks(A, true, out, max_fill, fill, why);
 }
 
 AFormat AOperator::prepare(AFormat wanted, int threads)
@@ -223,23 +361,30 @@ AFormat AOperator::prepare(AFormat wanted, int threads)
     m_blocks = BlockRows{};
     m_why_csr.clear();
     m_fill = 0.0;
-    if (wanted == AFormat::BSR) {
+    if (wanted == AFormat::BSR || wanted == AFormat::SBSR) {
         double fill = 0.0;
-        if (build_block_rows(*m_csr, m_blocks, MAX_FILL, fill, m_why_csr)) {
-            m_format = AFormat::BSR;
-            m_fill = fill;
+        const bool upper = wanted == AFormat::SBSR;
+        if (build_blocks(*m_csr, upper, m_blocks, MAX_FILL, fill, m_why_csr) &&
+            (!upper || upper_blocks_mirror_a(*m_csr, m_blocks, m_why_csr))) {
+            m_format = wanted;
+            (void)fill;  // per nonzero of the stored part; fill() is per nonzero of A
+            m_fill = static_cast<double>(m_blocks.value.size()) /
+                     static_cast<double>(std::max<Eigen::Index>(1, m_csr->nonZeros()));
         } else {
             m_blocks = BlockRows{};
         }
     }
     // Threads only where the raw loops run (compressed A); each range keeps enough nonzeros to
     // repay waking its thread. The ranges depend on A and threads only, never on the machine.
+    // The symmetric blocks run on one thread (their transposes scatter into other rows).
     const SpMat& A = *m_csr;
     const long nnz = static_cast<long>(A.nonZeros());
     int parts = std::max(1, threads);
     parts = static_cast<int>(std::min<long>(parts, std::max(1L, nnz / MIN_NONZEROS_PER_PART)));
     if (!A.isCompressed()) parts = 1;
-    if (m_format == AFormat::BSR)
+    if (m_format == AFormat::SBSR)
+        m_part_start = {0, static_cast<int>(m_blocks.start.size()) - 1};
+    else if (m_format == AFormat::BSR)
         m_part_start = split_rows(m_blocks.start.data(), static_cast<std::ptrdiff_t>(m_blocks.start.size()) - 1, parts);
     else if (A.isCompressed())
         m_part_start = split_rows(A.outerIndexPtr(), A.rows(), parts);
@@ -259,7 +404,7 @@ bool a_product_parallel_build()
 
 double AOperator::matrix_bytes() const
 {
-    if (m_format == AFormat::BSR)
+    if (m_format != AFormat::CSR)
         return static_cast<double>(m_blocks.value.size()) * 8.0 + static_cast<double>(m_blocks.column.size()) * 4.0 +
                static_cast<double>(m_blocks.start.size()) * 4.0;
     return static_cast<double>(m_csr->nonZeros()) * 12.0 + static_cast<double>(m_csr->rows() + 1) * 4.0;
@@ -294,6 +439,13 @@ Vec a_product(const SpMat& A, const Vec& x)
 
 void a_product(const AOperator& A, const Vec& x, Vec& y)
 {
+    if (A.format() == AFormat::SBSR) {
+        y.resize(A.rows());
+        double unused = 0.0;
+        sym_block_product<Dots::NONE>(A.blocks(), A.rows() / 3, x.data(), y.data(), nullptr, nullptr, unused);
+        g_a_products.fetch_add(1, std::memory_order_relaxed);
+        return;
+    }
     if (A.parts() > 1) {  // threads: the raw loops by row range
         y.resize(A.rows());
         double unused = 0.0;
@@ -310,6 +462,13 @@ void a_product(const AOperator& A, const Vec& x, Vec& y)
 
 double a_product_dots(const AOperator& A, const Vec& x, Vec& y, const Vec& w, double& xw)
 {
+    if (A.format() == AFormat::SBSR) {
+        y.resize(A.rows());
+        const double xy =
+            sym_block_product<Dots::ALL>(A.blocks(), A.rows() / 3, x.data(), y.data(), w.data(), nullptr, xw);
+        g_a_products.fetch_add(1, std::memory_order_relaxed);
+        return xy;
+    }
     if (A.parts() > 1) {
         y.resize(A.rows());
         const double xy = product_by_parts<Dots::ALL>(A, x.data(), y.data(), w.data(), nullptr, xw);
@@ -327,7 +486,9 @@ double a_product_dots(const AOperator& A, const Vec& x, Vec& y, const Vec& w, co
 {
     y.resize(A.rows());
     double xy = 0.0;
-    if (A.parts() > 1)
+    if (A.format() == AFormat::SBSR)
+        xy = sym_block_product<Dots::MASKED>(A.blocks(), A.rows() / 3, x.data(), y.data(), w.data(), skip, xw);
+    else if (A.parts() > 1)
         xy = product_by_parts<Dots::MASKED>(A, x.data(), y.data(), w.data(), skip, xw);
     else if (A.format() == AFormat::BSR)
         xy = block_product<Dots::MASKED>(A.blocks(), 0, A.rows() / 3, x.data(), y.data(), w.data(), skip, xw);

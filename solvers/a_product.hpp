@@ -13,8 +13,9 @@ namespace cb {
 
 /// How an AOperator stores A for its products.
 enum class AFormat {
-    CSR,  ///< A itself (Eigen's compressed rows: a value and a 32-bit column per nonzero)
-    BSR,  ///< 3x3 blocks (a vertex's three DOFs): nine values and one 32-bit block column per block
+    CSR,   ///< A itself (Eigen's compressed rows: a value and a 32-bit column per nonzero)
+    BSR,   ///< 3x3 blocks (a vertex's three DOFs): nine values and one 32-bit block column per block
+    SBSR,  ///< BSR's upper block triangle only (A symmetric): about half the bytes; one thread
 };
 
 /// A's 3x3 block rows: block row I holds rows 3I, 3I+1, 3I+2. A block is stored column by column
@@ -31,9 +32,11 @@ struct BlockRows {
 class AOperator {
 public:
     explicit AOperator(const SpMat& A) : m_csr(&A) {}
-    /// Chooses the storage of the products: BSR when asked and A has the block structure (n a
-    /// multiple of 3, compressed, sorted columns, at most 25% stored zeros), else CSR; why_csr()
-    /// says why. Both sum each row in column order, so y is the same to the last bit.
+    /// Chooses the storage of the products: BSR (or SBSR) when asked and A has the block structure
+    /// (n a multiple of 3, compressed, sorted columns, at most 25% stored zeros), else CSR;
+    /// why_csr() says why. BSR and CSR sum each row in column order, so y is the same to the last
+    /// bit; SBSR, which reads A's upper block triangle (A must be symmetric, as a QP's is), sums in
+    /// another order (y equal to rounding) and runs on one thread whatever `threads` says.
     /// `threads` (the common setting, >= 1) splits the products into that many fixed row ranges of
     /// about equal nonzeros (fewer when A is small: at least MIN_NONZEROS_PER_PART each); the same
     /// A and threads give the same ranges, so y is the same to the last bit and the fused dots,
@@ -44,14 +47,15 @@ public:
     /// Range p covers rows (BSR: block rows) part_start()[p] .. part_start()[p + 1] - 1.
     const std::vector<int>& part_start() const { return m_part_start; }
     AFormat format() const { return m_format; }
-    /// Why the products read CSR (empty when BSR, or when BSR was not asked for).
+    /// Why the products read CSR (empty when blocks, or when blocks were not asked for).
     const std::string& why_csr() const { return m_why_csr; }
-    /// Stored block entries per nonzero of A (>= 1; 0 when CSR).
+    /// Stored block entries per nonzero of A (BSR >= 1, SBSR about half that; 0 when CSR).
     double fill() const { return m_fill; }
     /// Bytes one product streams from A's storage (values, indices, row starts).
     double matrix_bytes() const;
     /// A itself (CSR): for sparse partial products, diagonals and factorizations.
     const SpMat& csr() const { return *m_csr; }
+    /// The blocks the products read (BSR: all; SBSR: the upper block triangle; empty when CSR).
     const BlockRows& blocks() const { return m_blocks; }
     Eigen::Index rows() const { return m_csr->rows(); }
 
@@ -74,6 +78,10 @@ bool a_product_parallel_build();
 
 /// Builds A's block rows; false (with `why`) when A has no usable 3x3 block structure.
 bool build_block_rows(const SpMat& A, BlockRows& out, double max_fill, double& fill, std::string& why);
+
+/// As build_block_rows(), keeping only the blocks on and above the block diagonal (block column
+/// >= block row); `fill` is per nonzero of that part of A.
+bool build_upper_block_rows(const SpMat& A, BlockRows& out, double max_fill, double& fill, std::string& why);
 
 /// y = A x, counted. y is resized; it must not alias x.
 void a_product(const AOperator& A, const Vec& x, Vec& y);

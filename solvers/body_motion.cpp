@@ -13,8 +13,6 @@ namespace {
 /// Eigenvalues below this fraction of a body's largest are modes the body cannot move.
 constexpr double RANK_CUTOFF = 1e-12;
 
-using LongVec6 = std::array<long double, BodyMotion::MODES>;
-
 }  // namespace
 
 int BodyMotion::mode_row(Eigen::Index p, int mode[3], double value[3]) const
@@ -32,6 +30,47 @@ int BodyMotion::mode_row(Eigen::Index p, int mode[3], double value[3]) const
     return 3;
 }
 
+long double BodyMotion::spatial_row_sums(const SpMat& A, Eigen::Index p, const double* scaled_offset, long double r0,
+                                         LongVec6& av) const
+{
+    // mode_row() unrolled by the column's axis, with the sums in named locals rather than an
+    // indexed array (which kept every long double in memory): each sum still takes its terms in
+    // column order, so the values are the same to the last bit.
+    const int* inner = A.innerIndexPtr();
+    const double* val = A.valuePtr();
+    const double* x0 = m_x0.data();
+    const double* d = scaled_offset;
+    const int first = A.outerIndexPtr()[p];
+    const int last = A.isCompressed() ? A.outerIndexPtr()[p + 1] : first + A.innerNonZeroPtr()[p];
+    long double t0 = 0.0L, t1 = 0.0L, t2 = 0.0L, q3 = 0.0L, q4 = 0.0L, q5 = 0.0L;
+    for (int k = first; k < last; ++k) {
+        if (val[k] == 0.0) continue;
+        const long double a = val[k];
+        const int c = inner[k], v = c / 3;
+        const double* dv = d + 3 * static_cast<std::ptrdiff_t>(v);
+        r0 += a * x0[c];
+        switch (c - 3 * v) {
+        case 0:
+            t0 += a;
+            q4 += a * dv[2];
+            q5 += a * -dv[1];
+            break;
+        case 1:
+            t1 += a;
+            q5 += a * dv[0];
+            q3 += a * -dv[2];
+            break;
+        default:
+            t2 += a;
+            q3 += a * dv[1];
+            q4 += a * -dv[0];
+            break;
+        }
+    }
+    av = LongVec6{t0, t1, t2, q3, q4, q5};
+    return r0;
+}
+
 BodyMotion::BodyMotion(const QpView& qp, double length)
 {
     const SpMat& A = qp.A;
@@ -43,14 +82,17 @@ BodyMotion::BodyMotion(const QpView& qp, double length)
     const int nodes = static_cast<int>(n / m_per_node);
 
     DisjointSets sets(nodes);
+    // A vertex's three rows mostly name the same neighbours: `joined` keeps each pair to one join.
+    std::vector<int> joined(static_cast<size_t>(nodes), -1);
     for (Eigen::Index r = 0; r < A.outerSize(); ++r) {
-        const int node = static_cast<int>(r) / m_per_node;
-        int last = node;  // a row's columns are sorted: a vertex's DOFs come together, one join each
+        const int node = static_cast<int>(r / m_per_node);
+        joined[static_cast<size_t>(node)] = node;
         for (SpMat::InnerIterator it(A, r); it; ++it) {
-            const int other = static_cast<int>(it.col()) / m_per_node;
-            if (it.value() == 0.0 || other == last) continue;  // a stored zero couples nothing
+            const int other = static_cast<int>(m_spatial ? it.col() / 3 : it.col());
+            if (it.value() == 0.0 || joined[static_cast<size_t>(other)] == node)
+                continue;  // a stored zero couples nothing
             sets.join(node, other);
-            last = other;
+            joined[static_cast<size_t>(other)] = node;
         }
     }
     int bodies = 0;
@@ -77,16 +119,18 @@ BodyMotion::BodyMotion(const QpView& qp, double length)
     std::vector<LongVec6> load(static_cast<size_t>(bodies), LongVec6{});
     int mode[3], cmode[3];
     double value[3], cvalue[3];
+    const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> scaled_offset = m_offset * m_inv_length;
     for (Eigen::Index p = 0; p < A.outerSize(); ++p) {
         LongVec6 av{};
         long double r0 = -static_cast<long double>(qp.b[p]);
-        for (SpMat::InnerIterator it(A, p); it; ++it) {
-            if (it.value() == 0.0) continue;
-            r0 += static_cast<long double>(it.value()) * qp.x0[it.col()];
-            const int cn = mode_row(it.col(), cmode, cvalue);
-            for (int t = 0; t < cn; ++t)
-                av[static_cast<size_t>(cmode[t])] += static_cast<long double>(it.value()) * cvalue[t];
-        }
+        if (m_spatial)
+            r0 = spatial_row_sums(A, p, scaled_offset.data(), r0, av);
+        else
+            for (SpMat::InnerIterator it(A, p); it; ++it) {
+                if (it.value() == 0.0) continue;
+                r0 += static_cast<long double>(it.value()) * qp.x0[it.col()];
+                av[0] += static_cast<long double>(it.value());
+            }
         for (int k = 0; k < MODES; ++k) m_av(p, k) = static_cast<double>(av[static_cast<size_t>(k)]);
         const int rn = mode_row(p, mode, value);
         LongVec6& l = load[body_of(p)];

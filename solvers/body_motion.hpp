@@ -25,6 +25,7 @@
 #include "solvers/qp.hpp"
 
 #include <Eigen/Dense>
+#include <array>
 #include <vector>
 
 namespace cb {
@@ -46,8 +47,14 @@ public:
     int bodies() const { return static_cast<int>(m_pinv.size()); }
 
 private:
+    using LongVec6 = std::array<long double, MODES>;
+
     /// Row p of V: up to three (mode, value) pairs; returns how many.
     int mode_row(Eigen::Index p, int mode[3], double value[3]) const;
+    /// (AV)_p in `av` and r0 + (A x0)_p, returned, summed in extended precision (3-D reading;
+    /// `scaled_offset`: m_offset / length, row-major).
+    long double spatial_row_sums(const SpMat& A, Eigen::Index p, const double* scaled_offset, long double r0,
+                                 LongVec6& av) const;
 
     bool m_spatial = false;     ///< 3-D reading: nodes are vertices, 6 modes per body
     int m_per_node = 1;         ///< DOFs per node

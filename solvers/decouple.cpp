@@ -123,6 +123,23 @@ DecoupleReport decouple_rows(const QpView& qp, const ContactRows& contacts, Deco
     return report;
 }
 
+void select_constraint_rows(const Qp& qp, const std::vector<int>& rows, SpMat& J_out, Vec& c_out)
+{
+    std::vector<Triplet> triplets;
+    c_out.resize(static_cast<Eigen::Index>(rows.size()));
+    for (size_t r = 0; r < rows.size(); ++r) {
+        const int i = rows[r];
+        if (i < 0 || i >= qp.m())
+            throw_input_error("select_rows", "rows",
+                              "row " + std::to_string(i) + " out of range [0, " + std::to_string(qp.m()) + ")");
+        for (SpMat::InnerIterator it(qp.J, i); it; ++it)
+            triplets.emplace_back(static_cast<int>(r), static_cast<int>(it.col()), it.value());
+        c_out[static_cast<Eigen::Index>(r)] = qp.c[i];
+    }
+    J_out.resize(static_cast<Eigen::Index>(rows.size()), qp.J.cols());
+    J_out.setFromTriplets(triplets.begin(), triplets.end());
+}
+
 Qp select_rows(const Qp& qp, const std::vector<int>& rows)
 {
     Qp out;
@@ -131,19 +148,7 @@ Qp select_rows(const Qp& qp, const std::vector<int>& rows)
     out.x0 = qp.x0;
     out.meta = qp.meta;
     out.length = qp.length;  // A, b and x0 are kept: so is the scene size
-    std::vector<Triplet> triplets;
-    out.c.resize(static_cast<Eigen::Index>(rows.size()));
-    for (size_t r = 0; r < rows.size(); ++r) {
-        const int i = rows[r];
-        if (i < 0 || i >= qp.m())
-            throw_input_error("select_rows", "rows",
-                              "row " + std::to_string(i) + " out of range [0, " + std::to_string(qp.m()) + ")");
-        for (SpMat::InnerIterator it(qp.J, i); it; ++it)
-            triplets.emplace_back(static_cast<int>(r), static_cast<int>(it.col()), it.value());
-        out.c[static_cast<Eigen::Index>(r)] = qp.c[i];
-    }
-    out.J.resize(static_cast<Eigen::Index>(rows.size()), qp.J.cols());
-    out.J.setFromTriplets(triplets.begin(), triplets.end());
+    select_constraint_rows(qp, rows, out.J, out.c);
     const ContactRows& in = qp.contacts;
     const size_t m = static_cast<size_t>(qp.m());
     for (int i : rows) {

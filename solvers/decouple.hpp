@@ -32,4 +32,8 @@ DecoupleReport decouple_rows(const QpView& qp, const ContactRows& contacts, Deco
 /// The QP restricted to the given rows of J (contacts metadata restricted too).
 Qp select_rows(const Qp& qp, const std::vector<int>& rows);
 
+/// The given rows of J and c only, into `J_out` and `c_out` (what select_rows() changes; A, b and
+/// x0 stay the original's, so a caller can view them instead of copying them).
+void select_constraint_rows(const Qp& qp, const std::vector<int>& rows, SpMat& J_out, Vec& c_out);
+
 }  // namespace cb

@@ -1,0 +1,104 @@
+// Issue 47's "part of an iteration outside its A-products": decoupled `mprgp` (the authors' row
+// order) and `mprgp-coupled`, registry defaults, on each snapshot of CB_BENCH_SNAPSHOTS. A monitor
+// reads the thread's CPU clock and the A-product counter at the first and the last iteration;
+// then the fused product-with-dots on the solvers' storage (BSR, `threads` as the solvers) is timed
+// alone (harness/bench/alternating.hpp). outside_<s> = 1 - products x product time / iteration
+// time: the share of an iteration spent in vector passes, projections and the stop test.
+// CB_BENCH_THREADS (default 1) sets the solvers' and the product's `threads` (then wall clock:
+// a threaded product's CPU time is summed over its threads).
+//   CB_BENCH_SNAPSHOTS=a.qpsnap:b.qpsnap build/bin/cb_bench --benchmark_filter=IterationShare
+#include "harness/bench/alternating.hpp"
+#include "solvers/a_product.hpp"
+#include "solvers/decouple.hpp"
+#include "solvers/registry.hpp"
+
+#include <benchmark/benchmark.h>
+
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+namespace {
+
+using namespace cb::bench;
+
+int threads()
+{
+    const char* env = std::getenv("CB_BENCH_THREADS");
+    return std::max(1, env ? std::atoi(env) : 1);
+}
+
+Clock clock_for_threads() { return threads() > 1 ? Clock::WALL : Clock::THREAD_CPU; }
+
+/// Clock and A-product count at the first and the last outer iteration.
+class ShareMonitor : public cb::Monitor {
+public:
+    bool on_iteration(const cb::IterationInfo& info) override
+    {
+        const double now = now_s(clock_for_threads());
+        const long products = cb::a_product_count();
+        if (m_calls++ == 0) {
+            m_first = now;
+            m_first_products = products;
+            m_first_iteration = info.iteration;
+        }
+        m_last = now;
+        m_last_products = products;
+        m_last_iteration = info.iteration;
+        return true;
+    }
+    bool wants_iterate() const override { return false; }
+    long iterations() const { return m_last_iteration - m_first_iteration; }
+    long products() const { return m_last_products - m_first_products; }
+    double seconds() const { return m_last - m_first; }
+
+private:
+    long m_calls = 0, m_first_iteration = 0, m_last_iteration = 0, m_first_products = 0, m_last_products = 0;
+    double m_first = 0.0, m_last = 0.0;
+};
+
+void measure(benchmark::State& state, const cb::Qp& qp)
+{
+    const cb::DecoupleReport report = cb::decouple_rows(qp.view(), qp.contacts, cb::DecoupleOrder::AUTHORS, 0);
+    const cb::Qp decoupled = cb::select_rows(qp, report.kept_rows);
+    const nlohmann::json settings = {{"threads", threads()}};
+    cb::AOperator op(qp.A);
+    op.prepare(cb::AFormat::BSR, threads());
+    const cb::Vec x = cb::Vec::LinSpaced(qp.n(), -1.0, 1.0), w = cb::Vec::Constant(qp.n(), 0.5);
+    cb::Vec y(qp.n());
+    for (auto _ : state) {
+        double total = 0.0;
+        for (const std::string& name : {std::string("mprgp"), std::string("mprgp-coupled")}) {
+            const auto solver = cb::builtin_registry().create(name, settings);
+            ShareMonitor monitor;
+            cb::SolveContext context;
+            context.monitor = &monitor;
+            const cb::SolverResult r = solver->solve(name == "mprgp" ? decoupled.view() : qp.view(), context);
+            const std::vector<std::vector<double>> t =
+                alternate({[&] {
+                              double xw = 0.0;
+                              benchmark::DoNotOptimize(cb::a_product_dots(op, x, y, w, xw));
+                          }},
+                          clock_for_threads());
+            const std::string key = name == "mprgp" ? "mprgp" : "coupled";
+            const double per_it = monitor.seconds() / static_cast<double>(std::max(1L, monitor.iterations()));
+            const double products_per_it =
+                static_cast<double>(monitor.products()) / static_cast<double>(std::max(1L, monitor.iterations()));
+            state.counters[key + "_it"] = static_cast<double>(r.counters.iterations);
+            state.counters[key + "_ms_per_it"] = 1e3 * per_it;
+            state.counters[key + "_products_per_it"] = products_per_it;
+            state.counters[key + "_product_ms"] = 1e3 * median(t[0]);
+            state.counters[key + "_product_spread"] = spread(t[0]);
+            state.counters["outside_" + key] = 1.0 - products_per_it * median(t[0]) / per_it;
+            total += per_it;
+        }
+        state.SetIterationTime(total);
+    }
+    state.counters["threads"] = threads();
+    state.counters["n"] = static_cast<double>(qp.n());
+    state.SetLabel(op.format() == cb::AFormat::BSR ? "bsr" : "csr fallback: " + op.why_csr());
+}
+
+const bool registered = register_per_snapshot("BM_IterationShare", measure);
+
+}  // namespace

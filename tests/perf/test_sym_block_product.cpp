@@ -1,0 +1,164 @@
+// The symmetric block product (solvers/a_product, AFormat::SBSR: A's upper block triangle) against
+// Eigen's CSR product, the oracle: y, x'y and x'w equal to rounding on every synthetic and stress
+// family; honest CSR fallbacks (n not a multiple of 3, A not symmetric); one thread whatever
+// `threads` asks; about half the bytes of BSR.
+#include "harness/stress_families.hpp"
+#include "problems/synthetic.hpp"
+#include "solvers/a_product.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <set>
+
+using namespace cb;
+
+namespace {
+
+Vec varied(Eigen::Index n, std::uint64_t seed)
+{
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    Vec v(n);
+    for (Eigen::Index i = 0; i < n; ++i) v[i] = u(rng) * std::pow(10.0, 3.0 * u(rng));
+    return v;
+}
+
+/// Every product of `op` against Eigen's on A: each y_i within a few roundings of |A||x| in row i
+/// (the terms meet in another order), the fused and masked dots likewise.
+void expect_products_to_rounding(const AOperator& op, const SpMat& A, const std::string& what)
+{
+    SCOPED_TRACE(what);
+    const Vec x = varied(A.cols(), 3), w = varied(A.cols(), 4);
+    std::vector<char> skip(static_cast<size_t>(A.rows()));
+    for (size_t i = 0; i < skip.size(); ++i) skip[i] = static_cast<char>(i % 5 == 1);
+    const Vec oracle = A * x;
+    const Vec size = A.cwiseAbs() * x.cwiseAbs();
+    const double eps = 1e-14;
+    const long before = a_product_count();
+    Vec y, y2, y3;
+    a_product(op, x, y);
+    ASSERT_EQ(y.size(), A.rows());
+    double xw = 0.0, xw_masked = 0.0;
+    const double xy = a_product_dots(op, x, y2, w, xw);
+    a_product_dots(op, x, y3, w, skip.data(), xw_masked);
+    for (Eigen::Index i = 0; i < A.rows(); ++i) {
+        ASSERT_LE(std::abs(y[i] - oracle[i]), eps * size[i]) << "row " << i;
+        ASSERT_EQ(y2[i], y[i]) << "row " << i;  // the same sums with or without the dots
+        ASSERT_EQ(y3[i], y[i]) << "row " << i;
+    }
+    double expected_masked = 0.0;
+    for (Eigen::Index i = 0; i < A.rows(); ++i)
+        if (!skip[static_cast<size_t>(i)]) expected_masked += x[i] * w[i];
+    EXPECT_NEAR(xy, x.dot(oracle), eps * x.cwiseAbs().dot(size));
+    EXPECT_NEAR(xw, x.dot(w), eps * x.cwiseAbs().dot(w.cwiseAbs()));
+    EXPECT_NEAR(xw_masked, expected_masked, eps * x.cwiseAbs().dot(w.cwiseAbs()));
+    EXPECT_EQ(a_product_count() - before, 3);  // each product counted once, whatever the storage
+}
+
+}  // namespace
+
+TEST(SymBlockProduct, EqualsTheCsrProductToRoundingOnEverySyntheticFamily)
+{
+    for (const std::string& family : synthetic_families()) {
+        const Qp qp = make_synthetic(family, nlohmann::json::object(), 7);
+        AOperator op(qp.A), bsr(qp.A);
+        const AFormat format = op.prepare(AFormat::SBSR);
+        if (qp.n() % 3 == 0) {
+            EXPECT_EQ(format, AFormat::SBSR) << family << ": " << op.why_csr();
+            ASSERT_EQ(bsr.prepare(AFormat::BSR), AFormat::BSR) << family;
+            // The upper block triangle: each off-diagonal block once, each diagonal block whole.
+            EXPECT_EQ(2 * op.blocks().column.size(), bsr.blocks().column.size() + static_cast<size_t>(qp.n() / 3))
+                << family;
+            EXPECT_DOUBLE_EQ(op.fill(), 9.0 * static_cast<double>(op.blocks().column.size()) /
+                                            static_cast<double>(qp.A.nonZeros()))
+                << family;
+            EXPECT_LT(op.matrix_bytes(), bsr.matrix_bytes()) << family;
+        }
+        expect_products_to_rounding(op, qp.A, family);
+    }
+}
+
+TEST(SymBlockProduct, EqualsTheCsrProductToRoundingOnEveryStressFamily)
+{
+    std::set<std::string> done;
+    std::vector<std::string> csr;
+    for (const StressCase& c : stress_cases()) {
+        if (!done.insert(c.family).second) continue;  // the first case of each family
+        const Qp qp = make_stress_qp(c);
+        AOperator op(qp.A);
+        if (op.prepare(AFormat::SBSR) == AFormat::CSR) csr.push_back(c.id + ": " + op.why_csr());
+        expect_products_to_rounding(op, qp.A, c.id);
+    }
+    EXPECT_GE(done.size(), 10u);
+    EXPECT_EQ(csr, (std::vector<std::string>{}));  // every stress family's A is symmetric, of vertex blocks
+}
+
+TEST(SymBlockProduct, FallsBackToCsrWhenNIsNotAMultipleOfThree)
+{
+    const Qp qp = make_synthetic("plane", {{"nx", 2}, {"ny", 2}, {"nz", 2}}, 3);
+    const Eigen::Index n = qp.n() - 1;
+    const SpMat A = qp.A.topLeftCorner(n, n);
+    AOperator op(A);
+    EXPECT_EQ(op.prepare(AFormat::SBSR), AFormat::CSR);
+    EXPECT_EQ(op.why_csr(), "the DOF count " + std::to_string(n) + " is not a positive multiple of 3");
+    expect_products_to_rounding(op, A, "n = " + std::to_string(n));
+}
+
+TEST(SymBlockProduct, FallsBackToCsrWhenANotSymmetric)
+{
+    Eigen::MatrixXd dense = Eigen::MatrixXd::Random(6, 6);
+    dense = (dense * dense.transpose()).eval();
+    {
+        Eigen::MatrixXd off = dense;
+        off(4, 0) = off(0, 4) * (1.0 + 1e-15) + 1e-300;  // below the diagonal block: one bit off
+        const SpMat A = off.sparseView();
+        AOperator op(A);
+        EXPECT_EQ(op.prepare(AFormat::SBSR), AFormat::CSR);
+        EXPECT_EQ(op.why_csr(), "A is not symmetric (entry (4, 0) differs from (0, 4))");
+    }
+    {
+        Eigen::MatrixXd off = dense;
+        off(1, 2) += 1.0;  // inside a diagonal block
+        const SpMat A = off.sparseView();
+        AOperator op(A);
+        EXPECT_EQ(op.prepare(AFormat::SBSR), AFormat::CSR);
+        EXPECT_EQ(op.why_csr(), "A is not symmetric (entry (1, 2) differs from (2, 1))");
+    }
+    {
+        Eigen::MatrixXd off = dense;
+        off(3, 1) = 0.0;  // the lower entry absent, the upper one not
+        const SpMat A = off.sparseView();
+        AOperator op(A);
+        EXPECT_EQ(op.prepare(AFormat::SBSR), AFormat::CSR);
+        EXPECT_EQ(op.why_csr(), "A is not symmetric (9 nonzeros above its block diagonal, 8 below)");
+        expect_products_to_rounding(op, A, "one-sided entry");
+    }
+    // The same A with its symmetry intact: SBSR, and its blocks are the upper ones only.
+    const SpMat A = dense.sparseView();
+    AOperator op(A);
+    ASSERT_EQ(op.prepare(AFormat::SBSR), AFormat::SBSR) << op.why_csr();
+    EXPECT_EQ(op.blocks().column, (std::vector<int>{0, 1, 1}));
+    EXPECT_EQ(op.blocks().value[9 * 1 + 3 * 2 + 0], A.coeff(0, 5));  // block (0, 1), column-major
+    EXPECT_DOUBLE_EQ(op.fill(), 27.0 / 36.0);
+}
+
+TEST(SymBlockProduct, RunsOnOneThreadWhateverThreadsAsks)
+{
+    const Qp qp = make_synthetic("plane", {{"nx", 24}, {"ny", 24}, {"nz", 24}}, 1);
+    ASSERT_GT(qp.A.nonZeros(), 4 * MIN_NONZEROS_PER_PART);
+    AOperator one(qp.A), four(qp.A);
+    ASSERT_EQ(one.prepare(AFormat::SBSR, 1), AFormat::SBSR);
+    ASSERT_EQ(four.prepare(AFormat::SBSR, 4), AFormat::SBSR);
+    EXPECT_EQ(four.parts(), 1);
+    EXPECT_EQ(four.part_start(), (std::vector<int>{0, static_cast<int>(qp.n() / 3)}));
+    const Vec x = varied(qp.n(), 11), w = varied(qp.n(), 12);
+    Vec y1, y4;
+    double xw1 = 0.0, xw4 = 0.0;
+    const double xy1 = a_product_dots(one, x, y1, w, xw1);
+    const double xy4 = a_product_dots(four, x, y4, w, xw4);
+    EXPECT_EQ((y1 - y4).lpNorm<Eigen::Infinity>(), 0.0);
+    EXPECT_EQ(xy1, xy4);
+    EXPECT_EQ(xw1, xw4);
+}
