@@ -49,7 +49,7 @@ TEST(NsgsFriction, AtMuZeroAgreesWithPgsAndActiveSet)
 TEST(NsgsFriction, SticksAndSlidesAsCoulombSays)
 {
     // Pushed sideways by 0.2 of its weight, the deformable body: with mu = 0.5 its inner contacts
-    // stick and its edges slide (measured: 7 of 16), with mu = 0.1 every contact slides on the cone.
+    // stick and its edges slide (measured: 6 of 16 stick), with mu = 0.1 every contact slides on the cone.
     double widest_slip[2] = {0.0, 0.0};
     for (const double mu : {0.5, 0.1}) {
         const Qp qp = testing_qps::pushed_plane(0.2, mu);
