@@ -398,7 +398,7 @@ SolverResult CommandSolver::solve(const QpView& qp, const SolveContext& context)
     fs::create_directories(out);
 
     // The problem exactly as this solver is given it (decoupled rows when the harness decoupled).
-    Qp problem{qp.A, qp.b, qp.J, qp.c, qp.x0, {}, {{"source", "contactbench command solver"}}, {}};
+    Qp problem{qp.A, qp.b, qp.J, qp.c, qp.x0, {}, {{"source", "contactbench command solver"}}, {}, {}};
     write_qpsnap(snapshot.string(), problem);
     nlohmann::json settings_file = {{"protocol", COMMAND_PROTOCOL_VERSION},
                                     {"snapshot", snapshot.string()},

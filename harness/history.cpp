@@ -31,7 +31,8 @@ std::vector<std::string> HistoryMonitor::columns()
 }
 
 HistoryRow HistoryMonitor::measure(long call, long iteration, StepKind step, const Vec& x, const Vec* lambda,
-                                   double time_s, double solve_time_s, long a_products, double native, long active)
+                                   double time_s, double solve_time_s, long a_products, double native, long active,
+                                   const Vec* lambda_t)
 {
     HistoryRow row;
     row.call = call;
@@ -65,7 +66,7 @@ HistoryRow HistoryMonitor::measure(long call, long iteration, StepKind step, con
             padded[m_kept_rows[k]] = (*lambda)[static_cast<Eigen::Index>(k)];
         row.accuracy = accuracy_from_gradient(m_qp, m_scale, x, g, padded);
     } else if (lambda && lambda->size() == m_qp.m()) {
-        row.accuracy = accuracy_from_gradient(m_qp, m_scale, x, g, *lambda);
+        row.accuracy = accuracy_from_gradient(m_qp, m_scale, x, g, *lambda, lambda_t);
     } else {
         const Vec fitted = fit_multipliers(m_qp, m_scale, x, g);
         row.accuracy = accuracy_from_gradient(m_qp, m_scale, x, g, fitted);
@@ -106,15 +107,16 @@ bool HistoryMonitor::on_iteration(const IterationInfo& info)
     if (!std::isfinite(info.native_residual)) m_nonfinite = true;
     if (!m_record || !info.x || call % m_stride != 0) return true;
     const long a_products = info.counters ? info.counters->a_products : 0;
-    HistoryRow row = measure(call, info.iteration, info.step, *info.x, info.lambda, info.elapsed_s,
-                             info.elapsed_s - info.setup_s, a_products, info.native_residual, info.active_set_size);
+    HistoryRow row =
+        measure(call, info.iteration, info.step, *info.x, info.lambda, info.elapsed_s, info.elapsed_s - info.setup_s,
+                a_products, info.native_residual, info.active_set_size, info.lambda_t);
     row.work = work_units(a_products, info.counters ? info.counters->work_flops : 0.0, m_qp.A);
     push(row);
     return true;
 }
 
 void HistoryMonitor::finish(const Vec& x, const Vec& lambda, long iterations, double setup_s, double solve_s,
-                            long a_products, double native_residual, double work_flops)
+                            long a_products, double native_residual, double work_flops, const Vec* lambda_t)
 {
     if (!all_finite(x) || !all_finite(lambda)) m_nonfinite = true;
     if (!m_record || x.size() != m_qp.n()) return;
@@ -124,13 +126,13 @@ void HistoryMonitor::finish(const Vec& x, const Vec& lambda, long iterations, do
         // harness settled on, so that the last row is the run's error.
         HistoryRow& last = m_rows.back();
         const HistoryRow again = measure(last.call, last.iteration, last.step, x, l, last.time_s, last.solve_time_s,
-                                         last.a_products, last.native_residual, last.active_set);
+                                         last.a_products, last.native_residual, last.active_set, lambda_t);
         last.accuracy = again.accuracy;
         last.objective = again.objective;
         return;
     }
     HistoryRow row = measure(m_calls, iterations, StepKind::FINAL, x, l, setup_s + solve_s, solve_s, a_products,
-                             native_residual, -1);
+                             native_residual, -1, lambda_t);
     row.work = work_units(a_products, work_flops, m_qp.A);
     if (!std::isfinite(row.objective) || !std::isfinite(row.accuracy.max())) m_nonfinite = true;
     m_rows.push_back(row);

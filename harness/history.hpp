@@ -55,7 +55,7 @@ public:
     /// Appends the returned point (x, lambda) as the final row unless the last call was recorded;
     /// its time_s is setup_s + solve_s, its solve_time_s solve_s.
     void finish(const Vec& x, const Vec& lambda, long iterations, double setup_s, double solve_s, long a_products,
-                double native_residual, double work_flops = 0.0);
+                double native_residual, double work_flops = 0.0, const Vec* lambda_t = nullptr);
 
     bool nonfinite() const { return m_nonfinite; }
     bool monotone() const { return m_monotone; }
@@ -69,7 +69,7 @@ public:
 
 private:
     HistoryRow measure(long call, long iteration, StepKind step, const Vec& x, const Vec* lambda, double time_s,
-                       double solve_time_s, long a_products, double native, long active);
+                       double solve_time_s, long a_products, double native, long active, const Vec* lambda_t = nullptr);
     void push(HistoryRow row);
 
     QpView m_qp;

@@ -98,9 +98,13 @@ Judgement judge_point(const Qp& qp, const SolutionPoint& point, const JudgeOptio
     if (have_record) {
         const std::string solver_status = record_string(options, "solver_status");
         solve_status_from_string(solver_status);  // an unknown name is an InputError
+        // A frictionless solver on a frictional problem is never `converged` (docs/accuracy.md).
+        const auto solved_at = options.record.find("solved_problem");
+        const bool frictionless = solved_at != options.record.end() && solved_at->is_string() &&
+                                  solved_at->get<std::string>() == "frictionless";
         if (solver_status != to_string(SolveStatus::CONVERGED)) {
             out.status = solver_status;
-        } else if (out.meets_tol) {
+        } else if (out.meets_tol && !frictionless) {
             out.status = to_string(SolveStatus::CONVERGED);
         } else {
             // The solver said converged and the point misses tol on the original QP: on the
@@ -151,9 +155,18 @@ Judgement judge_point(const Qp& qp, const SolutionPoint& point, const JudgeOptio
                 out.accuracy_solved = measure_point(reduced_view, accuracy_scale(reduced_view), x, g, &lambda_kept,
                                                     out.tol, used, fitted);
                 out.have_solved = true;
+            } else if (solved == "frictionless") {
+                // A frictionless solver on a frictional problem: the problem without its friction.
+                QpView relaxed = view;
+                relaxed.friction = nullptr;
+                Vec used;
+                bool fitted = false;
+                out.accuracy_solved =
+                    measure_point(relaxed, accuracy_scale(relaxed), x, g, &out.lambda, out.tol, used, fitted);
+                out.have_solved = true;
             } else if (!solved.empty()) {
                 throw_input_error(options.record_path, "/solved_problem",
-                                  "expected unconstrained or decoupled, got '" + solved + "'");
+                                  "expected unconstrained, decoupled or frictionless, got '" + solved + "'");
             }
             out.status = out.have_solved && within(out.accuracy_solved.max(), out.tol) ? STATUS_SOLVED_RELAXATION
                                                                                        : STATUS_UNCONFIRMED;

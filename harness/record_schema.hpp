@@ -13,6 +13,9 @@
 /// Fields added later (nothing renamed; an older record lacks them and means the default):
 ///   "work_counted" (issue 41): false for an external program's run, whose work counters are
 ///   null; absent: true (compare reads it so).
+///   "fclib_error" and "accuracy"."friction" (issue 48): only in records of problems with
+///   friction (docs/accuracy.md "e for Coulomb friction"); absent: a frictionless problem.
+///   "solved_problem" gains the value "frictionless" (a frictionless solver on a frictional problem).
 #include <nlohmann/json.hpp>
 #include <string>
 

@@ -24,7 +24,8 @@ struct SolverProblem {
     QpView view() const
     {
         if (!applied) return original->view();
-        return QpView{original->A, original->b, decoupled_J, decoupled_c, original->x0, &original->length};
+        // Friction's rows are the original's: a decoupled solver is frictionless and gets none.
+        return QpView{original->A, original->b, decoupled_J, decoupled_c, original->x0, &original->length, nullptr};
     }
 };
 

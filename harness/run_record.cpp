@@ -76,8 +76,12 @@ nlohmann::json run_record(const RunOutcome& out, const RunFacts& facts, int repe
     rec["m_solved"] = out.m_solved;
     if (facts.changed) {
         rec["accuracy_solved"] = out.accuracy_solved.to_json();
-        rec["solved_problem"] = facts.ignores_constraints ? "unconstrained" : "decoupled";
+        rec["solved_problem"] = facts.ignores_constraints ? "unconstrained"
+                                : facts.decouple_applied  ? "decoupled"
+                                                          : "frictionless";
     }
+    // A frictional problem (some mu > 0): FCLIB's relative natural-map error beside e (issue 48).
+    if (facts.frictional) rec["fclib_error"] = finite_or_null(out.fclib_error);
     rec["violation"] = finite_or_null(out.violation);
     rec["violation_original"] = finite_or_null(out.violation);
     rec["native_residual"] = finite_or_null(result.native_residual);

@@ -26,6 +26,9 @@ struct RunFacts {
     double tol = 0.0, accuracy_tol = 0.0;
     bool native = false, native_ok = false;  ///< stop=native was met; its residual met tol
     bool changed = false, ignores_constraints = false;
+    bool frictionless = false;      ///< a frictionless solver on a frictional problem (it solved mu = 0)
+    bool decouple_applied = false;  ///< the solver saw decoupled rows (they carry no friction either)
+    bool frictional = false;        ///< the problem has friction (some mu > 0): the record carries fclib_error
     bool lambda_fitted = false;  ///< the multipliers measured with are a least-squares fit
     double objective_x0 = 0.0;
     long a_products_harness = 0;

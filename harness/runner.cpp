@@ -5,6 +5,7 @@
 #include "harness/run_problem.hpp"
 #include "harness/run_record.hpp"
 #include "solvers/a_product.hpp"
+#include "solvers/friction_snapshot_error.hpp"
 #include "solvers/peak_memory.hpp"
 #include "solvers/registry.hpp"
 #include "solvers/work_units.hpp"
@@ -17,18 +18,21 @@
 namespace cb {
 
 AccuracyParts measure_point(const QpView& qp, const AccuracyScale& scale, const Vec& x, const Vec& g,
-                            const Vec* own_lambda, double tol, Vec& lambda, bool& fitted)
+                            const Vec* own_lambda, double tol, Vec& lambda, bool& fitted, const Vec* lambda_t)
 {
     AccuracyParts best;
     bool have = false;
     if (own_lambda && own_lambda->size() == qp.m()) {
         lambda = *own_lambda;
-        best = accuracy_from_gradient(qp, scale, x, g, lambda);
+        best = accuracy_from_gradient(qp, scale, x, g, lambda, lambda_t);
         have = true;
     }
     if (!have || !(best.max() <= tol)) {
-        const Vec candidate = fit_multipliers(qp, scale, x, g);
-        const AccuracyParts with_fit = accuracy_from_gradient(qp, scale, x, g, candidate);
+        const bool tangential =
+            lambda_t && qp.friction && lambda_t->size() == qp.friction->T.rows() && qp.friction->T.cols() == g.size();
+        const Vec candidate =
+            fit_multipliers(qp, scale, x, tangential ? Vec(g - qp.friction->T.transpose() * *lambda_t) : g);
+        const AccuracyParts with_fit = accuracy_from_gradient(qp, scale, x, g, candidate, lambda_t);
         if (!have || with_fit.max() < best.max()) {
             best = with_fit;
             lambda = candidate;
@@ -121,7 +125,7 @@ Vec own_multipliers(const SolverResult& result, const Qp& original, const Solver
 /// The run's status (runner.hpp) from the solver's word and the measure. stop=native stops on the
 /// paper's residual, whose tol is in another unit: its "converged" must still reach the default
 /// accuracy on e.
-void judge_status(RunOutcome& out, bool changed, double accuracy_tol)
+void judge_status(RunOutcome& out, bool changed, double accuracy_tol, bool frictionless_relaxation)
 {
     const double slack = 1.0 + 1e-9;  // the solver's own arithmetic may round the last digit differently
     const bool original_ok = std::isfinite(out.accuracy.max()) && out.accuracy.max() <= accuracy_tol * slack;
@@ -129,7 +133,7 @@ void judge_status(RunOutcome& out, bool changed, double accuracy_tol)
         std::isfinite(out.accuracy_solved.max()) && out.accuracy_solved.max() <= accuracy_tol * slack;
     if (out.result.status != SolveStatus::CONVERGED) {
         out.status = to_string(out.result.status);
-    } else if (original_ok) {
+    } else if (original_ok && !frictionless_relaxation) {
         out.status = to_string(SolveStatus::CONVERGED);
     } else if (changed && solved_ok) {
         out.status = STATUS_SOLVED_RELAXATION;
@@ -144,7 +148,7 @@ void judge_status(RunOutcome& out, bool changed, double accuracy_tol)
 /// F, the violation, and the history's last row, NaN and monotonicity verdicts. Sets the facts the
 /// measure decides (tol, accuracy_tol, the note on a wrong-sized x, changed, lambda_fitted).
 void measure_outcome(RunOutcome& out, RunFacts& facts, const CommonSettings& common, const Qp& original,
-                     const SolverProblem& problem, HistoryMonitor& history)
+                     const SolverProblem& problem, HistoryMonitor& history, bool handles_friction)
 {
     const SolverResult& result = out.result;
     const QpView original_view = original.view();
@@ -165,8 +169,16 @@ void measure_outcome(RunOutcome& out, RunFacts& facts, const CommonSettings& com
     const Vec own_full = own_multipliers(result, original, problem);
     bool fitted = result.lambda_fitted;
     Vec lambda;
-    out.accuracy =
-        measure_point(original_view, scale, x, g, own_valid ? &own_full : nullptr, facts.accuracy_tol, lambda, fitted);
+    // A frictional solver's tangential multipliers, on the problem as given (decoupling drops friction).
+    const bool own_t = problem.is_original() && original.friction.T.rows() == 2 * original.m() &&
+                       result.lambda_t.size() == 2 * original.m();
+    if (own_t) out.lambda_t = result.lambda_t;
+    const Vec* lambda_t = own_t ? &out.lambda_t : nullptr;
+    out.accuracy = measure_point(original_view, scale, x, g, own_valid ? &own_full : nullptr, facts.accuracy_tol,
+                                 lambda, fitted, lambda_t);
+    if (original.frictional())
+        out.fclib_error = friction_snapshot_error(original_view, x, lambda, own_t ? out.lambda_t : Vec(),
+                                                  friction_local_q_norm(original_view));
     out.kept_rows = problem.kept_rows;
     out.lambda_full = lambda;
     out.objective = 0.5 * x.dot(g) - 0.5 * original.b.dot(x);
@@ -175,7 +187,11 @@ void measure_outcome(RunOutcome& out, RunFacts& facts, const CommonSettings& com
     // The problem the solver solved, when it differs: the decoupled rows, or no rows at all for
     // a solver that ignores J (cg's unconstrained relaxation).
     facts.ignores_constraints = result.info.is_object() && result.info.value("ignores_constraints", false);
-    facts.changed = !problem.is_original() || (facts.ignores_constraints && original.m() > 0);
+    // A frictionless solver on a frictional problem solved the problem with mu = 0.
+    facts.frictionless = original.frictional() && !handles_friction && !facts.ignores_constraints;
+    facts.decouple_applied = !problem.is_original();
+    facts.frictional = original.frictional();
+    facts.changed = !problem.is_original() || (facts.ignores_constraints && original.m() > 0) || facts.frictionless;
     out.m_solved = facts.ignores_constraints ? 0 : view.m();
     if (!facts.changed) {
         out.accuracy_solved = out.accuracy;
@@ -185,13 +201,15 @@ void measure_outcome(RunOutcome& out, RunFacts& facts, const CommonSettings& com
         const QpView relaxed{original.A, original.b, no_rows, no_c, original.x0, &original.length};
         out.accuracy_solved = accuracy_from_gradient(relaxed, accuracy_scale(relaxed), x, g, Vec(0));
     } else {
+        // The decoupled rows, or the rows without their friction: the view with no friction fields.
+        const QpView solved{view.A, view.b, view.J, view.c, view.x0, view.length, nullptr};
         Vec lambda_solved;
         bool fitted_solved = result.lambda_fitted;
-        out.accuracy_solved = measure_point(view, accuracy_scale(view), x, g, own_valid ? &result.lambda : nullptr,
+        out.accuracy_solved = measure_point(solved, accuracy_scale(solved), x, g, own_valid ? &result.lambda : nullptr,
                                             facts.accuracy_tol, lambda_solved, fitted_solved);
     }
     history.finish(x, lambda, result.iterations, result.setup_s, result.solve_s, result.counters.a_products,
-                   result.native_residual, result.counters.work_flops);
+                   result.native_residual, result.counters.work_flops, lambda_t);
     out.nonfinite = history.nonfinite() || !std::isfinite(out.objective) || !std::isfinite(out.accuracy.max());
     out.monotone = history.monotone();
     facts.lambda_fitted = fitted;
@@ -214,6 +232,7 @@ RunOutcome run_solver(const SolverRegistry& registry, const Qp& original, const 
     const nlohmann::json settings = run_settings(solver_name, settings_in, options);
     // Creating the solver validates the settings (InputError names the key).
     std::unique_ptr<Solver> solver = registry.create(solver_name, settings);
+    const bool handles_friction = solver->handles_friction();
     RunFacts facts;
     facts.solver = solver_name;
     facts.settings = solver->settings();
@@ -224,7 +243,10 @@ RunOutcome run_solver(const SolverRegistry& registry, const Qp& original, const 
     // Decoupling: a problem transform applied before the solver sees the QP.
     SolverProblem problem;
     choose_solver_problem(original, solver->requires_decoupled(), options, problem);
-    const QpView view = problem.view();
+    // A frictionless solver is given the problem it solves, without the friction (mu = 0): its
+    // own stop test then measures that problem, and the harness's verdict says so.
+    QpView view = problem.view();
+    if (!handles_friction) view.friction = nullptr;
     const QpView original_view = original.view();
     // One scale for both: decoupling keeps A, b and x0, so D and l are the original's.
     const AccuracyScale scale = accuracy_scale(original_view);
@@ -239,8 +261,8 @@ RunOutcome run_solver(const SolverRegistry& registry, const Qp& original, const 
     out.result = std::move(repeats.first);
     const SolverResult& result = out.result;
 
-    measure_outcome(out, facts, common, original, problem, history);
-    judge_status(out, facts.changed, facts.accuracy_tol);
+    measure_outcome(out, facts, common, original, problem, history, handles_friction);
+    judge_status(out, facts.changed, facts.accuracy_tol, facts.frictionless);
 
     facts.snapshot = snapshot_info.is_object() ? snapshot_info : nlohmann::json::object();
     if (!facts.snapshot.contains("n")) facts.snapshot["n"] = original.n();

@@ -16,6 +16,7 @@
 
 #include <nlohmann/json.hpp>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -65,6 +66,10 @@ struct RunOutcome {
     // Extensions beyond INTERFACES.md:
     std::vector<int> kept_rows;  ///< rows of the original J the solver saw (empty: all of them)
     Vec lambda_full;             ///< lambda on the original rows (0 on rows dropped by decoupling)
+    Vec lambda_t;                ///< the solver's tangential multipliers (2m) on a frictional problem, else empty
+    /// FCLIB's relative natural-map error at (x, lambda, lambda_t) (solvers/friction_snapshot_error.hpp);
+    /// NaN unless the problem is frictional (some mu > 0).
+    double fclib_error = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// Runs one solver on one QP with the monitor recording history on a paused stopwatch.
@@ -81,8 +86,11 @@ RunOutcome run_solver(const Qp& qp, const std::string& solver_name, const nlohma
 /// m); a least-squares fit when it is missing, or when it misses `tol` and the fit does better
 /// (e judges the point x, so the harness takes the smaller). `lambda` gets the multipliers used,
 /// `fitted` is set when they are the fit. `solve` and `judge` both measure with this.
+/// `lambda_t` (a frictional solver's 2m tangential multipliers, or nullptr) enters every evaluation;
+/// the fit then fits the normal multipliers to the gradient less T'lambda_t.
 AccuracyParts measure_point(const QpView& qp, const AccuracyScale& scale, const Vec& x, const Vec& g,
-                            const Vec* own_lambda, double tol, Vec& lambda, bool& fitted);
+                            const Vec* own_lambda, double tol, Vec& lambda, bool& fitted,
+                            const Vec* lambda_t = nullptr);
 
 class SolverRegistry;
 /// Same, with the solver taken from `registry` (tests register small local solvers).

@@ -14,6 +14,8 @@ Nothing here writes an old name.
 Fields added later (nothing renamed; an older file lacks them and means the default):
     run record "work_counted" (issue 41): false for an external program's run, whose work
     counters are null; absent: true
+    run record "fclib_error" and "accuracy"["friction"] (issue 48): only for a problem with
+    friction; absent: a frictionless problem (fclib_error None, friction 0)
 """
 from __future__ import annotations
 
@@ -27,7 +29,7 @@ OLD_STABILITY_COLUMNS = {"kkt": "accuracy", "kkt_solved": "accuracy_solved"}
 OLD_KEYS = {"kkt_relative": "accuracy"}
 
 #: added field -> what an older record that lacks it means
-ADDED_FIELDS = {"work_counted": True}
+ADDED_FIELDS = {"work_counted": True, "fclib_error": None}
 
 _told = set()
 

@@ -46,17 +46,20 @@ double point_extent(const Vec& x, std::string& source)
 
 double AccuracyParts::max() const
 {
-    return std::max(std::max(std::max(stationarity, primal), std::max(dual, complementarity)), gap);
+    // friction is +0.0 without friction: max(e, +0.0) == e, bit for bit.
+    return std::max(std::max(std::max(std::max(stationarity, primal), std::max(dual, complementarity)), gap), friction);
 }
 
 nlohmann::json AccuracyParts::to_json() const
 {
-    return {{"stationarity", finite_or_null(stationarity)},
-            {"primal", finite_or_null(primal)},
-            {"dual", finite_or_null(dual)},
-            {"complementarity", finite_or_null(complementarity)},
-            {"gap", finite_or_null(gap)},
-            {"max", finite_or_null(max())}};
+    nlohmann::json out = {{"stationarity", finite_or_null(stationarity)},
+                          {"primal", finite_or_null(primal)},
+                          {"dual", finite_or_null(dual)},
+                          {"complementarity", finite_or_null(complementarity)},
+                          {"gap", finite_or_null(gap)},
+                          {"max", finite_or_null(max())}};
+    if (frictional) out["friction"] = finite_or_null(friction);
+    return out;
 }
 
 nlohmann::json AccuracyScale::to_json() const
@@ -169,23 +172,36 @@ AccuracyScale accuracy_scale(const QpView& qp)
 
 double AccuracyScale::stationarity(const Vec& r, const Vec& x, const Vec& lambda) const
 {
-    double local = 0.0;
-    for (Eigen::Index j = 0; j < r.size(); ++j) local = std::max(local, sanitize(std::abs(r[j]) * inv_diag[j]));
-    return std::max(local * inv_length, body_motion(x, lambda));
+    return stationarity(r, x, lambda, Vec());
 }
 
-double AccuracyScale::body_motion(const Vec& x, const Vec& lambda) const
+double AccuracyScale::stationarity(const Vec& r, const Vec& x, const Vec& lambda, const Vec& lambda_t) const
 {
-    return sanitize(bodies.displacement(x, lambda)) * inv_length;
+    double local = 0.0;
+    for (Eigen::Index j = 0; j < r.size(); ++j) local = std::max(local, sanitize(std::abs(r[j]) * inv_diag[j]));
+    return std::max(local * inv_length, body_motion(x, lambda, lambda_t));
+}
+
+double AccuracyScale::body_motion(const Vec& x, const Vec& lambda, const Vec& lambda_t) const
+{
+    return sanitize(bodies.displacement(x, lambda, lambda_t)) * inv_length;
 }
 
 AccuracyParts accuracy_from_gradient(const QpView& qp, const AccuracyScale& scale, const Vec& x, const Vec& g,
-                                     const Vec& lambda)
+                                     const Vec& lambda, const Vec* lambda_t)
 {
     AccuracyParts e;
     const Eigen::Index m = qp.m();
     const bool has_lambda = m > 0 && lambda.size() == m;
-    const Vec r = has_lambda ? Vec(g - qp.J.transpose() * lambda) : g;
+    // Friction fields of the right sizes (the reader guarantees them; a view built by hand may lack them).
+    const Friction* f = qp.friction && qp.friction->mu.size() == m && m > 0 && qp.friction->T.rows() == 2 * m &&
+                                qp.friction->T.cols() == qp.n()
+                            ? qp.friction
+                            : nullptr;
+    const bool has_t = f && lambda_t && lambda_t->size() == 2 * m;
+    const bool has_ct = f && f->cT.size() == 2 * m;
+    Vec r = has_lambda ? Vec(g - qp.J.transpose() * lambda) : g;
+    if (has_t) r -= f->T.transpose() * *lambda_t;
     RowParts rows;
     for (Eigen::Index i = 0; i < m; ++i) {
         double jx = 0.0;
@@ -198,25 +214,39 @@ AccuracyParts accuracy_from_gradient(const QpView& qp, const AccuracyScale& scal
         }
         rows.add_primal(slack, inv_norm);
         if (has_lambda) rows.add_multiplier(slack, lambda[i], inv_norm, scale.length_per_multiplier[i]);
+        if (!f) continue;
+        const double lt[2] = {has_t ? (*lambda_t)[2 * i] : 0.0, has_t ? (*lambda_t)[2 * i + 1] : 0.0};
+        if (f->mu[i] == 0.0 && lt[0] == 0.0 && lt[1] == 0.0) continue;  // frictionless: nothing to add
+        double tangent_slack[2];
+        for (int k = 0; k < 2; ++k) {
+            double tx = 0.0;
+            for (SpMat::InnerIterator it(f->T, 2 * i + k); it; ++it) tx += it.value() * x[it.col()];
+            tangent_slack[k] = tx - (has_ct ? f->cT[2 * i + k] : 0.0);
+        }
+        rows.add_friction(slack, has_lambda ? lambda[i] : 0.0, tangent_slack, lt, f->mu[i], inv_norm,
+                          scale.length_per_multiplier[i]);
     }
     const RowParts parts = rows.scaled(scale.inv_length, scale.inv_energy);
     e.primal = parts.primal;
     e.dual = parts.dual;
     e.complementarity = parts.complementarity;
     e.gap = parts.gap;
-    e.stationarity = scale.stationarity(r, x, has_lambda ? lambda : Vec(0));
+    e.friction = parts.friction;
+    e.frictional = f != nullptr;
+    e.stationarity = scale.stationarity(r, x, has_lambda ? lambda : Vec(0), has_t ? *lambda_t : Vec());
     return e;
 }
 
-AccuracyParts accuracy(const QpView& qp, const AccuracyScale& scale, const Vec& x, const Vec& lambda)
+AccuracyParts accuracy(const QpView& qp, const AccuracyScale& scale, const Vec& x, const Vec& lambda,
+                       const Vec* lambda_t)
 {
     const Vec g = a_product(qp.A, x) - qp.b;
-    return accuracy_from_gradient(qp, scale, x, g, lambda);
+    return accuracy_from_gradient(qp, scale, x, g, lambda, lambda_t);
 }
 
-AccuracyParts accuracy(const QpView& qp, const Vec& x, const Vec& lambda)
+AccuracyParts accuracy(const QpView& qp, const Vec& x, const Vec& lambda, const Vec* lambda_t)
 {
-    return accuracy(qp, accuracy_scale(qp), x, lambda);
+    return accuracy(qp, accuracy_scale(qp), x, lambda, lambda_t);
 }
 
 double energy_gap(const AccuracyScale& scale, double objective, double objective_star)

@@ -15,6 +15,13 @@
 ///   e = max of the five.
 /// A zero row (n_i = 0) is feasible iff c_i <= 0 (else the primal part is infinite); its
 /// multiplier exerts no force, so it adds nothing to the dual, complementarity and gap parts.
+///
+/// Coulomb friction (qp.friction, issue 48; docs/accuracy.md "e for Coulomb friction"): with the
+/// tangential multipliers lambda_T (2m), r = Ax - b - J'lambda - T'lambda_T, and each contact with
+/// mu_i > 0 or lambda_T,i != 0 adds its natural map in lengths (accuracy_rows.hpp add_friction)
+///   friction         max_i ||F_i||_2 / l
+/// and its modified velocity's work to the gap; e = max of the six. A contact with mu_i = 0 and
+/// lambda_T,i = 0 adds nothing, so on a frictionless problem e is today's bit for bit.
 #include "solvers/body_motion.hpp"
 #include "solvers/qp.hpp"
 
@@ -33,8 +40,11 @@ struct AccuracyParts {
     double dual = 0.0;
     double complementarity = 0.0;
     double gap = 0.0;
-    double max() const;              ///< the error e
-    nlohmann::json to_json() const;  ///< {stationarity, primal, dual, complementarity, gap, max}; non-finite -> null
+    double friction = 0.0;    ///< Coulomb's natural map (0 without friction)
+    bool frictional = false;  ///< the problem has friction fields: to_json adds "friction"
+    double max() const;       ///< the error e
+    /// {stationarity, primal, dual, complementarity, gap, [friction,] max}; non-finite -> null
+    nlohmann::json to_json() const;
 };
 
 /// What the measure needs from the problem alone, computed once per QP: O(nnz(A) + nnz(J)),
@@ -53,8 +63,10 @@ struct AccuracyScale {
     /// The stationarity part at (x, lambda) whose residual force is r = Ax - b - J'lambda:
     /// max(|D^-1 r|_inf, the bodies' motion) / l (a lambda of another size than m counts as 0).
     double stationarity(const Vec& r, const Vec& x, const Vec& lambda) const;
+    /// Same with tangential multipliers (2m; empty: none): r = Ax - b - J'lambda - T'lambda_T.
+    double stationarity(const Vec& r, const Vec& x, const Vec& lambda, const Vec& lambda_t) const;
     /// Its rigid half alone, the bodies' motion / l (for solvers whose fused passes hold the rest).
-    double body_motion(const Vec& x, const Vec& lambda) const;
+    double body_motion(const Vec& x, const Vec& lambda, const Vec& lambda_t = Vec()) const;
     nlohmann::json to_json() const;  ///< {length_scale, length_scale_source, stiffness_scale}
 };
 
@@ -72,13 +84,16 @@ double point_extent(const Vec& x, std::string& source);
 
 /// The measure at (x, lambda) with the gradient g = Ax - b already known (no A-product).
 /// A lambda whose size is not m counts as lambda = 0 on stationarity and adds no dual or
-/// complementarity part. NaN anywhere reads as an infinite part.
+/// complementarity part. NaN anywhere reads as an infinite part. On a problem with friction
+/// fields, `lambda_t` (2m tangential multipliers; nullptr or another size: 0) enters stationarity
+/// and the friction part (see above).
 AccuracyParts accuracy_from_gradient(const QpView& qp, const AccuracyScale& scale, const Vec& x, const Vec& g,
-                                     const Vec& lambda);
+                                     const Vec& lambda, const Vec* lambda_t = nullptr);
 /// Same, one A-product.
-AccuracyParts accuracy(const QpView& qp, const AccuracyScale& scale, const Vec& x, const Vec& lambda);
+AccuracyParts accuracy(const QpView& qp, const AccuracyScale& scale, const Vec& x, const Vec& lambda,
+                       const Vec* lambda_t = nullptr);
 /// Same, building the scale first (tests and one-off checks).
-AccuracyParts accuracy(const QpView& qp, const Vec& x, const Vec& lambda);
+AccuracyParts accuracy(const QpView& qp, const Vec& x, const Vec& lambda, const Vec* lambda_t = nullptr);
 
 /// The energy figure |F - F*| / (d_ref l^2): an objective gap in units of the energy of moving a
 /// typical DOF by the scene size (dimensionless; NaN when F or F* is not finite).

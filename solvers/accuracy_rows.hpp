@@ -10,8 +10,15 @@
 ///   dual             max(0, -lambda_i) n_i / k_i
 ///   complementarity  min(|lambda_i| n_i / k_i, |s_i| / n_i)
 ///   gap              |lambda_i s_i|        (summed over rows; the others are maxima)
-/// A new kind of row (a friction cone, say) adds its own add_* function here and, if it brings a
-/// new part, a member here and in AccuracyParts.
+/// A frictional contact (Coulomb, issue 48: normal row i and its two tangent rows, tangential
+/// slacks t_i = T_i x - cT_i, tangential multipliers lambda_T,i, coefficient mu_i) adds, with
+/// w_i = n_i / k_i converting its forces and 1 / n_i its displacements into lengths:
+///   friction         || F_i ||_2,  F_i = w_i r_i - P_K(w_i r_i - (u_i + mu_i ||u_iT|| e_n)),
+///                    r_i = (lambda_i, lambda_T,i), u_i = (s_i, t_i) / n_i   (Coulomb's natural map)
+///   gap              + |lambda_T,i . t_i + mu_i lambda_i ||t_i||| (the modified velocity's work)
+/// (add_friction; docs/accuracy.md "e for Coulomb friction").
+#include "solvers/friction_error.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -26,6 +33,7 @@ struct RowParts {
     double dual = 0.0;
     double complementarity = 0.0;
     double gap = 0.0;
+    double friction = 0.0;  ///< Coulomb's natural map, largest over frictional contacts (0: none)
 
     static double sanitize(double v) { return std::isfinite(v) ? v : std::numeric_limits<double>::infinity(); }
 
@@ -49,6 +57,26 @@ struct RowParts {
         complementarity = std::max(complementarity, sanitize(std::min(std::abs(push), std::abs(slack) * inv_norm)));
         gap += std::abs(lambda * slack);
     }
+    /// The Coulomb parts of a contact with n_i > 0 whose coefficient or tangential multipliers are
+    /// not zero (a contact with both zero adds nothing: there the natural map's normal component is
+    /// already bounded by the primal, dual and complementarity parts and its tangential one is 0).
+    /// `tangent_slack` t_i and `lambda_t` are the contact's two tangential values.
+    void add_friction(double slack, double lambda, const double tangent_slack[2], const double lambda_t[2], double mu,
+                      double inv_norm, double length_per_multiplier)
+    {
+        const double w = length_per_multiplier;
+        const double force[3] = {lambda * w, lambda_t[0] * w, lambda_t[1] * w};
+        const double move[3] = {slack * inv_norm, tangent_slack[0] * inv_norm, tangent_slack[1] * inv_norm};
+        // De Saxce's modified displacement u + mu ||u_T|| e_n makes the natural map one cone projection.
+        double z[3] = {force[0] - (move[0] + mu * std::hypot(move[1], move[2])), force[1] - move[1],
+                       force[2] - move[2]};
+        project_on_coulomb_cone(z, mu);
+        const double natural = std::sqrt((force[0] - z[0]) * (force[0] - z[0]) + (force[1] - z[1]) * (force[1] - z[1]) +
+                                         (force[2] - z[2]) * (force[2] - z[2]));
+        friction = std::max(friction, sanitize(natural));
+        gap += std::abs(lambda_t[0] * tangent_slack[0] + lambda_t[1] * tangent_slack[1] +
+                        mu * lambda * std::hypot(tangent_slack[0], tangent_slack[1]));
+    }
     /// Every part of row i (c = c_i tells a zero row's feasibility).
     void add_row(double c, double slack, double lambda, double inv_norm, double length_per_multiplier)
     {
@@ -62,7 +90,8 @@ struct RowParts {
     /// The parts in the measure's units (AccuracyParts): lengths / l, gap / (d_ref l^2).
     RowParts scaled(double inv_length, double inv_energy) const
     {
-        return {primal * inv_length, dual * inv_length, complementarity * inv_length, sanitize(gap * inv_energy)};
+        return {primal * inv_length, dual * inv_length, complementarity * inv_length, sanitize(gap * inv_energy),
+                friction * inv_length};
     }
 };
 

@@ -163,28 +163,51 @@ BodyMotion::BodyMotion(const QpView& qp, double length)
         m_pinv[b] = eig.eigenvectors() * inv.asDiagonal() * eig.eigenvectors().transpose();
     }
 
-    // JV: each row's load per body it touches (a contact row touches one or two bodies).
-    const Eigen::Index m = qp.J.rows();
-    m_row_start.assign(static_cast<size_t>(m) + 1, 0);
-    for (Eigen::Index i = 0; i < m; ++i) {
-        const auto first = m_row_body.size();
-        for (SpMat::InnerIterator it(qp.J, i); it; ++it) {
-            if (it.value() == 0.0 || it.col() >= n) continue;
-            const int b = static_cast<int>(body_of(it.col()));
-            size_t e = first;
-            while (e < m_row_body.size() && m_row_body[e] != b) ++e;
-            if (e == m_row_body.size()) {
-                m_row_body.push_back(b);
-                m_row_jv.push_back(Vec6::Zero());
-            }
-            const int cn = mode_row(it.col(), cmode, cvalue);
-            for (int t = 0; t < cn; ++t) m_row_jv[e][cmode[t]] += it.value() * cvalue[t];
-        }
-        m_row_start[static_cast<size_t>(i) + 1] = static_cast<int>(m_row_body.size());
-    }
+    m_rows = row_loads(qp.J);
+    if (qp.friction && qp.friction->T.rows() == 2 * qp.J.rows() && qp.friction->T.cols() == n)
+        m_tangents = row_loads(qp.friction->T);
 }
 
-double BodyMotion::displacement(const Vec& x, const Vec& lambda) const
+BodyMotion::RowLoads BodyMotion::row_loads(const SpMat& rows) const
+{
+    RowLoads out;
+    const Eigen::Index m = rows.rows(), n = m_x0.size();
+    int cmode[3];
+    double cvalue[3];
+    out.start.assign(static_cast<size_t>(m) + 1, 0);
+    for (Eigen::Index i = 0; i < m; ++i) {
+        const auto first = out.body.size();
+        for (SpMat::InnerIterator it(rows, i); it; ++it) {
+            if (it.value() == 0.0 || it.col() >= n) continue;
+            const int b = m_body[static_cast<size_t>(it.col() / m_per_node)];
+            size_t e = first;
+            while (e < out.body.size() && out.body[e] != b) ++e;
+            if (e == out.body.size()) {
+                out.body.push_back(b);
+                out.jv.push_back(Vec6::Zero());
+            }
+            const int cn = mode_row(it.col(), cmode, cvalue);
+            for (int t = 0; t < cn; ++t) out.jv[e][cmode[t]] += it.value() * cvalue[t];
+        }
+        out.start[static_cast<size_t>(i) + 1] = static_cast<int>(out.body.size());
+    }
+    return out;
+}
+
+bool BodyMotion::subtract(const RowLoads& rows, const Vec& lambda, std::vector<Vec6>& load)
+{
+    const Eigen::Index m = rows.rows();
+    if (lambda.size() != m || m <= 0) return true;
+    if (!lambda.allFinite()) return false;
+    for (Eigen::Index i = 0; i < m; ++i) {
+        if (lambda[i] == 0.0) continue;
+        for (int e = rows.start[static_cast<size_t>(i)]; e < rows.start[static_cast<size_t>(i) + 1]; ++e)
+            load[static_cast<size_t>(rows.body[static_cast<size_t>(e)])] -= lambda[i] * rows.jv[static_cast<size_t>(e)];
+    }
+    return true;
+}
+
+double BodyMotion::displacement(const Vec& x, const Vec& lambda, const Vec& lambda_t) const
 {
     if (m_body.empty()) return 0.0;
     if (x.size() != m_x0.size() || !x.allFinite()) return std::numeric_limits<double>::infinity();
@@ -192,16 +215,8 @@ double BodyMotion::displacement(const Vec& x, const Vec& lambda) const
     for (Eigen::Index p = 0; p < x.size(); ++p)
         load[static_cast<size_t>(m_body[static_cast<size_t>(p / m_per_node)])] +=
             m_av.row(p).transpose() * (x[p] - m_x0[p]);
-    const auto m = static_cast<Eigen::Index>(m_row_start.size()) - 1;
-    if (lambda.size() == m && m > 0) {
-        if (!lambda.allFinite()) return std::numeric_limits<double>::infinity();
-        for (Eigen::Index i = 0; i < m; ++i) {
-            if (lambda[i] == 0.0) continue;
-            for (int e = m_row_start[static_cast<size_t>(i)]; e < m_row_start[static_cast<size_t>(i) + 1]; ++e)
-                load[static_cast<size_t>(m_row_body[static_cast<size_t>(e)])] -=
-                    lambda[i] * m_row_jv[static_cast<size_t>(e)];
-        }
-    }
+    if (!subtract(m_rows, lambda, load) || !subtract(m_tangents, lambda_t, load))
+        return std::numeric_limits<double>::infinity();
     std::vector<Vec6> motion(load.size());
     for (size_t b = 0; b < load.size(); ++b) motion[b] = m_pinv[b] * load[b];
     double widest = 0.0;

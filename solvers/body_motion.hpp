@@ -40,9 +40,10 @@ public:
     /// O(nnz(A) + nnz(J) + n); no A-product. `length` scales the rotation modes (any positive length).
     BodyMotion(const QpView& qp, double length);
 
-    /// max over DOFs of |V (V'AV)^+ V'(Ax - b - J'lambda)| in the problem's length unit; a lambda
-    /// whose size is not m counts as 0. 0 for n = 0; infinity when x or lambda is not finite. O(n + nnz(J)).
-    double displacement(const Vec& x, const Vec& lambda) const;
+    /// max over DOFs of |V (V'AV)^+ V'(Ax - b - J'lambda - T'lambda_t)| in the problem's length
+    /// unit; a lambda whose size is not m (lambda_t: 2m, T the friction's tangent rows) counts as 0.
+    /// 0 for n = 0; infinity when x or lambda is not finite. O(n + nnz(J) + nnz(T)).
+    double displacement(const Vec& x, const Vec& lambda, const Vec& lambda_t = Vec()) const;
 
     int bodies() const { return static_cast<int>(m_pinv.size()); }
 
@@ -64,9 +65,18 @@ private:
     Vec m_x0;                                                            ///< the start the loads are taken from
     Eigen::Matrix<double, Eigen::Dynamic, MODES, Eigen::RowMajor> m_av;  ///< row p: (AV)_p on its body's modes
     std::vector<Vec6> m_load0;                                           ///< V'(A x0 - b) per body
-    std::vector<int> m_row_start;  ///< (JV) entries of row i: [start_i, start_i+1)
-    std::vector<int> m_row_body;
-    std::vector<Vec6> m_row_jv;
+    /// Each row's load per body it touches (a contact row touches one or two bodies).
+    struct RowLoads {
+        std::vector<int> start;  ///< (JV) entries of row i: [start_i, start_i+1)
+        std::vector<int> body;
+        std::vector<Vec6> jv;
+        Eigen::Index rows() const { return static_cast<Eigen::Index>(start.size()) - 1; }
+    };
+    RowLoads row_loads(const SpMat& rows) const;
+    /// load -= (JV)' lambda over `rows`; false when lambda is not finite.
+    static bool subtract(const RowLoads& rows, const Vec& lambda, std::vector<Vec6>& load);
+    RowLoads m_rows;           ///< J's
+    RowLoads m_tangents;       ///< the friction's T (no rows without friction)
     std::vector<Mat6> m_pinv;  ///< (V'AV)^+ per body (1 x 1 in the top-left corner without 3-D)
 };
 

@@ -5,6 +5,7 @@
 #include "solvers/mprgp.hpp"
 #include "solvers/mprgp_box.hpp"
 #include "solvers/mprgp_coupled.hpp"
+#include "solvers/nsgs_friction.hpp"
 #include "solvers/pgs.hpp"
 #include "solvers/registry.hpp"
 #ifdef CB_HAVE_IPOPT
@@ -34,6 +35,7 @@ void register_builtin_solvers(SolverRegistry& registry)
     registry.add("mprgp-coupled", mprgp_coupled_entry());  // applies to any J (the entry's default)
     registry.add("ica", ica_entry());
     registry.add("pgs", pgs_entry());
+    registry.add("nsgs-friction", nsgs_friction_entry());  // pgs's frictional extension (Coulomb cones)
     // External peers (solvers/peers/), each only when CMake found its library:
 #ifdef CB_HAVE_IPOPT
     registry.add("ipopt", ipopt_entry());

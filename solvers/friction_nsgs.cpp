@@ -51,6 +51,10 @@ double solve_contact(const Mat3& A, const Eigen::PartialPivLU<Mat3>& factor, dou
         r.setZero();
         return 0.0;
     }
+    if (mu == 0.0) {  // the cone is the normal ray: r_T = 0 and u_n = 0, exactly (pgs's update)
+        r = Vec3(-b[0] / A(0, 0), 0.0, 0.0);
+        return 0.0;
+    }
     const Vec3 stick = factor.solve(-b);  // u = 0 (LU: W_ii need not be symmetric; Capsules' is not)
     if (stick[0] >= 0.0 && std::hypot(stick[1], stick[2]) <= mu * stick[0]) {
         r = stick;
@@ -98,6 +102,49 @@ double solve_contact(const Mat3& A, const Eigen::PartialPivLU<Mat3>& factor, dou
 
 }  // namespace
 
+FrictionSweeps::FrictionSweeps(const SpMat& W, const Vec& mu, const std::string& name)
+    : m_mu(mu), m_block(size_t(mu.size()), Mat3::Zero()), m_factor(size_t(mu.size())), m_rho(size_t(mu.size()), 0.0)
+{
+    // The diagonal blocks, their factors and step lengths, once.
+    const Eigen::Index m = mu.size();
+    for (Eigen::Index row = 0; row < 3 * m; ++row)
+        for (SpMat::InnerIterator it(W, row); it; ++it)
+            if (it.col() / 3 == row / 3) m_block[size_t(row / 3)](row % 3, it.col() % 3) = it.value();
+    for (Eigen::Index i = 0; i < m; ++i) {
+        const Mat3& block = m_block[size_t(i)];
+        if (mu[i] == 0.0) {  // closed form: only the normal entry is read
+            if (!(block(0, 0) > 0.0))
+                throw InputError(name + ": W: the normal entry of frictionless contact " + std::to_string(i) + " is " +
+                                 std::to_string(block(0, 0)) + ", not positive");
+            continue;
+        }
+        const Mat3 sym = 0.5 * (block + block.transpose());
+        const Eigen::SelfAdjointEigenSolver<Mat3> eig(sym, Eigen::EigenvaluesOnly);
+        if (!(eig.eigenvalues()[0] > 0.0))
+            throw InputError(name + ": W: the diagonal block of contact " + std::to_string(i) +
+                             " is not positive definite (smallest eigenvalue of its symmetric part " +
+                             std::to_string(eig.eigenvalues()[0]) +
+                             "): nsgs needs each one-contact problem to have "
+                             "a unique solution");
+        m_factor[size_t(i)].compute(block);
+        m_rho[size_t(i)] = 1.0 / eig.eigenvalues()[2];
+    }
+}
+
+void FrictionSweeps::sweep(const SpMat& W, const Vec& q, Vec& r, double target, long local_iterations) const
+{
+    for (Eigen::Index i = 0; i < m_mu.size(); ++i) {
+        Vec3 u = Vec3::Zero();
+        for (int k = 0; k < 3; ++k)
+            for (SpMat::InnerIterator it(W, 3 * i + k); it; ++it) u[k] += it.value() * r[it.col()];
+        Vec3 ri = r.segment<3>(3 * i);
+        const Vec3 b = u + q.segment<3>(3 * i) - m_block[size_t(i)] * ri;
+        solve_contact(m_block[size_t(i)], m_factor[size_t(i)], m_rho[size_t(i)], b, m_mu[i], ri, target,
+                      local_iterations);
+        r.segment<3>(3 * i) = ri;
+    }
+}
+
 FrictionRun friction_nsgs(const FrictionLocal& p, const FrictionNsgsSettings& s)
 {
     const Eigen::Index m = p.contacts();
@@ -112,25 +159,7 @@ FrictionRun friction_nsgs(const FrictionLocal& p, const FrictionNsgsSettings& s)
     }
     Stopwatch watch;
     watch.start();
-    // The diagonal blocks, their factors and step lengths, once.
-    std::vector<Mat3> block(size_t(m), Mat3::Zero());
-    for (Eigen::Index row = 0; row < 3 * m; ++row)
-        for (SpMat::InnerIterator it(p.W, row); it; ++it)
-            if (it.col() / 3 == row / 3) block[size_t(row / 3)](row % 3, it.col() % 3) = it.value();
-    std::vector<Eigen::PartialPivLU<Mat3>> factor(static_cast<size_t>(m));
-    std::vector<double> rho(static_cast<size_t>(m));
-    for (Eigen::Index i = 0; i < m; ++i) {
-        const Mat3 sym = 0.5 * (block[size_t(i)] + block[size_t(i)].transpose());
-        const Eigen::SelfAdjointEigenSolver<Mat3> eig(sym, Eigen::EigenvaluesOnly);
-        if (!(eig.eigenvalues()[0] > 0.0))
-            throw InputError(p.name + ": W: the diagonal block of contact " + std::to_string(i) +
-                             " is not positive definite (smallest eigenvalue of its symmetric part " +
-                             std::to_string(eig.eigenvalues()[0]) +
-                             "): nsgs needs each one-contact problem to have "
-                             "a unique solution");
-        factor[size_t(i)].compute(block[size_t(i)]);
-        rho[size_t(i)] = 1.0 / eig.eigenvalues()[2];
-    }
+    const FrictionSweeps sweeps(p.W, p.mu, p.name);
     const double norm_q = p.q.norm();
     double error = fclib_relative_error(p, run.r);
     run.status = "max_iterations";
@@ -145,16 +174,7 @@ FrictionRun friction_nsgs(const FrictionLocal& p, const FrictionNsgsSettings& s)
         }
         // Each contact's one-contact problem is solved to a fraction of the current global error.
         const double target = std::pow(1e-3 * error * (norm_q > 0.0 ? norm_q : 1.0), 2) / double(m);
-        for (Eigen::Index i = 0; i < m; ++i) {
-            Vec3 u = Vec3::Zero();
-            for (int k = 0; k < 3; ++k)
-                for (SpMat::InnerIterator it(p.W, 3 * i + k); it; ++it) u[k] += it.value() * run.r[it.col()];
-            Vec3 r = run.r.segment<3>(3 * i);
-            const Vec3 b = u + p.q.segment<3>(3 * i) - block[size_t(i)] * r;
-            solve_contact(block[size_t(i)], factor[size_t(i)], rho[size_t(i)], b, p.mu[i], r, target,
-                          s.local_iterations);
-            run.r.segment<3>(3 * i) = r;
-        }
+        sweeps.sweep(p.W, p.q, run.r, target, s.local_iterations);
         ++run.iterations;
         error = fclib_relative_error(p, run.r);
         if (!std::isfinite(error)) {

@@ -17,7 +17,31 @@
 /// error <= tol, so `converged` means exactly what it means for every peer.
 #include "solvers/friction_problem.hpp"
 
+#include <Eigen/Dense>
+#include <vector>
+
 namespace cb {
+
+/// The sweeps of nsgs on u = W r + q, for a solver that owns its loop (friction_nsgs below, and
+/// `nsgs-friction` on a snapshot's exact dual, solvers/nsgs_friction.hpp). A contact with mu = 0
+/// is solved in closed form (r_T = 0, r_n = max(0, -b_n / W_nn): its cone is the normal ray), so
+/// on a frictionless problem a sweep is pgs's (only W_nn > 0 is needed there).
+class FrictionSweeps {
+public:
+    /// Takes W's diagonal blocks and factors them. Throws InputError("name: W: ...") when a
+    /// frictional contact's block is not positive definite, or a frictionless one has W_nn <= 0.
+    FrictionSweeps(const SpMat& W, const Vec& mu, const std::string& name);
+    /// One ascending sweep over the contacts of r (3m): contact i sees the others frozen and its
+    /// one-contact problem is solved to the squared local residual `target` (at most
+    /// `local_iterations` projected steps after the closed forms).
+    void sweep(const SpMat& W, const Vec& q, Vec& r, double target, long local_iterations) const;
+
+private:
+    Vec m_mu;
+    std::vector<Eigen::Matrix3d> m_block;
+    std::vector<Eigen::PartialPivLU<Eigen::Matrix3d>> m_factor;
+    std::vector<double> m_rho;
+};
 
 struct FrictionNsgsSettings {
     double tol = 1e-8;             ///< FCLIB relative error to reach

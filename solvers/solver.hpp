@@ -75,6 +75,7 @@ struct IterationInfo {
     const Counters* counters = nullptr;
     double elapsed_s = 0.0;  ///< solver time since the start of its setup (monitor time excluded)
     double setup_s = 0.0;    ///< the setup's share of elapsed_s (elapsed_s - setup_s: the iterations)
+    const Vec* lambda_t = nullptr;  ///< a frictional solver's 2m tangential multipliers, or nullptr
 };
 
 /// Called at every outer iteration; its time is excluded from the solver's time (SolveLoop::notify).
@@ -108,6 +109,7 @@ struct SolverResult {
     double native_residual = 0.0;  ///< at the returned x
     bool lambda_fitted = false;    ///< true when lambda came from fit_multipliers, not the solver
     nlohmann::json info = nlohmann::json::object();  ///< solver-specific facts (power method, rows dropped ...)
+    Vec lambda_t;  ///< a frictional solver's tangential multipliers (2m, qp.friction's T rows); empty: 0
 };
 
 class Solver {
@@ -119,6 +121,10 @@ public:
     /// True when the solver needs a decoupled J (at most one row per vertex); the harness
     /// then applies the decoupling transform first.
     virtual bool requires_decoupled() const { return false; }
+    /// True when the solver solves the Coulomb problem of a snapshot with friction (qp.friction).
+    /// Otherwise it solves the frictionless problem (mu = 0) and the harness says so: status
+    /// `solved_relaxation` at best, never `converged` (docs/accuracy.md "e for Coulomb friction").
+    virtual bool handles_friction() const { return false; }
     virtual SolverResult solve(const QpView& qp, const SolveContext& context) = 0;
 };
 

@@ -1,0 +1,70 @@
+#pragma once
+/// Frictional test problems for the solver and measure tests (issue 48): a synthetic QP given
+/// Coulomb friction (solvers/qp.hpp Friction) with tangent rows built from its normal rows.
+#include "harness/runner.hpp"
+#include "problems/synthetic.hpp"
+#include "solvers/qp.hpp"
+
+#include <cmath>
+#include <functional>
+#include <vector>
+
+namespace cb::testing_qps {
+
+/// Gives every contact row of `qp` two tangent rows and mu_i = mu_of(i). Row i's normal is its
+/// first touched vertex's three entries, normalised; t1, t2 complete an orthonormal frame, and
+/// each touched vertex v (entries a_v) gets (a_v . n) t_k in tangent row k, so the frame is the
+/// row's own (a one-vertex plane row: exactly n, t1, t2). cT = T x0: slip is measured from the start.
+inline void add_friction(Qp& qp, const std::function<double(Eigen::Index)>& mu_of)
+{
+    const Eigen::Index m = qp.m(), n = qp.n();
+    std::vector<Triplet> t;
+    for (Eigen::Index i = 0; i < m; ++i) {
+        Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+        Eigen::Index first = -1;
+        for (SpMat::InnerIterator it(qp.J, i); it; ++it) {
+            if (first < 0) first = it.col() / 3;
+            if (it.col() / 3 == first) normal[it.col() % 3] = it.value();
+        }
+        normal.normalize();
+        const Eigen::Vector3d helper = std::abs(normal[0]) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+        const Eigen::Vector3d t1 = normal.cross(helper).normalized();
+        const Eigen::Vector3d t2 = normal.cross(t1);
+        // Per touched vertex, the weight a_v . n.
+        std::vector<std::pair<Eigen::Index, double>> weight;
+        for (SpMat::InnerIterator it(qp.J, i); it; ++it) {
+            const Eigen::Index v = it.col() / 3;
+            if (weight.empty() || weight.back().first != v) weight.push_back({v, 0.0});
+            weight.back().second += it.value() * normal[it.col() % 3];
+        }
+        for (const auto& [v, w] : weight)
+            for (int a = 0; a < 3; ++a) {
+                if (t1[a] != 0.0) t.emplace_back(static_cast<int>(2 * i), static_cast<int>(3 * v + a), w * t1[a]);
+                if (t2[a] != 0.0) t.emplace_back(static_cast<int>(2 * i + 1), static_cast<int>(3 * v + a), w * t2[a]);
+            }
+    }
+    Friction& f = qp.friction;
+    f.T.resize(2 * m, n);
+    f.T.setFromTriplets(t.begin(), t.end());
+    f.T.makeCompressed();
+    f.mu.resize(m);
+    for (Eigen::Index i = 0; i < m; ++i) f.mu[i] = mu_of(i);
+    f.cT = f.T * qp.x0;
+}
+
+/// `plane` (a body falling onto the ground y >= 0) with a sideways load along x spread over its
+/// vertices, `push` times the total contact force of the frictionless solution: with mu > push
+/// the body tends to stick, with mu < push it slides.
+inline Qp pushed_plane(double push, double mu, std::uint64_t seed = 3)
+{
+    Qp qp = make_synthetic("plane", {{"nx", 3}, {"ny", 2}, {"nz", 3}}, seed);
+    RunOptions options;
+    options.record_history = false;
+    const RunOutcome frictionless = run_solver(qp, "active-set", {{"tol", 1e-10}}, options);
+    const double load = push * frictionless.lambda_full.sum() / static_cast<double>(qp.n() / 3);
+    for (Eigen::Index j = 0; j < qp.n(); j += 3) qp.b[j] += load;
+    add_friction(qp, [mu](Eigen::Index) { return mu; });
+    return qp;
+}
+
+}  // namespace cb::testing_qps
