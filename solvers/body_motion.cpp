@@ -117,8 +117,8 @@ BodyMotion::BodyMotion(const QpView& qp, double length)
     // parts of a row cancel, and must do so before rounding to double).
     m_av.setZero(n, MODES);
     std::vector<LongVec6> load(static_cast<size_t>(bodies), LongVec6{});
-    int mode[3], cmode[3];
-    double value[3], cvalue[3];
+    int mode[3];
+    double value[3];
     const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> scaled_offset = m_offset * m_inv_length;
     for (Eigen::Index p = 0; p < A.outerSize(); ++p) {
         LongVec6 av{};
