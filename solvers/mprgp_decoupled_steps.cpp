@@ -78,6 +78,14 @@ SolveStatus DecoupledMprgp::expansion(std::string& why)
     project_x();
     refresh_gradient();
     double f_now = objective_from_gradient();
+    if (m_bb && alpha_cg == 0.0 && f_now > f_before) {
+        // expansion = bb raised F: the fixed step from the same point (m_tmp still holds its phi).
+        m_x = m_bb_step.start() - m_alpha_bar * m_tmp;
+        project_x();
+        refresh_gradient();
+        f_now = objective_from_gradient();
+        ++m_bb_fallbacks;
+    }
     ++m_cnt.expansion_steps;
     return end_step(f_before, f_now, why);
 }
@@ -381,6 +389,7 @@ SolverResult DecoupledMprgp::run()
     result.info["safeguard_firings"] = m_cnt.safeguard_steps;
     result.info["alpha_bar"] = m_alpha_bar;
     result.info["active_rows"] = m_active_count;
+    if (m_bb) result.info["bb_fallbacks"] = m_bb_fallbacks;
     if (m_recompute)
         result.info["recompute"] = {{"trial_steps", m_trial_steps},
                                     {"direct_disagreements", m_direct_disagreements},

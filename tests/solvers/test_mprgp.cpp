@@ -152,6 +152,30 @@ TEST_P(MprgpExpansionVariants, MatchActiveSetObjectiveAndKkt)
 INSTANTIATE_TEST_SUITE_P(Families, MprgpExpansionVariants, families,
                          [](const auto& info) { return std::string(info.param.name); });
 
+// expansion = bb on the random SPD stress case with m near n (decoupled): long BB steps that raised
+// F, repaired only by Alg. 3's capped safeguard, diverged (accuracy 5e149 after 8138 iterations);
+// the fixed-step fallback keeps F(P(x)) non-increasing and reaches the active-set solution.
+TEST(Mprgp, BarzilaiBorweinExpansionStaysMonotone)
+{
+    const Qp qp = decoupled(cb::make_synthetic("random-spd", {{"n", 200}, {"m", 190}}, 1));
+    const cb::SolverResult ref = reference_solver()->solve(qp.view(), {});
+    ASSERT_EQ(ref.status, SolveStatus::CONVERGED) << ref.message;
+    ObjectiveRecorder recorder(qp);
+    cb::SolveContext context;
+    context.monitor = &recorder;
+    const cb::SolverResult r =
+        mprgp({{"tol", 1e-10}, {"max_iterations", 20000}, {"expansion", "bb"}})->solve(qp.view(), context);
+    ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
+    const double f_ref = cb::objective(qp.view(), ref.x);
+    EXPECT_LE(std::abs(cb::objective(qp.view(), r.x) - f_ref), 1e-8 * std::abs(f_ref));
+    EXPECT_LE(relative_kkt(qp, r.x, r.lambda), 1e-8);
+    EXPECT_GT(r.info.at("bb_fallbacks").get<long>(), 0);  // the case exercises the fallback
+    for (size_t k = 1; k < recorder.values.size(); ++k) {
+        const double prev = recorder.values[k - 1], now = recorder.values[k];
+        ASSERT_LE(now, prev + 1e-11 * (std::abs(prev) + std::abs(now))) << "call " << k;
+    }
+}
+
 // A tiny hand-solved problem: min (x0^2+x1^2+x2^2) - 2 x1 s.t. x0 >= 1 (one row on vertex 0).
 // x* = (1, 1, 0), lambda* = 2.
 TEST(Mprgp, TinyHandSolvedProblem)
