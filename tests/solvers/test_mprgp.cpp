@@ -126,7 +126,7 @@ INSTANTIATE_TEST_SUITE_P(Families, MprgpAgreement, families,
                          [](const auto& info) { return std::string(info.param.name); });
 
 // The literature expansion variants (docs/DESIGN.md "Adding an MPRGP variant") reach the
-// active-set solution on every family, and take expansions of their own (else the part is dead).
+// active-set solution on every family (most take no expansion: then the variant is the default).
 class MprgpExpansionVariants : public ::testing::TestWithParam<Case> {};
 
 TEST_P(MprgpExpansionVariants, MatchActiveSetObjectiveAndKkt)
@@ -170,6 +170,30 @@ TEST(Mprgp, BarzilaiBorweinExpansionStaysMonotone)
     EXPECT_LE(std::abs(cb::objective(qp.view(), r.x) - f_ref), 1e-8 * std::abs(f_ref));
     EXPECT_LE(relative_kkt(qp, r.x, r.lambda), 1e-8);
     EXPECT_GT(r.info.at("bb_fallbacks").get<long>(), 0);  // the case exercises the fallback
+    for (size_t k = 1; k < recorder.values.size(); ++k) {
+        const double prev = recorder.values[k - 1], now = recorder.values[k];
+        ASSERT_LE(now, prev + 1e-11 * (std::abs(prev) + std::abs(now))) << "call " << k;
+    }
+}
+
+// expansion = projcg on the same case: P(y) from the rejected CG trial, whose F(P(y)) rose by the
+// monotone chain's rule, so Alg. 3's safeguard repairs it; F(P(x)) stays non-increasing.
+TEST(Mprgp, ProjectedCgExpansionStaysMonotone)
+{
+    const Qp qp = decoupled(cb::make_synthetic("random-spd", {{"n", 200}, {"m", 190}}, 1));
+    const cb::SolverResult ref = reference_solver()->solve(qp.view(), {});
+    ASSERT_EQ(ref.status, SolveStatus::CONVERGED) << ref.message;
+    ObjectiveRecorder recorder(qp);
+    cb::SolveContext context;
+    context.monitor = &recorder;
+    const cb::SolverResult r =
+        mprgp({{"tol", 1e-10}, {"max_iterations", 20000}, {"expansion", "projcg"}})->solve(qp.view(), context);
+    ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
+    const double f_ref = cb::objective(qp.view(), ref.x);
+    EXPECT_LE(std::abs(cb::objective(qp.view(), r.x) - f_ref), 1e-8 * std::abs(f_ref));
+    EXPECT_LE(relative_kkt(qp, r.x, r.lambda), 1e-8);
+    EXPECT_GT(r.counters.expansion_steps, 0);
+    EXPECT_GT(r.counters.safeguard_steps, 0);  // P(y) raised F: the safeguard ran
     for (size_t k = 1; k < recorder.values.size(); ++k) {
         const double prev = recorder.values[k - 1], now = recorder.values[k];
         ASSERT_LE(now, prev + 1e-11 * (std::abs(prev) + std::abs(now))) << "call " << k;
