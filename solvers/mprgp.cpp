@@ -35,7 +35,9 @@ const SettingsTable<MprgpSettings>& mprgp_settings_table()
                 "expansion", &MprgpSettings::expansion, expansion_variant_names(),
                 "paper: x = P(x - alpha_bar phi), alpha_bar = 2/||A|| (Alg. 1) | precond: x = P(x - a z) with z the "
                 "preconditioner's face direction and a = z'g / z'Az (one more A-product; Alg. 3's safeguard still "
-                "guarantees descent); docs/preconditioners.md")
+                "guarantees descent); docs/preconditioners.md | bb: P(x - a phi) with the Barzilai-Borwein a = s's/s'y "
+                "of the last two iterates in [alpha_bar/2, 100 alpha_bar] | projcg: P(y), the rejected CG trial "
+                "projected (Kruzik et al. 2020); docs/DESIGN.md")
             .number("ichol_refactor", &MprgpSettings::ichol_refactor, -1e-300, 1.0,
                     "precond = ichol: refactor the face matrix when more than this fraction of the rows changed face "
                     "since the last factorization (0: at every face change; 1: factor once)")

@@ -24,7 +24,7 @@ struct MprgpSettings {
     long safeguard_max = 100;         ///< max Alg. 3 safeguard repeats after one step
     double ichol_refactor = 0.1;  ///< precond = ichol: refactor when more than this fraction of the rows changed face
     std::string expansion = "paper";  ///< paper: P(x - alpha_bar phi) | precond: P(x - a z), z the preconditioned free
-                                      ///< gradient, a its exact step
+                                      ///< gradient, a its exact step | bb | projcg (solvers/mprgp_parts.hpp)
     std::string deflation = "none";   ///< none | rigid: Galerkin step and balanced preconditioner with the face's
                                       ///< rigid modes (solvers/mprgp_deflation.hpp)
 

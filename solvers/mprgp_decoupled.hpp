@@ -12,10 +12,12 @@
 #include "solvers/accuracy.hpp"
 #include "solvers/ichol.hpp"
 #include "solvers/mprgp.hpp"
+#include "solvers/mprgp_bb_step.hpp"
 #include "solvers/mprgp_deflation.hpp"
 #include "solvers/mprgp_engine.hpp"
 #include "solvers/mprgp_kernels.hpp"
 #include "solvers/mprgp_parts.hpp"
+#include "solvers/mprgp_projcg_step.hpp"
 #include "solvers/solve_loop.hpp"
 
 #include <string>
@@ -113,6 +115,10 @@ private:
     Vec m_dinv;
     bool m_ichol = false;
     ExpansionVariant m_expansion;  // the expansion's direction and step length (solvers/mprgp_parts.hpp)
+    bool m_bb = false;             // expansion = bb: record the iterates for m_bb_step
+    BarzilaiBorweinStep m_bb_step;
+    long m_bb_fallbacks = 0;  // BB steps that raised F, repeated with alpha_bar
+    ProjectedCgStep m_projcg;  // expansion = projcg: the rejected trial's step length
     bool m_recompute = false;      // objective = recompute
     double m_gamma2 = 1.0;         // Gamma^2
     IncompleteCholeskyPreconditioner m_ic;

@@ -33,12 +33,15 @@ void DecoupledMprgp::expansion_step()
             jacobi_face_precondition(m_J, m_rows, m_active, m_dinv, m_g, m_tmp);
         ++m_cnt.precond_applications;
         break;
+    case ExpansionDirection::PROJECTED_CG:  // without a rejected trial (expansion() takes it)
     case ExpansionDirection::FREE_GRADIENT:
         free_gradient(m_J, m_rows, m_active, m_g, m_tmp);  // phi(y)
         break;
     }
     double step = m_alpha_bar;
-    if (m_expansion.length != StepLength::FIXED) {
+    if (m_expansion.length == StepLength::BARZILAI_BORWEIN) {
+        step = m_bb_step.length(m_x, m_g, m_alpha_bar);
+    } else if (m_expansion.length != StepLength::FIXED) {
         product(m_tmp, m_Ap);
         step = expansion_step_length(m_expansion.length, m_alpha_bar, m_tmp.dot(m_Ap), face_dot(m_tmp));
     }
@@ -49,6 +52,7 @@ SolveStatus DecoupledMprgp::end_step(double f_before, double f_now, std::string&
 {
     const bool ok = safeguard_steps(f_before, f_now);
     restart(true);
+    if (m_bb) m_bb_step.record(m_x, m_g);
     if (!ok) {
         why = "in a safeguard loop";
         return SolveStatus::TIME_LIMIT;
@@ -60,15 +64,28 @@ SolveStatus DecoupledMprgp::end_step(double f_before, double f_now, std::string&
 SolveStatus DecoupledMprgp::expansion(std::string& why)
 {
     const double f_before = m_f_x + m_corr_x;  // F(P(x))
-    if (m_infeasible) {
+    // expansion = projcg after a rejected trial: x = P(x - alpha_cg p), from the chain iterate.
+    const double alpha_cg = m_expansion.direction == ExpansionDirection::PROJECTED_CG ? m_projcg.take() : 0.0;
+    if (m_infeasible && alpha_cg == 0.0) {
         project_x();  // y = P(x)
         refresh_gradient();
     }
     active_rows(m_J, m_c, m_rows, m_x, m_active);
-    expansion_step();
+    if (alpha_cg > 0.0)
+        m_x -= alpha_cg * m_p;
+    else
+        expansion_step();
     project_x();
     refresh_gradient();
     double f_now = objective_from_gradient();
+    if (m_bb && alpha_cg == 0.0 && f_now > f_before) {
+        // expansion = bb raised F: the fixed step from the same point (m_tmp still holds its phi).
+        m_x = m_bb_step.start() - m_alpha_bar * m_tmp;
+        project_x();
+        refresh_gradient();
+        f_now = objective_from_gradient();
+        ++m_bb_fallbacks;
+    }
     ++m_cnt.expansion_steps;
     return end_step(f_before, f_now, why);
 }
@@ -180,7 +197,10 @@ Trial DecoupledMprgp::cg_trial(std::string& why)
     double f_proj_y = 0.0;
     if (m_recompute) f_proj_y = recompute_objective(alpha, delta, accept);
     // F(P(y)) went up: the chain ends with an (infeasible) trial point, an expansion follows.
-    if (!accept) return t;
+    if (!accept) {
+        m_projcg.rejected(alpha);
+        return t;
+    }
     cg_update(alpha, pap, df, corr_y, f_proj_y);
     t.accepted = true;
     return t;
@@ -257,6 +277,7 @@ void DecoupledMprgp::cg_update(double alpha, double pap, double df, double corr_
     m_f_x += df;
     m_corr_x = corr_y;
     if (m_recompute) m_f_proj_x = f_proj_y;
+    if (m_bb) m_bb_step.record(m_x, m_g);
     ++m_cnt.cg_steps;
 }
 
@@ -280,6 +301,7 @@ SolverResult DecoupledMprgp::run()
     // Every string setting is read here, once: the steps read enums and flags.
     m_ichol = m_st.precond == "ichol";
     m_expansion = expansion_variant(m_st.expansion);
+    m_bb = m_expansion.length == StepLength::BARZILAI_BORWEIN;
     m_recompute = m_st.objective == "recompute";
     m_gamma2 = m_st.gamma * m_st.gamma;
     if (m_st.deflation == "rigid") {
@@ -335,6 +357,7 @@ SolverResult DecoupledMprgp::run()
     project_x();  // x = P(x0)
     refresh_gradient();
     restart(true);
+    if (m_bb) m_bb_step.record(m_x, m_g);
 
     std::string why;  // a breakdown's reason (the loop's own exits need none)
     const SolveStatus status = run_mprgp(*this, m_loop, m_cnt, why);
@@ -366,6 +389,7 @@ SolverResult DecoupledMprgp::run()
     result.info["safeguard_firings"] = m_cnt.safeguard_steps;
     result.info["alpha_bar"] = m_alpha_bar;
     result.info["active_rows"] = m_active_count;
+    if (m_bb) result.info["bb_fallbacks"] = m_bb_fallbacks;
     if (m_recompute)
         result.info["recompute"] = {{"trial_steps", m_trial_steps},
                                     {"direct_disagreements", m_direct_disagreements},

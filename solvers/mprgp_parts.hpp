@@ -64,12 +64,14 @@ inline double fixed_step_length(const PowerResult& power)
 enum class ExpansionDirection {
     FREE_GRADIENT,   ///< phi, the free gradient (Dostal; Li et al. Alg. 1)
     PRECONDITIONED,  ///< the preconditioner's face direction z (J_A z = 0)
+    PROJECTED_CG,    ///< the rejected CG trial's p and alpha_cg: x = P(x - alpha_cg p) (mprgp_projcg_step.hpp)
 };
 
 /// The length a of the expansion step x = P(x - a d).
 enum class StepLength {
     FIXED,         ///< alpha_bar = 2 / ||A|| (rounded up 1%): a projected step that never increases F
     LINE_MINIMUM,  ///< d'g / d'Ad, the minimiser of F along d before the projection (alpha_bar if not positive)
+    BARZILAI_BORWEIN,  ///< s's / s'y from the last two iterates, safeguarded (mprgp_bb_step.hpp)
 };
 
 /// a for the direction d, from d'Ad and d'g (both read only for LINE_MINIMUM).
@@ -79,6 +81,7 @@ inline double expansion_step_length(StepLength rule, double alpha_bar, double da
     case StepLength::LINE_MINIMUM:
         return dad > 0.0 && dg > 0.0 && std::isfinite(dad) ? dg / dad : alpha_bar;
     case StepLength::FIXED:
+    case StepLength::BARZILAI_BORWEIN:  // from the iterates' history: BarzilaiBorweinStep
         break;
     }
     return alpha_bar;
@@ -97,6 +100,8 @@ inline const std::vector<ExpansionVariant>& expansion_variants()
     static const std::vector<ExpansionVariant> variants = {
         {"paper", ExpansionDirection::FREE_GRADIENT, StepLength::FIXED},
         {"precond", ExpansionDirection::PRECONDITIONED, StepLength::LINE_MINIMUM},
+        {"bb", ExpansionDirection::FREE_GRADIENT, StepLength::BARZILAI_BORWEIN},
+        {"projcg", ExpansionDirection::PROJECTED_CG, StepLength::FIXED},
     };
     return variants;
 }

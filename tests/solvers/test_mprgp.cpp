@@ -113,8 +113,7 @@ nlohmann::json with(nlohmann::json base, const nlohmann::json& extra)
     return base;
 }
 
-INSTANTIATE_TEST_SUITE_P(Families, MprgpAgreement,
-                         ::testing::Values(Case{"plane", "plane", small, false},
+const auto families = ::testing::Values(Case{"plane", "plane", small, false},
                                            Case{"tilted", "plane", with(small, {{"tilt_deg", 17.0}}), false},
                                            Case{"stiff", "plane", with(small, {{"youngs", 1e10}}), false},
                                            Case{"mm", "plane", with(small, {{"length_scale", 1e-3}}), false},
@@ -122,8 +121,84 @@ INSTANTIATE_TEST_SUITE_P(Families, MprgpAgreement,
                                            Case{"coupled", "coupled", {{"nx", 3}, {"ny", 2}, {"nz", 3}}, true},
                                            Case{"duplicate", "duplicate-rows", small, true},
                                            Case{"scaled", "scaled-rows", small, true},
-                                           Case{"zero", "zero-rows", small, true}),
+                                           Case{"zero", "zero-rows", small, true});
+INSTANTIATE_TEST_SUITE_P(Families, MprgpAgreement, families,
                          [](const auto& info) { return std::string(info.param.name); });
+
+// The literature expansion variants (docs/DESIGN.md "Adding an MPRGP variant") reach the
+// active-set solution on every family (most take no expansion: then the variant is the default).
+class MprgpExpansionVariants : public ::testing::TestWithParam<Case> {};
+
+TEST_P(MprgpExpansionVariants, MatchActiveSetObjectiveAndKkt)
+{
+    const Case& tc = GetParam();
+    Qp qp = cb::make_synthetic(tc.family, tc.params, 1);
+    if (tc.decouple) qp = decoupled(qp);
+    const cb::SolverResult ref = reference_solver()->solve(qp.view(), {});
+    ASSERT_EQ(ref.status, SolveStatus::CONVERGED) << tc.name << ": " << ref.message;
+    const double f_ref = cb::objective(qp.view(), ref.x);
+    for (const char* expansion : {"bb", "projcg"}) {
+        const cb::SolverResult r =
+            mprgp({{"tol", 1e-10}, {"max_iterations", 20000}, {"expansion", expansion}})->solve(qp.view(), {});
+        ASSERT_EQ(r.status, SolveStatus::CONVERGED) << tc.name << " " << expansion << ": " << r.message;
+        const double f = cb::objective(qp.view(), r.x);
+        EXPECT_LE(std::abs(f - f_ref), 1e-8 * std::max(std::abs(f_ref), 1e-300))
+            << tc.name << " " << expansion << " F " << f << " F* " << f_ref;
+        EXPECT_LE(relative_kkt(qp, r.x, r.lambda), 1e-8) << tc.name << " " << expansion;
+        EXPECT_LE(cb::max_violation(qp.view(), r.x), 1e-9 * std::max(1.0, qp.c.lpNorm<Eigen::Infinity>()))
+            << tc.name << " " << expansion;
+    }
+}
+INSTANTIATE_TEST_SUITE_P(Families, MprgpExpansionVariants, families,
+                         [](const auto& info) { return std::string(info.param.name); });
+
+// expansion = bb on the random SPD stress case with m near n (decoupled): long BB steps that raised
+// F, repaired only by Alg. 3's capped safeguard, diverged (accuracy 5e149 after 8138 iterations);
+// the fixed-step fallback keeps F(P(x)) non-increasing and reaches the active-set solution.
+TEST(Mprgp, BarzilaiBorweinExpansionStaysMonotone)
+{
+    const Qp qp = decoupled(cb::make_synthetic("random-spd", {{"n", 200}, {"m", 190}}, 1));
+    const cb::SolverResult ref = reference_solver()->solve(qp.view(), {});
+    ASSERT_EQ(ref.status, SolveStatus::CONVERGED) << ref.message;
+    ObjectiveRecorder recorder(qp);
+    cb::SolveContext context;
+    context.monitor = &recorder;
+    const cb::SolverResult r =
+        mprgp({{"tol", 1e-10}, {"max_iterations", 20000}, {"expansion", "bb"}})->solve(qp.view(), context);
+    ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
+    const double f_ref = cb::objective(qp.view(), ref.x);
+    EXPECT_LE(std::abs(cb::objective(qp.view(), r.x) - f_ref), 1e-8 * std::abs(f_ref));
+    EXPECT_LE(relative_kkt(qp, r.x, r.lambda), 1e-8);
+    EXPECT_GT(r.info.at("bb_fallbacks").get<long>(), 0);  // the case exercises the fallback
+    for (size_t k = 1; k < recorder.values.size(); ++k) {
+        const double prev = recorder.values[k - 1], now = recorder.values[k];
+        ASSERT_LE(now, prev + 1e-11 * (std::abs(prev) + std::abs(now))) << "call " << k;
+    }
+}
+
+// expansion = projcg on the same case: P(y) from the rejected CG trial, whose F(P(y)) rose by the
+// monotone chain's rule, so Alg. 3's safeguard repairs it; F(P(x)) stays non-increasing.
+TEST(Mprgp, ProjectedCgExpansionStaysMonotone)
+{
+    const Qp qp = decoupled(cb::make_synthetic("random-spd", {{"n", 200}, {"m", 190}}, 1));
+    const cb::SolverResult ref = reference_solver()->solve(qp.view(), {});
+    ASSERT_EQ(ref.status, SolveStatus::CONVERGED) << ref.message;
+    ObjectiveRecorder recorder(qp);
+    cb::SolveContext context;
+    context.monitor = &recorder;
+    const cb::SolverResult r =
+        mprgp({{"tol", 1e-10}, {"max_iterations", 20000}, {"expansion", "projcg"}})->solve(qp.view(), context);
+    ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
+    const double f_ref = cb::objective(qp.view(), ref.x);
+    EXPECT_LE(std::abs(cb::objective(qp.view(), r.x) - f_ref), 1e-8 * std::abs(f_ref));
+    EXPECT_LE(relative_kkt(qp, r.x, r.lambda), 1e-8);
+    EXPECT_GT(r.counters.expansion_steps, 0);
+    EXPECT_GT(r.counters.safeguard_steps, 0);  // P(y) raised F: the safeguard ran
+    for (size_t k = 1; k < recorder.values.size(); ++k) {
+        const double prev = recorder.values[k - 1], now = recorder.values[k];
+        ASSERT_LE(now, prev + 1e-11 * (std::abs(prev) + std::abs(now))) << "call " << k;
+    }
+}
 
 // A tiny hand-solved problem: min (x0^2+x1^2+x2^2) - 2 x1 s.t. x0 >= 1 (one row on vertex 0).
 // x* = (1, 1, 0), lambda* = 2.
