@@ -142,13 +142,14 @@ SOLVER_STYLES: Dict[str, tuple] = {
     "bullet-dantzig": ("#000000", ">"),   # black
     "tao-pdipm": ("#F0E442", "X"),        # Okabe-Ito yellow
     "tao-tron": ("#AA4499", "d"),         # Tol purple
+    "nsgs-friction": ("#EE3377", "H"),    # Tol magenta
 }
 #: a label without a fixed style (a user's own solver or a `command` label) gets a (colour, marker)
 #: pair of these lists, the first free one from a place chosen by a hash of its name: its colour is
 #: at CIELAB distance > 20 from every fixed colour (a user's label once got a light blue beside
 #: active-set's sky blue) and its marker is one no registered solver has. A label of a known solver
 #: (e.g. "mprgp-ichol" of mprgp) keeps the solver's colour, takes a spare marker and a dashed line.
-SPARE_MARKERS = ("H", "8", "1", "2", "3", "4", "+")
+SPARE_MARKERS = ("8", "1", "2", "3", "4", "+", "|")
 SPARE_COLOURS = ("#661100", "#BBBBBB", "#EE8866", "#997700", "#117733", "#CC6677", "#999933", "#004488")
 _VARIANT_STYLES = ("--", ":", "-.", (0, (5, 1, 1, 1)))
 #: styles given to labels without a fixed one in this process: no two labels share a pair
