@@ -39,17 +39,18 @@ int cmd_cluster(const Args& args)
                           "--max-parallel", "--sbatch-option"},
                          {"--exclusive"});
     if (cl.help()) {
-        std::cout << "usage: " << USAGE
-                  << "\n\nWrites DIR/slurm/array.sbatch (a job array: task i runs shard i of N of the suite,\n"
-                     "pinned to whole cores, and writes DIR/shard-<i>-of-<N>) and DIR/slurm/merge.sbatch (joins\n"
-                     "the shards into DIR/summary.csv), then prints the sbatch commands that submit them, the\n"
-                     "merge after the array has succeeded. DIR must be on a file system every node sees.\n"
-                     "  --partition P, --time T, --mem M   passed to #SBATCH (per array task)\n"
-                     "  --cpus-per-task C                  cores per task (default: the most `threads` a label asks for, 1)\n"
-                     "  --exclusive                        whole nodes per task (quietest clock, costs nodes)\n"
-                     "  --first-index K                    the array runs K..K+N-1 (default 0)\n"
-                     "  --max-parallel K                   at most K tasks at once (%K)\n"
-                     "  --sbatch-option OPT                a further #SBATCH option, e.g. --account=abc\n";
+        std::cout
+            << "usage: " << USAGE
+            << "\n\nWrites DIR/slurm/array.sbatch (a job array: task i runs shard i of N of the suite,\n"
+               "pinned to whole cores, and writes DIR/shard-<i>-of-<N>) and DIR/slurm/merge.sbatch (joins\n"
+               "the shards into DIR/summary.csv), then prints the sbatch commands that submit them, the\n"
+               "merge after the array has succeeded. DIR must be on a file system every node sees.\n"
+               "  --partition P, --time T, --mem M   passed to #SBATCH (per array task)\n"
+               "  --cpus-per-task C                  cores per task (default: the most `threads` a label asks for, 1)\n"
+               "  --exclusive                        whole nodes per task (quietest clock, costs nodes)\n"
+               "  --first-index K                    the array runs K..K+N-1 (default 0)\n"
+               "  --max-parallel K                   at most K tasks at once (%K)\n"
+               "  --sbatch-option OPT                a further #SBATCH option, e.g. --account=abc\n";
         return 0;
     }
     cl.expect_positional(2, 2, USAGE);

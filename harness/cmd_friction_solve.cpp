@@ -27,11 +27,12 @@ namespace {
 
 const char* const USAGE =
     "contactbench friction-solve FILE.hdf5|FILE.dat [--solver S ...]\n"
-    "                            (S: nsgs|mprgp-tresca-fp|mprgp+ica-friction|siconos-nsgs|siconos-nsn|siconos-prox|siconos-admm)\n"
+    "                            (S: "
+    "nsgs|mprgp-tresca-fp|mprgp+ica-friction|siconos-nsgs|siconos-nsn|siconos-prox|siconos-admm)\n"
     "                            [--tol T] [--max-iterations N] [--time-limit S] [--json FILE]";
 
-const std::vector<std::string> SOLVERS = {"nsgs",         "mprgp-tresca-fp", "mprgp+ica-friction", "siconos-nsgs",
-                                          "siconos-nsn",  "siconos-prox",    "siconos-admm"};
+const std::vector<std::string> SOLVERS = {"nsgs",        "mprgp-tresca-fp", "mprgp+ica-friction", "siconos-nsgs",
+                                          "siconos-nsn", "siconos-prox",    "siconos-admm"};
 /// Ours: built always; the rest are Siconos' (a child process each).
 bool is_ours(const std::string& solver)
 {
@@ -152,20 +153,21 @@ int cmd_friction_solve(const Args& args)
     const CommandLine cl("friction-solve", args, {"--solver", "--tol", "--max-iterations", "--time-limit", "--json"},
                          {});
     if (cl.help()) {
-        std::cout << "usage: " << USAGE
-                  << "\n  Solves an FCLIB frictional problem with its friction by each --solver (default: all seven),\n"
-                     "  starting from r = 0, and prints the FCLIB relative error computed by the harness, iterations\n"
-                     "  and wall time. converged: that error <= --tol (default 1e-8).\n"
-                     "  fclib_local (u = W r + q): fclib_error = ||F_nat(r)|| / ||q|| (Acary et al. 2018);\n"
-                     "    siconos_err: the same numerator over max(||q||, ||u||, ||r||), as Siconos 4.4 scales it.\n"
-                     "  fclib_global (M v = H r + f, u = H'v + w): fclib_error = Siconos 4.4's gfc3d_compute_error\n"
-                     "    (equilibrium + complementarity); reduced_err: ||F_nat(r)|| / ||q|| on the reduced problem\n"
-                     "    W = H' M^-1 H, q = w + H' M^-1 f (sparse Cholesky of M).\n"
-                     "  nsgs: ours (solvers/friction_nsgs.hpp; on a global file, on its reduced problem);\n"
-                     "  mprgp-tresca-fp: Coulomb as a fixed point on Tresca's slip bounds over MPGP; mprgp+ica-friction:\n"
-                     "  frictionless MPRGP on W_NN, then nsgs from it (local problems; docs/friction.md).\n"
-                     "  siconos-*: Siconos' fc3d (local) or gfc3d (global) NSGS, NSN_AC, PROX and ADMM in a child\n"
-                     "  process (docs/peers.md).\n";
+        std::cout
+            << "usage: " << USAGE
+            << "\n  Solves an FCLIB frictional problem with its friction by each --solver (default: all seven),\n"
+               "  starting from r = 0, and prints the FCLIB relative error computed by the harness, iterations\n"
+               "  and wall time. converged: that error <= --tol (default 1e-8).\n"
+               "  fclib_local (u = W r + q): fclib_error = ||F_nat(r)|| / ||q|| (Acary et al. 2018);\n"
+               "    siconos_err: the same numerator over max(||q||, ||u||, ||r||), as Siconos 4.4 scales it.\n"
+               "  fclib_global (M v = H r + f, u = H'v + w): fclib_error = Siconos 4.4's gfc3d_compute_error\n"
+               "    (equilibrium + complementarity); reduced_err: ||F_nat(r)|| / ||q|| on the reduced problem\n"
+               "    W = H' M^-1 H, q = w + H' M^-1 f (sparse Cholesky of M).\n"
+               "  nsgs: ours (solvers/friction_nsgs.hpp; on a global file, on its reduced problem);\n"
+               "  mprgp-tresca-fp: Coulomb as a fixed point on Tresca's slip bounds over MPGP; mprgp+ica-friction:\n"
+               "  frictionless MPRGP on W_NN, then nsgs from it (local problems; docs/friction.md).\n"
+               "  siconos-*: Siconos' fc3d (local) or gfc3d (global) NSGS, NSN_AC, PROX and ADMM in a child\n"
+               "  process (docs/peers.md).\n";
         return 0;
     }
     cl.expect_positional(1, 1, USAGE);

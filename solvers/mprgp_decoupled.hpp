@@ -117,10 +117,10 @@ private:
     ExpansionVariant m_expansion;  // the expansion's direction and step length (solvers/mprgp_parts.hpp)
     bool m_bb = false;             // expansion = bb: record the iterates for m_bb_step
     BarzilaiBorweinStep m_bb_step;
-    long m_bb_fallbacks = 0;  // BB steps that raised F, repeated with alpha_bar
+    long m_bb_fallbacks = 0;   // BB steps that raised F, repeated with alpha_bar
     ProjectedCgStep m_projcg;  // expansion = projcg: the rejected trial's step length
-    bool m_recompute = false;      // objective = recompute
-    double m_gamma2 = 1.0;         // Gamma^2
+    bool m_recompute = false;  // objective = recompute
+    double m_gamma2 = 1.0;     // Gamma^2
     IncompleteCholeskyPreconditioner m_ic;
     std::vector<char> m_face_factored;  // active set the ichol factor was built for
     bool m_face_factor_failed = false;

@@ -69,8 +69,8 @@ enum class ExpansionDirection {
 
 /// The length a of the expansion step x = P(x - a d).
 enum class StepLength {
-    FIXED,         ///< alpha_bar = 2 / ||A|| (rounded up 1%): a projected step that never increases F
-    LINE_MINIMUM,  ///< d'g / d'Ad, the minimiser of F along d before the projection (alpha_bar if not positive)
+    FIXED,             ///< alpha_bar = 2 / ||A|| (rounded up 1%): a projected step that never increases F
+    LINE_MINIMUM,      ///< d'g / d'Ad, the minimiser of F along d before the projection (alpha_bar if not positive)
     BARZILAI_BORWEIN,  ///< s's / s'y from the last two iterates, safeguarded (mprgp_bb_step.hpp)
 };
 

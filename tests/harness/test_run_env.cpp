@@ -250,8 +250,9 @@ TEST(RunEnv, ClusterSlurmGivesEachTaskTheThreadsItsLabelsUse)
     const Output few = run("cluster slurm '" + path.string() + "' --out '" + (work_dir() / "few").string() +
                            "' --shards 2 --cpus-per-task 1");
     EXPECT_EQ(few.status, 2);
-    EXPECT_EQ(few.err, "contactbench cluster: error: cluster: --cpus-per-task: 1 is fewer than the 2 threads a label of " +
-                           path.string() + " asks for (setting `threads`)\n");
+    EXPECT_EQ(few.err,
+              "contactbench cluster: error: cluster: --cpus-per-task: 1 is fewer than the 2 threads a label of " +
+                  path.string() + " asks for (setting `threads`)\n");
     EXPECT_FALSE(fs::exists(work_dir() / "few"));
 }
 

@@ -113,15 +113,13 @@ nlohmann::json with(nlohmann::json base, const nlohmann::json& extra)
     return base;
 }
 
-const auto families = ::testing::Values(Case{"plane", "plane", small, false},
-                                           Case{"tilted", "plane", with(small, {{"tilt_deg", 17.0}}), false},
-                                           Case{"stiff", "plane", with(small, {{"youngs", 1e10}}), false},
-                                           Case{"mm", "plane", with(small, {{"length_scale", 1e-3}}), false},
-                                           Case{"box", "box", small, true},
-                                           Case{"coupled", "coupled", {{"nx", 3}, {"ny", 2}, {"nz", 3}}, true},
-                                           Case{"duplicate", "duplicate-rows", small, true},
-                                           Case{"scaled", "scaled-rows", small, true},
-                                           Case{"zero", "zero-rows", small, true});
+const auto families = ::testing::Values(
+    Case{"plane", "plane", small, false}, Case{"tilted", "plane", with(small, {{"tilt_deg", 17.0}}), false},
+    Case{"stiff", "plane", with(small, {{"youngs", 1e10}}), false},
+    Case{"mm", "plane", with(small, {{"length_scale", 1e-3}}), false}, Case{"box", "box", small, true},
+    Case{"coupled", "coupled", {{"nx", 3}, {"ny", 2}, {"nz", 3}}, true},
+    Case{"duplicate", "duplicate-rows", small, true}, Case{"scaled", "scaled-rows", small, true},
+    Case{"zero", "zero-rows", small, true});
 INSTANTIATE_TEST_SUITE_P(Families, MprgpAgreement, families,
                          [](const auto& info) { return std::string(info.param.name); });
 
