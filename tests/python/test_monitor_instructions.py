@@ -26,6 +26,9 @@ BINARY = os.environ.get("CB_CONTACTBENCH", os.path.join(ROOT, "build", "bin", "c
 # A stiff body on a plane (n = 588, 98 rows; E = 1e9 as in `make timing`), and the same body under
 # bounds for the bounds-only solvers.
 PROBLEM = ["--param", "nx=6", "--param", "ny=3", "--param", "nz=6", "--param", "youngs=1e9"]
+# Enough iterations for the monitor's per-iteration call to show, few enough that the slow sweeps
+# (ica and nsgs-friction take thousands on this stiff body) stay seconds under callgrind.
+ITERATION_CAP = ["--set", "max_iterations=300"]
 MAX_EXTRA = 0.01  # relative: the call itself is ~1e-4; allocator paths vary run to run by ~0.3%
 
 
@@ -72,6 +75,7 @@ class MonitorInstructions(unittest.TestCase):
 
     def solve_args(self, name, family, monitored):
         args = ["solve", self.snapshots[family], "--solver", name, "--json", os.path.join(self.work, "r.json")]
+        args += ITERATION_CAP
         return args + (["--history"] if monitored else [])
 
     def test_monitored_runs_execute_the_same_instructions_on_the_solvers_clock(self):
