@@ -3,6 +3,7 @@
 #include "solvers/cg.hpp"
 #include "solvers/ica.hpp"
 #include "solvers/mprgp.hpp"
+#include "solvers/mprgp_bmf03.hpp"
 #include "solvers/mprgp_box.hpp"
 #include "solvers/mprgp_coupled.hpp"
 #include "solvers/nsgs_friction.hpp"
@@ -35,7 +36,9 @@ void register_builtin_solvers(SolverRegistry& registry)
     registry.add("mprgp-coupled", mprgp_coupled_entry());  // applies to any J (the entry's default)
     registry.add("ica", ica_entry());
     registry.add("pgs", pgs_entry());
-    registry.add("nsgs-friction", nsgs_friction_entry());  // pgs's frictional extension (Coulomb cones)
+    registry.add("nsgs-friction", nsgs_friction_entry());
+    registry.add("mprgp+bmf03", mprgp_bmf03_entry());  // frictionless mprgp-coupled, then a Coulomb velocity update  //
+                                                       // pgs's frictional extension (Coulomb cones)
     // External peers (solvers/peers/), each only when CMake found its library:
 #ifdef CB_HAVE_IPOPT
     registry.add("ipopt", ipopt_entry());
