@@ -224,8 +224,9 @@ TEST(FrictionIncline, ChainsRefuseAFrictionalStepChainOnAFrictionlessScene)
     } catch (const InputError& e) {
         error = e.what();
     }
-    EXPECT_EQ(error,
-              "incline.json: /mu: chain 'exact' steps with the frictional step, but the scene has no friction (mu = 0)");
+    EXPECT_EQ(
+        error,
+        "incline.json: /mu: chain 'exact' steps with the frictional step, but the scene has no friction (mu = 0)");
 }
 
 TEST(FrictionIncline, AStepMissingItsToleranceIsReported)
