@@ -9,6 +9,7 @@
 #include "harness/stop_signals.hpp"
 #include "harness/suite.hpp"
 #include "sim/chains.hpp"
+#include "solvers/format_number.hpp"
 #include "solvers/registry.hpp"
 
 #include <filesystem>
@@ -21,6 +22,53 @@ namespace {
 /// The exact chains' tolerances on e: the reference, and the looser one whose distance to it is
 /// the noise floor (what a tolerance change alone does to a chaotic chain).
 constexpr double REFERENCE_TOL = 1e-8, NOISE_TOL = 1e-6;
+
+/// Runs the chains (locked output folder, signals) and reports a stop; the exit status.
+int run_locked_chains(const std::string& scene_path, const sim::PathRoots& roots, sim::ChainOptions& opt)
+{
+    lock_output_folder(opt.out_dir, "chains");
+    opt.stop = catch_stop_signals();
+    long frames_done = 0;
+    sim::run_chains([&] { return sim::load_scene(scene_path, roots); }, opt, &frames_done);
+    if (*opt.stop != 0 &&
+        !std::filesystem::exists(opt.out_dir + "/chains.json")) {  // not a signal after the last frame
+        std::cerr << "chains: stopped by signal " << *opt.stop << " after frame " << frames_done - 1 << ": "
+                  << opt.out_dir << "/chains.csv holds frames 0 to " << frames_done - 1
+                  << " of every chain; no chains.json (the same command resumes them)\n";
+        return stopped_exit_status(*opt.stop);
+    }
+    return 0;
+}
+
+/// A frictional scene's chains: the exact frictional step against the paper's two baselines and no
+/// friction at all (docs/friction.md "The price along a chain").
+int run_frictional_chains(const CommandLine& cl, const std::string& scene_path, const sim::PathRoots& roots,
+                          const sim::Scene& scene, sim::ChainOptions& opt)
+{
+    for (const char* flag : {"--exact", "--orders", "--control"})
+        if (cl.has(flag))
+            throw_input_error(flag, "",
+                              "applies to frictionless scenes; " + scene.name +
+                                  " has mu = " + format_g(scene.friction.mu) +
+                                  ", whose chains are exact, exact-tol1e-6, bmf03, ica-friction and frictionless");
+    sim::ChainSpec exact{"exact", scene.friction.solver, {{"tol", scene.friction.tol}}, "none"};
+    exact.friction_step = true;
+    sim::ChainSpec noise{"exact-tol1e-6", scene.friction.solver, {{"tol", NOISE_TOL}}, "none"};
+    noise.friction_step = true;
+    opt.chains = {exact, noise, {"bmf03", "mprgp+bmf03", {{"tol", REFERENCE_TOL}}, "none"}};
+    if (builtin_registry().contains("mprgp+ica-friction"))
+        opt.chains.push_back({"ica-friction", "mprgp+ica-friction", {{"tol", REFERENCE_TOL}}, "none"});
+    opt.chains.push_back({"frictionless", "mprgp-coupled", {{"tol", REFERENCE_TOL}}, "none"});
+    opt.reference = "exact";
+    opt.render_chain = "bmf03";
+    std::cerr << scene.name << ": frictional chains exact (" << scene.friction.solver << ", FCLIB error "
+              << format_g(scene.friction.tol) << "), exact-tol1e-6";
+    for (size_t c = 2; c < opt.chains.size(); ++c)
+        std::cerr << ", " << opt.chains[c].label << " (" << opt.chains[c].solver << ")";
+    std::cerr << "; output in " << opt.out_dir << "\n";
+    return run_locked_chains(scene_path, roots, opt);
+}
+
 }  // namespace
 
 int cmd_chains(const Args& args)
@@ -58,6 +106,13 @@ int cmd_chains(const Args& args)
         "  --allow-commands  run a `command` solver (an external program) that the scene names; the scene\n"
         "                 must also say \"allow_commands\": true\n"
         "  --fresh        discard an earlier chains run's outputs in DIR (without it they are refused, exit 2)\n"
+        "On a scene with friction (mu > 0) the chains are instead (docs/friction.md \"The price along a chain\"):\n"
+        "  exact          the simulator's frictional step (the scene's friction_settings; the reference)\n"
+        "  exact-tol1e-6  the same at FCLIB error 1e-6: the noise floor\n"
+        "  bmf03          mprgp+bmf03: frictionless mprgp-coupled (tol 1e-8), then BMF03's velocity update\n"
+        "  ica-friction   mprgp+ica-friction, when this build registers it on snapshots\n"
+        "  frictionless   mprgp-coupled (tol 1e-8) on the step's QP with mu = 0: friction's whole price\n"
+        "  and --exact, --orders and --control are refused.\n"
         "DIR is locked while the chains run (a second command into it exits 2). While they run the table is\n"
         "DIR/chains.csv.partial, and after each whole frame every chain's state is saved in DIR/chains.state\n"
         "(removed once chains.json is written), so a killed run resumes too. SIGINT or SIGTERM\n"
@@ -92,6 +147,7 @@ int cmd_chains(const Args& args)
     opt.data_dir = data;
     opt.fresh = cl.has("--fresh");
 
+    if (scene.friction.mu > 0.0) return run_frictional_chains(cl, scene_path, roots, scene, opt);
     const std::string exact = cl.value("--exact", "mprgp-coupled");
     if (!builtin_registry().contains(exact))
         throw_input_error("--exact", "", "no solver named '" + exact + "' (contactbench solvers lists them)");
@@ -114,18 +170,7 @@ int cmd_chains(const Args& args)
     for (size_t c = 2; c < opt.chains.size(); ++c)
         std::cerr << ", " << opt.chains[c].label << " (" << opt.chains[c].solver << ")";
     std::cerr << "; output in " << opt.out_dir << "\n";
-    lock_output_folder(opt.out_dir, "chains");
-    opt.stop = catch_stop_signals();
-    long frames_done = 0;
-    sim::run_chains([&] { return sim::load_scene(scene_path, roots); }, opt, &frames_done);
-    if (*opt.stop != 0 &&
-        !std::filesystem::exists(opt.out_dir + "/chains.json")) {  // not a signal after the last frame
-        std::cerr << "chains: stopped by signal " << *opt.stop << " after frame " << frames_done - 1 << ": "
-                  << opt.out_dir << "/chains.csv holds frames 0 to " << frames_done - 1
-                  << " of every chain; no chains.json (the same command resumes them)\n";
-        return stopped_exit_status(*opt.stop);
-    }
-    return 0;
+    return run_locked_chains(scene_path, roots, opt);
 }
 
 }  // namespace cb

@@ -31,7 +31,7 @@ import figutil  # noqa: E402
 from figutil import plt  # noqa: E402
 
 #: sim/chains.hpp CHAINS_VERSION: a cached folder of another version is run again
-CHAINS_VERSION = 4
+CHAINS_VERSION = 5
 
 # The rule for "noticeable" (docs/simulator.md). p: the deepest vertex inside a body or obstacle
 # at a frame's end, relative to L (the smallest body's largest extent at rest).

@@ -43,6 +43,15 @@ ChainDistance chain_distance(const Vec& a, const Vec& b)
     return d;
 }
 
+Vec3 vertex_mean(const Vec& x)
+{
+    const Eigen::Index nv = x.size() / 3;
+    if (nv == 0 || !x.allFinite()) return Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
+    Vec3 sum = Vec3::Zero();
+    for (Eigen::Index i = 0; i < nv; ++i) sum += x.segment<3>(3 * i);
+    return sum / static_cast<double>(nv);
+}
+
 namespace {
 
 std::string number(double v)
@@ -141,15 +150,24 @@ bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& op
     std::vector<std::unique_ptr<Simulator>> sims;
     for (const ChainSpec& spec : opt.chains) {
         Scene s = load_scene();
-        // Every chain would step with the same frictional solver: the chains compare QP solvers and orders.
-        if (s.friction.mu > 0.0)
-            throw_input_error(s.file, "/mu",
-                              "chains compares solvers and decoupling orders on frictionless steps; this scene has "
-                              "mu = " +
-                                  format_g(s.friction.mu) + " (simulate steps it)");
-        s.solver = spec.solver;
-        s.solver_settings = spec.settings;
-        SimulatorOptions so;  // no out_dir: the chains write their own tables
+        SimulatorOptions so;       // no out_dir: the chains write their own tables
+        if (spec.friction_step) {  // the scene's frictional step, its tol the chain's
+            if (!(s.friction.mu > 0.0))
+                throw_input_error(s.file, "/mu",
+                                  "chain '" + spec.label +
+                                      "' steps with the frictional step, but the scene has no "
+                                      "friction (mu = 0)");
+            for (const auto& [key, value] : spec.settings.items()) {
+                if (key != "tol" || !value.is_number() || !(value.get<double>() > 0.0))
+                    throw_input_error("chain " + spec.label, key,
+                                      "a frictional-step chain takes only \"tol\" (> 0), got " + value.dump());
+                s.friction.tol = value.get<double>();
+            }
+        } else {
+            s.solver = spec.solver;
+            s.solver_settings = spec.settings;
+            so.friction_by_solver = true;  // mu > 0: the chain's solver takes the frictional QP
+        }
         so.solve_step = opt.solve_step;
         so.decouple = spec.decouple;
         so.decouple_seed = opt.decouple_seed;
@@ -162,9 +180,11 @@ bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& op
     const double size = first.body_size();
 
     nlohmann::json chains = nlohmann::json::array();
-    for (const ChainSpec& spec : opt.chains)
+    for (const ChainSpec& spec : opt.chains) {
         chains.push_back(
             {{"label", spec.label}, {"solver", spec.solver}, {"settings", spec.settings}, {"decouple", spec.decouple}});
+        if (scene.friction.mu > 0.0) chains.back()["friction_step"] = spec.friction_step;
+    }
     // Every input of what the chains write: a resume needs the same (file contents, not names).
     nlohmann::json meshes = nlohmann::json::object();
     for (const auto& b : scene.bodies)
@@ -223,7 +243,7 @@ bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& op
     const std::string header =
         "frame,time_s,chain,solver,decouple,status,steps_not_solved,accuracy,rows,rows_solved,rows_dropped,"
         "penetration,penetration_rel,vertices_inside,violation_rel,rms_distance_rel,max_distance_rel,"
-        "kinetic_energy,elastic_energy,blow_up\n";
+        "kinetic_energy,elastic_energy,blow_up,travel_rel,drift_rel\n";
     PartialTable csv;
     long csv_bytes = 0;
     if (state) {
@@ -238,6 +258,8 @@ bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& op
         csv_bytes += static_cast<long>(text.size());
     };
 
+    std::vector<Vec3> start_mean;  // each chain's start (before a resume restores a later state)
+    for (const auto& sim : sims) start_mean.push_back(vertex_mean(sim->positions()));
     std::vector<bool> stopped(sims.size(), false);
     PicturedFrame difference, penetration;  // of the shown chain against the reference
     std::vector<double> pen_of(sims.size(), 0.0);
@@ -298,21 +320,25 @@ bool run_chains(const std::function<Scene()>& load_scene, const ChainOptions& op
             const double pen = end.depth;
             pen_of[c] = pen;
             const ChainDistance d = chain_distance(sim.positions(), sims[ref]->positions());
+            const Vec3 mean = vertex_mean(sim.positions());
+            const double travel = (mean - start_mean[c]).norm() / size;
+            const double drift = (mean - vertex_mean(sims[ref]->positions())).norm() / size;
             const ChainSpec& spec = opt.chains[c];
             rows << f << ',' << number(static_cast<double>(f + 1) * sim.step_h() * sim.steps_per_frame()) << ','
                  << spec.label << ',' << spec.solver << ',' << spec.decouple << ',' << status << ',' << not_solved
                  << ',' << number(e) << ',' << nrows << ',' << nsolved << ',' << (nrows - nsolved) << ',' << number(pen)
                  << ',' << number(pen / size) << ',' << end.inside << ',' << number(fr.max_penetration_rel) << ','
                  << number(d.rms / size) << ',' << number(d.max / size) << ',' << number(fr.kinetic_energy) << ','
-                 << number(fr.elastic_energy) << ',' << (fr.blow_up ? 1 : 0) << '\n';
+                 << number(fr.elastic_energy) << ',' << (fr.blow_up ? 1 : 0) << ',' << number(travel) << ','
+                 << number(drift) << '\n';
             if (opt.progress) {
-                char line[256];
+                char line[320];
                 std::snprintf(line, sizeof line,
                               "%s frame %04ld  %-14s rows %4ld kept %4ld  %s  e %.1e  pen %.2g%% (%ld inside)  "
-                              "dist max %.2g%% rms %.2g%% of body%s\n",
+                              "dist max %.2g%% rms %.2g%% travel %.2g%% drift %.2g%% of body%s\n",
                               scene.name.c_str(), f, spec.label.c_str(), nrows, nsolved, status.c_str(), e,
-                              100 * pen / size, end.inside, 100 * d.max / size, 100 * d.rms / size,
-                              fr.blow_up ? "  BLOW-UP (chain stopped)" : "");
+                              100 * pen / size, end.inside, 100 * d.max / size, 100 * d.rms / size, 100 * travel,
+                              100 * drift, fr.blow_up ? "  BLOW-UP (chain stopped)" : "");
                 *opt.progress << line << std::flush;
             }
         }

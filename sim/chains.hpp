@@ -19,6 +19,11 @@ struct ChainSpec {
     std::string label, solver;
     nlohmann::json settings = nlohmann::json::object();
     std::string decouple = "auto";
+    /// A frictional scene (mu > 0) only. true: the simulator's frictional step (sim/friction_step, the
+    /// scene's friction_settings; `solver` names its method, `settings` may set only its "tol").
+    /// false: each step's frictional QP goes to `solver`, a registry entry (mprgp+bmf03; a frictionless
+    /// solver solves it with mu = 0).
+    bool friction_step = false;
 };
 
 struct ChainOptions {
@@ -40,8 +45,12 @@ struct ChainOptions {
 
 /// Bump when what `chains` writes for the same inputs changes (caches key on it with the
 /// simulator's version).
-// 2: the picture at the largest penetration; 3: exact = mprgp-coupled; 4: vertices_inside
-constexpr int CHAINS_VERSION = 4;
+// 2: the picture at the largest penetration; 3: exact = mprgp-coupled; 4: vertices_inside;
+// 5: frictional scenes (friction_step chains), travel_rel and drift_rel
+constexpr int CHAINS_VERSION = 5;
+
+/// Mean of the vertices' positions (the centroid of equal weights; NaN when not finite).
+Vec3 vertex_mean(const Vec& x);
 
 /// Per-vertex distance between two position vectors of the same mesh: RMS and max over vertices.
 struct ChainDistance {

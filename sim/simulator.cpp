@@ -371,7 +371,7 @@ std::vector<StepRecord> Simulator::step()
             write_qpsnap(rec.snapshot, qp);
             snapshot.stop(rec.time_snapshot_s, rec.peak_snapshot_mb, m_peak_reset);
         }
-        if (m_scene.friction.mu > 0.0) {
+        if (m_scene.friction.mu > 0.0 && !m_opt.friction_by_solver) {
             // Coulomb friction: the contacts' local problem solved by NSGS, judged by FCLIB's error.
             const StageMeter solve;
             const FrictionalStepOutcome out =

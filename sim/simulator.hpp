@@ -62,6 +62,9 @@ struct SimulatorOptions {
         "auto";  ///< --decouple: auto (authors' order when the solver needs it) | none | authors | random | depth
     std::uint64_t decouple_seed = 0;  ///< --decouple-seed; step s uses seed + s
     double h = 0;  ///< --h: time step (s) when > 0; the frame keeps its duration (steps per frame scaled)
+    /// mu > 0: each step's frictional QP (its friction fields set) goes to solve_step and the stepping
+    /// solver, a registry entry (`chains`' baselines), instead of the frictional step (sim/friction_step).
+    bool friction_by_solver = false;
     /// --fresh: discard an earlier simulation's output in out_dir first. Without it, out_dir must
     /// hold nothing of a simulation, or an interrupted (or shorter) run of the same inputs, which
     /// is resumed from its last complete frame (sim/resume_state.hpp); anything else is refused.

@@ -37,7 +37,7 @@ import stale_figures
 #: the folder beside the checkout that only CI may name
 SHARED = ".." + "/" + "shared"
 #: Markdown files the code writes into results folders (outputs, not documents of the repository)
-GENERATED_OUTPUTS = {"report.md", "stability.md", "profiles.md", "table1.md"}
+GENERATED_OUTPUTS = {"report.md", "stability.md", "profiles.md", "table1.md", "friction_chains.md"}
 TEXT_SUFFIXES = (".cpp", ".hpp", ".h", ".py", ".md", ".txt", ".json", ".cmake", ".sh", ".yml", ".yaml",
                  ".clang-format", ".clang-tidy")
 TEXT_NAMES = {"Makefile", "CMakeLists.txt", "run"}

@@ -206,22 +206,27 @@ TEST(FrictionIncline, SceneFrictionKeysAreChecked)
     EXPECT_EQ(load_scene_json(incline_scene(0.0), "s.json", PathRoots{}).friction.mu, 0.0);
 }
 
-TEST(FrictionIncline, ChainsRefuseAFrictionalScene)
+TEST(FrictionIncline, ChainsRefuseAFrictionalStepChainOnAFrictionlessScene)
 {
+    // Frictional scenes are chains' too (tests/sim/test_friction_chains.cpp); the frictional step
+    // needs a mu > 0 to step with.
     ChainOptions opt;
     opt.out_dir = "/nonexistent/never-written";
-    opt.chains = {ChainSpec{"exact", "active-set", json::object(), "none"}};
+    ChainSpec exact{"exact", "nsgs", json::object(), "none"};
+    exact.friction_step = true;
+    opt.chains = {exact};
     opt.reference = opt.render_chain = "exact";
     opt.solve_step = harness_step_solver();
-    const auto load = [] { return load_scene_json(incline_scene(0.5, "nsgs"), "incline.json", PathRoots{}); };
+    const auto load = [] { return load_scene_json(incline_scene(0.0), "incline.json", PathRoots{}); };
     std::string error = "(no error)";
     try {
         run_chains(load, opt);
     } catch (const InputError& e) {
         error = e.what();
     }
-    EXPECT_EQ(error, "incline.json: /mu: chains compares solvers and decoupling orders on frictionless steps; this "
-                     "scene has mu = 0.5 (simulate steps it)");
+    EXPECT_EQ(
+        error,
+        "incline.json: /mu: chain 'exact' steps with the frictional step, but the scene has no friction (mu = 0)");
 }
 
 TEST(FrictionIncline, AStepMissingItsToleranceIsReported)
