@@ -31,11 +31,9 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, ROOT)
 
-import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from plots import friction_profiles as fp  # noqa: E402
-from plots.figutil import fmt  # noqa: E402
 from plots.intervals import min_rounds  # noqa: E402
 from plots.profiles import data_shift  # noqa: E402
 
