@@ -5,6 +5,7 @@
 #include "solvers/mprgp.hpp"
 #include "solvers/mprgp_box.hpp"
 #include "solvers/mprgp_coupled.hpp"
+#include "solvers/mprgp_tresca_entries.hpp"
 #include "solvers/nsgs_friction.hpp"
 #include "solvers/pgs.hpp"
 #include "solvers/registry.hpp"
@@ -19,6 +20,7 @@
 #include "solvers/peers/tao_tron.hpp"
 #endif
 #ifdef CB_HAVE_SICONOS
+#include "solvers/peers/siconos_friction.hpp"
 #include "solvers/peers/siconos_lemke.hpp"
 #include "solvers/peers/siconos_nsn.hpp"
 #endif
@@ -36,6 +38,8 @@ void register_builtin_solvers(SolverRegistry& registry)
     registry.add("ica", ica_entry());
     registry.add("pgs", pgs_entry());
     registry.add("nsgs-friction", nsgs_friction_entry());  // pgs's frictional extension (Coulomb cones)
+    registry.add("mprgp-tresca-fp", mprgp_tresca_fp_entry());        // Coulomb by a fixed point on Tresca bounds
+    registry.add("mprgp+ica-friction", mprgp_ica_friction_entry());  // baseline: mprgp-box's r_n, then nsgs
     // External peers (solvers/peers/), each only when CMake found its library:
 #ifdef CB_HAVE_IPOPT
     registry.add("ipopt", ipopt_entry());
@@ -43,6 +47,9 @@ void register_builtin_solvers(SolverRegistry& registry)
 #ifdef CB_HAVE_SICONOS
     registry.add("siconos-lemke", siconos_lemke_entry());
     registry.add("siconos-nsn", siconos_nsn_entry());
+    registry.add("siconos-fc3d-nsgs", siconos_friction_entry("fc3d", "nsgs"));  // frictional, local form
+    registry.add("siconos-fc3d-nsn", siconos_friction_entry("fc3d", "nsn"));
+    registry.add("siconos-gfc3d-nsn", siconos_friction_entry("gfc3d", "nsn"));  // frictional, global form
 #endif
 #ifdef CB_HAVE_PETSC
     registry.add("tao-pdipm", tao_pdipm_entry());
