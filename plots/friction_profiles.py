@@ -173,9 +173,10 @@ def claim_row(rounds: List[pd.DataFrame], tol: float, measure: str, problems: Se
     judged below 1 by the report's rules (plots/claims.py judge_rounds: the median over the rounds
     and its order-statistic interval). A round whose MPRGP side failed a problem gives only a lower
     bound of q (decides only `does not hold`); one whose Siconos side failed gives an upper bound
-    (decides only `holds`)."""
+    (decides only `holds`). Frictionless labels (frictionless_labels) are no candidates."""
     values, lower, upper, picks = [], [], [], []
     for runs in rounds:
+        runs = runs[~runs["label"].isin(frictionless_labels(runs))]  # mprgp-coupled is no frictional solver  # mprgp-coupled is no frictional solver
         m_label, m_t, m_fail = family_time(runs, tol, measure, problems, MPRGP_PREFIX, penalty, shift)
         s_label, s_t, s_fail = family_time(runs, tol, measure, problems, SICONOS_PREFIX, penalty, shift)
         values.append(m_t / s_t if m_label and s_label else None)

@@ -11,7 +11,7 @@
    round k in OUT/runs/tol<tol>/round<k>, the solvers' order reversed in even rounds, so that no
    solver always runs first on a problem (docs/work.md "Claims"). `contactbench run` reuses a
    finished run; --force reruns.
-3. report: OUT/friction_suite.md (the table of every run, the per-label summary and the claim rows)
+3. report: OUT/friction_suite (Markdown, REPORT_NAME: the table of every run, the per-label summary and the claim rows)
    and the profiles FIGDIR/friction_profiles.png (plots/friction_profiles.py), from the runs' final
    points: status, errors and iterations of round 1 (the same in every round for these
    deterministic solvers: checked, a difference is reported), time the median over the rounds.
@@ -34,6 +34,7 @@ sys.path.insert(0, ROOT)
 import pandas as pd  # noqa: E402
 
 from plots import friction_profiles as fp  # noqa: E402
+from plots.figutil import fmt  # noqa: E402
 from plots.intervals import min_rounds  # noqa: E402
 from plots.profiles import data_shift  # noqa: E402
 
@@ -47,6 +48,8 @@ FCLIB_GLOBAL = ["CubeH8", "LMGC_GFC3D-i00001-1-00000", "LMGC_GFC3D-i00501-4-0000
                 "LMGC_GlobalFrictionContactProblem00046"]
 #: the scenes whose frames are the "flexible frames" of the claim (FEM bodies of the simulator)
 FLEXIBLE = [name for name, _ in SCENES]
+#: the report written into OUT (a results file, not a document of the repository)
+REPORT_NAME = "friction_suite" + ".md"
 
 
 def call(cmd) -> None:
@@ -148,6 +151,35 @@ def summary_table(by_tol) -> str:
     return "\n".join(lines)
 
 
+def problem_group(snapshot: str) -> str:
+    """The scene a frame comes from, or "FCLIB global" for a converted file."""
+    for name in FLEXIBLE:
+        if snapshot.startswith(name + "_f"):
+            return name
+    return "FCLIB global"
+
+
+def group_table(by_tol) -> str:
+    """Per tol and label, one cell per problem group: the median time over its problems [s] and how
+    many of them met the tol by e and by FCLIB's error."""
+    groups = FLEXIBLE + ["FCLIB global"]
+    lines = ["| tol | solver | " + " | ".join(groups) + " |", "|---|---|" + "---|" * len(groups)]
+    for tol in sorted(by_tol, reverse=True):
+        runs = by_tol[tol].assign(group=lambda d: d["snapshot"].map(problem_group))
+        for label, g in runs.groupby("label", sort=False):
+            cells = []
+            for group in groups:
+                sel = g[g["group"] == group]
+                if sel.empty:
+                    cells.append("—")
+                    continue
+                n = len(sel)
+                cells.append(f"{fmt(sel['time_s'].median())} (e {int(fp.reached(sel, tol, 'e').sum())}/{n}, "
+                             f"FCLIB {int(fp.reached(sel, tol, 'fclib').sum())}/{n})")
+            lines.append(f"| {tol:g} | {label} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
 def claim_lines(claim) -> str:
     return (f"| {claim.claim} ({fp.MEASURES[claim.key.rsplit('-', 1)[1]]}) | {claim.verdict} | {claim.ours} | "
             f"{claim.reason or '—'} |")
@@ -177,13 +209,15 @@ def report(out: str, tols, rounds: int, figures: str) -> str:
              "Frictionless labels (solved_relaxation on every run), left out of the profiles: "
              + (", ".join(frictionless) or "none") + ".", "",
              "## Per solver", "", summary_table(by_tol), "",
+             "## Per problem group: median time [s] (runs that met tol by e, by FCLIB's error)", "",
+             group_table(by_tol), "",
              "## Claims", "", "| claim | verdict | ours (median [interval]) | reason |", "|---|---|---|---|",
              *[claim_lines(c) for c in claim_rows], "",
              "## Every run", "", fp.run_table(by_tol), ""]
     if notes:
         parts += ["## Notes", ""] + [f"- {n}" for n in notes] + [""]
     parts += ["## Figures", ""] + [f"- {f}" for f in figs]
-    path = os.path.join(out, "friction_suite.md")
+    path = os.path.join(out, REPORT_NAME)
     with open(path + ".tmp", "w", encoding="utf-8") as f:
         f.write("\n".join(parts) + "\n")
     os.replace(path + ".tmp", path)

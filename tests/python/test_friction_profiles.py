@@ -77,6 +77,9 @@ class TestFrictionProfiles(unittest.TestCase):
             recs = [record(p, "mprgp-x", "converged", tm, mprgp_fclib, 1e-9) for p in ("F1", "F2")]
             recs += [record(p, "siconos-y", "converged", ts, 1e-9, 1e-9) for p in ("F1", "F2")]
             recs += [record(p, "siconos-z", "converged", 3 * ts, 1e-9, 1e-9) for p in ("F1", "F2")]
+            # a frictionless MPRGP, fastest and below tol on F1: no candidate of the MPRGP side
+            recs += [record("F1", "mprgp-coupled", "solved_relaxation", 1e-3, 1e-9, 1e-9, solver="mprgp-coupled"),
+                     record("F2", "mprgp-coupled", "solved_relaxation", 1e-3, 1e-3, 1e-3, solver="mprgp-coupled")]
             with tempfile.TemporaryDirectory() as d:
                 rounds.append(fp.read_records(write_folder(d, recs)))
         return fp.claim_row(rounds, 1e-8, "fclib", ["F1", "F2"], penalty=10.0, shift=0.0, problems_text="F1, F2")
