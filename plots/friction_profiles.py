@@ -6,8 +6,8 @@ table of every run, and the claim row on MPRGP-based against Siconos' frictional
 Acary et al. run each solver once per tolerance and count a run as solved when its error is at or
 below the tolerance; so does this module, on the final point of the suite's runs at each tolerance
 (one results folder per tolerance and round). A run is judged by a measure, not by its status:
-- "fclib": FCLIB's relative natural-map error ||F_nat(r)|| / (1 + ||q||), the field's measure
-  (the record's `fclib_error`);
+- "fclib": FCLIB's relative natural-map error, the field's measure, as the harness computes it
+  (the record's `fclib_error`, docs/peers.md "Frictional problems");
 - "e": our frictional accuracy error e (the record's `accuracy.max`, docs/accuracy.md).
 Each solver stops on its own criterion at the suite's tol, so a run may reach one measure and not
 the other: both are reported. A run that does not reach the tolerance counts as failed (ratio
@@ -15,7 +15,7 @@ infinite). `not_applicable` runs leave the solver's denominator. Labels whose ev
 `solved_relaxation` (frictionless solvers: they solve the problem with mu = 0) are frictionless:
 left out of the profiles and named beside them.
 
-usage: friction_profiles.py TOLDIR=RESULTS [TOLDIR=RESULTS ...] (see plots/friction_suite.py)
+A library of plots/friction_suite.py (which runs the suite and writes the report).
 """
 from __future__ import annotations
 
