@@ -14,32 +14,6 @@ namespace cb {
 
 namespace {
 
-/// Two columns a, b with (row; e_a; e_b) independent: the row's support not inside {a, b}.
-std::vector<Eigen::Index> tangent_columns(const std::vector<Eigen::Index>& support, Eigen::Index n)
-{
-    std::vector<Eigen::Index> candidates;
-    if (!support.empty()) {
-        const Eigen::Index block = 3 * (support.front() / 3);
-        for (Eigen::Index c = block; c < std::min(block + 3, n); ++c) candidates.push_back(c);
-    }
-    for (Eigen::Index c = 0; c < n; ++c) candidates.push_back(c);
-    auto inside = [&](const std::vector<Eigen::Index>& set) {
-        for (Eigen::Index s : support)
-            if (std::find(set.begin(), set.end(), s) == set.end()) return false;
-        return true;
-    };
-    std::vector<Eigen::Index> chosen;
-    for (Eigen::Index c : candidates) {
-        if (chosen.size() == 2) break;
-        if (std::find(chosen.begin(), chosen.end(), c) != chosen.end()) continue;
-        std::vector<Eigen::Index> with = chosen;
-        with.push_back(c);
-        if (!support.empty() && inside(with)) continue;  // the normal would be a combination of the tangents
-        chosen = with;
-    }
-    return chosen;
-}
-
 void add_counters(Counters& total, const Counters& part)
 {
     total.a_products += part.a_products;
@@ -62,22 +36,39 @@ SolveStatus status_of(const std::string& text)
 
 Friction frictionless_frame(const QpView& qp)
 {
-    const Eigen::Index m = qp.m(), n = qp.n();
     Friction frame;
-    frame.mu = Vec::Zero(m);
-    std::vector<Eigen::Triplet<double>> entries;
-    for (Eigen::Index i = 0; i < m; ++i) {
-        std::vector<Eigen::Index> support;
-        for (SpMat::InnerIterator it(qp.J, i); it; ++it)
-            if (it.value() != 0.0) support.push_back(it.col());
-        const std::vector<Eigen::Index> columns = tangent_columns(support, n);
-        for (size_t k = 0; k < columns.size(); ++k)
-            entries.emplace_back(static_cast<int>(2 * i + static_cast<Eigen::Index>(k)), static_cast<int>(columns[k]),
-                                 1.0);
-    }
-    frame.T.resize(2 * m, n);
-    frame.T.setFromTriplets(entries.begin(), entries.end());
+    frame.mu = Vec::Zero(qp.m());
+    frame.T.resize(2 * qp.m(), qp.n());
     return frame;
+}
+
+FrictionLocal pin_frictionless_tangents(const FrictionLocal& local)
+{
+    const Eigen::Index m = local.contacts(), n = 3 * m;
+    std::vector<bool> touched(static_cast<size_t>(n), false);
+    for (Eigen::Index row = 0; row < local.W.outerSize(); ++row)
+        for (SpMat::InnerIterator it(local.W, row); it; ++it)
+            if (it.value() != 0.0) touched[static_cast<size_t>(row)] = touched[static_cast<size_t>(it.col())] = true;
+    FrictionLocal out = local;
+    std::vector<Eigen::Triplet<double>> entries;
+    for (Eigen::Index row = 0; row < local.W.outerSize(); ++row)
+        for (SpMat::InnerIterator it(local.W, row); it; ++it)
+            entries.emplace_back(static_cast<int>(row), static_cast<int>(it.col()), it.value());
+    bool pinned = false;
+    for (Eigen::Index i = 0; i < m; ++i) {
+        if (local.mu[i] != 0.0) continue;
+        const double normal = local.W.coeff(3 * i, 3 * i);
+        for (Eigen::Index k = 3 * i + 1; k <= 3 * i + 2; ++k) {
+            if (touched[static_cast<size_t>(k)]) continue;
+            entries.emplace_back(static_cast<int>(k), static_cast<int>(k), normal > 0.0 ? normal : 1.0);
+            out.q[k] = 0.0;
+            pinned = true;
+        }
+    }
+    if (!pinned) return out;
+    out.W.resize(n, n);
+    out.W.setFromTriplets(entries.begin(), entries.end());
+    return out;
 }
 
 SolverResult solve_frictional_snapshot(const std::string& name, const QpView& qp, const CommonSettings& common,

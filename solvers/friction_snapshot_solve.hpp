@@ -5,9 +5,8 @@
 /// verdict on the returned (x, lambda, lambda_t).
 ///
 /// Frame: a snapshot with friction fields keeps them; one without (version 1) is the frictional problem
-/// with mu = 0, given tangent rows by frictionless_frame(): at mu = 0 the tangential reactions are 0
-/// whatever the rows, and rows independent of the normal keep each contact's 3x3 block of W nonsingular
-/// (Jacobi's diagonal, Siconos' one-contact solvers). Such a run returns no lambda_t.
+/// with mu = 0 and zero tangent rows (frictionless_frame; local forms: pin_frictionless_tangents). Such a
+/// run returns no lambda_t.
 ///
 /// Tolerance: the method is called with its own stop (FCLIB's relative error, or Siconos' global error)
 /// at tol. With stop=kkt the judge is the frictional accuracy error e at the returned point: when the
@@ -50,10 +49,13 @@ struct SnapshotFrictionOptions {
     std::string native_definition;  ///< what the native residual is, for the record
 };
 
-/// Tangent rows for a snapshot without friction fields: for contact i two unit rows e_a, e_b with
-/// (J_i; e_a; e_b) linearly independent, a and b taken first from the 3-column block of J_i's first
-/// nonzero (a vertex's x, y, z), then by increasing column. mu = 0 everywhere.
+/// The frame of a snapshot without friction fields: mu = 0 and zero tangent rows (2m x n).
 Friction frictionless_frame(const QpView& qp);
+
+/// `local` with every contact of mu = 0 whose tangent rows and columns of W are zero (a frictionless
+/// frame's) given W_TT = W_nn I and q_T = 0: at mu = 0 r_T = 0 and the error ignores u_T, so the solution
+/// and FCLIB's error are unchanged, and W's diagonal stays positive (Jacobi, Siconos' one-contact solvers).
+FrictionLocal pin_frictionless_tangents(const FrictionLocal& local);
 
 SolverResult solve_frictional_snapshot(const std::string& name, const QpView& qp, const CommonSettings& common,
                                        const SolveContext& context, const SnapshotFrictionOptions& options,

@@ -49,15 +49,35 @@ const SettingsTable<MprgpIcaFrictionEntrySettings>& mprgp_ica_friction_settings_
     return table;
 }
 
+/// Stops mprgp-tresca-fp once its MPRGP iterations, summed over the Tresca solves, reach the cap
+/// (MprgpTrescaSettings caps each solve only).
+class IterationCap : public Monitor {
+public:
+    explicit IterationCap(long cap) : m_cap(cap) {}
+    bool on_iteration(const IterationInfo& info) override
+    {
+        if (info.step != StepKind::START) ++m_done;
+        m_reached = m_done >= m_cap;
+        return !m_reached;
+    }
+    bool wants_iterate() const override { return false; }
+    bool reached() const { return m_reached; }
+
+private:
+    long m_cap, m_done = 0;
+    bool m_reached = false;
+};
+
 /// The local problem of `framed` (FrictionDual) and a method on it returning r; x is recovered from r.
 template <class Method>
 SnapshotFrictionMethod local_method(const QpView& framed, const std::string& name, Method method)
 {
     auto dual = std::make_shared<FrictionDual>(framed, name);
+    auto local = std::make_shared<const FrictionLocal>(pin_frictionless_tangents(dual->local()));
     SnapshotFrictionMethod out;
-    out.run = [dual, method](double tol, long max_iterations, double time_limit_s) {
+    out.run = [dual, local, method](double tol, long max_iterations, double time_limit_s) {
         SnapshotFrictionRun one;
-        one.run = method(dual->local(), tol, max_iterations, time_limit_s);
+        one.run = method(*local, tol, max_iterations, time_limit_s);
         if (one.run.r.allFinite()) one.x = dual->primal(one.run.r);
         return one;
     };
@@ -105,7 +125,11 @@ SolverResult MprgpTrescaFpSolver::solve(const QpView& qp, const SolveContext& co
                                 t.time_limit_s = time_limit_s;
                                 t.gamma = s.gamma;
                                 t.lag_skew = s.lag_skew;
-                                return mprgp_tresca_fp(local, t).run;
+                                IterationCap cap(max_iterations);
+                                t.monitor = &cap;
+                                FrictionRun run = mprgp_tresca_fp(local, t).run;
+                                if (run.status == "stopped_by_monitor" && cap.reached()) run.status = "max_iterations";
+                                return run;
                             });
     });
 }

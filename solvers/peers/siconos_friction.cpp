@@ -8,6 +8,7 @@
 #include "solvers/peers/siconos_fc3d.hpp"
 #include "solvers/peers/siconos_gfc3d.hpp"
 
+#include <algorithm>
 #include <climits>
 #include <memory>
 
@@ -39,10 +40,13 @@ const SettingsTable<SiconosFrictionSettings>& table_of(const std::string& kind)
 SnapshotFrictionMethod fc3d_method(const QpView& framed, const std::string& name, const std::string& method)
 {
     auto dual = std::make_shared<FrictionDual>(framed, name);
+    auto local = std::make_shared<const FrictionLocal>(pin_frictionless_tangents(dual->local()));
     SnapshotFrictionMethod out;
-    out.run = [dual, method](double tol, long max_iterations, double time_limit_s) {
+    out.run = [dual, local, method](double tol, long max_iterations, double time_limit_s) {
         SnapshotFrictionRun one;
-        one.run = siconos_fc3d_solve(dual->local(), method, max_iterations, tol, time_limit_s);
+        one.run = siconos_fc3d_solve(*local, method, max_iterations, tol, time_limit_s);
+        // NSN_AC's loop test post-increments: at the cap it reports one more step than it took (siconos_nsn.cpp).
+        one.run.iterations = std::min(one.run.iterations, max_iterations);
         if (one.run.r.allFinite()) one.x = dual->primal(one.run.r);
         return one;
     };
@@ -57,9 +61,9 @@ SnapshotFrictionMethod gfc3d_method(const QpView& framed, const std::string& nam
     auto global = std::make_shared<FrictionGlobal>();
     Vec c_all;
     SpMat rows = contact_frame_rows(framed, &c_all);
-    // A contact with mu = 0 carries no tangential force whatever its tangent rows: they are left out (zero
-    // columns of H, as siconos-nsn passes them), since dependent columns make Siconos' Newton matrix
-    // singular (gfc3d_driver info 1 on plane_2x2x2 with the synthesized frame of a version 1 snapshot).
+    // A contact with mu = 0 carries no tangential force whatever its tangent rows. Siconos' Newton takes
+    // them out (zero columns of H, as siconos-nsn passes them): with them its Newton matrix can be
+    // singular (gfc3d_driver info 1 on plane_2x2x2 with unit tangent rows independent of each normal).
     const Vec& mu = framed.friction->mu;
     for (Eigen::Index row = 0; row < rows.outerSize(); ++row)
         if (row % 3 != 0 && mu[row / 3] == 0.0) {
@@ -75,7 +79,9 @@ SnapshotFrictionMethod gfc3d_method(const QpView& framed, const std::string& nam
     global->name = name;
     SnapshotFrictionMethod out;
     out.run = [global, method](double tol, long max_iterations, double time_limit_s) {
-        const FrictionGlobalRun run = siconos_gfc3d_solve(*global, method, max_iterations, tol, time_limit_s);
+        FrictionGlobalRun run = siconos_gfc3d_solve(*global, method, max_iterations, tol, time_limit_s);
+        // NSN_AC's loop test post-increments: at the cap it reports one more step than it took (siconos_nsn.cpp).
+        run.run.iterations = std::min(run.run.iterations, max_iterations);
         return SnapshotFrictionRun{run.run, run.v};
     };
     out.counters = []() { return Counters{}; };
@@ -118,7 +124,10 @@ SolverEntry siconos_friction_entry(const std::string& kind, const std::string& m
     entry.make = [name, kind, method, &table](const nlohmann::json& settings) -> std::unique_ptr<Solver> {
         return std::make_unique<SiconosFrictionSolver>(kind, method, read_settings(settings, name, table));
     };
-    const std::string what = method == "nsgs" ? "NSGS" : method == "nsn" ? "NSN_AC (non-smooth Newton)" : method;
+    const std::string what = method == "nsgs"   ? "NSGS"
+                             : method == "nsn"  ? "NSN_AC (non-smooth Newton)"
+                             : method == "prox" ? "PROX_WR (proximal point on its reduced problem)"
+                                                : method;
     entry.description = std::string("peer: Siconos numerics ") + CB_SICONOS_VERSION + " " + kind + " " + what +
                         (kind == "fc3d" ? " on the local problem W = H A^-1 H' (CHOLMOD; small m)"
                                         : " on the global problem M = A, H = [J; T]'") +

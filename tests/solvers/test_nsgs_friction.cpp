@@ -102,7 +102,9 @@ TEST(NsgsFriction, FrictionlessSolversOnAFrictionalProblemSolveTheRelaxation)
         const RunOutcome run = run_solver(qp, solver, {{"tol", 1e-6}}, quiet());
         const SolverEntry& entry = builtin_registry().entry(solver);
         if (!entry.needs_settings && entry.make(nlohmann::json::object())->handles_friction()) {
-            EXPECT_EQ(run.status, "converged") << solver << ": " << run.result.message;  // frictional solvers
+            // A frictional solver (tests/solvers/test_friction_registry.cpp) solves the Coulomb problem or fails.
+            EXPECT_NE(run.status, "solved_relaxation") << solver << ": " << run.result.message;
+            if (solver == "nsgs-friction") EXPECT_EQ(run.status, "converged") << run.result.message;
             continue;
         }
         EXPECT_NE(run.status, "converged") << solver;
