@@ -29,7 +29,7 @@ ifeq ($(PEERS),all)
 DEB_PACKAGES += petsc-dev
 endif
 
-.PHONY: help deps build test demo bench timing baseline reproduce decoupling stress fuzz clean meshes paper-data docs-check tidy lint ladder \
+.PHONY: help deps build test demo bench timing baseline reproduce decoupling stress fuzz clean meshes paper-data docs-check tidy lint ladder friction-suite \
   ci-perf perf-gate perf-gate-selftest contactbench-binary
 
 help:
@@ -46,6 +46,7 @@ help:
 	@echo "                meshes, scenes and figure tables into DATA=$(DATA) (PAPER_DATA_SOURCE=URL|DIR|.tar.gz)"
 	@echo "make reproduce  the paper's figures and report in results/paper/ (full: 65 min wall / 25 min CPU measured on a loaded 2-core machine; QUICK=1: about 2-4 minutes)"
 	@echo "make decoupling the price of collision decoupling along chains (results/decoupling/)"
+	@echo "make friction-suite the frictional suite: frames, runs at 1e-4 and 1e-8 in rounds, profiles (results/friction/)"
 	@echo "make docs-check fail on a cited document, section or path that is not in the repository, or a stale count"
 	@echo "make tidy       clang-tidy on the C++ files changed against main (TIDY_BASE=main)"
 	@echo "make lint       pyflakes on every Python file, clang-format on C++ lines changed against main (LINT_BASE=main)"
@@ -160,6 +161,11 @@ DECOUPLING_SCENES ?= two_dinos_1303 two_dinos_1493 two_dinos_5910 two_dinos_9381
 decoupling: build
 	$(PY) plots/decoupling.py $(foreach s,$(DECOUPLING_SCENES),scenes/$(s).json) --cb $(CB) --out results/decoupling
 	$(PY) plots/decoupling.py scenes/dino_eight.json --frames 160 --cb $(CB) --out results/decoupling
+
+# The frictional suite (docs/friction.md "The frictional suite"): the frictional frames and converted
+# FCLIB files, suites/friction.json at tol 1e-4 and 1e-8 in interleaved rounds, profiles and claim.
+friction-suite: build
+	$(PY) plots/friction_suite.py --cb $(CB) --out results/friction
 
 stress: build
 	$(CB) stress --out results/stress

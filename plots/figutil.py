@@ -143,6 +143,12 @@ SOLVER_STYLES: Dict[str, tuple] = {
     "tao-pdipm": ("#F0E442", "X"),        # Okabe-Ito yellow
     "tao-tron": ("#AA4499", "d"),         # Tol purple
     "nsgs-friction": ("#EE3377", "H"),    # Tol magenta
+    # the frictional entries of issues 45/48: the plain markers are taken, so each has a letter
+    "mprgp-tresca-fp": ("#8855FF", "$T$"),      # violet
+    "mprgp+ica-friction": ("#445500", "$I$"),   # dark olive
+    "siconos-fc3d-nsgs": ("#FF11FF", "$G$"),    # fuchsia
+    "siconos-fc3d-nsn": ("#0000FF", "$N$"),     # blue
+    "siconos-gfc3d-nsn": ("#00CC00", "$M$"),    # green
 }
 #: a label without a fixed style (a user's own solver or a `command` label) gets a (colour, marker)
 #: pair of these lists, the first free one from a place chosen by a hash of its name: its colour is

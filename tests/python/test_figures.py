@@ -50,7 +50,8 @@ class TestPalette(unittest.TestCase):
     def test_16_labels_get_distinct_pairs(self):
         for labels, solvers in (
                 (USER_LABELS, {}),
-                (list(figutil.SOLVER_STYLES) + USER_LABELS[:16 - len(figutil.SOLVER_STYLES)], {}),
+                # fixed styles beside user labels (12 of the fixed ones, 4 users')
+                (list(figutil.SOLVER_STYLES)[:12] + USER_LABELS[:4], {}),
                 ([f"mprgp-v{k}" for k in range(7)] + USER_LABELS[:9], {f"mprgp-v{k}": "mprgp" for k in range(7)})):
             figutil._ASSIGNED.clear()
             styles = figutil.assign_styles(labels, solvers)
