@@ -18,7 +18,8 @@ namespace {
 
 const char* const USAGE =
     "contactbench convert IN OUT [--drop-friction] [--symmetrise] [--length-scale L]\n"
-    "  IN.qpsnap  -> OUT folder (A.mtx b.mtx J.mtx c.mtx x0.mtx meta.json [contact.json x_ref.mtx lambda_ref.mtx])\n"
+    "  IN.qpsnap  -> OUT folder (A.mtx b.mtx J.mtx c.mtx x0.mtx meta.json [contact.json x_ref.mtx lambda_ref.mtx]\n"
+    "                [mu.mtx T.mtx cT.mtx h.mtx v0.mtx]: a frictional snapshot's friction in files of its own)\n"
     "  IN folder  -> OUT.qpsnap (Matrix Market files as written by scipy.io.mmwrite, Julia, MATLAB ...)\n"
     "  IN.qpsnap  -> OUT.qpsnap (rewrites; validates on the way)\n"
     "  IN.qpsnap  -> OUT.hdf5 / .h5: an FCLIB fclib_global problem (mu and tangents of a frictional snapshot,\n"
@@ -28,7 +29,8 @@ const char* const USAGE =
     "  IN.dat     -> OUT: a Siconos numerics text dump: a local friction-contact problem (dense or sparse-block W)\n"
     "               as FCLIB local, or an LCP (A = M, b = -q, J = I)\n"
     "  --drop-friction  a frictional FCLIB or .dat problem (mu != 0) keeps its normal part (in meta.provenance);\n"
-    "                   without it a global FCLIB one keeps its friction in a .qpsnap (version 2) or .hdf5\n"
+    "                   without it a global FCLIB one keeps its friction (.qpsnap version 2, .hdf5 or a\n"
+    "                   folder's mu.mtx T.mtx cT.mtx) and a local one (no A to hold it) is refused\n"
     "  --symmetrise     an FCLIB or .dat matrix not symmetric to rounding is averaged with its transpose (recorded)\n"
     "  --length-scale L stores the problem's scene size l in the snapshot (meta.length_scale)\n"
     "IN is recognised by its content, not its name. Values are written with %.17g: .qpsnap -> folder ->\n"
@@ -57,9 +59,9 @@ int cmd_convert(const Args& args)
     FclibReadOptions options;
     options.drop_friction = cl.has("--drop-friction");
     options.symmetrise = cl.has("--symmetrise");
-    // A global file's friction goes into the snapshot (version 2) or an FCLIB file; a Matrix
-    // Market folder has no field for it.
-    options.keep_friction = ends_with(out, ".qpsnap") || is_fclib_path(out);
+    // A global file's friction goes into every output: the snapshot (version 2), an FCLIB file or
+    // a Matrix Market folder's friction files.
+    options.keep_friction = true;
     if ((options.drop_friction || options.symmetrise) && format != FileFormat::FCLIB_GLOBAL &&
         format != FileFormat::FCLIB_LOCAL && format != FileFormat::SICONOS_DAT)
         throw_input_error(in, options.drop_friction ? "--drop-friction" : "--symmetrise",
@@ -98,7 +100,7 @@ int cmd_convert(const Args& args)
     } else {
         write_matrix_market_folder(out, qp, &extras);
         std::cout << "wrote " << out << "/ (n = " << qp.n() << ", m = " << qp.m() << ", nnz(A) = " << qp.A.nonZeros()
-                  << ")\n";
+                  << (qp.friction.mu.size() ? ", friction in mu.mtx T.mtx" : "") << ")\n";
     }
     return 0;
 }

@@ -65,10 +65,7 @@ int cmd_info(const Args& args)
     if (format == FileFormat::FCLIB_GLOBAL || format == FileFormat::FCLIB_LOCAL || format == FileFormat::HDF5 ||
         format == FileFormat::SICONOS_DAT) {
         nlohmann::json fclib = format == FileFormat::SICONOS_DAT ? describe_siconos_dat(path) : describe_fclib(path);
-        fclib["path"] = path;
-        if (!fclib.contains("convert"))
-            fclib["convert"] = "contactbench convert " + path + " OUT.qpsnap" +
-                               (fclib.value("mu_max", 0.0) > 0.0 ? " --drop-friction" : "");
+        fclib["path"] = path;  // its "convert" (and "friction_solve") say what those commands do with it
         if (cl.has("--json")) {
             std::cout << fclib.dump(2) << "\n";
             return 0;

@@ -21,16 +21,20 @@ namespace cb {
 namespace {
 
 const char* const USAGE =
-    "contactbench judge SNAP SOLUTION [--lambda FILE] [--tol T] [--record RUN.json] [--json FILE]\n"
-    "                    [--length-scale L]\n"
+    "contactbench judge SNAP SOLUTION [--lambda FILE] [--lambda-t FILE] [--tol T] [--record RUN.json]\n"
+    "                    [--json FILE] [--length-scale L]\n"
     "  SOLUTION: a folder with x.{mtx,npy,txt} and optionally lambda.{mtx,npy,txt} (solve --save-solution),\n"
-    "            or one file holding x: .npy, .mtx, or plain text (numbers separated by white space)";
+    "            or one file holding x: .npy, .mtx, or plain text (numbers separated by white space)\n"
+    "  A frictional snapshot is judged with its friction when the solution gives lambda_t (2m tangential\n"
+    "  multipliers: lambda_t.{mtx,npy,txt} in the folder, or --lambda-t); without it, on the frictionless\n"
+    "  relaxation (mu = 0), and the output says so";
 
 }  // namespace
 
 int cmd_judge(const Args& args)
 {
-    const CommandLine cl("judge", args, {"--lambda", "--tol", "--record", "--json", "--length-scale"}, {});
+    const CommandLine cl("judge", args, {"--lambda", "--lambda-t", "--tol", "--record", "--json", "--length-scale"},
+                         {});
     if (cl.help()) {
         std::cout << "usage: " << USAGE << "\n";
         return 0;
@@ -61,13 +65,15 @@ int cmd_judge(const Args& args)
             given = {l.get<double>(), source};
     }
     fix_length_scale(qp, snap, options.snapshot_hash, given);
-    const SolutionPoint point = read_solution(solution, qp.n(), qp.m(), cl.value("--lambda"));
+    const SolutionPoint point = read_solution(solution, qp.n(), qp.m(), cl.value("--lambda"), cl.value("--lambda-t"),
+                                              long(qp.friction.T.rows()));
     const Judgement j = judge_point(qp, point, options);
 
     std::ostringstream out;
     out << "snapshot    " << snap << " (n " << qp.n() << ", m " << qp.m() << ")\n";
     out << "solution    x from " << point.x_path;
     if (!point.lambda_path.empty()) out << ", lambda from " << point.lambda_path;
+    if (!point.lambda_t_path.empty()) out << ", lambda_t from " << point.lambda_t_path;
     out << (j.lambda_fitted
                 ? (point.lambda_path.empty() ? "; lambda fitted (none given)"
                                              : "; lambda fitted (the given one missed tol, the fit did better)")
@@ -79,8 +85,17 @@ int cmd_judge(const Args& args)
         << format_g(j.accuracy.complementarity, 3) << ", gap " << format_g(j.accuracy.gap, 3) << "\n";
     out << "units       stationarity, primal, dual, complementarity: lengths / l; gap: energy / (d_ref l^2), d_ref "
         << format_g(j.scale.stiffness, 3) << "\n";
-    out << "verdict     " << (j.meets_tol ? "converged" : "not converged") << " at tol " << format_g(j.tol, 3) << " (e "
-        << (j.meets_tol ? "<=" : ">") << " tol)\n";
+    if (j.relaxation)
+        out << "friction    no lambda_t given: judged on the frictionless relaxation (mu = 0), not on the frictional "
+               "problem (give lambda_t.{mtx,npy,txt} in the folder, or --lambda-t)\n";
+    else if (j.frictional)
+        out << "friction    judged on the frictional problem; FCLIB relative error " << format_g(j.fclib_error, 3)
+            << "\n";
+    out << "verdict     "
+        << (!j.meets_tol   ? "not converged"
+            : j.relaxation ? "solved_relaxation (of the frictionless relaxation)"
+                           : "converged")
+        << " at tol " << format_g(j.tol, 3) << " (e " << (j.meets_tol ? "<=" : ">") << " tol)\n";
     if (!j.status.empty()) {
         out << "status      " << j.status << " (with the run's record " << options.record_path << ")";
         if (j.have_solved) out << "; error on the problem it solved " << format_g(j.accuracy_solved.max(), 3);
@@ -99,7 +114,8 @@ int cmd_judge(const Args& args)
         record["snapshot"] = {{"path", snap}, {"hash", options.snapshot_hash}, {"n", qp.n()}, {"m", qp.m()}};
         record["solution"] = {
             {"x", point.x_path},
-            {"lambda", point.lambda_path.empty() ? nlohmann::json() : nlohmann::json(point.lambda_path)}};
+            {"lambda", point.lambda_path.empty() ? nlohmann::json() : nlohmann::json(point.lambda_path)},
+            {"lambda_t", point.lambda_t_path.empty() ? nlohmann::json() : nlohmann::json(point.lambda_t_path)}};
         if (!options.record_path.empty()) record["record"] = options.record_path;
         write_json_atomic(cl.value("--json"), record);
     }

@@ -91,7 +91,7 @@ int cmd_solve(const Args& args)
         throw_input_error(solution_dir, "--save-solution",
                           "exists and is not a folder (x.mtx and lambda.mtx are written into a folder)");
     if (!solution_dir.empty())  // never written through a planted link (problems/output_folder.hpp)
-        for (const char* file : {"/x.mtx", "/lambda.mtx"}) check_output_entry(solution_dir + file);
+        for (const char* file : {"/x.mtx", "/lambda.mtx", "/lambda_t.mtx"}) check_output_entry(solution_dir + file);
 
     RunOptions options;
     options.record_history = cl.has("--history");
@@ -170,6 +170,11 @@ int cmd_solve(const Args& args)
         if (ec) throw_input_error(dir, "--save-solution", "cannot create the folder: " + ec.message());
         write_mtx_vector(dir + "/x.mtx", run.result.x);
         write_mtx_vector(dir + "/lambda.mtx", run.lambda_full);  // one entry per row of the snapshot's J
+        // A frictional solver's tangential multipliers (rows of T), for `judge` to measure the friction.
+        if (run.lambda_t.size())
+            write_mtx_vector(dir + "/lambda_t.mtx", run.lambda_t);
+        else
+            std::filesystem::remove(dir + "/lambda_t.mtx", ec);  // an earlier run's would be judged with this x
     }
     return 0;
 }

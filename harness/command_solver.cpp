@@ -397,8 +397,11 @@ SolverResult CommandSolver::solve(const QpView& qp, const SolveContext& context)
                    out = work_dir / "out";
     fs::create_directories(out);
 
-    // The problem exactly as this solver is given it (decoupled rows when the harness decoupled).
+    // The problem exactly as this solver is given it (decoupled rows when the harness decoupled),
+    // with its friction when it has some (snapshot version 2).
     Qp problem{qp.A, qp.b, qp.J, qp.c, qp.x0, {}, {{"source", "contactbench command solver"}}, {}, {}};
+    if (qp.friction) problem.friction = *qp.friction;
+    const long tangent_rows = long(problem.friction.T.rows());
     write_qpsnap(snapshot.string(), problem);
     nlohmann::json settings_file = {{"protocol", COMMAND_PROTOCOL_VERSION},
                                     {"snapshot", snapshot.string()},
@@ -411,6 +414,7 @@ SolverResult CommandSolver::solve(const QpView& qp, const SolveContext& context)
                                     {"time_limit_s", time_limit_s},
                                     {"seed", common.seed},
                                     {"accepts", m_settings.accepts},
+                                    {"frictional", problem.frictional()},
                                     {"x0", "the snapshot's array x0"},
                                     {"lambda0", nullptr},
                                     {"mtx", nullptr}};
@@ -505,7 +509,8 @@ SolverResult CommandSolver::solve(const QpView& qp, const SolveContext& context)
         report = read_report(out / "result.json");
         check_declared_size(out / "x.mtx", qp.n(), "x");
         check_declared_size(out / "lambda.mtx", qp.m(), "lambda");
-        point = read_solution(out.string(), qp.n(), qp.m());
+        check_declared_size(out / "lambda_t.mtx", tangent_rows, "lambda_t");
+        point = read_solution(out.string(), qp.n(), qp.m(), "", "", tangent_rows);
         // On the harness's clock the program's solve ends with the child (start-up before it);
         // on its own clock, after its setup.
         // Its times never beyond the child's wall time: refused otherwise (check_times). On the
@@ -528,6 +533,7 @@ SolverResult CommandSolver::solve(const QpView& qp, const SolveContext& context)
     }
     result.x = point.x;
     result.lambda = point.lambda;
+    result.lambda_t = point.lambda_t;  // empty: judged as solving the frictionless relaxation
     result.iterations = report.iterations;
     result.counters.iterations = report.iterations;
     result.native_residual = report.residual;

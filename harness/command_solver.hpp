@@ -3,7 +3,8 @@
 /// command protocol"). The harness writes the QP it gives the solver as a .qpsnap and the
 /// settings as JSON into a fresh work folder, runs argv (no shell; {snapshot}, {settings} and
 /// {out} replaced by paths), kills the program at time_limit_s, and reads back from {out}:
-/// x.{npy,mtx,txt} (required), lambda.{npy,mtx,txt} and result.json (status, iterations,
+/// x.{npy,mtx,txt} (required), lambda.{npy,mtx,txt}, lambda_t.{npy,mtx,txt} (a frictional
+/// snapshot's 2m tangential multipliers) and result.json (status, iterations,
 /// self-reported times, residual, history with optional iterates). The run is then judged like
 /// any registry solver's: on the ORIGINAL QP, so a wrong x claimed `converged` is `unconfirmed`.
 ///
@@ -51,6 +52,9 @@ public:
     std::string name() const override { return "command"; }
     nlohmann::json settings() const override { return m_settings.to_json(); }
     bool requires_decoupled() const override { return m_settings.accepts == "decoupled"; }
+    /// The program gets the snapshot as the suite gives it (version 2, friction included); it
+    /// solved the frictional problem when it returns lambda_t too, else the relaxation (runner.hpp).
+    bool handles_friction() const override { return true; }
     SolverResult solve(const QpView& qp, const SolveContext& context) override;
 
 private:

@@ -4,6 +4,7 @@
 #include "harness/reference.hpp"
 #include "harness/runner.hpp"
 #include "solvers/decouple.hpp"
+#include "solvers/friction_snapshot_error.hpp"
 
 #include <cmath>
 #include <limits>
@@ -53,7 +54,9 @@ nlohmann::json Judgement::to_json() const
     nlohmann::json j;
     j["accuracy"] = accuracy.to_json();
     j["tol"] = tol;
-    j["verdict"] = meets_tol ? "converged" : "not_converged";
+    j["verdict"] = !meets_tol ? "not_converged" : relaxation ? "solved_relaxation" : "converged";
+    j["judged_problem"] = !frictional ? "as_given" : relaxation ? "frictionless_relaxation" : "frictional";
+    if (frictional) j["fclib_error"] = finite_or_null(fclib_error);
     j["lambda_fitted"] = lambda_fitted;
     j["objective"] = finite_or_null(objective);
     j["violation"] = finite_or_null(violation);
@@ -83,15 +86,24 @@ Judgement judge_point(const Qp& qp, const SolutionPoint& point, const JudgeOptio
     }
     if (!(out.tol > 0.0)) out.tol = DEFAULT_ACCURACY_TOL;
 
-    const QpView view = qp.view();
+    // A frictional snapshot is judged with its friction only when the point carries lambda_t:
+    // otherwise lambda_T = 0 would be measured, a point nobody claimed; the relaxation is named.
+    out.frictional = qp.frictional();
+    const bool tangential = qp.friction.T.rows() > 0 && point.lambda_t.size() == qp.friction.T.rows();
+    out.relaxation = out.frictional && !tangential;
+    QpView view = qp.view();
+    if (out.relaxation) view.friction = nullptr;
     out.scale = accuracy_scale(view);
     const Vec& x = point.x;
     const Vec g = qp.A * x - qp.b;
     const bool own = point.lambda.size() == qp.m() && !point.lambda_path.empty();
     out.lambda_fitted = !own;
-    out.accuracy =
-        measure_point(view, out.scale, x, g, own ? &point.lambda : nullptr, out.tol, out.lambda, out.lambda_fitted);
+    out.accuracy = measure_point(view, out.scale, x, g, own ? &point.lambda : nullptr, out.tol, out.lambda,
+                                 out.lambda_fitted, tangential ? &point.lambda_t : nullptr);
     out.meets_tol = within(out.accuracy.max(), out.tol);
+    out.fclib_error = out.frictional && tangential ? friction_snapshot_error(qp.view(), x, out.lambda, point.lambda_t,
+                                                                             friction_local_q_norm(qp.view()))
+                                                   : std::numeric_limits<double>::quiet_NaN();
     out.objective = 0.5 * x.dot(g) - 0.5 * qp.b.dot(x);
     out.violation = max_violation(view, x);
 
@@ -104,7 +116,7 @@ Judgement judge_point(const Qp& qp, const SolutionPoint& point, const JudgeOptio
                                   solved_at->get<std::string>() == "frictionless";
         if (solver_status != to_string(SolveStatus::CONVERGED)) {
             out.status = solver_status;
-        } else if (out.meets_tol && !frictionless) {
+        } else if (out.meets_tol && !frictionless && !out.relaxation) {
             out.status = to_string(SolveStatus::CONVERGED);
         } else {
             // The solver said converged and the point misses tol on the original QP: on the
@@ -145,11 +157,14 @@ Judgement judge_point(const Qp& qp, const SolutionPoint& point, const JudgeOptio
                                       "expected one of authors, random, depth, got '" + order + "'");
                 }
                 const DecoupleReport report = decouple_rows(view, qp.contacts, decouple_order, seed);
-                const Qp reduced = select_rows(qp, report.kept_rows);
+                // The kept rows over the snapshot's own A, b and x0 (a view: A is not copied).
+                SpMat J_kept;
+                Vec c_kept;
+                select_constraint_rows(qp, report.kept_rows, J_kept, c_kept);
                 Vec lambda_kept(static_cast<Eigen::Index>(report.kept_rows.size()));
                 for (size_t k = 0; k < report.kept_rows.size(); ++k)
                     lambda_kept[static_cast<Eigen::Index>(k)] = out.lambda[report.kept_rows[k]];
-                const QpView reduced_view = reduced.view();
+                const QpView reduced_view{qp.A, qp.b, J_kept, c_kept, qp.x0, &qp.length, nullptr};
                 Vec used;
                 bool fitted = false;
                 out.accuracy_solved = measure_point(reduced_view, accuracy_scale(reduced_view), x, g, &lambda_kept,
@@ -163,6 +178,10 @@ Judgement judge_point(const Qp& qp, const SolutionPoint& point, const JudgeOptio
                 bool fitted = false;
                 out.accuracy_solved =
                     measure_point(relaxed, accuracy_scale(relaxed), x, g, &out.lambda, out.tol, used, fitted);
+                out.have_solved = true;
+            } else if (solved.empty() && out.relaxation) {
+                // A frictional run judged without lambda_t: the point answers the relaxation at best.
+                out.accuracy_solved = out.accuracy;
                 out.have_solved = true;
             } else if (!solved.empty()) {
                 throw_input_error(options.record_path, "/solved_problem",

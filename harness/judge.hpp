@@ -4,6 +4,11 @@
 /// (measure_point), the verdict at tol, the objective and its gap to a cached reference. With
 /// the run's record (`solve --json`, a suite's runs/*.json) the run's status is rebuilt too,
 /// including `solved_relaxation` and `unconfirmed`, which need the solver's own word.
+///
+/// On a frictional snapshot the point is judged on the frictional problem only when it carries its
+/// tangential multipliers (SolutionPoint::lambda_t); without them it is judged on the frictionless
+/// relaxation (mu = 0), which the judgement names (`relaxation`): its verdict is then at best
+/// `solved_relaxation`, never `converged`.
 #include "problems/solution_io.hpp"
 #include "solvers/accuracy.hpp"
 #include "solvers/qp.hpp"
@@ -27,7 +32,10 @@ struct Judgement {
     Vec lambda;              ///< the multipliers the measure used
     bool lambda_fitted = false;
     double tol = 0.0;
-    bool meets_tol = false;  ///< e <= tol: the verdict `converged` of the point
+    bool meets_tol = false;    ///< e <= tol: the verdict `converged` of the point (`solved_relaxation` if relaxation)
+    bool relaxation = false;   ///< a frictional snapshot judged without lambda_t: e is the frictionless relaxation's
+    bool frictional = false;   ///< the snapshot has friction (some mu > 0)
+    double fclib_error = 0.0;  ///< FCLIB's relative error at (x, lambda, lambda_t); NaN unless judged with friction
     double objective = 0.0, violation = 0.0;
     std::string status;             ///< the run's status, only with a record ("" otherwise)
     AccuracyParts accuracy_solved;  ///< with a record of a changed problem: e on the problem it solved

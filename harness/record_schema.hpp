@@ -15,7 +15,10 @@
 ///   null; absent: true (compare reads it so).
 ///   "fclib_error" and "accuracy"."friction" (issue 48): only in records of problems with
 ///   friction (docs/accuracy.md "e for Coulomb friction"); absent: a frictionless problem.
-///   "solved_problem" gains the value "frictionless" (a frictionless solver on a frictional problem).
+///   "solved_problem" gains the value "frictionless" (a frictionless solver on a frictional problem,
+///   or a frictional one that returned no tangential multipliers).
+///   "friction" {"mu_min", "mu_max"}: only in records of problems with friction.
+///   summary.csv columns fclib_error, solved_problem, mu_min, mu_max (appended; empty when absent).
 #include <nlohmann/json.hpp>
 #include <string>
 

@@ -87,7 +87,11 @@ const std::vector<std::string>& summary_columns()
                                                      "m",
                                                      "tol",
                                                      "length_scale",
-                                                     "length_scale_source"};
+                                                     "length_scale_source",
+                                                     "fclib_error",
+                                                     "solved_problem",
+                                                     "mu_min",
+                                                     "mu_max"};
     return columns;
 }
 
@@ -174,6 +178,11 @@ std::string summary_row(const nlohmann::json& run, const std::string& suite_name
         at(run, {"tol"}),
         at(run, {"length_scale"}),
         at(run, {"length_scale_source"}),
+        // Friction (issue 48): empty for a frictionless run; solved_problem also names other relaxations.
+        at(run, {"fclib_error"}),
+        at(run, {"solved_problem"}),
+        at(run, {"friction", "mu_min"}),
+        at(run, {"friction", "mu_max"}),
     };
     std::string line;
     for (size_t i = 0; i < values.size(); ++i) line += (i ? "," : "") + cell(values[i]);

@@ -81,7 +81,10 @@ nlohmann::json run_record(const RunOutcome& out, const RunFacts& facts, int repe
                                                           : "frictionless";
     }
     // A frictional problem (some mu > 0): FCLIB's relative natural-map error beside e (issue 48).
-    if (facts.frictional) rec["fclib_error"] = finite_or_null(out.fclib_error);
+    if (facts.frictional) {
+        rec["fclib_error"] = finite_or_null(out.fclib_error);
+        rec["friction"] = {{"mu_min", facts.mu_min}, {"mu_max", facts.mu_max}};
+    }
     rec["violation"] = finite_or_null(out.violation);
     rec["violation_original"] = finite_or_null(out.violation);
     rec["native_residual"] = finite_or_null(result.native_residual);

@@ -29,6 +29,7 @@ struct RunFacts {
     bool frictionless = false;      ///< a frictionless solver on a frictional problem (it solved mu = 0)
     bool decouple_applied = false;  ///< the solver saw decoupled rows (they carry no friction either)
     bool frictional = false;        ///< the problem has friction (some mu > 0): the record carries fclib_error
+    double mu_min = 0.0, mu_max = 0.0;  ///< the range of mu over the contacts (record "friction", when frictional)
     bool lambda_fitted = false;  ///< the multipliers measured with are a least-squares fit
     double objective_x0 = 0.0;
     long a_products_harness = 0;

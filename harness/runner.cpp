@@ -187,10 +187,14 @@ void measure_outcome(RunOutcome& out, RunFacts& facts, const CommonSettings& com
     // The problem the solver solved, when it differs: the decoupled rows, or no rows at all for
     // a solver that ignores J (cg's unconstrained relaxation).
     facts.ignores_constraints = result.info.is_object() && result.info.value("ignores_constraints", false);
-    // A frictionless solver on a frictional problem solved the problem with mu = 0.
-    facts.frictionless = original.frictional() && !handles_friction && !facts.ignores_constraints;
+    // A frictionless solver on a frictional problem solved the problem with mu = 0; so did a
+    // frictional one that returned no tangential multipliers (a `command` program's x alone):
+    // measured with lambda_T = 0 it would be judged on a problem it never claimed to solve.
+    facts.frictionless = original.frictional() && !(handles_friction && own_t) && !facts.ignores_constraints;
     facts.decouple_applied = !problem.is_original();
     facts.frictional = original.frictional();
+    if (facts.frictional)
+        facts.mu_min = original.friction.mu.minCoeff(), facts.mu_max = original.friction.mu.maxCoeff();
     facts.changed = !problem.is_original() || (facts.ignores_constraints && original.m() > 0) || facts.frictionless;
     out.m_solved = facts.ignores_constraints ? 0 : view.m();
     if (!facts.changed) {

@@ -9,6 +9,9 @@
 /// unit); `solved_relaxation` when the solver changed the problem (the harness decoupled its rows,
 /// or it ignores J) and met the tolerance on its own problem only; `unconfirmed` when it said
 /// converged and the measure disagrees on the problem it solved; otherwise the solver's status.
+/// On a frictional problem a solver solved the frictional problem only when it handles friction
+/// and returned its 2m tangential multipliers; otherwise its problem was the frictionless
+/// relaxation (record "solved_problem": "frictionless").
 #include "solvers/accuracy.hpp"
 #include "solvers/qp.hpp"
 #include "solvers/settings.hpp"

@@ -39,7 +39,8 @@ SUMMARY_COLUMNS = ["suite", "snapshot", "label", "solver", "status", "solver_sta
                    "status_confirmed", "iterations", "a_products", "work", "cholmod_factorizations", "accuracy",
                    "stationarity", "primal", "dual", "complementarity", "gap", "accuracy_solved", "m_solved",
                    "objective", "energy_gap", "violation", "native_residual", "nonfinite", "monotone",
-                   "setup_s", "solve_s", "time_s", "n", "m", "tol", "length_scale", "length_scale_source"]
+                   "setup_s", "solve_s", "time_s", "peak_rss_mb", "n", "m", "tol", "length_scale",
+                   "length_scale_source", "fclib_error", "solved_problem", "mu_min", "mu_max"]
 
 #: run statuses beside the solvers' own (harness/runner.hpp)
 RELAXATION_STATUS = "solved_relaxation"
@@ -162,6 +163,11 @@ def flatten_run(record: dict, source: str = "run record") -> dict:
         "tol": _number(record.get("tol")),
         "accuracy_tol": _number(record.get("accuracy_tol", record.get("tol"))),
         "solved_problem": record.get("solved_problem"),
+        # friction (issue 48): NaN for a frictionless run
+        "fclib_error": _number(record.get("fclib_error")),
+        "mu_min": _number((record.get("friction") or {}).get("mu_min")),
+        "mu_max": _number((record.get("friction") or {}).get("mu_max")),
+        "peak_rss_mb": _number((record.get("memory") or {}).get("peak_rss_mb")),
         "setup_s": _number(times.get("setup_s")),
         "solve_s": _number(times.get("solve_s")),
         "time_s": _number(times.get("total_s", _number(times.get("setup_s")) + _number(times.get("solve_s")))),

@@ -16,6 +16,8 @@ Fields added later (nothing renamed; an older file lacks them and means the defa
     counters are null; absent: true
     run record "fclib_error" and "accuracy"["friction"] (issue 48): only for a problem with
     friction; absent: a frictionless problem (fclib_error None, friction 0)
+    run record "friction" {"mu_min", "mu_max"} and summary.csv columns fclib_error,
+    solved_problem, mu_min, mu_max (issue 48): empty for a frictionless run
 """
 from __future__ import annotations
 
@@ -29,7 +31,7 @@ OLD_STABILITY_COLUMNS = {"kkt": "accuracy", "kkt_solved": "accuracy_solved"}
 OLD_KEYS = {"kkt_relative": "accuracy"}
 
 #: added field -> what an older record that lacks it means
-ADDED_FIELDS = {"work_counted": True, "fclib_error": None}
+ADDED_FIELDS = {"work_counted": True, "fclib_error": None, "friction": None}
 
 _told = set()
 

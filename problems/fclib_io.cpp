@@ -491,8 +491,12 @@ std::pair<double, double> check_mu(FclibReader& file, const std::string& field, 
             std::string message = contact;
             message += " has mu = " + exact(mu[i]);
             message += ": this " + kind;
-            message += " problem has friction, which the QP cannot hold; `convert --drop-friction` keeps its normal "
-                       "part (recorded in the snapshot)";
+            message += kind == "fclib_local"
+                           ? " problem has friction, which a snapshot cannot hold (it has no A); `convert "
+                             "--drop-friction` keeps its normal part (recorded in the snapshot), `friction-solve` "
+                             "solves a 3-D one with its friction"
+                           : " problem has friction: read it with keep_friction (as `convert` does: a snapshot of "
+                             "version 2) or drop_friction (its normal part)";
             file.fail(field, message);
         }
         lo = i == 0 ? mu[i] : std::min(lo, mu[i]);
@@ -960,6 +964,13 @@ nlohmann::json describe_fclib(const std::string& path)
         out["mu_min"] = *std::min_element(mu.begin(), mu.end());
         out["mu_max"] = *std::max_element(mu.begin(), mu.end());
     }
+    // What convert and friction-solve do with the file today: a 3-D global problem keeps its
+    // friction in the snapshot (version 2); a local one (no A) or a 2-D one keeps only its normal part.
+    const bool frictional = !mu.empty() && *std::max_element(mu.begin(), mu.end()) > 0.0;
+    const bool keeps_friction = kind == "fclib_global" && d == 3;
+    out["convert"] =
+        "contactbench convert " + path + " OUT.qpsnap" + (frictional && !keeps_friction ? " --drop-friction" : "");
+    if (frictional && d == 3) out["friction_solve"] = "contactbench friction-solve " + path;
     out["has_solution"] = file.exists("/solution");
     out["guesses"] = file.exists("/guesses/number_of_guesses") ? file.integer("/guesses/number_of_guesses") : 0;
     nlohmann::json source = nlohmann::json::object();

@@ -132,13 +132,20 @@ void expect_qpsnap(const std::string& path, const std::string& command)
     if (format == FileFormat::QPSNAP || format == FileFormat::UNKNOWN) return;
     std::string how;
     switch (format) {
-    case FileFormat::FCLIB_GLOBAL:
-    case FileFormat::FCLIB_LOCAL:
+    case FileFormat::FCLIB_GLOBAL:  // convert keeps a 3-D global problem's friction (snapshot version 2)
+        how = "convert it first: contactbench convert " + path +
+              " OUT.qpsnap (a frictional problem keeps its friction; --drop-friction keeps only its normal part), "
+              "or solve it with its friction: contactbench friction-solve " +
+              path;
+        break;
+    case FileFormat::FCLIB_LOCAL:  // no A: a snapshot cannot hold a local problem's friction
+        how = "convert it first: contactbench convert " + path +
+              " OUT.qpsnap (a frictional problem needs --drop-friction: its normal part), or solve it with its "
+              "friction: contactbench friction-solve " +
+              path;
+        break;
     case FileFormat::MATRIX_MARKET_FOLDER:
-        how = "convert it first: contactbench convert " + path + " OUT.qpsnap" +
-              (format == FileFormat::MATRIX_MARKET_FOLDER ? ""
-                                                          : " (add --drop-friction to keep the normal part of a "
-                                                            "frictional problem)");
+        how = "convert it first: contactbench convert " + path + " OUT.qpsnap";
         break;
     case FileFormat::SICONOS_DAT:
         how = "convert a local problem first: contactbench convert " + path +

@@ -457,6 +457,20 @@ Qp read_matrix_market_folder(const std::string& dir, SnapshotExtras* extras)
         if (!qp.meta.is_object()) throw_input_error((d / "meta.json").string(), "", "expected a JSON object");
     }
     if (fs::exists(d / "contact.json")) read_contacts((d / "contact.json").string(), m, qp.contacts);
+    // Coulomb friction (snapshot version 2's fields), each in a file of its own; validate_qp's
+    // check_friction applies the snapshot's rules to them (mu with T, cT with T, v0 with h).
+    if (fs::exists(d / "mu.mtx")) qp.friction.mu = vector_of("mu.mtx", m, "m (rows of J.mtx)");
+    if (fs::exists(d / "T.mtx")) {
+        MtxLimits t_limits;  // 2m x n: a larger declared size is refused before it is allocated
+        t_limits.max_rows = std::max(2 * m, 1L);
+        t_limits.max_cols = std::max(n, 1L);
+        t_limits.why_rows = "2m = " + std::to_string(2 * m) + ", two tangent rows per row of J.mtx";
+        t_limits.why_cols = "n = " + std::to_string(n) + ", from A.mtx";
+        qp.friction.T = read_mtx_matrix_bounded((d / "T.mtx").string(), t_limits);
+    }
+    if (fs::exists(d / "cT.mtx")) qp.friction.cT = vector_of("cT.mtx", 2 * m, "2m (two tangents per row of J.mtx)");
+    if (fs::exists(d / "h.mtx")) qp.friction.h = vector_of("h.mtx", 1, "1 (the time step h)")[0];
+    if (fs::exists(d / "v0.mtx")) qp.friction.v0 = vector_of("v0.mtx", n, "n (from A.mtx)");
     SnapshotExtras ex;
     if (fs::exists(d / "x_ref.mtx")) ex.x_ref = vector_of("x_ref.mtx", n, "n (from A.mtx)");
     if (fs::exists(d / "lambda_ref.mtx")) ex.lambda_ref = vector_of("lambda_ref.mtx", m, "m (rows of J.mtx)");
@@ -500,6 +514,15 @@ void write_matrix_market_folder(const std::string& dir, const Qp& qp, const Snap
             }
             write_file_atomic((tmp / "contact.json").string(), ct.dump() + "\n");
         }
+        const Friction& fr = qp.friction;
+        if (fr.mu.size()) {
+            write_mtx_vector((tmp / "mu.mtx").string(), fr.mu, "mu: Coulomb friction coefficient per row of J");
+            write_mtx_matrix((tmp / "T.mtx").string(), fr.T,
+                             "T: 2m x n, rows 2i and 2i+1 are the tangents of J's row i");
+        }
+        if (fr.cT.size()) write_mtx_vector((tmp / "cT.mtx").string(), fr.cT, "cT: slip T x - cT");
+        if (fr.h > 0) write_mtx_vector((tmp / "h.mtx").string(), Vec::Constant(1, fr.h), "h: time step");
+        if (fr.v0.size()) write_mtx_vector((tmp / "v0.mtx").string(), fr.v0, "v0: start velocities");
         if (extras && extras->x_ref.size()) write_mtx_vector((tmp / "x_ref.mtx").string(), extras->x_ref, "x_ref");
         if (extras && extras->lambda_ref.size())
             write_mtx_vector((tmp / "lambda_ref.mtx").string(), extras->lambda_ref, "lambda_ref");

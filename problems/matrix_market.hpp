@@ -5,7 +5,10 @@
 ///   J.mtx   coordinate real general, m x n ("0 n 0" when m = 0)
 ///   meta.json (optional), contact.json (optional: {"kind": [m], "depth": [m], "vertex": [[4] x m]}),
 ///   x_ref.mtx, lambda_ref.mtx (optional)
-/// Values are written with %.17g, so .qpsnap -> folder -> .qpsnap is bit-exact in the arrays.
+///   mu.mtx T.mtx cT.mtx h.mtx v0.mtx (optional: Coulomb friction, snapshot version 2's fields, with
+///   its rules: mu (m) with T (2m x n, coordinate), cT (2m) only with T, h (1 x 1) and v0 (n) with h)
+/// Values are written with %.17g, so .qpsnap -> folder -> .qpsnap is bit-exact in the arrays, friction
+/// included.
 #include "problems/qpsnap.hpp"
 
 #include <string>

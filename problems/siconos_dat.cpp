@@ -410,8 +410,9 @@ Qp read_siconos_dat_qp(const std::string& path, const FclibReadOptions& options)
         if (p.mu[i] != 0.0 && !options.drop_friction)
             throw_input_error(path, "mu[" + std::to_string(i) + "]",
                               "contact " + std::to_string(i) + " has mu = " + exact(p.mu[i]) +
-                                  ": this Siconos local problem has friction, which the QP cannot hold; `convert "
-                                  "--drop-friction` keeps its normal part (recorded in the snapshot)");
+                                  ": this Siconos local problem has friction, which a snapshot cannot hold (it has no "
+                                  "A); `convert --drop-friction` keeps its normal part (recorded in the snapshot), "
+                                  "`friction-solve` solves a 3-D one with its friction");
         mu_min = std::min(mu_min, p.mu[i]);
         mu_max = std::max(mu_max, p.mu[i]);
     }

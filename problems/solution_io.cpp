@@ -46,11 +46,14 @@ std::string printable(const std::string& s, size_t max_chars = 40)
     return out;
 }
 
+/// The snapshot's dimension a solution vector has: n for x, 2m for lambda_t, m for lambda.
+const char* dimension_name(const std::string& field) { return field == "x" ? "n" : field == "lambda_t" ? "2m" : "m"; }
+
 void require_count(long got, long expected, const std::string& path, const std::string& field)
 {
     if (expected >= 0 && got != expected)
         throw_input_error(path, field,
-                          "expected " + std::to_string(expected) + " entries (" + (field == "x" ? "n" : "m") +
+                          "expected " + std::to_string(expected) + " entries (" + dimension_name(field) +
                               " of the snapshot), got " + std::to_string(got));
 }
 
@@ -301,7 +304,7 @@ Vec read_vector_file_sized(const std::string& path, const std::string& field, lo
     path_kind(path, field, "no such file");
     const std::string ext = extension(path);
     Vec v = ext == ".npy"   ? read_npy(path, field, expected)
-            : ext == ".mtx" ? read_mtx_vector(path, expected, field == "x" ? "n" : "m")
+            : ext == ".mtx" ? read_mtx_vector(path, expected, dimension_name(field))
                             : read_text_vector(path, field, expected);
     require_count(long(v.size()), expected, path, field);
     for (Eigen::Index i = 0; i < v.size(); ++i)
@@ -334,19 +337,29 @@ std::string find_vector_file(const std::string& dir, const std::string& stem)
     return found;
 }
 
-SolutionPoint read_solution(const std::string& path, long n, long m, const std::string& lambda_file)
+SolutionPoint read_solution(const std::string& path, long n, long m, const std::string& lambda_file,
+                            const std::string& lambda_t_file, long tangent_rows)
 {
     SolutionPoint point;
     if (path_kind(path, "x", "no such file or folder") == 'd') {
         point.x_path = find_vector_file(path, "x");
         if (point.x_path.empty()) throw_input_error(path, "x", "missing: the folder has no x.mtx, x.npy or x.txt");
         point.lambda_path = find_vector_file(path, "lambda");
+        point.lambda_t_path = find_vector_file(path, "lambda_t");
     } else {
         point.x_path = path;
     }
     if (!lambda_file.empty()) point.lambda_path = lambda_file;
+    if (!lambda_t_file.empty()) point.lambda_t_path = lambda_t_file;
+    // Tangential multipliers answer tangent rows; without them they would be measured against nothing.
+    if (!point.lambda_t_path.empty() && tangent_rows <= 0)
+        throw_input_error(point.lambda_t_path, "lambda_t",
+                          "given, but the snapshot has no friction (no tangent rows T): remove it, or judge the "
+                          "frictional snapshot it answers");
     point.x = read_vector_file_sized(point.x_path, "x", n);
     if (!point.lambda_path.empty()) point.lambda = read_vector_file_sized(point.lambda_path, "lambda", m);
+    if (!point.lambda_t_path.empty())
+        point.lambda_t = read_vector_file_sized(point.lambda_t_path, "lambda_t", tangent_rows);
     return point;
 }
 

@@ -10,6 +10,7 @@
 #include "solvers/registry.hpp"
 
 #include "tests/harness/cli_test_util.hpp"
+#include "tests/solvers/friction_test_qps.hpp"
 
 #include <gtest/gtest.h>
 
@@ -248,4 +249,72 @@ TEST(Judge, MalformedSolutionsNameTheFileAndTheField)
     EXPECT_EQ(error_for(dir / "bad_lambda"), (dir / "bad_lambda" / "lambda.npy").string() + ": lambda: expected " +
                                                  std::to_string(m) + " entries (m of the snapshot), got " +
                                                  std::to_string(m + 2));
+}
+
+// Issue 48: a frictional run's solution carries lambda_t (solve --save-solution writes it) and
+// judge measures the friction with it, as solve did; without it judge says it judged the
+// frictionless relaxation, and never calls the point converged.
+TEST(Judge, FrictionalRunIsJudgedWithItsTangentialMultipliersOrNamedARelaxation)
+{
+    const fs::path dir = work_dir() / "friction";
+    fs::create_directories(dir);
+    const std::string snap = (dir / "pushed.qpsnap").string();
+    write_qpsnap(snap, testing_qps::pushed_plane(0.2, 0.5));
+    const std::string record_path = (dir / "run.json").string(), sol = (dir / "sol").string();
+    run_command(cmd_solve, {snap, "--solver", "nsgs-friction", "--set", "tol=1e-8", "--set", "max_iterations=100000",
+                            "--json", record_path, "--save-solution", sol});
+    const nlohmann::json record = read_json_file(record_path);
+    ASSERT_EQ(record["status"], "converged") << record["message"];
+    ASSERT_TRUE(fs::exists(dir / "sol" / "lambda_t.mtx"));
+
+    const std::string judge_json = (dir / "judge.json").string();
+    std::string text = run_command(cmd_judge, {snap, sol, "--record", record_path, "--json", judge_json});
+    nlohmann::json judged = read_json_file(judge_json);
+    EXPECT_EQ(judged["judged_problem"], "frictional");
+    EXPECT_EQ(judged["accuracy"]["max"].get<double>(), record["accuracy"]["max"].get<double>());
+    EXPECT_EQ(judged["accuracy"]["friction"].get<double>(), record["accuracy"]["friction"].get<double>());
+    EXPECT_EQ(judged["fclib_error"].get<double>(), record["fclib_error"].get<double>());
+    EXPECT_EQ(judged["verdict"], "converged");
+    EXPECT_EQ(judged["status"], "converged");
+    EXPECT_NE(text.find("friction    judged on the frictional problem; FCLIB relative error"), std::string::npos)
+        << text;
+
+    // Without lambda_t: the frictionless relaxation, said so, at best solved_relaxation.
+    fs::remove(dir / "sol" / "lambda_t.mtx");
+    text = run_command(cmd_judge, {snap, sol, "--record", record_path, "--json", judge_json});
+    judged = read_json_file(judge_json);
+    EXPECT_EQ(judged["judged_problem"], "frictionless_relaxation");
+    EXPECT_FALSE(judged["accuracy"].contains("friction"));
+    EXPECT_TRUE(judged["fclib_error"].is_null());
+    EXPECT_NE(judged["verdict"], "converged");
+    EXPECT_NE(judged["status"], "converged");
+    EXPECT_NE(text.find("friction    no lambda_t given: judged on the frictionless relaxation (mu = 0), not on the "
+                        "frictional problem"),
+              std::string::npos)
+        << text;
+    // Given with --lambda-t, the same numbers as from the folder.
+    run_command(cmd_solve, {snap, "--solver", "nsgs-friction", "--set", "tol=1e-8", "--set", "max_iterations=100000",
+                            "--save-solution", (dir / "again").string()});
+    run_command(cmd_judge, {snap, sol, "--lambda-t", (dir / "again" / "lambda_t.mtx").string(), "--record", record_path,
+                            "--json", judge_json});
+    EXPECT_EQ(read_json_file(judge_json)["accuracy"]["max"].get<double>(), record["accuracy"]["max"].get<double>());
+
+    // A frictionless solver's run (solved_relaxation) is judged the same with or without a record.
+    run_command(cmd_solve, {snap, "--solver", "pgs", "--set", "tol=1e-8", "--json", record_path, "--save-solution",
+                            (dir / "pgs").string()});
+    EXPECT_FALSE(fs::exists(dir / "pgs" / "lambda_t.mtx"));
+    run_command(cmd_judge, {snap, (dir / "pgs").string(), "--record", record_path, "--json", judge_json});
+    EXPECT_EQ(read_json_file(judge_json)["status"], read_json_file(record_path)["status"]);
+    EXPECT_EQ(read_json_file(judge_json)["status"], "solved_relaxation");
+
+    // lambda_t on a snapshot without tangent rows, or of the wrong size: refused, naming it.
+    EXPECT_EQ(input_error_of([&] { read_solution(sol, 3, 1, "", (dir / "again" / "lambda_t.mtx").string(), 0); }),
+              (dir / "again" / "lambda_t.mtx").string() +
+                  ": lambda_t: given, but the snapshot has no friction (no tangent rows T): remove it, or judge the "
+                  "frictional snapshot it answers");
+    const Qp qp = read_qpsnap(snap);
+    write_text(dir / "short.txt", "1 2 3\n");
+    EXPECT_EQ(input_error_of([&] { read_solution(sol, qp.n(), qp.m(), "", (dir / "short.txt").string(), 2 * qp.m()); }),
+              (dir / "short.txt").string() + ": lambda_t: expected " + std::to_string(2 * qp.m()) +
+                  " entries (2m of the snapshot), got 3");
 }

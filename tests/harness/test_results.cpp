@@ -86,7 +86,7 @@ TEST(Results, SummaryColumnsAndRow)
         "suite,snapshot,label,solver,status,solver_status,criterion,status_confirmed,iterations,a_products,"
         "work,cholmod_factorizations,accuracy,stationarity,primal,dual,complementarity,gap,accuracy_solved,m_solved,"
         "objective,energy_gap,violation,native_residual,nonfinite,monotone,setup_s,solve_s,time_s,peak_rss_mb,n,m,tol,"
-        "length_scale,length_scale_source";
+        "length_scale,length_scale_source,fclib_error,solved_problem,mu_min,mu_max";
     std::string header;
     for (size_t i = 0; i < summary_columns().size(); ++i) header += (i ? "," : "") + summary_columns()[i];
     EXPECT_EQ(header, expected);
@@ -122,7 +122,8 @@ TEST(Results, SummaryColumnsAndRow)
                                 {"message", "a, \"quoted\" message"}};
     EXPECT_EQ(summary_row(run, "demo"),
               "demo,plane-s1,mprgp-jacobi,mprgp,solved_relaxation,converged,kkt,true,54,120,137.5,0,0.25,0.25,0,0,"
-              "0.125,0.0625,0.5,12,-4.5,0.75,0,,false,true,0.5,1.5,2,48.25,375,25,9.9999999999999995e-07,2,x0_extent");
+              "0.125,0.0625,0.5,12,-4.5,0.75,0,,false,true,0.5,1.5,2,48.25,375,25,9.9999999999999995e-07,2,x0_extent,"
+              ",,,");
     // A run on an unchanged problem: the solved error and rows are the original's.
     nlohmann::json plain = run;
     plain.erase("accuracy_solved");

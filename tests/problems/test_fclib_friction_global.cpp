@@ -277,11 +277,23 @@ TEST(FclibFrictionGlobal, ConvertKeepsTheFrictionAndRoundTrips)
         run_captured(bin + " convert '" + in.string() + "' '" + snap.string() + "' --drop-friction", dir);
     ASSERT_EQ(o.status, 0) << o.err;
     EXPECT_TRUE(cb::read_qpsnap(snap.string()).friction.empty());
-    // A Matrix Market folder has no friction field: the file is refused there without --drop-friction.
-    const cb::test::Output mm =
-        run_captured(bin + " convert '" + in.string() + "' '" + (dir / "mm").string() + "'", dir);
-    EXPECT_EQ(mm.status, 2);
-    EXPECT_NE(mm.err.find("this fclib_global problem has friction"), std::string::npos) << mm.err;
+    // A Matrix Market folder keeps the friction in files of its own (mu.mtx T.mtx cT.mtx): the
+    // folder and the snapshot converted from the file are one problem, bit for bit.
+    const fs::path mm = dir / "mm", kept = dir / "kept.qpsnap", via_mm = dir / "via_mm.qpsnap";
+    cb::test::Output c = run_captured(bin + " convert '" + in.string() + "' '" + mm.string() + "'", dir);
+    ASSERT_EQ(c.status, 0) << c.err;
+    EXPECT_NE(c.out.find("friction in mu.mtx T.mtx"), std::string::npos) << c.out;
+    c = run_captured(bin + " convert '" + mm.string() + "' '" + via_mm.string() + "'", dir);
+    ASSERT_EQ(c.status, 0) << c.err;
+    c = run_captured(bin + " convert '" + in.string() + "' '" + kept.string() + "'", dir);
+    ASSERT_EQ(c.status, 0) << c.err;
+    const cb::Qp a = cb::read_qpsnap(kept.string()), b = cb::read_qpsnap(via_mm.string());
+    ASSERT_TRUE(b.frictional());
+    EXPECT_EQ(b.friction.mu, a.friction.mu);
+    EXPECT_EQ(cb::SpMat(b.friction.T - a.friction.T).norm(), 0.0);
+    EXPECT_EQ(b.friction.cT, a.friction.cT);
+    EXPECT_EQ(cb::SpMat(b.A - a.A).norm(), 0.0);
+    EXPECT_EQ(b.b, a.b);
 }
 
 }  // namespace

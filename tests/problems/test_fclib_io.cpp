@@ -237,8 +237,8 @@ TEST(FclibHostile, FrictionHugeOrNanMuAndEqualityConstraintsAreRefused)
             f.put_reals("/fclib_global/vectors/mu", mu);
         });
     };
-    const std::string friction = ": this fclib_global problem has friction, which the QP cannot hold; `convert "
-                                 "--drop-friction` keeps its normal part (recorded in the snapshot)";
+    const std::string friction = ": this fclib_global problem has friction: read it with keep_friction (as "
+                                 "`convert` does: a snapshot of version 2) or drop_friction (its normal part)";
     EXPECT_EQ(mu_of(0.3), "/fclib_global/vectors/mu: contact 1 has mu = 0.29999999999999999" + friction);
     EXPECT_EQ(mu_of(1e308), "/fclib_global/vectors/mu: contact 1 has mu = 1e+308" + friction);
     EXPECT_EQ(mu_of(std::nan("")),
@@ -403,8 +403,8 @@ TEST(FclibWriters, FrictionIsDroppedOnlyWhenAskedAndRecorded)
     }
     EXPECT_EQ(error_of([&] { cb::read_fclib(path); }, path),
               "/fclib_global/vectors/mu: contact 1 has mu = 0.40000000000000002: this fclib_global problem has "
-              "friction, which the QP cannot hold; `convert --drop-friction` keeps its normal part (recorded in the "
-              "snapshot)");
+              "friction: read it with keep_friction (as `convert` does: a snapshot of version 2) or drop_friction "
+              "(its normal part)");
     cb::FclibReadOptions drop;
     drop.drop_friction = true;
     const cb::Qp qp = cb::read_fclib(path, nullptr, drop);
@@ -441,8 +441,9 @@ TEST(FclibWriters, LocalProblemIsItsNormalBlock)
         write_local(f, {0.0, 0.25});
     }
     EXPECT_EQ(error_of([&] { cb::read_fclib(path); }, path),
-              "/fclib_local/vectors/mu: contact 1 has mu = 0.25: this fclib_local problem has friction, which the QP "
-              "cannot hold; `convert --drop-friction` keeps its normal part (recorded in the snapshot)");
+              "/fclib_local/vectors/mu: contact 1 has mu = 0.25: this fclib_local problem has friction, which a "
+              "snapshot cannot hold (it has no A); `convert --drop-friction` keeps its normal part (recorded in the "
+              "snapshot), `friction-solve` solves a 3-D one with its friction");
     cb::FclibReadOptions drop;
     drop.drop_friction = true;
     const cb::Qp dropped = cb::read_fclib(path, &extras, drop);

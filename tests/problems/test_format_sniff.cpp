@@ -98,7 +98,9 @@ TEST(FormatSniff, CommandsNameTheFormatAndSuggestConvert)
                              ": format: an FCLIB fclib_global problem (HDF5), not a .qpsnap snapshot (solve reads "
                              ".qpsnap snapshots); convert it first: contactbench convert " +
                              cube +
-                             " OUT.qpsnap (add --drop-friction to keep the normal part of a frictional problem)\n");
+                             " OUT.qpsnap (a frictional problem keeps its friction; --drop-friction keeps only its "
+                             "normal part), or solve it with its friction: contactbench friction-solve " +
+                             cube + "\n");
     const auto info = run("info '" + cube + "' --json");
     ASSERT_EQ(info.status, 0) << info.err;
     const nlohmann::json summary = nlohmann::json::parse(info.out);
@@ -106,7 +108,25 @@ TEST(FormatSniff, CommandsNameTheFormatAndSuggestConvert)
     EXPECT_EQ(summary.at("contacts"), 1);
     EXPECT_EQ(summary.at("unknowns"), 162);
     EXPECT_EQ(summary.at("mu_max"), 0.3);
-    EXPECT_EQ(summary.at("convert"), "contactbench convert " + cube + " OUT.qpsnap --drop-friction");
+    // CubeH8 (3-D, mu 0.3) converts with its friction: no --drop-friction in the suggestion.
+    EXPECT_EQ(summary.at("convert"), "contactbench convert " + cube + " OUT.qpsnap");
+    EXPECT_EQ(summary.at("friction_solve"), "contactbench friction-solve " + cube);
+    // A local file (no A) converts only its normal part: --drop-friction is part of the suggestion.
+    const std::string local = (DATA / "fclib/Capsules-i125-1213.hdf5").string();
+    const auto solve_local = run("solve '" + local + "' --solver pgs");
+    EXPECT_EQ(solve_local.status, 2);
+    EXPECT_EQ(solve_local.err, "contactbench solve: error: " + local +
+                                   ": format: an FCLIB fclib_local problem (HDF5), not a .qpsnap snapshot (solve "
+                                   "reads .qpsnap snapshots); convert it first: contactbench convert " +
+                                   local +
+                                   " OUT.qpsnap (a frictional problem needs --drop-friction: its normal part), or "
+                                   "solve it with its friction: contactbench friction-solve " +
+                                   local + "\n");
+    const auto info_local = run("info '" + local + "' --json");
+    ASSERT_EQ(info_local.status, 0) << info_local.err;
+    const nlohmann::json local_summary = nlohmann::json::parse(info_local.out);
+    EXPECT_EQ(local_summary.at("convert"), "contactbench convert " + local + " OUT.qpsnap --drop-friction");
+    EXPECT_EQ(local_summary.at("friction_solve"), "contactbench friction-solve " + local);
     fs::remove_all(work);
 }
 

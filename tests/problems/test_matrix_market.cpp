@@ -11,6 +11,7 @@
 #include <fstream>
 #include <iterator>
 #include <unistd.h>
+#include <vector>
 
 namespace cb {
 namespace {
@@ -210,6 +211,65 @@ TEST(MatrixMarketErrors, DeclaredSizesBeyondTheBytesPresent)
     } catch (const InputError& e) {
         EXPECT_EQ(std::string(e.what()), v + ": entries: expected 200000000 entries, the file ends after 1");
     }
+}
+
+// ---- Coulomb friction in files of its own (issue 48: a folder used to drop it without a word) ----
+
+/// A synthetic QP with every friction field set (mu, T, cT, h, v0).
+Qp frictional_synthetic()
+{
+    Qp qp = make_synthetic("coupled", {{"nx", 2}, {"ny", 2}, {"nz", 2}}, 3);
+    const Eigen::Index m = qp.m(), n = qp.n();
+    Friction& f = qp.friction;
+    f.mu = Vec::LinSpaced(m, 0.0, 0.9);
+    std::vector<Eigen::Triplet<double>> t;
+    for (Eigen::Index i = 0; i < 2 * m; ++i) t.emplace_back(int(i), int((3 * i + 1) % n), 1.0 / double(i + 3));
+    f.T.resize(2 * m, n);
+    f.T.setFromTriplets(t.begin(), t.end());
+    f.T.makeCompressed();
+    f.cT = Vec::LinSpaced(2 * m, -1.0, 1.0 / 7.0);
+    f.h = 1.0 / 60.0;
+    f.v0 = Vec::LinSpaced(n, 0.25, -2.0 / 3.0);
+    return qp;
+}
+
+TEST(MatrixMarketFriction, RoundTripKeepsEveryFrictionFieldBitForBit)
+{
+    const Qp qp = frictional_synthetic();
+    const std::string base = temp_dir("friction_round");
+    const std::string s1 = base + "/a.qpsnap", s2 = base + "/b.qpsnap", folder = base + "/folder";
+    write_qpsnap(s1, qp);
+    write_matrix_market_folder(folder, read_qpsnap(s1));
+    for (const char* file : {"mu.mtx", "T.mtx", "cT.mtx", "h.mtx", "v0.mtx"})
+        EXPECT_TRUE(fs::exists(folder + "/" + file)) << file;
+    const Qp back = read_matrix_market_folder(folder);
+    ASSERT_TRUE(back.frictional());
+    EXPECT_EQ(back.friction.h, qp.friction.h);
+    write_qpsnap(s2, back);
+    EXPECT_EQ(file_bytes(s1), file_bytes(s2));  // version 2, every friction array bit for bit
+    // A frictionless QP's folder has no friction file.
+    write_matrix_market_folder(folder, make_synthetic("coupled", {{"nx", 2}, {"ny", 2}, {"nz", 2}}, 3));
+    EXPECT_FALSE(fs::exists(folder + "/mu.mtx"));
+    EXPECT_TRUE(read_matrix_market_folder(folder).friction.empty());
+}
+
+TEST(MatrixMarketFriction, BadFrictionFilesNameTheFileAndField)
+{
+    const std::string mu = "%%MatrixMarket matrix array real general\n1 1\n0.5\n";
+    const std::string t = "%%MatrixMarket matrix coordinate real general\n2 2 2\n1 1 1\n2 2 1\n";
+    std::string d = tiny_folder("fric_no_t", "mu.mtx", mu);
+    expect_error(d, d + ": T: missing: mu needs the two tangent rows per contact (T, 2m x n)");
+    d = tiny_folder("fric_no_mu", "T.mtx", t);
+    expect_error(d, d + ": mu: missing: T is given without friction coefficients");
+    d = tiny_folder("fric_negative", "mu.mtx", "%%MatrixMarket matrix array real general\n1 1\n-0.5\n");
+    put(d + "/T.mtx", t);
+    expect_error(d, d + ": mu: negative friction coefficient -0.5 at contact 0");
+    d = tiny_folder("fric_t_rows", "mu.mtx", mu);
+    put(d + "/T.mtx", "%%MatrixMarket matrix coordinate real general\n5 2 1\n1 1 1\n");
+    expect_error(d, d + "/T.mtx: line 2: declares 5 rows, at most 2 possible (2m = 2, two tangent rows per row of "
+                        "J.mtx)");
+    d = tiny_folder("fric_v0", "v0.mtx", "%%MatrixMarket matrix array real general\n2 1\n1\n2\n");
+    expect_error(d, d + ": h: missing: v0 is given without the step h");
 }
 
 }  // namespace

@@ -148,8 +148,8 @@ TEST(SiconosDat, ConvertKeepsTheNormalBlockAsFclibLocalDoes)
     EXPECT_EQ(o.status, 2);
     EXPECT_EQ(o.err, "contactbench convert: error: " + in +
                          ": mu[0]: contact 0 has mu = 0.69999999999999996: this Siconos local problem has friction, "
-                         "which the QP cannot hold; `convert --drop-friction` keeps its normal part (recorded in the "
-                         "snapshot)\n");
+                         "which a snapshot cannot hold (it has no A); `convert --drop-friction` keeps its normal part "
+                         "(recorded in the snapshot), `friction-solve` solves a 3-D one with its friction\n");
     o = run_captured(bin + " convert '" + in + "' '" + out + "' --drop-friction", dir);
     EXPECT_EQ(o.status, 2);
     EXPECT_EQ(o.err, "contactbench convert: error: " + in +
