@@ -5,6 +5,7 @@
 #include "solvers/mprgp.hpp"
 #include "solvers/mprgp_box.hpp"
 #include "solvers/mprgp_coupled.hpp"
+#include "solvers/mprgp_staggered.hpp"
 #include "solvers/nsgs_friction.hpp"
 #include "solvers/pgs.hpp"
 #include "solvers/registry.hpp"
@@ -36,6 +37,7 @@ void register_builtin_solvers(SolverRegistry& registry)
     registry.add("ica", ica_entry());
     registry.add("pgs", pgs_entry());
     registry.add("nsgs-friction", nsgs_friction_entry());  // pgs's frictional extension (Coulomb cones)
+    registry.add("mprgp-staggered", mprgp_staggered_entry());  // Kaufman et al. 2008 on mprgp-coupled and MPGP
     // External peers (solvers/peers/), each only when CMake found its library:
 #ifdef CB_HAVE_IPOPT
     registry.add("ipopt", ipopt_entry());
