@@ -166,6 +166,7 @@ SolverResult MprgpStaggeredSolver::solve(const QpView& qp, const SolveContext& c
         fclib = friction_snapshot_error(qp, x, lambda_n, lambda_t, norm_q);
     };
     long rounds = 0, normal_iterations = 0, tangential_iterations = 0, tangential_products = 0;
+    Counters tangential_steps;  // the tangential solves' step kinds, summed (info)
     auto finish = [&](SolveStatus status, const std::string& detail) {
         result.x = x;
         result.lambda = lambda_n;
@@ -175,6 +176,9 @@ SolverResult MprgpStaggeredSolver::solve(const QpView& qp, const SolveContext& c
         result.info["normal_iterations"] = normal_iterations;
         result.info["tangential_iterations"] = tangential_iterations;
         result.info["tangential_w_products"] = tangential_products;
+        result.info["tangential_steps"] = {{"cg", tangential_steps.cg_steps},
+                                           {"expansion", tangential_steps.expansion_steps},
+                                           {"proportioning", tangential_steps.proportioning_steps}};
         std::ostringstream text;
         text << rounds << " rounds (" << normal_iterations << " normal + " << tangential_iterations
              << " tangential MPRGP iterations), e " << e << ", FCLIB error " << fclib;
@@ -276,6 +280,7 @@ SolverResult MprgpStaggeredSolver::solve(const QpView& qp, const SolveContext& c
         counters.work_flops += double(cnt.a_products) * w_product_flops;
         cnt.a_products = 0;  // products with W_TT, not A: counted as work above
         add_inner_counters(counters, cnt);
+        add_inner_counters(tangential_steps, cnt);
         if (ts == SolveStatus::TIME_LIMIT) return finish(SolveStatus::TIME_LIMIT, "");
         if (ts == SolveStatus::MAX_ITERATIONS) return finish(SolveStatus::MAX_ITERATIONS, "");
         if (ts != SolveStatus::CONVERGED)

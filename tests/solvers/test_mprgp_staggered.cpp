@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <vector>
 
 namespace cb {
@@ -149,6 +150,29 @@ TEST(MprgpStaggered, TheOuterCapEndsAsMaxIterationsAndSaysSo)
     EXPECT_EQ(r.message.rfind("mprgp-staggered: outer cap max_outer = 1 rounds reached; 1 rounds (", 0), 0u)
         << r.message;
     EXPECT_EQ(r.lambda_t.size(), 2 * qp.m());
+}
+
+// The frictional path keeps the solve-loop contract that Conformance checks on frictionless problems.
+TEST(MprgpStaggered, FrictionalRunsKeepTheSolveLoopContract)
+{
+    Qp qp = testing_qps::pushed_plane(0.2, 0.5);
+    auto solve = [&](const nlohmann::json& settings) {
+        return builtin_registry().create("mprgp-staggered", settings)->solve(qp.view(), SolveContext{});
+    };
+    const SolverResult timed = solve({{"time_limit_s", 1e-12}});
+    EXPECT_EQ(timed.status, SolveStatus::TIME_LIMIT) << timed.message;
+    EXPECT_EQ(timed.message.rfind("mprgp-staggered: time limit of 1e-12 s reached during setup (after ", 0), 0u)
+        << timed.message;
+    const SolverResult capped = solve({{"tol", 1e-12}, {"max_iterations", 5}});
+    EXPECT_EQ(capped.status, SolveStatus::MAX_ITERATIONS) << capped.message;
+    EXPECT_EQ(capped.message.rfind("mprgp-staggered: iteration cap 5 reached", 0), 0u) << capped.message;
+    EXPECT_LE(capped.iterations, 5);
+    const SolverResult refused = solve({{"max_contacts", qp.m() - 1}});
+    EXPECT_EQ(refused.status, SolveStatus::NOT_APPLICABLE) << refused.message;
+    qp.b[0] = std::numeric_limits<double>::quiet_NaN();
+    const SolverResult nan = solve(nlohmann::json::object());
+    EXPECT_EQ(nan.status, SolveStatus::DIVERGED) << nan.message;
+    EXPECT_EQ(nan.message.rfind("mprgp-staggered: non-finite iterate", 0), 0u) << nan.message;
 }
 
 }  // namespace
