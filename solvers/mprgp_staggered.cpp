@@ -155,7 +155,7 @@ SolverResult MprgpStaggeredSolver::solve(const QpView& qp, const SolveContext& c
     // The normal QPs are measured in the snapshot's scale (their b differs, so l is fixed here).
     const FixedLength length{scale.length, "given"};
     const bool native = s.common.stops_on_native();
-    const double tangential_unit = native ? (norm_q > 0.0 ? norm_q : 1.0) : scale.length * smallest_row_norm(scale);
+    const double tangential_unit = scale.length * smallest_row_norm(scale);  // e's friction part, in lengths
 
     Vec x = qp.x0, lambda_n = Vec::Zero(m), lambda_t = Vec::Zero(2 * m), g;
     double e = 0.0, fclib = 0.0;
@@ -201,14 +201,20 @@ SolverResult MprgpStaggeredSolver::solve(const QpView& qp, const SolveContext& c
 
     measure();
     if (!notify(StepKind::START)) return finish(SolveStatus::STOPPED_BY_MONITOR, "");
+    // The inner tolerances follow e in both stop rules: the normal solve's own measure is e, and
+    // FCLIB's error (stop=native) does not bound it, so loose solves would hold it up.
     double outer = native ? fclib : e, best = std::numeric_limits<double>::infinity();
+    // x 0.1 after each round that did not lower the outer error by 1%: an error held up by the
+    // inner solves' accuracy (FCLIB's at e ~ tol) gets tighter ones.
+    double tighten = 1.0;
+    constexpr double TIGHTEST = 1e-6;
     long since_best = 0;
     Vec b_normal(n), b_disc(2 * m), x_free_n;
     std::vector<double> radius(static_cast<size_t>(m));
     const SpMat no_rows(0, 2 * m);
     const Vec no_c(0);
     while (true) {
-        const double inner_tol = std::max(s.inner_fraction * s.common.tol, s.inner_relative * outer);
+        const double inner_tol = std::max(s.inner_fraction * s.common.tol, s.inner_relative * e) * tighten;
         // (a) the normal QP with lambda_T fixed: b + T'lambda_T, warm-started at x.
         b_normal = qp.b + f.T.transpose() * lambda_t;
         const QpView normal_qp{qp.A, b_normal, qp.J, qp.c, x, &length, nullptr};
@@ -242,9 +248,12 @@ SolverResult MprgpStaggeredSolver::solve(const QpView& qp, const SolveContext& c
         if (outer < 0.99 * best) {
             best = outer;
             since_best = 0;
-        } else if (++since_best >= s.stall_rounds) {
-            return finish(SolveStatus::STALLED, std::string(NAME) + ": stalled: the outer error did not fall 1% in " +
-                                                    std::to_string(s.stall_rounds) + " rounds");
+        } else {
+            tighten = std::max(0.1 * tighten, TIGHTEST);
+            if (++since_best >= s.stall_rounds)
+                return finish(SolveStatus::STALLED, std::string(NAME) +
+                                                        ": stalled: the outer error did not fall 1% in " +
+                                                        std::to_string(s.stall_rounds) + " rounds");
         }
         if (rounds >= s.max_outer) {
             SolverResult out = finish(SolveStatus::MAX_ITERATIONS, "");

@@ -13,8 +13,9 @@
 /// Stop: the outer loop's rule at (x, lambda_N, lambda_T) after each normal solve: stop=kkt the
 /// frictional accuracy error e (docs/accuracy.md "e for Coulomb friction"), stop=native FCLIB's
 /// relative error (solvers/friction_snapshot_error.hpp). The inner solves stop at max(inner_fraction
-/// tol, inner_relative e_k) (in their own units: e of the normal QP; ||phi + beta|| relative to l
-/// and the tangent rows' norms, or to ||q|| with stop=native), loose while lambda_N still moves.
+/// tol, inner_relative e_k), e_k the frictional e at the last point whatever the stop rule (in their
+/// own units: e of the normal QP; ||phi + beta|| relative to l and the normal rows' smallest norm),
+/// loose while lambda_N still moves.
 /// `iterations` counts every inner MPRGP iteration (normal and tangential); max_iterations caps
 /// their sum. Other exits: `max_iterations` when max_outer rounds end unconverged (its message
 /// says so), `stalled` when stall_rounds rounds pass without a 1% lower error, an inner solve's

@@ -91,6 +91,22 @@ TEST(MprgpStaggered, ConvergesOnAFrictionalSnapshotAndAgreesWithNsgsFriction)
     }
 }
 
+// stop=native stops on FCLIB's error, which the inner solves' e does not bound: their tolerances
+// tighten when the error stops falling (before, a loose schedule held FCLIB's error up: stalled).
+TEST(MprgpStaggered, StopNativeReachesFclibsError)
+{
+    for (const double mu : {0.5, 0.1}) {
+        const Qp qp = testing_qps::pushed_plane(0.2, mu);
+        for (const double tol : {1e-8, 1e-10}) {
+            const RunOutcome run = run_solver(qp, "mprgp-staggered", {{"tol", tol}, {"stop", "native"}}, quiet());
+            const std::string what = "mu = " + std::to_string(mu) + ", tol " + std::to_string(tol);
+            ASSERT_EQ(run.result.status, SolveStatus::CONVERGED) << what << ": " << run.result.message;
+            EXPECT_LE(run.record["fclib_error"].get<double>(), tol * (1 + 1e-9)) << what;
+            EXPECT_EQ(run.status, "converged") << what;  // and e <= 1e-6, the harness's rule for native
+        }
+    }
+}
+
 /// Two free unit-mass particles on the plane z >= 0, each pressed down by 1 and pushed sideways by
 /// `push0` and `push1`; mu = 0.5 and the identity tangent frame (T picks x and y).
 Qp two_particles(const Eigen::Vector2d& push0, const Eigen::Vector2d& push1)
