@@ -38,7 +38,8 @@ const SettingsTable<MprgpStaggeredSettings>& mprgp_staggered_settings_table()
             .number("inner_fraction", &MprgpStaggeredSettings::inner_fraction, 0.0, 1.0,
                     "each inner solve stops at max(inner_fraction tol, inner_relative e_k)")
             .number("inner_relative", &MprgpStaggeredSettings::inner_relative, 0.0, 1.0,
-                    "(see inner_fraction) e_k: the outer error after the round before (loose while lambda_N moves)")
+                    "(see inner_fraction) e_k: the frictional e after the round before (loose while lambda_N moves); "
+                    "both 10x tighter after each round without a 1% lower outer error")
             .integer("stall_rounds", &MprgpStaggeredSettings::stall_rounds, 1, LONG_MAX,
                      "rounds without a 1% lower outer error before the run ends stalled");
     return table;
