@@ -196,8 +196,9 @@ SolverResult MprgpStaggeredSolver::solve(const QpView& qp, const SolveContext& c
         info.counters = &counters;
         return loop.notify(info);
     };
+    // An inner solve's limit: what is left of ours (never <= 0 there, which would read as "none").
     auto remaining_time = [&]() {
-        return s.common.time_limit_s > 0.0 ? s.common.time_limit_s - loop.elapsed_s() : 0.0;
+        return s.common.time_limit_s > 0.0 ? std::max(s.common.time_limit_s - loop.elapsed_s(), 1e-12) : 0.0;
     };
 
     measure();
