@@ -7,6 +7,7 @@
 #include "solvers/mprgp_box.hpp"
 #include "solvers/mprgp_coupled.hpp"
 #include "solvers/mprgp_tresca_entries.hpp"
+#include "solvers/mprgp_staggered.hpp"
 #include "solvers/nsgs_friction.hpp"
 #include "solvers/pgs.hpp"
 #include "solvers/registry.hpp"
@@ -42,6 +43,7 @@ void register_builtin_solvers(SolverRegistry& registry)
     registry.add("mprgp-tresca-fp", mprgp_tresca_fp_entry());        // Coulomb by a fixed point on Tresca bounds
     registry.add("mprgp+ica-friction", mprgp_ica_friction_entry());  // baseline: mprgp-box's r_n, then nsgs
     registry.add("mprgp+bmf03", mprgp_bmf03_entry());  // baseline: mprgp-coupled, then a Coulomb velocity update
+    registry.add("mprgp-staggered", mprgp_staggered_entry());  // Kaufman et al. 2008 on mprgp-coupled and MPGP
     // External peers (solvers/peers/), each only when CMake found its library:
 #ifdef CB_HAVE_IPOPT
     registry.add("ipopt", ipopt_entry());

@@ -14,6 +14,7 @@
 ///                          g_i - min(g_i'n_i, 0) n_i (the part of g_i a feasible descent can follow)
 /// so that phi + beta is the projected gradient: -(phi + beta) is the steepest feasible descent.
 /// Block i is "on the circle" when |x_i| >= r_i (1 - tol): the engine's active set.
+#include "solvers/disc_geometry.hpp"
 #include "solvers/types.hpp"
 
 #include <algorithm>
@@ -43,30 +44,16 @@ public:
 
     void project(Vec& x) const
     {
-        for (Eigen::Index i = 0; i < blocks(); ++i) {
-            const double len = norm(x, i);
-            if (len <= radius(i)) continue;
-            const double s = radius(i) / len;
-            x[2 * i] *= s;
-            x[2 * i + 1] *= s;
-        }
+        for (Eigen::Index i = 0; i < blocks(); ++i) disc::project(x[2 * i], x[2 * i + 1], radius(i));
     }
 
     /// The positive root of |x_i - alpha p_i| = r_i per block, the smallest over blocks (+inf when
-    /// p moves no block). Both root forms avoid cancellation: (x'p + s) / |p|^2 when x'p >= 0,
-    /// (r^2 - |x|^2) / (s - x'p) otherwise, s = sqrt((x'p)^2 + |p|^2 (r^2 - |x|^2)).
+    /// p moves no block; solvers/disc_geometry.hpp).
     double feasible_step(const Vec& x, const Vec& p) const
     {
         double step = std::numeric_limits<double>::infinity();
-        for (Eigen::Index i = 0; i < blocks(); ++i) {
-            const double x0 = x[2 * i], x1 = x[2 * i + 1], p0 = p[2 * i], p1 = p[2 * i + 1];
-            const double pp = p0 * p0 + p1 * p1;
-            if (pp == 0.0) continue;
-            const double xp = x0 * p0 + x1 * p1;
-            const double room = std::max(0.0, radius(i) * radius(i) - (x0 * x0 + x1 * x1));
-            const double s = std::sqrt(xp * xp + pp * room);
-            step = std::min(step, xp >= 0.0 ? (xp + s) / pp : (s - xp > 0.0 ? room / (s - xp) : 0.0));
-        }
+        for (Eigen::Index i = 0; i < blocks(); ++i)
+            step = std::min(step, disc::step_to_circle(x[2 * i], x[2 * i + 1], p[2 * i], p[2 * i + 1], radius(i)));
         return step;
     }
 
@@ -88,10 +75,8 @@ public:
             if (!active(x, i)) continue;
             const double len = norm(x, i);
             if (!(len > 0.0)) continue;  // a zero-radius disc: no direction stays in it, no descent
-            const double n0 = x[2 * i] / len, n1 = x[2 * i + 1] / len;
-            const double gn = std::min(g[2 * i] * n0 + g[2 * i + 1] * n1, 0.0);
-            beta[2 * i] = g[2 * i] - gn * n0;
-            beta[2 * i + 1] = g[2 * i + 1] - gn * n1;
+            disc::chopped_gradient(g[2 * i], g[2 * i + 1], x[2 * i] / len, x[2 * i + 1] / len, beta[2 * i],
+                                   beta[2 * i + 1]);
         }
     }
 
@@ -122,11 +107,11 @@ public:
         for (Eigen::Index i = 0; i < blocks(); ++i) {
             const bool on = m_on[static_cast<size_t>(i)];
             const double n0 = m_normal[2 * i], n1 = m_normal[2 * i + 1];
-            const double gn = std::min(g[2 * i] * n0 + g[2 * i + 1] * n1, 0.0);
             phi[2 * i] = on ? 0.0 : g[2 * i];
             phi[2 * i + 1] = on ? 0.0 : g[2 * i + 1];
-            beta[2 * i] = on && (n0 != 0.0 || n1 != 0.0) ? g[2 * i] - gn * n0 : 0.0;
-            beta[2 * i + 1] = on && (n0 != 0.0 || n1 != 0.0) ? g[2 * i + 1] - gn * n1 : 0.0;
+            beta[2 * i] = beta[2 * i + 1] = 0.0;
+            if (on && (n0 != 0.0 || n1 != 0.0))
+                disc::chopped_gradient(g[2 * i], g[2 * i + 1], n0, n1, beta[2 * i], beta[2 * i + 1]);
         }
     }
     /// phitilde'phi, phitilde = (x - P(x - alpha_bar phi)) / alpha_bar (Dostal 2009, eq. 7.8).

@@ -14,6 +14,7 @@
 /// the part of g_T that a feasible descent can follow; 0 on a zero-radius disc (no direction stays
 /// in it). phi + beta is then the projected gradient, zero exactly at a Tresca solution.
 /// Ref: Dostal, Kozubek, Math. Program. 135 (2012), MPGP; Dostal 2009, eq. (7.8) reduced free gradient.
+#include "solvers/disc_geometry.hpp"
 #include "solvers/types.hpp"
 
 #include <algorithm>
@@ -47,28 +48,19 @@ public:
     {
         for (Eigen::Index i = 0; i < contacts(); ++i) {
             x[3 * i] = std::max(x[3 * i], 0.0);
-            const double len = tangent_norm(x, i);
-            if (len <= m_slip[i]) continue;
-            const double s = m_slip[i] / len;
-            x[3 * i + 1] *= s;
-            x[3 * i + 2] *= s;
+            disc::project(x[3 * i + 1], x[3 * i + 2], m_slip[i]);
         }
     }
 
     /// The largest a >= 0 with x - a p in the set (x in it): the normal's bound, and per disc the
-    /// positive root of ||x_T - a p_T|| = s, in the cancellation-free form of DiscSet.
+    /// positive root of ||x_T - a p_T|| = s (solvers/disc_geometry.hpp).
     double feasible_step(const Vec& x, const Vec& p) const
     {
         double step = std::numeric_limits<double>::infinity();
         for (Eigen::Index i = 0; i < contacts(); ++i) {
             if (p[3 * i] > 0.0) step = std::min(step, x[3 * i] / p[3 * i]);
-            const double x0 = x[3 * i + 1], x1 = x[3 * i + 2], p0 = p[3 * i + 1], p1 = p[3 * i + 2];
-            const double pp = p0 * p0 + p1 * p1;
-            if (pp == 0.0) continue;
-            const double xp = x0 * p0 + x1 * p1;
-            const double room = std::max(0.0, m_slip[i] * m_slip[i] - (x0 * x0 + x1 * x1));
-            const double s = std::sqrt(xp * xp + pp * room);
-            step = std::min(step, xp >= 0.0 ? (xp + s) / pp : (s - xp > 0.0 ? room / (s - xp) : 0.0));
+            step =
+                std::min(step, disc::step_to_circle(x[3 * i + 1], x[3 * i + 2], p[3 * i + 1], p[3 * i + 2], m_slip[i]));
         }
         return step;
     }
@@ -110,12 +102,11 @@ public:
             beta[3 * i] = normal_on ? std::min(g[3 * i], 0.0) : 0.0;
             const bool disc_on = m_disc_on[k] == 1;
             const double n0 = m_outward[2 * i], n1 = m_outward[2 * i + 1];
-            const bool has_normal = n0 != 0.0 || n1 != 0.0;
-            const double gn = std::min(g[3 * i + 1] * n0 + g[3 * i + 2] * n1, 0.0);
             phi[3 * i + 1] = disc_on ? 0.0 : g[3 * i + 1];
             phi[3 * i + 2] = disc_on ? 0.0 : g[3 * i + 2];
-            beta[3 * i + 1] = disc_on && has_normal ? g[3 * i + 1] - gn * n0 : 0.0;
-            beta[3 * i + 2] = disc_on && has_normal ? g[3 * i + 2] - gn * n1 : 0.0;
+            beta[3 * i + 1] = beta[3 * i + 2] = 0.0;
+            if (disc_on && (n0 != 0.0 || n1 != 0.0))
+                disc::chopped_gradient(g[3 * i + 1], g[3 * i + 2], n0, n1, beta[3 * i + 1], beta[3 * i + 2]);
         }
     }
 
@@ -134,12 +125,7 @@ public:
             const double p0 = phi[3 * i + 1], p1 = phi[3 * i + 2];
             if (p0 == 0.0 && p1 == 0.0) continue;
             double y0 = x[3 * i + 1] - alpha_bar * p0, y1 = x[3 * i + 2] - alpha_bar * p1;
-            const double len = std::hypot(y0, y1);
-            if (len > m_slip[i]) {
-                const double s = m_slip[i] / len;
-                y0 *= s;
-                y1 *= s;
-            }
+            disc::project(y0, y1, m_slip[i]);
             sum += ((x[3 * i + 1] - y0) * p0 + (x[3 * i + 2] - y1) * p1) / alpha_bar;
         }
         return sum;
