@@ -1,6 +1,6 @@
 #pragma once
 /// FCLIB's relative natural-map error (solvers/friction_error.hpp) of a frictional snapshot, a QP
-/// with Coulomb friction (solvers/qp.hpp Friction: FCLIB's global form with M = A, f = -b,
+/// with Coulomb friction (solvers/qp.hpp Friction: FCLIB's global form with M = A, f = b,
 /// H' = J_all, w = -c_all). Contact i's local velocity and reaction are
 ///   u_i = (J_i x - c_i, T_2i x - cT_2i, T_2i+1 x - cT_2i+1),   r_i = (lambda_i, lambda_T,2i, lambda_T,2i+1),
 /// and the error is ||F_nat(r)||_2 / ||q||_2 with F_nat the local form's, per contact

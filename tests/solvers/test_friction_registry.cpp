@@ -7,7 +7,10 @@
 #include "harness/runner.hpp"
 #include "problems/qpsnap.hpp"
 #include "problems/synthetic.hpp"
+#include "solvers/accuracy.hpp"
 #include "solvers/friction_dual.hpp"
+#include "solvers/friction_error.hpp"
+#include "solvers/friction_nsgs.hpp"
 #include "solvers/friction_snapshot_solve.hpp"
 #include "solvers/mprgp_box.hpp"
 #include "solvers/registry.hpp"
@@ -19,6 +22,8 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -261,6 +266,69 @@ TEST(FrictionRegistryCli, SolveRunsEachEntryOnAFrictionalSnapshot)
         EXPECT_EQ(record["status"], "converged") << name;
         EXPECT_LE(record["fclib_error"].get<double>(), 1e-5) << name;
     }
+}
+
+}  // namespace
+}  // namespace cb
+
+namespace cb {
+namespace {
+
+/// solve_frictional_snapshot's rounds with a method whose point is off by `offset(tol)` times the
+/// exact r* (relative): the verdict is e's, and a tighter own tolerance is asked for while e > tol.
+SolverResult fake_method_run(const Qp& qp, const std::function<double(double)>& offset, std::vector<double>& asked)
+{
+    CommonSettings common;
+    common.tol = 1e-6;
+    SnapshotFrictionOptions options;
+    return solve_frictional_snapshot("fake", qp.view(), common, SolveContext{}, options, [&](const QpView& framed) {
+        auto dual = std::make_shared<FrictionDual>(framed, "fake");
+        FrictionNsgsSettings exact;
+        exact.tol = 1e-13;
+        exact.max_iterations = 100000;
+        const Vec r_star = friction_nsgs(dual->local(), exact).r;
+        SnapshotFrictionMethod method;
+        method.run = [dual, r_star, offset, &asked](double tol, long, double) {
+            asked.push_back(tol);
+            SnapshotFrictionRun one;
+            one.run.r = r_star * (1.0 + offset(tol));
+            one.run.error = fclib_relative_error(dual->local(), one.run.r);
+            one.run.status = "converged";  // its own word, whatever e says
+            one.run.iterations = 10;
+            one.x = dual->primal(one.run.r);
+            return one;
+        };
+        method.counters = [dual] { return dual->counters(); };
+        return method;
+    });
+}
+
+TEST(FrictionSnapshotSolve, TightensTheOwnToleranceWhileEIsNotMet)
+{
+    const Qp qp = particles_on_a_plane(12);
+    std::vector<double> asked;
+    const SolverResult r = fake_method_run(
+        qp, [](double tol) { return 1e3 * tol; }, asked);
+    ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
+    ASSERT_GE(asked.size(), 2u) << r.message;
+    EXPECT_EQ(asked[0], 1e-6);
+    for (size_t k = 1; k < asked.size(); ++k) EXPECT_LE(asked[k], 0.1 * asked[k - 1]);
+    EXPECT_EQ(r.iterations, 10 * static_cast<long>(asked.size()));
+    EXPECT_EQ(r.info["rounds"].size(), asked.size());
+    EXPECT_LE(accuracy(qp.view(), r.x, r.lambda, &r.lambda_t).max(), 1e-6);
+}
+
+TEST(FrictionSnapshotSolve, AMethodThatClaimsConvergenceButDoesNotImproveIsStalled)
+{
+    const Qp qp = particles_on_a_plane(12);
+    std::vector<double> asked;
+    const SolverResult r = fake_method_run(
+        qp, [](double) { return 1e-2; }, asked);
+    EXPECT_EQ(r.status, SolveStatus::STALLED) << r.message;
+    EXPECT_EQ(asked.size(), 2u);  // the second round did not lower e: the first point stands
+    EXPECT_NE(r.message.find("the previous round's point is kept"), std::string::npos) << r.message;
+    EXPECT_EQ(r.message.rfind("fake: the stop rule does not hold at the returned point: accuracy error ", 0), 0u)
+        << r.message;
 }
 
 }  // namespace
