@@ -1,12 +1,12 @@
 // The frictional time step: the contacts' local problem, NSGS, and the recovery of x (see friction_step.hpp).
 #include "sim/friction_step.hpp"
 
+#include "solvers/delassus.hpp"
 #include "solvers/friction_error.hpp"
 #include "solvers/friction_nsgs.hpp"
 #include "solvers/peers/siconos_fc3d.hpp"
 #include "solvers/stopwatch.hpp"
 
-#include <Eigen/CholmodSupport>
 #include <cmath>
 #include <stdexcept>
 
@@ -60,23 +60,22 @@ SpMat tangent_rows(const std::vector<ContactRow>& rows, Eigen::Index n_dofs)
 FrictionalStepProblem frictional_step_problem(const SpMat& A, const Vec& b, const std::vector<ContactRow>& rows,
                                               const Vec& x_start, double mu, const std::string& name)
 {
-    Eigen::CholmodSupernodalLLT<SpMatCol, Eigen::Lower> llt;
-    {
-        const SpMatCol A_col = A;
-        llt.compute(A_col);
-    }
-    if (llt.info() != Eigen::Success)
+    Delassus delassus;
+    Counters counters;  // the step reports its time, not its work
+    if (!delassus.factor(SpMatCol(A), counters))
         throw std::runtime_error(name + ": CHOLMOD could not factor the step's A (not positive definite to working "
                                         "precision): the frictional step needs A^-1");
     const Eigen::Index m = static_cast<Eigen::Index>(rows.size());
     const SpMat J = frictional_rows(rows, A.cols());
     FrictionalStepProblem p;
-    p.x_free = llt.solve(b);
-    p.Y = llt.solve(Eigen::MatrixXd(SpMatCol(J.transpose())));
+    p.x_free = delassus.solve(b, counters);
+    Eigen::MatrixXd W;
+    DelassusForming forming;
+    forming.columns = &p.Y;
+    delassus.form_dense(J, W, counters, forming);
     // The target of each row: c_i for the normal (the gap), the tangent at x_start for the tangents (the slip).
     Vec c_all = J * x_start;
     for (Eigen::Index i = 0; i < m; ++i) c_all[3 * i] = rows[static_cast<size_t>(i)].c;
-    const Eigen::MatrixXd W = J * p.Y;
     p.local.W = W.sparseView(0.0, 0.0);  // every computed entry kept (an exact 0 only is dropped)
     p.local.q = J * p.x_free - c_all;
     p.local.mu = Vec::Constant(m, mu);

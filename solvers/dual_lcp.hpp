@@ -2,13 +2,11 @@
 /// The QP's dual LCP formed on the harness's side, for the solvers that pivot on a dense matrix
 /// (the peers `siconos-lemke` and `bullet-dantzig`; `pgs` and `ica` form the same W their own way):
 ///   w = W lambda + q >= 0,  lambda >= 0,  lambda'w = 0,   W = J A^-1 J',  q = J A^-1 b - c,
-/// and the primal point x = A^-1 (b + J'lambda). A is factored once by CHOLMOD; W is formed
-/// densely with blocks of right-hand sides and symmetrised. All of it is the solvers' setup, and
-/// its work is counted (cholmod_analyses, cholmod_factorizations, cholmod_solves, work_flops).
+/// and the primal point x = A^-1 (b + J'lambda). W is formed by Delassus (solvers/delassus.hpp:
+/// CHOLMOD, dense, symmetrised). All of it is the solvers' setup, and its work is counted
+/// (cholmod_analyses, cholmod_factorizations, cholmod_solves, work_flops).
+#include "solvers/delassus.hpp"
 #include "solvers/solver.hpp"
-
-#include <Eigen/CholmodSupport>
-#include <Eigen/Dense>
 
 #include <string>
 
@@ -28,11 +26,10 @@ public:
     Vec primal(const QpView& qp, const Vec& lambda, Counters& counters) const;
 
 private:
-    Eigen::CholmodSupernodalLLT<SpMatCol, Eigen::Lower> m_llt;
+    Delassus m_delassus;
     Eigen::MatrixXd m_W;
     Vec m_q;
     Vec m_x_free;
-    double m_solve_flops = 0.0;  ///< one solve with L and L' (docs/work.md)
 };
 
 }  // namespace cb

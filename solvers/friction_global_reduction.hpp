@@ -4,12 +4,11 @@
 ///   W = H' M^-1 H,   q = w + H' M^-1 f.
 /// (The plus sign: FCLIB's f stands on the right of M v = H r + f; Siconos' own reformulation,
 /// globalFrictionContact_reformulation_FrictionContact, computes the same q = b + H' M^-1 q_Siconos.)
-/// M is factored once by a sparse Cholesky (Eigen's simplicial LL', fill-reducing ordering); the
+/// M is factored once by CHOLMOD and W formed sparse by Delassus (solvers/delassus.hpp); the
 /// factor also gives back v for any r, so a solver of the local problem answers the global one.
+#include "solvers/delassus.hpp"
 #include "solvers/friction_global.hpp"
 #include "solvers/friction_problem.hpp"
-
-#include <Eigen/SparseCholesky>
 
 namespace cb {
 
@@ -26,7 +25,7 @@ public:
 
 private:
     const FrictionGlobal& m_problem;
-    Eigen::SimplicialLLT<SpMatCol> m_cholesky;
+    Delassus m_delassus;
     FrictionLocal m_local;
 };
 

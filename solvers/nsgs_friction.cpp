@@ -2,14 +2,13 @@
 #include "solvers/nsgs_friction.hpp"
 
 #include "solvers/a_product.hpp"
+#include "solvers/delassus.hpp"
 #include "solvers/friction_error.hpp"
 #include "solvers/friction_nsgs.hpp"
 #include "solvers/friction_snapshot_error.hpp"
 #include "solvers/solve_loop.hpp"
 #include "solvers/work_units.hpp"
 
-#include <Eigen/CholmodSupport>
-#include <Eigen/Dense>
 #include <algorithm>
 #include <climits>
 #include <cmath>
@@ -105,42 +104,20 @@ SolverResult NsgsFrictionSolver::solve(const QpView& qp, const SolveContext& con
         rows.setFromTriplets(t.begin(), t.end());
     }
 
-    Eigen::CholmodSupernodalLLT<SpMatCol, Eigen::Lower> llt;
-    {
-        const SpMatCol A_col = qp.A;
-        llt.compute(A_col);
-    }
-    ++counters.cholmod_analyses;
-    ++counters.cholmod_factorizations;
-    counters.work_flops += cholmod_factor_flops(llt.cholmod());
-    if (llt.info() != Eigen::Success)
+    Delassus delassus;
+    if (!delassus.factor(SpMatCol(qp.A), counters))
         return loop.finish(result, SolveStatus::INVALID_INPUT,
                            "nsgs-friction: CHOLMOD could not factor A (not positive definite to working precision)");
-    const Vec x_u = llt.solve(qp.b);
-    ++counters.cholmod_solves;
-    counters.work_flops += cholmod_solve_flops(llt.cholmod());
+    const Vec x_u = delassus.solve(qp.b, counters);
     const Vec q = rows * x_u - c_all;
     if (!x_u.allFinite() || !q.allFinite()) return loop.finish(result, loop.check(counters.iterations, false, false));
 
-    // W = J_all A^-1 J_all', column block by column block.
+    // W = J_all A^-1 J_all', with Y = A^-1 J_all' kept when it fits.
     const Eigen::Index k3 = 3 * k;
     const bool keep_y = static_cast<double>(n) * static_cast<double>(k3) <= MAX_STORED_ENTRIES;
-    Eigen::MatrixXd Y;
-    if (keep_y) Y.resize(n, k3);
-    Eigen::MatrixXd W(k3, k3);
-    const SpMatCol rows_t = SpMatCol(rows.transpose());
-    for (Eigen::Index j0 = 0; j0 < k3; j0 += s.block) {
-        const Eigen::Index b = std::min<Eigen::Index>(s.block, k3 - j0);
-        const Eigen::MatrixXd rhs = Eigen::MatrixXd(rows_t.middleCols(j0, b));
-        const Eigen::MatrixXd Yc = llt.solve(rhs);
-        counters.cholmod_solves += b;
-        counters.work_flops += cholmod_solve_flops(llt.cholmod(), b) +
-                               sparse_product_flops(static_cast<double>(rows.nonZeros()), static_cast<double>(b));
-        W.middleCols(j0, b) = rows * Yc;
-        if (keep_y) Y.middleCols(j0, b) = Yc;
-        if (loop.time_up()) return loop.finish(result, SolveStatus::TIME_LIMIT, "while forming W = J_all A^-1 J_all'");
-    }
-    W = 0.5 * (W + W.transpose()).eval();  // exact symmetry (the solves leave O(eps) asymmetry)
+    Eigen::MatrixXd Y, W;
+    if (!delassus.form_dense(rows, W, counters, {s.block, keep_y ? &Y : nullptr, [&] { return loop.time_up(); }}))
+        return loop.finish(result, SolveStatus::TIME_LIMIT, "while forming W = J_all A^-1 J_all'");
     FrictionLocal local;
     local.W = W.sparseView();
     local.q = q;
@@ -178,9 +155,7 @@ SolverResult NsgsFrictionSolver::solve(const QpView& qp, const SolveContext& con
         } else if (keep_y && !exact) {
             x = x_u + Y * r;
         } else {
-            x = llt.solve(Vec(qp.b + rows.transpose() * r));
-            ++counters.cholmod_solves;
-            counters.work_flops += cholmod_solve_flops(llt.cholmod());
+            x = delassus.solve(Vec(qp.b + rows.transpose() * r), counters);
         }
     };
     double native = fclib_relative_error(local, r);

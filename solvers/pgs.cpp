@@ -2,11 +2,10 @@
 #include "solvers/pgs.hpp"
 #include "solvers/a_product.hpp"
 #include "solvers/accuracy_rows.hpp"
+#include "solvers/delassus.hpp"
 #include "solvers/solve_loop.hpp"
 #include "solvers/work_units.hpp"
 
-#include <Eigen/CholmodSupport>
-#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -79,42 +78,20 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
     }
     result.info["zero_rows"] = zero_rows;
 
-    Eigen::CholmodSupernodalLLT<SpMatCol, Eigen::Lower> llt;
-    {
-        const SpMatCol A_col = qp.A;
-        llt.compute(A_col);
-    }
-    ++counters.cholmod_analyses;
-    ++counters.cholmod_factorizations;
-    counters.work_flops += cholmod_factor_flops(llt.cholmod());
-    if (llt.info() != Eigen::Success)
+    Delassus delassus;
+    if (!delassus.factor(SpMatCol(qp.A), counters))
         return loop.finish(result, SolveStatus::INVALID_INPUT,
                            "pgs: CHOLMOD could not factor A (not positive definite to working precision)");
-    const Vec x_u = llt.solve(qp.b);
-    ++counters.cholmod_solves;
-    counters.work_flops += cholmod_solve_flops(llt.cholmod());
+    const Vec x_u = delassus.solve(qp.b, counters);
     const Vec q = qp.c - qp.J * x_u;
     // A non-finite b or c would sit in q, where the clamp max(0, .) hides it from the sweeps.
     if (!x_u.allFinite() || !q.allFinite()) return loop.finish(result, loop.check(counters.iterations, false, false));
 
-    // S = J A^-1 J', column block by column block.
+    // S = J A^-1 J', with Y = A^-1 J' kept when it fits.
     const bool keep_y = static_cast<double>(n) * static_cast<double>(m) <= MAX_STORED_ENTRIES;
-    Eigen::MatrixXd Y;
-    if (keep_y) Y.resize(n, m);
-    Eigen::MatrixXd S(m, m);
-    const SpMatCol Jt = SpMatCol(qp.J.transpose());
-    for (Eigen::Index j0 = 0; j0 < m; j0 += s.block) {
-        const Eigen::Index k = std::min<Eigen::Index>(s.block, m - j0);
-        const Eigen::MatrixXd rhs = Eigen::MatrixXd(Jt.middleCols(j0, k));
-        const Eigen::MatrixXd Yc = llt.solve(rhs);
-        counters.cholmod_solves += k;  // one per right-hand side
-        counters.work_flops += cholmod_solve_flops(llt.cholmod(), k) +
-                               sparse_product_flops(static_cast<double>(qp.J.nonZeros()), static_cast<double>(k));
-        S.middleCols(j0, k) = qp.J * Yc;
-        if (keep_y) Y.middleCols(j0, k) = Yc;
-        if (loop.time_up()) return loop.finish(result, SolveStatus::TIME_LIMIT, "while forming S = J A^-1 J'");
-    }
-    S = 0.5 * (S + S.transpose()).eval();  // exact symmetry (the solves leave O(eps) asymmetry)
+    Eigen::MatrixXd Y, S;
+    if (!delassus.form_dense(qp.J, S, counters, {s.block, keep_y ? &Y : nullptr, [&] { return loop.time_up(); }}))
+        return loop.finish(result, SolveStatus::TIME_LIMIT, "while forming S = J A^-1 J'");
     const Vec S_diag = S.diagonal();
     result.info["y_stored"] = keep_y;
     // CSR: a few products (the stop test's gradients) would not repay a block copy of A.
@@ -138,9 +115,7 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
         } else if (keep_y && !exact) {
             x = x_u + Y * lambda;
         } else {
-            x = llt.solve(Vec(qp.b + qp.J.transpose() * lambda));
-            ++counters.cholmod_solves;
-            counters.work_flops += cholmod_solve_flops(llt.cholmod());
+            x = delassus.solve(Vec(qp.b + qp.J.transpose() * lambda), counters);
         }
     };
     auto natural_residual = [&]() {

@@ -3,12 +3,11 @@
 #include "solvers/peers/siconos_fc3d.hpp"
 
 #include "solvers/friction_error.hpp"
+#include "solvers/peers/siconos_friction_driver.hpp"
 #include "solvers/types.hpp"
 
 #ifdef CB_HAVE_SICONOS
-#include "solvers/peers/child_process.hpp"
 #include "solvers/peers/siconos_numerics_matrix.hpp"
-#include "solvers/stopwatch.hpp"
 
 #include <FrictionContactProblem.h>
 #include <Friction_cst.h>
@@ -19,7 +18,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #endif
 
 namespace cb {
@@ -36,14 +34,12 @@ bool siconos_fc3d_built() { return false; }
 
 FrictionRun siconos_fc3d_solve(const FrictionLocal&, const std::string& method, long, double, double)
 {
-    throw InputError("siconos-" + method +
-                     ": not built (install libsiconos-numerics-dev and reconfigure with CB_PEERS=ON)");
+    throw InputError("siconos-" + method + ": not built (" + siconos_install_hint() + ")");
 }
 
 double siconos_fc3d_error(const FrictionLocal&, const Vec&)
 {
-    throw InputError(
-        "Siconos numerics is not built (install libsiconos-numerics-dev and reconfigure with CB_PEERS=ON)");
+    throw InputError(std::string("Siconos numerics is not built (") + siconos_install_hint() + ")");
 }
 
 #else
@@ -69,16 +65,6 @@ struct SiconosProblem {
     FrictionContactProblem problem{};
 };
 
-struct Fc3dReport {
-    int info = -1;
-    int iterations = 0;
-    double residual = -1.0;
-};
-
-}  // namespace
-
-namespace {
-
 int fc3d_solver_id(const std::string& method)
 {
     if (method == "nsgs") return SICONOS_FRICTION_3D_NSGS;
@@ -94,44 +80,24 @@ FrictionRun siconos_round(const FrictionLocal& p, const std::string& method, lon
     const Eigen::Index n = 3 * p.contacts();
     FrictionRun run;
     run.r = start;
-    Stopwatch watch;
-    watch.start();
-    const ChildOutcome child = run_in_child(
-        [&]() {
-            SiconosProblem sp(p);
-            std::vector<double> r(start.data(), start.data() + n), u(size_t(n), 0.0);
-            SolverOptions* options = solver_options_create(fc3d_solver_id(method));
-            options->iparam[SICONOS_IPARAM_MAX_ITER] = static_cast<int>(std::min<long>(max_iterations, 1L << 30));
-            options->dparam[SICONOS_DPARAM_TOL] = tol;
-            Fc3dReport report;
-            report.info = fc3d_driver(&sp.problem, r.data(), u.data(), options);
-            report.iterations = options->iparam[SICONOS_IPARAM_ITER_DONE];
-            report.residual = options->dparam[SICONOS_DPARAM_RESIDU];
-            solver_options_delete(options);
-            std::vector<char> out(size_t(n) * sizeof(double) + sizeof report);
-            std::memcpy(out.data(), r.data(), size_t(n) * sizeof(double));
-            std::memcpy(out.data() + size_t(n) * sizeof(double), &report, sizeof report);
-            return out;
-        },
-        watch, time_limit_s);
-    watch.pause();
-    run.seconds = watch.seconds();
-    const size_t expected = size_t(n) * sizeof(double) + sizeof(Fc3dReport);
-    if (child.timed_out || child.failed || child.bytes.size() != expected) {
-        run.status = child.timed_out ? "time_limit" : "diverged";
-        run.note = child.timed_out
-                       ? "killed at the time limit"
-                       : "Siconos child " + (child.failed ? child.failure
-                                                          : "sent " + std::to_string(child.bytes.size()) +
-                                                                " bytes, expected " + std::to_string(expected));
+    auto fc3d_from_start = [&](SolverOptions* options, std::vector<double>& r) {
+        SiconosProblem sp(p);
+        std::copy(start.data(), start.data() + n, r.begin());
+        std::vector<double> u(size_t(n), 0.0);
+        return fc3d_driver(&sp.problem, r.data(), u.data(), options);
+    };
+    const SiconosDriverRun driven =
+        run_siconos_driver(fc3d_solver_id(method), max_iterations, tol, time_limit_s, size_t(n), fc3d_from_start);
+    run.seconds = driven.seconds;
+    if (!driven.status.empty()) {
+        run.status = driven.status;
+        run.note = driven.failure;
         return run;
     }
-    std::memcpy(run.r.data(), child.bytes.data(), size_t(n) * sizeof(double));
-    Fc3dReport report;
-    std::memcpy(&report, child.bytes.data() + size_t(n) * sizeof(double), sizeof report);
-    run.iterations = report.iterations;
-    run.native_error = report.residual;
-    run.note = "fc3d_driver info " + std::to_string(report.info);
+    run.r = Eigen::Map<const Vec>(driven.values.data(), n);
+    run.iterations = driven.iterations;
+    run.native_error = driven.residual;
+    run.note = "fc3d_driver info " + std::to_string(driven.info);
     return run;
 }
 

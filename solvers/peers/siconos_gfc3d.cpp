@@ -3,11 +3,10 @@
 #include "solvers/peers/siconos_gfc3d.hpp"
 
 #include "solvers/friction_error.hpp"
+#include "solvers/peers/siconos_friction_driver.hpp"
 
 #ifdef CB_HAVE_SICONOS
-#include "solvers/peers/child_process.hpp"
 #include "solvers/peers/siconos_numerics_matrix.hpp"
-#include "solvers/stopwatch.hpp"
 
 #include <Friction_cst.h>
 #include <GlobalFrictionContactProblem.h>
@@ -17,7 +16,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #endif
 
 namespace cb {
@@ -34,14 +32,12 @@ bool siconos_gfc3d_built() { return false; }
 
 FrictionGlobalRun siconos_gfc3d_solve(const FrictionGlobal&, const std::string& method, long, double, double)
 {
-    throw InputError("siconos-" + method +
-                     ": not built (install libsiconos-numerics-dev and reconfigure with CB_PEERS=ON)");
+    throw InputError("siconos-" + method + ": not built (" + siconos_install_hint() + ")");
 }
 
 double siconos_gfc3d_error(const FrictionGlobal&, const Vec&, const Vec&)
 {
-    throw InputError(
-        "Siconos numerics is not built (install libsiconos-numerics-dev and reconfigure with CB_PEERS=ON)");
+    throw InputError(std::string("Siconos numerics is not built (") + siconos_install_hint() + ")");
 }
 
 #else
@@ -75,12 +71,6 @@ struct SiconosGlobalProblem {
     GlobalFrictionContactProblem problem{};
 };
 
-struct Gfc3dReport {
-    int info = -1;
-    int iterations = 0;
-    double residual = -1.0;
-};
-
 int solver_id(const std::string& method)
 {
     if (method == "nsgs") return SICONOS_GLOBAL_FRICTION_3D_NSGS_WR;
@@ -102,46 +92,25 @@ FrictionGlobalRun siconos_gfc3d_solve(const FrictionGlobal& p, const std::string
     run.solver = "siconos-" + method;
     run.r = Vec::Zero(m3);
     out.v = Vec::Zero(n);
-    Stopwatch watch;
-    watch.start();
-    const size_t expected = size_t(m3 + n) * sizeof(double) + sizeof(Gfc3dReport);
-    const ChildOutcome child = run_in_child(
-        [&]() {
-            SiconosGlobalProblem sp(p);
-            std::vector<double> r(size_t(m3), 0.0), u(size_t(m3), 0.0), v(size_t(n), 0.0);
-            SolverOptions* options = solver_options_create(id);
-            options->iparam[SICONOS_IPARAM_MAX_ITER] = static_cast<int>(std::min<long>(max_iterations, 1L << 30));
-            options->dparam[SICONOS_DPARAM_TOL] = tol;
-            Gfc3dReport report;
-            report.info = gfc3d_driver(&sp.problem, r.data(), u.data(), v.data(), options);
-            report.iterations = options->iparam[SICONOS_IPARAM_ITER_DONE];
-            report.residual = options->dparam[SICONOS_DPARAM_RESIDU];
-            std::vector<char> bytes(expected);
-            std::memcpy(bytes.data(), r.data(), size_t(m3) * sizeof(double));
-            std::memcpy(bytes.data() + size_t(m3) * sizeof(double), v.data(), size_t(n) * sizeof(double));
-            std::memcpy(bytes.data() + size_t(m3 + n) * sizeof(double), &report, sizeof report);
-            return bytes;  // the child exits without freeing: Siconos' options may hold its workspaces
-        },
-        watch, time_limit_s);
-    watch.pause();
-    run.seconds = watch.seconds();
-    if (child.timed_out || child.failed || child.bytes.size() != expected) {
-        run.status = child.timed_out ? "time_limit" : "diverged";
-        run.note = child.timed_out
-                       ? "killed at the time limit"
-                       : "Siconos child " + (child.failed ? child.failure
-                                                          : "sent " + std::to_string(child.bytes.size()) +
-                                                                " bytes, expected " + std::to_string(expected));
+    auto gfc3d_from_zero = [&](SolverOptions* options, std::vector<double>& rv) {  // r, then v
+        SiconosGlobalProblem sp(p);
+        std::vector<double> u(size_t(m3), 0.0);
+        return gfc3d_driver(&sp.problem, rv.data(), u.data(), rv.data() + m3, options);
+    };
+    const SiconosDriverRun driven =
+        run_siconos_driver(id, max_iterations, tol, time_limit_s, size_t(m3 + n), gfc3d_from_zero);
+    run.seconds = driven.seconds;
+    if (!driven.status.empty()) {
+        run.status = driven.status;
+        run.note = driven.failure;
         run.error = global_relative_error(p, run.r, out.v, &run.u);  // at the start, as the local peers
         return out;
     }
-    std::memcpy(run.r.data(), child.bytes.data(), size_t(m3) * sizeof(double));
-    std::memcpy(out.v.data(), child.bytes.data() + size_t(m3) * sizeof(double), size_t(n) * sizeof(double));
-    Gfc3dReport report;
-    std::memcpy(&report, child.bytes.data() + size_t(m3 + n) * sizeof(double), sizeof report);
-    run.iterations = report.iterations;
-    run.native_error = report.residual;
-    run.note = "gfc3d_driver info " + std::to_string(report.info);
+    run.r = Eigen::Map<const Vec>(driven.values.data(), m3);
+    out.v = Eigen::Map<const Vec>(driven.values.data() + m3, n);
+    run.iterations = driven.iterations;
+    run.native_error = driven.residual;
+    run.note = "gfc3d_driver info " + std::to_string(driven.info);
     const bool finite = run.r.allFinite() && out.v.allFinite();
     run.error = finite ? global_relative_error(p, run.r, out.v, &run.u) : INFINITY;
     run.status = !finite                            ? "diverged"

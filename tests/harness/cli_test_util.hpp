@@ -1,7 +1,7 @@
 #pragma once
 /// Helpers shared by the tests that drive the contactbench binary (env CB_CONTACTBENCH): where
-/// the binary is, a scratch folder per test process, and running a shell command with its
-/// output captured.
+/// the binary is, a scratch folder per test process, running a shell command with its output
+/// captured, and running the binary itself under a time limit.
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -52,6 +52,43 @@ inline Output run_captured(const std::string& command, const std::filesystem::pa
     o.out = slurp(out);
     o.err = slurp(err);
     return o;
+}
+
+/// `text` as one shell word: in single quotes, its own single quotes escaped.
+inline std::string shell_quote(const std::string& text)
+{
+    std::string quoted = "'";
+    for (char ch : text) quoted += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
+    return quoted + "'";
+}
+
+/// A fresh (emptied) folder `parent/name`.
+inline std::filesystem::path fresh_subdir(const std::filesystem::path& parent, const std::string& name)
+{
+    const std::filesystem::path d = parent / name;
+    std::filesystem::remove_all(d);
+    std::filesystem::create_directories(d);
+    return d;
+}
+
+/// How run_contactbench calls the binary.
+struct CliCall {
+    std::filesystem::path cd;  ///< the working folder; empty: the test process's
+    std::string prefix;        ///< shell commands run first (e.g. "ulimit -f 4")
+    std::string env;           ///< "NAME=value ..." for the binary's environment
+    std::string program = contactbench_binary();
+};
+
+/// Runs `[cd CD &&] [PREFIX;] [ENV] exec timeout 120 PROGRAM ARGS` in bash (ARGS shell-quoted where
+/// needed), stdout and stderr captured in files of `capture_dir`; a hang ends as exit status 124.
+inline Output run_contactbench(const std::string& args, const std::filesystem::path& capture_dir,
+                               const CliCall& call = {})
+{
+    std::string inner = call.cd.empty() ? "" : "cd " + shell_quote(call.cd.string()) + " && ";
+    if (!call.prefix.empty()) inner += call.prefix + "; ";
+    if (!call.env.empty()) inner += call.env + " ";
+    inner += "exec timeout 120 " + shell_quote(call.program) + " " + args;
+    return run_captured("bash -c " + shell_quote(inner), capture_dir);
 }
 
 }  // namespace cb::test

@@ -5,6 +5,7 @@
 #include "problems/synthetic.hpp"
 
 #include "tests/harness/cli_test_util.hpp"
+#include "tests/harness/remove_at_end.hpp"
 
 #include <gtest/gtest.h>
 
@@ -28,10 +29,7 @@ const fs::path& work_dir()
 }
 
 /// Runs `contactbench ARGS` (ARGS already shell-quoted where needed).
-Output run(const std::string& args)
-{
-    return test::run_captured("'" + test::contactbench_binary() + "' " + args, work_dir());
-}
+Output run(const std::string& args) { return test::run_contactbench(args, work_dir()); }
 
 std::string small_snapshot()
 {
@@ -69,11 +67,7 @@ const nlohmann::json SOLVERS = {{{"label", "mprgp"}, {"solver", "mprgp"}},
                                 {{"label", "ghost"}, {"solver", "no-such-solver"}}};
 
 /// Removes the scratch folder after the last test.
-class CleanUp : public ::testing::Environment {
-public:
-    void TearDown() override { fs::remove_all(work_dir()); }
-};
-const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new CleanUp);
+const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new test::RemoveAtEnd(work_dir));
 
 }  // namespace
 

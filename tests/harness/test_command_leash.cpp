@@ -8,6 +8,7 @@
 #include "problems/synthetic.hpp"
 
 #include "tests/harness/cli_test_util.hpp"
+#include "tests/harness/remove_at_end.hpp"
 
 #include <gtest/gtest.h>
 
@@ -33,24 +34,17 @@ const fs::path& work_dir()
     return dir;
 }
 
-fs::path fresh_dir(const std::string& name)
-{
-    const fs::path d = work_dir() / name;
-    fs::remove_all(d);
-    fs::create_directories(d);
-    return d;
-}
+fs::path fresh_dir(const std::string& name) { return test::fresh_subdir(work_dir(), name); }
 
 std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
 
 /// `cd DIR && [ENV] timeout 120 contactbench ARGS` in bash, output captured.
 Output run_in(const fs::path& dir, const std::string& args, const std::string& env = "")
 {
-    const std::string inner =
-        "cd " + q(dir) + " && " + env + " exec timeout 120 '" + test::contactbench_binary() + "' " + args;
-    std::string quoted;
-    for (char ch : inner) quoted += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
-    return test::run_captured("bash -c '" + quoted + "'", dir);
+    test::CliCall call;
+    call.cd = dir;
+    call.env = env;
+    return test::run_contactbench(args, dir, call);
 }
 
 fs::path write_program(const fs::path& path, const std::string& body)
@@ -72,11 +66,7 @@ std::string argv_setting(const std::vector<std::string>& argv) { return "'argv="
 
 bool process_exists(pid_t pid) { return ::kill(pid, 0) == 0 || errno != ESRCH; }
 
-class CleanUp : public ::testing::Environment {
-public:
-    void TearDown() override { fs::remove_all(work_dir()); }
-};
-const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new CleanUp);
+const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new test::RemoveAtEnd(work_dir));
 
 }  // namespace
 

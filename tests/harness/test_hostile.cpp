@@ -8,6 +8,7 @@
 #include "problems/synthetic.hpp"
 
 #include "tests/harness/cli_test_util.hpp"
+#include "tests/harness/remove_at_end.hpp"
 
 #include <gtest/gtest.h>
 
@@ -42,10 +43,10 @@ const fs::path HOSTILE = fs::path(CB_TEST_DATA_DIR).parent_path() / "hostile";
 Output run(const std::string& args, const std::string& prefix = "",
            const std::string& program = test::contactbench_binary())
 {
-    const std::string inner = (prefix.empty() ? "" : prefix + "; ") + "exec timeout 120 '" + program + "' " + args;
-    std::string quoted;
-    for (char ch : inner) quoted += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
-    return test::run_captured("bash -c '" + quoted + "'", work_dir());
+    test::CliCall call;
+    call.prefix = prefix;
+    call.program = program;
+    return test::run_contactbench(args, work_dir(), call);
 }
 
 std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
@@ -88,11 +89,7 @@ fs::path fresh_dir(const std::string& name)
     return d;
 }
 
-class CleanUp : public ::testing::Environment {
-public:
-    void TearDown() override { fs::remove_all(work_dir()); }
-};
-const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new CleanUp);
+const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new test::RemoveAtEnd(work_dir));
 
 }  // namespace
 

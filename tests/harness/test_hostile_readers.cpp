@@ -7,6 +7,7 @@
 #include "problems/synthetic.hpp"
 
 #include "tests/harness/cli_test_util.hpp"
+#include "tests/harness/remove_at_end.hpp"
 
 #include <gtest/gtest.h>
 
@@ -34,11 +35,9 @@ const fs::path& work_dir()
 /// Runs `[PREFIX;] timeout 120 contactbench ARGS` in bash; a hang ends as 124.
 Output run(const std::string& args, const std::string& prefix = "")
 {
-    const std::string inner =
-        (prefix.empty() ? "" : prefix + "; ") + "exec timeout 120 '" + test::contactbench_binary() + "' " + args;
-    std::string quoted;
-    for (char ch : inner) quoted += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
-    return test::run_captured("bash -c '" + quoted + "'", work_dir());
+    test::CliCall call;
+    call.prefix = prefix;
+    return test::run_contactbench(args, work_dir(), call);
 }
 
 std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
@@ -81,11 +80,7 @@ std::string doubles(long n, double v)
     return s;
 }
 
-class CleanUp : public ::testing::Environment {
-public:
-    void TearDown() override { fs::remove_all(work_dir()); }
-};
-const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new CleanUp);
+const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new test::RemoveAtEnd(work_dir));
 
 /// 600 MB of address space: the binary and its libraries, far from what a declared size once cost.
 const std::string LIMIT = "ulimit -v 600000";

@@ -6,6 +6,7 @@
 #include "problems/synthetic.hpp"
 
 #include "tests/harness/cli_test_util.hpp"
+#include "tests/harness/remove_at_end.hpp"
 
 #include <gtest/gtest.h>
 
@@ -26,22 +27,14 @@ const fs::path& work_dir()
     return dir;
 }
 
-fs::path fresh_dir(const std::string& name)
-{
-    const fs::path d = work_dir() / name;
-    fs::remove_all(d);
-    fs::create_directories(d);
-    return d;
-}
+fs::path fresh_dir(const std::string& name) { return test::fresh_subdir(work_dir(), name); }
 
-std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
-
+/// `cd DIR && timeout 120 contactbench ARGS` in bash, output captured.
 Output run_in(const fs::path& dir, const std::string& args)
 {
-    const std::string inner = "cd " + q(dir) + " && exec timeout 120 '" + test::contactbench_binary() + "' " + args;
-    std::string quoted;
-    for (char ch : inner) quoted += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
-    return test::run_captured("bash -c '" + quoted + "'", dir);
+    test::CliCall call;
+    call.cd = dir;
+    return test::run_contactbench(args, dir, call);
 }
 
 /// a.qpsnap and suite.json (one pgs run) in `dir`.
@@ -63,11 +56,7 @@ std::vector<std::string> names_in(const fs::path& dir)
 const std::string REFUSAL = "contactbench writes and deletes nothing through links or special files inside an "
                             "output folder; remove it or use another output folder\n";
 
-class CleanUp : public ::testing::Environment {
-public:
-    void TearDown() override { fs::remove_all(work_dir()); }
-};
-const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new CleanUp);
+const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new test::RemoveAtEnd(work_dir));
 
 }  // namespace
 

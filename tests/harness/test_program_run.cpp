@@ -5,6 +5,7 @@
 #include "harness/program_run.hpp"
 
 #include "tests/harness/cli_test_util.hpp"
+#include "tests/harness/remove_at_end.hpp"
 
 #include <gtest/gtest.h>
 
@@ -24,13 +25,7 @@ const fs::path& work_dir()
     return dir;
 }
 
-fs::path fresh_dir(const std::string& name)
-{
-    const fs::path d = work_dir() / name;
-    fs::remove_all(d);
-    fs::create_directories(d);
-    return d;
-}
+fs::path fresh_dir(const std::string& name) { return test::fresh_subdir(work_dir(), name); }
 
 ProgramOutcome run_sh(const fs::path& dir, const std::string& script, ProgramOptions options = {})
 {
@@ -41,11 +36,7 @@ ProgramOutcome run_sh(const fs::path& dir, const std::string& script, ProgramOpt
 
 bool process_exists(pid_t pid) { return ::kill(pid, 0) == 0 || errno != ESRCH; }
 
-class CleanUp : public ::testing::Environment {
-public:
-    void TearDown() override { fs::remove_all(work_dir()); }
-};
-const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new CleanUp);
+const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new test::RemoveAtEnd(work_dir));
 
 }  // namespace
 

@@ -4,6 +4,7 @@
 #include "harness/results.hpp"
 
 #include "tests/harness/cli_test_util.hpp"
+#include "tests/harness/remove_at_end.hpp"
 
 #include <gtest/gtest.h>
 
@@ -32,10 +33,12 @@ const fs::path& work_dir()
     return dir;
 }
 
-/// Runs `ENV contactbench ARGS` (ENV: "NAME=value ..." for env(1), ARGS shell-quoted where needed).
+/// Runs `ENV contactbench ARGS` (ENV: "NAME=value ...", ARGS shell-quoted where needed).
 Output run(const std::string& args, const std::string& env = "")
 {
-    return test::run_captured("env " + env + " '" + test::contactbench_binary() + "' " + args, work_dir());
+    test::CliCall call;
+    call.env = env;
+    return test::run_contactbench(args, work_dir(), call);
 }
 
 /// 2 snapshots x 3 solvers = 6 jobs.
@@ -77,11 +80,7 @@ std::string summary_without_times(const fs::path& dir)
     return result;
 }
 
-class CleanUp : public ::testing::Environment {
-public:
-    void TearDown() override { fs::remove_all(work_dir()); }
-};
-const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new CleanUp);
+const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new test::RemoveAtEnd(work_dir));
 
 }  // namespace
 
