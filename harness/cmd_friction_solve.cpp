@@ -7,6 +7,7 @@
 #include "problems/fclib_io.hpp"
 #include "problems/format_sniff.hpp"
 #include "problems/siconos_dat.hpp"
+#include "solvers/format_number.hpp"
 #include "solvers/friction_error.hpp"
 #include "solvers/friction_global_nsgs.hpp"
 #include "solvers/friction_nsgs.hpp"
@@ -71,6 +72,28 @@ void report(const std::string& solver, const FrictionRun& run, double second_err
     if (!run.note.empty()) row["note"] = run.note;
 }
 
+/// Our solvers of a local problem (nsgs and the two MPRGP-based ones); an empty `solver` for a peer.
+FrictionRun our_local_run(const FrictionLocal& problem, const std::string& solver, const Settings& s)
+{
+    if (solver == "nsgs") return friction_nsgs(problem, nsgs_settings(s));
+    if (solver == "mprgp-tresca-fp") {
+        MprgpTrescaSettings settings;
+        settings.tol = s.tol;
+        settings.max_inner = s.max_iterations;
+        settings.time_limit_s = s.time_limit;
+        return mprgp_tresca_fp(problem, settings).run;
+    }
+    if (solver == "mprgp+ica-friction") {
+        MprgpIcaFrictionSettings settings;
+        settings.tol = s.tol;
+        settings.max_mprgp = s.max_iterations;
+        settings.max_sweeps = s.max_iterations;
+        settings.time_limit_s = s.time_limit;
+        return mprgp_ica_friction(problem, settings);
+    }
+    return {};
+}
+
 void solve_local(const FrictionLocal& problem, const std::vector<std::string>& solvers, const Settings& s,
                  std::string& table, nlohmann::json& out)
 {
@@ -82,25 +105,8 @@ void solve_local(const FrictionLocal& problem, const std::vector<std::string>& s
                   "fclib_error", "siconos_err");
     table += line;
     for (const std::string& solver : solvers) {
-        FrictionRun run;
-        if (solver == "nsgs") {
-            run = friction_nsgs(problem, nsgs_settings(s));
-        } else if (solver == "mprgp-tresca-fp") {
-            MprgpTrescaSettings settings;
-            settings.tol = s.tol;
-            settings.max_inner = s.max_iterations;
-            settings.time_limit_s = s.time_limit;
-            run = mprgp_tresca_fp(problem, settings).run;
-        } else if (solver == "mprgp+ica-friction") {
-            MprgpIcaFrictionSettings settings;
-            settings.tol = s.tol;
-            settings.max_mprgp = s.max_iterations;
-            settings.max_sweeps = s.max_iterations;
-            settings.time_limit_s = s.time_limit;
-            run = mprgp_ica_friction(problem, settings);
-        } else {
-            run = siconos_fc3d_solve(problem, solver.substr(8), s.max_iterations, s.tol, s.time_limit);
-        }
+        FrictionRun run = our_local_run(problem, solver, s);
+        if (run.solver.empty()) run = siconos_fc3d_solve(problem, solver.substr(8), s.max_iterations, s.tol, s.time_limit);
         nlohmann::json row;
         const double siconos_scaled = siconos_relative_error(problem, run.r);
         report(solver, run, siconos_scaled, table, row);
@@ -129,16 +135,22 @@ void solve_global(const FrictionGlobal& problem, const std::vector<std::string>&
     for (const std::string& solver : solvers) {
         FrictionRun run;
         if (solver == "mprgp-tresca-fp" || solver == "mprgp+ica-friction") {
-            run.solver = solver;
-            run.status = "not_applicable";
-            run.error = INFINITY;
-            run.note = "takes local problems only (W, q): a global file's reduced problem is not wired to it yet";
+            // On the reduced problem, judged like nsgs on the global one: the global error at (r, v).
+            run = our_local_run(reduction.local(), solver, s);
+            if (run.r.size() == reduction.local().q.size() && run.r.allFinite()) {
+                const double reduced_error = run.error;
+                run.error = global_relative_error(problem, run.r, reduction.velocity(run.r), &run.u);
+                run.note += std::string(run.note.empty() ? "" : "; ") + "on the reduced problem W = H' M^-1 H (error " +
+                            format_g(reduced_error) + "), v = M^-1 (H r + f)";
+                if (run.status == "converged" && !(run.error <= s.tol)) run.status = "stalled";
+            }
         } else if (solver == "nsgs") {
             run = friction_nsgs_global(problem, reduction, nsgs_settings(s)).run;
         } else {
             run = siconos_gfc3d_solve(problem, solver.substr(8), s.max_iterations, s.tol, s.time_limit).run;
         }
-        const double reduced = run.r.allFinite() ? fclib_relative_error(reduction.local(), run.r) : INFINITY;
+        const double reduced = run.r.size() == reduction.local().q.size() && run.r.allFinite()
+                                   ? fclib_relative_error(reduction.local(), run.r) : INFINITY;
         nlohmann::json row;
         report(solver, run, reduced, table, row);
         row["reduced_error"] = reduced;
@@ -165,7 +177,8 @@ int cmd_friction_solve(const Args& args)
                "    W = H' M^-1 H, q = w + H' M^-1 f (sparse Cholesky of M).\n"
                "  nsgs: ours (solvers/friction_nsgs.hpp; on a global file, on its reduced problem);\n"
                "  mprgp-tresca-fp: Coulomb as a fixed point on Tresca's slip bounds over MPGP; mprgp+ica-friction:\n"
-               "  frictionless MPRGP on W_NN, then nsgs from it (local problems; docs/friction.md).\n"
+               "  frictionless MPRGP on W_NN, then nsgs from it (on a global file, on its reduced problem;\n"
+               "  docs/friction.md).\n"
                "  siconos-*: Siconos' fc3d (local) or gfc3d (global) NSGS, NSN_AC, PROX and ADMM in a child\n"
                "  process (docs/peers.md).\n";
         return 0;

@@ -187,6 +187,28 @@ TEST(FclibFrictionGlobal, FrictionSolveTakesAGlobalFile)
     EXPECT_EQ(j["runs"][0]["fclib_error"].get<double>(), run.run.error);
 }
 
+TEST(FclibFrictionGlobal, MprgpFrictionalSolversTakeAGlobalFileThroughItsReducedProblem)
+{
+    // Both once answered not_applicable with an empty r, which the error then read: exit 139.
+    if (skip_without_fclib()) GTEST_SKIP() << "FCLIB import not built (libfclib-dev missing)";
+    const fs::path dir = cb::test::make_test_work_dir("friction_solve_global_mprgp");
+    const fs::path file = DATA / "LMGC_GFC3D-i00501-4-00000.hdf5";
+    const cb::test::Output o = run_captured(cb::test::contactbench_binary() + " friction-solve '" + file.string() +
+                                                "' --solver mprgp-tresca-fp --solver mprgp+ica-friction --json '" +
+                                                (dir / "r.json").string() + "'",
+                                            dir);
+    ASSERT_EQ(o.status, 0) << o.err;
+    const nlohmann::json j = nlohmann::json::parse(cb::test::slurp(dir / "r.json"));
+    ASSERT_EQ(j["runs"].size(), 2u);
+    const cb::FrictionGlobal p = cb::read_fclib_global_friction(file.string());
+    const cb::GlobalReduction reduction(p);
+    for (const nlohmann::json& run : j["runs"]) {
+        EXPECT_EQ(run["status"], "converged") << run.dump();
+        EXPECT_LE(run["fclib_error"].get<double>(), 1e-8) << run.dump();
+        EXPECT_LE(run["reduced_error"].get<double>(), 1e-6) << run.dump();
+    }
+}
+
 }  // namespace
 
 namespace {
