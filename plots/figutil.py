@@ -149,6 +149,8 @@ SOLVER_STYLES: Dict[str, tuple] = {
     "siconos-fc3d-nsgs": ("#FF11FF", "$G$"),    # fuchsia
     "siconos-fc3d-nsn": ("#0000FF", "$N$"),     # blue
     "siconos-gfc3d-nsn": ("#00CC00", "$M$"),    # green
+    "mprgp+bmf03": ("#7799FF", "$B$"),          # periwinkle
+    "mprgp-staggered": ("#117777", "$S$"),      # dark teal
 }
 #: a label without a fixed style (a user's own solver or a `command` label) gets a (colour, marker)
 #: pair of these lists, the first free one from a place chosen by a hash of its name: its colour is

@@ -122,8 +122,8 @@ SolverResult MprgpBmf03Solver::solve(const QpView& qp, const SolveContext& conte
 
     // Stage 1: the frictionless QP, exactly (friction fields hidden from mprgp-coupled).
     const QpView frictionless{qp.A, qp.b, qp.J, qp.c, qp.x0, qp.length, nullptr};
-    MprgpCoupledSolver inner(MprgpCoupledSettings::from_json(common.to_json()));
-    SolverResult result = inner.solve(frictionless, context);
+    SolverResult result =
+        mprgp_coupled_solve(frictionless, MprgpCoupledSettings::from_json(common.to_json()), context);
     rename_message(result);
     result.info["frictionless_stage"] = {
         {"solver", "mprgp-coupled"}, {"status", to_string(result.status)}, {"iterations", result.iterations}};

@@ -72,7 +72,12 @@ SolverEntry mprgp_coupled_entry()
 
 SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& context)
 {
-    CoupledRun run(qp, m_settings, context);
+    return mprgp_coupled_solve(qp, m_settings, context);
+}
+
+SolverResult mprgp_coupled_solve(const QpView& qp, const MprgpCoupledSettings& settings, const SolveContext& context)
+{
+    CoupledRun run(qp, settings, context);
     return run.run();
 }
 

@@ -48,4 +48,9 @@ private:
 
 SolverEntry mprgp_coupled_entry();
 
+/// The same solve for a solver that runs mprgp-coupled as one of its stages: not through a
+/// `Solver::solve`, whose entries the instruction counts toggle on (tools/perf_gate.py TOGGLES),
+/// so that a nested stage does not switch the count off.
+SolverResult mprgp_coupled_solve(const QpView& qp, const MprgpCoupledSettings& settings, const SolveContext& context);
+
 }  // namespace cb

@@ -50,7 +50,7 @@ SolverResult frictionless(const QpView& qp, const SolveContext& context, const C
 {
     MprgpCoupledSettings normal;
     normal.common = common;
-    SolverResult r = MprgpCoupledSolver(normal).solve(qp, context);
+    SolverResult r = mprgp_coupled_solve(qp, normal, context);
     const std::string prefix = std::string(NORMAL_SOLVER) + ": ";
     if (r.message.rfind(prefix, 0) == 0) r.message = std::string(NAME) + ": " + r.message.substr(prefix.size());
     r.info["rounds"] = 1;
@@ -226,7 +226,7 @@ SolverResult MprgpStaggeredSolver::solve(const QpView& qp, const SolveContext& c
         normal.common.tol = inner_tol;
         normal.common.max_iterations = s.common.max_iterations - counters.iterations;
         normal.common.time_limit_s = remaining_time();
-        const SolverResult nr = MprgpCoupledSolver(normal).solve(normal_qp, SolveContext{});
+        const SolverResult nr = mprgp_coupled_solve(normal_qp, normal, SolveContext{});
         ++rounds;
         add_inner_counters(counters, nr.counters);
         counters.a_products += nr.counters.a_products;

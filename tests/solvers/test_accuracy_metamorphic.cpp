@@ -186,6 +186,13 @@ const std::map<std::pair<std::string, std::string>, std::string>& known_status_c
     static const std::map<std::pair<std::string, std::string>, std::string> known = {
         // Ipopt's own scaling stalls on an objective scaled by 2^-26 (both fixtures).
         {{"ipopt", "(a) objective x 2^-26"}, "stalled"},
+        // The local-form entries stop on FCLIB's natural map, r - P_K(r - u~), which adds a reaction
+        // to a velocity: scaling the objective scales r and not u, scaling rows scales both apart,
+        // so a point at FCLIB error ~1e-9 can be far from e <= tol. Their rounds tighten the own
+        // tolerance (docs/friction.md) and then stall honestly.
+        {{"mprgp-tresca-fp", "(a) objective x 2^-26"}, "stalled"},
+        {{"mprgp-tresca-fp", "(b) rows x 2^-20..2^20"}, "stalled"},
+        {{"mprgp+ica-friction", "(b) rows x 2^-20..2^20"}, "stalled"},
     };
     return known;
 }
@@ -210,9 +217,11 @@ TEST(AccuracyMetamorphic, EverySolversConvergedHoldsOnTheMappedProblem)
                 if (run.result.iterations != base.result.iterations)
                     std::cout << "[ finding ] " << what << ": " << base.status << " in " << base.result.iterations
                               << " iterations -> " << run.status << " in " << run.result.iterations << "\n";
+                // A known finding may show on one fixture and not on the other.
                 const auto known = known_status_changes().find({solver, mp.name});
-                EXPECT_EQ(run.status, known == known_status_changes().end() ? base.status : known->second)
-                    << what << ": " << run.result.message;
+                const bool known_change = known != known_status_changes().end() && run.status == known->second;
+                EXPECT_TRUE(run.status == base.status || known_change)
+                    << what << ": " << base.status << " -> " << run.status << ": " << run.result.message;
                 if (run.status != "converged") continue;
                 ++converged_runs;
                 // The run's point and multipliers mapped back: the measure agrees on the original
