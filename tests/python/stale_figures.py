@@ -20,6 +20,8 @@ from typing import List, Optional, Sequence
 
 #: what a measured figure describes unless its line names other paths
 DEFAULT_COVERS = ("solvers/", "problems/", "sim/")
+#: the subject prefix of a commit that only moves files (and rewrites the paths naming them)
+PURE_MOVE = "Pure move:"
 MEASURED_RE = re.compile(r"Measured at ([0-9a-f]{7,40}) with `([^`]+)`(?:\s*\(covers ([^)]*)\))?")
 STILL_STANDS_RE = re.compile(r"(?:Still stands|Not re-measured):\s*\S")
 
@@ -49,11 +51,18 @@ def changed_since(repo: str, commit: str, covers: Sequence[str]) -> Optional[Lis
     when COMMIT is not in this clone."""
     if git(repo, "cat-file", "-e", commit + "^{commit}") is None:
         return None
-    out = git(repo, "diff", "--name-only", commit, "HEAD")
+    # Every commit since, but the pure moves: a commit whose subject starts with PURE_MOVE moves files
+    # and rewrites the paths that name them, which changes no figure.
+    out = git(repo, "log", "--format=%x01%s", "--name-only", commit + "..HEAD")
     if out is None:
         return None
+    touched = set()
+    for entry in out.split("\x01")[1:]:
+        subject, _, names = entry.partition("\n")
+        if not subject.startswith(PURE_MOVE):
+            touched.update(name for name in names.splitlines() if name.strip())
     changed = []
-    for path in out.splitlines():
+    for path in sorted(touched):
         for cover in covers:
             if (cover.endswith("/") and path.startswith(cover)) or fnmatch.fnmatch(path, cover):
                 changed.append(path)

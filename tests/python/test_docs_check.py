@@ -180,6 +180,18 @@ class ReportsStaleFigures(unittest.TestCase):
             "changes to solvers/mprgp.cpp: re-measure, or say why they still stand (\"Still stands: ...\") or that "
             "they were not re-measured (\"Not re-measured: ...\")"])
 
+    def test_a_pure_move_leaves_them_fresh_and_a_later_change_does_not(self):
+        self.doc()
+        os.makedirs(os.path.join(self.root, "solvers", "mprgp"))
+        self.git("mv", "solvers/mprgp.cpp", "solvers/mprgp/mprgp.cpp")
+        write(self.root, "plots/fig.py", "# solvers/mprgp/mprgp.cpp\n")
+        self.commit("Pure move: solvers/mprgp.cpp into solvers/mprgp/")
+        self.assertEqual(stale_figures_problems(self.root), [])
+        write(self.root, "solvers/mprgp/mprgp.cpp", "int iterations = 317;\n")
+        self.commit("solver")
+        self.assertEqual(len(stale_figures_problems(self.root)), 1)
+        self.assertIn("predate changes to solvers/mprgp/mprgp.cpp:", stale_figures_problems(self.root)[0])
+
     def test_a_stated_reason_keeps_them(self):
         self.doc("\nStill stands: the change after it renames a variable.")
         write(self.root, "solvers/mprgp.cpp", "int iterations_ = 224;\n")
