@@ -4,19 +4,13 @@
 /// so the harness can count A-products itself (around each solve) instead of trusting the
 /// solver's own count, and so A's storage for the product is chosen in one place.
 /// Work that bypasses it (CHOLMOD, sparse partial products) shows up in instruction counts instead.
+#include "solvers/a_format.hpp"
 #include "solvers/types.hpp"
 
 #include <string>
 #include <vector>
 
 namespace cb {
-
-/// How an AOperator stores A for its products.
-enum class AFormat {
-    CSR,   ///< A itself (Eigen's compressed rows: a value and a 32-bit column per nonzero)
-    BSR,   ///< 3x3 blocks (a vertex's three DOFs): nine values and one 32-bit block column per block
-    SBSR,  ///< BSR's upper block triangle only (A symmetric): about half the bytes; one thread
-};
 
 /// A's 3x3 block rows: block row I holds rows 3I, 3I+1, 3I+2. A block is stored column by column
 /// (value (r, c) at 9k + 3c + r) so that a column's three entries meet three partial sums at once.
@@ -41,6 +35,8 @@ public:
     /// about equal nonzeros (fewer when A is small: at least MIN_NONZEROS_PER_PART each); the same
     /// A and threads give the same ranges, so y is the same to the last bit and the fused dots,
     /// summed range by range in range order, the same on every run (docs/a_product.md).
+    /// AUTO (the common setting `a_format`'s default): BSR, which keeps the iterates bit-equal to
+    /// CSR's; SBSR changed iteration counts on suites/ci.json, so it is asked for by name only.
     AFormat prepare(AFormat wanted, int threads = 1);
     /// Row ranges the products are split into (1: one thread, today's loops).
     int parts() const { return static_cast<int>(m_part_start.size()) - 1; }
@@ -58,9 +54,21 @@ public:
     /// The blocks the products read (BSR: all; SBSR: the upper block triangle; empty when CSR).
     const BlockRows& blocks() const { return m_blocks; }
     Eigen::Index rows() const { return m_csr->rows(); }
+    /// From now on the products give U A U x (U = diag(u)) instead of A x, without a scaled copy
+    /// of A (mprgp-coupled's precond = scaled: the QP in y = U^-1 x): x is scaled into a buffer
+    /// before the product and y on the way out, two passes over vectors against one over A.
+    /// u must outlive the operator; nullptr: A itself again.
+    void scale_by(const Vec* u) { m_scale = u; }
+    /// The scaling of the products (nullptr when they give A x).
+    const Vec* scaling() const { return m_scale; }
+    /// The buffer holding U x during a scaled product (one per operator: products on one
+    /// operator run one at a time).
+    Vec& scaled_input() const { return m_scaled_x; }
 
 private:
     const SpMat* m_csr;
+    const Vec* m_scale = nullptr;
+    mutable Vec m_scaled_x;
     AFormat m_format = AFormat::CSR;
     BlockRows m_blocks;
     std::string m_why_csr;

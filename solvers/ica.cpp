@@ -186,7 +186,8 @@ SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
         result.info["start_solver"] = "cholmod";
     }
     AOperator a_op(qp.A);  // the product with A: 3x3 blocks when A has them, built in the setup
-    a_op.prepare(AFormat::BSR, static_cast<int>(s.common.threads));
+    a_op.prepare(s.common.a_format, static_cast<int>(s.common.threads));
+    result.info["a_format"] = to_string(a_op.format());  // the storage the products read
     Vec lambda = Vec::Zero(m);
     if (context.lambda0 && context.lambda0->size() == m) lambda = context.lambda0->cwiseMax(0.0);
     if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT);

@@ -81,7 +81,8 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
     if (m_settings.precond == "jacobi" && !jacobi_inverse_diagonal(qp.A, dinv, error))
         return loop.finish(result, SolveStatus::INVALID_INPUT, "mprgp-box: " + error);
     AOperator a_op(qp.A);  // the product with A: 3x3 blocks when A has them, built in the setup
-    a_op.prepare(AFormat::BSR, static_cast<int>(common.threads));
+    a_op.prepare(common.a_format, static_cast<int>(common.threads));
+    result.info["a_format"] = to_string(a_op.format());  // the storage the products read
     const PowerResult power = estimate_norm(a_op, context, PowerRule::POWER, m_settings.power_max, common, cnt);
     const double alpha_bar = fixed_step_length(power);
     result.info["alpha_bar"] = alpha_bar;

@@ -34,10 +34,11 @@ public:
     CoupledRun(const QpView& qp, const MprgpCoupledSettings& st, const SolveContext& context)
         : m_loop("mprgp-coupled", qp, st.common, context), m_original(qp), m_choice(PrecondChoice::make(qp, st)),
           m_scaled(ScaledVariables::make(qp, m_choice.name, st)),
-          m_qp(m_scaled ? QpView{m_scaled->A, m_scaled->b, m_scaled->J, qp.c, m_scaled->y0} : qp), m_A(m_qp.A),
-          m_a_op(m_A), m_J(m_qp.J), m_c(m_qp.c), m_st(st), m_ctx(context), m_n(qp.n()), m_m(qp.m()),
+          m_qp(m_scaled ? QpView{qp.A, m_scaled->b, m_scaled->J, qp.c, m_scaled->y0} : qp), m_A(m_qp.A), m_a_op(m_A),
+          m_J(m_qp.J), m_c(m_qp.c), m_st(st), m_ctx(context), m_n(qp.n()), m_m(qp.m()),
           m_unscale(m_scaled ? &m_scaled->unscale : nullptr)
     {
+        m_a_op.scale_by(m_unscale);  // precond = scaled: products with U A U, A not copied
     }
     /// Setup, the engine's iteration (solvers/mprgp_engine.hpp), the returned point.
     SolverResult run();
@@ -116,13 +117,22 @@ private:
         }
         m_touched.clear();
     }
-    /// d'Ad over the touched rows of A (A symmetric, d sparse).
+    /// d'Ad over the touched rows of A (A symmetric, d sparse); precond = scaled: d'UAUd.
     double d_a_d() const
     {
         const int* outer = m_A.outerIndexPtr();
         const int* inner = m_A.innerIndexPtr();
         const double* val = m_A.valuePtr();
         double dad = 0.0;
+        if (m_unscale != nullptr) {
+            const double* u = m_unscale->data();
+            for (int j : m_touched) {
+                double s = 0.0;
+                for (int k = outer[j]; k < outer[j + 1]; ++k) s += val[k] * (u[inner[k]] * m_d[inner[k]]);
+                dad += (u[j] * m_d[j]) * s;
+            }
+            return dad;
+        }
         for (int j : m_touched) {
             double s = 0.0;
             for (int k = outer[j]; k < outer[j + 1]; ++k) s += val[k] * m_d[inner[k]];
@@ -138,12 +148,21 @@ private:
         for (int j : m_touched) nz += outer[j + 1] - outer[j];
         return static_cast<double>(nz);
     }
-    /// g += A d (columns of A = rows, A symmetric), O(nnz of the touched columns).
+    /// g += A d (columns of A = rows, A symmetric), O(nnz of the touched columns); precond =
+    /// scaled: g += U A U d.
     void add_a_d(Vec& g) const
     {
         const int* outer = m_A.outerIndexPtr();
         const int* inner = m_A.innerIndexPtr();
         const double* val = m_A.valuePtr();
+        if (m_unscale != nullptr) {
+            const double* u = m_unscale->data();
+            for (int j : m_touched) {
+                const double ud = u[j] * m_d[j];
+                for (int k = outer[j]; k < outer[j + 1]; ++k) g[inner[k]] += u[inner[k]] * (val[k] * ud);
+            }
+            return;
+        }
         for (int j : m_touched)
             for (int k = outer[j]; k < outer[j + 1]; ++k) g[inner[k]] += val[k] * m_d[j];
     }
@@ -308,7 +327,7 @@ private:
     const QpView m_original;                    // the QP in the file
     PrecondChoice m_choice;                     // the preconditioner used and, for auto, why
     std::unique_ptr<ScaledVariables> m_scaled;  // precond = scaled: the QP in y = D^1/2 x, else null
-    const QpView m_qp;                          // the QP iterated on: m_original or m_scaled's
+    const QpView m_qp;                          // the QP iterated on: m_original or m_scaled's (A: the original's)
     const SpMat& m_A;
     AOperator m_a_op;  // the product with A (prepared in the setup)
     const SpMat& m_J;

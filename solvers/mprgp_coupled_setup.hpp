@@ -113,10 +113,12 @@ struct PrecondChoice {
 };
 
 /// precond = scaled: the QP in the variables y = D^1/2 x (D = diag(A)): A -> U A U, J -> J U,
-/// b -> U b, x0 -> x0 / U with U = D^-1/2; c and the multipliers are the same.
+/// b -> U b, x0 -> x0 / U with U = D^-1/2; c and the multipliers are the same. U A U is not
+/// formed: the run's AOperator applies U on both sides of each product (AOperator::scale_by) and
+/// its sparse partial products scale the few entries they read, so A is not copied.
 struct ScaledVariables {
     Vec unscale;  ///< U: x = U y
-    SpMat A, J;
+    SpMat J;
     Vec b, y0;
     /// null unless precond = scaled applies (deflation = none, a positive diagonal of A)
     static std::unique_ptr<ScaledVariables> make(const QpView& qp, const std::string& precond,
@@ -129,9 +131,6 @@ struct ScaledVariables {
         auto s = std::make_unique<ScaledVariables>();
         s->unscale = qp.A.diagonal().cwiseSqrt().cwiseInverse();
         const Vec& u = s->unscale;
-        s->A = qp.A;  // the same pattern, each entry scaled by its row's and its column's U
-        for (Eigen::Index i = 0; i < s->A.outerSize(); ++i)
-            for (SpMat::InnerIterator it(s->A, i); it; ++it) it.valueRef() *= u[i] * u[it.col()];
         s->J = qp.J;
         for (Eigen::Index i = 0; i < s->J.outerSize(); ++i)
             for (SpMat::InnerIterator it(s->J, i); it; ++it) it.valueRef() *= u[it.col()];

@@ -254,7 +254,7 @@ SolverResult CoupledRun::run()
             result.message = "mprgp-coupled: row " + std::to_string(i) + " is zero but c > 0: empty feasible set";
             return m_loop.finish(result, result.status);
         }
-    m_a_op.prepare(AFormat::BSR, static_cast<int>(m_st.common.threads));  // 3x3 blocks when A has them
+    m_a_op.prepare(m_st.common.a_format, static_cast<int>(m_st.common.threads));
     const PowerResult power = estimate_norm(m_a_op, m_ctx, PowerRule::POWER, m_st.power_max, common, m_cnt);
     m_alpha_bar = fixed_step_length(power);
     m_scale = accuracy_scale(m_original);
@@ -316,6 +316,7 @@ SolverResult CoupledRun::run()
                    {"dependent_rows", "handled by a shift 1e-12 of the unit-diagonal-scaled Gram matrices"}};
     m_stats.fill(result.info);
     if (!m_choice.rule.empty()) result.info["precond_rule"] = m_choice.rule;
+    result.info["a_format"] = to_string(m_a_op.format());  // the storage the products read
     // The loop writes the reason of its own exits; a breakdown is the solver's word.
     // The whole measure at the returned point (m_error leaves out the bodies' rigid motion); a
     // converged run's message already states it.

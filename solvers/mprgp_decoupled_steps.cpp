@@ -317,7 +317,8 @@ SolverResult DecoupledMprgp::run()
             return m_loop.finish(result, result.status);
         }
     }
-    m_a_op.prepare(AFormat::BSR, static_cast<int>(m_st.common.threads));  // 3x3 blocks when A has them
+    m_a_op.prepare(m_st.common.a_format, static_cast<int>(m_st.common.threads));
+    result.info["a_format"] = to_string(m_a_op.format());  // the storage the products read
     const PowerRule rule = m_st.alpha == "authors" ? PowerRule::AUTHORS : PowerRule::POWER;
     const long power_max = rule == PowerRule::AUTHORS ? 1001 : m_st.power_max;
     const PowerResult power = estimate_norm(m_a_op, m_ctx, rule, power_max, common, m_cnt, &m_loop);

@@ -36,7 +36,18 @@ const SettingsTable<CommonSettings>& common_settings_table()
                 [](const C& s, nlohmann::json& j) { j["seed"] = s.seed; })
             .integer("threads", &C::threads, 1, MAX_THREADS,
                      "threads of the products with A, over fixed row ranges (same settings, same iterates; "
-                     "threads > 1 may differ from 1 in the dots' last bits): docs/a_product.md");
+                     "threads > 1 may differ from 1 in the dots' last bits): docs/a_product.md")
+            .row(
+                "a_format", [](const C& s) { return std::string(to_string(s.a_format)); },
+                "auto | csr | bsr | sbsr: storage of A for the solvers' products with A (auto = bsr: 3x3 blocks, "
+                "iterates bit-equal to csr's; sbsr: the upper block triangle, about half the bytes, iterates equal "
+                "to rounding, one thread; a format A lacks falls back to csr): docs/a_product.md",
+                [](SettingsReader& reader, C& s) {
+                    parse_a_format(reader.choice("a_format", to_string(s.a_format), {"auto", "csr", "bsr", "sbsr"}),
+                                   s.a_format);
+                },
+                [](const C& s, nlohmann::json& j) { j["a_format"] = to_string(s.a_format); },
+                {"auto", "csr", "bsr", "sbsr"});
     return table;
 }
 

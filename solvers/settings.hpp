@@ -1,6 +1,7 @@
 #pragma once
 /// Solver settings: the block every solver accepts, and a strict JSON reader that names the
 /// offending field ("mprgp: /gamma: must be > 0, got -1") and rejects unknown keys.
+#include "solvers/a_format.hpp"
 #include "solvers/types.hpp"
 
 #include <nlohmann/json.hpp>
@@ -40,6 +41,7 @@ struct CommonSettings {
     double time_limit_s = 0.0;    ///< 0 disables the limit
     std::uint64_t seed = 0;       ///< every random choice is seeded
     long threads = 1;             ///< threads of the A-products (solvers/a_product.hpp); 1 = one core
+    AFormat a_format = AFormat::AUTO;  ///< storage of A for the A-products (AOperator::prepare)
 
     /// stop=native. For a peer that passes `tol` to its library as that library's own tolerance;
     /// whether a solve converged is SolveLoop's decision, never the solver's.
@@ -69,7 +71,7 @@ class SettingsReader {
 public:
     SettingsReader(const nlohmann::json& settings, std::string where);
 
-    /// Reads the common block (tol, stop, max_iterations, time_limit_s, seed, threads); a key not given
+    /// Reads the common block (tol, stop, max_iterations, time_limit_s, seed, threads, a_format); a key not given
     /// keeps its value in `defaults` (a solver's own defaults: active-set's tol is 1e-10).
     CommonSettings common(CommonSettings defaults = CommonSettings{});
 

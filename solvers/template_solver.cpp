@@ -52,7 +52,8 @@ SolverResult TemplateSolver::solve(const QpView& qp, const SolveContext& context
     }
     const double step = norm_inf > 0 ? m_settings.step_scale / norm_inf : 1.0;
     AOperator a_op(qp.A);  // the product with A: 3x3 blocks when A has them, built in the setup
-    a_op.prepare(AFormat::BSR, static_cast<int>(common.threads));
+    a_op.prepare(common.a_format, static_cast<int>(common.threads));
+    result.info["a_format"] = to_string(a_op.format());  // the storage the products read
     const AccuracyScale scale = accuracy_scale(qp);
     counters.a_products += scale.a_products;
     // time_limit_s counts setup: a limit reached here ends the solve before any iteration.

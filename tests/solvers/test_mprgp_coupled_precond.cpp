@@ -331,3 +331,41 @@ TEST(MprgpCoupledPrecond, ComponentOperatorsTakeTheGlobalOperatorsSteps)
         EXPECT_LE(worst, 1e-7 * scene_size(qp)) << deflation;
     }
 }
+
+TEST(MprgpCoupledPrecond, ScaledVariablesWithoutACopyOfAFollowTheScaledQp)
+{
+    // precond = scaled applies U = D^-1/2 on both sides of each product instead of forming U A U:
+    // its iterates, mapped to y = x / U, are those of precond = none on the QP formed in y, to rounding.
+    const Qp qp = loaded(cb::make_synthetic("coupled", {{"nx", 13}, {"ny", 2}, {"nz", 13}}, 7), 7);
+    const cb::Vec u = qp.A.diagonal().cwiseSqrt().cwiseInverse();
+    cb::Qp in_y = qp;
+    for (Eigen::Index i = 0; i < in_y.A.outerSize(); ++i)
+        for (cb::SpMat::InnerIterator it(in_y.A, i); it; ++it) it.valueRef() *= u[i] * u[it.col()];
+    for (Eigen::Index i = 0; i < in_y.J.outerSize(); ++i)
+        for (cb::SpMat::InnerIterator it(in_y.J, i); it; ++it) it.valueRef() *= u[it.col()];
+    in_y.b = u.cwiseProduct(qp.b);
+    in_y.x0 = qp.x0.cwiseQuotient(u);
+    struct Iterates : cb::Monitor {
+        bool on_iteration(const cb::IterationInfo& info) override
+        {
+            if (info.x != nullptr && xs.size() < 20) xs.push_back(*info.x);
+            return true;
+        }
+        std::vector<cb::Vec> xs;
+    } scaled_run, formed_run;
+    cb::SolveContext context;
+    context.monitor = &scaled_run;
+    const cb::SolverResult scaled =
+        cb::builtin_registry().create("mprgp-coupled", {{"precond", "scaled"}})->solve(qp.view(), context);
+    context.monitor = &formed_run;
+    cb::builtin_registry().create("mprgp-coupled", {{"precond", "none"}})->solve(in_y.view(), context);
+    ASSERT_EQ(scaled.status, SolveStatus::CONVERGED) << scaled.message;
+    const size_t compared = std::min(scaled_run.xs.size(), formed_run.xs.size());
+    ASSERT_GE(compared, 8u);  // the two runs stop by different measures: their common beginning
+    for (size_t k = 0; k < compared; ++k) {
+        const cb::Vec y = scaled_run.xs[k].cwiseQuotient(u);
+        EXPECT_LE((y - formed_run.xs[k]).lpNorm<Eigen::Infinity>(),
+                  1e-9 * std::max(1.0, formed_run.xs[k].lpNorm<Eigen::Infinity>()))
+            << "iterate " << k;
+    }
+}
