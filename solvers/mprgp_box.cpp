@@ -62,7 +62,12 @@ SolverEntry mprgp_box_entry()
 
 SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context)
 {
-    const CommonSettings& common = m_settings.common;
+    return mprgp_box_solve(qp, m_settings, context);
+}
+
+SolverResult mprgp_box_solve(const QpView& qp, const MprgpBoxSettings& settings, const SolveContext& context)
+{
+    const CommonSettings& common = settings.common;
     const Eigen::Index n = qp.n(), m = qp.m();
     SolverResult result;
     SolveLoop loop("mprgp-box", qp, common, context);
@@ -78,12 +83,12 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
                 (bounds.status == SolveStatus::NOT_APPLICABLE ? "; use mprgp (decoupled J) or mprgp-coupled" : ""));
     Vec dinv = Vec::Ones(n);
     std::string error;
-    if (m_settings.precond == "jacobi" && !jacobi_inverse_diagonal(qp.A, dinv, error))
+    if (settings.precond == "jacobi" && !jacobi_inverse_diagonal(qp.A, dinv, error))
         return loop.finish(result, SolveStatus::INVALID_INPUT, "mprgp-box: " + error);
     AOperator a_op(qp.A);  // the product with A: 3x3 blocks when A has them, built in the setup
     a_op.prepare(common.a_format, static_cast<int>(common.threads));
     result.info["a_format"] = to_string(a_op.format());  // the storage the products read
-    const PowerResult power = estimate_norm(a_op, context, PowerRule::POWER, m_settings.power_max, common, cnt);
+    const PowerResult power = estimate_norm(a_op, context, PowerRule::POWER, settings.power_max, common, cnt);
     const double alpha_bar = fixed_step_length(power);
     result.info["alpha_bar"] = alpha_bar;
     result.info["power"] = {{"products", power.products}, {"estimate", power.estimate}, {"warm_start", power.warm}};
@@ -93,7 +98,7 @@ SolverResult MprgpBoxSolver::solve(const QpView& qp, const SolveContext& context
 
     // --- the MPRGP iteration (solvers/mprgp_engine.hpp) over the bounds ---
     BoundSet set(qp, bounds, scale);
-    FeasibleMprgpSteps<BoundSet> steps(set, a_op, qp.b, dinv, alpha_bar, m_settings.gamma, loop, cnt);
+    FeasibleMprgpSteps<BoundSet> steps(set, a_op, qp.b, dinv, alpha_bar, settings.gamma, loop, cnt);
     steps.start(qp.x0);
     std::string why;  // a breakdown's reason (the loop's own exits need none)
     const SolveStatus status = run_mprgp(steps, loop, cnt, why);

@@ -41,4 +41,8 @@ private:
 
 SolverEntry mprgp_box_entry();
 
+/// The same solve for a solver that runs mprgp-box as one of its stages: not through a
+/// `Solver::solve`, whose entries the instruction counts toggle on (tools/perf_gate.py TOGGLES).
+SolverResult mprgp_box_solve(const QpView& qp, const MprgpBoxSettings& settings, const SolveContext& context);
+
 }  // namespace cb

@@ -235,7 +235,7 @@ FrictionRun mprgp_ica_friction(const FrictionLocal& p, const MprgpIcaFrictionSet
     box.common.tol = s.normal_tol * std::max(qp.b.norm(), 1e-300);
     box.common.max_iterations = s.max_mprgp;
     box.common.time_limit_s = s.time_limit_s;
-    const SolverResult normal = MprgpBoxSolver(box).solve(qp.view(), {});
+    const SolverResult normal = mprgp_box_solve(qp.view(), box, {});
     Vec start = Vec::Zero(3 * m);
     if (normal.x.size() == m && normal.x.allFinite())
         for (Eigen::Index i = 0; i < m; ++i) start[3 * i] = std::max(normal.x[i], 0.0);

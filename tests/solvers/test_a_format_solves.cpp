@@ -73,7 +73,9 @@ bool expect_formats_agree(const std::string& solver, const Qp& qp)
     EXPECT_EQ(bsr.result.iterations, csr.result.iterations);
     EXPECT_EQ(bsr.result.counters.a_products, csr.result.counters.a_products);
     EXPECT_EQ(bsr.result.x.size(), csr.result.x.size());
-    if (bsr.result.x.size() == csr.result.x.size()) EXPECT_EQ(largest_difference(bsr.result.x, csr.result.x), 0.0);
+    if (bsr.result.x.size() == csr.result.x.size()) {
+        EXPECT_EQ(largest_difference(bsr.result.x, csr.result.x), 0.0);
+    }
     EXPECT_EQ(sbsr.result.info.value("a_format", ""), storage_for(qp.A, AFormat::SBSR));
     const size_t compared = std::min(sbsr.first.size(), csr.first.size());
     EXPECT_GE(compared, std::min<size_t>(FirstIterates::KEPT, static_cast<size_t>(csr.result.iterations)));
