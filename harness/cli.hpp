@@ -1,7 +1,7 @@
 #pragma once
 /// A small command-line parser: positional arguments, `--flag`, `--key value` and repeated
 /// keys (`--set a=1 --set b=2`). Unknown options are InputErrors naming the option.
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <map>
 #include <set>

@@ -9,8 +9,8 @@
 #include "harness/stop_signals.hpp"
 #include "harness/suite.hpp"
 #include "sim/chains.hpp"
-#include "solvers/format_number.hpp"
-#include "solvers/registry.hpp"
+#include "solvers/core/format_number.hpp"
+#include "solvers/core/registry.hpp"
 
 #include <filesystem>
 #include <iostream>

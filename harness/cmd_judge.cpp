@@ -8,7 +8,7 @@
 #include "problems/format_sniff.hpp"
 #include "problems/qpsnap.hpp"
 #include "problems/solution_io.hpp"
-#include "solvers/format_number.hpp"
+#include "solvers/core/format_number.hpp"
 
 #include <cstdio>
 #include <filesystem>

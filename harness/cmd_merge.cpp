@@ -10,7 +10,7 @@
 #include "harness/timing_hygiene.hpp"
 #include "problems/io_util.hpp"
 #include "problems/output_folder.hpp"
-#include "solvers/solver.hpp"  // solve_status_from_string
+#include "solvers/core/solver.hpp"  // solve_status_from_string
 
 #include <filesystem>
 #include <iostream>
@@ -44,7 +44,7 @@ struct Shard {
     std::string jobs_path() const { return (dir / "jobs.json").string(); }
 };
 
-/// Statuses a run file may hold: the solvers' (solvers/solver.hpp) and the harness's own.
+/// Statuses a run file may hold: the solvers' (solvers/core/solver.hpp) and the harness's own.
 bool known_status(const std::string& status)
 {
     if (status == "internal_error" || status == STATUS_SOLVED_RELAXATION || status == STATUS_UNCONFIRMED) return true;

@@ -9,8 +9,8 @@
 #include "problems/format_sniff.hpp"
 #include "problems/output_folder.hpp"
 #include "problems/qpsnap.hpp"
-#include "solvers/format_number.hpp"
-#include "solvers/registry.hpp"
+#include "solvers/core/format_number.hpp"
+#include "solvers/core/registry.hpp"
 
 #include <cstdio>
 #include <filesystem>

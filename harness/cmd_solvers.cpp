@@ -1,7 +1,7 @@
 // contactbench solvers: every registered solver, one line each, with what it applies to.
 #include "harness/cli.hpp"
 #include "harness/commands.hpp"
-#include "solvers/registry.hpp"
+#include "solvers/core/registry.hpp"
 
 #include <nlohmann/json.hpp>
 #include <algorithm>

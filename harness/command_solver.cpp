@@ -9,7 +9,7 @@
 #include "problems/matrix_market.hpp"
 #include "problems/qpsnap.hpp"
 #include "problems/solution_io.hpp"
-#include "solvers/peak_memory.hpp"
+#include "solvers/core/peak_memory.hpp"
 
 #include <algorithm>
 #include <chrono>

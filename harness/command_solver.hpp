@@ -12,9 +12,9 @@
 /// -> diverged with info.command.crashed; unusable output (no x, wrong length, NaN, bad
 /// result.json) -> diverged with info.command.garbage. Lives in harness/ because it writes
 /// files (solvers/ never does); main() adds it to the registry (install_command_solver).
-#include "solvers/registry.hpp"
-#include "solvers/settings.hpp"
-#include "solvers/solver.hpp"
+#include "solvers/core/registry.hpp"
+#include "solvers/core/settings.hpp"
+#include "solvers/core/solver.hpp"
 
 #include <string>
 #include <utility>

@@ -5,7 +5,7 @@
 #include "harness/record_types.hpp"
 #include "harness/results.hpp"
 #include "harness/results_folder.hpp"
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <algorithm>
 #include <cmath>

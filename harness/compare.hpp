@@ -8,7 +8,7 @@
 ///  - work counters (iterations, a_products, a_products_harness, cholmod_factorizations,
 ///    precond_applications; lower is better): on the same machine any growth is a regression
 ///    (they are deterministic); across machines growth beyond counter_rtol * BASE + counter_atol;
-///  - a_products_harness counts the products made through solvers/a_product, whoever asked for
+///  - a_products_harness counts the products made through solvers/linalg/a_product, whoever asked for
 ///    them: growth that the solver's own a_products does not show is named "uncounted";
 ///  - accuracy (the error e, docs/accuracy.md): regressed when accuracy(NEW) > accuracy(BASE) *
 ///    (1 + accuracy_rtol) and above the run's tol (files of an older version use old names, read

@@ -1,6 +1,6 @@
 #include "harness/history.hpp"
 
-#include "solvers/work_units.hpp"
+#include "solvers/measure/work_units.hpp"
 
 #include <algorithm>
 #include <cmath>

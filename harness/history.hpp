@@ -16,8 +16,8 @@
 /// Time: time_s is the solver's time since the start of its setup (monitor excluded), so the
 /// first row of every history sits at the solver's setup time; solve_time_s is the same stamp
 /// without the setup (the iterations only).
-#include "solvers/accuracy.hpp"
-#include "solvers/solver.hpp"
+#include "solvers/measure/accuracy.hpp"
+#include "solvers/core/solver.hpp"
 
 #include <nlohmann/json.hpp>
 #include <vector>
@@ -38,7 +38,7 @@ struct HistoryRow {
     double objective_change_terms = 0.0;  ///< sum of |terms| of that difference (its rounding scale)
     double native_residual = 0.0;
     long active_set = -1;
-    double work = 0.0;  ///< A-product equivalents so far (solvers/work_units.hpp)
+    double work = 0.0;  ///< A-product equivalents so far (solvers/measure/work_units.hpp)
 };
 
 class HistoryMonitor : public Monitor {

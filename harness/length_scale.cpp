@@ -2,7 +2,7 @@
 
 #include "harness/reference.hpp"
 #include "harness/suite.hpp"
-#include "solvers/accuracy.hpp"
+#include "solvers/measure/accuracy.hpp"
 
 #include <algorithm>
 #include <cerrno>

@@ -1,7 +1,7 @@
 #pragma once
 /// The scene size l of a problem, fixed once before any solver runs so that every solver's stop
 /// test and the harness's measure use the same one (docs/accuracy.md "Length scale").
-#include "solvers/qp.hpp"
+#include "solvers/core/qp.hpp"
 
 #include <string>
 

@@ -2,7 +2,7 @@
 #include "harness/blas_threads.hpp"
 #include "harness/command_solver.hpp"
 #include "harness/commands.hpp"
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <csignal>
 #include <cstring>

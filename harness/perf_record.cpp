@@ -3,7 +3,7 @@
 #include "harness/record_schema.hpp"
 #include "harness/results.hpp"
 #include "problems/io_util.hpp"
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <cerrno>
 #include <cmath>

@@ -1,7 +1,7 @@
 #include "harness/record_types.hpp"
 
 #include "harness/record_schema.hpp"
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 namespace cb {
 

@@ -4,7 +4,7 @@
 #include "harness/results.hpp"
 #include "harness/runner.hpp"
 #include "harness/suite.hpp"
-#include "solvers/accuracy.hpp"
+#include "solvers/measure/accuracy.hpp"
 
 #include <cmath>
 #include <filesystem>

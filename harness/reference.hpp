@@ -2,7 +2,7 @@
 /// Reference solutions (x*, F*) of the ORIGINAL QP for the energy figure of docs/accuracy.md,
 /// computed with the `active-set` solver (every row, tol 1e-10) and cached by snapshot content
 /// hash and method (solver, settings, REFERENCE_VERSION): <cache_dir()>/reference/<key>-<method hash>.json.
-#include "solvers/qp.hpp"
+#include "solvers/core/qp.hpp"
 
 #include <nlohmann/json.hpp>
 #include <string>

@@ -2,7 +2,7 @@
 
 #include "harness/record_schema.hpp"
 #include "problems/io_util.hpp"
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <algorithm>
 #include <cmath>

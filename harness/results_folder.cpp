@@ -4,7 +4,7 @@
 #include "harness/record_types.hpp"
 #include "harness/results.hpp"
 #include "problems/io_util.hpp"
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <algorithm>
 #include <cerrno>

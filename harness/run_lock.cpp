@@ -1,6 +1,6 @@
 #include "harness/run_lock.hpp"
 
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <cerrno>
 #include <cstring>

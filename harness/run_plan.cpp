@@ -3,7 +3,7 @@
 #include "harness/results.hpp"
 #include "harness/runner.hpp"
 #include "problems/qpsnap.hpp"
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <cstdlib>
 #include <filesystem>

@@ -1,6 +1,6 @@
 #include "harness/run_problem.hpp"
 
-#include "solvers/decouple.hpp"
+#include "solvers/mprgp/decouple.hpp"
 
 namespace cb {
 

@@ -3,7 +3,7 @@
 /// decoupled rows when the run asks for it or the solver requires it, and the warm-start
 /// multipliers restricted to the rows it sees.
 #include "harness/runner.hpp"
-#include "solvers/qp.hpp"
+#include "solvers/core/qp.hpp"
 
 #include <nlohmann/json.hpp>
 #include <vector>

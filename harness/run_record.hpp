@@ -2,7 +2,7 @@
 /// The run record (docs/INTERFACES.md "Run record"): the JSON of a run that happened, built from
 /// its outcome, and the record of a run that could not happen (same keys, null measures).
 #include "harness/runner.hpp"
-#include "solvers/peak_memory.hpp"
+#include "solvers/core/peak_memory.hpp"
 
 #include <nlohmann/json.hpp>
 #include <string>

@@ -4,11 +4,11 @@
 #include "harness/provenance.hpp"
 #include "harness/run_problem.hpp"
 #include "harness/run_record.hpp"
-#include "solvers/a_product.hpp"
-#include "solvers/friction_snapshot_error.hpp"
-#include "solvers/peak_memory.hpp"
-#include "solvers/registry.hpp"
-#include "solvers/work_units.hpp"
+#include "solvers/linalg/a_product.hpp"
+#include "solvers/measure/friction_snapshot_error.hpp"
+#include "solvers/core/peak_memory.hpp"
+#include "solvers/core/registry.hpp"
+#include "solvers/measure/work_units.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -88,7 +88,7 @@ Repeats solve_repeats(const SolverRegistry& registry, const std::string& solver_
     Repeats out;
     Vec eigen_in;
     if (warm.eigenvector) eigen_in = *warm.eigenvector;
-    reset_peak_memory();  // this run's peak, not the process's (solvers/peak_memory.hpp)
+    reset_peak_memory();  // this run's peak, not the process's (solvers/core/peak_memory.hpp)
     for (int r = 0; r < options.repeat; ++r) {
         if (r > 0) {
             solver = registry.create(solver_name, settings);
@@ -240,7 +240,7 @@ RunOutcome run_solver(const SolverRegistry& registry, const Qp& original, const 
     RunFacts facts;
     facts.solver = solver_name;
     facts.settings = solver->settings();
-    // The solver's effective common block, typed by the one reader of solvers/settings.hpp (its
+    // The solver's effective common block, typed by the one reader of solvers/core/settings.hpp (its
     // defaults, not the harness's: active-set's tol defaults to 1e-10).
     const CommonSettings common = SettingsReader(facts.settings, solver_name).common();
 

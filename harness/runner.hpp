@@ -12,10 +12,10 @@
 /// On a frictional problem a solver solved the frictional problem only when it handles friction
 /// and returned its 2m tangential multipliers; otherwise its problem was the frictionless
 /// relaxation (record "solved_problem": "frictionless").
-#include "solvers/accuracy.hpp"
-#include "solvers/qp.hpp"
-#include "solvers/settings.hpp"
-#include "solvers/solver.hpp"
+#include "solvers/measure/accuracy.hpp"
+#include "solvers/core/qp.hpp"
+#include "solvers/core/settings.hpp"
+#include "solvers/core/solver.hpp"
 
 #include <nlohmann/json.hpp>
 #include <cstdint>
@@ -51,8 +51,8 @@ struct RunOptions {
 inline constexpr const char* STATUS_SOLVED_RELAXATION = "solved_relaxation";
 inline constexpr const char* STATUS_UNCONFIRMED = "unconfirmed";
 /// The accuracy a `stop=native` run must reach on e to count as converged: the default tol of
-/// the common settings (solvers/settings.hpp), declared there once.
-inline constexpr double DEFAULT_ACCURACY_TOL = DEFAULT_TOL;  // the one default (solvers/settings.hpp)
+/// the common settings (solvers/core/settings.hpp), declared there once.
+inline constexpr double DEFAULT_ACCURACY_TOL = DEFAULT_TOL;  // the one default (solvers/core/settings.hpp)
 
 struct RunOutcome {
     SolverResult result;                  ///< as the solver returned it (result.status: the solver's word)
@@ -70,7 +70,7 @@ struct RunOutcome {
     std::vector<int> kept_rows;  ///< rows of the original J the solver saw (empty: all of them)
     Vec lambda_full;             ///< lambda on the original rows (0 on rows dropped by decoupling)
     Vec lambda_t;                ///< the solver's tangential multipliers (2m) on a frictional problem, else empty
-    /// FCLIB's relative natural-map error at (x, lambda, lambda_t) (solvers/friction_snapshot_error.hpp);
+    /// FCLIB's relative natural-map error at (x, lambda, lambda_t) (solvers/measure/friction_snapshot_error.hpp);
     /// NaN unless the problem is frictional (some mu > 0).
     double fclib_error = std::numeric_limits<double>::quiet_NaN();
 };

@@ -1,6 +1,6 @@
 #include "harness/set_arguments.hpp"
 
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <cstdlib>
 

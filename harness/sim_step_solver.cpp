@@ -1,7 +1,7 @@
 #include "harness/sim_step_solver.hpp"
 
 #include "harness/runner.hpp"
-#include "solvers/settings.hpp"
+#include "solvers/core/settings.hpp"
 
 namespace cb {
 

@@ -1,6 +1,6 @@
 #include "harness/slurm.hpp"
 
-#include "solvers/types.hpp"  // throw_input_error
+#include "solvers/core/types.hpp"  // throw_input_error
 
 #include <cctype>
 #include <cerrno>

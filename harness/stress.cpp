@@ -4,8 +4,8 @@
 #include "harness/results.hpp"
 #include "harness/runner.hpp"
 #include "harness/set_arguments.hpp"
-#include "solvers/format_number.hpp"
-#include "solvers/registry.hpp"
+#include "solvers/core/format_number.hpp"
+#include "solvers/core/registry.hpp"
 
 #include <algorithm>
 #include <cerrno>

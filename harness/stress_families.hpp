@@ -5,7 +5,7 @@
 /// scaled rows, degenerate J (duplicated, parallel, zero rows, many rows on one vertex),
 /// infeasible sets, empty J, nearly singular A, m close to n, ill-conditioned random SPD; and
 /// "fem-sim": QPs of our own simulator (sim/) on stiff and fast variants of the demo scene.
-#include "solvers/qp.hpp"
+#include "solvers/core/qp.hpp"
 
 #include <nlohmann/json.hpp>
 #include <cstdint>

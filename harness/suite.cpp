@@ -3,7 +3,7 @@
 #include "harness/results.hpp"
 #include "problems/qpsnap.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <algorithm>
 #include <climits>

@@ -2,7 +2,7 @@
 // "min_rows": 20} picks snapshots from DIR/steps.csv (docs/INTERFACES.md "Suite JSON").
 #include "harness/suite.hpp"
 
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <filesystem>
 #include <fstream>

@@ -219,7 +219,7 @@ def unmeasured_notes(runs: pd.DataFrame, labels=None) -> list:
     return notes
 
 
-#: the one vocabulary of run statuses (harness/runner.hpp, solvers/solver.cpp), as figures, tables
+#: the one vocabulary of run statuses (harness/runner.hpp, solvers/core/solver.cpp), as figures, tables
 #: and the report use them; figures mark every status but `converged` with the same black x
 STATUS_MEANINGS = {
     "converged": "the solver said converged and the accuracy error e on the original QP is <= tol",

@@ -12,7 +12,7 @@ file and the field: ``QpsnapError("PATH: A.indices: column 7 out of range [0, 6)
     # min 1/2 x'Ax - b'x  subject to  Jx >= c, from numpy/scipy arrays (A symmetric):
     write_qpsnap("mine.qpsnap", A, b, J, c, x0=None, meta={"family": "mine"})
 
-    # version 2, Coulomb friction (solvers/qp.hpp Friction): mu per contact row, T (2m x n) the two
+    # version 2, Coulomb friction (solvers/core/qp.hpp Friction): mu per contact row, T (2m x n) the two
     # tangent rows of contact i at rows 2i, 2i+1 (FCLIB's local frame, J's row i the normal),
     # optional cT (2m), h (time step) and v0 (n, needs h):
     write_qpsnap("fric.qpsnap", A, b, J, c, mu=mu, T=T, h=0.01, v0=v0)

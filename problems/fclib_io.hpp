@@ -29,8 +29,8 @@
 /// Built only when CMake finds pkg-config `fclib`; otherwise every function throws InputError
 /// saying so.
 #include "problems/qpsnap.hpp"
-#include "solvers/friction_global.hpp"
-#include "solvers/friction_problem.hpp"
+#include "solvers/core/friction_global.hpp"
+#include "solvers/core/friction_problem.hpp"
 
 #include <string>
 
@@ -44,7 +44,7 @@ void write_fclib_global(const std::string& path, const Qp& qp, const SnapshotExt
 
 struct FclibReadOptions {
     bool drop_friction = false;  ///< mu != 0 accepted: its normal part only (recorded in meta.provenance)
-    /// mu != 0 in an fclib_global problem kept as the snapshot's friction (solvers/qp.hpp Friction):
+    /// mu != 0 in an fclib_global problem kept as the snapshot's friction (solvers/core/qp.hpp Friction):
     /// mu, T = the tangent columns of H (transposed: rows 2i, 2i+1 = columns 3i+1, 3i+2), cT = -w_T.
     /// Then u_i = (J_i x - c_i, T_i x - cT_i) = H_i' v + w_i exactly, and r = (lambda, lambda_T).
     /// The file's /solution is not kept (a snapshot's reference holds no tangential multipliers).

@@ -1,6 +1,6 @@
 #include "problems/io_util.hpp"
 
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <cerrno>
 #include <cstring>

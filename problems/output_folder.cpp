@@ -1,7 +1,7 @@
 // What a command may write or delete in an output folder: see output_folder.hpp.
 #include "problems/output_folder.hpp"
 
-#include "solvers/types.hpp"  // throw_input_error
+#include "solvers/core/types.hpp"  // throw_input_error
 
 #include <filesystem>
 #include <system_error>

@@ -241,7 +241,7 @@ const ArraySpec ARRAYS[] = {
     {"contact.vertex", "int64", false},
     {"x_ref", "float64", false},
     {"lambda_ref", "float64", false},
-    // version 2: Coulomb friction (solvers/qp.hpp Friction)
+    // version 2: Coulomb friction (solvers/core/qp.hpp Friction)
     {"mu", "float64", false},
     {"T.indptr", "int64", false},
     {"T.indices", "int64", false},
@@ -493,7 +493,7 @@ void check_diagonal(const std::string& path, const SpMat& A)
     }
 }
 
-/// The rules of the friction fields (solvers/qp.hpp Friction) on a QP in memory, as the reader
+/// The rules of the friction fields (solvers/core/qp.hpp Friction) on a QP in memory, as the reader
 /// applies them to a file: mu and T together, sizes, finite values, mu >= 0, h > 0 with v0.
 void check_friction(const std::string& where, const Qp& qp)
 {

@@ -7,7 +7,7 @@
 ///         version 2 only: mu T.indptr T.indices T.data cT v0 and the header number h
 ///         (Coulomb friction, Qp::friction). A version 1 file reads as mu = 0 (no friction); the
 ///         writer writes version 1 whenever Qp::friction is empty.
-#include "solvers/qp.hpp"
+#include "solvers/core/qp.hpp"
 
 #include <map>
 #include <string>

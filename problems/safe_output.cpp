@@ -2,7 +2,7 @@
 #include "problems/safe_output.hpp"
 
 #include "problems/io_util.hpp"  // fsync_dir
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <cerrno>
 #include <csignal>

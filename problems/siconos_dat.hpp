@@ -22,7 +22,7 @@
 /// every error is an InputError "PATH: FIELD: problem (line L)", exit status 2.
 #include "problems/fclib_io.hpp"
 #include "problems/qpsnap.hpp"
-#include "solvers/friction_problem.hpp"
+#include "solvers/core/friction_problem.hpp"
 
 #include <nlohmann/json.hpp>
 

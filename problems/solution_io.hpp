@@ -10,7 +10,7 @@
 ///              (numbers separated by white space, commas allowed, `#` starts a comment).
 /// Every error is an InputError naming the file and the field ("x.npy: x: expected 12 entries
 /// (n of the snapshot), got 11"; "x.txt: x[3]: not finite (nan)").
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <string>
 

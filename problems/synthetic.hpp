@@ -2,7 +2,7 @@
 /// Seeded synthetic QP families, for tests and the stress suite (DESIGN.md "Problems").
 /// Every family shares one FEM-like SPD matrix: a box of tet cubes, linear elasticity, lumped
 /// mass, A = M + h^2 K, the QP of one backward-Euler step of a linear elastic body.
-#include "solvers/qp.hpp"
+#include "solvers/core/qp.hpp"
 
 #include <nlohmann/json.hpp>
 #include <cstdint>

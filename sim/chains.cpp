@@ -1,6 +1,6 @@
 #include "sim/chains.hpp"
 
-#include "solvers/format_number.hpp"
+#include "solvers/core/format_number.hpp"
 
 #include "problems/io_util.hpp"
 #include "problems/qpsnap.hpp"
@@ -8,7 +8,7 @@
 #include "sim/chains_state.hpp"
 #include "sim/partial_table.hpp"
 #include "sim/render.hpp"
-#include "solvers/format_number.hpp"
+#include "solvers/core/format_number.hpp"
 
 #include <algorithm>
 #include <chrono>

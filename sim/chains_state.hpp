@@ -9,7 +9,7 @@
 /// Format: "cb-chains-resume 1\n", one line of JSON (identity, counters, vector sizes), then the
 /// raw little-endian doubles of each chain's x, v and eigenvector, then each pictured frame's
 /// positions of every chain.
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <nlohmann/json.hpp>
 

@@ -10,7 +10,7 @@
 /// P = R (2 mu (S - I) + lambda tr(S - I) I) is the rotated linear stress, f_a = -vol P g_a.
 /// The stiffness holds R fixed: K_e = R K0_e R' with K0_e the linear-elastic 12x12 matrix.
 #include "sim/tet_mesh.hpp"
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <Eigen/Core>
 #include <array>

@@ -8,11 +8,11 @@
 /// the gap and u_T = T_i (x - x_n) the slip of the step (implicit Euler at the velocity level:
 /// slip / h is the tangential velocity, and the cone law is the same for both). The reduction
 ///     W = J_all A^-1 J_all',   q = J_all A^-1 b - c_all,   x = A^-1 (b + J_all' r)
-/// makes it FCLIB's local problem (solvers/friction_problem.hpp), solved by our NSGS to a
+/// makes it FCLIB's local problem (solvers/core/friction_problem.hpp), solved by our NSGS to a
 /// tolerance on FCLIB's relative natural-map error, which the harness computes itself
-/// (solvers/friction_error.hpp). Ref: Acary, Bremond, Huber (2018), Sec. 2; Jean (1999).
+/// (solvers/measure/friction_error.hpp). Ref: Acary, Bremond, Huber (2018), Sec. 2; Jean (1999).
 #include "sim/collision/dcd.hpp"
-#include "solvers/friction_problem.hpp"
+#include "solvers/core/friction_problem.hpp"
 
 #include <string>
 #include <vector>
@@ -37,7 +37,7 @@ void tangent_frame(const Vec3& n, Vec3& t1, Vec3& t2);
 /// the vertex against the triangle's closest point).
 SpMat frictional_rows(const std::vector<ContactRow>& rows, Eigen::Index n_dofs);
 
-/// The tangent rows alone as a snapshot holds them (solvers/qp.hpp Friction::T): 2m x n_dofs, rows
+/// The tangent rows alone as a snapshot holds them (solvers/core/qp.hpp Friction::T): 2m x n_dofs, rows
 /// 2i and 2i+1 are rows 3i+1 and 3i+2 of frictional_rows.
 SpMat tangent_rows(const std::vector<ContactRow>& rows, Eigen::Index n_dofs);
 

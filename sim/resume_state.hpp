@@ -6,7 +6,7 @@
 ///
 /// Format: "cb-resume 1\n", one line of JSON (identity, counters, vector sizes), then the raw
 /// little-endian doubles of x, v, the power method's eigenvector and the strip frames' positions.
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <nlohmann/json.hpp>
 

@@ -3,7 +3,7 @@
 #include "problems/io_util.hpp"
 #include "sim/mesh_io.hpp"
 #include "sim/tetrahedralize.hpp"
-#include "solvers/format_number.hpp"
+#include "solvers/core/format_number.hpp"
 #include "solvers/peers/siconos_fc3d.hpp"
 
 #include <cstdio>

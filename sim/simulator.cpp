@@ -6,11 +6,11 @@
 #include "sim/partial_table.hpp"
 #include "sim/render.hpp"
 #include "sim/resume_state.hpp"
-#include "solvers/accuracy.hpp"
-#include "solvers/decouple.hpp"
-#include "solvers/format_number.hpp"
-#include "solvers/peak_memory.hpp"
-#include "solvers/registry.hpp"
+#include "solvers/measure/accuracy.hpp"
+#include "solvers/mprgp/decouple.hpp"
+#include "solvers/core/format_number.hpp"
+#include "solvers/core/peak_memory.hpp"
+#include "solvers/core/registry.hpp"
 
 #include <algorithm>
 #include <cerrno>
@@ -51,7 +51,7 @@ void make_dirs(const std::string& path)
 
 /// One stage of a step, measured: its wall time and the process's peak resident memory while it
 /// ran. The high-water mark is reset when the stage starts, so that a stage's peak is its own and
-/// not that of an earlier, larger stage (solvers/peak_memory.hpp); forked children (peers solving
+/// not that of an earlier, larger stage (solvers/core/peak_memory.hpp); forked children (peers solving
 /// in a child) add their largest peak, as in a run record.
 class StageMeter {
 public:

@@ -11,7 +11,7 @@
 #include "sim/fem_corotated.hpp"
 #include "sim/integrator.hpp"
 #include "sim/scene.hpp"
-#include "solvers/solver.hpp"
+#include "solvers/core/solver.hpp"
 
 #include <csignal>
 #include <cstdint>

@@ -3,7 +3,7 @@
 /// (chains_state.*): a magic line, one line of JSON (identity, counters, vector sizes), then the
 /// raw little-endian doubles of the vectors in the order the header lists them. Written
 /// atomically (temporary, then rename); read back only when it is whole.
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <nlohmann/json.hpp>
 

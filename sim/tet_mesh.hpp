@@ -1,6 +1,6 @@
 #pragma once
 /// Tetrahedral and triangle surface meshes of the simulator, and small geometric helpers.
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>

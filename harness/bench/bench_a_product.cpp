@@ -11,7 +11,7 @@
 //   CB_BENCH_SNAPSHOTS=a.qpsnap:b.qpsnap build/bin/cb_bench --benchmark_filter=AProductFormats
 #include "harness/bench/alternating.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/a_product.hpp"
+#include "solvers/linalg/a_product.hpp"
 
 #include <benchmark/benchmark.h>
 

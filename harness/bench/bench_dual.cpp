@@ -3,7 +3,7 @@
 // the two per-iteration costs are measured in the same binary. Also one A-product on the same A
 // for scale (an ICA outer iteration costs about 2 A-products + the PGS sweeps on B).
 #include "problems/synthetic.hpp"
-#include "solvers/registry.hpp"
+#include "solvers/core/registry.hpp"
 
 #include <benchmark/benchmark.h>
 

@@ -7,7 +7,7 @@
 /// Optional self-contact: the same test against non-incident tets/triangles of the own body.
 /// Ref: Li et al. 2015, Sec. 3.2, eq. (8); candidates from Bvh (AABB trees), rebuilt per call.
 #include "sim/collision/obstacles.hpp"
-#include "solvers/qp.hpp"
+#include "solvers/core/qp.hpp"
 
 #include <memory>
 #include <vector>

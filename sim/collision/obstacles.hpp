@@ -5,7 +5,7 @@
 /// Ref: Li et al. 2015, Sec. 3.2 (the obstacle case of eq. 8: the triangle is fixed).
 #include "sim/collision/bvh.hpp"
 #include "sim/tet_mesh.hpp"
-#include "solvers/qp.hpp"
+#include "solvers/core/qp.hpp"
 
 #include <memory>
 #include <string>

@@ -1,7 +1,7 @@
 // Fork, pipe, poll, waitpid: see child_process.hpp.
 #include "solvers/peers/child_process.hpp"
 
-#include "solvers/peak_memory.hpp"
+#include "solvers/core/peak_memory.hpp"
 
 #include <poll.h>
 #include <signal.h>

@@ -2,8 +2,8 @@
 /// Runs a piece of library work in a forked child process, so that an abort, failed assertion
 /// or segfault in an external library becomes a recorded outcome instead of the end of a suite.
 /// The child sends its answer back as bytes through a pipe; the parent kills it at the deadline.
-#include "solvers/solve_loop.hpp"
-#include "solvers/stopwatch.hpp"
+#include "solvers/core/solve_loop.hpp"
+#include "solvers/core/stopwatch.hpp"
 
 #include <functional>
 #include <optional>

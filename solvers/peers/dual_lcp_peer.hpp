@@ -1,12 +1,12 @@
 #pragma once
 /// The one solve of the peers that pivot on the harness's dual LCP (siconos-lemke,
 /// bullet-dantzig): refuse m > max_rows (not_applicable), form W and q with CHOLMOD as setup
-/// (solvers/dual_lcp.hpp), answer m = 0 without the library, run the library in a child process
+/// (solvers/linalg/dual_lcp.hpp), answer m = 0 without the library, run the library in a child process
 /// (a crash is a status, time_limit_s ends it), read back lambda and the report, form
 /// x = A^-1 (b + J'lambda) and let the accuracy measure decide (finish_siconos_result). Only the
 /// child's work and a few words differ between the peers.
 #include "solvers/peers/siconos_report.hpp"
-#include "solvers/solver.hpp"
+#include "solvers/core/solver.hpp"
 
 #include <Eigen/Dense>
 #include <functional>

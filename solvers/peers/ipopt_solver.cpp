@@ -1,6 +1,6 @@
 // Ipopt as an external peer (see ipopt_solver.hpp for the mapping of settings onto Ipopt's options).
 #include "solvers/peers/ipopt_solver.hpp"
-#include "solvers/solve_loop.hpp"
+#include "solvers/core/solve_loop.hpp"
 
 #include <IpIpoptApplication.hpp>
 #include <IpIpoptCalculatedQuantities.hpp>

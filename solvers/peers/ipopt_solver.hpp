@@ -18,8 +18,8 @@
 /// status is CONVERGED only when the common KKT test holds at the returned point.
 /// Ipopt is run in-process: it reports failures through return codes and did not crash on the
 /// CI and stress problems, so no child process is used.
-#include "solvers/registry.hpp"
-#include "solvers/solver.hpp"
+#include "solvers/core/registry.hpp"
+#include "solvers/core/solver.hpp"
 
 namespace cb {
 

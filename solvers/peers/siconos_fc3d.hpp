@@ -10,7 +10,7 @@
 ///
 /// Compiled with or without Siconos: without it, siconos_fc3d_built() is false and the other
 /// functions throw InputError saying so.
-#include "solvers/friction_problem.hpp"
+#include "solvers/core/friction_problem.hpp"
 
 #include <string>
 #include <vector>

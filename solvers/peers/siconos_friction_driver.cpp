@@ -1,11 +1,11 @@
 // One Siconos frictional driver call in a child process (see siconos_friction_driver.hpp).
 #include "solvers/peers/siconos_friction_driver.hpp"
 
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #ifdef CB_HAVE_SICONOS
 #include "solvers/peers/child_process.hpp"
-#include "solvers/stopwatch.hpp"
+#include "solvers/core/stopwatch.hpp"
 
 #include <SolverOptions.h>
 

@@ -2,7 +2,7 @@
 // siconos_gfc3d.hpp).
 #include "solvers/peers/siconos_gfc3d.hpp"
 
-#include "solvers/friction_error.hpp"
+#include "solvers/measure/friction_error.hpp"
 #include "solvers/peers/siconos_friction_driver.hpp"
 
 #ifdef CB_HAVE_SICONOS

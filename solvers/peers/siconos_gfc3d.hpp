@@ -1,5 +1,5 @@
 #pragma once
-/// Siconos numerics' solvers of the global frictional problem (gfc3d, solvers/friction_global.hpp)
+/// Siconos numerics' solvers of the global frictional problem (gfc3d, solvers/core/friction_global.hpp)
 /// as peers, each run through gfc3d_driver in a forked child process (Siconos can abort):
 ///   nsgs  SICONOS_GLOBAL_FRICTION_3D_NSGS_WR  (reduced to the local problem, fc3d NSGS on it)
 ///   nsn   SICONOS_GLOBAL_FRICTION_3D_NSN_AC   (non-smooth Newton on Alart-Curnier's function)
@@ -11,8 +11,8 @@
 ///
 /// Compiled with or without Siconos: without it, siconos_gfc3d_built() is false and the other
 /// functions throw InputError saying so.
-#include "solvers/friction_global.hpp"
-#include "solvers/friction_problem.hpp"
+#include "solvers/core/friction_global.hpp"
+#include "solvers/core/friction_problem.hpp"
 
 #include <string>
 #include <vector>

@@ -8,8 +8,8 @@
 /// runs in a forked child process: a crash is recorded as status `diverged` with the signal in the
 /// message and info.crashed = true, and time_limit_s ends the child (status `time_limit`).
 /// The verdict is the common KKT test at the returned point; Siconos's info code goes to the message.
-#include "solvers/registry.hpp"
-#include "solvers/solver.hpp"
+#include "solvers/core/registry.hpp"
+#include "solvers/core/solver.hpp"
 
 namespace cb {
 

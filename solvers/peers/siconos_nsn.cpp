@@ -2,7 +2,7 @@
 #include "solvers/peers/siconos_nsn.hpp"
 #include "solvers/peers/child_process.hpp"
 #include "solvers/peers/siconos_report.hpp"
-#include "solvers/solve_loop.hpp"
+#include "solvers/core/solve_loop.hpp"
 
 #include <Friction_cst.h>
 #include <GlobalFrictionContactProblem.h>

@@ -5,8 +5,8 @@
 ///   M v = q + H r,  u = H'v + b:  M = A, q = b, H's normal columns = J', b = (-c, 0, 0), mu = 0).
 /// The tangential columns of H are zero (mu = 0 makes the tangential reactions zero anyway).
 /// Runs in a forked child process (Siconos can abort), like siconos-lemke; x = v, lambda = r_N.
-#include "solvers/registry.hpp"
-#include "solvers/solver.hpp"
+#include "solvers/core/registry.hpp"
+#include "solvers/core/solver.hpp"
 
 namespace cb {
 

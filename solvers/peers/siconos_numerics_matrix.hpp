@@ -1,7 +1,7 @@
 #pragma once
 /// A sparse matrix as a Siconos NumericsMatrix in triplet storage (the caller frees it: NM_free).
 /// Included only where Siconos numerics is built (CB_HAVE_SICONOS).
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <NumericsMatrix.h>
 #include <NumericsSparseMatrix.h>

@@ -1,7 +1,7 @@
 #include "solvers/peers/siconos_report.hpp"
 
-#include "solvers/a_product.hpp"
-#include "solvers/accuracy.hpp"
+#include "solvers/linalg/a_product.hpp"
+#include "solvers/measure/accuracy.hpp"
 
 #include <limits>
 #include <sstream>

@@ -2,8 +2,8 @@
 /// What a peer's child process reports (Siconos's, and Bullet's in the same shape), and the one
 /// rule that turns it into a result: the status is the accuracy measure's verdict at the returned
 /// point (docs/accuracy.md), the library's own word goes into the message.
-#include "solvers/solve_loop.hpp"
-#include "solvers/solver.hpp"
+#include "solvers/core/solve_loop.hpp"
+#include "solvers/core/solver.hpp"
 
 #include <string>
 

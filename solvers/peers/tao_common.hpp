@@ -3,9 +3,9 @@
 /// start, the QP's objective, gradient and constant Hessian as TAO callbacks, sequential AIJ copies
 /// of Eigen matrices, and a guard that ends a TAO solve whose iterations no longer advance.
 /// Only the TAO peers' sources include this header (they are compiled with PETSc's flags).
-#include "solvers/qp.hpp"
+#include "solvers/core/qp.hpp"
 
-#include "solvers/accuracy.hpp"
+#include "solvers/measure/accuracy.hpp"
 #include "solvers/peers/siconos_report.hpp"
 
 #include <petsctao.h>

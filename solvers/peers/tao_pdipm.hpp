@@ -13,8 +13,8 @@
 /// are initialised there, once per solve), so time_limit_s ends the child (status `time_limit`)
 /// and a crash is status `diverged` with info.crashed = true. TAO's converged reason goes to the
 /// message; the status is the harness's accuracy verdict. Final point only (no history).
-#include "solvers/registry.hpp"
-#include "solvers/solver.hpp"
+#include "solvers/core/registry.hpp"
+#include "solvers/core/solver.hpp"
 
 namespace cb {
 

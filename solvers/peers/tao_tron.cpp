@@ -1,12 +1,12 @@
 // PETSc TAO's TAOTRON as an external peer on bound rows, run in a child process (see tao_tron.hpp).
 #include "solvers/peers/tao_tron.hpp"
-#include "solvers/a_product.hpp"
-#include "solvers/accuracy.hpp"
-#include "solvers/bounds.hpp"
+#include "solvers/linalg/a_product.hpp"
+#include "solvers/measure/accuracy.hpp"
+#include "solvers/mprgp/bounds.hpp"
 #include "solvers/peers/child_process.hpp"
 #include "solvers/peers/siconos_report.hpp"
 #include "solvers/peers/tao_common.hpp"
-#include "solvers/solve_loop.hpp"
+#include "solvers/core/solve_loop.hpp"
 
 #include <algorithm>
 #include <cstring>
@@ -36,7 +36,7 @@ nlohmann::json TaoTronSettings::to_json() const { return write_settings(*this, t
 
 namespace {
 
-using Bounds = RowBounds;  // solvers/bounds.hpp: the rows read as bounds, one policy
+using Bounds = RowBounds;  // solvers/mprgp/bounds.hpp: the rows read as bounds, one policy
 
 /// TRON's multipliers are not returned: at its point, the gradient g_j of a DOF at a bound is the
 /// binding row's force (bound_multipliers).

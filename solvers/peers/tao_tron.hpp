@@ -10,8 +10,8 @@
 /// TaoSetMaximumIterations. TRON runs in a forked child process as tao-pdipm does, so
 /// time_limit_s ends the child (status `time_limit`) and a crash is status `diverged` with
 /// info.crashed = true. Final point only (no history). See docs/peers.md.
-#include "solvers/registry.hpp"
-#include "solvers/solver.hpp"
+#include "solvers/core/registry.hpp"
+#include "solvers/core/solver.hpp"
 
 namespace cb {
 

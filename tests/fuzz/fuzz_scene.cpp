@@ -6,7 +6,7 @@
 // Build: cmake -DCB_FUZZ=ON with CXX=clang++ (target fuzz_scene), see tests/fuzz/README.md.
 #include "problems/io_util.hpp"
 #include "sim/scene.hpp"
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <cstdint>
 #include <string>

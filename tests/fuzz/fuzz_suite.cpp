@@ -4,7 +4,7 @@
 // Build: cmake -DCB_FUZZ=ON with CXX=clang++ (target fuzz_suite), see tests/fuzz/README.md.
 #include "harness/suite.hpp"
 #include "problems/io_util.hpp"
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <cstdint>
 #include <string>

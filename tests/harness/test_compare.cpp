@@ -4,7 +4,7 @@
 #include "harness/compare.hpp"
 #include "harness/perf_record.hpp"
 #include "harness/results.hpp"
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <gtest/gtest.h>
 

@@ -3,7 +3,7 @@
 // every label takes the friction but the one frictionless reference the suite's description names.
 #include "harness/suite.hpp"
 #include "solvers/peers/siconos_fc3d.hpp"
-#include "solvers/registry.hpp"
+#include "solvers/core/registry.hpp"
 
 #include <gtest/gtest.h>
 #include <set>

@@ -7,7 +7,7 @@
 #include "problems/qpsnap.hpp"
 #include "problems/solution_io.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/registry.hpp"
+#include "solvers/core/registry.hpp"
 
 #include "tests/harness/cli_test_util.hpp"
 #include "tests/solvers/friction_test_qps.hpp"

@@ -8,7 +8,7 @@
 // absolute wall-clock bound. Its deterministic twin: tests/python/test_monitor_instructions.py.
 #include "harness/history.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/registry.hpp"
+#include "solvers/core/registry.hpp"
 
 #include <gtest/gtest.h>
 

@@ -6,7 +6,7 @@
 #include "harness/suite.hpp"
 #include "problems/qpsnap.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/registry.hpp"
+#include "solvers/core/registry.hpp"
 
 #include <gtest/gtest.h>
 #include <cmath>

@@ -3,7 +3,7 @@
 // decoupled run's setup: 0.55 GB on a 1M-DOF frame).
 #include "harness/run_problem.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/decouple.hpp"
+#include "solvers/mprgp/decouple.hpp"
 
 #include <gtest/gtest.h>
 

@@ -4,7 +4,7 @@
 #include "harness/runner.hpp"
 #include "harness/set_arguments.hpp"
 #include "problems/qpsnap.hpp"
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <gtest/gtest.h>
 

@@ -4,7 +4,7 @@
 #include "harness/results.hpp"
 #include "harness/slurm.hpp"
 #include "harness/timing_hygiene.hpp"
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <gtest/gtest.h>
 

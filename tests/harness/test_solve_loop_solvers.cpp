@@ -1,10 +1,10 @@
-// Every registered solver through the one solve-loop protocol (solvers/solve_loop.hpp): its
+// Every registered solver through the one solve-loop protocol (solvers/core/solve_loop.hpp): its
 // history starts at its setup time, and time_limit_s counts setup.
 #include "harness/history.hpp"
 #include "harness/runner.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/registry.hpp"
-#include "solvers/template_solver.hpp"
+#include "solvers/core/registry.hpp"
+#include "solvers/methods/template_solver.hpp"
 
 #include <gtest/gtest.h>
 

@@ -2,7 +2,7 @@
 // "stride": k, "min_rows": r}): the selection follows steps.csv, and every missing piece is an
 // error that names the suite field and prints the `contactbench simulate` command that makes it.
 #include "harness/suite.hpp"
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <gtest/gtest.h>
 #include <filesystem>

@@ -1,7 +1,7 @@
 // Suite solver entries that a build may lack (`optional`) or that apply to some snapshots only
 // (`problems`, `skip_problems`): parsing, the notices, and which jobs a suite has.
 #include "harness/suite.hpp"
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <gtest/gtest.h>
 #include <functional>

@@ -1,4 +1,4 @@
-# Writes OUTPUT: a copy of SOURCE (solvers/mprgp_decoupled_steps.cpp) with the planted regressions of PLANT
+# Writes OUTPUT: a copy of SOURCE (solvers/mprgp/mprgp_decoupled_steps.cpp) with the planted regressions of PLANT
 # (tests/perf/mprgp_plant.inc) hooked into the CG step's A-product (product_dot). Run with
 #   cmake -DSOURCE=... -DPLANT=... -DOUTPUT=... -P plant_mprgp.cmake
 # Fails when the anchors are gone, so a refactored source cannot silently lose the plants.

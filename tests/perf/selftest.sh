@@ -24,7 +24,7 @@ started=$(date +%s)
 git clone --quiet "$ROOT" "$WORK/clone"
 cd "$WORK/clone"
 base=$(git rev-parse HEAD)
-/usr/bin/python3 - solvers/mprgp_decoupled_steps.cpp <<'PY'
+/usr/bin/python3 - solvers/mprgp/mprgp_decoupled_steps.cpp <<'PY'
 import re, sys
 path = sys.argv[1]
 text = open(path).read()

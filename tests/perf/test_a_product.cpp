@@ -1,9 +1,9 @@
-// The harness-counted A-products: solvers/a_product computes y = A x and counts it, and run_solver
+// The harness-counted A-products: solvers/linalg/a_product computes y = A x and counts it, and run_solver
 // records the products made during the solve as counters.a_products_harness beside the solver's
 // own count (equal for every solver whose products all go through the counting operator).
 #include "harness/runner.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/a_product.hpp"
+#include "solvers/linalg/a_product.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,9 +1,9 @@
-// The block product (solvers/a_product, AFormat::BSR) against Eigen's CSR product, the oracle:
+// The block product (solvers/linalg/a_product, AFormat::BSR) against Eigen's CSR product, the oracle:
 // the same y, x'y and x'w on every synthetic family and every stress family, and an honest CSR
 // fallback when A has no 3x3 block structure (n not a multiple of 3, scattered nonzeros).
 #include "harness/stress_families.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/a_product.hpp"
+#include "solvers/linalg/a_product.hpp"
 
 #include <gtest/gtest.h>
 

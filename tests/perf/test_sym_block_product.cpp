@@ -1,10 +1,10 @@
-// The symmetric block product (solvers/a_product, AFormat::SBSR: A's upper block triangle) against
+// The symmetric block product (solvers/linalg/a_product, AFormat::SBSR: A's upper block triangle) against
 // Eigen's CSR product, the oracle: y, x'y and x'w equal to rounding on every synthetic and stress
 // family; honest CSR fallbacks (n not a multiple of 3, A not symmetric); one thread whatever
 // `threads` asks; about half the bytes of BSR.
 #include "harness/stress_families.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/a_product.hpp"
+#include "solvers/linalg/a_product.hpp"
 
 #include <gtest/gtest.h>
 

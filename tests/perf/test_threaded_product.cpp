@@ -1,11 +1,11 @@
-// The `threads` setting (solvers/a_product, docs/a_product.md): products split into fixed row
+// The `threads` setting (solvers/linalg/a_product, docs/a_product.md): products split into fixed row
 // ranges give Eigen's y bit for bit and its dots to rounding; the same settings give the same
 // iterates on every run; small A stays on one range; `run` warns when jobs x threads exceed the cores.
 #include "harness/process_pool.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/a_product.hpp"
-#include "solvers/registry.hpp"
-#include "solvers/settings.hpp"
+#include "solvers/linalg/a_product.hpp"
+#include "solvers/core/registry.hpp"
+#include "solvers/core/settings.hpp"
 
 #include <gtest/gtest.h>
 

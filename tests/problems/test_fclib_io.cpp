@@ -2,7 +2,7 @@
 // problems outside the frictionless mapping are refused with a message naming the field.
 #include "problems/fclib_io.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/registry.hpp"
+#include "solvers/core/registry.hpp"
 
 #ifdef CB_HAVE_FCLIB
 #include "tests/problems/hdf5_edit.hpp"

@@ -9,7 +9,7 @@
 // Before issue 41 none of these files imported.
 #include "problems/fclib_io.hpp"
 #include "problems/qpsnap.hpp"
-#include "solvers/registry.hpp"
+#include "solvers/core/registry.hpp"
 #include "tests/harness/cli_test_util.hpp"
 
 #include <gtest/gtest.h>

@@ -1,7 +1,7 @@
 // problems/io_util: special files refused without blocking, the JSON depth scan (brackets in
 // strings do not count), and atomic writes that fail cleanly past a file-size limit.
 #include "problems/io_util.hpp"
-#include "solvers/types.hpp"
+#include "solvers/core/types.hpp"
 
 #include <gtest/gtest.h>
 

@@ -13,7 +13,7 @@ Resolution: a name with a folder is relative to the citing file, then to the rep
 name is looked up beside the citing file, at the root, then in docs/. `§n` resolves to a heading
 numbered n (a heading "3. ..."); a quoted name to a heading that contains it.
 Also checked: every repository path a document or a comment cites (`harness/runner.cpp`,
-`solvers/template_solver.{hpp,cpp}`, `harness/cmd_*.cpp`: a path under a top-level source folder,
+`solvers/methods/template_solver.{hpp,cpp}`, `harness/cmd_*.cpp`: a path under a top-level source folder,
 braces expanded, globs matching at least one file) exists, relative to the root or to the citing
 file; and, when a built contactbench is at hand ($CB_CONTACTBENCH or build/bin/contactbench),
 the counts the code prints match what the documents say (check_counts below).
@@ -54,8 +54,8 @@ HEADING_RE = re.compile(r"^#{1,6}\s+(.*?)\s*#*\s*$")
 #: the repository's top-level folders: a path that starts with one of them is a file citation
 SOURCE_FOLDERS = ("solvers", "problems", "harness", "sim", "plots", "tools", "tests", "scenes", "suites",
                   "examples", "cmake", "docs")
-# A repository path (`harness/runner.cpp`, `solvers/template_solver.{hpp,cpp}`, `harness/cmd_*.cpp`,
-# `solvers/mprgp.*`, `solvers/a_product` for the pair); not inside a longer path or a URL, not a
+# A repository path (`harness/runner.cpp`, `solvers/methods/template_solver.{hpp,cpp}`, `harness/cmd_*.cpp`,
+# `solvers/mprgp/mprgp.*`, `solvers/linalg/a_product` for the pair); not inside a longer path or a URL, not a
 # placeholder filled in later (`cmd_<name>.cpp`, `corpus_$t`).
 PATH_RE = re.compile(r"(?<![\w/.$~-])((?:" + "|".join(SOURCE_FOLDERS) + r")/[\w./*{},+-]*[\w*}])(?![<$\w])")
 
@@ -136,7 +136,7 @@ def path_exists(repo: str, citing: str, path: str) -> bool:
         found = False
         for base in (repo, os.path.join(repo, os.path.dirname(citing))):
             full = os.path.normpath(os.path.join(base, candidate))
-            # a stem names its file pair: `solvers/a_product` -> a_product.hpp, a_product.cpp
+            # a stem names its file pair: `solvers/linalg/a_product` -> a_product.hpp, a_product.cpp
             if ("*" in candidate and glob.glob(full)) or os.path.exists(full) or glob.glob(glob.escape(full) + ".*"):
                 found = True
                 break

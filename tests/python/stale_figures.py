@@ -3,7 +3,7 @@
 A measured block in a Markdown document carries one visible line of this form:
 
     Measured at <commit> with `<command>`.
-    Measured at <commit> with `<command>` (covers solvers/mprgp.cpp solvers/a_product.*).
+    Measured at <commit> with `<command>` (covers solvers/mprgp/mprgp.cpp solvers/linalg/a_product.*).
 
 It is stale when the code it describes changed after <commit>: by default the solver, problem and
 simulator sources (DEFAULT_COVERS), or the paths it names after "covers". A stale block fails the

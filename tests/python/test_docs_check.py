@@ -140,7 +140,7 @@ class ReportsStaleFigures(unittest.TestCase):
         self.tmp = tempfile.TemporaryDirectory()
         self.root = self.tmp.name
         self.git("init", "-q")
-        write(self.root, "solvers/mprgp.cpp", "int iterations = 224;\n")
+        write(self.root, "solvers/mprgp/mprgp.cpp", "int iterations = 224;\n")
         write(self.root, "plots/fig.py", "print(1)\n")
         self.commit("first")
         self.measured = self.git("rev-parse", "--short=10", "HEAD").strip()
@@ -173,19 +173,19 @@ class ReportsStaleFigures(unittest.TestCase):
 
     def test_a_planted_solver_change_makes_them_stale(self):
         self.doc()
-        write(self.root, "solvers/mprgp.cpp", "int iterations = 317;\n")
+        write(self.root, "solvers/mprgp/mprgp.cpp", "int iterations = 317;\n")
         self.commit("solver")
         self.assertEqual(stale_figures_problems(self.root), [
             f"docs/work.md:3: figures measured at {self.measured} with `contactbench solve f.qpsnap` predate "
-            "changes to solvers/mprgp.cpp: re-measure, or say why they still stand (\"Still stands: ...\") or that "
+            "changes to solvers/mprgp/mprgp.cpp: re-measure, or say why they still stand (\"Still stands: ...\") or that "
             "they were not re-measured (\"Not re-measured: ...\")"])
 
     def test_a_pure_move_leaves_them_fresh_and_a_later_change_does_not(self):
         self.doc()
         os.makedirs(os.path.join(self.root, "solvers", "mprgp"))
-        self.git("mv", "solvers/mprgp.cpp", "solvers/mprgp/mprgp.cpp")
+        self.git("mv", "solvers/mprgp/mprgp.cpp", "solvers/mprgp/mprgp.cpp")
         write(self.root, "plots/fig.py", "# solvers/mprgp/mprgp.cpp\n")
-        self.commit("Pure move: solvers/mprgp.cpp into solvers/mprgp/")
+        self.commit("Pure move: solvers/mprgp/mprgp.cpp into solvers/mprgp/")
         self.assertEqual(stale_figures_problems(self.root), [])
         write(self.root, "solvers/mprgp/mprgp.cpp", "int iterations = 317;\n")
         self.commit("solver")
@@ -194,19 +194,19 @@ class ReportsStaleFigures(unittest.TestCase):
 
     def test_a_stated_reason_keeps_them(self):
         self.doc("\nStill stands: the change after it renames a variable.")
-        write(self.root, "solvers/mprgp.cpp", "int iterations_ = 224;\n")
+        write(self.root, "solvers/mprgp/mprgp.cpp", "int iterations_ = 224;\n")
         self.commit("solver")
         self.assertEqual(stale_figures_problems(self.root), [])
 
     def test_saying_they_were_not_re_measured_keeps_them_visible(self):
         self.doc("\nNot re-measured: the solver changed after it; `make ladder` gives today's figures.")
-        write(self.root, "solvers/mprgp.cpp", "int iterations = 317;\n")
+        write(self.root, "solvers/mprgp/mprgp.cpp", "int iterations = 317;\n")
         self.commit("solver")
         self.assertEqual(stale_figures_problems(self.root), [])
 
     def test_covers_narrows_what_they_describe(self):
         write(self.root, "docs/work.md", f"Measured at {self.measured} with `make x` (covers plots/*.py).\n")
-        write(self.root, "solvers/mprgp.cpp", "int iterations = 1;\n")
+        write(self.root, "solvers/mprgp/mprgp.cpp", "int iterations = 1;\n")
         self.commit("solver and doc")
         self.assertEqual(stale_figures_problems(self.root), [])
         write(self.root, "plots/fig.py", "print(3)\n")

@@ -4,7 +4,7 @@
 #include "harness/suite.hpp"  // cache_dir
 #include "problems/qpsnap.hpp"
 #include "sim/simulator.hpp"
-#include "solvers/registry.hpp"
+#include "solvers/core/registry.hpp"
 
 #include <gtest/gtest.h>
 #include <fstream>

@@ -1,9 +1,9 @@
 #pragma once
 /// Frictional test problems for the solver and measure tests (issue 48): a synthetic QP given
-/// Coulomb friction (solvers/qp.hpp Friction) with tangent rows built from its normal rows.
+/// Coulomb friction (solvers/core/qp.hpp Friction) with tangent rows built from its normal rows.
 #include "harness/runner.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/qp.hpp"
+#include "solvers/core/qp.hpp"
 
 #include <cmath>
 #include <functional>

@@ -1,8 +1,8 @@
 #pragma once
 /// Shared by the tests of the factors on row sets (DenseSetFactor, MaskedGramFactor): a random
 /// sparse SPD Gram matrix, and the error of a factor's solve against a dense LLT solve on S(set, set).
-#include "solvers/solver.hpp"
-#include "solvers/types.hpp"
+#include "solvers/core/solver.hpp"
+#include "solvers/core/types.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>

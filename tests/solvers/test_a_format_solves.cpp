@@ -1,13 +1,13 @@
-// The common setting `a_format` (solvers/a_product, docs/a_product.md) in whole solves: on every
+// The common setting `a_format` (solvers/linalg/a_product, docs/a_product.md) in whole solves: on every
 // stress family each solver that multiplies by A gives, with 3x3 blocks (bsr), CSR's iterates bit
 // for bit, and with the symmetric blocks (sbsr, opt-in) CSR's iterates to rounding and the
 // same iterations and status; the setting is recorded, its storage noted, and a bad value refused.
 #include "harness/stress_families.hpp"
 #include "problems/qpsnap.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/a_product.hpp"
-#include "solvers/registry.hpp"
-#include "solvers/settings.hpp"
+#include "solvers/linalg/a_product.hpp"
+#include "solvers/core/registry.hpp"
+#include "solvers/core/settings.hpp"
 #include "tests/harness/cli_test_util.hpp"
 
 #include <gtest/gtest.h>

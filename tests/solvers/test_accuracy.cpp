@@ -1,7 +1,7 @@
-// Tests of the accuracy measure (solvers/accuracy.cpp) on hand-worked QPs: each of the four parts
+// Tests of the accuracy measure (solvers/measure/accuracy.cpp) on hand-worked QPs: each of the four parts
 // with its row norm and stiffness, the length scale and its fallbacks, zero rows, NaN, the energy
 // figures and fit_multipliers. Invariances are in test_accuracy_metamorphic.cpp.
-#include "solvers/accuracy.hpp"
+#include "solvers/measure/accuracy.hpp"
 #include "tests/solvers/tiny_qps.hpp"
 
 #include <gtest/gtest.h>

@@ -10,7 +10,7 @@
 // cancel, to tol / 10). And with mu = 0 the frictional e is today's e bit for bit.
 #include "friction_test_qps.hpp"
 #include "harness/runner.hpp"
-#include "solvers/accuracy.hpp"
+#include "solvers/measure/accuracy.hpp"
 
 #include <gtest/gtest.h>
 #include <cmath>

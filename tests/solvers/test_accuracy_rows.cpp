@@ -1,8 +1,8 @@
-// Tests of the accuracy measure's row kernel (solvers/accuracy_rows.hpp): the parts of one row
+// Tests of the accuracy measure's row kernel (solvers/measure/accuracy_rows.hpp): the parts of one row
 // against hand-computed values, zero rows, and NaN reading as +inf in every part (the fused
 // evaluations of mprgp, mprgp-coupled and pgs dropped a NaN row part through std::max before
 // they called the kernel).
-#include "solvers/accuracy_rows.hpp"
+#include "solvers/measure/accuracy_rows.hpp"
 
 #include <gtest/gtest.h>
 

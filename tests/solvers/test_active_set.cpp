@@ -2,9 +2,9 @@
 // solutions, degenerate and infeasible sets, agreement with cg and with a brute-force
 // enumeration of active sets, and the synthetic families at 1e-10 relative KKT.
 #include "problems/synthetic.hpp"
-#include "solvers/accuracy.hpp"
-#include "solvers/active_set.hpp"
-#include "solvers/cg.hpp"
+#include "solvers/measure/accuracy.hpp"
+#include "solvers/methods/active_set.hpp"
+#include "solvers/methods/cg.hpp"
 #include "tests/solvers/tiny_qps.hpp"
 
 #include <Eigen/Dense>

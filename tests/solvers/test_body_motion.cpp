@@ -1,8 +1,8 @@
-// Tests of the rigid half of the accuracy measure's stationarity (solvers/body_motion.*): a stiff
+// Tests of the rigid half of the accuracy measure's stationarity (solvers/measure/body_motion.*): a stiff
 // body in free fall, where one Jacobi step misreads the start's error by the stiffness, two
 // bodies judged apart, rotations, and the one-mode reading when n is not a multiple of 3.
-#include "solvers/accuracy.hpp"
-#include "solvers/body_motion.hpp"
+#include "solvers/measure/accuracy.hpp"
+#include "solvers/measure/body_motion.hpp"
 #include "tests/solvers/tiny_qps.hpp"
 
 #include <gtest/gtest.h>

@@ -1,8 +1,8 @@
 // Tests of `cg` (PCG on A x = b, constraints ignored): hand-derived solutions, its stop rules,
 // counters, monitor calls, breakdown and settings errors.
 #include "problems/synthetic.hpp"
-#include "solvers/accuracy.hpp"
-#include "solvers/cg.hpp"
+#include "solvers/measure/accuracy.hpp"
+#include "solvers/methods/cg.hpp"
 #include "tests/solvers/tiny_qps.hpp"
 
 #include <Eigen/Dense>

@@ -2,8 +2,8 @@
 // coarse space of mprgp's deflation without the face): same solution as plain PCG on a stiff
 // body in fewer iterations, honest counters, and no effect where no mode is slow.
 #include "problems/synthetic.hpp"
-#include "solvers/cg.hpp"
-#include "solvers/mprgp_deflation.hpp"
+#include "solvers/methods/cg.hpp"
+#include "solvers/mprgp/mprgp_deflation.hpp"
 #include "tests/solvers/tipping_column.hpp"
 
 #include <Eigen/SparseCholesky>

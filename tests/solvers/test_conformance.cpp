@@ -1,12 +1,12 @@
-// Every registered solver against the one solve-loop contract (solvers/solve_loop.hpp): stop=kkt
+// Every registered solver against the one solve-loop contract (solvers/core/solve_loop.hpp): stop=kkt
 // and stop=native, the iteration cap, the time limit and a non-finite input, each checked on the
 // status, the criterion enum and the loop's standard message. The solver list comes from the
 // registry (plus the unregistered template), so a new solver is covered without editing this file;
 // each gets the falling-body problem, or the bounds-only one when it answers not_applicable.
 #include "problems/synthetic.hpp"
-#include "solvers/accuracy.hpp"
-#include "solvers/registry.hpp"
-#include "solvers/template_solver.hpp"
+#include "solvers/measure/accuracy.hpp"
+#include "solvers/core/registry.hpp"
+#include "solvers/methods/template_solver.hpp"
 
 #include <gtest/gtest.h>
 
@@ -18,7 +18,7 @@
 namespace cb {
 namespace {
 
-/// Built into every binary (solvers/builtin_solvers.cpp, no external package): missing is a failure.
+/// Built into every binary (solvers/core/builtin_solvers.cpp, no external package): missing is a failure.
 const std::set<std::string> ALWAYS_REGISTERED = {"active-set",    "cg", "ica", "mprgp", "mprgp-box",
                                                  "mprgp-coupled", "pgs"};
 /// Finite methods that take no iteration cap (docs/peers.md): with max_iterations = 1 they still

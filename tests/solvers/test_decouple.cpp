@@ -1,6 +1,6 @@
 // Tests of the decoupling transform (ALGORITHMS.md §1).
 #include "problems/synthetic.hpp"
-#include "solvers/decouple.hpp"
+#include "solvers/mprgp/decouple.hpp"
 
 #include <gtest/gtest.h>
 

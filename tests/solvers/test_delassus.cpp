@@ -1,6 +1,6 @@
-// Tests of the Delassus matrix W = H A^-1 H' (solvers/delassus.hpp): against a dense Cholesky
+// Tests of the Delassus matrix W = H A^-1 H' (solvers/linalg/delassus.hpp): against a dense Cholesky
 // computed here, its counters, the kept columns A^-1 H', the time-limit stop and the sparse form.
-#include "solvers/delassus.hpp"
+#include "solvers/linalg/delassus.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,8 +1,8 @@
-// DenseSetFactor (solvers/dense_set_factor.hpp): after any sequence of sets, reached by row
+// DenseSetFactor (solvers/linalg/dense_set_factor.hpp): after any sequence of sets, reached by row
 // appends, deletions at any position or a fresh factor, its solve equals a dense LLT solve on
 // S(set, set); sets above the capacity and non-positive pivots are refused.
 #include "set_solve_check.hpp"
-#include "solvers/dense_set_factor.hpp"
+#include "solvers/linalg/dense_set_factor.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,7 +1,7 @@
-// The disc constraint set (solvers/disc_set.hpp), the engine's first separable convex set other
+// The disc constraint set (solvers/mprgp/disc_set.hpp), the engine's first separable convex set other
 // than half-spaces: projection, feasible step length and free / chopped gradients against brute
 // force (grids of points, steps and directions), on seeded random blocks.
-#include "solvers/disc_set.hpp"
+#include "solvers/mprgp/disc_set.hpp"
 
 #include <gtest/gtest.h>
 

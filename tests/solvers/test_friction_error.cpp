@@ -1,4 +1,4 @@
-// Issue 48: the natural-map error computed by the harness (solvers/friction_error.hpp) equals
+// Issue 48: the natural-map error computed by the harness (solvers/measure/friction_error.hpp) equals
 // Siconos' own fc3d_compute_error to 1e-12 (relative) on the two real local files of
 // tests/data/fclib (at r = 0, at random points, at Siconos' and our solutions) and on random
 // problems, in Siconos 4.4's scaling (/ max(||q||, ||u||, ||r||)); Acary et al.'s (/ ||q||) shares the
@@ -7,8 +7,8 @@
 // in another order by Siconos; seen: 8e-18 apart at an error of 1.9e-14, 7e-22 at 2.3e-12). The cone projection is a
 // projection.
 #include "problems/fclib_io.hpp"
-#include "solvers/friction_error.hpp"
-#include "solvers/friction_nsgs.hpp"
+#include "solvers/measure/friction_error.hpp"
+#include "solvers/friction/friction_nsgs.hpp"
 #include "solvers/peers/siconos_fc3d.hpp"
 
 #include <gtest/gtest.h>

@@ -1,13 +1,13 @@
 // Issue 48, global frictional problems: the reduction to the local problem (W = H' M^-1 H,
 // q = w + H' M^-1 f by a sparse Cholesky of M) equals a dense computation on every real global
-// file of tests/data/fclib, and the harness's global error (solvers/friction_error.hpp) equals
+// file of tests/data/fclib, and the harness's global error (solvers/measure/friction_error.hpp) equals
 // Siconos' own gfc3d_compute_error to 1e-12 relative there: at r = 0, at random points and at
 // solutions (ours and Siconos' NSN's), plus 1e-16 absolute where the error is of the order of the
 // rounding of M v and H r.
 #include "problems/fclib_io.hpp"
-#include "solvers/friction_error.hpp"
-#include "solvers/friction_global_nsgs.hpp"
-#include "solvers/friction_global_reduction.hpp"
+#include "solvers/measure/friction_error.hpp"
+#include "solvers/friction/friction_global_nsgs.hpp"
+#include "solvers/friction/friction_global_reduction.hpp"
 #include "solvers/peers/siconos_gfc3d.hpp"
 
 #include <gtest/gtest.h>

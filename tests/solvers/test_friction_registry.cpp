@@ -1,4 +1,4 @@
-// The frictional registry entries beside nsgs-friction (solvers/mprgp_tresca_entries.hpp,
+// The frictional registry entries beside nsgs-friction (solvers/friction/mprgp_tresca_entries.hpp,
 // solvers/peers/siconos_friction.hpp) through the runner: converged on the frictional e of a snapshot
 // where some contacts stick and some slide, FCLIB's error and x agreeing with nsgs-friction's; at
 // mu = 0 mprgp-tresca-fp is mprgp-box on the normal block; `contactbench solve` runs each.
@@ -7,13 +7,13 @@
 #include "harness/runner.hpp"
 #include "problems/qpsnap.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/accuracy.hpp"
-#include "solvers/friction_dual.hpp"
-#include "solvers/friction_error.hpp"
-#include "solvers/friction_nsgs.hpp"
-#include "solvers/friction_snapshot_solve.hpp"
-#include "solvers/mprgp_box.hpp"
-#include "solvers/registry.hpp"
+#include "solvers/measure/accuracy.hpp"
+#include "solvers/friction/friction_dual.hpp"
+#include "solvers/measure/friction_error.hpp"
+#include "solvers/friction/friction_nsgs.hpp"
+#include "solvers/friction/friction_snapshot_solve.hpp"
+#include "solvers/mprgp/mprgp_box.hpp"
+#include "solvers/core/registry.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>

@@ -1,9 +1,9 @@
-// FCLIB's relative error of a frictional snapshot (solvers/friction_snapshot_error.hpp) against the
-// local form's (solvers/friction_error.hpp) on the local problem formed explicitly: W = J_all A^-1
+// FCLIB's relative error of a frictional snapshot (solvers/measure/friction_snapshot_error.hpp) against the
+// local form's (solvers/measure/friction_error.hpp) on the local problem formed explicitly: W = J_all A^-1
 // J_all', q = J_all A^-1 b - c_all, at a point whose x comes from r by stationarity.
 #include "friction_test_qps.hpp"
-#include "solvers/friction_error.hpp"
-#include "solvers/friction_snapshot_error.hpp"
+#include "solvers/measure/friction_error.hpp"
+#include "solvers/measure/friction_snapshot_error.hpp"
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>

@@ -1,10 +1,10 @@
-// Tests of precond = ichol (solvers/ichol.hpp): the face matrix and the face preconditioner on
+// Tests of precond = ichol (solvers/linalg/ichol.hpp): the face matrix and the face preconditioner on
 // decoupled rows, and cg / mprgp with it (counters, convergence on a stiff case).
 #include "harness/stress_families.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/accuracy.hpp"
-#include "solvers/ichol.hpp"
-#include "solvers/registry.hpp"
+#include "solvers/measure/accuracy.hpp"
+#include "solvers/linalg/ichol.hpp"
+#include "solvers/core/registry.hpp"
 
 #include <Eigen/SparseCholesky>
 #include <gtest/gtest.h>

@@ -1,7 +1,7 @@
-// MaskedGramFactor (solvers/masked_gram_factor.hpp): after any sequence of masks, reached by row
+// MaskedGramFactor (solvers/linalg/masked_gram_factor.hpp): after any sequence of masks, reached by row
 // modifications or by refactorisation, its solve equals a dense solve on S(mask, mask).
 #include "set_solve_check.hpp"
-#include "solvers/masked_gram_factor.hpp"
+#include "solvers/linalg/masked_gram_factor.hpp"
 
 #include <gtest/gtest.h>
 

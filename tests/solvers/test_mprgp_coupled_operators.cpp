@@ -1,12 +1,12 @@
 // `mprgp-coupled` with operators=components against the global CHOLMOD operators (the oracle):
 // the same step kinds and iterates to rounding, compared on x and J'lambda (dependent rows make
 // lambda itself non-unique), on QPs with components of 1 to ~200 rows, dependent rows and face
-// changes. Also the row-graph components themselves (solvers/row_components.hpp).
+// changes. Also the row-graph components themselves (solvers/linalg/row_components.hpp).
 #include "coupled_test_qps.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/accuracy.hpp"
-#include "solvers/registry.hpp"
-#include "solvers/row_components.hpp"
+#include "solvers/measure/accuracy.hpp"
+#include "solvers/core/registry.hpp"
+#include "solvers/linalg/row_components.hpp"
 
 #include <gtest/gtest.h>
 

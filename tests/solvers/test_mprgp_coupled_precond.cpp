@@ -1,15 +1,15 @@
-// `mprgp-coupled` with precond = ichol and deflation = rigid (solvers/coupled_preconditioner.*,
+// `mprgp-coupled` with precond = ichol and deflation = rigid (solvers/mprgp/coupled_preconditioner.*,
 // docs/preconditioners.md): the direction stays in null(J_A) and is symmetric and positive on the
 // face; every variant converges on the original QP and agrees with the jacobi run on x and F, on
 // QPs with components of 2-200 rows, dependent rows and face changes; the rigid modes pay on a
 // stiff coupled QP.
 #include "coupled_test_qps.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/accuracy.hpp"
-#include "solvers/coupled_face_operators.hpp"
-#include "solvers/coupled_preconditioner.hpp"
-#include "solvers/registry.hpp"
-#include "solvers/row_components.hpp"
+#include "solvers/measure/accuracy.hpp"
+#include "solvers/mprgp/coupled_face_operators.hpp"
+#include "solvers/mprgp/coupled_preconditioner.hpp"
+#include "solvers/core/registry.hpp"
+#include "solvers/linalg/row_components.hpp"
 
 #include <gtest/gtest.h>
 

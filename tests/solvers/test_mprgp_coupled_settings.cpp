@@ -1,7 +1,7 @@
 // mprgp-coupled's settings after issue 44: the variants measured worse (trial=project,
 // expansion=precond|feasible_step; docs/ALGORITHMS.md §4, the paragraph on retired variants) are refused
 // as unknown settings, and the kept ones read as before.
-#include "solvers/registry.hpp"
+#include "solvers/core/registry.hpp"
 
 #include <gtest/gtest.h>
 

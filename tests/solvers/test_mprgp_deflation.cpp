@@ -1,10 +1,10 @@
-// Tests of mprgp's deflation = rigid (solvers/mprgp_deflation.hpp): the coarse correction, its
+// Tests of mprgp's deflation = rigid (solvers/mprgp/mprgp_deflation.hpp): the coarse correction, its
 // incremental face updates, the slow-mode filter, and the issue-17 target on a stiff body that
 // tips onto a few support points (mprgp + ichol within 2x the iterations of cg + ichol).
 #include "problems/synthetic.hpp"
-#include "solvers/accuracy.hpp"
-#include "solvers/mprgp_deflation.hpp"
-#include "solvers/registry.hpp"
+#include "solvers/measure/accuracy.hpp"
+#include "solvers/mprgp/mprgp_deflation.hpp"
+#include "solvers/core/registry.hpp"
 #include "tests/solvers/tipping_column.hpp"
 
 #include <gtest/gtest.h>

@@ -1,11 +1,11 @@
-// The MPRGP engine (solvers/mprgp_engine.hpp) on a separable convex set other than half-spaces:
-// a Tresca-like problem, min 1/2 x'Ax - b'x with |x_i| <= g_i per 2-block (solvers/disc_set.hpp).
+// The MPRGP engine (solvers/mprgp/mprgp_engine.hpp) on a separable convex set other than half-spaces:
+// a Tresca-like problem, min 1/2 x'Ax - b'x with |x_i| <= g_i per 2-block (solvers/mprgp/disc_set.hpp).
 // Its answer is checked against an independent projected-gradient solve and against the KKT
 // conditions of the disc problem.
-#include "solvers/a_product.hpp"
-#include "solvers/disc_set.hpp"
-#include "solvers/mprgp_feasible.hpp"
-#include "solvers/mprgp_kernels.hpp"
+#include "solvers/linalg/a_product.hpp"
+#include "solvers/mprgp/disc_set.hpp"
+#include "solvers/mprgp/mprgp_feasible.hpp"
+#include "solvers/mprgp/mprgp_kernels.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,8 +1,8 @@
 // Tests of the decoupled closed forms (ALGORITHMS.md §2) against their definitions, and of the
 // power method against a dense eigensolver.
 #include "problems/synthetic.hpp"
-#include "solvers/decouple.hpp"
-#include "solvers/mprgp_kernels.hpp"
+#include "solvers/mprgp/decouple.hpp"
+#include "solvers/mprgp/mprgp_kernels.hpp"
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>

@@ -6,8 +6,8 @@
 #include "problems/qpsnap.hpp"
 #include "sim/simulator.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/decouple.hpp"
-#include "solvers/registry.hpp"
+#include "solvers/mprgp/decouple.hpp"
+#include "solvers/core/registry.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,12 +1,12 @@
-// `mprgp-staggered` (solvers/mprgp_staggered.hpp): at mu = 0 it is mprgp-coupled, iterate for
+// `mprgp-staggered` (solvers/friction/mprgp_staggered.hpp): at mu = 0 it is mprgp-coupled, iterate for
 // iterate; with friction it reaches the frictional e and agrees with nsgs-friction; on two free
 // particles its tangential multipliers are the closed-form sticking and sliding forces; an outer
 // cap ends as max_iterations and says which cap.
 #include "friction_test_qps.hpp"
 #include "harness/runner.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/accuracy.hpp"
-#include "solvers/registry.hpp"
+#include "solvers/measure/accuracy.hpp"
+#include "solvers/core/registry.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,14 +1,14 @@
-// Issue 45: the Tresca set (solvers/tresca_set.hpp) against brute force, and the MPRGP-based
-// frictional solvers (solvers/mprgp_tresca.hpp): mprgp-tresca-fp at mu = 0 takes mprgp-box's iterates
+// Issue 45: the Tresca set (solvers/mprgp/tresca_set.hpp) against brute force, and the MPRGP-based
+// frictional solvers (solvers/friction/mprgp_tresca.hpp): mprgp-tresca-fp at mu = 0 takes mprgp-box's iterates
 // on (W_NN, q_N) in one Tresca solve; on a random SPD frictional problem it reaches FCLIB's error
 // 1e-8; what it does with a W that is not symmetric or not semidefinite; mprgp+ica-friction; nsgs's
 // start vector; and both on the real local files of tests/data/fclib.
 #include "problems/fclib_io.hpp"
-#include "solvers/friction_error.hpp"
-#include "solvers/friction_nsgs.hpp"
-#include "solvers/mprgp_box.hpp"
-#include "solvers/mprgp_tresca.hpp"
-#include "solvers/tresca_set.hpp"
+#include "solvers/measure/friction_error.hpp"
+#include "solvers/friction/friction_nsgs.hpp"
+#include "solvers/mprgp/mprgp_box.hpp"
+#include "solvers/friction/mprgp_tresca.hpp"
+#include "solvers/mprgp/tresca_set.hpp"
 #include "tests/harness/cli_test_util.hpp"
 
 #include <gtest/gtest.h>

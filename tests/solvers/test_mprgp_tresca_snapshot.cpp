@@ -1,10 +1,10 @@
-// Issue 45, the snapshot (primal) form: a frictional QP (solvers/qp.hpp, Friction: J normal rows,
-// T tangent rows, mu) made local through W = H A^-1 H' (solvers/friction_dual.hpp) and solved by
+// Issue 45, the snapshot (primal) form: a frictional QP (solvers/core/qp.hpp, Friction: J normal rows,
+// T tangent rows, mu) made local through W = H A^-1 H' (solvers/friction/friction_dual.hpp) and solved by
 // mprgp-tresca-fp; checked against nsgs on the same W and against the primal x = A^-1 (b + H'r).
-#include "solvers/friction_dual.hpp"
-#include "solvers/friction_error.hpp"
-#include "solvers/friction_nsgs.hpp"
-#include "solvers/mprgp_tresca.hpp"
+#include "solvers/friction/friction_dual.hpp"
+#include "solvers/measure/friction_error.hpp"
+#include "solvers/friction/friction_nsgs.hpp"
+#include "solvers/friction/mprgp_tresca.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,11 +1,11 @@
-// `nsgs-friction` (solvers/nsgs_friction.hpp): at mu = 0 it is pgs on the same dual and agrees with
+// `nsgs-friction` (solvers/friction/nsgs_friction.hpp): at mu = 0 it is pgs on the same dual and agrees with
 // pgs and active-set; with friction it converges on the frictional e, sticks and slides as
 // Coulomb says; and frictionless solvers on a frictional problem are never `converged`.
 #include "friction_test_qps.hpp"
 #include "harness/runner.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/accuracy.hpp"
-#include "solvers/registry.hpp"
+#include "solvers/measure/accuracy.hpp"
+#include "solvers/core/registry.hpp"
 
 #include <gtest/gtest.h>
 #include <cmath>

@@ -1,6 +1,6 @@
-// Peak resident memory (solvers/peak_memory.hpp): the reset makes a run's peak its own, not the
+// Peak resident memory (solvers/core/peak_memory.hpp): the reset makes a run's peak its own, not the
 // process's, and a child's peak is seen by the parent.
-#include "solvers/peak_memory.hpp"
+#include "solvers/core/peak_memory.hpp"
 #include "solvers/peers/child_process.hpp"
 
 #include <gtest/gtest.h>

@@ -1,8 +1,8 @@
-// Settings declared once (solvers/settings.hpp SettingsTable): `--help`, the record (to_json)
+// Settings declared once (solvers/core/settings.hpp SettingsTable): `--help`, the record (to_json)
 // and the reader agree for every registered solver.
-#include "solvers/registry.hpp"
-#include "solvers/settings.hpp"
-#include "solvers/template_solver.hpp"
+#include "solvers/core/registry.hpp"
+#include "solvers/core/settings.hpp"
+#include "solvers/methods/template_solver.hpp"
 
 #include <gtest/gtest.h>
 

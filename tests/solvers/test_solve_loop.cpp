@@ -1,7 +1,7 @@
-// The solve-loop protocol (solvers/solve_loop.hpp): the stop rule, exit order, `>=` on both
+// The solve-loop protocol (solvers/core/solve_loop.hpp): the stop rule, exit order, `>=` on both
 // limits, setup counted in the time limit, the monitor on a paused clock, the finisher's criterion
 // and standard messages.
-#include "solvers/solve_loop.hpp"
+#include "solvers/core/solve_loop.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,9 +1,9 @@
-// Tests of the model solver solvers/template_solver.{hpp,cpp}: registered the way README "Adding a
+// Tests of the model solver solvers/methods/template_solver.{hpp,cpp}: registered the way README "Adding a
 // solver" says (in a registry of its own here), it solves hand-derived bound QPs (STYLE.md §7) to
 // the KKT accuracy asked, honours stop=native and max_iterations, and refuses what it cannot solve.
-#include "solvers/accuracy.hpp"
-#include "solvers/registry.hpp"
-#include "solvers/template_solver.hpp"
+#include "solvers/measure/accuracy.hpp"
+#include "solvers/core/registry.hpp"
+#include "solvers/methods/template_solver.hpp"
 #include "tests/solvers/tiny_qps.hpp"
 
 #include <gtest/gtest.h>

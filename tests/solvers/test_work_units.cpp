@@ -1,8 +1,8 @@
-// Tests of the work unit (solvers/work_units.hpp, docs/work.md): the flop counts CHOLMOD reports,
+// Tests of the work unit (solvers/measure/work_units.hpp, docs/work.md): the flop counts CHOLMOD reports,
 // their conversion to A-product equivalents, and the work each solver counts.
-#include "solvers/ichol.hpp"
-#include "solvers/registry.hpp"
-#include "solvers/work_units.hpp"
+#include "solvers/linalg/ichol.hpp"
+#include "solvers/core/registry.hpp"
+#include "solvers/measure/work_units.hpp"
 #include "tests/solvers/dual_test_problems.hpp"
 
 #include <Eigen/CholmodSupport>

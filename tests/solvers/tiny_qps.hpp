@@ -1,7 +1,7 @@
 #pragma once
 /// Tiny hand-derived QPs shared by the solver tests (each documents its solution).
 /// min 1/2 x'Ax - b'x  s.t.  Jx >= c.
-#include "solvers/qp.hpp"
+#include "solvers/core/qp.hpp"
 
 #include <vector>
 

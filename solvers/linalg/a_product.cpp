@@ -1,0 +1,556 @@
+#include "solvers/linalg/a_product.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cstddef>
+#include <limits>
+
+namespace cb {
+
+namespace {
+
+std::atomic<long> g_a_products{0};
+
+/// Block entries stored per nonzero beyond which BSR is refused: at 1.25 it still reads about
+/// 10.6 bytes per nonzero against CSR's 12.
+constexpr double MAX_FILL = 1.25;
+
+enum class Dots { NONE, ALL, MASKED };
+
+/// y = A x on the block rows; with D != NONE also x'y and x'w (masked: where skip[i] == 0).
+/// Each row's sum runs over its columns in increasing order, as the CSR loop's does, and the
+/// stored zeros add exact zeros: y, x'y and x'w equal the CSR kernels' to the last bit (finite x).
+/// Block rows first .. last - 1 only (a thread's range); their dots are that range's partial sums.
+template <Dots D>
+double block_product(const BlockRows& B, std::ptrdiff_t first, std::ptrdiff_t last, const double* __restrict px,
+                     double* __restrict py, const double* __restrict pw, const char* __restrict skip, double& xw)
+{
+    const int* __restrict start = B.start.data();
+    const int* __restrict column = B.column.data();
+    const double* __restrict val = B.value.data();
+    double xy = 0.0, dot_w = 0.0;
+    for (std::ptrdiff_t I = first; I < last; ++I) {
+        double s0 = 0.0, s1 = 0.0, s2 = 0.0;
+        for (int k = start[I]; k < start[I + 1]; ++k) {
+            const double* __restrict b = val + 9 * static_cast<std::ptrdiff_t>(k);
+            const double* __restrict xj = px + 3 * static_cast<std::ptrdiff_t>(column[k]);
+            const double x0 = xj[0], x1 = xj[1], x2 = xj[2];
+            s0 += b[0] * x0;
+            s1 += b[1] * x0;
+            s2 += b[2] * x0;
+            s0 += b[3] * x1;
+            s1 += b[4] * x1;
+            s2 += b[5] * x1;
+            s0 += b[6] * x2;
+            s1 += b[7] * x2;
+            s2 += b[8] * x2;
+        }
+        const std::ptrdiff_t i = 3 * I;
+        py[i] = s0;
+        py[i + 1] = s1;
+        py[i + 2] = s2;
+        if constexpr (D != Dots::NONE) {
+            xy += px[i] * s0;
+            xy += px[i + 1] * s1;
+            xy += px[i + 2] * s2;
+            for (std::ptrdiff_t r = i; r < i + 3; ++r)
+                if (D == Dots::ALL || !skip[r]) dot_w += px[r] * pw[r];
+        }
+    }
+    xw = dot_w;
+    return xy;
+}
+
+/// y = A x on the upper block triangle of a symmetric A (block (I, J), J >= I, stands for itself
+/// and, when J > I, for its transpose at (J, I)); with D != NONE also x'y and x'w as above. Block
+/// row I adds B x_J to y_I and scatters B' x_I into y_J (J > I): when row I is reached, every
+/// block row before it has added its part to y_I, so y_I is complete there and its dots are
+/// summed in the same pass. y_I's terms come in another order than the CSR row's, so y equals
+/// CSR's to rounding, not to the bit. One thread: the scatter writes rows other threads would own.
+template <Dots D>
+double sym_block_product(const BlockRows& B, std::ptrdiff_t nb, const double* __restrict px, double* __restrict py,
+                         const double* __restrict pw, const char* __restrict skip, double& xw)
+{
+    const int* __restrict start = B.start.data();
+    const int* __restrict column = B.column.data();
+    const double* __restrict val = B.value.data();
+    std::fill(py, py + 3 * nb, 0.0);
+    double xy = 0.0, dot_w = 0.0;
+    for (std::ptrdiff_t I = 0; I < nb; ++I) {
+        const std::ptrdiff_t i = 3 * I;
+        const double xi0 = px[i], xi1 = px[i + 1], xi2 = px[i + 2];
+        double s0 = py[i], s1 = py[i + 1], s2 = py[i + 2];
+        int k = start[I];
+        const int end = start[I + 1];
+        if (k < end && column[k] == I) {  // the diagonal block: no transpose to scatter
+            const double* __restrict b = val + 9 * static_cast<std::ptrdiff_t>(k);
+            s0 += b[0] * xi0 + b[3] * xi1 + b[6] * xi2;
+            s1 += b[1] * xi0 + b[4] * xi1 + b[7] * xi2;
+            s2 += b[2] * xi0 + b[5] * xi1 + b[8] * xi2;
+            ++k;
+        }
+        for (; k < end; ++k) {
+            const double* __restrict b = val + 9 * static_cast<std::ptrdiff_t>(k);
+            const std::ptrdiff_t j = 3 * static_cast<std::ptrdiff_t>(column[k]);
+            const double x0 = px[j], x1 = px[j + 1], x2 = px[j + 2];
+            s0 += b[0] * x0 + b[3] * x1 + b[6] * x2;
+            s1 += b[1] * x0 + b[4] * x1 + b[7] * x2;
+            s2 += b[2] * x0 + b[5] * x1 + b[8] * x2;
+            py[j] += b[0] * xi0 + b[1] * xi1 + b[2] * xi2;  // column c of B is row c of B'
+            py[j + 1] += b[3] * xi0 + b[4] * xi1 + b[5] * xi2;
+            py[j + 2] += b[6] * xi0 + b[7] * xi1 + b[8] * xi2;
+        }
+        py[i] = s0;
+        py[i + 1] = s1;
+        py[i + 2] = s2;
+        if constexpr (D != Dots::NONE) {
+            xy += xi0 * s0;
+            xy += xi1 * s1;
+            xy += xi2 * s2;
+            for (std::ptrdiff_t r = i; r < i + 3; ++r)
+                if (D == Dots::ALL || !skip[r]) dot_w += px[r] * pw[r];
+        }
+    }
+    xw = dot_w;
+    return xy;
+}
+
+/// The CSR loop of the fused product (compressed A) over rows first .. last - 1: row i's sum, then
+/// x_i y_i and x_i w_i (D == NONE: the sums only, as Eigen's row-major product does them).
+template <Dots D>
+double csr_product_dots(const SpMat& A, Eigen::Index first, Eigen::Index last, const double* __restrict px,
+                        double* __restrict py, const double* __restrict pw, const char* __restrict skip, double& xw)
+{
+    const int* __restrict outer = A.outerIndexPtr();
+    const int* __restrict inner = A.innerIndexPtr();
+    const double* __restrict val = A.valuePtr();
+    double xy = 0.0, dot_w = 0.0;
+    for (Eigen::Index i = first; i < last; ++i) {
+        double s = 0.0;
+        for (int k = outer[i]; k < outer[i + 1]; ++k) s += val[k] * px[inner[k]];
+        py[i] = s;
+        if constexpr (D != Dots::NONE) {
+            xy += px[i] * s;
+            if (D == Dots::ALL || !skip[i]) dot_w += px[i] * pw[i];
+        }
+    }
+    xw = dot_w;
+    return xy;
+}
+
+/// Runs the product over the operator's row ranges, on up to parts() threads, and sums the ranges'
+/// dots in range order: which thread runs a range changes nothing in y or the dots.
+template <Dots D>
+double product_by_parts(const AOperator& A, const double* px, double* py, const double* pw, const char* skip,
+                        double& xw)
+{
+    const int parts = A.parts();
+    const int* bound = A.part_start().data();
+    std::vector<double> part_xy(static_cast<size_t>(parts), 0.0), part_xw(static_cast<size_t>(parts), 0.0);
+    const bool blocks = A.format() == AFormat::BSR;
+    const auto run = [&](int p) {
+        double& w = part_xw[static_cast<size_t>(p)];
+        part_xy[static_cast<size_t>(p)] =
+            blocks ? block_product<D>(A.blocks(), bound[p], bound[p + 1], px, py, pw, skip, w)
+                   : csr_product_dots<D>(A.csr(), bound[p], bound[p + 1], px, py, pw, skip, w);
+    };
+#ifdef CB_HAVE_OPENMP
+#pragma omp parallel for num_threads(parts) schedule(static, 1)
+    for (int p = 0; p < parts; ++p) run(p);
+#else
+    for (int p = 0; p < parts; ++p) run(p);
+#endif
+    double xy = 0.0, dot_w = 0.0;
+    for (int p = 0; p < parts; ++p) {
+        xy += part_xy[static_cast<size_t>(p)];
+        dot_w += part_xw[static_cast<size_t>(p)];
+    }
+    xw = dot_w;
+    return xy;
+}
+
+/// Bounds of `parts` ranges over the rows whose nonzeros (or blocks) start at start[0..rows]:
+/// range p ends at the first row whose prefix reaches p/parts of the total, so each range holds
+/// about the same work. Empty ranges are dropped.
+std::vector<int> split_rows(const int* start, std::ptrdiff_t rows, int parts)
+{
+    std::vector<int> bound{0};
+    const double total = static_cast<double>(start[rows] - start[0]);
+    std::ptrdiff_t row = 0;
+    for (int p = 1; p < parts; ++p) {
+        const double target = total * p / parts;
+        while (row < rows && static_cast<double>(start[row] - start[0]) < target) ++row;
+        if (row > bound.back()) bound.push_back(static_cast<int>(row));
+    }
+    if (rows > bound.back()) bound.push_back(static_cast<int>(rows));
+    if (bound.size() == 1) bound.push_back(0);
+    return bound;
+}
+
+}  // namespace
+
+namespace {
+
+/// Block row I's distinct block columns, in increasing order, from its three CSR rows (each
+/// sorted): a three-way merge of the rows' columns / 3, starting at block column `from`.
+/// `visit(J, k[3], end[3])` is called per block column with each row's first entry in it (entries
+/// up to end[r] belong to J). Returns false when a row's columns do not increase.
+template <typename Visit>
+bool merge_block_columns(const int* outer, const int* inner, std::ptrdiff_t I, int from, Visit&& visit)
+{
+    int k[3], stop[3];
+    for (int r = 0; r < 3; ++r) {
+        const std::ptrdiff_t i = 3 * I + r;
+        k[r] = outer[i];
+        stop[r] = outer[i + 1];
+        for (int q = k[r] + 1; q < stop[r]; ++q)
+            if (inner[q] <= inner[q - 1]) return false;
+        while (k[r] < stop[r] && inner[k[r]] / 3 < from) ++k[r];  // the lower triangle, when skipped
+    }
+    for (;;) {
+        int J = std::numeric_limits<int>::max();
+        for (int r = 0; r < 3; ++r)
+            if (k[r] < stop[r]) J = std::min(J, inner[k[r]] / 3);
+        if (J == std::numeric_limits<int>::max()) return true;
+        int end[3];
+        for (int r = 0; r < 3; ++r) {
+            end[r] = k[r];
+            while (end[r] < stop[r] && inner[end[r]] / 3 == J) ++end[r];
+        }
+        visit(J, k, end);
+        for (int r = 0; r < 3; ++r) k[r] = end[r];
+    }
+}
+
+/// A's 3x3 blocks (all, or with `upper` those of block column >= block row only).
+bool build_blocks(const SpMat& A, bool upper, BlockRows& out, double max_fill, double& fill, std::string& why)
+{
+    out = BlockRows{};
+    fill = 0.0;
+    const Eigen::Index n = A.rows();
+    if (n == 0 || n % 3 != 0 || A.cols() != n) {
+        why = "the DOF count " + std::to_string(n) + " is not a positive multiple of 3";
+        return false;
+    }
+    if (!A.isCompressed()) {
+        why = "A is not compressed";
+        return false;
+    }
+    const std::ptrdiff_t nb = n / 3;
+    const int* outer = A.outerIndexPtr();
+    const int* inner = A.innerIndexPtr();
+    const double* val = A.valuePtr();
+    // Pass 1: how many blocks each block row has (columns must increase along a row, or the block
+    // sums would not follow the CSR sums' order).
+    std::vector<int> start(static_cast<size_t>(nb) + 1, 0);
+    long long blocks = 0;
+    long long lower_nonzeros = 0;  // entries left out by `upper`
+    for (std::ptrdiff_t I = 0; I < nb; ++I) {
+        const int from = upper ? static_cast<int>(I) : 0;
+        const bool sorted = merge_block_columns(outer, inner, I, from, [&](int, const int*, const int*) { ++blocks; });
+        if (!sorted) {
+            for (std::ptrdiff_t i = 3 * I; i < 3 * I + 3; ++i)
+                for (int k = outer[i] + 1; k < outer[i + 1]; ++k)
+                    if (inner[k] <= inner[k - 1]) {
+                        why = "A's columns are not increasing in row " + std::to_string(i);
+                        return false;
+                    }
+        }
+        if (upper)
+            for (std::ptrdiff_t i = 3 * I; i < 3 * I + 3; ++i)
+                for (int k = outer[i]; k < outer[i + 1] && inner[k] < 3 * I; ++k) ++lower_nonzeros;
+        if (blocks > std::numeric_limits<int>::max() / 9) {
+            why = "A has too many blocks for 32-bit block offsets";
+            return false;
+        }
+        start[static_cast<size_t>(I) + 1] = static_cast<int>(blocks);
+    }
+    // Fill: stored entries per nonzero of the part of A they stand for.
+    const double nnz = static_cast<double>(A.nonZeros() - lower_nonzeros);
+    fill = nnz > 0.0 ? 9.0 * static_cast<double>(blocks) / nnz : 1.0;
+    if (fill > max_fill) {
+        why = "A's nonzeros do not form 3x3 blocks (" + std::to_string(fill) + " stored entries per nonzero)";
+        return false;
+    }
+    // Pass 2: block columns and values (absent entries stay zero), block by block in storage order.
+    out.start = std::move(start);
+    out.column.resize(static_cast<size_t>(blocks));
+    out.value.assign(static_cast<size_t>(blocks) * 9, 0.0);
+    int* column = out.column.data();
+    double* value = out.value.data();
+    for (std::ptrdiff_t I = 0; I < nb; ++I) {
+        std::ptrdiff_t q = out.start[static_cast<size_t>(I)];
+        merge_block_columns(outer, inner, I, upper ? static_cast<int>(I) : 0, [&](int J, const int* k, const int* end) {
+            column[q] = J;
+            double* b = value + 9 * q;
+            for (int r = 0; r < 3; ++r)
+                for (int e = k[r]; e < end[r]; ++e) b[3 * (inner[e] - 3 * J) + r] = val[e];
+            ++q;
+        });
+    }
+    why.clear();
+    return true;
+}
+
+/// Whether the upper blocks U of A (build_blocks with `upper`) stand for all of A, i.e. A is
+/// symmetric to the bit: every nonzero below the block diagonal equals its mirror in U, U holds no
+/// other nonzero off its diagonal blocks, and each diagonal block is symmetric. Each block row's
+/// blocks are met in increasing block column, so a cursor per block row finds the mirrors in one
+/// pass. `why` names the first entry that differs.
+bool upper_blocks_mirror_a(const SpMat& A, const BlockRows& U, std::string& why)
+{
+    const std::ptrdiff_t nb = A.rows() / 3;
+    const int* outer = A.outerIndexPtr();
+    const int* inner = A.innerIndexPtr();
+    const double* val = A.valuePtr();
+    std::vector<int> cursor(U.start.begin(), U.start.end() - 1);
+    long long lower = 0, upper = 0;
+    const auto differs = [&](std::ptrdiff_t i, std::ptrdiff_t j) {
+        why = "A is not symmetric (entry (" + std::to_string(i) + ", " + std::to_string(j) + ") differs from (" +
+              std::to_string(j) + ", " + std::to_string(i) + "))";
+        return false;
+    };
+    for (std::ptrdiff_t I = 0; I < nb; ++I) {
+        for (int k = U.start[static_cast<size_t>(I)]; k < U.start[static_cast<size_t>(I) + 1]; ++k) {
+            const double* b = U.value.data() + 9 * static_cast<std::ptrdiff_t>(k);
+            if (U.column[static_cast<size_t>(k)] != I) {
+                for (int e = 0; e < 9; ++e) upper += b[e] != 0.0;
+                continue;
+            }
+            for (int r = 0; r < 3; ++r)
+                for (int c = r + 1; c < 3; ++c)
+                    if (b[3 * c + r] != b[3 * r + c]) return differs(3 * I + r, 3 * I + c);
+        }
+        for (std::ptrdiff_t i = 3 * I; i < 3 * I + 3; ++i)
+            for (int k = outer[i]; k < outer[i + 1] && inner[k] < 3 * I; ++k) {
+                if (val[k] == 0.0) continue;
+                ++lower;
+                const int J = inner[k] / 3;  // the mirror (inner[k], i) is in block (J, I)
+                int& q = cursor[static_cast<size_t>(J)];
+                while (q < U.start[static_cast<size_t>(J) + 1] && U.column[static_cast<size_t>(q)] < I) ++q;
+                if (q == U.start[static_cast<size_t>(J) + 1] || U.column[static_cast<size_t>(q)] != I)
+                    return differs(i, inner[k]);
+                const std::ptrdiff_t r = inner[k] - 3 * J, c = i - 3 * I;
+                if (U.value[9 * static_cast<size_t>(q) + static_cast<size_t>(3 * c + r)] != val[k])
+                    return differs(i, inner[k]);
+            }
+    }
+    if (lower != upper) {
+        why = "A is not symmetric (" + std::to_string(upper) + " nonzeros above its block diagonal, " +
+              std::to_string(lower) + " below)";
+        return false;
+    }
+    return true;
+}
+
+}  // namespace
+
+bool build_block_rows(const SpMat& A, BlockRows& out, double max_fill, double& fill, std::string& why)
+{
+    return build_blocks(A, false, out, max_fill, fill, why);
+}
+
+bool build_upper_block_rows(const SpMat& A, BlockRows& out, double max_fill, double& fill, std::string& why)
+{
+    return build_blocks(A, true, out, max_fill, fill, why);
+}
+
+AFormat AOperator::prepare(AFormat wanted, int threads)
+{
+    m_format = AFormat::CSR;
+    m_blocks = BlockRows{};
+    m_why_csr.clear();
+    m_fill = 0.0;
+    // AUTO: the blocks whose sums follow CSR's order (SBSR's other order changed iteration counts
+    // on suites/ci.json; docs/a_product.md).
+    const AFormat asked = wanted == AFormat::AUTO ? AFormat::BSR : wanted;
+    if (asked == AFormat::BSR || asked == AFormat::SBSR) {
+        double fill = 0.0;
+        const bool upper = asked == AFormat::SBSR;
+        if (build_blocks(*m_csr, upper, m_blocks, MAX_FILL, fill, m_why_csr) &&
+            (!upper || upper_blocks_mirror_a(*m_csr, m_blocks, m_why_csr))) {
+            m_format = asked;
+            (void)fill;  // per nonzero of the stored part; fill() is per nonzero of A
+            m_fill = static_cast<double>(m_blocks.value.size()) /
+                     static_cast<double>(std::max<Eigen::Index>(1, m_csr->nonZeros()));
+        } else {
+            m_blocks = BlockRows{};
+        }
+    }
+    // Threads only where the raw loops run (compressed A); each range keeps enough nonzeros to
+    // repay waking its thread. The ranges depend on A and threads only, never on the machine.
+    // The symmetric blocks run on one thread (their transposes scatter into other rows).
+    const SpMat& A = *m_csr;
+    const long nnz = static_cast<long>(A.nonZeros());
+    int parts = std::max(1, threads);
+    parts = static_cast<int>(std::min<long>(parts, std::max(1L, nnz / MIN_NONZEROS_PER_PART)));
+    if (!A.isCompressed()) parts = 1;
+    if (m_format == AFormat::SBSR)
+        m_part_start = {0, static_cast<int>(m_blocks.start.size()) - 1};
+    else if (m_format == AFormat::BSR)
+        m_part_start = split_rows(m_blocks.start.data(), static_cast<std::ptrdiff_t>(m_blocks.start.size()) - 1, parts);
+    else if (A.isCompressed())
+        m_part_start = split_rows(A.outerIndexPtr(), A.rows(), parts);
+    else
+        m_part_start = {0, static_cast<int>(A.rows())};
+    return m_format;
+}
+
+bool a_product_parallel_build()
+{
+#ifdef CB_HAVE_OPENMP
+    return true;
+#else
+    return false;
+#endif
+}
+
+double AOperator::matrix_bytes() const
+{
+    if (m_format != AFormat::CSR)
+        return static_cast<double>(m_blocks.value.size()) * 8.0 + static_cast<double>(m_blocks.column.size()) * 4.0 +
+               static_cast<double>(m_blocks.start.size()) * 4.0;
+    return static_cast<double>(m_csr->nonZeros()) * 12.0 + static_cast<double>(m_csr->rows() + 1) * 4.0;
+}
+
+// Out of line on purpose: one symbol that every counted product goes through.
+void a_product(const SpMat& A, const Vec& x, Vec& y)
+{
+    y.noalias() = A * x;
+    g_a_products.fetch_add(1, std::memory_order_relaxed);
+}
+
+double a_product_dots(const SpMat& A, const Vec& x, Vec& y, const Vec& w, double& xw)
+{
+    if (!A.isCompressed()) {  // the raw loop reads a compressed row-major matrix
+        a_product(A, x, y);
+        xw = x.dot(w);
+        return x.dot(y);
+    }
+    y.resize(A.rows());
+    const double xy = csr_product_dots<Dots::ALL>(A, 0, A.rows(), x.data(), y.data(), w.data(), nullptr, xw);
+    g_a_products.fetch_add(1, std::memory_order_relaxed);
+    return xy;
+}
+
+Vec a_product(const SpMat& A, const Vec& x)
+{
+    Vec y;
+    a_product(A, x, y);
+    return y;
+}
+
+namespace {
+
+/// y = A x on the storage prepare() chose, counted (the operator's scaling aside).
+void stored_product(const AOperator& A, const Vec& x, Vec& y)
+{
+    if (A.format() == AFormat::SBSR) {
+        y.resize(A.rows());
+        double unused = 0.0;
+        sym_block_product<Dots::NONE>(A.blocks(), A.rows() / 3, x.data(), y.data(), nullptr, nullptr, unused);
+        g_a_products.fetch_add(1, std::memory_order_relaxed);
+        return;
+    }
+    if (A.parts() > 1) {  // threads: the raw loops by row range
+        y.resize(A.rows());
+        double unused = 0.0;
+        product_by_parts<Dots::NONE>(A, x.data(), y.data(), nullptr, nullptr, unused);
+        g_a_products.fetch_add(1, std::memory_order_relaxed);
+        return;
+    }
+    if (A.format() != AFormat::BSR) return a_product(A.csr(), x, y);
+    y.resize(A.rows());
+    double unused = 0.0;
+    block_product<Dots::NONE>(A.blocks(), 0, A.rows() / 3, x.data(), y.data(), nullptr, nullptr, unused);
+    g_a_products.fetch_add(1, std::memory_order_relaxed);
+}
+
+/// y = U A U x: U x into the operator's buffer, the stored product, then y's scaling and the
+/// dots in one pass (x'y and x'w in index order, as the one-thread kernels sum them).
+template <Dots D>
+double scaled_product(const AOperator& A, const Vec& x, Vec& y, const Vec* w, const char* skip, double& xw)
+{
+    const Vec& u = *A.scaling();
+    Vec& ux = A.scaled_input();
+    ux = u.cwiseProduct(x);
+    stored_product(A, ux, y);
+    double xy = 0.0, dot_w = 0.0;
+    for (Eigen::Index i = 0; i < y.size(); ++i) {
+        y[i] *= u[i];
+        if constexpr (D != Dots::NONE) {
+            xy += x[i] * y[i];
+            if (D == Dots::ALL || !skip[i]) dot_w += x[i] * (*w)[i];
+        }
+    }
+    xw = dot_w;
+    return xy;
+}
+
+}  // namespace
+
+void a_product(const AOperator& A, const Vec& x, Vec& y)
+{
+    if (A.scaling() == nullptr) return stored_product(A, x, y);
+    double unused = 0.0;
+    scaled_product<Dots::NONE>(A, x, y, nullptr, nullptr, unused);
+}
+
+double a_product_dots(const AOperator& A, const Vec& x, Vec& y, const Vec& w, double& xw)
+{
+    if (A.scaling() != nullptr) return scaled_product<Dots::ALL>(A, x, y, &w, nullptr, xw);
+    if (A.format() == AFormat::SBSR) {
+        y.resize(A.rows());
+        const double xy =
+            sym_block_product<Dots::ALL>(A.blocks(), A.rows() / 3, x.data(), y.data(), w.data(), nullptr, xw);
+        g_a_products.fetch_add(1, std::memory_order_relaxed);
+        return xy;
+    }
+    if (A.parts() > 1) {
+        y.resize(A.rows());
+        const double xy = product_by_parts<Dots::ALL>(A, x.data(), y.data(), w.data(), nullptr, xw);
+        g_a_products.fetch_add(1, std::memory_order_relaxed);
+        return xy;
+    }
+    if (A.format() != AFormat::BSR) return a_product_dots(A.csr(), x, y, w, xw);
+    y.resize(A.rows());
+    const double xy = block_product<Dots::ALL>(A.blocks(), 0, A.rows() / 3, x.data(), y.data(), w.data(), nullptr, xw);
+    g_a_products.fetch_add(1, std::memory_order_relaxed);
+    return xy;
+}
+
+double a_product_dots(const AOperator& A, const Vec& x, Vec& y, const Vec& w, const char* skip, double& xw)
+{
+    if (A.scaling() != nullptr) return scaled_product<Dots::MASKED>(A, x, y, &w, skip, xw);
+    y.resize(A.rows());
+    double xy = 0.0;
+    if (A.format() == AFormat::SBSR)
+        xy = sym_block_product<Dots::MASKED>(A.blocks(), A.rows() / 3, x.data(), y.data(), w.data(), skip, xw);
+    else if (A.parts() > 1)
+        xy = product_by_parts<Dots::MASKED>(A, x.data(), y.data(), w.data(), skip, xw);
+    else if (A.format() == AFormat::BSR)
+        xy = block_product<Dots::MASKED>(A.blocks(), 0, A.rows() / 3, x.data(), y.data(), w.data(), skip, xw);
+    else if (A.csr().isCompressed())
+        xy = csr_product_dots<Dots::MASKED>(A.csr(), 0, A.rows(), x.data(), y.data(), w.data(), skip, xw);
+    else {
+        y.noalias() = A.csr() * x;
+        xy = x.dot(y);
+        double dot_w = 0.0;
+        for (Eigen::Index i = 0; i < x.size(); ++i)
+            if (!skip[i]) dot_w += x[i] * w[i];
+        xw = dot_w;
+    }
+    g_a_products.fetch_add(1, std::memory_order_relaxed);
+    return xy;
+}
+
+Vec a_product(const AOperator& A, const Vec& x)
+{
+    Vec y;
+    a_product(A, x, y);
+    return y;
+}
+
+long a_product_count() { return g_a_products.load(std::memory_order_relaxed); }
+
+}  // namespace cb

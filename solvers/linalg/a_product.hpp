@@ -1,0 +1,116 @@
+#pragma once
+/// The counted product with A: y = A x through one non-inline function that also bumps a
+/// process-wide counter. Solvers multiply by A through an AOperator, prepared once in their setup,
+/// so the harness can count A-products itself (around each solve) instead of trusting the
+/// solver's own count, and so A's storage for the product is chosen in one place.
+/// Work that bypasses it (CHOLMOD, sparse partial products) shows up in instruction counts instead.
+#include "solvers/linalg/a_format.hpp"
+#include "solvers/core/types.hpp"
+
+#include <string>
+#include <vector>
+
+namespace cb {
+
+/// A's 3x3 block rows: block row I holds rows 3I, 3I+1, 3I+2. A block is stored column by column
+/// (value (r, c) at 9k + 3c + r) so that a column's three entries meet three partial sums at once.
+/// Entries absent from A are stored as zeros.
+struct BlockRows {
+    std::vector<int> start;     ///< block row I's blocks are start[I] .. start[I + 1] - 1
+    std::vector<int> column;    ///< block column per block, increasing within a block row
+    std::vector<double> value;  ///< 9 per block
+};
+
+/// The operator x -> A x that a solver multiplies by. It refers to A (no copy of the CSR); A must
+/// outlive it. prepare() may build a block copy; products then read it instead of A.
+class AOperator {
+public:
+    explicit AOperator(const SpMat& A) : m_csr(&A) {}
+    /// Chooses the storage of the products: BSR (or SBSR) when asked and A has the block structure
+    /// (n a multiple of 3, compressed, sorted columns, at most 25% stored zeros), else CSR;
+    /// why_csr() says why. BSR and CSR sum each row in column order, so y is the same to the last
+    /// bit; SBSR, which reads A's upper block triangle (A must be symmetric, as a QP's is), sums in
+    /// another order (y equal to rounding) and runs on one thread whatever `threads` says.
+    /// `threads` (the common setting, >= 1) splits the products into that many fixed row ranges of
+    /// about equal nonzeros (fewer when A is small: at least MIN_NONZEROS_PER_PART each); the same
+    /// A and threads give the same ranges, so y is the same to the last bit and the fused dots,
+    /// summed range by range in range order, the same on every run (docs/a_product.md).
+    /// AUTO (the common setting `a_format`'s default): BSR, which keeps the iterates bit-equal to
+    /// CSR's; SBSR changed iteration counts on suites/ci.json, so it is asked for by name only.
+    AFormat prepare(AFormat wanted, int threads = 1);
+    /// Row ranges the products are split into (1: one thread, today's loops).
+    int parts() const { return static_cast<int>(m_part_start.size()) - 1; }
+    /// Range p covers rows (BSR: block rows) part_start()[p] .. part_start()[p + 1] - 1.
+    const std::vector<int>& part_start() const { return m_part_start; }
+    AFormat format() const { return m_format; }
+    /// Why the products read CSR (empty when blocks, or when blocks were not asked for).
+    const std::string& why_csr() const { return m_why_csr; }
+    /// Stored block entries per nonzero of A (BSR >= 1, SBSR about half that; 0 when CSR).
+    double fill() const { return m_fill; }
+    /// Bytes one product streams from A's storage (values, indices, row starts).
+    double matrix_bytes() const;
+    /// A itself (CSR): for sparse partial products, diagonals and factorizations.
+    const SpMat& csr() const { return *m_csr; }
+    /// The blocks the products read (BSR: all; SBSR: the upper block triangle; empty when CSR).
+    const BlockRows& blocks() const { return m_blocks; }
+    Eigen::Index rows() const { return m_csr->rows(); }
+    /// From now on the products give U A U x (U = diag(u)) instead of A x, without a scaled copy
+    /// of A (mprgp-coupled's precond = scaled: the QP in y = U^-1 x): x is scaled into a buffer
+    /// before the product and y on the way out, two passes over vectors against one over A.
+    /// u must outlive the operator; nullptr: A itself again.
+    void scale_by(const Vec* u) { m_scale = u; }
+    /// The scaling of the products (nullptr when they give A x).
+    const Vec* scaling() const { return m_scale; }
+    /// The buffer holding U x during a scaled product (one per operator: products on one
+    /// operator run one at a time).
+    Vec& scaled_input() const { return m_scaled_x; }
+
+private:
+    const SpMat* m_csr;
+    const Vec* m_scale = nullptr;
+    mutable Vec m_scaled_x;
+    AFormat m_format = AFormat::CSR;
+    BlockRows m_blocks;
+    std::string m_why_csr;
+    double m_fill = 0.0;
+    std::vector<int> m_part_start{0, 0};
+};
+
+/// Fewest nonzeros of A per row range of a threaded product: below about this many a range's
+/// work is shorter than waking a thread for it.
+constexpr long MIN_NONZEROS_PER_PART = 32768;
+
+/// Whether threaded products can run in parallel in this build (OpenMP found); without it the
+/// ranges run one after the other, with the same results.
+bool a_product_parallel_build();
+
+/// Builds A's block rows; false (with `why`) when A has no usable 3x3 block structure.
+bool build_block_rows(const SpMat& A, BlockRows& out, double max_fill, double& fill, std::string& why);
+
+/// As build_block_rows(), keeping only the blocks on and above the block diagonal (block column
+/// >= block row); `fill` is per nonzero of that part of A.
+bool build_upper_block_rows(const SpMat& A, BlockRows& out, double max_fill, double& fill, std::string& why);
+
+/// y = A x, counted. y is resized; it must not alias x.
+void a_product(const AOperator& A, const Vec& x, Vec& y);
+
+/// y = A x with x'y and x'w summed in the same pass over A, counted as one product: the CG step's
+/// p'Ap and p'g without two more passes over vectors the product has just pushed out of cache.
+/// y is resized; it must not alias x or w. @return x'y; xw receives x'w.
+double a_product_dots(const AOperator& A, const Vec& x, Vec& y, const Vec& w, double& xw);
+
+/// As above with x'w summed only where skip[i] == 0 (mprgp's p'g over the DOFs outside its rows).
+double a_product_dots(const AOperator& A, const Vec& x, Vec& y, const Vec& w, const char* skip, double& xw);
+
+/// A x, counted (for expressions such as `b - a_product(A, x)`).
+Vec a_product(const AOperator& A, const Vec& x);
+
+/// One-off products outside a solver's iterations (the harness's measure, peers' reports): CSR, counted.
+void a_product(const SpMat& A, const Vec& x, Vec& y);
+double a_product_dots(const SpMat& A, const Vec& x, Vec& y, const Vec& w, double& xw);
+Vec a_product(const SpMat& A, const Vec& x);
+
+/// A-products done through a_product() by this process so far (all threads).
+long a_product_count();
+
+}  // namespace cb

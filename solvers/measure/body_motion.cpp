@@ -1,0 +1,237 @@
+#include "solvers/measure/body_motion.hpp"
+#include "solvers/linalg/disjoint_sets.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <array>
+#include <cmath>
+#include <limits>
+
+namespace cb {
+
+namespace {
+
+/// Eigenvalues below this fraction of a body's largest are modes the body cannot move.
+constexpr double RANK_CUTOFF = 1e-12;
+
+}  // namespace
+
+int BodyMotion::mode_row(Eigen::Index p, int mode[3], double value[3]) const
+{
+    mode[0] = m_spatial ? static_cast<int>(p % 3) : 0;
+    value[0] = 1.0;
+    if (!m_spatial) return 1;
+    // (e_k x d)_a for the two axes k != a: +d_{a+2} for k = a+1 and -d_{a+1} for k = a+2 (mod 3).
+    const int a = static_cast<int>(p % 3), k1 = (a + 1) % 3, k2 = (a + 2) % 3;
+    const auto d = m_offset.row(p / 3);
+    mode[1] = 3 + k1;
+    value[1] = d[k2] * m_inv_length;
+    mode[2] = 3 + k2;
+    value[2] = -d[k1] * m_inv_length;
+    return 3;
+}
+
+long double BodyMotion::spatial_row_sums(const SpMat& A, Eigen::Index p, const double* scaled_offset, long double r0,
+                                         LongVec6& av) const
+{
+    // mode_row() unrolled by the column's axis, with the sums in named locals rather than an
+    // indexed array (which kept every long double in memory): each sum still takes its terms in
+    // column order, so the values are the same to the last bit.
+    const int* inner = A.innerIndexPtr();
+    const double* val = A.valuePtr();
+    const double* x0 = m_x0.data();
+    const double* d = scaled_offset;
+    const int first = A.outerIndexPtr()[p];
+    const int last = A.isCompressed() ? A.outerIndexPtr()[p + 1] : first + A.innerNonZeroPtr()[p];
+    long double t0 = 0.0L, t1 = 0.0L, t2 = 0.0L, q3 = 0.0L, q4 = 0.0L, q5 = 0.0L;
+    for (int k = first; k < last; ++k) {
+        if (val[k] == 0.0) continue;
+        const long double a = val[k];
+        const int c = inner[k], v = c / 3;
+        const double* dv = d + 3 * static_cast<std::ptrdiff_t>(v);
+        r0 += a * x0[c];
+        switch (c - 3 * v) {
+        case 0:
+            t0 += a;
+            q4 += a * dv[2];
+            q5 += a * -dv[1];
+            break;
+        case 1:
+            t1 += a;
+            q5 += a * dv[0];
+            q3 += a * -dv[2];
+            break;
+        default:
+            t2 += a;
+            q3 += a * dv[1];
+            q4 += a * -dv[0];
+            break;
+        }
+    }
+    av = LongVec6{t0, t1, t2, q3, q4, q5};
+    return r0;
+}
+
+BodyMotion::BodyMotion(const QpView& qp, double length)
+{
+    const SpMat& A = qp.A;
+    const Eigen::Index n = A.rows();
+    if (n == 0 || qp.x0.size() != n || qp.b.size() != n) return;
+    m_spatial = n % 3 == 0;
+    m_per_node = m_spatial ? 3 : 1;
+    m_inv_length = length > 0.0 && std::isfinite(length) ? 1.0 / length : 1.0;
+    const int nodes = static_cast<int>(n / m_per_node);
+
+    DisjointSets sets(nodes);
+    // A vertex's three rows mostly name the same neighbours: `joined` keeps each pair to one join.
+    std::vector<int> joined(static_cast<size_t>(nodes), -1);
+    for (Eigen::Index r = 0; r < A.outerSize(); ++r) {
+        const int node = static_cast<int>(r / m_per_node);
+        joined[static_cast<size_t>(node)] = node;
+        for (SpMat::InnerIterator it(A, r); it; ++it) {
+            const int other = static_cast<int>(m_spatial ? it.col() / 3 : it.col());
+            if (it.value() == 0.0 || joined[static_cast<size_t>(other)] == node)
+                continue;  // a stored zero couples nothing
+            sets.join(node, other);
+            joined[static_cast<size_t>(other)] = node;
+        }
+    }
+    int bodies = 0;
+    m_body = sets.labels(bodies);
+    auto body_of = [&](Eigen::Index p) { return static_cast<size_t>(m_body[static_cast<size_t>(p / m_per_node)]); };
+
+    if (m_spatial) {
+        std::vector<Eigen::Vector3d> centroid(static_cast<size_t>(bodies), Eigen::Vector3d::Zero());
+        std::vector<double> count(static_cast<size_t>(bodies), 0.0);
+        for (Eigen::Index v = 0; v < nodes; ++v) {
+            centroid[body_of(3 * v)] += qp.x0.segment<3>(3 * v);
+            count[body_of(3 * v)] += 1.0;
+        }
+        for (size_t b = 0; b < centroid.size(); ++b) centroid[b] /= count[b];
+        m_offset.resize(nodes, 3);
+        for (Eigen::Index v = 0; v < nodes; ++v)
+            m_offset.row(v) = (qp.x0.segment<3>(3 * v) - centroid[body_of(3 * v)]).transpose();
+    }
+    m_x0 = qp.x0;
+
+    // AV and V'(A x0 - b), one pass over A with long double sums (see the header: the stiffness
+    // parts of a row cancel, and must do so before rounding to double).
+    m_av.setZero(n, MODES);
+    std::vector<LongVec6> load(static_cast<size_t>(bodies), LongVec6{});
+    int mode[3];
+    double value[3];
+    const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> scaled_offset = m_offset * m_inv_length;
+    for (Eigen::Index p = 0; p < A.outerSize(); ++p) {
+        LongVec6 av{};
+        long double r0 = -static_cast<long double>(qp.b[p]);
+        if (m_spatial)
+            r0 = spatial_row_sums(A, p, scaled_offset.data(), r0, av);
+        else
+            for (SpMat::InnerIterator it(A, p); it; ++it) {
+                if (it.value() == 0.0) continue;
+                r0 += static_cast<long double>(it.value()) * qp.x0[it.col()];
+                av[0] += static_cast<long double>(it.value());
+            }
+        for (int k = 0; k < MODES; ++k) m_av(p, k) = static_cast<double>(av[static_cast<size_t>(k)]);
+        const int rn = mode_row(p, mode, value);
+        LongVec6& l = load[body_of(p)];
+        for (int s = 0; s < rn; ++s) l[static_cast<size_t>(mode[s])] += value[s] * r0;
+    }
+    m_load0.assign(static_cast<size_t>(bodies), Vec6::Zero());
+    for (size_t b = 0; b < load.size(); ++b)
+        for (int k = 0; k < MODES; ++k) m_load0[b][k] = static_cast<double>(load[b][static_cast<size_t>(k)]);
+
+    // E = V'AV per body, from AV.
+    std::vector<Mat6> E(static_cast<size_t>(bodies), Mat6::Zero());
+    for (Eigen::Index p = 0; p < n; ++p) {
+        const int rn = mode_row(p, mode, value);
+        Mat6& Eb = E[body_of(p)];
+        for (int s = 0; s < rn; ++s) Eb.row(mode[s]) += value[s] * m_av.row(p);
+    }
+    m_pinv.assign(static_cast<size_t>(bodies), Mat6::Zero());
+    for (size_t b = 0; b < E.size(); ++b) {
+        if (!m_spatial) {
+            if (E[b](0, 0) > 0.0 && std::isfinite(E[b](0, 0))) m_pinv[b](0, 0) = 1.0 / E[b](0, 0);
+            continue;
+        }
+        if (!E[b].allFinite()) continue;  // not SPD: the Jacobi half of the measure still judges it
+        const Eigen::SelfAdjointEigenSolver<Mat6> eig(0.5 * (E[b] + E[b].transpose()));
+        const Vec6& lambda = eig.eigenvalues();
+        const double cutoff = RANK_CUTOFF * lambda.maxCoeff();
+        Vec6 inv = Vec6::Zero();
+        for (int k = 0; k < MODES; ++k)
+            if (lambda[k] > cutoff && lambda[k] > 0.0) inv[k] = 1.0 / lambda[k];
+        m_pinv[b] = eig.eigenvectors() * inv.asDiagonal() * eig.eigenvectors().transpose();
+    }
+
+    m_rows = row_loads(qp.J);
+    if (qp.friction && qp.friction->T.rows() == 2 * qp.J.rows() && qp.friction->T.cols() == n)
+        m_tangents = row_loads(qp.friction->T);
+}
+
+BodyMotion::RowLoads BodyMotion::row_loads(const SpMat& rows) const
+{
+    RowLoads out;
+    const Eigen::Index m = rows.rows(), n = m_x0.size();
+    int cmode[3];
+    double cvalue[3];
+    out.start.assign(static_cast<size_t>(m) + 1, 0);
+    for (Eigen::Index i = 0; i < m; ++i) {
+        const auto first = out.body.size();
+        for (SpMat::InnerIterator it(rows, i); it; ++it) {
+            if (it.value() == 0.0 || it.col() >= n) continue;
+            const int b = m_body[static_cast<size_t>(it.col() / m_per_node)];
+            size_t e = first;
+            while (e < out.body.size() && out.body[e] != b) ++e;
+            if (e == out.body.size()) {
+                out.body.push_back(b);
+                out.jv.push_back(Vec6::Zero());
+            }
+            const int cn = mode_row(it.col(), cmode, cvalue);
+            for (int t = 0; t < cn; ++t) out.jv[e][cmode[t]] += it.value() * cvalue[t];
+        }
+        out.start[static_cast<size_t>(i) + 1] = static_cast<int>(out.body.size());
+    }
+    return out;
+}
+
+bool BodyMotion::subtract(const RowLoads& rows, const Vec& lambda, std::vector<Vec6>& load)
+{
+    const Eigen::Index m = rows.rows();
+    if (lambda.size() != m || m <= 0) return true;
+    if (!lambda.allFinite()) return false;
+    for (Eigen::Index i = 0; i < m; ++i) {
+        if (lambda[i] == 0.0) continue;
+        for (int e = rows.start[static_cast<size_t>(i)]; e < rows.start[static_cast<size_t>(i) + 1]; ++e)
+            load[static_cast<size_t>(rows.body[static_cast<size_t>(e)])] -= lambda[i] * rows.jv[static_cast<size_t>(e)];
+    }
+    return true;
+}
+
+double BodyMotion::displacement(const Vec& x, const Vec& lambda, const Vec& lambda_t) const
+{
+    if (m_body.empty()) return 0.0;
+    if (x.size() != m_x0.size() || !x.allFinite()) return std::numeric_limits<double>::infinity();
+    std::vector<Vec6> load = m_load0;  // V'r per body
+    for (Eigen::Index p = 0; p < x.size(); ++p)
+        load[static_cast<size_t>(m_body[static_cast<size_t>(p / m_per_node)])] +=
+            m_av.row(p).transpose() * (x[p] - m_x0[p]);
+    if (!subtract(m_rows, lambda, load) || !subtract(m_tangents, lambda_t, load))
+        return std::numeric_limits<double>::infinity();
+    std::vector<Vec6> motion(load.size());
+    for (size_t b = 0; b < load.size(); ++b) motion[b] = m_pinv[b] * load[b];
+    double widest = 0.0;
+    const auto nodes = static_cast<Eigen::Index>(m_body.size());
+    for (Eigen::Index v = 0; v < nodes; ++v) {
+        const Vec6& y = motion[static_cast<size_t>(m_body[static_cast<size_t>(v)])];
+        if (!m_spatial) {
+            widest = std::max(widest, std::abs(y[0]));
+            continue;
+        }
+        const Eigen::Vector3d d = m_offset.row(v).transpose();
+        const Eigen::Vector3d u = y.head<3>() + y.tail<3>().cross(d) * m_inv_length;
+        widest = std::max(widest, u.cwiseAbs().maxCoeff());
+    }
+    return std::isfinite(widest) ? widest : std::numeric_limits<double>::infinity();
+}
+
+}  // namespace cb

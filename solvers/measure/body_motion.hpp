@@ -1,0 +1,83 @@
+#pragma once
+/// The rigid half of the accuracy measure's stationarity part (docs/accuracy.md, "Why these choices"):
+/// how far the residual force r = Ax - b - J'lambda would move each body as a whole.
+///
+/// D^-1 r (one Jacobi step) is the displacement r causes on a DOF held by its neighbours. It
+/// misreads forces that move a stiff body as a whole: in free fall at a small step the residual
+/// of the start is h^2 M g on every DOF, D = M + h^2 diag(K) is ruled by the stiffness, so D^-1 r
+/// is h^2 g M/D while the body really falls by h^2 g (K does not resist a rigid move). The
+/// Galerkin displacement in the span of each body's rigid modes, u = V (V'AV)^+ V'r, is what the
+/// residual does to the body as a whole; it is the A-orthogonal projection of the true error
+/// A^-1 r onto those modes, so its A-norm never exceeds the error's, and it vanishes with r.
+///
+/// Bodies are the connected components of A's vertex graph (vertex = DOF / 3; stored zeros do not
+/// join), their modes the 3 translations and the 3 rotations about the body's centroid in x0.
+/// When n is not a multiple of 3 the nodes are the DOFs and each body has one mode, the constant.
+/// Modes that a body cannot move (a single vertex's rotations, a point-like start) are dropped by
+/// the pseudo-inverse.
+///
+/// V'r is formed as V'r0 + (AV)'(x - x0) - (JV)'lambda, r0 = A x0 - b and AV summed once in
+/// extended precision, rather than summed from a computed r: each entry of fl(Ax - b) carries
+/// rounding of the size eps |A||x| (the stiffness times the position), which a body's sum over
+/// its mass would read as motion; this way only the step x - x0 meets the stiffness in double.
+/// The QP's own floor remains: a backward-stable direct solve of a stiff body leaves a true
+/// residual of that size (e = 1.6e-10 on the tipping column of tests/solvers/tipping_column.hpp).
+#include "solvers/core/qp.hpp"
+
+#include <Eigen/Dense>
+#include <array>
+#include <vector>
+
+namespace cb {
+
+class BodyMotion {
+public:
+    static constexpr int MODES = 6;
+    using Mat6 = Eigen::Matrix<double, MODES, MODES>;
+    using Vec6 = Eigen::Matrix<double, MODES, 1>;
+
+    BodyMotion() = default;
+    /// O(nnz(A) + nnz(J) + n); no A-product. `length` scales the rotation modes (any positive length).
+    BodyMotion(const QpView& qp, double length);
+
+    /// max over DOFs of |V (V'AV)^+ V'(Ax - b - J'lambda - T'lambda_t)| in the problem's length
+    /// unit; a lambda whose size is not m (lambda_t: 2m, T the friction's tangent rows) counts as 0.
+    /// 0 for n = 0; infinity when x or lambda is not finite. O(n + nnz(J) + nnz(T)).
+    double displacement(const Vec& x, const Vec& lambda, const Vec& lambda_t = Vec()) const;
+
+    int bodies() const { return static_cast<int>(m_pinv.size()); }
+
+private:
+    using LongVec6 = std::array<long double, MODES>;
+
+    /// Row p of V: up to three (mode, value) pairs; returns how many.
+    int mode_row(Eigen::Index p, int mode[3], double value[3]) const;
+    /// (AV)_p in `av` and r0 + (A x0)_p, returned, summed in extended precision (3-D reading;
+    /// `scaled_offset`: m_offset / length, row-major).
+    long double spatial_row_sums(const SpMat& A, Eigen::Index p, const double* scaled_offset, long double r0,
+                                 LongVec6& av) const;
+
+    bool m_spatial = false;     ///< 3-D reading: nodes are vertices, 6 modes per body
+    int m_per_node = 1;         ///< DOFs per node
+    double m_inv_length = 1.0;  ///< rotation modes are (e_k x d) / l: the columns stay O(1)
+    std::vector<int> m_body;    ///< body of each node
+    Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> m_offset;  ///< vertex - its body's centroid
+    Vec m_x0;                                                            ///< the start the loads are taken from
+    Eigen::Matrix<double, Eigen::Dynamic, MODES, Eigen::RowMajor> m_av;  ///< row p: (AV)_p on its body's modes
+    std::vector<Vec6> m_load0;                                           ///< V'(A x0 - b) per body
+    /// Each row's load per body it touches (a contact row touches one or two bodies).
+    struct RowLoads {
+        std::vector<int> start;  ///< (JV) entries of row i: [start_i, start_i+1)
+        std::vector<int> body;
+        std::vector<Vec6> jv;
+        Eigen::Index rows() const { return static_cast<Eigen::Index>(start.size()) - 1; }
+    };
+    RowLoads row_loads(const SpMat& rows) const;
+    /// load -= (JV)' lambda over `rows`; false when lambda is not finite.
+    static bool subtract(const RowLoads& rows, const Vec& lambda, std::vector<Vec6>& load);
+    RowLoads m_rows;           ///< J's
+    RowLoads m_tangents;       ///< the friction's T (no rows without friction)
+    std::vector<Mat6> m_pinv;  ///< (V'AV)^+ per body (1 x 1 in the top-left corner without 3-D)
+};
+
+}  // namespace cb

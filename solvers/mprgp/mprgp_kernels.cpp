@@ -1,0 +1,156 @@
+// Closed-form MPRGP operators for decoupled J (ALGORITHMS.md §2) and the power method.
+// Ref: Li et al., "Deformable Objects Collision Handling with Fast Convergence", CGF 2015,
+//      eq. (13), (15)-(20); Alg. 1-3. With JJ' diagonal every subproblem is row-separable.
+#include "solvers/mprgp/mprgp_kernels.hpp"
+
+#include "solvers/linalg/a_product.hpp"
+#include "solvers/measure/accuracy.hpp"
+
+#include <cmath>
+#include <random>
+
+namespace cb {
+
+DecoupledRows make_decoupled_rows(const SpMat& J, const Vec& dinv)
+{
+    DecoupledRows rows;
+    const Eigen::Index m = J.rows();
+    rows.s.resize(m);
+    rows.inv_s.resize(m);
+    rows.r.resize(m);
+    rows.dof_in_row.assign(static_cast<size_t>(J.cols()), 0);
+    for (Eigen::Index i = 0; i < m; ++i) {
+        double s = 0.0, w = 0.0;
+        for (SpMat::InnerIterator it(J, i); it; ++it) {
+            s += it.value() * it.value();
+            w += it.value() * it.value() * dinv[it.col()];
+            if (it.value() != 0.0) rows.dof_in_row[static_cast<size_t>(it.col())] = 1;  // explicit zeros do not count
+        }
+        rows.s[i] = s;
+        rows.inv_s[i] = s > 0.0 ? 1.0 / s : 0.0;
+        rows.r[i] = w > 0.0 ? 1.0 / w : 0.0;
+    }
+    return rows;
+}
+
+void active_rows(const SpMat& J, const Vec& c, const DecoupledRows& rows, const Vec& x, std::vector<char>& active)
+{
+    active.assign(static_cast<size_t>(J.rows()), 0);
+    for (Eigen::Index i = 0; i < J.rows(); ++i) {
+        if (rows.s[i] <= 0.0) continue;
+        active[static_cast<size_t>(i)] = std::abs(row_dot(J, i, x) - c[i]) <= active_tolerance(c[i]);
+    }
+}
+
+long project_decoupled(const SpMat& J, const Vec& c, const DecoupledRows& rows, const Vec& x, Vec& y, Vec* lambda)
+{
+    if (&y != &x) y = x;
+    if (lambda) lambda->setZero(J.rows());
+    long moved = 0;
+    for (Eigen::Index i = 0; i < J.rows(); ++i) {
+        if (rows.s[i] <= 0.0) continue;
+        // Rows share no DOF, so each row's correction leaves the others' J_k y unchanged.
+        const double l = (c[i] - row_dot(J, i, y)) * rows.inv_s[i];
+        if (l > 0.0) {
+            row_axpy(J, i, l, y);
+            ++moved;
+            if (lambda) (*lambda)[i] = l;
+        }
+    }
+    return moved;
+}
+
+void free_gradient(const SpMat& J, const DecoupledRows& rows, const std::vector<char>& active, const Vec& g, Vec& phi)
+{
+    phi = g;
+    for (Eigen::Index i = 0; i < J.rows(); ++i)
+        if (active[static_cast<size_t>(i)]) row_axpy(J, i, -row_dot(J, i, g) * rows.inv_s[i], phi);
+}
+
+void chopped_gradient(const SpMat& J, const DecoupledRows& rows, const std::vector<char>& active, const Vec& g,
+                      Vec& beta)
+{
+    beta.setZero(g.size());
+    for (Eigen::Index i = 0; i < J.rows(); ++i) {
+        if (!active[static_cast<size_t>(i)]) continue;
+        const double t = row_dot(J, i, g) * rows.inv_s[i];
+        if (t < 0.0) row_axpy(J, i, t, beta);
+    }
+}
+
+double reduced_free_gradient_dot(const SpMat& J, const Vec& c, const DecoupledRows& rows, const Vec& x, const Vec& phi,
+                                 double alpha_bar)
+{
+    const Vec trial = x - alpha_bar * phi;
+    Vec projected;
+    project_decoupled(J, c, rows, trial, projected);
+    return (x - projected).dot(phi) / alpha_bar;
+}
+
+void decoupled_multipliers(const SpMat& J, const DecoupledRows& rows, const std::vector<char>& active, const Vec& g,
+                           Vec& lambda)
+{
+    lambda.setZero(J.rows());
+    for (Eigen::Index i = 0; i < J.rows(); ++i)
+        if (active[static_cast<size_t>(i)]) lambda[i] = std::max(0.0, row_dot(J, i, g) * rows.inv_s[i]);
+}
+
+void jacobi_face_precondition(const SpMat& J, const DecoupledRows& rows, const std::vector<char>& active,
+                              const Vec& dinv, const Vec& g, Vec& z)
+{
+    z = dinv.cwiseProduct(g);
+    const int* outer = J.outerIndexPtr();
+    const int* inner = J.innerIndexPtr();
+    const double* val = J.valuePtr();
+    for (Eigen::Index i = 0; i < J.rows(); ++i) {
+        if (!active[static_cast<size_t>(i)]) continue;
+        double wg = 0.0;  // (W g)_i = J_i D^-1 g = J_i z before the correction
+        for (int k = outer[i]; k < outer[i + 1]; ++k) wg += val[k] * z[inner[k]];
+        const double mu = rows.r[i] * wg;
+        for (int k = outer[i]; k < outer[i + 1]; ++k) z[inner[k]] -= mu * val[k] * dinv[inner[k]];
+    }
+}
+
+PowerResult power_method(const AOperator& A, Vec& v, PowerRule rule, long max_products, double tol, bool warm,
+                         std::uint64_t seed, bool (*deadline_check)(void*), void* deadline_data)
+{
+    PowerResult result;
+    const Eigen::Index n = A.rows();
+    if (n == 0) return result;
+    const bool use_warm = warm && rule == PowerRule::POWER && v.size() == n && v.allFinite() && v.norm() > 0.0;
+    if (use_warm) {
+        v.normalize();
+        result.warm = true;
+    } else {
+        // Seeded, strictly positive start: never orthogonal to the Perron-like top eigenvector
+        // of a mass-dominated A, and reproducible.
+        std::mt19937_64 rng(seed ^ 0x9e3779b97f4a7c15ULL);
+        std::uniform_real_distribution<double> unit(0.5, 1.5);
+        v.resize(n);
+        for (Eigen::Index i = 0; i < n; ++i) v[i] = unit(rng);
+        v.normalize();
+    }
+    Vec w(n);
+    double previous = 0.0;
+    for (long k = 0; k < max_products; ++k) {
+        a_product(A, v, w);
+        ++result.products;
+        const double norm_w = w.norm();
+        if (!(norm_w > 0.0) || !std::isfinite(norm_w)) break;
+        result.estimate = norm_w;
+        w /= norm_w;
+        if (rule == PowerRule::AUTHORS) {
+            const double change = (w - v).norm();
+            v.swap(w);
+            if (change <= tol) break;
+        } else {
+            v.swap(w);
+            if (k > 0 && std::abs(norm_w - previous) <= 1e-3 * norm_w) break;
+        }
+        previous = norm_w;
+        if (deadline_check && deadline_check(deadline_data)) break;
+    }
+    return result;
+}
+
+}  // namespace cb
