@@ -182,15 +182,15 @@ class ReportsStaleFigures(unittest.TestCase):
 
     def test_a_pure_move_leaves_them_fresh_and_a_later_change_does_not(self):
         self.doc()
-        os.makedirs(os.path.join(self.root, "solvers", "mprgp"))
-        self.git("mv", "solvers/mprgp/mprgp.cpp", "solvers/mprgp/mprgp.cpp")
-        write(self.root, "plots/fig.py", "# solvers/mprgp/mprgp.cpp\n")
-        self.commit("Pure move: solvers/mprgp/mprgp.cpp into solvers/mprgp/")
+        os.makedirs(os.path.join(self.root, "solvers", "engine"))
+        self.git("mv", "solvers/mprgp/mprgp.cpp", "solvers/engine/mprgp.cpp")
+        write(self.root, "plots/fig.py", "# solvers/engine/mprgp.cpp\n")
+        self.commit("Pure move: solvers/mprgp/ into solvers/engine/")
         self.assertEqual(stale_figures_problems(self.root), [])
-        write(self.root, "solvers/mprgp/mprgp.cpp", "int iterations = 317;\n")
+        write(self.root, "solvers/engine/mprgp.cpp", "int iterations = 317;\n")
         self.commit("solver")
         self.assertEqual(len(stale_figures_problems(self.root)), 1)
-        self.assertIn("predate changes to solvers/mprgp/mprgp.cpp:", stale_figures_problems(self.root)[0])
+        self.assertIn("predate changes to solvers/engine/mprgp.cpp:", stale_figures_problems(self.root)[0])
 
     def test_a_stated_reason_keeps_them(self):
         self.doc("\nStill stands: the change after it renames a variable.")
