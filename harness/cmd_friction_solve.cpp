@@ -8,13 +8,13 @@
 #include "problems/format_sniff.hpp"
 #include "problems/siconos_dat.hpp"
 #include "solvers/core/format_number.hpp"
-#include "solvers/measure/friction_error.hpp"
+#include "solvers/core/stopwatch.hpp"
 #include "solvers/friction/friction_global_nsgs.hpp"
 #include "solvers/friction/friction_nsgs.hpp"
 #include "solvers/friction/mprgp_tresca.hpp"
+#include "solvers/measure/friction_error.hpp"
 #include "solvers/peers/siconos_fc3d.hpp"
 #include "solvers/peers/siconos_gfc3d.hpp"
-#include "solvers/core/stopwatch.hpp"
 
 #include <nlohmann/json.hpp>
 #include <algorithm>
@@ -106,7 +106,8 @@ void solve_local(const FrictionLocal& problem, const std::vector<std::string>& s
     table += line;
     for (const std::string& solver : solvers) {
         FrictionRun run = our_local_run(problem, solver, s);
-        if (run.solver.empty()) run = siconos_fc3d_solve(problem, solver.substr(8), s.max_iterations, s.tol, s.time_limit);
+        if (run.solver.empty())
+            run = siconos_fc3d_solve(problem, solver.substr(8), s.max_iterations, s.tol, s.time_limit);
         nlohmann::json row;
         const double siconos_scaled = siconos_relative_error(problem, run.r);
         report(solver, run, siconos_scaled, table, row);
@@ -150,7 +151,8 @@ void solve_global(const FrictionGlobal& problem, const std::vector<std::string>&
             run = siconos_gfc3d_solve(problem, solver.substr(8), s.max_iterations, s.tol, s.time_limit).run;
         }
         const double reduced = run.r.size() == reduction.local().q.size() && run.r.allFinite()
-                                   ? fclib_relative_error(reduction.local(), run.r) : INFINITY;
+                                   ? fclib_relative_error(reduction.local(), run.r)
+                                   : INFINITY;
         nlohmann::json row;
         report(solver, run, reduced, table, row);
         row["reduced_error"] = reduced;

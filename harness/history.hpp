@@ -16,8 +16,8 @@
 /// Time: time_s is the solver's time since the start of its setup (monitor excluded), so the
 /// first row of every history sits at the solver's setup time; solve_time_s is the same stamp
 /// without the setup (the iterations only).
-#include "solvers/measure/accuracy.hpp"
 #include "solvers/core/solver.hpp"
+#include "solvers/measure/accuracy.hpp"
 
 #include <nlohmann/json.hpp>
 #include <vector>

@@ -3,8 +3,8 @@
 
 #include "harness/reference.hpp"
 #include "harness/runner.hpp"
-#include "solvers/mprgp/decouple.hpp"
 #include "solvers/measure/friction_snapshot_error.hpp"
+#include "solvers/mprgp/decouple.hpp"
 
 #include <cmath>
 #include <limits>

@@ -10,8 +10,8 @@
 /// relaxation (mu = 0), which the judgement names (`relaxation`): its verdict is then at best
 /// `solved_relaxation`, never `converged`.
 #include "problems/solution_io.hpp"
-#include "solvers/measure/accuracy.hpp"
 #include "solvers/core/qp.hpp"
+#include "solvers/measure/accuracy.hpp"
 
 #include <nlohmann/json.hpp>
 #include <string>

@@ -2,8 +2,8 @@
 
 #include "harness/blas_threads.hpp"
 #include "harness/slurm.hpp"
-#include "solvers/linalg/a_product.hpp"
 #include "solvers/core/registry.hpp"
+#include "solvers/linalg/a_product.hpp"
 
 #include <Eigen/Core>
 #include <SuiteSparse_config.h>

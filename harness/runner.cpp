@@ -4,10 +4,10 @@
 #include "harness/provenance.hpp"
 #include "harness/run_problem.hpp"
 #include "harness/run_record.hpp"
-#include "solvers/linalg/a_product.hpp"
-#include "solvers/measure/friction_snapshot_error.hpp"
 #include "solvers/core/peak_memory.hpp"
 #include "solvers/core/registry.hpp"
+#include "solvers/linalg/a_product.hpp"
+#include "solvers/measure/friction_snapshot_error.hpp"
 #include "solvers/measure/work_units.hpp"
 
 #include <algorithm>

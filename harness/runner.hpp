@@ -12,10 +12,10 @@
 /// On a frictional problem a solver solved the frictional problem only when it handles friction
 /// and returned its 2m tangential multipliers; otherwise its problem was the frictionless
 /// relaxation (record "solved_problem": "frictionless").
-#include "solvers/measure/accuracy.hpp"
 #include "solvers/core/qp.hpp"
 #include "solvers/core/settings.hpp"
 #include "solvers/core/solver.hpp"
+#include "solvers/measure/accuracy.hpp"
 
 #include <nlohmann/json.hpp>
 #include <cstdint>

@@ -1,11 +1,11 @@
 // The frictional time step: the contacts' local problem, NSGS, and the recovery of x (see friction_step.hpp).
 #include "sim/friction_step.hpp"
 
+#include "solvers/core/stopwatch.hpp"
+#include "solvers/friction/friction_nsgs.hpp"
 #include "solvers/linalg/delassus.hpp"
 #include "solvers/measure/friction_error.hpp"
-#include "solvers/friction/friction_nsgs.hpp"
 #include "solvers/peers/siconos_fc3d.hpp"
-#include "solvers/core/stopwatch.hpp"
 
 #include <cmath>
 #include <stdexcept>

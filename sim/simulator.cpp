@@ -6,11 +6,11 @@
 #include "sim/partial_table.hpp"
 #include "sim/render.hpp"
 #include "sim/resume_state.hpp"
-#include "solvers/measure/accuracy.hpp"
-#include "solvers/mprgp/decouple.hpp"
 #include "solvers/core/format_number.hpp"
 #include "solvers/core/peak_memory.hpp"
 #include "solvers/core/registry.hpp"
+#include "solvers/measure/accuracy.hpp"
+#include "solvers/mprgp/decouple.hpp"
 
 #include <algorithm>
 #include <cerrno>

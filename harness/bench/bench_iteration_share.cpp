@@ -8,9 +8,9 @@
 // a threaded product's CPU time is summed over its threads).
 //   CB_BENCH_SNAPSHOTS=a.qpsnap:b.qpsnap build/bin/cb_bench --benchmark_filter=IterationShare
 #include "harness/bench/alternating.hpp"
+#include "solvers/core/registry.hpp"
 #include "solvers/linalg/a_product.hpp"
 #include "solvers/mprgp/decouple.hpp"
-#include "solvers/core/registry.hpp"
 
 #include <benchmark/benchmark.h>
 

@@ -5,8 +5,8 @@
 // "Performance targets").
 //   build-*/bin/cb_bench --benchmark_filter='Triad|AProduct|Pcg|Mprgp'
 #include "problems/synthetic.hpp"
-#include "solvers/measure/accuracy.hpp"
 #include "solvers/core/registry.hpp"
+#include "solvers/measure/accuracy.hpp"
 
 #include <benchmark/benchmark.h>
 

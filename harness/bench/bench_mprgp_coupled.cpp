@@ -22,8 +22,8 @@
 // CB_BENCH_COUPLED_SETTINGS (a JSON object, e.g. {"precond": "scaled"}) sets `mprgp-coupled`'s
 // settings instead of its defaults; decoupled `mprgp` keeps its own.
 #include "problems/qpsnap.hpp"
-#include "solvers/mprgp/decouple.hpp"
 #include "solvers/core/registry.hpp"
+#include "solvers/mprgp/decouple.hpp"
 
 #include <benchmark/benchmark.h>
 #if __has_include(<valgrind/callgrind.h>)

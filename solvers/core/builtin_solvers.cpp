@@ -1,16 +1,16 @@
 // The list of built-in solvers: one line per solver (see README "Adding a solver").
+#include "solvers/core/registry.hpp"
+#include "solvers/friction/mprgp_bmf03.hpp"
+#include "solvers/friction/mprgp_staggered.hpp"
+#include "solvers/friction/mprgp_tresca_entries.hpp"
+#include "solvers/friction/nsgs_friction.hpp"
 #include "solvers/methods/active_set.hpp"
 #include "solvers/methods/cg.hpp"
 #include "solvers/methods/ica.hpp"
+#include "solvers/methods/pgs.hpp"
 #include "solvers/mprgp/mprgp.hpp"
-#include "solvers/friction/mprgp_bmf03.hpp"
 #include "solvers/mprgp/mprgp_box.hpp"
 #include "solvers/mprgp/mprgp_coupled.hpp"
-#include "solvers/friction/mprgp_tresca_entries.hpp"
-#include "solvers/friction/mprgp_staggered.hpp"
-#include "solvers/friction/nsgs_friction.hpp"
-#include "solvers/methods/pgs.hpp"
-#include "solvers/core/registry.hpp"
 #ifdef CB_HAVE_IPOPT
 #include "solvers/peers/ipopt_solver.hpp"
 #endif
@@ -39,7 +39,7 @@ void register_builtin_solvers(SolverRegistry& registry)
     registry.add("mprgp-coupled", mprgp_coupled_entry());  // applies to any J (the entry's default)
     registry.add("ica", ica_entry());
     registry.add("pgs", pgs_entry());
-    registry.add("nsgs-friction", nsgs_friction_entry());  // pgs's frictional extension (Coulomb cones)
+    registry.add("nsgs-friction", nsgs_friction_entry());            // pgs's frictional extension (Coulomb cones)
     registry.add("mprgp-tresca-fp", mprgp_tresca_fp_entry());        // Coulomb by a fixed point on Tresca bounds
     registry.add("mprgp+ica-friction", mprgp_ica_friction_entry());  // baseline: mprgp-box's r_n, then nsgs
     registry.add("mprgp+bmf03", mprgp_bmf03_entry());  // baseline: mprgp-coupled, then a Coulomb velocity update

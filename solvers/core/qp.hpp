@@ -53,7 +53,7 @@ struct QpView {
     const Vec& b;
     const SpMat& J;
     const Vec& c;
-    const Vec& x0;  ///< start point (may be infeasible)
+    const Vec& x0;                        ///< start point (may be infeasible)
     const FixedLength* length = nullptr;  ///< the problem's fixed scene size, if any
     const Friction* friction = nullptr;   ///< the rows' Coulomb friction, if any
     Eigen::Index n() const { return A.rows(); }

@@ -1,8 +1,8 @@
 #pragma once
 /// Solver settings: the block every solver accepts, and a strict JSON reader that names the
 /// offending field ("mprgp: /gamma: must be > 0, got -1") and rejects unknown keys.
-#include "solvers/linalg/a_format.hpp"
 #include "solvers/core/types.hpp"
+#include "solvers/linalg/a_format.hpp"
 
 #include <nlohmann/json.hpp>
 #include <climits>
@@ -37,10 +37,10 @@ struct CommonSettings {
     double tol =
         DEFAULT_TOL;  ///< on the accuracy error e (a fraction of the scene size), or the native residual (stop=native)
     StopRule stop = StopRule::ACCURACY;
-    long max_iterations = 10000;  ///< outer iterations
-    double time_limit_s = 0.0;    ///< 0 disables the limit
-    std::uint64_t seed = 0;       ///< every random choice is seeded
-    long threads = 1;             ///< threads of the A-products (solvers/linalg/a_product.hpp); 1 = one core
+    long max_iterations = 10000;       ///< outer iterations
+    double time_limit_s = 0.0;         ///< 0 disables the limit
+    std::uint64_t seed = 0;            ///< every random choice is seeded
+    long threads = 1;                  ///< threads of the A-products (solvers/linalg/a_product.hpp); 1 = one core
     AFormat a_format = AFormat::AUTO;  ///< storage of A for the A-products (AOperator::prepare)
 
     /// stop=native. For a peer that passes `tol` to its library as that library's own tolerance;

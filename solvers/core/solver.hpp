@@ -1,9 +1,9 @@
 #pragma once
 /// The one interface every solver implements, with its status, counters and monitor.
-#include "solvers/measure/accuracy.hpp"
 #include "solvers/core/qp.hpp"
 #include "solvers/core/settings.hpp"
 #include "solvers/core/stopwatch.hpp"
+#include "solvers/measure/accuracy.hpp"
 
 #include <nlohmann/json.hpp>
 #include <memory>
@@ -73,8 +73,8 @@ struct IterationInfo {
     double native_residual = 0.0;  ///< the solver's own residual (MPRGP ||phi+beta||, ICA ||Ax-b-J'l||)
     long active_set_size = -1;     ///< -1 when the solver has no notion of it
     const Counters* counters = nullptr;
-    double elapsed_s = 0.0;  ///< solver time since the start of its setup (monitor time excluded)
-    double setup_s = 0.0;    ///< the setup's share of elapsed_s (elapsed_s - setup_s: the iterations)
+    double elapsed_s = 0.0;         ///< solver time since the start of its setup (monitor time excluded)
+    double setup_s = 0.0;           ///< the setup's share of elapsed_s (elapsed_s - setup_s: the iterations)
     const Vec* lambda_t = nullptr;  ///< a frictional solver's 2m tangential multipliers, or nullptr
 };
 

@@ -6,9 +6,9 @@
 /// the FrictionLocal (solvers/core/friction_problem.hpp) that the dual frictional solvers take
 /// (mprgp-tresca-fp, nsgs). Formed by DualLcp (solvers/linalg/dual_lcp.hpp: CHOLMOD, dense W), so the
 /// sizes are those of a dense 3m x 3m W.
-#include "solvers/linalg/dual_lcp.hpp"
 #include "solvers/core/friction_problem.hpp"
 #include "solvers/core/qp.hpp"
+#include "solvers/linalg/dual_lcp.hpp"
 
 #include <string>
 

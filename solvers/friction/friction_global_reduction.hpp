@@ -6,9 +6,9 @@
 /// globalFrictionContact_reformulation_FrictionContact, computes the same q = b + H' M^-1 q_Siconos.)
 /// M is factored once by CHOLMOD and W formed sparse by Delassus (solvers/linalg/delassus.hpp); the
 /// factor also gives back v for any r, so a solver of the local problem answers the global one.
-#include "solvers/linalg/delassus.hpp"
 #include "solvers/core/friction_global.hpp"
 #include "solvers/core/friction_problem.hpp"
+#include "solvers/linalg/delassus.hpp"
 
 namespace cb {
 

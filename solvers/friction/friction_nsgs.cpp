@@ -1,8 +1,8 @@
 // Our non-smooth Gauss-Seidel on a frictional local problem (see friction_nsgs.hpp).
 #include "solvers/friction/friction_nsgs.hpp"
 
-#include "solvers/measure/friction_error.hpp"
 #include "solvers/core/stopwatch.hpp"
+#include "solvers/measure/friction_error.hpp"
 
 #include <Eigen/Dense>
 #include <cmath>

@@ -1,9 +1,9 @@
 // A frictional method run on a snapshot and judged by the harness's measure (see friction_snapshot_solve.hpp).
 #include "solvers/friction/friction_snapshot_solve.hpp"
 
-#include "solvers/measure/accuracy.hpp"
 #include "solvers/core/format_number.hpp"
 #include "solvers/core/solve_loop.hpp"
+#include "solvers/measure/accuracy.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,7 +1,7 @@
 #pragma once
 /// The one way a registry entry runs a frictional method that is not a SolveLoop solver (our local-form
-/// solvers of solvers/friction/mprgp_tresca.hpp, Siconos' fc3d/gfc3d peers) on a snapshot (solvers/core/qp.hpp, Friction):
-/// the contact frame, the setup inside the solver's clock, the method's own tolerance, and the harness's
+/// solvers of solvers/friction/mprgp_tresca.hpp, Siconos' fc3d/gfc3d peers) on a snapshot (solvers/core/qp.hpp,
+/// Friction): the contact frame, the setup inside the solver's clock, the method's own tolerance, and the harness's
 /// verdict on the returned (x, lambda, lambda_t).
 ///
 /// Frame: a snapshot with friction fields keeps them; one without (version 1) is the frictional problem

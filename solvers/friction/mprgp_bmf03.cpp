@@ -1,12 +1,12 @@
 // `mprgp+bmf03` (see mprgp_bmf03.hpp).
 #include "solvers/friction/mprgp_bmf03.hpp"
 
-#include "solvers/linalg/a_product.hpp"
-#include "solvers/measure/friction_snapshot_error.hpp"
-#include "solvers/mprgp/mprgp_coupled.hpp"
 #include "solvers/core/solve_loop.hpp"
 #include "solvers/core/stopwatch.hpp"
+#include "solvers/linalg/a_product.hpp"
+#include "solvers/measure/friction_snapshot_error.hpp"
 #include "solvers/measure/work_units.hpp"
+#include "solvers/mprgp/mprgp_coupled.hpp"
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/Dense>
@@ -122,8 +122,7 @@ SolverResult MprgpBmf03Solver::solve(const QpView& qp, const SolveContext& conte
 
     // Stage 1: the frictionless QP, exactly (friction fields hidden from mprgp-coupled).
     const QpView frictionless{qp.A, qp.b, qp.J, qp.c, qp.x0, qp.length, nullptr};
-    SolverResult result =
-        mprgp_coupled_solve(frictionless, MprgpCoupledSettings::from_json(common.to_json()), context);
+    SolverResult result = mprgp_coupled_solve(frictionless, MprgpCoupledSettings::from_json(common.to_json()), context);
     rename_message(result);
     result.info["frictionless_stage"] = {
         {"solver", "mprgp-coupled"}, {"status", to_string(result.status)}, {"iterations", result.iterations}};

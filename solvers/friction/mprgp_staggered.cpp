@@ -1,16 +1,16 @@
 // `mprgp-staggered` (see mprgp_staggered.hpp).
 #include "solvers/friction/mprgp_staggered.hpp"
 
+#include "solvers/core/solve_loop.hpp"
 #include "solvers/linalg/a_product.hpp"
-#include "solvers/measure/accuracy.hpp"
-#include "solvers/mprgp/disc_set.hpp"
 #include "solvers/linalg/dual_lcp.hpp"
+#include "solvers/measure/accuracy.hpp"
 #include "solvers/measure/friction_snapshot_error.hpp"
+#include "solvers/measure/work_units.hpp"
+#include "solvers/mprgp/disc_set.hpp"
 #include "solvers/mprgp/mprgp_coupled.hpp"
 #include "solvers/mprgp/mprgp_feasible.hpp"
 #include "solvers/mprgp/mprgp_kernels.hpp"
-#include "solvers/core/solve_loop.hpp"
-#include "solvers/measure/work_units.hpp"
 
 #include <algorithm>
 #include <climits>

@@ -1,15 +1,15 @@
 // mprgp-tresca-fp and mprgp+ica-friction (see mprgp_tresca.hpp).
 #include "solvers/friction/mprgp_tresca.hpp"
 
-#include "solvers/linalg/a_product.hpp"
 #include "solvers/core/format_number.hpp"
+#include "solvers/core/solve_loop.hpp"
+#include "solvers/core/stopwatch.hpp"
+#include "solvers/linalg/a_product.hpp"
 #include "solvers/measure/friction_error.hpp"
 #include "solvers/mprgp/mprgp_box.hpp"
 #include "solvers/mprgp/mprgp_feasible.hpp"
 #include "solvers/mprgp/mprgp_kernels.hpp"
 #include "solvers/mprgp/mprgp_parts.hpp"
-#include "solvers/core/solve_loop.hpp"
-#include "solvers/core/stopwatch.hpp"
 #include "solvers/mprgp/tresca_set.hpp"
 
 #include <Eigen/Dense>

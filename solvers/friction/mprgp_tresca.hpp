@@ -19,9 +19,9 @@
 ///
 /// `mprgp+ica-friction` (the paper's suggestion after OTSG09): frictionless mprgp-box on (W_NN, q_N),
 /// then our `nsgs` started from (r_n, 0).
-#include "solvers/friction/friction_nsgs.hpp"
 #include "solvers/core/friction_problem.hpp"
 #include "solvers/core/solver.hpp"
+#include "solvers/friction/friction_nsgs.hpp"
 
 #include <string>
 

@@ -1,12 +1,12 @@
 // `nsgs-friction` (see nsgs_friction.hpp).
 #include "solvers/friction/nsgs_friction.hpp"
 
+#include "solvers/core/solve_loop.hpp"
+#include "solvers/friction/friction_nsgs.hpp"
 #include "solvers/linalg/a_product.hpp"
 #include "solvers/linalg/delassus.hpp"
 #include "solvers/measure/friction_error.hpp"
-#include "solvers/friction/friction_nsgs.hpp"
 #include "solvers/measure/friction_snapshot_error.hpp"
-#include "solvers/core/solve_loop.hpp"
 #include "solvers/measure/work_units.hpp"
 
 #include <algorithm>

@@ -4,8 +4,8 @@
 /// so the harness can count A-products itself (around each solve) instead of trusting the
 /// solver's own count, and so A's storage for the product is chosen in one place.
 /// Work that bypasses it (CHOLMOD, sparse partial products) shows up in instruction counts instead.
-#include "solvers/linalg/a_format.hpp"
 #include "solvers/core/types.hpp"
+#include "solvers/linalg/a_format.hpp"
 
 #include <string>
 #include <vector>

@@ -5,8 +5,8 @@
 /// and the primal point x = A^-1 (b + J'lambda). W is formed by Delassus (solvers/linalg/delassus.hpp:
 /// CHOLMOD, dense, symmetrised). All of it is the solvers' setup, and its work is counted
 /// (cholmod_analyses, cholmod_factorizations, cholmod_solves, work_flops).
-#include "solvers/linalg/delassus.hpp"
 #include "solvers/core/solver.hpp"
+#include "solvers/linalg/delassus.hpp"
 
 #include <string>
 

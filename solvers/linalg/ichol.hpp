@@ -3,8 +3,8 @@
 /// MPRGP's decoupled rows (docs/preconditioners.md).
 /// Ref: Lin & More, "Incomplete Cholesky factorizations with limited memory", SIAM J. Sci.
 ///      Comput. 21(1), 1999 (Eigen's IncompleteCholesky: AMD ordering, diagonal scaling, shift).
-#include "solvers/mprgp/mprgp_kernels.hpp"
 #include "solvers/core/types.hpp"
+#include "solvers/mprgp/mprgp_kernels.hpp"
 
 #include <Eigen/IterativeLinearSolvers>
 #include <string>

@@ -22,8 +22,8 @@
 ///   friction         max_i ||F_i||_2 / l
 /// and its modified velocity's work to the gap; e = max of the six. A contact with mu_i = 0 and
 /// lambda_T,i = 0 adds nothing, so on a frictionless problem e is today's bit for bit.
-#include "solvers/measure/body_motion.hpp"
 #include "solvers/core/qp.hpp"
+#include "solvers/measure/body_motion.hpp"
 
 #include <nlohmann/json.hpp>
 #include <algorithm>
@@ -55,11 +55,11 @@ struct AccuracyScale {
     Vec length_per_multiplier;  ///< n_i / k_i: the displacement a unit multiplier causes along row i
     double length = 1.0;        ///< the scene size l, in the problem's length unit
     double inv_length = 1.0;
-    std::string length_source;       ///< x0_extent | ... | unit, or a FixedLength's source (docs/accuracy.md)
-    double stiffness = 1.0;          ///< d_ref = mean of D: the energy scale is d_ref * l^2
-    double inv_energy = 1.0;         ///< 1 / (d_ref l^2)
-    long a_products = 0;             ///< A-products spent computing this scale
-    BodyMotion bodies;               ///< the rigid half of stationarity (built from the QP and l)
+    std::string length_source;  ///< x0_extent | ... | unit, or a FixedLength's source (docs/accuracy.md)
+    double stiffness = 1.0;     ///< d_ref = mean of D: the energy scale is d_ref * l^2
+    double inv_energy = 1.0;    ///< 1 / (d_ref l^2)
+    long a_products = 0;        ///< A-products spent computing this scale
+    BodyMotion bodies;          ///< the rigid half of stationarity (built from the QP and l)
     /// The stationarity part at (x, lambda) whose residual force is r = Ax - b - J'lambda:
     /// max(|D^-1 r|_inf, the bodies' motion) / l (a lambda of another size than m counts as 0).
     double stationarity(const Vec& r, const Vec& x, const Vec& lambda) const;

@@ -2,11 +2,11 @@
 // Ref: Li et al. 2015, Fig. 8 (the PCG baseline); Hestenes-Stiefel CG with a Jacobi preconditioner.
 #include "solvers/methods/cg.hpp"
 
+#include "solvers/core/solve_loop.hpp"
 #include "solvers/linalg/a_product.hpp"
 #include "solvers/linalg/ichol.hpp"
-#include "solvers/mprgp/mprgp_deflation.hpp"
-#include "solvers/core/solve_loop.hpp"
 #include "solvers/measure/work_units.hpp"
+#include "solvers/mprgp/mprgp_deflation.hpp"
 
 #include <cmath>
 #include <sstream>

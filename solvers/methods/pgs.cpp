@@ -1,9 +1,9 @@
 // Ref: Li et al., CGF 2015, eq. (2) (the dual LCP of the contact QP); ALGORITHMS.md §7.
 #include "solvers/methods/pgs.hpp"
-#include "solvers/linalg/a_product.hpp"
-#include "solvers/measure/accuracy_rows.hpp"
-#include "solvers/linalg/delassus.hpp"
 #include "solvers/core/solve_loop.hpp"
+#include "solvers/linalg/a_product.hpp"
+#include "solvers/linalg/delassus.hpp"
+#include "solvers/measure/accuracy_rows.hpp"
 #include "solvers/measure/work_units.hpp"
 
 #include <algorithm>

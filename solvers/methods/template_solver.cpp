@@ -5,9 +5,9 @@
 #include "solvers/methods/template_solver.hpp"
 #include "solvers/linalg/a_product.hpp"
 
+#include "solvers/core/solve_loop.hpp"
 #include "solvers/measure/accuracy.hpp"
 #include "solvers/mprgp/bounds.hpp"
-#include "solvers/core/solve_loop.hpp"
 
 #include <cmath>
 #include <sstream>

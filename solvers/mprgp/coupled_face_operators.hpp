@@ -12,9 +12,9 @@
 /// Every Gram matrix is scaled to unit diagonal and shifted by 1e-12 before factoring, so
 /// dependent rows stay solvable (the solve splits their multiplier).
 /// Ref: Li et al., CGF 2015, eq. (15)-(20).
-#include "solvers/linalg/row_components.hpp"
 #include "solvers/core/solver.hpp"
 #include "solvers/core/types.hpp"
+#include "solvers/linalg/row_components.hpp"
 
 #include <nlohmann/json.hpp>
 #include <memory>

@@ -15,11 +15,11 @@
 /// clipped to the feasible set, as `mprgp` does after a start, an expansion or a proportioning step.
 /// Ref: Saad, Yeung, Erhel, Guyomarc'h, SIAM J. Sci. Comput. 21(5), 2000 (deflated PCG);
 ///      Tang, Nabben, Vuik, Erlangga, J. Sci. Comput. 39, 2009 (balanced preconditioner).
-#include "solvers/mprgp/coupled_face_operators.hpp"
-#include "solvers/linalg/ichol.hpp"
-#include "solvers/mprgp/mprgp_deflation.hpp"
 #include "solvers/core/solver.hpp"
 #include "solvers/core/types.hpp"
+#include "solvers/linalg/ichol.hpp"
+#include "solvers/mprgp/coupled_face_operators.hpp"
+#include "solvers/mprgp/mprgp_deflation.hpp"
 
 #include <nlohmann/json.hpp>
 #include <string>

@@ -3,8 +3,8 @@
 /// solves: the interface of the coupled face operators' blocks (solvers/mprgp/coupled_face_operators.*).
 /// Dense blocks: solvers/mprgp/coupled_dense_block.cpp; CHOLMOD blocks (the global oracle and large
 /// components): solvers/mprgp/coupled_sparse_blocks.cpp.
-#include "solvers/mprgp/coupled_face_operators.hpp"
 #include "solvers/linalg/masked_gram_factor.hpp"
+#include "solvers/mprgp/coupled_face_operators.hpp"
 
 #include <memory>
 #include <vector>

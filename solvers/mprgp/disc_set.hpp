@@ -14,8 +14,8 @@
 ///                          g_i - min(g_i'n_i, 0) n_i (the part of g_i a feasible descent can follow)
 /// so that phi + beta is the projected gradient: -(phi + beta) is the steepest feasible descent.
 /// Block i is "on the circle" when |x_i| >= r_i (1 - tol): the engine's active set.
-#include "solvers/mprgp/disc_geometry.hpp"
 #include "solvers/core/types.hpp"
+#include "solvers/mprgp/disc_geometry.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -5,11 +5,11 @@
 #include "solvers/mprgp/mprgp_box.hpp"
 #include "solvers/core/solve_loop.hpp"
 
+#include "solvers/core/format_number.hpp"
 #include "solvers/linalg/a_product.hpp"
 #include "solvers/measure/accuracy.hpp"
 #include "solvers/mprgp/bound_set.hpp"
 #include "solvers/mprgp/bounds.hpp"
-#include "solvers/core/format_number.hpp"
 #include "solvers/mprgp/mprgp_feasible.hpp"
 #include "solvers/mprgp/mprgp_kernels.hpp"
 #include "solvers/mprgp/mprgp_parts.hpp"

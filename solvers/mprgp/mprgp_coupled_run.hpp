@@ -8,6 +8,7 @@
 /// solvers/mprgp/mprgp_coupled_steps.cpp: setup, the steps and the returned point.
 /// Ref: Li et al., CGF 2015, eq. (15)-(16) free gradient, (17)-(18) chopped gradient, (19)-(20)
 ///      projection, Alg. 3.
+#include "solvers/core/solve_loop.hpp"
 #include "solvers/linalg/a_product.hpp"
 #include "solvers/measure/accuracy.hpp"
 #include "solvers/mprgp/coupled_face_operators.hpp"
@@ -15,7 +16,6 @@
 #include "solvers/mprgp/mprgp_coupled_setup.hpp"
 #include "solvers/mprgp/mprgp_engine.hpp"
 #include "solvers/mprgp/mprgp_kernels.hpp"
-#include "solvers/core/solve_loop.hpp"
 
 #include <algorithm>
 #include <cmath>

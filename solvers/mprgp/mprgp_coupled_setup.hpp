@@ -1,10 +1,10 @@
 #pragma once
 /// `mprgp-coupled`'s setup pieces: the research counters of a run (one ResearchStats that fills
 /// `info`), the preconditioner choice (precond = auto) and the scaled variables (precond = scaled).
-#include "solvers/mprgp/mprgp_coupled.hpp"
-#include "solvers/mprgp/mprgp_parts.hpp"
 #include "solvers/core/qp.hpp"
 #include "solvers/linalg/row_components.hpp"
+#include "solvers/mprgp/mprgp_coupled.hpp"
+#include "solvers/mprgp/mprgp_parts.hpp"
 
 #include <memory>
 #include <optional>

@@ -8,9 +8,10 @@
 /// The hot loop is written for cost: one A-product per CG step (the projected objective F(P(y))
 /// comes from scalar recurrences plus a sparse correction), O(nnz(J)) row work, and fused vector
 /// updates, so that an iteration costs about one Jacobi-PCG iteration.
+#include "solvers/core/solve_loop.hpp"
 #include "solvers/linalg/a_product.hpp"
-#include "solvers/measure/accuracy.hpp"
 #include "solvers/linalg/ichol.hpp"
+#include "solvers/measure/accuracy.hpp"
 #include "solvers/mprgp/mprgp.hpp"
 #include "solvers/mprgp/mprgp_bb_step.hpp"
 #include "solvers/mprgp/mprgp_deflation.hpp"
@@ -18,7 +19,6 @@
 #include "solvers/mprgp/mprgp_kernels.hpp"
 #include "solvers/mprgp/mprgp_parts.hpp"
 #include "solvers/mprgp/mprgp_projcg_step.hpp"
-#include "solvers/core/solve_loop.hpp"
 
 #include <string>
 #include <vector>

@@ -2,8 +2,8 @@
 // returned point.
 #include "solvers/mprgp/mprgp_decoupled.hpp"
 
-#include "solvers/mprgp/decouple.hpp"
 #include "solvers/core/format_number.hpp"
+#include "solvers/mprgp/decouple.hpp"
 
 #include <algorithm>
 #include <cmath>

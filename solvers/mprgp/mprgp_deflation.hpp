@@ -11,8 +11,8 @@
 ///      algorithm", SIAM J. Sci. Comput. 21(5), 2000 (deflated PCG, Galerkin start);
 ///      Tang, Nabben, Vuik, Erlangga, "Comparison of two-level preconditioners derived from
 ///      deflation, domain decomposition and multigrid methods", J. Sci. Comput. 39, 2009 (BNN).
-#include "solvers/mprgp/mprgp_kernels.hpp"
 #include "solvers/core/types.hpp"
+#include "solvers/mprgp/mprgp_kernels.hpp"
 
 #include <Eigen/Dense>
 #include <functional>

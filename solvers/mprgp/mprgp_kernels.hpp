@@ -4,8 +4,8 @@
 /// Ref: Li et al., "Deformable Objects Collision Handling with Fast Convergence", CGF 2015,
 ///      eq. (13) reduced free gradient, eq. (15)-(16) free gradient, eq. (17)-(18) chopped
 ///      gradient, eq. (19)-(20) projection; Alg. 1-3.
-#include "solvers/linalg/a_product.hpp"
 #include "solvers/core/types.hpp"
+#include "solvers/linalg/a_product.hpp"
 
 #include <cstdint>
 #include <vector>

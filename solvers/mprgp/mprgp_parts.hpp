@@ -5,11 +5,11 @@
 /// EXPANSION_VARIANTS (docs/DESIGN.md "Adding an MPRGP variant").
 /// Ref: Kruzik, Horak, Cermak, Pospisil, Pecha, "Active set expansion strategies in MPRGP
 ///      algorithm", Adv. Eng. Softw. 149 (2020): expansion directions and step lengths as parts.
-#include "solvers/mprgp/mprgp_kernels.hpp"
 #include "solvers/core/settings.hpp"
 #include "solvers/core/solve_loop.hpp"
 #include "solvers/core/solver.hpp"
 #include "solvers/core/types.hpp"
+#include "solvers/mprgp/mprgp_kernels.hpp"
 
 #include <cmath>
 #include <string>

@@ -14,8 +14,8 @@
 /// the part of g_T that a feasible descent can follow; 0 on a zero-radius disc (no direction stays
 /// in it). phi + beta is then the projected gradient, zero exactly at a Tresca solution.
 /// Ref: Dostal, Kozubek, Math. Program. 135 (2012), MPGP; Dostal 2009, eq. (7.8) reduced free gradient.
-#include "solvers/mprgp/disc_geometry.hpp"
 #include "solvers/core/types.hpp"
+#include "solvers/mprgp/disc_geometry.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,8 +1,8 @@
 // The shared solve of the dual-LCP peers (see dual_lcp_peer.hpp).
 #include "solvers/peers/dual_lcp_peer.hpp"
+#include "solvers/core/solve_loop.hpp"
 #include "solvers/linalg/dual_lcp.hpp"
 #include "solvers/peers/child_process.hpp"
-#include "solvers/core/solve_loop.hpp"
 
 #include <cstring>
 #include <limits>

@@ -5,8 +5,8 @@
 /// (a crash is a status, time_limit_s ends it), read back lambda and the report, form
 /// x = A^-1 (b + J'lambda) and let the accuracy measure decide (finish_siconos_result). Only the
 /// child's work and a few words differ between the peers.
-#include "solvers/peers/siconos_report.hpp"
 #include "solvers/core/solver.hpp"
+#include "solvers/peers/siconos_report.hpp"
 
 #include <Eigen/Dense>
 #include <functional>

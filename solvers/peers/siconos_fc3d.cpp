@@ -2,9 +2,9 @@
 // siconos_fc3d.hpp).
 #include "solvers/peers/siconos_fc3d.hpp"
 
+#include "solvers/core/types.hpp"
 #include "solvers/measure/friction_error.hpp"
 #include "solvers/peers/siconos_friction_driver.hpp"
-#include "solvers/core/types.hpp"
 
 #ifdef CB_HAVE_SICONOS
 #include "solvers/peers/siconos_numerics_matrix.hpp"

@@ -1,10 +1,10 @@
 // Siconos' fc3d/gfc3d solvers as registry peers on a frictional snapshot (see siconos_friction.hpp).
 #include "solvers/peers/siconos_friction.hpp"
 
-#include "solvers/friction/friction_dual.hpp"
 #include "solvers/core/friction_global.hpp"
-#include "solvers/measure/friction_snapshot_error.hpp"
+#include "solvers/friction/friction_dual.hpp"
 #include "solvers/friction/friction_snapshot_solve.hpp"
+#include "solvers/measure/friction_snapshot_error.hpp"
 #include "solvers/peers/siconos_fc3d.hpp"
 #include "solvers/peers/siconos_gfc3d.hpp"
 

@@ -2,8 +2,8 @@
 /// Siconos numerics' frictional solvers as registry peers on a snapshot (solvers/core/qp.hpp, Friction), each in a
 /// forked child process (solvers/peers/siconos_fc3d.*, siconos_gfc3d.*), judged by the harness's frictional e
 /// (solvers/friction/friction_snapshot_solve.hpp: Siconos' tolerance tightened while e is not met):
-///   `siconos-fc3d-nsgs`  fc3d NSGS on the local problem W = H A^-1 H', q (solvers/friction/friction_dual.hpp), x recovered
-///   `siconos-fc3d-nsn`   fc3d NSN_AC (non-smooth Newton on Alart-Curnier's function), the same local problem
+///   `siconos-fc3d-nsgs`  fc3d NSGS on the local problem W = H A^-1 H', q (solvers/friction/friction_dual.hpp), x
+///   recovered `siconos-fc3d-nsn`   fc3d NSN_AC (non-smooth Newton on Alart-Curnier's function), the same local problem
 ///   `siconos-gfc3d-nsn`  gfc3d NSN_AC on the global problem itself: M = A, H = J_all' (contact i's columns
 ///                        J_i', T_2i', T_2i+1'), f = b, w = -c_all (FCLIB's signs, as `convert` writes them), x = v;
 ///                        a contact with mu = 0 gets zero tangent columns (as `siconos-nsn`)

@@ -4,8 +4,8 @@
 #include "solvers/core/types.hpp"
 
 #ifdef CB_HAVE_SICONOS
-#include "solvers/peers/child_process.hpp"
 #include "solvers/core/stopwatch.hpp"
+#include "solvers/peers/child_process.hpp"
 
 #include <SolverOptions.h>
 

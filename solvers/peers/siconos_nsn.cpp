@@ -1,8 +1,8 @@
 // Siconos numerics' global nonsmooth Newton (mu = 0) in a child process (see siconos_nsn.hpp).
 #include "solvers/peers/siconos_nsn.hpp"
+#include "solvers/core/solve_loop.hpp"
 #include "solvers/peers/child_process.hpp"
 #include "solvers/peers/siconos_report.hpp"
-#include "solvers/core/solve_loop.hpp"
 
 #include <Friction_cst.h>
 #include <GlobalFrictionContactProblem.h>

@@ -1,8 +1,8 @@
 // Shared pieces of the PETSc TAO peers (see tao_common.hpp).
 #include "solvers/peers/tao_common.hpp"
+#include "solvers/core/solver.hpp"
 #include "solvers/linalg/a_product.hpp"
 #include "solvers/measure/accuracy.hpp"
-#include "solvers/core/solver.hpp"
 
 #include <fcntl.h>
 #include <stdlib.h>

@@ -1,11 +1,11 @@
 // PETSc TAO's TAOPDIPM as an external peer, run in a child process (see tao_pdipm.hpp).
 #include "solvers/peers/tao_pdipm.hpp"
+#include "solvers/core/solve_loop.hpp"
 #include "solvers/linalg/a_product.hpp"
 #include "solvers/measure/accuracy.hpp"
 #include "solvers/peers/child_process.hpp"
 #include "solvers/peers/siconos_report.hpp"
 #include "solvers/peers/tao_common.hpp"
-#include "solvers/core/solve_loop.hpp"
 
 #include <algorithm>
 #include <cstring>

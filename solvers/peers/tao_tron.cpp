@@ -1,12 +1,12 @@
 // PETSc TAO's TAOTRON as an external peer on bound rows, run in a child process (see tao_tron.hpp).
 #include "solvers/peers/tao_tron.hpp"
+#include "solvers/core/solve_loop.hpp"
 #include "solvers/linalg/a_product.hpp"
 #include "solvers/measure/accuracy.hpp"
 #include "solvers/mprgp/bounds.hpp"
 #include "solvers/peers/child_process.hpp"
 #include "solvers/peers/siconos_report.hpp"
 #include "solvers/peers/tao_common.hpp"
-#include "solvers/core/solve_loop.hpp"
 
 #include <algorithm>
 #include <cstring>

@@ -2,8 +2,8 @@
 // optional entry only a peer of a library this build may lack) with settings they accept, and
 // every label takes the friction but the one frictionless reference the suite's description names.
 #include "harness/suite.hpp"
-#include "solvers/peers/siconos_fc3d.hpp"
 #include "solvers/core/registry.hpp"
+#include "solvers/peers/siconos_fc3d.hpp"
 
 #include <gtest/gtest.h>
 #include <set>

@@ -6,8 +6,8 @@
 #include "harness/reference.hpp"
 #include "harness/runner.hpp"
 #include "problems/qpsnap.hpp"
-#include "solvers/measure/accuracy.hpp"
 #include "solvers/core/registry.hpp"
+#include "solvers/measure/accuracy.hpp"
 
 #include <gtest/gtest.h>
 

@@ -4,8 +4,8 @@
 #include "harness/history.hpp"
 #include "harness/runner.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/mprgp/decouple.hpp"
 #include "solvers/core/registry.hpp"
+#include "solvers/mprgp/decouple.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,8 +1,8 @@
 // Tests of the stress suite: cases are generated, every run ends in an honest outcome, and the
 // stability files have the columns the heat map reads.
 #include "harness/stress.hpp"
-#include "solvers/measure/accuracy.hpp"
 #include "solvers/core/registry.hpp"
+#include "solvers/measure/accuracy.hpp"
 
 #include <gtest/gtest.h>
 #include <algorithm>

@@ -3,9 +3,9 @@
 // iterates on every run; small A stays on one range; `run` warns when jobs x threads exceed the cores.
 #include "harness/process_pool.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/linalg/a_product.hpp"
 #include "solvers/core/registry.hpp"
 #include "solvers/core/settings.hpp"
+#include "solvers/linalg/a_product.hpp"
 
 #include <gtest/gtest.h>
 

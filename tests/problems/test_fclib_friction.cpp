@@ -4,8 +4,8 @@
 // relative error the harness computes (/ ||q||). The one exception is stated with the number
 // reached; hostile frictional files end in exit 2 naming the field.
 #include "problems/fclib_io.hpp"
-#include "solvers/measure/friction_error.hpp"
 #include "solvers/friction/friction_nsgs.hpp"
+#include "solvers/measure/friction_error.hpp"
 #include "solvers/peers/siconos_fc3d.hpp"
 #include "tests/harness/cli_test_util.hpp"
 #include "tests/problems/hdf5_edit.hpp"

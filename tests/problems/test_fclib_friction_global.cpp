@@ -4,9 +4,9 @@
 // problem) <= 1e-6, except where stated below with the reason and the error reached (asserted,
 // not skipped). Hostile global files end in exit 2 naming the field; friction-solve takes them.
 #include "problems/fclib_io.hpp"
-#include "solvers/measure/friction_error.hpp"
 #include "solvers/friction/friction_global_nsgs.hpp"
 #include "solvers/friction/friction_global_reduction.hpp"
+#include "solvers/measure/friction_error.hpp"
 #include "solvers/peers/siconos_gfc3d.hpp"
 #include "tests/harness/cli_test_util.hpp"
 #include "tests/problems/hdf5_edit.hpp"

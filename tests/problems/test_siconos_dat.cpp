@@ -7,8 +7,8 @@
 #include "problems/format_sniff.hpp"
 #include "problems/qpsnap.hpp"
 #include "problems/siconos_dat.hpp"
-#include "solvers/measure/friction_error.hpp"
 #include "solvers/friction/friction_nsgs.hpp"
+#include "solvers/measure/friction_error.hpp"
 #include "solvers/peers/siconos_fc3d.hpp"
 #include "tests/harness/cli_test_util.hpp"
 

@@ -9,9 +9,9 @@
 #include "problems/qpsnap.hpp"
 #include "sim/chains.hpp"
 #include "sim/simulator.hpp"
+#include "solvers/core/registry.hpp"
 #include "solvers/friction/friction_nsgs.hpp"
 #include "solvers/peers/siconos_fc3d.hpp"
-#include "solvers/core/registry.hpp"
 
 #include <gtest/gtest.h>
 #include <cmath>

@@ -1,8 +1,8 @@
 #pragma once
 /// Shared by the mprgp-coupled tests (operators, preconditioners): the synthetic coupled scenes
 /// with a random extra load, so that the face changes during a solve, and with dependent rows.
-#include "solvers/measure/accuracy.hpp"
 #include "solvers/core/qp.hpp"
+#include "solvers/measure/accuracy.hpp"
 
 #include <cstdint>
 #include <cstdlib>

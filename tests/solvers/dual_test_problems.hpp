@@ -2,8 +2,8 @@
 /// Small self-contained contact QPs for the ica/pgs tests (no dependency on problems/):
 /// a grid of vertices with an SPD A = mass I + stiffness (L (x) C) (L: the grid graph Laplacian,
 /// C: a fixed SPD 3x3 coupling, so the 3x3 vertex blocks are full), pushed below the plane y >= 0.
-#include "solvers/measure/accuracy.hpp"
 #include "solvers/core/qp.hpp"
+#include "solvers/measure/accuracy.hpp"
 
 #include <Eigen/Dense>
 #include <cmath>

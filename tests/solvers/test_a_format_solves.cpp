@@ -5,9 +5,9 @@
 #include "harness/stress_families.hpp"
 #include "problems/qpsnap.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/linalg/a_product.hpp"
 #include "solvers/core/registry.hpp"
 #include "solvers/core/settings.hpp"
+#include "solvers/linalg/a_product.hpp"
 #include "tests/harness/cli_test_util.hpp"
 
 #include <gtest/gtest.h>

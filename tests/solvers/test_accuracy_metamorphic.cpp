@@ -12,8 +12,8 @@
 #include "harness/runner.hpp"
 #include "harness/stress_families.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/measure/accuracy.hpp"
 #include "solvers/core/registry.hpp"
+#include "solvers/measure/accuracy.hpp"
 
 #include <gtest/gtest.h>
 #include <cmath>

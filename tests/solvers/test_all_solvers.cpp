@@ -2,8 +2,8 @@
 // automatically) on tiny hand-derived QPs (STYLE.md §7). Solvers that require a decoupled J get
 // only decoupled problems; a solver that reports info.ignores_constraints (cg) must return the
 // unconstrained minimiser instead.
-#include "solvers/measure/accuracy.hpp"
 #include "solvers/core/registry.hpp"
+#include "solvers/measure/accuracy.hpp"
 #include "tests/solvers/tiny_qps.hpp"
 
 #include <Eigen/Dense>

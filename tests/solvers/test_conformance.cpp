@@ -4,8 +4,8 @@
 // registry (plus the unregistered template), so a new solver is covered without editing this file;
 // each gets the falling-body problem, or the bounds-only one when it answers not_applicable.
 #include "problems/synthetic.hpp"
-#include "solvers/measure/accuracy.hpp"
 #include "solvers/core/registry.hpp"
+#include "solvers/measure/accuracy.hpp"
 #include "solvers/methods/template_solver.hpp"
 
 #include <gtest/gtest.h>

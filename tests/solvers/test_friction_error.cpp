@@ -7,8 +7,8 @@
 // in another order by Siconos; seen: 8e-18 apart at an error of 1.9e-14, 7e-22 at 2.3e-12). The cone projection is a
 // projection.
 #include "problems/fclib_io.hpp"
-#include "solvers/measure/friction_error.hpp"
 #include "solvers/friction/friction_nsgs.hpp"
+#include "solvers/measure/friction_error.hpp"
 #include "solvers/peers/siconos_fc3d.hpp"
 
 #include <gtest/gtest.h>

@@ -5,9 +5,9 @@
 // solutions (ours and Siconos' NSN's), plus 1e-16 absolute where the error is of the order of the
 // rounding of M v and H r.
 #include "problems/fclib_io.hpp"
-#include "solvers/measure/friction_error.hpp"
 #include "solvers/friction/friction_global_nsgs.hpp"
 #include "solvers/friction/friction_global_reduction.hpp"
+#include "solvers/measure/friction_error.hpp"
 #include "solvers/peers/siconos_gfc3d.hpp"
 
 #include <gtest/gtest.h>

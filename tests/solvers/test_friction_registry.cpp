@@ -7,13 +7,13 @@
 #include "harness/runner.hpp"
 #include "problems/qpsnap.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/measure/accuracy.hpp"
+#include "solvers/core/registry.hpp"
 #include "solvers/friction/friction_dual.hpp"
-#include "solvers/measure/friction_error.hpp"
 #include "solvers/friction/friction_nsgs.hpp"
 #include "solvers/friction/friction_snapshot_solve.hpp"
+#include "solvers/measure/accuracy.hpp"
+#include "solvers/measure/friction_error.hpp"
 #include "solvers/mprgp/mprgp_box.hpp"
-#include "solvers/core/registry.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>

@@ -1,8 +1,8 @@
 // Tests of `ica` (ALGORITHMS.md §6): convergence on the common KKT, the published native stop
 // and what it misses, counters, options and refusals.
 #include "harness/runner.hpp"
-#include "solvers/methods/ica.hpp"
 #include "solvers/core/registry.hpp"
+#include "solvers/methods/ica.hpp"
 #include "tests/solvers/dual_test_problems.hpp"
 
 #include <Eigen/SparseCholesky>

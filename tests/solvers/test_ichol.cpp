@@ -2,9 +2,9 @@
 // decoupled rows, and cg / mprgp with it (counters, convergence on a stiff case).
 #include "harness/stress_families.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/measure/accuracy.hpp"
-#include "solvers/linalg/ichol.hpp"
 #include "solvers/core/registry.hpp"
+#include "solvers/linalg/ichol.hpp"
+#include "solvers/measure/accuracy.hpp"
 
 #include <Eigen/SparseCholesky>
 #include <gtest/gtest.h>

@@ -2,13 +2,13 @@
 // synthetic families, monotone F(P(x)), no safeguard firing on decoupled J, options, statuses,
 // and the iteration count against Jacobi-PCG on the same A (paper Fig. 8 claim).
 #include "problems/synthetic.hpp"
+#include "solvers/core/registry.hpp"
 #include "solvers/measure/accuracy.hpp"
 #include "solvers/methods/active_set.hpp"
 #include "solvers/methods/cg.hpp"
 #include "solvers/mprgp/decouple.hpp"
 #include "solvers/mprgp/mprgp.hpp"
 #include "solvers/mprgp/mprgp_kernels.hpp"
-#include "solvers/core/registry.hpp"
 
 #include <gtest/gtest.h>
 

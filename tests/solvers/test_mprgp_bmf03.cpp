@@ -2,9 +2,9 @@
 // contact, on particle-on-incline snapshots built here (a backward-Euler step of free particles on
 // the plane y >= 0 under gravity tilted by 20 degrees towards +x, as tests/sim/test_friction_incline.cpp).
 // For free particles the update is Coulomb's law exactly, so it must agree with nsgs-friction.
-#include "solvers/measure/friction_snapshot_error.hpp"
-#include "solvers/friction/mprgp_bmf03.hpp"
 #include "solvers/core/registry.hpp"
+#include "solvers/friction/mprgp_bmf03.hpp"
+#include "solvers/measure/friction_snapshot_error.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,9 +1,9 @@
 // Tests of `mprgp-box` (ALGORITHMS.md §5): bounds from signed unit rows (both sides), agreement
 // with the active-set reference and with `mprgp`, statuses.
 #include "problems/synthetic.hpp"
+#include "solvers/core/registry.hpp"
 #include "solvers/measure/accuracy.hpp"
 #include "solvers/mprgp/mprgp_box.hpp"
-#include "solvers/core/registry.hpp"
 
 #include <gtest/gtest.h>
 

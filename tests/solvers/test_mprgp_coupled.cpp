@@ -1,9 +1,9 @@
 // Tests of `mprgp-coupled` (ALGORITHMS.md §4): general J on per-component subproblems, agreement with
 // the active-set reference, dependent rows, both preconditioner settings, safeguard counts.
 #include "problems/synthetic.hpp"
+#include "solvers/core/registry.hpp"
 #include "solvers/measure/accuracy.hpp"
 #include "solvers/mprgp/decouple.hpp"
-#include "solvers/core/registry.hpp"
 
 #include <gtest/gtest.h>
 

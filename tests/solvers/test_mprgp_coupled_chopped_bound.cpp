@@ -6,9 +6,9 @@
 // and native residual the monitor sees are the exact ones (||A x - b - J'lambda||); the deferral
 // really happens on a 196-row component (above dense_max_rows).
 #include "problems/synthetic.hpp"
-#include "solvers/measure/accuracy.hpp"
 #include "solvers/core/registry.hpp"
 #include "solvers/linalg/row_components.hpp"
+#include "solvers/measure/accuracy.hpp"
 
 #include <gtest/gtest.h>
 

@@ -4,9 +4,9 @@
 // changes. Also the row-graph components themselves (solvers/linalg/row_components.hpp).
 #include "coupled_test_qps.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/measure/accuracy.hpp"
 #include "solvers/core/registry.hpp"
 #include "solvers/linalg/row_components.hpp"
+#include "solvers/measure/accuracy.hpp"
 
 #include <gtest/gtest.h>
 

@@ -5,11 +5,11 @@
 // stiff coupled QP.
 #include "coupled_test_qps.hpp"
 #include "problems/synthetic.hpp"
+#include "solvers/core/registry.hpp"
+#include "solvers/linalg/row_components.hpp"
 #include "solvers/measure/accuracy.hpp"
 #include "solvers/mprgp/coupled_face_operators.hpp"
 #include "solvers/mprgp/coupled_preconditioner.hpp"
-#include "solvers/core/registry.hpp"
-#include "solvers/linalg/row_components.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,8 +1,8 @@
 // Issue 17: mprgp-coupled on a problem moved by 100 m (x0 + t, b + A t, c + J t) behaves as on
 // the original one: same status, nearly the same iteration count, the solution moved by t.
 #include "harness/stress_families.hpp"
-#include "solvers/measure/accuracy.hpp"
 #include "solvers/core/registry.hpp"
+#include "solvers/measure/accuracy.hpp"
 
 #include <gtest/gtest.h>
 

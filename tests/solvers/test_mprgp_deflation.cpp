@@ -2,9 +2,9 @@
 // incremental face updates, the slow-mode filter, and the issue-17 target on a stiff body that
 // tips onto a few support points (mprgp + ichol within 2x the iterations of cg + ichol).
 #include "problems/synthetic.hpp"
+#include "solvers/core/registry.hpp"
 #include "solvers/measure/accuracy.hpp"
 #include "solvers/mprgp/mprgp_deflation.hpp"
-#include "solvers/core/registry.hpp"
 #include "tests/solvers/tipping_column.hpp"
 
 #include <gtest/gtest.h>

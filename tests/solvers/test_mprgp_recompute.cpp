@@ -4,10 +4,10 @@
 // frame 11 with the published Fig. 11 settings when their data is present.
 #include "harness/suite.hpp"
 #include "problems/qpsnap.hpp"
-#include "sim/simulator.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/mprgp/decouple.hpp"
+#include "sim/simulator.hpp"
 #include "solvers/core/registry.hpp"
+#include "solvers/mprgp/decouple.hpp"
 
 #include <gtest/gtest.h>
 

@@ -5,8 +5,8 @@
 #include "friction_test_qps.hpp"
 #include "harness/runner.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/measure/accuracy.hpp"
 #include "solvers/core/registry.hpp"
+#include "solvers/measure/accuracy.hpp"
 
 #include <gtest/gtest.h>
 

@@ -4,10 +4,10 @@
 // 1e-8; what it does with a W that is not symmetric or not semidefinite; mprgp+ica-friction; nsgs's
 // start vector; and both on the real local files of tests/data/fclib.
 #include "problems/fclib_io.hpp"
-#include "solvers/measure/friction_error.hpp"
 #include "solvers/friction/friction_nsgs.hpp"
-#include "solvers/mprgp/mprgp_box.hpp"
 #include "solvers/friction/mprgp_tresca.hpp"
+#include "solvers/measure/friction_error.hpp"
+#include "solvers/mprgp/mprgp_box.hpp"
 #include "solvers/mprgp/tresca_set.hpp"
 #include "tests/harness/cli_test_util.hpp"
 

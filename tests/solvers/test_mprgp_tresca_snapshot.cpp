@@ -2,9 +2,9 @@
 // T tangent rows, mu) made local through W = H A^-1 H' (solvers/friction/friction_dual.hpp) and solved by
 // mprgp-tresca-fp; checked against nsgs on the same W and against the primal x = A^-1 (b + H'r).
 #include "solvers/friction/friction_dual.hpp"
-#include "solvers/measure/friction_error.hpp"
 #include "solvers/friction/friction_nsgs.hpp"
 #include "solvers/friction/mprgp_tresca.hpp"
+#include "solvers/measure/friction_error.hpp"
 
 #include <gtest/gtest.h>
 

@@ -4,8 +4,8 @@
 #include "harness/stress_families.hpp"
 #include "problems/fclib_io.hpp"
 #include "problems/synthetic.hpp"
-#include "solvers/measure/accuracy.hpp"
 #include "solvers/core/registry.hpp"
+#include "solvers/measure/accuracy.hpp"
 
 #include <gtest/gtest.h>
 #include <algorithm>

@@ -3,9 +3,9 @@
 // failing Newton step, and each child's own Open MPI session folder. A peer that is not built is
 // skipped.
 #include "problems/synthetic.hpp"
+#include "solvers/core/registry.hpp"
 #include "solvers/measure/accuracy.hpp"
 #include "solvers/mprgp/mprgp_box.hpp"
-#include "solvers/core/registry.hpp"
 #include "tiny_qps.hpp"
 
 #include <gtest/gtest.h>

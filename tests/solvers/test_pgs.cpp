@@ -1,7 +1,7 @@
 // Tests of `pgs` on the exact dual (ALGORITHMS.md §7): convergence on the common KKT, agreement
 // with `ica` and with the reference `active-set`, the row limit, zero and infeasible rows.
-#include "solvers/methods/pgs.hpp"
 #include "solvers/core/registry.hpp"
+#include "solvers/methods/pgs.hpp"
 #include "tests/solvers/dual_test_problems.hpp"
 
 #include <Eigen/SparseCholesky>

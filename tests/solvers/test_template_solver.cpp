@@ -1,8 +1,8 @@
 // Tests of the model solver solvers/methods/template_solver.{hpp,cpp}: registered the way README "Adding a
 // solver" says (in a registry of its own here), it solves hand-derived bound QPs (STYLE.md §7) to
 // the KKT accuracy asked, honours stop=native and max_iterations, and refuses what it cannot solve.
-#include "solvers/measure/accuracy.hpp"
 #include "solvers/core/registry.hpp"
+#include "solvers/measure/accuracy.hpp"
 #include "solvers/methods/template_solver.hpp"
 #include "tests/solvers/tiny_qps.hpp"
 

@@ -1,7 +1,7 @@
 // Tests of the work unit (solvers/measure/work_units.hpp, docs/work.md): the flop counts CHOLMOD reports,
 // their conversion to A-product equivalents, and the work each solver counts.
-#include "solvers/linalg/ichol.hpp"
 #include "solvers/core/registry.hpp"
+#include "solvers/linalg/ichol.hpp"
 #include "solvers/measure/work_units.hpp"
 #include "tests/solvers/dual_test_problems.hpp"
 
