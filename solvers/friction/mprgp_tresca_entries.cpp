@@ -107,51 +107,54 @@ nlohmann::json MprgpIcaFrictionEntrySettings::to_json() const
     return write_settings(*this, mprgp_ica_friction_settings_table());
 }
 
+/// Both entries: the snapshot's local form (FrictionDual), the method on it, x recovered.
+template <class Method>
+SolverResult solve_on_local_form(const std::string& name, const QpView& qp, const CommonSettings& common,
+                                 long max_contacts, const SolveContext& context, Method method)
+{
+    SnapshotFrictionOptions options;
+    options.max_contacts = max_contacts;
+    options.native_definition = FCLIB_NATIVE;
+    return solve_frictional_snapshot(name, qp, common, context, options,
+                                     [&](const QpView& framed) { return local_method(framed, name, method); });
+}
+
 SolverResult MprgpTrescaFpSolver::solve(const QpView& qp, const SolveContext& context)
 {
     const MprgpTrescaFpEntrySettings s = m_settings;
-    SnapshotFrictionOptions options;
-    options.max_contacts = s.max_contacts;
-    options.native_definition = FCLIB_NATIVE;
-    return solve_frictional_snapshot(name(), qp, s.common, context, options, [&](const QpView& framed) {
-        return local_method(framed, name(),
-                            [s](const FrictionLocal& local, double tol, long max_iterations, double time_limit_s) {
-                                MprgpTrescaSettings t;
-                                t.tol = tol;
-                                t.max_outer = s.max_outer;
-                                t.max_inner = max_iterations;
-                                t.inner_fraction = s.inner_fraction;
-                                t.inner_relative = s.inner_relative;
-                                t.time_limit_s = time_limit_s;
-                                t.gamma = s.gamma;
-                                t.lag_skew = s.lag_skew;
-                                IterationCap cap(max_iterations);
-                                t.monitor = &cap;
-                                FrictionRun run = mprgp_tresca_fp(local, t).run;
-                                if (run.status == "stopped_by_monitor" && cap.reached()) run.status = "max_iterations";
-                                return run;
-                            });
-    });
+    return solve_on_local_form(name(), qp, s.common, s.max_contacts, context,
+                               [s](const FrictionLocal& local, double tol, long max_iterations, double time_limit_s) {
+                                   MprgpTrescaSettings t;
+                                   t.tol = tol;
+                                   t.max_outer = s.max_outer;
+                                   t.max_inner = max_iterations;
+                                   t.inner_fraction = s.inner_fraction;
+                                   t.inner_relative = s.inner_relative;
+                                   t.time_limit_s = time_limit_s;
+                                   t.gamma = s.gamma;
+                                   t.lag_skew = s.lag_skew;
+                                   IterationCap cap(max_iterations);
+                                   t.monitor = &cap;
+                                   FrictionRun run = mprgp_tresca_fp(local, t).run;
+                                   if (run.status == "stopped_by_monitor" && cap.reached())
+                                       run.status = "max_iterations";
+                                   return run;
+                               });
 }
 
 SolverResult MprgpIcaFrictionSolver::solve(const QpView& qp, const SolveContext& context)
 {
     const MprgpIcaFrictionEntrySettings s = m_settings;
-    SnapshotFrictionOptions options;
-    options.max_contacts = s.max_contacts;
-    options.native_definition = FCLIB_NATIVE;
-    return solve_frictional_snapshot(name(), qp, s.common, context, options, [&](const QpView& framed) {
-        return local_method(framed, name(),
-                            [s](const FrictionLocal& local, double tol, long max_iterations, double time_limit_s) {
-                                MprgpIcaFrictionSettings t;
-                                t.tol = tol;
-                                t.normal_tol = s.normal_tol;
-                                t.max_mprgp = max_iterations;
-                                t.max_sweeps = max_iterations;
-                                t.time_limit_s = time_limit_s;
-                                return mprgp_ica_friction(local, t);
-                            });
-    });
+    return solve_on_local_form(name(), qp, s.common, s.max_contacts, context,
+                               [s](const FrictionLocal& local, double tol, long max_iterations, double time_limit_s) {
+                                   MprgpIcaFrictionSettings t;
+                                   t.tol = tol;
+                                   t.normal_tol = s.normal_tol;
+                                   t.max_mprgp = max_iterations;
+                                   t.max_sweeps = max_iterations;
+                                   t.time_limit_s = time_limit_s;
+                                   return mprgp_ica_friction(local, t);
+                               });
 }
 
 SolverEntry mprgp_tresca_fp_entry()

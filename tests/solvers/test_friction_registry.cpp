@@ -34,6 +34,7 @@ using test::contactbench_binary;
 using test::make_test_work_dir;
 using test::Output;
 using test::run_captured;
+using testing_qps::particles_on_a_plane;
 
 const std::vector<std::string> NEW_ENTRIES = {"mprgp-tresca-fp", "mprgp+ica-friction", "siconos-fc3d-nsgs",
                                               "siconos-fc3d-nsn", "siconos-gfc3d-nsn"};
@@ -51,45 +52,6 @@ RunOptions quiet()
 bool is_peer(const std::string& name) { return name.rfind("siconos-", 0) == 0; }
 
 double max_abs(const Vec& v) { return v.size() ? v.cwiseAbs().maxCoeff() : 0.0; }
-
-/// k particles in a chain of weak springs on the plane z >= 0, pushed down and sideways: the first
-/// half by 0.1 of the push, the second by 2 (mu = 0.5): the first half sticks, the second slides
-/// (as tests/solvers/test_mprgp_tresca_snapshot.cpp builds it).
-Qp particles_on_a_plane(int k)
-{
-    const Eigen::Index n = 3 * k;
-    std::vector<Eigen::Triplet<double>> a;
-    for (Eigen::Index j = 0; j < n; ++j) a.emplace_back(int(j), int(j), 1.0);
-    for (int p = 0; p + 1 < k; ++p)
-        for (int d = 0; d < 3; ++d) {
-            const int i = 3 * p + d, j = 3 * (p + 1) + d;
-            a.emplace_back(i, i, 0.02);
-            a.emplace_back(j, j, 0.02);
-            a.emplace_back(i, j, -0.02);
-            a.emplace_back(j, i, -0.02);
-        }
-    Qp qp;
-    qp.A.resize(n, n);
-    qp.A.setFromTriplets(a.begin(), a.end());
-    qp.b = Vec::Zero(n);
-    qp.J.resize(k, n);
-    qp.friction.T.resize(2 * k, n);
-    std::vector<Eigen::Triplet<double>> j, t;
-    for (int p = 0; p < k; ++p) {
-        j.emplace_back(p, 3 * p + 2, 1.0);
-        t.emplace_back(2 * p, 3 * p, 1.0);
-        t.emplace_back(2 * p + 1, 3 * p + 1, 1.0);
-        qp.b[3 * p + 2] = -1.0;
-        qp.b[3 * p] = 2 * p < k ? 0.1 : 2.0;
-        qp.b[3 * p + 1] = 0.05 * ((p % 3) - 1);
-    }
-    qp.J.setFromTriplets(j.begin(), j.end());
-    qp.friction.T.setFromTriplets(t.begin(), t.end());
-    qp.c = Vec::Zero(k);
-    qp.x0 = Vec::Zero(n);
-    qp.friction.mu = Vec::Constant(k, 0.5);
-    return qp;
-}
 
 /// The two frictional snapshots: a deformable body pushed sideways by 0.2 of its weight with mu = 0.5
 /// (some contacts stick, some slide: tests/solvers/test_nsgs_friction.cpp counts them), and 12

@@ -1,6 +1,7 @@
 // Issue 45, the snapshot (primal) form: a frictional QP (solvers/core/qp.hpp, Friction: J normal rows,
 // T tangent rows, mu) made local through W = H A^-1 H' (solvers/friction/friction_dual.hpp) and solved by
 // mprgp-tresca-fp; checked against nsgs on the same W and against the primal x = A^-1 (b + H'r).
+#include "friction_test_qps.hpp"
 #include "solvers/friction/friction_dual.hpp"
 #include "solvers/friction/friction_nsgs.hpp"
 #include "solvers/friction/mprgp_tresca.hpp"
@@ -14,44 +15,7 @@
 namespace {
 
 using cb::Vec;
-
-/// k particles in a chain of weak springs on the plane z >= 0, pushed down and sideways: the first
-/// half by 0.1 of the push, the second by 2 (mu = 0.5): the first half sticks, the second slides.
-cb::Qp particles_on_a_plane(int k)
-{
-    const Eigen::Index n = 3 * k;
-    std::vector<Eigen::Triplet<double>> a;
-    for (Eigen::Index j = 0; j < n; ++j) a.emplace_back(int(j), int(j), 1.0);  // masses
-    for (int p = 0; p + 1 < k; ++p)                                            // springs of stiffness 0.02
-        for (int d = 0; d < 3; ++d) {
-            const int i = 3 * p + d, j = 3 * (p + 1) + d;
-            a.emplace_back(i, i, 0.02);
-            a.emplace_back(j, j, 0.02);
-            a.emplace_back(i, j, -0.02);
-            a.emplace_back(j, i, -0.02);
-        }
-    cb::Qp qp;
-    qp.A.resize(n, n);
-    qp.A.setFromTriplets(a.begin(), a.end());
-    qp.b = Vec::Zero(n);
-    qp.J.resize(k, n);
-    qp.friction.T.resize(2 * k, n);
-    std::vector<Eigen::Triplet<double>> j, t;
-    for (int p = 0; p < k; ++p) {
-        j.emplace_back(p, 3 * p + 2, 1.0);
-        t.emplace_back(2 * p, 3 * p, 1.0);
-        t.emplace_back(2 * p + 1, 3 * p + 1, 1.0);
-        qp.b[3 * p + 2] = -1.0;
-        qp.b[3 * p] = 2 * p < k ? 0.1 : 2.0;
-        qp.b[3 * p + 1] = 0.05 * ((p % 3) - 1);
-    }
-    qp.J.setFromTriplets(j.begin(), j.end());
-    qp.friction.T.setFromTriplets(t.begin(), t.end());
-    qp.c = Vec::Zero(k);
-    qp.x0 = Vec::Zero(n);
-    qp.friction.mu = Vec::Constant(k, 0.5);
-    return qp;
-}
+using cb::testing_qps::particles_on_a_plane;
 
 TEST(MprgpTrescaSnapshot, SolvesTheLocalProblemOfAFrictionalQp)
 {
