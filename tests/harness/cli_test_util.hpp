@@ -65,7 +65,7 @@ inline std::string shell_quote(const std::string& text)
 /// A fresh (emptied) folder `parent/name`.
 inline std::filesystem::path fresh_subdir(const std::filesystem::path& parent, const std::string& name)
 {
-    const std::filesystem::path d = parent / name;
+    std::filesystem::path d = parent / name;
     std::filesystem::remove_all(d);
     std::filesystem::create_directories(d);
     return d;

@@ -61,7 +61,7 @@ inline Qp pushed_plane(double push, double mu, std::uint64_t seed = 3)
     RunOptions options;
     options.record_history = false;
     const RunOutcome frictionless = run_solver(qp, "active-set", {{"tol", 1e-10}}, options);
-    const double load = push * frictionless.lambda_full.sum() / static_cast<double>(qp.n() / 3);
+    const double load = push * frictionless.lambda_full.sum() / (static_cast<double>(qp.n()) / 3.0);
     for (Eigen::Index j = 0; j < qp.n(); j += 3) qp.b[j] += load;
     add_friction(qp, [mu](Eigen::Index) { return mu; });
     return qp;
@@ -71,7 +71,7 @@ inline Qp pushed_plane(double push, double mu, std::uint64_t seed = 3)
 /// half by 0.1 of the push, the second by 2 (mu = 0.5): the first half sticks, the second slides.
 inline Qp particles_on_a_plane(int k)
 {
-    const Eigen::Index n = 3 * k;
+    const Eigen::Index n = 3 * static_cast<Eigen::Index>(k);
     std::vector<Eigen::Triplet<double>> a;
     for (Eigen::Index j = 0; j < n; ++j) a.emplace_back(int(j), int(j), 1.0);  // masses
     for (int p = 0; p + 1 < k; ++p)                                            // springs of stiffness 0.02
@@ -87,15 +87,16 @@ inline Qp particles_on_a_plane(int k)
     qp.A.setFromTriplets(a.begin(), a.end());
     qp.b = Vec::Zero(n);
     qp.J.resize(k, n);
-    qp.friction.T.resize(2 * k, n);
+    qp.friction.T.resize(2 * static_cast<Eigen::Index>(k), n);
     std::vector<Eigen::Triplet<double>> j, t;
     for (int p = 0; p < k; ++p) {
         j.emplace_back(p, 3 * p + 2, 1.0);
         t.emplace_back(2 * p, 3 * p, 1.0);
         t.emplace_back(2 * p + 1, 3 * p + 1, 1.0);
-        qp.b[3 * p + 2] = -1.0;
-        qp.b[3 * p] = 2 * p < k ? 0.1 : 2.0;
-        qp.b[3 * p + 1] = 0.05 * ((p % 3) - 1);
+        const Eigen::Index at = 3 * static_cast<Eigen::Index>(p);
+        qp.b[at + 2] = -1.0;
+        qp.b[at] = 2 * p < k ? 0.1 : 2.0;
+        qp.b[at + 1] = 0.05 * ((p % 3) - 1);
     }
     qp.J.setFromTriplets(j.begin(), j.end());
     qp.friction.T.setFromTriplets(t.begin(), t.end());

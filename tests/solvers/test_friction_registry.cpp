@@ -215,8 +215,11 @@ TEST(FrictionRegistryCli, SolveRunsEachEntryOnAFrictionalSnapshot)
     for (const std::string& name : NEW_ENTRIES) {
         if (!builtin_registry().contains(name)) continue;  // the peers: not built (the tests above say so)
         const std::string json = (dir / (name + ".json")).string();
-        const Output out = run_captured(
-            contactbench_binary() + " solve " + snap + " --solver '" + name + "' --set tol=1e-6 --json " + json, dir);
+        std::string command = contactbench_binary();
+        command += " solve " + snap;
+        command += " --solver '" + name;
+        command += "' --set tol=1e-6 --json " + json;
+        const Output out = run_captured(command, dir);
         ASSERT_EQ(out.status, 0) << name << ": " << out.err;
         std::ifstream in(json);
         const nlohmann::json record = nlohmann::json::parse(in);
