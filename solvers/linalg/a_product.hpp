@@ -18,7 +18,7 @@ namespace cb {
 struct BlockRows {
     std::vector<int> start;     ///< block row I's blocks are start[I] .. start[I + 1] - 1
     std::vector<int> column;    ///< block column per block, increasing within a block row
-    std::vector<double> value;  ///< 9 per block
+    std::vector<double> value;  ///< 9 per block, and one trailing zero (the AVX2 kernel reads past the last)
 };
 
 /// The operator x -> A x that a solver multiplies by. It refers to A (no copy of the CSR); A must
@@ -112,5 +112,11 @@ Vec a_product(const SpMat& A, const Vec& x);
 
 /// A-products done through a_product() by this process so far (all threads).
 long a_product_count();
+
+/// Whether the BSR products run the AVX2 kernel (the CPU has AVX2 and the scalar loop is not
+/// forced). Both kernels give the same y and dots to the last bit; tests compare them.
+bool block_kernel_is_simd();
+/// Forces the scalar BSR loop (true) or lets the CPU decide (false): for tests and benchmarks.
+void force_scalar_block_kernel(bool scalar);
 
 }  // namespace cb

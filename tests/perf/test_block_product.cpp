@@ -88,6 +88,32 @@ TEST(BlockProduct, EqualsTheCsrProductOnEveryStressFamily)
     EXPECT_EQ(csr, (std::vector<std::string>{}));
 }
 
+// Large enough for several chunks of the AVX2 kernel's row pairs (4096 block rows a chunk), with an
+// odd block row count; both kernels (AVX2 where the CPU has it, and the scalar loop) are compared.
+TEST(BlockProduct, BothKernelsEqualTheCsrProductOnALargeGrid)
+{
+    FemGridParams p;
+    p.nx = 40;
+    p.ny = 22;
+    p.nz = 20;  // 41 * 23 * 21 = 19803 vertices: an odd count of block rows
+    const SpMat A = fem_like_matrix(p);
+    ASSERT_EQ(A.rows() / 3 % 2, 1);
+    for (const bool scalar : {false, true}) {
+        force_scalar_block_kernel(scalar);
+        AOperator op(A);
+        ASSERT_EQ(op.prepare(AFormat::BSR), AFormat::BSR) << op.why_csr();
+        expect_same_products(op, A, scalar ? "scalar kernel" : "default kernel");
+        AOperator two(A);  // two row ranges (threads = 2): y to the last bit (the dots sum by range)
+        ASSERT_EQ(two.prepare(AFormat::BSR, 2), AFormat::BSR);
+        ASSERT_EQ(two.parts(), 2);
+        const Vec x = varied(A.cols(), 5);
+        Vec y;
+        a_product(two, x, y);
+        EXPECT_EQ((y - A * x).cwiseAbs().maxCoeff(), 0.0) << (scalar ? "scalar" : "default");
+    }
+    force_scalar_block_kernel(false);
+}
+
 TEST(BlockProduct, FallsBackToCsrWhenNIsNotAMultipleOfThree)
 {
     const Qp qp = make_synthetic("plane", {{"nx", 2}, {"ny", 2}, {"nz", 2}}, 3);
