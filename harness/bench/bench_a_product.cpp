@@ -6,8 +6,8 @@
 // nonzero (A's storage only), ns per nonzero, GB/s (A's storage + x read once + y written), the
 // fraction of the triad's GB/s (median times; _best: best times), the median time and the spread
 // (max / min); csr_over_<f> is the median of the per-repetition time ratios CSR / <f>, with its
-// min and max. same_y_bsr = 1 when BSR's y equals CSR's bit for bit (bsr_simd = 1: the AVX2 kernel); sbsr_y_err the largest
-// |y_sbsr - y_csr| / (|A||x|) over the rows (rounding: SBSR sums in another order).
+// min and max. same_y_bsr = 1 when BSR's y equals CSR's bit for bit (bsr_simd = 1: the AVX2 kernel); sbsr_y_err the
+// largest |y_sbsr - y_csr| / (|A||x|) over the rows (rounding: SBSR sums in another order).
 //   CB_BENCH_SNAPSHOTS=a.qpsnap:b.qpsnap build/bin/cb_bench --benchmark_filter=AProductFormats
 #include "harness/bench/alternating.hpp"
 #include "problems/synthetic.hpp"

@@ -29,7 +29,7 @@ enum class Dots { NONE, ALL, MASKED };
 #if defined(__x86_64__) && defined(__GNUC__)
 #define CB_HAVE_AVX2_KERNEL 1
 __attribute__((target("avx2"))) inline __m256d block_step(__m256d s, const double* __restrict b,
-                                                        const double* __restrict xj)
+                                                          const double* __restrict xj)
 {
     s = _mm256_add_pd(s, _mm256_mul_pd(_mm256_loadu_pd(b), _mm256_broadcast_sd(xj)));
     s = _mm256_add_pd(s, _mm256_mul_pd(_mm256_loadu_pd(b + 3), _mm256_broadcast_sd(xj + 1)));
@@ -52,10 +52,10 @@ __attribute__((target("avx2"))) inline void store_block_row(std::ptrdiff_t I, __
 constexpr std::ptrdiff_t PAIR_DISTANCE = 2048;
 
 template <Dots D>
-__attribute__((target("avx2"))) double block_product_avx2(const BlockRows& B, std::ptrdiff_t first,
-                                                           std::ptrdiff_t last, const double* __restrict px,
-                                                           double* __restrict py, const double* __restrict pw,
-                                                           const char* __restrict skip, double& xw)
+__attribute__((target("avx2"))) double block_product_avx2(const BlockRows& B, std::ptrdiff_t first, std::ptrdiff_t last,
+                                                          const double* __restrict px, double* __restrict py,
+                                                          const double* __restrict pw, const char* __restrict skip,
+                                                          double& xw)
 {
     const int* __restrict start = B.start.data();
     const int* __restrict column = B.column.data();
