@@ -44,7 +44,7 @@ help:
 	@echo "make baseline   re-record results/baselines/ci.csv from a clean tree (commit it alone, after the change)"
 	@echo "make paper-data fetch the authors' repository (simba518/MPRGP at 57fdd2c), verify it, extract"
 	@echo "                meshes, scenes and figure tables into DATA=$(DATA) (PAPER_DATA_SOURCE=URL|DIR|.tar.gz)"
-	@echo "make reproduce  the paper's figures and report in results/paper/ (full: 65 min wall / 25 min CPU measured on a loaded 2-core machine; QUICK=1: about 2-4 minutes)"
+	@echo "make reproduce  the paper's figures and report in results/paper/ (full: most of an hour on 2 cores, QUICK=1: minutes; measured times in README)"
 	@echo "make decoupling the price of collision decoupling along chains (results/decoupling/)"
 	@echo "make friction-suite the frictional suite: frames, runs at 1e-4 and 1e-8 in rounds, profiles (results/friction/)"
 	@echo "make docs-check fail on a cited document, section or path that is not in the repository, or a stale count"
