@@ -36,34 +36,6 @@ __attribute__((target("avx2"))) inline __m256d block_step(__m256d s, const doubl
     return _mm256_add_pd(s, _mm256_mul_pd(_mm256_loadu_pd(b + 6), _mm256_broadcast_sd(xj + 2)));
 }
 
-/// As block_step on U x (precond = scaled): x_c u_c is formed per column as the buffer of U x
-/// formed it (one rounding), so the sums are the buffer's to the last bit.
-__attribute__((target("avx2"))) inline __m256d scaled_block_step(__m256d s, const double* __restrict b,
-                                                                 const double* __restrict xj,
-                                                                 const double* __restrict uj)
-{
-    const __m256d u0 = _mm256_mul_pd(_mm256_broadcast_sd(xj), _mm256_broadcast_sd(uj));
-    const __m256d u1 = _mm256_mul_pd(_mm256_broadcast_sd(xj + 1), _mm256_broadcast_sd(uj + 1));
-    const __m256d u2 = _mm256_mul_pd(_mm256_broadcast_sd(xj + 2), _mm256_broadcast_sd(uj + 2));
-    s = _mm256_add_pd(s, _mm256_mul_pd(_mm256_loadu_pd(b), u0));
-    s = _mm256_add_pd(s, _mm256_mul_pd(_mm256_loadu_pd(b + 3), u1));
-    return _mm256_add_pd(s, _mm256_mul_pd(_mm256_loadu_pd(b + 6), u2));
-}
-
-/// Block k's step: block_step, or scaled_block_step with pu.
-template <bool SCALED>
-__attribute__((target("avx2"))) inline __m256d any_block_step(__m256d s, const double* __restrict val,
-                                                              const int* __restrict column, const double* __restrict px,
-                                                              const double* __restrict pu, int k)
-{
-    const double* b = val + 9 * static_cast<std::ptrdiff_t>(k);
-    const std::ptrdiff_t j = 3 * static_cast<std::ptrdiff_t>(column[k]);
-    if constexpr (SCALED)
-        return scaled_block_step(s, b, px + j, pu + j);
-    else
-        return block_step(s, b, px + j);
-}
-
 /// Stores block row I's three sums (with pu: each times u_i, as the scaled product's y).
 __attribute__((target("avx2"))) inline void store_block_row(std::ptrdiff_t I, __m256d s, double* __restrict py,
                                                             const double* __restrict pu)
@@ -86,16 +58,20 @@ __attribute__((target("avx2"))) inline void store_block_row(std::ptrdiff_t I, __
 /// speed, the hardware's prefetch not following two streams in one page; docs/a_product.md).
 constexpr std::ptrdiff_t PAIR_DISTANCE = 2048;
 
-/// With SCALED, y = U A U x (pu = u): see scaled_block_step and store_block_row.
+/// With SCALED: px holds U x, y is scaled by pu = u at each row's end and the dots read pd = x
+/// (block_product).
 template <Dots D, bool SCALED>
 __attribute__((target("avx2"))) double block_product_avx2(const BlockRows& B, std::ptrdiff_t first, std::ptrdiff_t last,
                                                           const double* __restrict px, double* __restrict py,
                                                           const double* __restrict pw, const char* __restrict skip,
-                                                          const double* __restrict pu, double& xw)
+                                                          const double* __restrict pu, const double* __restrict pd,
+                                                          double& xw)
 {
     const int* __restrict start = B.start.data();
     const int* __restrict column = B.column.data();
     const double* __restrict val = B.value.data();
+    const auto block = [val](int k) { return val + 9 * static_cast<std::ptrdiff_t>(k); };
+    const auto x_of = [px, column](int k) { return px + 3 * static_cast<std::ptrdiff_t>(column[k]); };
     const double* __restrict scale_y = SCALED ? pu : nullptr;
     double xy = 0.0, dot_w = 0.0;
     // Block rows I and I + d side by side (two chains of additions in flight), chunk by chunk; then
@@ -109,24 +85,24 @@ __attribute__((target("avx2"))) double block_product_avx2(const BlockRows& B, st
             int ka = start[I], kb = start[J];
             const int ea = start[I + 1], eb = start[J + 1];
             for (; ka < ea && kb < eb; ++ka, ++kb) {
-                sa = any_block_step<SCALED>(sa, val, column, px, pu, ka);
-                sb = any_block_step<SCALED>(sb, val, column, px, pu, kb);
+                sa = block_step(sa, block(ka), x_of(ka));
+                sb = block_step(sb, block(kb), x_of(kb));
             }
-            for (; ka < ea; ++ka) sa = any_block_step<SCALED>(sa, val, column, px, pu, ka);
-            for (; kb < eb; ++kb) sb = any_block_step<SCALED>(sb, val, column, px, pu, kb);
+            for (; ka < ea; ++ka) sa = block_step(sa, block(ka), x_of(ka));
+            for (; kb < eb; ++kb) sb = block_step(sb, block(kb), x_of(kb));
             store_block_row(I, sa, py, scale_y);
             store_block_row(J, sb, py, scale_y);
         }
         const std::ptrdiff_t end = std::min(last, c + 2 * PAIR_DISTANCE);
         if (c + 2 * d < end) {  // an odd row at the end of the range
             __m256d s = _mm256_setzero_pd();
-            for (int k = start[end - 1]; k < start[end]; ++k) s = any_block_step<SCALED>(s, val, column, px, pu, k);
+            for (int k = start[end - 1]; k < start[end]; ++k) s = block_step(s, block(k), x_of(k));
             store_block_row(end - 1, s, py, scale_y);
         }
         if constexpr (D != Dots::NONE) {
             for (std::ptrdiff_t i = 3 * c; i < 3 * end; ++i) {
-                xy += px[i] * py[i];
-                if (D == Dots::ALL || !skip[i]) dot_w += px[i] * pw[i];
+                xy += pd[i] * py[i];
+                if (D == Dots::ALL || !skip[i]) dot_w += pd[i] * pw[i];
             }
         }
     }
@@ -152,15 +128,16 @@ bool simd_block_kernel()
 /// Each row's sum runs over its columns in increasing order, as the CSR loop's does, and the
 /// stored zeros add exact zeros: y, x'y and x'w equal the CSR kernels' to the last bit (finite x).
 /// Block rows first .. last - 1 only (a thread's range); their dots are that range's partial sums.
-/// With SCALED, y = U A U x (pu = u) as the scaled product with a buffer of U x made it, to the last
-/// bit: x_c u_c formed per column, each sum times u_i at its row's end, the dots on the scaled y.
+/// With SCALED, y = U A U x: px holds U x, each row's sum is multiplied by u_i (pu) before it is
+/// stored, and the dots read x itself (pd), as the pass that scaled y after the product did.
 template <Dots D, bool SCALED = false>
 double block_product(const BlockRows& B, std::ptrdiff_t first, std::ptrdiff_t last, const double* __restrict px,
                      double* __restrict py, const double* __restrict pw, const char* __restrict skip, double& xw,
-                     const double* __restrict pu = nullptr)
+                     const double* __restrict pu = nullptr, const double* __restrict pd = nullptr)
 {
+    if constexpr (!SCALED) pd = px;
 #ifdef CB_HAVE_AVX2_KERNEL
-    if (simd_block_kernel()) return block_product_avx2<D, SCALED>(B, first, last, px, py, pw, skip, pu, xw);
+    if (simd_block_kernel()) return block_product_avx2<D, SCALED>(B, first, last, px, py, pw, skip, pu, pd, xw);
 #endif
     const int* __restrict start = B.start.data();
     const int* __restrict column = B.column.data();
@@ -170,14 +147,8 @@ double block_product(const BlockRows& B, std::ptrdiff_t first, std::ptrdiff_t la
         double s0 = 0.0, s1 = 0.0, s2 = 0.0;
         for (int k = start[I]; k < start[I + 1]; ++k) {
             const double* __restrict b = val + 9 * static_cast<std::ptrdiff_t>(k);
-            const std::ptrdiff_t j = 3 * static_cast<std::ptrdiff_t>(column[k]);
-            const double* __restrict xj = px + j;
-            double x0 = xj[0], x1 = xj[1], x2 = xj[2];
-            if constexpr (SCALED) {
-                x0 *= pu[j];
-                x1 *= pu[j + 1];
-                x2 *= pu[j + 2];
-            }
+            const double* __restrict xj = px + 3 * static_cast<std::ptrdiff_t>(column[k]);
+            const double x0 = xj[0], x1 = xj[1], x2 = xj[2];
             s0 += b[0] * x0;
             s1 += b[1] * x0;
             s2 += b[2] * x0;
@@ -198,11 +169,11 @@ double block_product(const BlockRows& B, std::ptrdiff_t first, std::ptrdiff_t la
         py[i + 1] = s1;
         py[i + 2] = s2;
         if constexpr (D != Dots::NONE) {
-            xy += px[i] * s0;
-            xy += px[i + 1] * s1;
-            xy += px[i + 2] * s2;
+            xy += pd[i] * s0;
+            xy += pd[i + 1] * s1;
+            xy += pd[i + 2] * s2;
             for (std::ptrdiff_t r = i; r < i + 3; ++r)
-                if (D == Dots::ALL || !skip[r]) dot_w += px[r] * pw[r];
+                if (D == Dots::ALL || !skip[r]) dot_w += pd[r] * pw[r];
         }
     }
     xw = dot_w;
@@ -673,16 +644,17 @@ template <Dots D>
 double scaled_product(const AOperator& A, const Vec& x, Vec& y, const Vec* w, const char* skip, double& xw)
 {
     const Vec& u = *A.scaling();
+    Vec& ux = A.scaled_input();
+    ux = u.cwiseProduct(x);
     if (A.format() == AFormat::BSR && A.parts() == 1) {
-        // One thread on blocks: U applied inside the kernel, the same y and dots as the passes below.
+        // One thread on blocks: y scaled and the dots summed inside the kernel, no pass after it
+        // (the same y and dots as that pass, below, to the last bit).
         y.resize(A.rows());
-        const double xy = block_product<D, true>(A.blocks(), 0, A.rows() / 3, x.data(), y.data(),
-                                                 w != nullptr ? w->data() : nullptr, skip, xw, u.data());
+        const double xy = block_product<D, true>(A.blocks(), 0, A.rows() / 3, ux.data(), y.data(),
+                                                 w != nullptr ? w->data() : nullptr, skip, xw, u.data(), x.data());
         g_a_products.fetch_add(1, std::memory_order_relaxed);
         return xy;
     }
-    Vec& ux = A.scaled_input();
-    ux = u.cwiseProduct(x);
     stored_product(A, ux, y);
     double xy = 0.0, dot_w = 0.0;
     for (Eigen::Index i = 0; i < y.size(); ++i) {

@@ -55,10 +55,10 @@ public:
     const BlockRows& blocks() const { return m_blocks; }
     Eigen::Index rows() const { return m_csr->rows(); }
     /// From now on the products give U A U x (U = diag(u)) instead of A x, without a scaled copy
-    /// of A (mprgp-coupled's precond = scaled: the QP in y = U^-1 x). On BSR with one thread the
-    /// block kernels apply U themselves (x_j u_j per block column, y_i u_i at the row's end); else
-    /// x is scaled into a buffer before the product and y on the way out. Both give the same y and
-    /// dots to the last bit.
+    /// of A (mprgp-coupled's precond = scaled: the QP in y = U^-1 x): x is scaled into a buffer
+    /// before the product; on BSR with one thread the block kernels scale each row's sum before
+    /// storing it and sum the dots with it, else y is scaled in a pass on the way out. Both give
+    /// the same y and dots to the last bit.
     /// u must outlive the operator; nullptr: A itself again.
     void scale_by(const Vec* u) { m_scale = u; }
     /// The scaling of the products (nullptr when they give A x).

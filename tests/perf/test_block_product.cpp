@@ -194,7 +194,9 @@ TEST(BlockProduct, BlocksCopiedFromWholeColumnGroupsHoldTheEntriesOfA)
             for (size_t I = 0; I + 1 < B.start.size(); ++I)
                 for (int k = B.start[I]; k < B.start[I + 1]; ++k, ++blocks) {
                     const int J = B.column[static_cast<size_t>(k)];
-                    if (upper) EXPECT_GE(J, static_cast<int>(I));
+                    if (upper) {
+                        EXPECT_GE(J, static_cast<int>(I));
+                    }
                     for (int r = 0; r < 3; ++r)
                         for (int c = 0; c < 3; ++c) {
                             const double v = B.value[9 * static_cast<size_t>(k) + static_cast<size_t>(3 * c + r)];

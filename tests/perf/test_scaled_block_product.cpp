@@ -1,7 +1,8 @@
 // mprgp-coupled's precond = scaled multiplies by U A U (U = diag(u)) without a scaled copy of A. On
-// BSR with one thread the block kernels apply U themselves; this checks them against the passes
-// they replaced (U x into a buffer, the plain product, y scaled and the dots summed in index
-// order): every y entry and every dot equal to the last bit, for both kernels.
+// BSR with one thread the block kernels scale each row's sum and sum the dots as they store y;
+// this checks them against the pass they replaced (U x into a buffer, the plain product, then y
+// scaled and the dots summed in index order): every y entry and every dot equal to the last bit,
+// for both kernels.
 #include "problems/synthetic.hpp"
 #include "solvers/linalg/a_product.hpp"
 
