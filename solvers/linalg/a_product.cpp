@@ -431,7 +431,8 @@ bool build_blocks(const SpMat& A, bool upper, BlockRows& out, double max_fill, d
     // Pass 2: block columns and values (absent entries stay zero), block by block in storage order.
     out.start = std::move(start);
     out.column.resize(static_cast<size_t>(blocks));
-    out.value.assign(static_cast<size_t>(blocks) * 9 + 1, 0.0);  // + 1: see block_step
+    out.value.resize(static_cast<size_t>(blocks) * 9 + 1);  // unwritten: every entry is set below
+    out.value.back() = 0.0;                                 // see block_step
     int* column = out.column.data();
     double* value = out.value.data();
     for (std::ptrdiff_t I = 0; I < nb; ++I) {
@@ -455,6 +456,7 @@ bool build_blocks(const SpMat& A, bool upper, BlockRows& out, double max_fill, d
         merge_block_columns(outer, inner, I, upper ? static_cast<int>(I) : 0, [&](int J, const int* k, const int* end) {
             column[q] = J;
             double* b = value + 9 * q;
+            std::fill(b, b + 9, 0.0);  // entries absent from A
             for (int r = 0; r < 3; ++r)
                 for (int e = k[r]; e < end[r]; ++e) b[3 * (inner[e] - 3 * J) + r] = val[e];
             ++q;
