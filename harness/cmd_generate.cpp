@@ -12,9 +12,9 @@ namespace cb {
 namespace {
 
 const char* const GENERATE_USAGE = "contactbench generate FAMILY --out FILE.qpsnap [--seed S] [--param key=value ...]\n"
-                          "       contactbench generate --list            (families and their parameters)\n"
-                          "       contactbench generate FAMILY --help     (one family's parameters)\n"
-                          "  values are JSON: --param nx=8 --param youngs=1e9 --param rotate=false";
+                                   "       contactbench generate --list            (families and their parameters)\n"
+                                   "       contactbench generate FAMILY --help     (one family's parameters)\n"
+                                   "  values are JSON: --param nx=8 --param youngs=1e9 --param rotate=false";
 
 void print_list(std::ostream& out)
 {
@@ -38,7 +38,8 @@ int cmd_generate(const Args& args)
     cl.expect_positional(1, 1, GENERATE_USAGE);
     const std::string family = cl.positional()[0];
     if (!cl.has("--out"))
-        throw_input_error("generate", "--out", "missing (the .qpsnap file to write)\nusage: " + std::string(GENERATE_USAGE));
+        throw_input_error("generate", "--out",
+                          "missing (the .qpsnap file to write)\nusage: " + std::string(GENERATE_USAGE));
     const long seed = cl.integer("--seed", 0);
     if (seed < 0) throw_input_error("generate", "--seed", "expected an integer >= 0, got " + std::to_string(seed));
     nlohmann::json params = nlohmann::json::object();

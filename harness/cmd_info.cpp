@@ -18,10 +18,10 @@ namespace cb {
 namespace {
 
 const char* const INFO_USAGE = "contactbench info SNAP [--json] [--time]\n"
-                          "  SNAP: a .qpsnap file or a Matrix Market folder (A.mtx b.mtx J.mtx c.mtx x0.mtx);\n"
-                          "        an FCLIB file (HDF5) or Siconos .dat is summarised (kind, contacts, mu)\n"
-                          "  --json: print one JSON object instead of text\n"
-                          "  --time: also time the validated load (read_qpsnap / the folder reader), wall and CPU";
+                               "  SNAP: a .qpsnap file or a Matrix Market folder (A.mtx b.mtx J.mtx c.mtx x0.mtx);\n"
+                               "        an FCLIB file (HDF5) or Siconos .dat is summarised (kind, contacts, mu)\n"
+                               "  --json: print one JSON object instead of text\n"
+                               "  --time: also time the validated load (read_qpsnap / the folder reader), wall and CPU";
 
 const char* kind_name(std::int64_t k)
 {

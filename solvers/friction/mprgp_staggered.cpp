@@ -52,7 +52,8 @@ SolverResult frictionless(const QpView& qp, const SolveContext& context, const C
     normal.common = common;
     SolverResult r = mprgp_coupled_solve(qp, normal, context);
     const std::string prefix = std::string(NORMAL_SOLVER) + ": ";
-    if (r.message.rfind(prefix, 0) == 0) r.message = std::string(STAGGERED_NAME) + ": " + r.message.substr(prefix.size());
+    if (r.message.rfind(prefix, 0) == 0)
+        r.message = std::string(STAGGERED_NAME) + ": " + r.message.substr(prefix.size());
     r.info["rounds"] = 1;
     r.info["normal_solver"] = NORMAL_SOLVER;
     if (qp.friction && qp.friction->T.rows() == 2 * qp.m()) r.lambda_t = Vec::Zero(2 * qp.m());
@@ -236,7 +237,8 @@ SolverResult MprgpStaggeredSolver::solve(const QpView& qp, const SolveContext& c
         if (nr.status == SolveStatus::MAX_ITERATIONS) return finish(SolveStatus::MAX_ITERATIONS, "");
         if (nr.status != SolveStatus::CONVERGED)
             return finish(nr.status == SolveStatus::NOT_RUN ? SolveStatus::STALLED : nr.status,
-                          std::string(STAGGERED_NAME) + ": normal solve of round " + std::to_string(rounds) + ": " + nr.message);
+                          std::string(STAGGERED_NAME) + ": normal solve of round " + std::to_string(rounds) + ": " +
+                              nr.message);
         x = nr.x;
         lambda_n = nr.lambda;
 
@@ -295,8 +297,8 @@ SolverResult MprgpStaggeredSolver::solve(const QpView& qp, const SolveContext& c
         if (ts == SolveStatus::TIME_LIMIT) return finish(SolveStatus::TIME_LIMIT, "");
         if (ts == SolveStatus::MAX_ITERATIONS) return finish(SolveStatus::MAX_ITERATIONS, "");
         if (ts != SolveStatus::CONVERGED)
-            return finish(ts, std::string(STAGGERED_NAME) + ": tangential solve of round " + std::to_string(rounds) + ": " +
-                                  to_string(ts) + (why.empty() ? "" : " (" + why + ")"));
+            return finish(ts, std::string(STAGGERED_NAME) + ": tangential solve of round " + std::to_string(rounds) +
+                                  ": " + to_string(ts) + (why.empty() ? "" : " (" + why + ")"));
     }
 }
 
