@@ -17,7 +17,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const char* const USAGE =
+const char* const CLUSTER_USAGE =
     "contactbench cluster slurm SUITE.json --out DIR --shards N [--partition P] [--time T] [--mem M]\n"
     "       [--cpus-per-task C] [--exclusive] [--first-index K] [--max-parallel K] [--sbatch-option OPT ...]";
 
@@ -40,7 +40,7 @@ int cmd_cluster(const Args& args)
                          {"--exclusive"});
     if (cl.help()) {
         std::cout
-            << "usage: " << USAGE
+            << "usage: " << CLUSTER_USAGE
             << "\n\nWrites DIR/slurm/array.sbatch (a job array: task i runs shard i of N of the suite,\n"
                "pinned to whole cores, and writes DIR/shard-<i>-of-<N>) and DIR/slurm/merge.sbatch (joins\n"
                "the shards into DIR/summary.csv), then prints the sbatch commands that submit them, the\n"
@@ -53,7 +53,7 @@ int cmd_cluster(const Args& args)
                "  --sbatch-option OPT                a further #SBATCH option, e.g. --account=abc\n";
         return 0;
     }
-    cl.expect_positional(2, 2, USAGE);
+    cl.expect_positional(2, 2, CLUSTER_USAGE);
     if (cl.positional()[0] != "slurm")
         throw_input_error("cluster", "scheduler", "expected 'slurm', got '" + cl.positional()[0] + "'");
     if (!cl.has("--out")) throw_input_error("cluster", "--out", "required: the shared results folder");

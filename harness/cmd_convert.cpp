@@ -16,7 +16,7 @@
 namespace cb {
 namespace {
 
-const char* const USAGE =
+const char* const CONVERT_USAGE =
     "contactbench convert IN OUT [--drop-friction] [--symmetrise] [--length-scale L]\n"
     "  IN.qpsnap  -> OUT folder (A.mtx b.mtx J.mtx c.mtx x0.mtx meta.json [contact.json x_ref.mtx lambda_ref.mtx]\n"
     "                [mu.mtx T.mtx cT.mtx h.mtx v0.mtx]: a frictional snapshot's friction in files of its own)\n"
@@ -48,10 +48,10 @@ int cmd_convert(const Args& args)
 {
     const CommandLine cl("convert", args, {"--length-scale"}, {"--drop-friction", "--symmetrise"});
     if (cl.help()) {
-        std::cout << "usage: " << USAGE << "\n";
+        std::cout << "usage: " << CONVERT_USAGE << "\n";
         return 0;
     }
-    cl.expect_positional(2, 2, USAGE);
+    cl.expect_positional(2, 2, CONVERT_USAGE);
     const std::string in = cl.positional()[0], out = cl.positional()[1];
     Qp qp;
     SnapshotExtras extras;

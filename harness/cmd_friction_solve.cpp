@@ -26,7 +26,7 @@ namespace cb {
 
 namespace {
 
-const char* const USAGE =
+const char* const FRICTION_SOLVE_USAGE =
     "contactbench friction-solve FILE.hdf5|FILE.dat [--solver S ...]\n"
     "                            (S: "
     "nsgs|mprgp-tresca-fp|mprgp+ica-friction|siconos-nsgs|siconos-nsn|siconos-prox|siconos-admm)\n"
@@ -168,7 +168,7 @@ int cmd_friction_solve(const Args& args)
                          {});
     if (cl.help()) {
         std::cout
-            << "usage: " << USAGE
+            << "usage: " << FRICTION_SOLVE_USAGE
             << "\n  Solves an FCLIB frictional problem with its friction by each --solver (default: all seven),\n"
                "  starting from r = 0, and prints the FCLIB relative error computed by the harness, iterations\n"
                "  and wall time. converged: that error <= --tol (default 1e-8).\n"
@@ -185,7 +185,7 @@ int cmd_friction_solve(const Args& args)
                "  process (docs/peers.md).\n";
         return 0;
     }
-    cl.expect_positional(1, 1, USAGE);
+    cl.expect_positional(1, 1, FRICTION_SOLVE_USAGE);
     const std::string path = cl.positional()[0];
     Settings s;
     s.tol = cl.number("--tol", 1e-8);

@@ -11,14 +11,14 @@
 namespace cb {
 namespace {
 
-const char* const USAGE = "contactbench generate FAMILY --out FILE.qpsnap [--seed S] [--param key=value ...]\n"
-                          "       contactbench generate --list            (families and their parameters)\n"
-                          "       contactbench generate FAMILY --help     (one family's parameters)\n"
-                          "  values are JSON: --param nx=8 --param youngs=1e9 --param rotate=false";
+const char* const GENERATE_USAGE = "contactbench generate FAMILY --out FILE.qpsnap [--seed S] [--param key=value ...]\n"
+                                   "       contactbench generate --list            (families and their parameters)\n"
+                                   "       contactbench generate FAMILY --help     (one family's parameters)\n"
+                                   "  values are JSON: --param nx=8 --param youngs=1e9 --param rotate=false";
 
 void print_list(std::ostream& out)
 {
-    out << "usage: " << USAGE << "\n\nfamilies:\n";
+    out << "usage: " << GENERATE_USAGE << "\n\nfamilies:\n";
     for (const auto& f : synthetic_families()) out << "\n" << synthetic_family_help(f);
 }
 
@@ -32,13 +32,14 @@ int cmd_generate(const Args& args)
         return 0;
     }
     if (cl.help()) {
-        std::cout << "usage: " << USAGE << "\n\n" << synthetic_family_help(cl.positional()[0]);
+        std::cout << "usage: " << GENERATE_USAGE << "\n\n" << synthetic_family_help(cl.positional()[0]);
         return 0;
     }
-    cl.expect_positional(1, 1, USAGE);
+    cl.expect_positional(1, 1, GENERATE_USAGE);
     const std::string family = cl.positional()[0];
     if (!cl.has("--out"))
-        throw_input_error("generate", "--out", "missing (the .qpsnap file to write)\nusage: " + std::string(USAGE));
+        throw_input_error("generate", "--out",
+                          "missing (the .qpsnap file to write)\nusage: " + std::string(GENERATE_USAGE));
     const long seed = cl.integer("--seed", 0);
     if (seed < 0) throw_input_error("generate", "--seed", "expected an integer >= 0, got " + std::to_string(seed));
     nlohmann::json params = nlohmann::json::object();

@@ -17,11 +17,11 @@
 namespace cb {
 namespace {
 
-const char* const USAGE = "contactbench info SNAP [--json] [--time]\n"
-                          "  SNAP: a .qpsnap file or a Matrix Market folder (A.mtx b.mtx J.mtx c.mtx x0.mtx);\n"
-                          "        an FCLIB file (HDF5) or Siconos .dat is summarised (kind, contacts, mu)\n"
-                          "  --json: print one JSON object instead of text\n"
-                          "  --time: also time the validated load (read_qpsnap / the folder reader), wall and CPU";
+const char* const INFO_USAGE = "contactbench info SNAP [--json] [--time]\n"
+                               "  SNAP: a .qpsnap file or a Matrix Market folder (A.mtx b.mtx J.mtx c.mtx x0.mtx);\n"
+                               "        an FCLIB file (HDF5) or Siconos .dat is summarised (kind, contacts, mu)\n"
+                               "  --json: print one JSON object instead of text\n"
+                               "  --time: also time the validated load (read_qpsnap / the folder reader), wall and CPU";
 
 const char* kind_name(std::int64_t k)
 {
@@ -55,10 +55,10 @@ int cmd_info(const Args& args)
 {
     const CommandLine cl("info", args, {}, {"--json", "--time"});
     if (cl.help()) {
-        std::cout << "usage: " << USAGE << "\n";
+        std::cout << "usage: " << INFO_USAGE << "\n";
         return 0;
     }
-    cl.expect_positional(1, 1, USAGE);
+    cl.expect_positional(1, 1, INFO_USAGE);
     const std::string path = cl.positional()[0];
     // By content: an FCLIB file is summarised (convert makes it a snapshot), other formats named.
     const FileFormat format = sniff_format(path);

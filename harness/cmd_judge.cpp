@@ -20,7 +20,7 @@ namespace cb {
 
 namespace {
 
-const char* const USAGE =
+const char* const JUDGE_USAGE =
     "contactbench judge SNAP SOLUTION [--lambda FILE] [--lambda-t FILE] [--tol T] [--record RUN.json]\n"
     "                    [--json FILE] [--length-scale L]\n"
     "  SOLUTION: a folder with x.{mtx,npy,txt} and optionally lambda.{mtx,npy,txt} (solve --save-solution),\n"
@@ -36,10 +36,10 @@ int cmd_judge(const Args& args)
     const CommandLine cl("judge", args, {"--lambda", "--lambda-t", "--tol", "--record", "--json", "--length-scale"},
                          {});
     if (cl.help()) {
-        std::cout << "usage: " << USAGE << "\n";
+        std::cout << "usage: " << JUDGE_USAGE << "\n";
         return 0;
     }
-    cl.expect_positional(2, 2, USAGE);
+    cl.expect_positional(2, 2, JUDGE_USAGE);
     const std::string snap = cl.positional()[0];
     const std::string solution = cl.positional()[1];
     JudgeOptions options;

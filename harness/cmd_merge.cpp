@@ -24,7 +24,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const char* const USAGE = "contactbench merge OUT DIR1 DIR2 ...";
+const char* const MERGE_USAGE = "contactbench merge OUT DIR1 DIR2 ...";
 
 std::string slurp(const fs::path& p) { return read_regular_file(p.string()); }
 
@@ -34,7 +34,7 @@ struct RunFile {
 };
 
 /// A shard folder of `contactbench run --shard i/N`, read and checked whole.
-struct Shard {
+struct ShardFolder {
     fs::path dir;
     nlohmann::json jobs, suite_json, provenance;
     std::string suite, suite_hash;
@@ -59,9 +59,9 @@ bool known_status(const std::string& status)
 /// The jobs file, suite file and every run file of the shard at `folder`, each checked: the jobs
 /// file's fields and types, i of N with 1 <= i <= N, the suite file matching the jobs file's
 /// suite hash, every listed run file present, a JSON object of this suite with a known status.
-Shard read_shard(const std::string& folder)
+ShardFolder read_shard(const std::string& folder)
 {
-    Shard shard;
+    ShardFolder shard;
     shard.dir = folder;
     if (!fs::is_directory(shard.dir / "runs"))
         throw_input_error(folder, "runs/", "missing: not a results folder of `contactbench run`");
@@ -137,7 +137,7 @@ Shard read_shard(const std::string& folder)
 }
 
 /// Throws unless `shard` is of the same suite and shard count as `first`.
-void same_suite(const Shard& shard, const Shard& first)
+void same_suite(const ShardFolder& shard, const ShardFolder& first)
 {
     if (shard.suite_hash != first.suite_hash || shard.suite != first.suite)
         throw_input_error(shard.jobs_path(), "suite",
@@ -151,7 +151,7 @@ void same_suite(const Shard& shard, const Shard& first)
 }
 
 /// An OUT that already holds results of another suite is not mixed with these.
-void refuse_foreign_out(const std::string& out, const Shard& first)
+void refuse_foreign_out(const std::string& out, const ShardFolder& first)
 {
     const fs::path jobs = fs::path(out) / "jobs.json";
     if (!fs::exists(fs::symlink_status(jobs))) return;
@@ -176,22 +176,22 @@ int cmd_merge(const Args& args)
 {
     const CommandLine cl("merge", args, {}, {});
     if (cl.help()) {
-        std::cout << "usage: " << USAGE
+        std::cout << "usage: " << MERGE_USAGE
                   << "\n\nChecks that DIR1 DIR2 ... are the complete shards i/N (every i once) of one suite,\n"
                      "each finished (DIRk/jobs.json lists every job, each has its run file, of that suite\n"
                      "and with a known status), then copies DIRk/runs/*.json into OUT/runs and rewrites\n"
                      "OUT/summary.csv. Nothing is written unless every shard passes.\n";
         return 0;
     }
-    cl.expect_positional(2, 100000, USAGE);
+    cl.expect_positional(2, 100000, MERGE_USAGE);
     const std::string out = cl.positional()[0];
     if (out.empty()) throw_input_error("merge", "OUT", "expects a folder name, got \"\"");
     // Every shard is checked, and every run file read and checked, before anything is written.
-    std::vector<Shard> shards;
+    std::vector<ShardFolder> shards;
     std::map<std::string, std::string> shard_of_file;  // run file name -> the shard folder holding it
     std::map<long, std::string> folder_of_index;
     for (size_t k = 1; k < cl.positional().size(); ++k) {
-        Shard shard = read_shard(cl.positional()[k]);
+        ShardFolder shard = read_shard(cl.positional()[k]);
         if (!shards.empty()) same_suite(shard, shards.front());
         const auto [previous, fresh] = folder_of_index.emplace(shard.index, shard.dir.string());
         if (!fresh)
@@ -206,7 +206,7 @@ int cmd_merge(const Args& args)
         }
         shards.push_back(std::move(shard));
     }
-    const Shard& first = shards.front();
+    const ShardFolder& first = shards.front();
     std::string missing;
     for (long i = 1; i <= first.count; ++i)
         if (!folder_of_index.count(i))
@@ -226,7 +226,7 @@ int cmd_merge(const Args& args)
     if (!existed) lock_output_folder(out, "merge");
     nlohmann::json merged_from = nlohmann::json::array();
     size_t copied = 0, duplicates = 0;
-    for (const Shard& shard : shards) {
+    for (const ShardFolder& shard : shards) {
         if (!shard.provenance.is_null())
             merged_from.push_back({{"dir", shard.dir.string()}, {"provenance", shard.provenance}});
         for (const auto& run : shard.runs) {

@@ -54,7 +54,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const char* const USAGE =
+const char* const RUN_USAGE =
     "contactbench run SUITE.json [--out DIR] [--shard i/N] [--force] [--fresh] [--jobs N [--jobs-timed]]\n"
     "                 [--length-scale L]";
 
@@ -347,10 +347,10 @@ int cmd_run(const Args& args)
     const CommandLine cl("run", args, {"--out", "--shard", "--jobs", "--length-scale"},
                          {"--force", "--fresh", "--jobs-timed"});
     if (cl.help()) {
-        std::cout << "usage: " << USAGE << HELP;
+        std::cout << "usage: " << RUN_USAGE << HELP;
         return 0;
     }
-    cl.expect_positional(1, 1, USAGE);
+    cl.expect_positional(1, 1, RUN_USAGE);
     Suite suite = load_suite(cl.positional()[0]);
     if (cl.has("--length-scale")) {
         suite.length_scale = parse_length_scale("run", cl.value("--length-scale"));

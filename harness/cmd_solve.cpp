@@ -22,13 +22,13 @@ namespace cb {
 
 namespace {
 
-const char* const USAGE =
+const char* const SOLVE_USAGE =
     "contactbench solve SNAP --solver NAME [--set key=value ...] [--json FILE] [--save-solution DIR]\n"
     "                   [--history] [--decouple auto|none|authors|random|depth] [--decouple-seed S]\n"
     "                   [--repeat k] [--time-limit SECONDS] [--length-scale L]";
 
 /// A dense vector in Matrix Market array format (%.17g), written atomically.
-void write_mtx_vector(const std::string& path, const Vec& v)
+void write_solution_vector(const std::string& path, const Vec& v)
 {
     std::string text = "%%MatrixMarket matrix array real general\n";
     text += std::to_string(v.size()) + " 1\n";
@@ -43,7 +43,7 @@ void write_mtx_vector(const std::string& path, const Vec& v)
 void print_solver_list(std::ostream& out)
 {
     const auto& registry = builtin_registry();
-    out << "usage: " << USAGE << "\n\nsolvers (contactbench solve --solver NAME --help for settings):\n";
+    out << "usage: " << SOLVE_USAGE << "\n\nsolvers (contactbench solve --solver NAME --help for settings):\n";
     size_t width = 0;
     for (const auto& name : registry.names()) width = std::max(width, name.size());
     for (const auto& name : registry.names())
@@ -79,8 +79,8 @@ int cmd_solve(const Args& args)
             print_solver_list(std::cout);
         return 0;
     }
-    cl.expect_positional(1, 1, USAGE);
-    if (!cl.has("--solver")) throw_input_error("solve", "--solver", "missing; usage: " + std::string(USAGE));
+    cl.expect_positional(1, 1, SOLVE_USAGE);
+    if (!cl.has("--solver")) throw_input_error("solve", "--solver", "missing; usage: " + std::string(SOLVE_USAGE));
     const std::string snap = cl.positional()[0];
     const std::string name = cl.value("--solver");
     if (!builtin_registry().contains(name)) builtin_registry().entry(name);  // throws the named InputError
@@ -168,11 +168,11 @@ int cmd_solve(const Args& args)
         std::error_code ec;
         std::filesystem::create_directories(dir, ec);
         if (ec) throw_input_error(dir, "--save-solution", "cannot create the folder: " + ec.message());
-        write_mtx_vector(dir + "/x.mtx", run.result.x);
-        write_mtx_vector(dir + "/lambda.mtx", run.lambda_full);  // one entry per row of the snapshot's J
+        write_solution_vector(dir + "/x.mtx", run.result.x);
+        write_solution_vector(dir + "/lambda.mtx", run.lambda_full);  // one entry per row of the snapshot's J
         // A frictional solver's tangential multipliers (rows of T), for `judge` to measure the friction.
         if (run.lambda_t.size())
-            write_mtx_vector(dir + "/lambda_t.mtx", run.lambda_t);
+            write_solution_vector(dir + "/lambda_t.mtx", run.lambda_t);
         else
             std::filesystem::remove(dir + "/lambda_t.mtx", ec);  // an earlier run's would be judged with this x
     }

@@ -12,7 +12,7 @@ namespace cb {
 
 namespace {
 
-const char* const USAGE =
+const char* const STRESS_USAGE =
     "contactbench stress [--out DIR] [--time-limit S] [--tol T] [--solvers a,b] [--cases x,y] [--quick] "
     "[--no-isolate] [--list]";
 
@@ -34,7 +34,7 @@ int cmd_stress(const Args& args)
                          {"--quick", "--no-isolate", "--list"});
     if (cl.help()) {
         std::cout
-            << "usage: " << USAGE << "\n\n"
+            << "usage: " << STRESS_USAGE << "\n\n"
             << "Runs every registered solver plus cg:precond=ichol and mprgp:precond=ichol (or --solvers;\n"
             << "a solver may carry settings: NAME:key=value[:key=value...]) on every stress case (or --cases: ids or\n"
             << "families) with a time limit per run (default 5 s), each run in a child process so that\n"
@@ -44,7 +44,7 @@ int cmd_stress(const Args& args)
             << "histories in runs/ for the error-against-time figure of `python3 -m plots.stability DIR`.\n";
         return 0;
     }
-    cl.expect_positional(0, 0, USAGE);
+    cl.expect_positional(0, 0, STRESS_USAGE);
     StressOptions options;
     options.quick = cl.has("--quick");
     if (cl.has("--list")) {

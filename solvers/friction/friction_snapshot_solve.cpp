@@ -14,7 +14,7 @@ namespace cb {
 
 namespace {
 
-void add_counters(Counters& total, const Counters& part)
+void add_work_counters(Counters& total, const Counters& part)
 {
     total.a_products += part.a_products;
     total.cholmod_analyses += part.cholmod_analyses;
@@ -105,7 +105,7 @@ SolverResult solve_frictional_snapshot(const std::string& name, const QpView& qp
         return loop.finish(result, SolveStatus::INVALID_INPUT, e.what());
     }
     if (!loop.end_setup()) {
-        add_counters(counters, method.counters());
+        add_work_counters(counters, method.counters());
         return loop.finish(result, SolveStatus::TIME_LIMIT);
     }
     const AccuracyScale scale = accuracy_scale(qp);
@@ -131,7 +131,7 @@ SolverResult solve_frictional_snapshot(const std::string& name, const QpView& qp
         try {
             one = method.run(own_tol, left_iterations, left_s);
         } catch (const InputError& error) {
-            add_counters(counters, method.counters());
+            add_work_counters(counters, method.counters());
             return loop.finish(result, SolveStatus::INVALID_INPUT, error.what());
         }
         iterations += one.run.iterations;
@@ -182,7 +182,7 @@ SolverResult solve_frictional_snapshot(const std::string& name, const QpView& qp
         if (!(tighter < own_tol)) break;
         own_tol = tighter;
     }
-    add_counters(counters, method.counters());
+    add_work_counters(counters, method.counters());
     counters.iterations = iterations;
     result.info["rounds"] = rounds;
     if (!have_point) return loop.finish(result, SolveStatus::TIME_LIMIT);  // the limit came before any round

@@ -19,7 +19,7 @@ namespace cb {
 
 namespace {
 
-const char* const NAME = "mprgp+bmf03";
+const char* const BMF03_NAME = "mprgp+bmf03";
 
 const SettingsTable<MprgpBmf03Settings>& mprgp_bmf03_settings_table()
 {
@@ -32,16 +32,16 @@ void rename_message(SolverResult& result)
 {
     const std::string inner = "mprgp-coupled: ";
     if (result.message.rfind(inner, 0) == 0)
-        result.message = std::string(NAME) + ": " + result.message.substr(inner.size());
+        result.message = std::string(BMF03_NAME) + ": " + result.message.substr(inner.size());
     else if (!result.message.empty())
-        result.message = std::string(NAME) + ": " + result.message;
+        result.message = std::string(BMF03_NAME) + ": " + result.message;
 }
 
 }  // namespace
 
 MprgpBmf03Settings MprgpBmf03Settings::from_json(const nlohmann::json& settings)
 {
-    return read_settings(settings, NAME, mprgp_bmf03_settings_table());
+    return read_settings(settings, BMF03_NAME, mprgp_bmf03_settings_table());
 }
 
 nlohmann::json MprgpBmf03Settings::to_json() const { return write_settings(*this, mprgp_bmf03_settings_table()); }
@@ -111,9 +111,9 @@ SolverResult MprgpBmf03Solver::solve(const QpView& qp, const SolveContext& conte
             missing += std::string(missing.empty() ? "" : " and ") + "no tangent rows for every contact";
         if (!missing.empty()) {
             SolverResult result;
-            SolveLoop loop(NAME, qp, common, context);
+            SolveLoop loop(BMF03_NAME, qp, common, context);
             return loop.finish(result, SolveStatus::NOT_APPLICABLE,
-                               std::string(NAME) +
+                               std::string(BMF03_NAME) +
                                    ": a velocity update needs a simulator's frictional step (qpsnap version 2 "
                                    "with h and v0); this problem has " +
                                    missing);
@@ -137,7 +137,7 @@ SolverResult MprgpBmf03Solver::solve(const QpView& qp, const SolveContext& conte
     Stopwatch watch;
     watch.start();
     Counters counters = result.counters;
-    SolveLoop loop(NAME, qp, common, SolveContext{});  // the verdict and its message (no monitor here)
+    SolveLoop loop(BMF03_NAME, qp, common, SolveContext{});  // the verdict and its message (no monitor here)
     loop.end_setup();
     Eigen::CholmodSupernodalLLT<SpMatCol, Eigen::Lower> llt;
     {
@@ -150,7 +150,7 @@ SolverResult MprgpBmf03Solver::solve(const QpView& qp, const SolveContext& conte
     if (llt.info() != Eigen::Success) {
         result.counters = counters;
         return loop.finish(result, SolveStatus::INVALID_INPUT,
-                           std::string(NAME) + ": CHOLMOD could not factor A (x_free = A^-1 b gives dv_N)");
+                           std::string(BMF03_NAME) + ": CHOLMOD could not factor A (x_free = A^-1 b gives dv_N)");
     }
     const Vec x_free = llt.solve(qp.b);
     ++counters.cholmod_solves;
@@ -190,7 +190,7 @@ SolverResult MprgpBmf03Solver::solve(const QpView& qp, const SolveContext& conte
 SolverEntry mprgp_bmf03_entry()
 {
     return solver_entry<MprgpBmf03Solver>(
-        NAME, mprgp_bmf03_settings_table(),
+        BMF03_NAME, mprgp_bmf03_settings_table(),
         "mprgp-coupled on the frictionless QP, then one Coulomb velocity update per contact (BMF03; a baseline)",
         "any J; with friction only a simulator's frictional step (h and v0 given), else not_applicable");
 }

@@ -23,7 +23,7 @@ namespace cb {
 
 namespace {
 
-const char* const NAME = "mprgp-staggered";
+const char* const STAGGERED_NAME = "mprgp-staggered";
 const char* const NORMAL_SOLVER = "mprgp-coupled";
 
 /// Every setting of `mprgp-staggered`, declared once (settings.hpp SettingsTable).
@@ -52,7 +52,8 @@ SolverResult frictionless(const QpView& qp, const SolveContext& context, const C
     normal.common = common;
     SolverResult r = mprgp_coupled_solve(qp, normal, context);
     const std::string prefix = std::string(NORMAL_SOLVER) + ": ";
-    if (r.message.rfind(prefix, 0) == 0) r.message = std::string(NAME) + ": " + r.message.substr(prefix.size());
+    if (r.message.rfind(prefix, 0) == 0)
+        r.message = std::string(STAGGERED_NAME) + ": " + r.message.substr(prefix.size());
     r.info["rounds"] = 1;
     r.info["normal_solver"] = NORMAL_SOLVER;
     if (qp.friction && qp.friction->T.rows() == 2 * qp.m()) r.lambda_t = Vec::Zero(2 * qp.m());
@@ -90,7 +91,7 @@ void add_inner_counters(Counters& total, const Counters& part)
 
 MprgpStaggeredSettings MprgpStaggeredSettings::from_json(const nlohmann::json& settings)
 {
-    return read_settings(settings, NAME, mprgp_staggered_settings_table());
+    return read_settings(settings, STAGGERED_NAME, mprgp_staggered_settings_table());
 }
 
 nlohmann::json MprgpStaggeredSettings::to_json() const
@@ -113,16 +114,16 @@ SolverResult MprgpStaggeredSolver::solve(const QpView& qp, const SolveContext& c
     result.info["normal_solver"] = NORMAL_SOLVER;
     result.info["native_residual_definition"] =
         "FCLIB's relative natural-map error ||F_nat(r)|| / ||q|| of the snapshot's local problem";
-    SolveLoop loop(NAME, qp, s.common, context);
+    SolveLoop loop(STAGGERED_NAME, qp, s.common, context);
     if (m > s.max_contacts)
         return loop.finish(result, SolveStatus::NOT_APPLICABLE,
-                           std::string(NAME) + ": m = " + std::to_string(m) +
+                           std::string(STAGGERED_NAME) + ": m = " + std::to_string(m) +
                                " contacts exceeds max_contacts = " + std::to_string(s.max_contacts) +
                                " (W_TT = T A^-1 T' is a dense 2m x 2m matrix); raise the max_contacts setting to "
                                "allow it");
     if (f.mu.size() != m || f.T.rows() != 2 * m || f.T.cols() != n || (f.cT.size() != 0 && f.cT.size() != 2 * m))
         return loop.finish(result, SolveStatus::INVALID_INPUT,
-                           std::string(NAME) + ": friction fields of the wrong size (mu " +
+                           std::string(STAGGERED_NAME) + ": friction fields of the wrong size (mu " +
                                std::to_string(f.mu.size()) + ", T " + std::to_string(f.T.rows()) + " x " +
                                std::to_string(f.T.cols()) + ", cT " + std::to_string(f.cT.size()) +
                                "; m = " + std::to_string(m) + ", n = " + std::to_string(n) + ")");
@@ -134,7 +135,7 @@ SolverResult MprgpStaggeredSolver::solve(const QpView& qp, const SolveContext& c
     DualLcp tangential;
     std::string error;
     if (!tangential.form(tangent_rows, counters, error))
-        return loop.finish(result, SolveStatus::INVALID_INPUT, std::string(NAME) + ": " + error);
+        return loop.finish(result, SolveStatus::INVALID_INPUT, std::string(STAGGERED_NAME) + ": " + error);
     const SpMat W_tt = tangential.matrix().sparseView();
     const Vec q_t0 = tangential.q();
     // D^-1 of W_TT; a zero tangent row (diagonal 0) never moves its disc's centre: 1 is harmless.
@@ -236,7 +237,8 @@ SolverResult MprgpStaggeredSolver::solve(const QpView& qp, const SolveContext& c
         if (nr.status == SolveStatus::MAX_ITERATIONS) return finish(SolveStatus::MAX_ITERATIONS, "");
         if (nr.status != SolveStatus::CONVERGED)
             return finish(nr.status == SolveStatus::NOT_RUN ? SolveStatus::STALLED : nr.status,
-                          std::string(NAME) + ": normal solve of round " + std::to_string(rounds) + ": " + nr.message);
+                          std::string(STAGGERED_NAME) + ": normal solve of round " + std::to_string(rounds) + ": " +
+                              nr.message);
         x = nr.x;
         lambda_n = nr.lambda;
 
@@ -253,14 +255,14 @@ SolverResult MprgpStaggeredSolver::solve(const QpView& qp, const SolveContext& c
         } else {
             tighten = std::max(0.1 * tighten, TIGHTEST);
             if (++since_best >= s.stall_rounds)
-                return finish(SolveStatus::STALLED, std::string(NAME) +
+                return finish(SolveStatus::STALLED, std::string(STAGGERED_NAME) +
                                                         ": stalled: the outer error did not fall 1% in " +
                                                         std::to_string(s.stall_rounds) + " rounds");
         }
         if (rounds >= s.max_outer) {
             SolverResult out = finish(SolveStatus::MAX_ITERATIONS, "");
             // The loop's standard reason names max_iterations, which was not reached: say which cap was.
-            out.message = std::string(NAME) + ": outer cap max_outer = " + std::to_string(s.max_outer) +
+            out.message = std::string(STAGGERED_NAME) + ": outer cap max_outer = " + std::to_string(s.max_outer) +
                           " rounds reached" + out.message.substr(out.message.find(';'));
             return out;
         }
@@ -277,7 +279,7 @@ SolverResult MprgpStaggeredSolver::solve(const QpView& qp, const SolveContext& c
         disc_common.max_iterations = s.common.max_iterations - counters.iterations;
         disc_common.time_limit_s = remaining_time();
         const QpView disc_qp{W_tt, b_disc, no_rows, no_c, lambda_t};
-        SolveLoop disc_loop(NAME, disc_qp, disc_common, SolveContext{});
+        SolveLoop disc_loop(STAGGERED_NAME, disc_qp, disc_common, SolveContext{});
         disc_loop.end_setup();
         Counters cnt;
         DiscSet discs(radius);
@@ -295,15 +297,15 @@ SolverResult MprgpStaggeredSolver::solve(const QpView& qp, const SolveContext& c
         if (ts == SolveStatus::TIME_LIMIT) return finish(SolveStatus::TIME_LIMIT, "");
         if (ts == SolveStatus::MAX_ITERATIONS) return finish(SolveStatus::MAX_ITERATIONS, "");
         if (ts != SolveStatus::CONVERGED)
-            return finish(ts, std::string(NAME) + ": tangential solve of round " + std::to_string(rounds) + ": " +
-                                  to_string(ts) + (why.empty() ? "" : " (" + why + ")"));
+            return finish(ts, std::string(STAGGERED_NAME) + ": tangential solve of round " + std::to_string(rounds) +
+                                  ": " + to_string(ts) + (why.empty() ? "" : " (" + why + ")"));
     }
 }
 
 SolverEntry mprgp_staggered_entry()
 {
     return solver_entry<MprgpStaggeredSolver>(
-        NAME, mprgp_staggered_settings_table(),
+        STAGGERED_NAME, mprgp_staggered_settings_table(),
         "staggered projections (Kaufman et al. 2008): the normal QP by mprgp-coupled with lambda_T fixed, the "
         "tangential discs by MPGP on W_TT = T A^-1 T' with lambda_N fixed, to a Coulomb fixed point",
         "any J with at most max_contacts rows; Coulomb friction (mu, tangent rows) when the snapshot has it, else "
