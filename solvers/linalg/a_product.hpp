@@ -115,6 +115,10 @@ bool build_block_rows(const SpMat& A, BlockRows& out, double max_fill, double& f
 /// >= block row); `fill` is per nonzero of that part of A.
 bool build_upper_block_rows(const SpMat& A, BlockRows& out, double max_fill, double& fill, std::string& why);
 
+/// Whether the upper blocks U of A (build_upper_block_rows) stand for all of A, i.e. A is symmetric
+/// to the bit; `why` names the first entry that differs.
+bool upper_blocks_mirror_a(const SpMat& A, const BlockRows& U, std::string& why);
+
 /// y = A x, counted. y is resized; it must not alias x.
 void a_product(const AOperator& A, const Vec& x, Vec& y);
 

@@ -1,0 +1,233 @@
+// A's 3x3 block rows built from its CSR (the storage of the block products in a_product.cpp): the
+// three-way merge of a block row's CSR rows, a straight copy for FEM rows, and the symmetry check of
+// the upper blocks.
+#include "solvers/linalg/a_product.hpp"
+
+#include <algorithm>
+#include <limits>
+#include <string>
+
+namespace cb {
+
+namespace {
+
+/// Block row I's distinct block columns, in increasing order, from its three CSR rows (each
+/// sorted): a three-way merge of the rows' columns / 3, starting at block column `from`.
+/// `visit(J, k[3], end[3])` is called per block column with each row's first entry in it (entries
+/// up to end[r] belong to J). Returns false when a row's columns do not increase.
+template <typename Visit>
+bool merge_block_columns(const int* outer, const int* inner, std::ptrdiff_t I, int from, Visit&& visit)
+{
+    int k[3], stop[3];
+    for (int r = 0; r < 3; ++r) {
+        const std::ptrdiff_t i = 3 * I + r;
+        k[r] = outer[i];
+        stop[r] = outer[i + 1];
+        for (int q = k[r] + 1; q < stop[r]; ++q)
+            if (inner[q] <= inner[q - 1]) return false;
+        while (k[r] < stop[r] && inner[k[r]] / 3 < from) ++k[r];  // the lower triangle, when skipped
+    }
+    for (;;) {
+        int J = std::numeric_limits<int>::max();
+        for (int r = 0; r < 3; ++r)
+            if (k[r] < stop[r]) J = std::min(J, inner[k[r]] / 3);
+        if (J == std::numeric_limits<int>::max()) return true;
+        int end[3];
+        for (int r = 0; r < 3; ++r) {
+            end[r] = k[r];
+            while (end[r] < stop[r] && inner[end[r]] / 3 == J) ++end[r];
+        }
+        visit(J, k, end);
+        for (int r = 0; r < 3; ++r) k[r] = end[r];
+    }
+}
+
+/// Whether block row I's three CSR rows hold the same columns, in whole increasing groups 3J, 3J + 1,
+/// 3J + 2 (a FEM matrix's vertex blocks): then its blocks are those groups, and their values are
+/// copied straight in, without the merge (the same blocks as the merge's). `groups` receives
+/// the row's group count and `first` the first group whose block column is >= `from`.
+bool whole_groups(const int* outer, const int* inner, std::ptrdiff_t I, int from, int& groups, int& first)
+{
+    const int a = outer[3 * I], len = outer[3 * I + 1] - a;
+    if (len % 3 != 0 || outer[3 * I + 2] - outer[3 * I + 1] != len || outer[3 * I + 3] - outer[3 * I + 2] != len)
+        return false;
+    const int* c0 = inner + a;
+    const int* c1 = inner + outer[3 * I + 1];
+    const int* c2 = inner + outer[3 * I + 2];
+    groups = len / 3;
+    first = groups;
+    int previous = -1;
+    for (int g = 0; g < groups; ++g) {
+        const int col = c0[3 * g];
+        if (col % 3 != 0 || col / 3 <= previous || c0[3 * g + 1] != col + 1 || c0[3 * g + 2] != col + 2) return false;
+        for (int e = 3 * g; e < 3 * g + 3; ++e)
+            if (c1[e] != c0[e] || c2[e] != c0[e]) return false;
+        previous = col / 3;
+        if (first == groups && previous >= from) first = g;
+    }
+    return true;
+}
+
+/// A's 3x3 blocks (all, or with `upper` those of block column >= block row only).
+bool build_blocks(const SpMat& A, bool upper, BlockRows& out, double max_fill, double& fill, std::string& why)
+{
+    out = BlockRows{};
+    fill = 0.0;
+    const Eigen::Index n = A.rows();
+    if (n == 0 || n % 3 != 0 || A.cols() != n) {
+        why = "the DOF count " + std::to_string(n) + " is not a positive multiple of 3";
+        return false;
+    }
+    if (!A.isCompressed()) {
+        why = "A is not compressed";
+        return false;
+    }
+    const std::ptrdiff_t nb = n / 3;
+    const int* outer = A.outerIndexPtr();
+    const int* inner = A.innerIndexPtr();
+    const double* val = A.valuePtr();
+    // Pass 1: how many blocks each block row has (columns must increase along a row, or the block
+    // sums would not follow the CSR sums' order).
+    std::vector<int> start(static_cast<size_t>(nb) + 1, 0);
+    long long blocks = 0;
+    long long lower_nonzeros = 0;  // entries left out by `upper`
+    for (std::ptrdiff_t I = 0; I < nb; ++I) {
+        const int from = upper ? static_cast<int>(I) : 0;
+        int groups = 0, first = 0;
+        if (whole_groups(outer, inner, I, from, groups, first)) {
+            blocks += groups - first;
+            lower_nonzeros += 9LL * first;
+            if (blocks > std::numeric_limits<int>::max() / 9) {
+                why = "A has too many blocks for 32-bit block offsets";
+                return false;
+            }
+            start[static_cast<size_t>(I) + 1] = static_cast<int>(blocks);
+            continue;
+        }
+        const bool sorted = merge_block_columns(outer, inner, I, from, [&](int, const int*, const int*) { ++blocks; });
+        if (!sorted) {
+            for (std::ptrdiff_t i = 3 * I; i < 3 * I + 3; ++i)
+                for (int k = outer[i] + 1; k < outer[i + 1]; ++k)
+                    if (inner[k] <= inner[k - 1]) {
+                        why = "A's columns are not increasing in row " + std::to_string(i);
+                        return false;
+                    }
+        }
+        if (upper)
+            for (std::ptrdiff_t i = 3 * I; i < 3 * I + 3; ++i)
+                for (int k = outer[i]; k < outer[i + 1] && inner[k] < 3 * I; ++k) ++lower_nonzeros;
+        if (blocks > std::numeric_limits<int>::max() / 9) {
+            why = "A has too many blocks for 32-bit block offsets";
+            return false;
+        }
+        start[static_cast<size_t>(I) + 1] = static_cast<int>(blocks);
+    }
+    // Fill: stored entries per nonzero of the part of A they stand for.
+    const double nnz = static_cast<double>(A.nonZeros() - lower_nonzeros);
+    fill = nnz > 0.0 ? 9.0 * static_cast<double>(blocks) / nnz : 1.0;
+    if (fill > max_fill) {
+        why = "A's nonzeros do not form 3x3 blocks (" + std::to_string(fill) + " stored entries per nonzero)";
+        return false;
+    }
+    // Pass 2: block columns and values (absent entries stay zero), block by block in storage order.
+    out.start = std::move(start);
+    out.column.resize(static_cast<size_t>(blocks));
+    out.value.resize(static_cast<size_t>(blocks) * 9 + 1);  // unwritten: every entry is set below
+    out.value.back() = 0.0;                                 // see block_step
+    int* column = out.column.data();
+    double* value = out.value.data();
+    for (std::ptrdiff_t I = 0; I < nb; ++I) {
+        std::ptrdiff_t q = out.start[static_cast<size_t>(I)];
+        int groups = 0, first = 0;
+        if (whole_groups(outer, inner, I, upper ? static_cast<int>(I) : 0, groups, first)) {
+            const double* v0 = val + outer[3 * I];
+            const double* v1 = val + outer[3 * I + 1];
+            const double* v2 = val + outer[3 * I + 2];
+            for (int g = first; g < groups; ++g, ++q) {
+                column[q] = inner[outer[3 * I] + 3 * g] / 3;
+                double* b = value + 9 * q;
+                for (int c = 0; c < 3; ++c) {
+                    b[3 * c] = v0[3 * g + c];
+                    b[3 * c + 1] = v1[3 * g + c];
+                    b[3 * c + 2] = v2[3 * g + c];
+                }
+            }
+            continue;
+        }
+        merge_block_columns(outer, inner, I, upper ? static_cast<int>(I) : 0, [&](int J, const int* k, const int* end) {
+            column[q] = J;
+            double* b = value + 9 * q;
+            std::fill(b, b + 9, 0.0);  // entries absent from A
+            for (int r = 0; r < 3; ++r)
+                for (int e = k[r]; e < end[r]; ++e) b[3 * (inner[e] - 3 * J) + r] = val[e];
+            ++q;
+        });
+    }
+    why.clear();
+    return true;
+}
+
+}  // namespace
+
+/// Whether the upper blocks U of A (build_blocks with `upper`) stand for all of A, i.e. A is
+/// symmetric to the bit: every nonzero below the block diagonal equals its mirror in U, U holds no
+/// other nonzero off its diagonal blocks, and each diagonal block is symmetric. Each block row's
+/// blocks are met in increasing block column, so a cursor per block row finds the mirrors in one
+/// pass. `why` names the first entry that differs.
+bool upper_blocks_mirror_a(const SpMat& A, const BlockRows& U, std::string& why)
+{
+    const std::ptrdiff_t nb = A.rows() / 3;
+    const int* outer = A.outerIndexPtr();
+    const int* inner = A.innerIndexPtr();
+    const double* val = A.valuePtr();
+    std::vector<int> cursor(U.start.begin(), U.start.end() - 1);
+    long long lower = 0, upper = 0;
+    const auto differs = [&](std::ptrdiff_t i, std::ptrdiff_t j) {
+        why = "A is not symmetric (entry (" + std::to_string(i) + ", " + std::to_string(j) + ") differs from (" +
+              std::to_string(j) + ", " + std::to_string(i) + "))";
+        return false;
+    };
+    for (std::ptrdiff_t I = 0; I < nb; ++I) {
+        for (int k = U.start[static_cast<size_t>(I)]; k < U.start[static_cast<size_t>(I) + 1]; ++k) {
+            const double* b = U.value.data() + 9 * static_cast<std::ptrdiff_t>(k);
+            if (U.column[static_cast<size_t>(k)] != I) {
+                for (int e = 0; e < 9; ++e) upper += b[e] != 0.0;
+                continue;
+            }
+            for (int r = 0; r < 3; ++r)
+                for (int c = r + 1; c < 3; ++c)
+                    if (b[3 * c + r] != b[3 * r + c]) return differs(3 * I + r, 3 * I + c);
+        }
+        for (std::ptrdiff_t i = 3 * I; i < 3 * I + 3; ++i)
+            for (int k = outer[i]; k < outer[i + 1] && inner[k] < 3 * I; ++k) {
+                if (val[k] == 0.0) continue;
+                ++lower;
+                const int J = inner[k] / 3;  // the mirror (inner[k], i) is in block (J, I)
+                int& q = cursor[static_cast<size_t>(J)];
+                while (q < U.start[static_cast<size_t>(J) + 1] && U.column[static_cast<size_t>(q)] < I) ++q;
+                if (q == U.start[static_cast<size_t>(J) + 1] || U.column[static_cast<size_t>(q)] != I)
+                    return differs(i, inner[k]);
+                const std::ptrdiff_t r = inner[k] - 3 * J, c = i - 3 * I;
+                if (U.value[9 * static_cast<size_t>(q) + static_cast<size_t>(3 * c + r)] != val[k])
+                    return differs(i, inner[k]);
+            }
+    }
+    if (lower != upper) {
+        why = "A is not symmetric (" + std::to_string(upper) + " nonzeros above its block diagonal, " +
+              std::to_string(lower) + " below)";
+        return false;
+    }
+    return true;
+}
+
+bool build_block_rows(const SpMat& A, BlockRows& out, double max_fill, double& fill, std::string& why)
+{
+    return build_blocks(A, false, out, max_fill, fill, why);
+}
+
+bool build_upper_block_rows(const SpMat& A, BlockRows& out, double max_fill, double& fill, std::string& why)
+{
+    return build_blocks(A, true, out, max_fill, fill, why);
+}
+
+}  // namespace cb
