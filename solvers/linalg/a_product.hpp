@@ -18,7 +18,7 @@ namespace cb {
 /// An allocator whose resize() leaves doubles unwritten: the block build writes every entry itself,
 /// and on a million DOFs zeroing the values first was a whole extra pass over them.
 template <typename T> struct UninitializedAllocator : std::allocator<T> {
-    template <typename U> struct rebind {
+    template <typename U> struct rebind {  // NOLINT(readability-identifier-naming): the allocator interface names it
         using other = UninitializedAllocator<U>;
     };
     UninitializedAllocator() = default;
@@ -37,8 +37,8 @@ template <typename T> struct UninitializedAllocator : std::allocator<T> {
 /// (value (r, c) at 9k + 3c + r) so that a column's three entries meet three partial sums at once.
 /// Entries absent from A are stored as zeros.
 struct BlockRows {
-    std::vector<int> start;     ///< block row I's blocks are start[I] .. start[I + 1] - 1
-    std::vector<int> column;    ///< block column per block, increasing within a block row
+    std::vector<int> start;   ///< block row I's blocks are start[I] .. start[I + 1] - 1
+    std::vector<int> column;  ///< block column per block, increasing within a block row
     /// 9 per block, and one trailing zero (the AVX2 kernel reads past the last)
     std::vector<double, UninitializedAllocator<double>> value;
 };
