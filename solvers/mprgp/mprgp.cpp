@@ -1,6 +1,7 @@
 // `mprgp`: extended monotone MPRGP on decoupled constraints (ALGORITHMS.md §3): its settings and
 // registry entry. The solve is solvers/mprgp/mprgp_decoupled.hpp's, run by the MPRGP engine.
 #include "solvers/mprgp/mprgp.hpp"
+#include "solvers/core/compressed_qp.hpp"
 #include "solvers/mprgp/mprgp_decoupled.hpp"
 #include "solvers/mprgp/mprgp_parts.hpp"
 
@@ -69,7 +70,8 @@ SolverEntry mprgp_entry()
 
 SolverResult MprgpSolver::solve(const QpView& qp, const SolveContext& context)
 {
-    DecoupledMprgp run(qp, m_settings, context);
+    const CompressedQpView compressed(qp);  // the row kernels read J and A row by row
+    DecoupledMprgp run(compressed.view(), m_settings, context);
     return run.run();
 }
 

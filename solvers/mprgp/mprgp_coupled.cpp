@@ -1,6 +1,7 @@
 // `mprgp-coupled`: extended MPRGP with general J (ALGORITHMS.md §4): its settings and registry
 // entry. The solve is solvers/mprgp/mprgp_coupled_run.hpp's, run by the MPRGP engine.
 #include "solvers/mprgp/mprgp_coupled.hpp"
+#include "solvers/core/compressed_qp.hpp"
 #include "solvers/mprgp/mprgp_coupled_run.hpp"
 
 namespace cb {
@@ -77,7 +78,8 @@ SolverResult MprgpCoupledSolver::solve(const QpView& qp, const SolveContext& con
 
 SolverResult mprgp_coupled_solve(const QpView& qp, const MprgpCoupledSettings& settings, const SolveContext& context)
 {
-    CoupledRun run(qp, settings, context);
+    const CompressedQpView compressed(qp);  // the face operators read J and A row by row
+    CoupledRun run(compressed.view(), settings, context);
     return run.run();
 }
 
