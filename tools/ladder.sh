@@ -17,11 +17,12 @@ if [ "$out" != results/ladder ]; then
     exit 2
 fi
 # A folder is reused only when its simulation.json says it is this scene's whole two-frame run by
-# this simulator version, and the scene file has not changed since; anything else is simulated
-# again (a planted or stale folder once gave the ladder another scene's snapshots).
+# this simulator version, and its resume.state names the scene file's present content; anything else
+# is simulated again, with --fresh (a planted or stale folder once gave the ladder another scene's snapshots).
 simver=$("$cb" --version --json | /usr/bin/python3 -c 'import json, sys; print(json.load(sys.stdin)["simulator_version"])')
 for s in "${scenes[@]}"; do
     dir="$out/sim/$s"
+    fresh=()
     if [ -f "$dir/simulation.json" ]; then
         why=$(/usr/bin/python3 tools/ladder_reuse.py "$dir/simulation.json" "scenes/ladder/$s.json" "$simver")
         if [ -z "$why" ]; then
@@ -29,10 +30,11 @@ for s in "${scenes[@]}"; do
             continue
         fi
         echo "ladder: $s: $dir is stale ($why): simulating again"
+        fresh=(--fresh)
     fi
     # The stepping solver only moves frame 0 (no contact yet); frame 1's snapshot is the QP.
     start=$SECONDS
-    "$cb" simulate "scenes/ladder/$s.json" --frames 2 --out "$dir" --solver mprgp
+    "$cb" simulate "scenes/ladder/$s.json" --frames 2 --out "$dir" --solver mprgp "${fresh[@]}"
     echo "ladder: $s: simulated in $((SECONDS - start)) s (time and peak memory of each stage per step in $dir/steps.csv)"
 done
 "$cb" run "suites/ladder_$ladder.json" --out "$out/$ladder"

@@ -1,13 +1,34 @@
 #!/usr/bin/python3
 """Why a ladder's cached simulation folder may not be reused (tools/ladder.sh): prints nothing when
-DIR/simulation.json says it is SCENE's whole two-frame mprgp run by simulator VERSION and the scene
-file has not changed since; else one line of reasons. A planted or stale folder once gave the
-ladder another scene's snapshots.
+DIR/simulation.json says it is SCENE's whole two-frame mprgp run by simulator VERSION and DIR/resume.state
+says it was simulated from the scene file's present content; else one line of reasons. A planted or stale
+folder once gave the ladder another scene's snapshots. The scene is compared by content, not by file
+time: a fresh clone's files are all newer than a simulation made before it.
 
 usage: ladder_reuse.py SIMULATION_JSON SCENE_FILE VERSION"""
 import json
 import os
 import sys
+
+RESUME_MAGIC = b"cb-resume 1\n"  # sim/resume_state.cpp
+
+
+def content_hash(path: str) -> str:
+    """problems/qpsnap.cpp's qpsnap_content_hash: FNV-1a 64 of the bytes, 16 hex digits."""
+    h = 14695981039346656037
+    with open(path, "rb") as f:
+        for byte in f.read():
+            h = ((h ^ byte) * 1099511628211) & 0xFFFFFFFFFFFFFFFF
+    return f"{h:016x}"
+
+
+def simulated_scene_hash(resume_state: str) -> str:
+    """The scene file's hash recorded by `simulate` in its resume state; raises OSError/ValueError."""
+    with open(resume_state, "rb") as f:
+        if f.read(len(RESUME_MAGIC)) != RESUME_MAGIC:
+            raise ValueError("not a resume state of this version")
+        head = json.loads(f.readline())
+    return head["identity"]["scene_file"]
 
 
 def stale_reason(simulation_json: str, scene_file: str, version: int) -> str:
@@ -27,8 +48,12 @@ def stale_reason(simulation_json: str, scene_file: str, version: int) -> str:
         why.append(f"simulator version {rec.get('simulator_version')!r}, not {version}")
     if rec.get("frames_done") != 2 or rec.get("blow_up") is not False or rec.get("solver") != "mprgp":
         why.append("not a whole two-frame mprgp run")
-    if os.path.getmtime(scene_file) > os.path.getmtime(simulation_json):
-        why.append("the scene file changed since")
+    resume_state = os.path.join(os.path.dirname(simulation_json), "resume.state")
+    try:
+        if simulated_scene_hash(resume_state) != content_hash(scene_file):
+            why.append("the scene file changed since")
+    except (OSError, ValueError, KeyError, TypeError, AttributeError) as err:
+        why.append(f"no readable resume.state to compare the scene with ({err})")
     return "; ".join(why)
 
 
