@@ -22,7 +22,7 @@ namespace {
 
 using namespace cb::bench;
 
-void measure(benchmark::State& state, const cb::Qp& qp)
+void measure_formats(benchmark::State& state, const cb::Qp& qp)
 {
     const cb::SpMat& A = qp.A;
     const Eigen::Index n = A.rows();
@@ -106,10 +106,10 @@ void measure(benchmark::State& state, const cb::Qp& qp)
 void BM_AProductFormats_plane32(benchmark::State& state)
 {
     static const cb::Qp qp = cb::make_synthetic("plane", {{"nx", 32}, {"ny", 32}, {"nz", 32}}, 1);
-    measure(state, qp);
+    measure_formats(state, qp);
 }
 BENCHMARK(BM_AProductFormats_plane32)->UseManualTime()->Iterations(1)->Unit(benchmark::kMillisecond);
 
-const bool registered = register_per_snapshot("BM_AProductFormats", measure);
+const bool formats_registered = register_per_snapshot("BM_AProductFormats", measure_formats);
 
 }  // namespace

@@ -51,7 +51,7 @@ void report(benchmark::State& state, const std::string& name, const std::vector<
     if (triad_speedup > 0.0) state.counters[name + "_of_triad_speedup"] = median(r) / triad_speedup;
 }
 
-void measure(benchmark::State& state, const cb::Qp& qp)
+void measure_threads(benchmark::State& state, const cb::Qp& qp)
 {
     const cb::SpMat& A = qp.A;
     const Eigen::Index n = A.rows();
@@ -104,10 +104,10 @@ void measure(benchmark::State& state, const cb::Qp& qp)
 void BM_AProductThreads_plane32(benchmark::State& state)
 {
     static const cb::Qp qp = cb::make_synthetic("plane", {{"nx", 32}, {"ny", 32}, {"nz", 32}}, 1);
-    measure(state, qp);
+    measure_threads(state, qp);
 }
 BENCHMARK(BM_AProductThreads_plane32)->UseManualTime()->Iterations(1)->Unit(benchmark::kMillisecond);
 
-const bool registered = register_per_snapshot("BM_AProductThreads", measure);
+const bool threads_registered = register_per_snapshot("BM_AProductThreads", measure_threads);
 
 }  // namespace

@@ -57,7 +57,7 @@ private:
     double m_first = 0.0, m_last = 0.0;
 };
 
-void measure(benchmark::State& state, const cb::Qp& qp)
+void measure_share(benchmark::State& state, const cb::Qp& qp)
 {
     const cb::DecoupleReport report = cb::decouple_rows(qp.view(), qp.contacts, cb::DecoupleOrder::AUTHORS, 0);
     const cb::Qp decoupled = cb::select_rows(qp, report.kept_rows);
@@ -99,6 +99,6 @@ void measure(benchmark::State& state, const cb::Qp& qp)
     state.SetLabel(op.format() == cb::AFormat::BSR ? "bsr" : "csr fallback: " + op.why_csr());
 }
 
-const bool registered = register_per_snapshot("BM_IterationShare", measure);
+const bool share_registered = register_per_snapshot("BM_IterationShare", measure_share);
 
 }  // namespace
