@@ -1,11 +1,11 @@
 // Timing benchmark (ctest: timing.test_monitor_timing, label `timing`, run serially; or `make
 // timing`): a monitored run of every solver takes the same solver time as an unmonitored one, within
-// noise, on a stiff snapshot of a few thousand DOF where the monitor's work once leaked into `pgs`'s
-// clock (x21.9). A ratio measured in one process: min of 7 (or more: at least 0.5 s of each kind)
-// interleaved runs each after a warm-up, setup and solve minimised apart (setup over both kinds:
-// the monitor is not called before the solve); a solver over the bound
-// is measured again (up to 3 times: a leak fails every time, a busy neighbour rarely does); no
-// absolute wall-clock bound. Its deterministic twin: tests/python/test_monitor_instructions.py.
+// noise, on a stiff snapshot of a few thousand DOF (1215 for the solvers whose setup outweighs their
+// solve) where the monitor's work once leaked into `pgs`'s clock (x21.9). A ratio measured in one process: min of 7 (or
+// more: at least 0.5 s of each kind) interleaved runs each after a warm-up, setup and solve minimised apart (setup over
+// both kinds: the monitor is not called before the solve); a solver over the bound is measured again (up to 3 times: a
+// leak fails every time, a busy neighbour rarely does); no absolute wall-clock bound. Its deterministic twin:
+// tests/python/test_monitor_instructions.py.
 #include "harness/history.hpp"
 #include "problems/synthetic.hpp"
 #include "solvers/core/registry.hpp"
