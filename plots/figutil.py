@@ -38,8 +38,8 @@ def _finish(fig, folder: str, stem: str, tight: bool) -> None:
         from plots import figure_checks
     except ImportError:
         import figure_checks
-    figure_checks.tidy_ticks(fig)
-    found = figure_checks.problems(fig, tight=tight)
+    drawn = figure_checks.tidy_ticks(fig)
+    found = figure_checks.problems(fig, tight=tight, drawn=drawn)
     if not found:
         return
     where = os.path.join(folder, stem)

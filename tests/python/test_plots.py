@@ -491,62 +491,6 @@ class TestReproduce(TempDirCase):
             with open(os.path.join(self.scenes, name + ".json"), "w") as f:
                 f.write("{}")
 
-    def test_quick_run_produces_every_figure_and_claim(self):
-        out = os.path.join(self.tmp, "out")
-        data = os.path.join(os.path.dirname(ROOT), "shared", "paper-data")
-        args = ["--contactbench", FAKE_CB, "--out", out, "--scenes", self.scenes, "--quick", "--no-profiles"]
-        if os.path.isdir(data):
-            args += ["--data", data]
-        with redirect_stdout(io.StringIO()) as log:
-            self.assertEqual(reproduce.main(args), 0)
-        figs = os.path.join(out, "figures")
-        for stem in ("fig6_decoupling_time", "fig8_mprgp_vs_cg", "fig9_preconditioning", "fig10_mprgp_vs_ica",
-                     "fig11_scaling"):
-            for ext in ("png", "pdf"):
-                self.assertTrue(os.path.getsize(os.path.join(figs, f"{stem}.{ext}")) > 1000, stem)
-        self.assertTrue(os.path.isfile(os.path.join(figs, "table1.csv")))
-        with open(os.path.join(out, "report.md"), encoding="utf-8") as f:
-            text = f.read()
-        rows = [l for l in text.splitlines() if l.startswith("| ") and "**" in l]
-        self.assertEqual(len(rows), len(report.EXPECTED_CLAIMS))
-        allowed = {claims.HOLDS, claims.HOLDS_AS_PUBLISHED, claims.HOLDS_NATIVE_ONLY, claims.DOES_NOT_HOLD,
-                   claims.NOT_MEASURED, claims.INCONCLUSIVE_QUICK}
-        for r in rows:
-            verdict = r.rsplit("**", 2)[1]
-            self.assertIn(verdict, allowed)
-            if verdict == claims.INCONCLUSIVE_QUICK:  # with the reason a full run could reverse it
-                self.assertIn("** (quick mode: ", r)
-        # the quick resolutions (7818 and 8958 DOF) are too close for the growth claim
-        self.assertIn("**inconclusive (quick)** (quick mode: the resolutions judged are 1.15x apart", text)
-        with open(os.path.join(out, "claims.json"), encoding="utf-8") as f:
-            saved = json.load(f)
-        self.assertEqual([c["key"] for c in saved][:len(report.EXPECTED_CLAIMS)],
-                         [k for k, _, _ in report.EXPECTED_CLAIMS])
-        # the fake's ICA is ~17x slower than its MPRGP at the smallest size: computed, not typed in
-        low_res = next(c for c in saved if c["key"] == "fig11-ica-low-res")
-        self.assertEqual(low_res["verdict"], claims.DOES_NOT_HOLD)
-        # every row says the problem it is judged on; timed rows carry the rounds' interval
-        for c in saved:
-            self.assertTrue(c["judged_on"], c["key"])
-            self.assertIn(c["verdict"], claims.VERDICTS)
-        for key in ("fig6-decoupling", "fig10-ica-10x", "fig11-ica-low-res"):
-            c = next(c for c in saved if c["key"] == key)
-            self.assertEqual(c["samples"], reproduce.TIMED_SUITES[key.split("-")[0]], key)
-            self.assertLessEqual(c["interval"][0], c["estimate"])
-            self.assertLessEqual(c["estimate"], c["interval"][1])
-        # the fake's long cube has contact from frame 3: Table 1 judges only those frames
-        dominates = next(c for c in saved if c["key"] == "table1-cg-dominates")
-        self.assertIn("frames with contact rows", dominates["judged_on"])
-        self.assertEqual(len(os.listdir(os.path.join(out, "rounds", "fig6"))), reproduce.TIMED_SUITES["fig6"] - 1)
-        self.assertIn("not simulated: dragon_stair", text)
-        # the fake's ica-published runs (stop=native) are `unconfirmed`: the report says what that means
-        self.assertIn(loader.UNCONFIRMED_MEANING, text)
-        self.assertNotIn("KKT", text)  # the measure is the accuracy error e (docs/accuracy.md)
-        self.assertIn("quick", log.getvalue())
-        # issue 46: the reproduction's HTML page, its path said at the end
-        self.assertTrue(os.path.isfile(os.path.join(out, "report", "index.html")))
-        self.assertIn(f"report: {os.path.join(out, 'report', 'index.html')}", log.getvalue())
-
     def test_missing_binary_reports_reason(self):
         out = os.path.join(self.tmp, "out")
         with redirect_stdout(io.StringIO()):
@@ -621,19 +565,119 @@ class TestReproduce(TempDirCase):
         self.assertEqual(kinds, ["exit", "cached", "exit", "exit", "cached"])
         self.assertTrue(runner2.steps[0].startswith("simulate two_dinos_1303: exit 0"))
 
+    def test_suite_cache_is_keyed_on_the_binary(self):
+        """A rebuilt contactbench resumes the suite (the harness redoes runs whose identity changed)."""
+        out = os.path.join(self.tmp, "out")
+        ctx = PaperContext(out=out, quick=True)
+        cb = os.path.join(self.tmp, "contactbench")
+        with open(cb, "w") as f:  # a binary of its own, so that it can be "rebuilt"
+            f.write(f'#!/bin/sh\nexec /usr/bin/python3 "{FAKE_CB}" "$@"\n')
+        os.chmod(cb, 0o755)
+        with redirect_stdout(io.StringIO()):
+            runner = reproduce.Runner(cb, None, os.path.join(self.tmp, "log"))
+            scene = os.path.join(self.scenes, "two_dinos_1303.json")
+            reproduce.simulate(runner, ctx, "two_dinos_1303", scene, 12, None, False)
+            snaps = reproduce.pick_frame(reproduce.snapshots_of(ctx, "two_dinos_1303"), 11)
+            tpl = os.path.join(ROOT, "suites", "paper", "fig11.json")
+            reproduce.run_suite(runner, ctx, "fig11", tpl, snaps, False)
+            reproduce.run_suite(runner, ctx, "fig11", tpl, snaps, False)
+            with open(cb, "a") as f:
+                f.write("# rebuilt\n")
+            reproduce.run_suite(runner, ctx, "fig11", tpl, snaps, False)
+        rounds = reproduce.TIMED_SUITES["fig11"]
+        self.assertEqual(runner.steps[1 + rounds], "run fig11: cached")
+        self.assertTrue(runner.steps[1 + 2 * rounds].startswith("run fig11: exit 0"), runner.steps)
+        self.assertTrue(runner.steps[2 + 2 * rounds].startswith(f"run fig11 round 2/{rounds}: exit 0"), runner.steps)
+
+
+class TestQuickReproduction(unittest.TestCase):
+    """README's `make demo` step (reproduce --quick, no authors' data, the stand-in contactbench) run
+    once for the class: its output is checked as written (a copy), and README's sequence goes on from
+    it (a quick reproduction draws every figure: ~10 s of CPU each time)."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = tempfile.mkdtemp(prefix="cb_plots_quick_")
+        cls.scenes = os.path.join(cls.tmp, "scenes")
+        os.makedirs(cls.scenes)
+        for name in ("two_dinos_1303", "two_dinos_1493", "longcube"):
+            with open(os.path.join(cls.scenes, name + ".json"), "w") as f:
+                f.write("{}")
+        cls.out = os.path.join(cls.tmp, "out")
+        cls.args = ["--contactbench", FAKE_CB, "--out", cls.out, "--scenes", cls.scenes, "--quick", "--no-profiles"]
+        with redirect_stdout(io.StringIO()) as log:  # make demo: no authors' data
+            cls.demo_status = reproduce.main(cls.args + ["--data", os.path.join(cls.tmp, "absent")])
+        cls.demo_log = log.getvalue()
+        cls.demo_copy = os.path.join(cls.tmp, "demo-copy")
+        shutil.copytree(cls.out, cls.demo_copy, symlinks=True)
+        with open(os.path.join(cls.out, "reproduce.json"), encoding="utf-8") as f:
+            cls.demo_meta = json.load(f)
+
+    @classmethod
+    def tearDownClass(cls):
+        shutil.rmtree(cls.tmp, ignore_errors=True)
+
+    def test_quick_run_produces_every_figure_and_claim(self):
+        self.assertEqual(self.demo_status, 0)
+        out = self.demo_copy  # the demo's output as it was written
+        figs = os.path.join(out, "figures")
+        for stem in ("fig6_decoupling_time", "fig8_mprgp_vs_cg", "fig9_preconditioning", "fig10_mprgp_vs_ica",
+                     "fig11_scaling"):
+            for ext in ("png", "pdf"):
+                self.assertTrue(os.path.getsize(os.path.join(figs, f"{stem}.{ext}")) > 1000, stem)
+        self.assertTrue(os.path.isfile(os.path.join(figs, "table1.csv")))
+        with open(os.path.join(out, "report.md"), encoding="utf-8") as f:
+            text = f.read()
+        rows = [l for l in text.splitlines() if l.startswith("| ") and "**" in l]
+        self.assertEqual(len(rows), len(report.EXPECTED_CLAIMS))
+        allowed = {claims.HOLDS, claims.HOLDS_AS_PUBLISHED, claims.HOLDS_NATIVE_ONLY, claims.DOES_NOT_HOLD,
+                   claims.NOT_MEASURED, claims.INCONCLUSIVE_QUICK}
+        for r in rows:
+            verdict = r.rsplit("**", 2)[1]
+            self.assertIn(verdict, allowed)
+            if verdict == claims.INCONCLUSIVE_QUICK:  # with the reason a full run could reverse it
+                self.assertIn("** (quick mode: ", r)
+        # the quick resolutions (7818 and 8958 DOF) are too close for the growth claim
+        self.assertIn("**inconclusive (quick)** (quick mode: the resolutions judged are 1.15x apart", text)
+        with open(os.path.join(out, "claims.json"), encoding="utf-8") as f:
+            saved = json.load(f)
+        self.assertEqual([c["key"] for c in saved][:len(report.EXPECTED_CLAIMS)],
+                         [k for k, _, _ in report.EXPECTED_CLAIMS])
+        # the fake's ICA is ~17x slower than its MPRGP at the smallest size: computed, not typed in
+        low_res = next(c for c in saved if c["key"] == "fig11-ica-low-res")
+        self.assertEqual(low_res["verdict"], claims.DOES_NOT_HOLD)
+        # every row says the problem it is judged on; timed rows carry the rounds' interval
+        for c in saved:
+            self.assertTrue(c["judged_on"], c["key"])
+            self.assertIn(c["verdict"], claims.VERDICTS)
+        for key in ("fig6-decoupling", "fig10-ica-10x", "fig11-ica-low-res"):
+            c = next(c for c in saved if c["key"] == key)
+            self.assertEqual(c["samples"], reproduce.TIMED_SUITES[key.split("-")[0]], key)
+            self.assertLessEqual(c["interval"][0], c["estimate"])
+            self.assertLessEqual(c["estimate"], c["interval"][1])
+        # the fake's long cube has contact from frame 3: Table 1 judges only those frames
+        dominates = next(c for c in saved if c["key"] == "table1-cg-dominates")
+        self.assertIn("frames with contact rows", dominates["judged_on"])
+        self.assertEqual(len(os.listdir(os.path.join(out, "rounds", "fig6"))), reproduce.TIMED_SUITES["fig6"] - 1)
+        self.assertIn("not simulated: dragon_stair", text)
+        # the fake's ica-published runs (stop=native) are `unconfirmed`: the report says what that means
+        self.assertIn(loader.UNCONFIRMED_MEANING, text)
+        self.assertNotIn("KKT", text)  # the measure is the accuracy error e (docs/accuracy.md)
+        self.assertIn("quick", self.demo_log)
+        # issue 46: the reproduction's HTML page, its path said at the end
+        self.assertTrue(os.path.isfile(os.path.join(out, "report", "index.html")))
+        self.assertIn(f"report: {os.path.join(self.out, 'report', 'index.html')}", self.demo_log)
+
     def test_readme_sequence_judges_no_run_on_the_stand_in_meshes(self):
         """README's sequence (issue 43): `make demo` (reproduce --quick without the authors' data: stand-in
         meshes), then `make paper-data`, then `make reproduce QUICK=1`. The scenes are simulated again into
         the same paths with other content, so no suite's cached results may be reused: every judged run's
         snapshot hash is that of the authors'-data snapshot now at its path, and the report names them."""
-        out = os.path.join(self.tmp, "out")
+        self.assertEqual(self.demo_status, 0)  # make demo (setUpClass)
+        out, demo, args = self.out, self.demo_meta, self.args
         data = os.path.join(self.tmp, "paper-data")
         os.makedirs(os.path.join(data, "figures"))
-        args = ["--contactbench", FAKE_CB, "--out", out, "--scenes", self.scenes, "--quick", "--no-profiles"]
         with redirect_stdout(io.StringIO()):
-            self.assertEqual(reproduce.main(args + ["--data", os.path.join(self.tmp, "absent")]), 0)  # make demo
-            with open(os.path.join(out, "reproduce.json"), encoding="utf-8") as f:
-                demo = json.load(f)
             self.assertEqual(reproduce.main(args + ["--data", data]), 0)  # after make paper-data
         with open(os.path.join(out, "reproduce.json"), encoding="utf-8") as f:
             meta = json.load(f)
@@ -666,30 +710,6 @@ class TestReproduce(TempDirCase):
         with open(os.path.join(out, "reproduce.json"), encoding="utf-8") as f:
             again = json.load(f)
         self.assertEqual([s for s in again["steps"] if s.startswith("run ") and not s.endswith(": cached")], [])
-
-    def test_suite_cache_is_keyed_on_the_binary(self):
-        """A rebuilt contactbench resumes the suite (the harness redoes runs whose identity changed)."""
-        out = os.path.join(self.tmp, "out")
-        ctx = PaperContext(out=out, quick=True)
-        cb = os.path.join(self.tmp, "contactbench")
-        with open(cb, "w") as f:  # a binary of its own, so that it can be "rebuilt"
-            f.write(f'#!/bin/sh\nexec /usr/bin/python3 "{FAKE_CB}" "$@"\n')
-        os.chmod(cb, 0o755)
-        with redirect_stdout(io.StringIO()):
-            runner = reproduce.Runner(cb, None, os.path.join(self.tmp, "log"))
-            scene = os.path.join(self.scenes, "two_dinos_1303.json")
-            reproduce.simulate(runner, ctx, "two_dinos_1303", scene, 12, None, False)
-            snaps = reproduce.pick_frame(reproduce.snapshots_of(ctx, "two_dinos_1303"), 11)
-            tpl = os.path.join(ROOT, "suites", "paper", "fig11.json")
-            reproduce.run_suite(runner, ctx, "fig11", tpl, snaps, False)
-            reproduce.run_suite(runner, ctx, "fig11", tpl, snaps, False)
-            with open(cb, "a") as f:
-                f.write("# rebuilt\n")
-            reproduce.run_suite(runner, ctx, "fig11", tpl, snaps, False)
-        rounds = reproduce.TIMED_SUITES["fig11"]
-        self.assertEqual(runner.steps[1 + rounds], "run fig11: cached")
-        self.assertTrue(runner.steps[1 + 2 * rounds].startswith("run fig11: exit 0"), runner.steps)
-        self.assertTrue(runner.steps[2 + 2 * rounds].startswith(f"run fig11 round 2/{rounds}: exit 0"), runner.steps)
 
 
 class TestSuiteTemplates(unittest.TestCase):

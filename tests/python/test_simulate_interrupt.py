@@ -222,6 +222,19 @@ class TestChainsLockAndStop(unittest.TestCase):
     SIGTERM after a whole frame of every chain and says the same command resumes it; the resumed
     run's outputs equal an uninterrupted run's bit for bit; other inputs are refused naming them."""
 
+    @classmethod
+    def setUpClass(cls):
+        # The uninterrupted run both resume tests compare with (the same command for both).
+        cls.scene = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
+                                 "scenes", "demo.json")
+        cls.tmp = tempfile.mkdtemp(prefix="cb_test_chains_")
+        cls.whole = os.path.join(cls.tmp, "whole")
+        subprocess.run([CB, "chains", cls.scene, "--frames", "150", "--out", cls.whole], check=True, capture_output=True)
+
+    @classmethod
+    def tearDownClass(cls):
+        shutil.rmtree(cls.tmp, ignore_errors=True)
+
     def test_busy_earlier_and_stopped(self):
         scene = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
                              "scenes", "demo.json")
@@ -261,13 +274,11 @@ class TestChainsLockAndStop(unittest.TestCase):
             self.assertEqual(len(open(os.path.join(out, "chains.csv")).read().splitlines()), len(rows) + 1)
 
     def test_resumed_chains_equal_an_uninterrupted_run(self):
-        scene = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
-                             "scenes", "demo.json")
+        scene, whole = self.scene, self.whole
         outputs = ["chains.csv", "chains.json", "demo_largest_difference.png", "demo_largest_penetration.png"]
         with tempfile.TemporaryDirectory() as tmp:
-            whole, out = os.path.join(tmp, "whole"), os.path.join(tmp, "resumed")
+            out = os.path.join(tmp, "resumed")
             cmd = [CB, "chains", scene, "--frames", "150"]
-            subprocess.run(cmd + ["--out", whole], check=True, capture_output=True)
             first = subprocess.Popen(cmd + ["--out", out], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                      text=True)
             state = os.path.join(out, "chains.state")
@@ -322,12 +333,10 @@ class TestChainsLockAndStop(unittest.TestCase):
 
     def test_killed_chains_resume_equal_an_uninterrupted_run(self):
         """SIGKILL: chains.csv.partial and chains.state are left; the same command resumes them."""
-        scene = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
-                             "scenes", "demo.json")
+        scene, whole = self.scene, self.whole
         with tempfile.TemporaryDirectory() as tmp:
-            whole, out = os.path.join(tmp, "whole"), os.path.join(tmp, "killed")
+            out = os.path.join(tmp, "killed")
             cmd = [CB, "chains", scene, "--frames", "150"]
-            subprocess.run(cmd + ["--out", whole], check=True, capture_output=True)
             first = subprocess.Popen(cmd + ["--out", out], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
             state = os.path.join(out, "chains.state")
             try:
