@@ -22,23 +22,23 @@ using cb::test::slurp;
 
 namespace {
 
-const fs::path& work_dir()
+const fs::path& cli_work_dir()
 {
     static const fs::path dir = test::make_test_work_dir("cli");
     return dir;
 }
 
 /// Runs `contactbench ARGS` (ARGS already shell-quoted where needed).
-Output run(const std::string& args) { return test::run_contactbench(args, work_dir()); }
+Output run_cli(const std::string& args) { return test::run_contactbench(args, cli_work_dir()); }
 
 std::string small_snapshot()
 {
-    const fs::path p = work_dir() / "plane.qpsnap";
+    const fs::path p = cli_work_dir() / "plane.qpsnap";
     if (!fs::exists(p)) write_qpsnap(p.string(), make_synthetic("plane", {{"nx", 2}, {"ny", 2}, {"nz", 2}}, 4));
     return p.string();
 }
 
-std::string write_suite(const std::string& name, const nlohmann::json& solvers)
+std::string write_cli_suite(const std::string& name, const nlohmann::json& solvers)
 {
     const nlohmann::json suite = {
         {"name", name},
@@ -48,7 +48,7 @@ std::string write_suite(const std::string& name, const nlohmann::json& solvers)
         {"solvers", solvers},
         {"tol", 1e-6},
         {"time_limit_s", 20}};
-    const fs::path p = work_dir() / (name + ".json");
+    const fs::path p = cli_work_dir() / (name + ".json");
     write_json_atomic(p.string(), suite);
     return p.string();
 }
@@ -67,20 +67,20 @@ const nlohmann::json SOLVERS = {{{"label", "mprgp"}, {"solver", "mprgp"}},
                                 {{"label", "ghost"}, {"solver", "no-such-solver"}}};
 
 /// Removes the scratch folder after the last test.
-const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new test::RemoveAtEnd(work_dir));
+const auto* const CLI_CLEAN_UP = ::testing::AddGlobalTestEnvironment(new test::RemoveAtEnd(cli_work_dir));
 
 }  // namespace
 
 TEST(Cli, SolveMissingFileIsBadInput)
 {
-    const Output o = run("solve /nonexistent/x.qpsnap --solver mprgp");
+    const Output o = run_cli("solve /nonexistent/x.qpsnap --solver mprgp");
     EXPECT_EQ(o.status, 2);
     EXPECT_EQ(o.err.rfind("contactbench solve: error: /nonexistent/x.qpsnap: ", 0), 0u) << o.err;
 }
 
 TEST(Cli, SolveUnknownSolverIsBadInput)
 {
-    const Output o = run("solve '" + small_snapshot() + "' --solver nope");
+    const Output o = run_cli("solve '" + small_snapshot() + "' --solver nope");
     EXPECT_EQ(o.status, 2);
     EXPECT_EQ(o.err.rfind("contactbench solve: error: solver 'nope' is not registered; known: ", 0), 0u) << o.err;
     EXPECT_NE(o.err.find("mprgp"), std::string::npos);
@@ -88,22 +88,22 @@ TEST(Cli, SolveUnknownSolverIsBadInput)
 
 TEST(Cli, SolveBadSetKeyIsBadInput)
 {
-    const Output o = run("solve '" + small_snapshot() + "' --solver mprgp --set bogus=1");
+    const Output o = run_cli("solve '" + small_snapshot() + "' --solver mprgp --set bogus=1");
     EXPECT_EQ(o.status, 2);
     EXPECT_EQ(o.err.rfind("contactbench solve: error: mprgp: /bogus: ", 0), 0u) << o.err;
-    const Output flag = run("solve '" + small_snapshot() + "' --solver mprgp --frobnicate");
+    const Output flag = run_cli("solve '" + small_snapshot() + "' --solver mprgp --frobnicate");
     EXPECT_EQ(flag.status, 2);
     EXPECT_EQ(flag.err.rfind("contactbench solve: error: solve: --frobnicate: unknown option", 0), 0u) << flag.err;
-    const Output repeat = run("solve '" + small_snapshot() + "' --solver mprgp --repeat 0");
+    const Output repeat = run_cli("solve '" + small_snapshot() + "' --solver mprgp --repeat 0");
     EXPECT_EQ(repeat.status, 2);
     EXPECT_EQ(repeat.err, "contactbench solve: error: solve: --repeat: must be in 1..1000, got 0\n");
 }
 
 TEST(Cli, SolveWritesJsonAndSolution)
 {
-    const fs::path json = work_dir() / "solve.json", sol = work_dir() / "sol";
-    const Output o = run("solve '" + small_snapshot() + "' --solver mprgp --set tol=1e-8 --json '" + json.string() +
-                         "' --save-solution '" + sol.string() + "' --history");
+    const fs::path json = cli_work_dir() / "solve.json", sol = cli_work_dir() / "sol";
+    const Output o = run_cli("solve '" + small_snapshot() + "' --solver mprgp --set tol=1e-8 --json '" + json.string() +
+                             "' --save-solution '" + sol.string() + "' --history");
     ASSERT_EQ(o.status, 0) << o.err;
     EXPECT_NE(o.out.find("status      converged (kkt)"), std::string::npos) << o.out;
     const nlohmann::json r = read_json_file(json.string());
@@ -118,15 +118,15 @@ TEST(Cli, SolveWritesJsonAndSolution)
     EXPECT_EQ(x.rfind("%%MatrixMarket matrix array real general\n" + std::to_string(n) + " 1\n", 0), 0u);
     EXPECT_EQ(std::count(x.begin(), x.end(), '\n'), n + 2);
     EXPECT_TRUE(fs::exists(sol / "lambda.mtx"));
-    EXPECT_EQ(count_files(work_dir(), ".tmp"), 0u);
+    EXPECT_EQ(count_files(cli_work_dir(), ".tmp"), 0u);
 }
 
 TEST(Cli, SolveHelpListsSolversAndSettings)
 {
-    const Output list = run("solve --help");
+    const Output list = run_cli("solve --help");
     EXPECT_EQ(list.status, 0);
     EXPECT_NE(list.out.find("  mprgp "), std::string::npos) << list.out;
-    const Output settings = run("solve --solver mprgp --help");
+    const Output settings = run_cli("solve --solver mprgp --help");
     EXPECT_EQ(settings.status, 0);
     EXPECT_NE(settings.out.find("tol [1e-6]"), std::string::npos) << settings.out;
     EXPECT_NE(settings.out.find("max_iterations [10000]"), std::string::npos);
@@ -134,9 +134,9 @@ TEST(Cli, SolveHelpListsSolversAndSettings)
 
 TEST(Cli, RunResumesShardsMergesAndIsDeterministic)
 {
-    const std::string suite = write_suite("e2e", SOLVERS);
-    const fs::path out = work_dir() / "e2e";
-    const Output first = run("run '" + suite + "' --out '" + out.string() + "'");
+    const std::string suite = write_cli_suite("e2e", SOLVERS);
+    const fs::path out = cli_work_dir() / "e2e";
+    const Output first = run_cli("run '" + suite + "' --out '" + out.string() + "'");
     ASSERT_EQ(first.status, 0) << first.err;
     EXPECT_EQ(count_files(out / "runs", ".json"), 6u);
     EXPECT_NE(first.err.find("[1/6] p1 x mprgp: converged in "), std::string::npos) << first.err;
@@ -156,7 +156,7 @@ TEST(Cli, RunResumesShardsMergesAndIsDeterministic)
 
     // Second run: everything is skipped, files untouched.
     const auto stamp = fs::last_write_time(out / "runs" / "p2__exact.json");
-    const Output second = run("run '" + suite + "' --out '" + out.string() + "'");
+    const Output second = run_cli("run '" + suite + "' --out '" + out.string() + "'");
     ASSERT_EQ(second.status, 0) << second.err;
     EXPECT_NE(second.err.find("ran 0 of 6 jobs"), std::string::npos) << second.err;
     EXPECT_EQ(fs::last_write_time(out / "runs" / "p2__exact.json"), stamp);
@@ -164,7 +164,7 @@ TEST(Cli, RunResumesShardsMergesAndIsDeterministic)
     // Interrupted: one run and the summary missing -> only that run is redone.
     fs::remove(out / "summary.csv");
     fs::remove(out / "runs" / "p2__mprgp.json");
-    const Output resumed = run("run '" + suite + "' --out '" + out.string() + "'");
+    const Output resumed = run_cli("run '" + suite + "' --out '" + out.string() + "'");
     ASSERT_EQ(resumed.status, 0) << resumed.err;
     EXPECT_NE(resumed.err.find("ran 1 of 6 jobs"), std::string::npos) << resumed.err;
     EXPECT_NE(resumed.err.find("p2 x mprgp: converged"), std::string::npos) << resumed.err;
@@ -172,50 +172,50 @@ TEST(Cli, RunResumesShardsMergesAndIsDeterministic)
     EXPECT_EQ(count_files(out / "runs", ".json"), 6u);
 
     // Shards 1/2 and 2/2 split the jobs; merged they give the same counters as the full run.
-    const fs::path s1 = work_dir() / "shard1", s2 = work_dir() / "shard2", merged = work_dir() / "merged";
-    ASSERT_EQ(run("run '" + suite + "' --out '" + s1.string() + "' --shard 1/2").status, 0);
-    ASSERT_EQ(run("run '" + suite + "' --out '" + s2.string() + "' --shard 2/2").status, 0);
+    const fs::path s1 = cli_work_dir() / "shard1", s2 = cli_work_dir() / "shard2", merged = cli_work_dir() / "merged";
+    ASSERT_EQ(run_cli("run '" + suite + "' --out '" + s1.string() + "' --shard 1/2").status, 0);
+    ASSERT_EQ(run_cli("run '" + suite + "' --out '" + s2.string() + "' --shard 2/2").status, 0);
     EXPECT_EQ(count_files(s1 / "runs", ".json"), 3u);
     EXPECT_EQ(count_files(s2 / "runs", ".json"), 3u);
     EXPECT_TRUE(fs::exists(s1 / "runs" / "p1__mprgp.json"));  // job 0
     EXPECT_TRUE(fs::exists(s2 / "runs" / "p1__exact.json"));  // job 1
-    const Output m = run("merge '" + merged.string() + "' '" + s1.string() + "' '" + s2.string() + "'");
+    const Output m = run_cli("merge '" + merged.string() + "' '" + s1.string() + "' '" + s2.string() + "'");
     ASSERT_EQ(m.status, 0) << m.err;
     EXPECT_EQ(count_files(merged / "runs", ".json"), 6u);
     const std::string msummary = slurp(merged / "summary.csv");
     EXPECT_EQ(std::count(msummary.begin(), msummary.end(), '\n'), 7);
     // Deterministic counters: the merged shards judge equal to the first run.
-    const Output judge = run("compare '" + out.string() + "' '" + merged.string() + "'");
+    const Output judge = run_cli("compare '" + out.string() + "' '" + merged.string() + "'");
     EXPECT_EQ(judge.status, 0) << judge.out;
     EXPECT_NE(judge.out.find("verdict: PASS (6 runs compared: 6 equal"), std::string::npos) << judge.out;
 
     // A deliberately worse variant under the same labels: MPRGP without its preconditioner.
     const std::string worse_suite =
-        write_suite("e2e", {{{"label", "mprgp"}, {"solver", "mprgp"}, {"settings", {{"precond", "none"}}}},
-                            {{"label", "exact"}, {"solver", "active-set"}},
-                            {{"label", "ghost"}, {"solver", "no-such-solver"}}});
-    const fs::path worse = work_dir() / "worse";
-    ASSERT_EQ(run("run '" + worse_suite + "' --out '" + worse.string() + "'").status, 0);
-    const Output regression = run("compare '" + out.string() + "' '" + worse.string() + "'");
+        write_cli_suite("e2e", {{{"label", "mprgp"}, {"solver", "mprgp"}, {"settings", {{"precond", "none"}}}},
+                                {{"label", "exact"}, {"solver", "active-set"}},
+                                {{"label", "ghost"}, {"solver", "no-such-solver"}}});
+    const fs::path worse = cli_work_dir() / "worse";
+    ASSERT_EQ(run_cli("run '" + worse_suite + "' --out '" + worse.string() + "'").status, 0);
+    const Output regression = run_cli("compare '" + out.string() + "' '" + worse.string() + "'");
     EXPECT_EQ(regression.status, 3) << regression.out;  // 3: a regression (1 is an internal error)
     EXPECT_NE(regression.out.find("FAIL regressed: iterations a_products"), std::string::npos) << regression.out;
     EXPECT_NE(regression.out.find("verdict: FAIL"), std::string::npos);
 
-    const Output bad_shard = run("run '" + suite + "' --out '" + s1.string() + "' --shard 3/2");
+    const Output bad_shard = run_cli("run '" + suite + "' --out '" + s1.string() + "' --shard 3/2");
     EXPECT_EQ(bad_shard.status, 2);
     EXPECT_EQ(bad_shard.err, "contactbench run: error: run: --shard: expected i/N with 1 <= i <= N, got '3/2'\n");
 }
 
 TEST(Cli, RunRejectsBadSuite)
 {
-    const Output missing = run("run /nonexistent/suite.json");
+    const Output missing = run_cli("run /nonexistent/suite.json");
     EXPECT_EQ(missing.status, 2);
     EXPECT_EQ(missing.err,
               "contactbench run: error: /nonexistent/suite.json: cannot open: No such file or directory\n");
-    const fs::path p = work_dir() / "bad.json";
+    const fs::path p = cli_work_dir() / "bad.json";
     write_json_atomic(p.string(),
                       {{"name", "bad"}, {"generate", nlohmann::json::array()}, {"solvers", {"cg"}}, {"tol", "x"}});
-    const Output bad = run("run '" + p.string() + "'");
+    const Output bad = run_cli("run '" + p.string() + "'");
     EXPECT_EQ(bad.status, 2);
     EXPECT_EQ(bad.err, "contactbench run: error: " + p.string() +
                            ": /snapshots: the suite names no snapshots and generates none\n");
@@ -234,9 +234,9 @@ TEST(Cli, ChainCarriesWarmStateAndReferenceAddsEnergyGap)
         {"solvers", {{{"label", "mprgp"}, {"solver", "mprgp"}}}},
         {"chain", true},
         {"reference", true}};
-    const fs::path p = work_dir() / "chain.json", out = work_dir() / "chain";
+    const fs::path p = cli_work_dir() / "chain.json", out = cli_work_dir() / "chain";
     write_json_atomic(p.string(), suite);
-    const Output o = run("run '" + p.string() + "' --out '" + out.string() + "'");
+    const Output o = run_cli("run '" + p.string() + "' --out '" + out.string() + "'");
     ASSERT_EQ(o.status, 0) << o.err;
     const nlohmann::json r1 = read_json_file((out / "runs" / "f1__mprgp.json").string());
     const nlohmann::json r2 = read_json_file((out / "runs" / "f2__mprgp.json").string());
@@ -254,19 +254,19 @@ TEST(Cli, ChainCarriesWarmStateAndReferenceAddsEnergyGap)
     EXPECT_EQ(r1["history"]["columns"].back(), "energy_gap");
     EXPECT_LT(r1["energy_gap"].get<double>(), 1e-6);
     // Cached by content hash and reference method (not by the binary: a rebuild keeps it).
-    EXPECT_EQ(count_files(work_dir() / "cache" / "reference", r1["snapshot"]["hash"].get<std::string>() + "-"), 1u);
+    EXPECT_EQ(count_files(cli_work_dir() / "cache" / "reference", r1["snapshot"]["hash"].get<std::string>() + "-"), 1u);
     EXPECT_EQ(r1["reference"]["method"]["solver"], "active-set");
 }
 
 TEST(Cli, CorruptSnapshotFailsItsRunsOnly)
 {
-    const fs::path dir = work_dir() / "corrupt";
+    const fs::path dir = cli_work_dir() / "corrupt";
     fs::create_directories(dir);
     fs::copy_file(small_snapshot(), dir / "good.qpsnap", fs::copy_options::overwrite_existing);
     std::ofstream(dir / "bad.qpsnap") << "not a snapshot";
     write_json_atomic((dir / "suite.json").string(),
                       {{"name", "corrupt"}, {"snapshots", {"*.qpsnap"}}, {"solvers", {"mprgp"}}, {"time_limit_s", 5}});
-    const Output o = run("run '" + (dir / "suite.json").string() + "' --out '" + (dir / "out").string() + "'");
+    const Output o = run_cli("run '" + (dir / "suite.json").string() + "' --out '" + (dir / "out").string() + "'");
     ASSERT_EQ(o.status, 0) << o.err;
     const nlohmann::json bad = read_json_file((dir / "out" / "runs" / "bad__mprgp.json").string());
     EXPECT_EQ(bad["status"], "invalid_input");
@@ -281,11 +281,11 @@ TEST(Cli, CorruptSnapshotFailsItsRunsOnly)
 TEST(Cli, RunSkipsUnbuiltOptionalSolversAndAppliesProblemFilters)
 {
     const std::string suite =
-        write_suite("filters", {{{"label", "mprgp"}, {"solver", "mprgp"}, {"problems", {"p1"}}},
-                                {{"label", "exact"}, {"solver", "active-set"}, {"skip_problems", {"p1"}}},
-                                {{"label", "absent"}, {"solver", "no-such-peer"}, {"optional", true}}});
-    const fs::path out = work_dir() / "filters";
-    const Output o = run("run '" + suite + "' --out '" + out.string() + "'");
+        write_cli_suite("filters", {{{"label", "mprgp"}, {"solver", "mprgp"}, {"problems", {"p1"}}},
+                                    {{"label", "exact"}, {"solver", "active-set"}, {"skip_problems", {"p1"}}},
+                                    {{"label", "absent"}, {"solver", "no-such-peer"}, {"optional", true}}});
+    const fs::path out = cli_work_dir() / "filters";
+    const Output o = run_cli("run '" + suite + "' --out '" + out.string() + "'");
     ASSERT_EQ(o.status, 0) << o.err;
     EXPECT_NE(o.err.find("run: optional solver 'absent' (no-such-peer) is not built into this contactbench; its runs "
                          "are skipped\n"),

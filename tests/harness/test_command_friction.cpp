@@ -4,6 +4,7 @@
 #include "harness/results.hpp"
 #include "harness/runner.hpp"
 #include "problems/qpsnap.hpp"
+#include "tests/harness/shell_quoted.hpp"
 
 #include "tests/harness/cli_test_util.hpp"
 #include "tests/solvers/friction_test_qps.hpp"
@@ -19,8 +20,6 @@ using namespace cb;
 
 namespace {
 
-std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
-
 void write_vector(const fs::path& p, const Vec& v)
 {
     std::ofstream out(p);
@@ -35,7 +34,8 @@ void write_vector(const fs::path& p, const Vec& v)
 fs::path copying_program(const fs::path& dir, const fs::path& answer, const fs::path& kept)
 {
     const fs::path p = dir / "answer.sh";
-    std::ofstream(p) << "#!/bin/sh\ncp \"$1\" " << q(kept) << "\ncp " << q(answer) << "/* \"$2\"\n";
+    std::ofstream(p) << "#!/bin/sh\ncp \"$1\" " << test::shell_quoted(kept) << "\ncp " << test::shell_quoted(answer)
+                     << "/* \"$2\"\n";
     fs::permissions(p, fs::perms::owner_all);
     return p;
 }
@@ -74,10 +74,11 @@ TEST(CommandFriction, ProgramGetsTheFrictionAndIsJudgedOnWhatItReturns)
         const fs::path program = copying_program(dir / c.name, answer, kept);
         const std::string argv = nlohmann::json({program.string(), "{snapshot}", "{out}"}).dump();
         const fs::path record_path = dir / c.name / "run.json";
-        const test::Output o = test::run_captured(test::contactbench_binary() + " solve " + q(snap) +
-                                                      " --solver command --set 'argv=" + argv +
-                                                      "' --set tol=1e-8 --set time_limit_s=60 --json " + q(record_path),
-                                                  dir);
+        const test::Output o =
+            test::run_captured(test::contactbench_binary() + " solve " + test::shell_quoted(snap) +
+                                   " --solver command --set 'argv=" + argv +
+                                   "' --set tol=1e-8 --set time_limit_s=60 --json " + test::shell_quoted(record_path),
+                               dir);
         ASSERT_EQ(o.status, 0) << o.err;
 
         // The program was given the frictional snapshot, friction and all.

@@ -6,6 +6,8 @@
 #include "harness/results.hpp"
 #include "problems/qpsnap.hpp"
 #include "problems/synthetic.hpp"
+#include "tests/harness/process_exists.hpp"
+#include "tests/harness/shell_quoted.hpp"
 
 #include "tests/harness/cli_test_util.hpp"
 #include "tests/harness/remove_at_end.hpp"
@@ -28,18 +30,16 @@ using cb::test::slurp;
 
 namespace {
 
-const fs::path& work_dir()
+const fs::path& leash_work_dir()
 {
     static const fs::path dir = test::make_test_work_dir("command_leash");
     return dir;
 }
 
-fs::path fresh_dir(const std::string& name) { return test::fresh_subdir(work_dir(), name); }
-
-std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
+fs::path fresh_leash_dir(const std::string& name) { return test::fresh_subdir(leash_work_dir(), name); }
 
 /// `cd DIR && [ENV] timeout 120 contactbench ARGS` in bash, output captured.
-Output run_in(const fs::path& dir, const std::string& args, const std::string& env = "")
+Output run_leashed_in(const fs::path& dir, const std::string& args, const std::string& env = "")
 {
     test::CliCall call;
     call.cd = dir;
@@ -64,9 +64,7 @@ fs::path plane_snapshot(const fs::path& dir)
 /// --set argv=... for `solve --solver command`, as one shell word.
 std::string argv_setting(const std::vector<std::string>& argv) { return "'argv=" + nlohmann::json(argv).dump() + "'"; }
 
-bool process_exists(pid_t pid) { return ::kill(pid, 0) == 0 || errno != ESRCH; }
-
-const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new test::RemoveAtEnd(work_dir));
+const auto* const LEASH_CLEAN_UP = ::testing::AddGlobalTestEnvironment(new test::RemoveAtEnd(leash_work_dir));
 
 }  // namespace
 
@@ -74,9 +72,9 @@ const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new test::Remov
 // "allow_commands": true and the command line gives --allow-commands.
 TEST(SceneCommand, RunsOnlyWithBothOptIns)
 {
-    const fs::path d = fresh_dir("scene");
+    const fs::path d = fresh_leash_dir("scene");
     const fs::path marker = d / "PWNED";
-    write_program(d / "marker.sh", "echo ran >> " + q(marker) + "\nexit 1\n");
+    write_program(d / "marker.sh", "echo ran >> " + test::shell_quoted(marker) + "\nexit 1\n");
     auto scene = [&](bool allow) {
         nlohmann::json s = {
             {"name", "evil"},
@@ -94,20 +92,22 @@ TEST(SceneCommand, RunsOnlyWithBothOptIns)
     const std::string rule = "'command' runs an external program; the scene must opt in with \"allow_commands\": "
                              "true (and the command line with --allow-commands)\n";
     for (const char* flag : {"", " --allow-commands"}) {
-        const Output o = run_in(d, "simulate " + q(evil) + " --frames 1 --out sim" + flag);
+        const Output o = run_leashed_in(d, "simulate " + test::shell_quoted(evil) + " --frames 1 --out sim" + flag);
         EXPECT_EQ(o.status, 2) << flag;
         EXPECT_EQ(o.err, "contactbench simulate: error: " + evil.string() + ": /solver: " + rule) << flag;
-        const Output c = run_in(d, "chains " + q(evil) + " --frames 1 --out ch --orders authors" + flag);
+        const Output c =
+            run_leashed_in(d, "chains " + test::shell_quoted(evil) + " --frames 1 --out ch --orders authors" + flag);
         EXPECT_EQ(c.status, 2) << flag;
         EXPECT_EQ(c.err, "contactbench chains: error: " + evil.string() + ": /solver: " + rule) << flag;
     }
     const std::string no_flag = ": /solver: 'command' runs an external program: it runs only when the scene says "
                                 "\"allow_commands\": true and the command line gives --allow-commands "
                                 "(--allow-commands not given)\n";
-    const Output sim = run_in(d, "simulate " + q(allowed) + " --frames 1 --out sim");
+    const Output sim = run_leashed_in(d, "simulate " + test::shell_quoted(allowed) + " --frames 1 --out sim");
     EXPECT_EQ(sim.status, 2);
     EXPECT_EQ(sim.err, "contactbench simulate: error: " + allowed.string() + no_flag);
-    const Output chains = run_in(d, "chains " + q(allowed) + " --frames 1 --out ch --orders authors");
+    const Output chains =
+        run_leashed_in(d, "chains " + test::shell_quoted(allowed) + " --frames 1 --out ch --orders authors");
     EXPECT_EQ(chains.status, 2);
     EXPECT_EQ(chains.err, "contactbench chains: error: " + allowed.string() + no_flag);
     EXPECT_FALSE(fs::exists(marker)) << "a program ran without both opt-ins";
@@ -115,7 +115,8 @@ TEST(SceneCommand, RunsOnlyWithBothOptIns)
     EXPECT_FALSE(fs::exists(d / "ch"));
 
     // Both given: the program runs (its failure is the step's, not the harness's).
-    run_in(d, "simulate " + q(allowed) + " --frames 1 --no-snapshots --out sim --allow-commands");
+    run_leashed_in(d,
+                   "simulate " + test::shell_quoted(allowed) + " --frames 1 --no-snapshots --out sim --allow-commands");
     EXPECT_TRUE(fs::exists(marker));
 }
 
@@ -123,11 +124,12 @@ TEST(SceneCommand, RunsOnlyWithBothOptIns)
 // then SIGKILL; the work folder is removed; the harness ends by SIGTERM.
 TEST(CommandLeash, SigtermEndsProgramAndRemovesWorkFolder)
 {
-    const fs::path d = fresh_dir("sigterm"), tmp = fresh_dir("sigterm/tmp");
+    const fs::path d = fresh_leash_dir("sigterm"), tmp = fresh_leash_dir("sigterm/tmp");
     const fs::path snap = plane_snapshot(d), pid_file = d / "program.pid";
     const fs::path prog =
-        write_program(d / "ignore_term.sh", "trap '' TERM INT HUP\necho $$ > " + q(pid_file) + ".tmp\nmv " +
-                                                q(pid_file) + ".tmp " + q(pid_file) + "\nwhile :; do sleep 1; done\n");
+        write_program(d / "ignore_term.sh", "trap '' TERM INT HUP\necho $$ > " + test::shell_quoted(pid_file) +
+                                                ".tmp\nmv " + test::shell_quoted(pid_file) + ".tmp " +
+                                                test::shell_quoted(pid_file) + "\nwhile :; do sleep 1; done\n");
     const std::string argv = nlohmann::json(std::vector<std::string>{prog.string(), "{settings}"}).dump();
     const pid_t harness = ::fork();
     ASSERT_GE(harness, 0);
@@ -148,8 +150,8 @@ TEST(CommandLeash, SigtermEndsProgramAndRemovesWorkFolder)
     int status = 0;
     ASSERT_EQ(::waitpid(harness, &status, 0), harness);
     EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM) << "status " << status;
-    EXPECT_FALSE(process_exists(program)) << "the program " << program << " outlived the harness";
-    if (process_exists(program)) ::kill(program, SIGKILL);
+    EXPECT_FALSE(test::process_exists(program)) << "the program " << program << " outlived the harness";
+    if (test::process_exists(program)) ::kill(program, SIGKILL);
     EXPECT_TRUE(fs::is_empty(tmp)) << "work folder left in " << tmp;
     EXPECT_NE(slurp(d / "harness.err")
                   .find("command: Terminated received: the program's process group was "
@@ -162,10 +164,11 @@ TEST(CommandLeash, SigtermEndsProgramAndRemovesWorkFolder)
 // C3: `solve` without --time-limit hands the program the command solver's default limit.
 TEST(CommandLeash, DefaultTimeLimit)
 {
-    const fs::path d = fresh_dir("default_limit");
+    const fs::path d = fresh_leash_dir("default_limit");
     const fs::path snap = plane_snapshot(d), copy = d / "settings_seen.json";
-    const Output o = run_in(d, "solve " + q(snap) + " --solver command --json rec.json --set " +
-                                   argv_setting({"/bin/sh", "-c", "cp \"$0\" " + q(copy) + "; exit 1", "{settings}"}));
+    const Output o = run_leashed_in(
+        d, "solve " + test::shell_quoted(snap) + " --solver command --json rec.json --set " +
+               argv_setting({"/bin/sh", "-c", "cp \"$0\" " + test::shell_quoted(copy) + "; exit 1", "{settings}"}));
     EXPECT_EQ(o.status, 0) << o.err;
     EXPECT_EQ(read_json_file(copy.string())["time_limit_s"], DEFAULT_COMMAND_TIME_LIMIT_S);
     EXPECT_EQ(read_json_file((d / "rec.json").string())["info"]["command"]["time_limit_s"], 600.0);
@@ -174,12 +177,13 @@ TEST(CommandLeash, DefaultTimeLimit)
 // C9: a program's escape sequences reach neither the terminal nor the record.
 TEST(CommandLeash, StderrEscapesStripped)
 {
-    const fs::path d = fresh_dir("ansi");
+    const fs::path d = fresh_leash_dir("ansi");
     const fs::path snap = plane_snapshot(d);
     write_program(d / "ansi.sh",
                   "printf '\\033[2J\\033[31mFAKE: all runs converged\\033[0m\\a,\"q\"\\n' >&2\nexit 3\n");
-    const Output o = run_in(d, "solve " + q(snap) + " --solver command --json rec.json --set " +
-                                   argv_setting({(d / "ansi.sh").string(), "{settings}"}));
+    const Output o =
+        run_leashed_in(d, "solve " + test::shell_quoted(snap) + " --solver command --json rec.json --set " +
+                              argv_setting({(d / "ansi.sh").string(), "{settings}"}));
     EXPECT_EQ(o.out.find('\x1b'), std::string::npos) << o.out;
     EXPECT_EQ(o.err.find('\x1b'), std::string::npos) << o.err;
     const nlohmann::json rec = read_json_file((d / "rec.json").string());
@@ -191,15 +195,16 @@ TEST(CommandLeash, StderrEscapesStripped)
 // C10: a program that touches ~200 MiB shows in the record's peak.
 TEST(CommandLeash, ProgramMemoryInTheRecord)
 {
-    const fs::path d = fresh_dir("memory");
+    const fs::path d = fresh_leash_dir("memory");
     const fs::path snap = plane_snapshot(d);
     const std::string script = "import json, os, sys\n"
                                "s = json.load(open(sys.argv[1]))\n"
                                "block = b'x' * (200 * 1024 * 1024)\n"
                                "open(os.path.join(s['out'], 'x.txt'), 'w').write('0\\n' * s['n'])\n";
     std::ofstream(d / "bigmem.py") << script;
-    const Output o = run_in(d, "solve " + q(snap) + " --solver command --json rec.json --set " +
-                                   argv_setting({"/usr/bin/python3", (d / "bigmem.py").string(), "{settings}"}));
+    const Output o =
+        run_leashed_in(d, "solve " + test::shell_quoted(snap) + " --solver command --json rec.json --set " +
+                              argv_setting({"/usr/bin/python3", (d / "bigmem.py").string(), "{settings}"}));
     ASSERT_EQ(o.status, 0) << o.err;
     const nlohmann::json rec = read_json_file((d / "rec.json").string());
     EXPECT_EQ(rec["info"]["command"]["crashed"], false) << rec["message"];
@@ -212,13 +217,14 @@ TEST(CommandLeash, ProgramMemoryInTheRecord)
 // folder; a relative argument naming an existing file (the program here) still finds it.
 TEST(CommandLeash, RelativeWritesStayInTheWorkFolder)
 {
-    const fs::path d = fresh_dir("relative");
+    const fs::path d = fresh_leash_dir("relative");
     const fs::path snap = plane_snapshot(d);
     write_program(d / "relative.sh", "echo written > escaped_by_command.txt\npwd > \"$1/../cwd.txt\"\n"
                                      "cp \"$1/../cwd.txt\" " +
-                                         q(d / "cwd_seen.txt") + "\nexit 1\n");
-    const Output o = run_in(d, "solve " + q(snap) + " --solver command --json rec.json --set " +
-                                   argv_setting({"./relative.sh", "{out}", "{snapshot}"}));
+                                         test::shell_quoted(d / "cwd_seen.txt") + "\nexit 1\n");
+    const Output o =
+        run_leashed_in(d, "solve " + test::shell_quoted(snap) + " --solver command --json rec.json --set " +
+                              argv_setting({"./relative.sh", "{out}", "{snapshot}"}));
     EXPECT_EQ(o.status, 0) << o.err;
     EXPECT_FALSE(fs::exists(d / "escaped_by_command.txt"));
     const std::string cwd = slurp(d / "cwd_seen.txt");

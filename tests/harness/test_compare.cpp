@@ -26,8 +26,8 @@ using namespace cb;
 
 namespace {
 
-nlohmann::json record(const std::string& snapshot, const std::string& label, long iterations, long a_products,
-                      double accuracy, const std::string& status = "converged")
+nlohmann::json compare_record(const std::string& snapshot, const std::string& label, long iterations, long a_products,
+                              double accuracy, const std::string& status = "converged")
 {
     return {
         {"label", label},
@@ -45,7 +45,8 @@ nlohmann::json record(const std::string& snapshot, const std::string& label, lon
 
 TEST(Compare, IdenticalRunsAreEqual)
 {
-    const std::vector<nlohmann::json> runs = {record("a", "mprgp", 10, 20, 5e-7), record("b", "mprgp", 12, 25, 8e-7)};
+    const std::vector<nlohmann::json> runs = {compare_record("a", "mprgp", 10, 20, 5e-7),
+                                              compare_record("b", "mprgp", 12, 25, 8e-7)};
     const CompareReport r = compare_runs(runs, runs);
     EXPECT_FALSE(r.failed());
     EXPECT_EQ(r.equal, 2);
@@ -56,15 +57,16 @@ TEST(Compare, IdenticalRunsAreEqual)
 
 TEST(Compare, CountersKktStatusAndMissing)
 {
-    const std::vector<nlohmann::json> base = {record("a", "mprgp", 10, 20, 5e-7), record("b", "mprgp", 12, 25, 8e-7),
-                                              record("c", "mprgp", 12, 25, 8e-7), record("d", "mprgp", 12, 25, 8e-7),
-                                              record("e", "mprgp", 12, 25, 8e-7)};
+    const std::vector<nlohmann::json> base = {
+        compare_record("a", "mprgp", 10, 20, 5e-7), compare_record("b", "mprgp", 12, 25, 8e-7),
+        compare_record("c", "mprgp", 12, 25, 8e-7), compare_record("d", "mprgp", 12, 25, 8e-7),
+        compare_record("e", "mprgp", 12, 25, 8e-7)};
     const std::vector<nlohmann::json> next = {
-        record("a", "mprgp", 10, 21, 5e-7),                    // one more A-product: regressed
-        record("b", "mprgp", 11, 24, 8e-7),                    // fewer: improved
-        record("c", "mprgp", 12, 25, 8e-7, "max_iterations"),  // status change
-        record("e", "mprgp", 12, 25, 9.5e-7),                  // accuracy worse by 19% but below tol: fine
-        record("f", "mprgp", 1, 1, 1e-7)};                     // new
+        compare_record("a", "mprgp", 10, 21, 5e-7),                    // one more A-product: regressed
+        compare_record("b", "mprgp", 11, 24, 8e-7),                    // fewer: improved
+        compare_record("c", "mprgp", 12, 25, 8e-7, "max_iterations"),  // status change
+        compare_record("e", "mprgp", 12, 25, 9.5e-7),                  // accuracy worse by 19% but below tol: fine
+        compare_record("f", "mprgp", 1, 1, 1e-7)};                     // new
     const CompareReport r = compare_runs(base, next);
     EXPECT_TRUE(r.failed());
     EXPECT_EQ(r.regressed, 1);
@@ -81,20 +83,21 @@ TEST(Compare, CountersKktStatusAndMissing)
     EXPECT_NE(table.find("FAIL missing in NEW"), std::string::npos) << table;
 
     // accuracy above tol and more than 10% worse: regressed; within --accuracy-rtol: not.
-    const std::vector<nlohmann::json> b2 = {record("a", "ica", 10, 20, 1e-5)};
-    EXPECT_EQ(compare_runs(b2, {record("a", "ica", 10, 20, 1.2e-5)}).rows[0].regressed,
+    const std::vector<nlohmann::json> b2 = {compare_record("a", "ica", 10, 20, 1e-5)};
+    EXPECT_EQ(compare_runs(b2, {compare_record("a", "ica", 10, 20, 1.2e-5)}).rows[0].regressed,
               std::vector<std::string>{"accuracy"});
-    EXPECT_FALSE(compare_runs(b2, {record("a", "ica", 10, 20, 1.05e-5)}).failed());
+    EXPECT_FALSE(compare_runs(b2, {compare_record("a", "ica", 10, 20, 1.05e-5)}).failed());
     CompareOptions loose;
     loose.accuracy_rtol = 0.5;
-    EXPECT_FALSE(compare_runs(b2, {record("a", "ica", 10, 20, 1.2e-5)}, loose).failed());
+    EXPECT_FALSE(compare_runs(b2, {compare_record("a", "ica", 10, 20, 1.2e-5)}, loose).failed());
 }
 
 TEST(Compare, WorkUnitsAreACounter)
 {
     // Same A-products, one more factorisation's worth of work (pgs, active-set, ichol): regressed
     // on "work" alone; less work: improved; a BASE without the counter: shown, not judged.
-    std::vector<nlohmann::json> base = {record("a", "pgs", 10, 1, 5e-7), record("b", "pgs", 10, 1, 5e-7)};
+    std::vector<nlohmann::json> base = {compare_record("a", "pgs", 10, 1, 5e-7),
+                                        compare_record("b", "pgs", 10, 1, 5e-7)};
     base[0]["counters"]["work"] = 224.5;
     base[1]["counters"]["work"] = 224.5;
     std::vector<nlohmann::json> next = base;
@@ -114,7 +117,8 @@ TEST(Compare, BinaryExitCodesOnFolders)
     const std::string binary = b && *b ? b : std::string(CB_BINARY_DIR) + "/bin/contactbench";
     const fs::path dir = fs::temp_directory_path() / ("cb_test_compare_" + std::to_string(::getpid()));
     fs::remove_all(dir);
-    const std::vector<nlohmann::json> runs = {record("a", "mprgp", 10, 20, 5e-7), record("b", "cg", 12, 25, 8e-7)};
+    const std::vector<nlohmann::json> runs = {compare_record("a", "mprgp", 10, 20, 5e-7),
+                                              compare_record("b", "cg", 12, 25, 8e-7)};
     for (const auto& folder : {"base", "same", "worse"})
         for (const auto& r : runs)
             write_json_atomic((dir / folder / "runs" / run_file_name(r["snapshot"]["id"], r["label"])).string(), r);
@@ -358,15 +362,16 @@ TEST(ComparePerfRecord, NanCountersMissingJudgedColumnsAndHugeRecordsAreRefused)
         }
         return "no error";
     };
-    auto record = [&](const std::string& name, const std::string& text) {
+    auto compare_record = [&](const std::string& name, const std::string& text) {
         std::string path = (dir / name).string();
         write_file_atomic(path, text);
         return path;
     };
-    const std::string nan_csv = record("nan.csv", "snapshot,label,status,work,accuracy\na,cg,converged,nan,1e-9\n");
+    const std::string nan_csv =
+        compare_record("nan.csv", "snapshot,label,status,work,accuracy\na,cg,converged,nan,1e-9\n");
     EXPECT_EQ(error_of([&] { read_perf_record(nan_csv); }),
               nan_csv + ": line 2: column work: expected a finite number, got 'nan'");
-    const std::string inf_csv = record("inf.csv", "snapshot,label,status,accuracy\na,cg,converged,-inf\n");
+    const std::string inf_csv = compare_record("inf.csv", "snapshot,label,status,accuracy\na,cg,converged,-inf\n");
     EXPECT_EQ(error_of([&] { read_perf_record(inf_csv); }),
               inf_csv + ": line 2: column accuracy: expected a finite number, got '-inf'");
     // NaN through the API (a record built in memory): NaN > x and NaN < x are both false.
@@ -382,27 +387,29 @@ TEST(ComparePerfRecord, NanCountersMissingJudgedColumnsAndHugeRecordsAreRefused)
     EXPECT_EQ(error_of([&] { compare_inputs(base, next); }),
               "NEW: a/cg: work: not a finite number (NaN or infinite): it cannot be judged");
     // A baseline (CSV) whose column or cell is empty where NEW records the quantity.
-    const std::string no_column = record("no_column.csv", "snapshot,label,status,iterations\na,cg,converged,5\n");
+    const std::string no_column =
+        compare_record("no_column.csv", "snapshot,label,status,iterations\na,cg,converged,5\n");
     const std::string with_column =
-        record("with_column.csv", "snapshot,label,status,iterations,a_products\na,cg,converged,5,7\n");
+        compare_record("with_column.csv", "snapshot,label,status,iterations,a_products\na,cg,converged,5,7\n");
     EXPECT_EQ(error_of([&] { compare_inputs(read_compare_input(no_column), read_compare_input(with_column)); }),
               no_column + ": a/cg: a_products: not recorded in BASE but recorded in NEW, so it would not be judged "
                           "(a baseline must record every judged quantity: regenerate it)");
     const std::string empty_cell =
-        record("empty_cell.csv", "snapshot,label,status,iterations,accuracy\na,cg,converged,5,\n");
+        compare_record("empty_cell.csv", "snapshot,label,status,iterations,accuracy\na,cg,converged,5,\n");
     const std::string accuracy =
-        record("accuracy.csv", "snapshot,label,status,iterations,accuracy\na,cg,converged,5,1e-3\n");
+        compare_record("accuracy.csv", "snapshot,label,status,iterations,accuracy\na,cg,converged,5,1e-3\n");
     EXPECT_EQ(error_of([&] { compare_inputs(read_compare_input(empty_cell), read_compare_input(accuracy)); }),
               empty_cell + ": a/cg: accuracy: not recorded in BASE but recorded in NEW, so it would not be judged "
                            "(a baseline must record every judged quantity: regenerate it)");
     // Bounded memory: at most 100000 runs and 4096 characters a line; a FIFO is not waited on.
     std::string huge = "snapshot,label,status\n";
     for (int i = 0; i <= 100000; ++i) huge += "s" + std::to_string(i) + ",cg,converged\n";
-    const std::string huge_csv = record("huge.csv", huge);
+    const std::string huge_csv = compare_record("huge.csv", huge);
     EXPECT_EQ(error_of([&] { read_perf_record(huge_csv); }),
               huge_csv +
                   ": line 100002: more than 100000 runs: not a performance record of a suite (memory is bounded)");
-    const std::string long_csv = record("long.csv", "snapshot,label,status\n" + std::string(5000, 'a') + ",cg,x\n");
+    const std::string long_csv =
+        compare_record("long.csv", "snapshot,label,status\n" + std::string(5000, 'a') + ",cg,x\n");
     EXPECT_EQ(error_of([&] { read_perf_record(long_csv); }), long_csv + ": line 2: longer than 4096 characters");
     const fs::path fifo = dir / "fifo.csv";
     ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);

@@ -5,6 +5,7 @@
 #include "harness/results.hpp"
 #include "problems/qpsnap.hpp"
 #include "problems/synthetic.hpp"
+#include "tests/harness/shell_quoted.hpp"
 
 #include "tests/harness/cli_test_util.hpp"
 #include "tests/harness/remove_at_end.hpp"
@@ -26,25 +27,23 @@ using cb::test::Output;
 
 namespace {
 
-const fs::path& work_dir()
+const fs::path& readers_work_dir()
 {
     static const fs::path dir = test::make_test_work_dir("hostile_readers");
     return dir;
 }
 
 /// Runs `[PREFIX;] timeout 120 contactbench ARGS` in bash; a hang ends as 124.
-Output run(const std::string& args, const std::string& prefix = "")
+Output run_reader(const std::string& args, const std::string& prefix = "")
 {
     test::CliCall call;
     call.prefix = prefix;
-    return test::run_contactbench(args, work_dir(), call);
+    return test::run_contactbench(args, readers_work_dir(), call);
 }
 
-std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
-
-fs::path fresh_dir(const std::string& name)
+fs::path fresh_readers_dir(const std::string& name)
 {
-    fs::path d = work_dir() / name;
+    fs::path d = readers_work_dir() / name;
     fs::remove_all(d);
     fs::create_directories(d);
     return d;
@@ -80,7 +79,7 @@ std::string doubles(long n, double v)
     return s;
 }
 
-const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new test::RemoveAtEnd(work_dir));
+const auto* const READERS_CLEAN_UP = ::testing::AddGlobalTestEnvironment(new test::RemoveAtEnd(readers_work_dir));
 
 /// 600 MB of address space: the binary and its libraries, far from what a declared size once cost.
 const std::string LIMIT = "ulimit -v 600000";
@@ -91,7 +90,7 @@ const std::string LIMIT = "ulimit -v 600000";
 
 TEST(HostileReaders, QpWithNoUnknownsIsRefusedByEveryReader)
 {
-    const fs::path dir = fresh_dir("empty_qp");
+    const fs::path dir = fresh_readers_dir("empty_qp");
     // A .qpsnap of n = 0, m = 0, as the writer lays it out (the FCLIB reader's empty problem
     // converted gave the same file).
     Qp empty;
@@ -101,7 +100,7 @@ TEST(HostileReaders, QpWithNoUnknownsIsRefusedByEveryReader)
     const std::string refusal =
         (dir / "empty.qpsnap").string() + ": n: no unknowns (n = 0): an empty problem has nothing to solve\n";
     for (const char* solver : {"active-set", "pgs", "mprgp-coupled"}) {
-        const Output o = run("solve " + q(dir / "empty.qpsnap") + " --solver " + solver);
+        const Output o = run_reader("solve " + test::shell_quoted(dir / "empty.qpsnap") + " --solver " + solver);
         EXPECT_EQ(o.status, 2) << solver << ": " << o.err;  // was SIGSEGV (139)
         EXPECT_EQ(o.err, "contactbench solve: error: " + refusal) << solver;
     }
@@ -111,7 +110,8 @@ TEST(HostileReaders, QpWithNoUnknownsIsRefusedByEveryReader)
     for (const char* v : {"b", "x0", "c"})
         write_bytes(dir / "mm" / (std::string(v) + ".mtx"), "%%MatrixMarket matrix array real general\n0 1\n");
     write_bytes(dir / "mm" / "J.mtx", "%%MatrixMarket matrix coordinate real general\n0 0 0\n");
-    const Output mm = run("convert " + q(dir / "mm") + " " + q(dir / "mm.qpsnap"));
+    const Output mm =
+        run_reader("convert " + test::shell_quoted(dir / "mm") + " " + test::shell_quoted(dir / "mm.qpsnap"));
     EXPECT_EQ(mm.status, 2) << mm.err;
     EXPECT_EQ(mm.err, "contactbench convert: error: " + (dir / "mm").string() +
                           ": n: no unknowns (n = 0): an empty problem has nothing to solve\n");
@@ -122,15 +122,17 @@ TEST(HostileReaders, QpWithNoUnknownsIsRefusedByEveryReader)
 
 TEST(HostileReaders, TextVectorWithANulByteEndsAtOnce)
 {
-    const fs::path dir = fresh_dir("nul");
+    const fs::path dir = fresh_readers_dir("nul");
     plane(dir / "plane.qpsnap");
     write_bytes(dir / "nul.txt", std::string(1, '\0'));
-    const Output o = run("judge " + q(dir / "plane.qpsnap") + " " + q(dir / "nul.txt"), LIMIT);
+    const Output o = run_reader(
+        "judge " + test::shell_quoted(dir / "plane.qpsnap") + " " + test::shell_quoted(dir / "nul.txt"), LIMIT);
     EXPECT_EQ(o.status, 2) << o.err;  // was an endless loop growing to bad_alloc
     EXPECT_EQ(o.err, "contactbench judge: error: " + (dir / "nul.txt").string() +
                          ": line 1: expected a number of x, got '\\x00'\n");
     write_bytes(dir / "nul2.txt", std::string("1 2\0003", 5));
-    const Output o2 = run("judge " + q(dir / "plane.qpsnap") + " " + q(dir / "nul2.txt"), LIMIT);
+    const Output o2 = run_reader(
+        "judge " + test::shell_quoted(dir / "plane.qpsnap") + " " + test::shell_quoted(dir / "nul2.txt"), LIMIT);
     EXPECT_EQ(o2.status, 2) << o2.err;
     EXPECT_EQ(o2.err, "contactbench judge: error: " + (dir / "nul2.txt").string() +
                           ": line 1: expected a number of x, got '2\\x003'\n");
@@ -138,26 +140,26 @@ TEST(HostileReaders, TextVectorWithANulByteEndsAtOnce)
 
 TEST(HostileReaders, SolutionReadersAllocateByTheSnapshotNotTheFile)
 {
-    const fs::path dir = fresh_dir("declared");
+    const fs::path dir = fresh_readers_dir("declared");
     const long n = plane(dir / "plane.qpsnap");
-    const std::string judge = "judge " + q(dir / "plane.qpsnap") + " ";
+    const std::string judge = "judge " + test::shell_quoted(dir / "plane.qpsnap") + " ";
     const std::string error = "contactbench judge: error: ";
     // J2: 60 bytes declaring 3e8 rows (2.4 GB once allocated before n was checked).
     write_bytes(dir / "decl.mtx", "%%MatrixMarket matrix coordinate real general\n300000000 1 0\n");
-    Output o = run(judge + q(dir / "decl.mtx"), LIMIT);
+    Output o = run_reader(judge + test::shell_quoted(dir / "decl.mtx"), LIMIT);
     EXPECT_EQ(o.status, 2) << o.err;
     EXPECT_EQ(o.err, error + (dir / "decl.mtx").string() + ": size: expected " + std::to_string(n) +
                          " entries (n of the snapshot), got 300000000\n");
     // More entries declared than positions: duplicates certain, refused before they are stored.
     write_bytes(dir / "many.mtx", "%%MatrixMarket matrix coordinate real general\n3 1 100000000\n");
-    o = run(judge + q(dir / "many.mtx"), LIMIT);
+    o = run_reader(judge + test::shell_quoted(dir / "many.mtx"), LIMIT);
     EXPECT_EQ(o.status, 2) << o.err;
     EXPECT_EQ(o.err, error + (dir / "many.mtx").string() +
                          ": line 2: declares 100000000 entries, more than the 3 x 1 matrix holds\n");
     // J3: a shape of 2^61 entries: count * 8 wrapped to 0 bytes and passed the size check.
     write_bytes(dir / "wrap.npy",
                 npy("{'descr': '<f8', 'fortran_order': False, 'shape': (2305843009213693952,), }", ""));
-    o = run(judge + q(dir / "wrap.npy"), LIMIT);
+    o = run_reader(judge + test::shell_quoted(dir / "wrap.npy"), LIMIT);
     EXPECT_EQ(o.status, 2) << o.err;
     EXPECT_EQ(o.err, error + (dir / "wrap.npy").string() +
                          ": x: shape (2305843009213693952,) declares 2305843009213693952 entries, the file holds 0 "
@@ -169,7 +171,7 @@ TEST(HostileReaders, SolutionReadersAllocateByTheSnapshotNotTheFile)
         for (int i = 0; i < (1 << 19); ++i) zeros += "0\n";
         for (int k = 0; k < 100; ++k) big << zeros;
     }
-    o = run(judge + q(dir / "big.txt"), LIMIT);
+    o = run_reader(judge + test::shell_quoted(dir / "big.txt"), LIMIT);
     EXPECT_EQ(o.status, 2) << o.err;
     EXPECT_EQ(o.err, error + (dir / "big.txt").string() + ": x: expected " + std::to_string(n) +
                          " entries (n of the snapshot), got 52428800\n");
@@ -178,28 +180,28 @@ TEST(HostileReaders, SolutionReadersAllocateByTheSnapshotNotTheFile)
 
 TEST(HostileReaders, NpyHeaderIsParsedAsADict)
 {
-    const fs::path dir = fresh_dir("npy");
+    const fs::path dir = fresh_readers_dir("npy");
     const long n = plane(dir / "plane.qpsnap");
-    const std::string judge = "judge " + q(dir / "plane.qpsnap") + " ";
+    const std::string judge = "judge " + test::shell_quoted(dir / "plane.qpsnap") + " ";
     // J5: a decoy 'descr' inside another value; the real dtype is int64 (once read as float64).
     write_bytes(dir / "decoy.npy", npy("{'shape': (" + std::to_string(n) +
                                            ",), 'fortran_order': False, 'note': \"'descr': '<f8', \", "
                                            "'descr': '<i8', }",
                                        doubles(n, 0.0)));
-    Output o = run(judge + q(dir / "decoy.npy"));
+    Output o = run_reader(judge + test::shell_quoted(dir / "decoy.npy"));
     EXPECT_EQ(o.status, 2) << o.err;
     EXPECT_EQ(o.err, "contactbench judge: error: " + (dir / "decoy.npy").string() +
                          ": note: unknown key in the .npy header (descr, fortran_order, shape)\n");
     write_bytes(dir / "i8.npy", npy("{'descr': '<i8', 'fortran_order': False, 'shape': (" + std::to_string(n) + ",), }",
                                     doubles(n, 0.0)));
-    o = run(judge + q(dir / "i8.npy"));
+    o = run_reader(judge + test::shell_quoted(dir / "i8.npy"));
     EXPECT_EQ(o.status, 2) << o.err;
     EXPECT_EQ(o.err, "contactbench judge: error: " + (dir / "i8.npy").string() +
                          ": x: dtype '<i8' not supported; write float64 (numpy: x.astype(float))\n");
     write_bytes(dir / "twice.npy",
                 npy("{'descr': '<i8', 'descr': '<f8', 'fortran_order': False, 'shape': (" + std::to_string(n) + ",), }",
                     doubles(n, 0.0)));
-    o = run(judge + q(dir / "twice.npy"));
+    o = run_reader(judge + test::shell_quoted(dir / "twice.npy"));
     EXPECT_EQ(o.status, 2) << o.err;
     EXPECT_EQ(o.err, "contactbench judge: error: " + (dir / "twice.npy").string() +
                          ": descr: given twice in the .npy header\n");
@@ -207,23 +209,23 @@ TEST(HostileReaders, NpyHeaderIsParsedAsADict)
     write_bytes(
         dir / "good.npy",
         npy("{'descr': '<f8', 'fortran_order': False, 'shape': (" + std::to_string(n) + ",), }", doubles(n, 0.0)));
-    o = run(judge + q(dir / "good.npy"));
+    o = run_reader(judge + test::shell_quoted(dir / "good.npy"));
     EXPECT_EQ(o.status, 0) << o.err;
 }
 
 TEST(HostileReaders, JudgeCommandLineAndRecordChecks)
 {
-    const fs::path dir = fresh_dir("judge_checks");
+    const fs::path dir = fresh_readers_dir("judge_checks");
     plane(dir / "plane.qpsnap");
-    const std::string snap = q(dir / "plane.qpsnap");
-    ASSERT_EQ(
-        run("solve " + snap + " --solver pgs --json " + q(dir / "rec.json") + " --save-solution " + q(dir / "sol"))
-            .status,
-        0);
-    const std::string judge = "judge " + snap + " " + q(dir / "sol");
+    const std::string snap = test::shell_quoted(dir / "plane.qpsnap");
+    ASSERT_EQ(run_reader("solve " + snap + " --solver pgs --json " + test::shell_quoted(dir / "rec.json") +
+                         " --save-solution " + test::shell_quoted(dir / "sol"))
+                  .status,
+              0);
+    const std::string judge = "judge " + snap + " " + test::shell_quoted(dir / "sol");
     // J9: --tol inf and 1e999 (once "converged at tol inf").
     for (const char* tol : {"inf", "1e999", "nan"}) {
-        const Output o = run(judge + " --tol " + tol);
+        const Output o = run_reader(judge + " --tol " + tol);
         EXPECT_EQ(o.status, 2) << tol;
         EXPECT_EQ(o.err, std::string("contactbench judge: error: judge: --tol: expected a finite number, got '") + tol +
                              "'\n");
@@ -233,7 +235,7 @@ TEST(HostileReaders, JudgeCommandLineAndRecordChecks)
     nlohmann::json no_snapshot = rec;
     no_snapshot.erase("snapshot");
     write_json_atomic((dir / "no_snap.json").string(), no_snapshot);
-    Output o = run(judge + " --record " + q(dir / "no_snap.json"));
+    Output o = run_reader(judge + " --record " + test::shell_quoted(dir / "no_snap.json"));
     EXPECT_EQ(o.status, 2) << o.err;  // was judged with no snapshot check at all
     EXPECT_EQ(o.err, "contactbench judge: error: " + (dir / "no_snap.json").string() +
                          ": /snapshot: missing or not an object: is this a run record (solve --json, a suite's "
@@ -241,14 +243,14 @@ TEST(HostileReaders, JudgeCommandLineAndRecordChecks)
     nlohmann::json hash_num = rec;
     hash_num["snapshot"]["hash"] = 5;
     write_json_atomic((dir / "hash_num.json").string(), hash_num);
-    o = run(judge + " --record " + q(dir / "hash_num.json"));
+    o = run_reader(judge + " --record " + test::shell_quoted(dir / "hash_num.json"));
     EXPECT_EQ(o.status, 2) << o.err;  // was a raw type_error, exit 1
     EXPECT_EQ(o.err, "contactbench judge: error: " + (dir / "hash_num.json").string() +
                          ": /snapshot/hash: missing or not a non-empty string: the record does not say which snapshot "
                          "it ran on\n");
     // J6: a symlink loop as the solution.
     fs::create_symlink("loop", dir / "loop");
-    o = run("judge " + snap + " " + q(dir / "loop"));
+    o = run_reader("judge " + snap + " " + test::shell_quoted(dir / "loop"));
     EXPECT_EQ(o.status, 2) << o.err;  // was "internal error: filesystem error", exit 1
     EXPECT_EQ(o.err, "contactbench judge: error: " + (dir / "loop").string() +
                          ": x: cannot open: Too many levels of symbolic links\n");
@@ -258,30 +260,30 @@ TEST(HostileReaders, JudgeCommandLineAndRecordChecks)
 
 TEST(HostileReaders, SuiteDuplicateKeysAndHugeTimeLimitAreRefused)
 {
-    const fs::path dir = fresh_dir("suite_checks");
+    const fs::path dir = fresh_readers_dir("suite_checks");
     plane(dir / "plane.qpsnap");
     write_bytes(dir / "dup.json",
                 R"({"name": "d", "snapshots": ["plane.qpsnap"], "solvers": ["pgs"], "solvers": ["cg"]})");
-    Output o = run("run " + q(dir / "dup.json") + " --out " + q(dir / "out"));
+    Output o = run_reader("run " + test::shell_quoted(dir / "dup.json") + " --out " + test::shell_quoted(dir / "out"));
     EXPECT_EQ(o.status, 2) << o.err;  // was accepted, the last "solvers" silently winning
     EXPECT_EQ(o.err, "contactbench run: error: " + (dir / "dup.json").string() +
                          ": /solvers: key given twice in one object (each key once)\n");
     write_bytes(dir / "nested.json",
                 R"({"name": "d", "snapshots": ["plane.qpsnap"], "solvers": [{"solver": "pgs", "solver": "cg"}]})");
-    o = run("run " + q(dir / "nested.json") + " --out " + q(dir / "out"));
+    o = run_reader("run " + test::shell_quoted(dir / "nested.json") + " --out " + test::shell_quoted(dir / "out"));
     EXPECT_EQ(o.status, 2) << o.err;
     EXPECT_EQ(o.err, "contactbench run: error: " + (dir / "nested.json").string() +
                          ": /solvers/0/solver: key given twice in one object (each key once)\n");
     write_bytes(dir / "tl.json",
                 R"({"name": "t", "snapshots": ["plane.qpsnap"], "solvers": ["pgs"], "time_limit_s": 1e308})");
-    o = run("run " + q(dir / "tl.json") + " --out " + q(dir / "out"));
+    o = run_reader("run " + test::shell_quoted(dir / "tl.json") + " --out " + test::shell_quoted(dir / "out"));
     EXPECT_EQ(o.status, 2) << o.err;  // was accepted, and every run failed
     EXPECT_EQ(o.err, "contactbench run: error: " + (dir / "tl.json").string() +
                          ": /time_limit_s: must be <= 1e6 seconds (11.6 days; 0 disables), got 1e+308\n");
     // S3: a FIFO named as a snapshot is named as one (was "no such file").
     ASSERT_EQ(::mkfifo((dir / "fifo.qpsnap").c_str(), 0644), 0);
     write_bytes(dir / "fifo.json", R"({"name": "f", "snapshots": ["fifo.qpsnap"], "solvers": ["pgs"]})");
-    o = run("run " + q(dir / "fifo.json") + " --out " + q(dir / "out"));
+    o = run_reader("run " + test::shell_quoted(dir / "fifo.json") + " --out " + test::shell_quoted(dir / "out"));
     EXPECT_EQ(o.status, 2) << o.err;
     EXPECT_EQ(o.err, "contactbench run: error: " + (dir / "fifo.json").string() + ": /snapshots/0: '" +
                          (dir / "fifo.qpsnap").string() + "': not a regular file (a FIFO)\n");
@@ -291,7 +293,7 @@ TEST(HostileReaders, SuiteDuplicateKeysAndHugeTimeLimitAreRefused)
     fs::create_symlink("self.qpsnap", dir / "loops" / "self.qpsnap");
     fs::copy_file(dir / "plane.qpsnap", dir / "loops" / "a.qpsnap");
     write_bytes(dir / "loops.json", R"({"name": "l", "snapshots": ["loops"], "solvers": ["pgs"]})");
-    o = run("run " + q(dir / "loops.json") + " --out " + q(dir / "lo"));
+    o = run_reader("run " + test::shell_quoted(dir / "loops.json") + " --out " + test::shell_quoted(dir / "lo"));
     EXPECT_EQ(o.status, 0) << o.err;
     EXPECT_NE(o.err.find("self x pgs: invalid_input: " + (dir / "loops" / "self.qpsnap").string() +
                          ": cannot open: Too many levels of symbolic links"),
@@ -301,11 +303,13 @@ TEST(HostileReaders, SuiteDuplicateKeysAndHugeTimeLimitAreRefused)
 
 TEST(HostileReaders, MeshSizesAreBoundedBeforeAllocation)
 {
-    const fs::path dir = fresh_dir("meshes");
+    const fs::path dir = fresh_readers_dir("meshes");
     // S2: an OFF file declaring 2e9 vertices (reserved in full once).
     write_bytes(dir / "h.off", "OFF\n2000000000 1 0\n0 0 0\n");
     write_bytes(dir / "o.json", R"({"name": "o", "frames": 1, "bodies": [{"mesh": "h.off"}]})");
-    Output o = run("simulate " + q(dir / "o.json") + " --frames 0 --no-snapshots --out " + q(dir / "o"), LIMIT);
+    Output o = run_reader("simulate " + test::shell_quoted(dir / "o.json") + " --frames 0 --no-snapshots --out " +
+                              test::shell_quoted(dir / "o"),
+                          LIMIT);
     EXPECT_EQ(o.status, 2) << o.err;
     EXPECT_NE(o.err.find((dir / "h.off").string() + ": "), std::string::npos) << o.err;
     EXPECT_NE(o.err.find("expected 2000000000 vertices, got 1"), std::string::npos) << o.err;
@@ -313,7 +317,9 @@ TEST(HostileReaders, MeshSizesAreBoundedBeforeAllocation)
     write_bytes(dir / "tet.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
     write_bytes(dir / "r.json", R"({"name": "r", "frames": 1, "bodies": [{"mesh": )"
                                 R"({"path": "tet.obj", "resolution": 512, "fit_size": 0.2}}]})");
-    o = run("simulate " + q(dir / "r.json") + " --frames 0 --no-snapshots --out " + q(dir / "r"), "ulimit -v 1500000");
+    o = run_reader("simulate " + test::shell_quoted(dir / "r.json") + " --frames 0 --no-snapshots --out " +
+                       test::shell_quoted(dir / "r"),
+                   "ulimit -v 1500000");
     EXPECT_EQ(o.status, 2) << o.err;
     EXPECT_EQ(o.err, "contactbench simulate: error: " + (dir / "tet.obj").string() +
                          ": resolution: 512 puts more than 6000000 tets inside the surface (the limit); use a lower "
@@ -321,7 +327,8 @@ TEST(HostileReaders, MeshSizesAreBoundedBeforeAllocation)
     // S7: a box whose cells are too small: the scene file and field named.
     write_bytes(dir / "tiny.json", R"({"name": "t", "frames": 1, "bodies": [{"box": {"cells": [2, 2, 2], )"
                                    R"("size": [1e-300, 1e-300, 1e-300]}}]})");
-    o = run("simulate " + q(dir / "tiny.json") + " --frames 0 --no-snapshots --out " + q(dir / "t"));
+    o = run_reader("simulate " + test::shell_quoted(dir / "tiny.json") + " --frames 0 --no-snapshots --out " +
+                   test::shell_quoted(dir / "t"));
     EXPECT_EQ(o.status, 2) << o.err;
     EXPECT_EQ(
         o.err.rfind("contactbench simulate: error: " + (dir / "tiny.json").string() + ": /bodies/0/box/size: ", 0), 0u)
@@ -332,11 +339,11 @@ TEST(HostileReaders, MeshSizesAreBoundedBeforeAllocation)
 
 TEST(HostileReaders, ResultsFoldersAreReadOnlyWhenWhole)
 {
-    const fs::path dir = fresh_dir("whole");
+    const fs::path dir = fresh_readers_dir("whole");
     plane(dir / "plane.qpsnap");
     write_bytes(dir / "s.json", R"({"name": "s", "snapshots": ["plane.qpsnap"], "solvers": ["pgs"]})");
     const fs::path base = dir / "b";
-    ASSERT_EQ(run("run " + q(dir / "s.json") + " --out " + q(base)).status, 0);
+    ASSERT_EQ(run_reader("run " + test::shell_quoted(dir / "s.json") + " --out " + test::shell_quoted(base)).status, 0);
     auto copy_of_base = [&](const std::string& name) {
         const fs::path to = dir / name;
         fs::remove_all(to);
@@ -349,7 +356,7 @@ TEST(HostileReaders, ResultsFoldersAreReadOnlyWhenWhole)
     regressed["status"] = "diverged";
     write_json_atomic((next / "runs" / "plane__pgs.json").string(), regressed);
     fs::copy_file(base / "runs" / "plane__pgs.json", next / "runs" / "zz_stale.json");
-    Output o = run("compare " + q(base) + " " + q(next));
+    Output o = run_reader("compare " + test::shell_quoted(base) + " " + test::shell_quoted(next));
     EXPECT_EQ(o.status, 2) << o.out << o.err;  // was PASS
     EXPECT_EQ(o.err, "contactbench compare: error: " + (next / "runs" / "zz_stale.json").string() + ": not a job of " +
                          (next / "jobs.json").string() + ": a stray or stale file (remove it, or run again)\n");
@@ -357,7 +364,7 @@ TEST(HostileReaders, ResultsFoldersAreReadOnlyWhenWhole)
     const fs::path killed = copy_of_base("k");
     fs::rename(killed / "suite.json", killed / "suite.pending.json");
     fs::remove(killed / "jobs.json");
-    o = run("compare " + q(killed) + " " + q(base));
+    o = run_reader("compare " + test::shell_quoted(killed) + " " + test::shell_quoted(base));
     EXPECT_EQ(o.status, 2) << o.out << o.err;
     EXPECT_EQ(o.err, "contactbench compare: error: " + killed.string() +
                          ": suite.pending.json: present: the folder's `contactbench run` was interrupted or is still "
@@ -367,7 +374,7 @@ TEST(HostileReaders, ResultsFoldersAreReadOnlyWhenWhole)
     nlohmann::json not_final = read_json_file((retry / "runs" / "plane__pgs.json").string());
     not_final["final"] = false;
     write_json_atomic((retry / "runs" / "plane__pgs.json").string(), not_final);
-    o = run("merge " + q(dir / "m") + " " + q(retry));
+    o = run_reader("merge " + test::shell_quoted(dir / "m") + " " + test::shell_quoted(retry));
     EXPECT_EQ(o.status, 2) << o.err;
     EXPECT_EQ(o.err, "contactbench merge: error: " + (retry / "runs" / "plane__pgs.json").string() +
                          ": /final: false: the run ended in an error to be retried, not a result (run the suite "
@@ -376,7 +383,7 @@ TEST(HostileReaders, ResultsFoldersAreReadOnlyWhenWhole)
     nlohmann::json foreign = read_json_file((other / "runs" / "plane__pgs.json").string());
     foreign["label"] = "cg";
     write_json_atomic((other / "runs" / "plane__pgs.json").string(), foreign);
-    o = run("merge " + q(dir / "m") + " " + q(other));
+    o = run_reader("merge " + test::shell_quoted(dir / "m") + " " + test::shell_quoted(other));
     EXPECT_EQ(o.status, 2) << o.err;
     EXPECT_EQ(o.err, "contactbench merge: error: " + (other / "runs" / "plane__pgs.json").string() +
                          ": /snapshot/id, /label: the record is of job plane__cg.json, not of this file: a copy or "
@@ -387,7 +394,7 @@ TEST(HostileReaders, ResultsFoldersAreReadOnlyWhenWhole)
     ASSERT_TRUE(counted["counters"].contains("a_products"));
     counted["counters"]["a_products"] = "12";
     write_json_atomic((stringly / "runs" / "plane__pgs.json").string(), counted);
-    o = run("merge " + q(dir / "m") + " " + q(stringly));
+    o = run_reader("merge " + test::shell_quoted(dir / "m") + " " + test::shell_quoted(stringly));
     EXPECT_EQ(o.status, 2) << o.err;
     EXPECT_EQ(o.err, "contactbench merge: error: " + (stringly / "runs" / "plane__pgs.json").string() +
                          ": /counters/a_products: expected a number, got \"12\"\n");
@@ -401,11 +408,11 @@ TEST(HostileReaders, ResultsFoldersAreReadOnlyWhenWhole)
     const std::string holder = me + " run\n";  // as `run` writes it: "<pid> <command>"
     ASSERT_EQ(::ftruncate(fd, 0), 0);
     ASSERT_EQ(::pwrite(fd, holder.data(), holder.size(), 0), ssize_t(holder.size()));
-    o = run("merge " + q(busy) + " " + q(base));
+    o = run_reader("merge " + test::shell_quoted(busy) + " " + test::shell_quoted(base));
     EXPECT_EQ(o.status, 2) << o.err;
     EXPECT_EQ(o.err, "contactbench merge: error: " + busy.string() + ": another `contactbench run` (pid " + me +
                          ") is writing to this folder; wait for it to finish or use another --out\n");
-    o = run("compare " + q(base) + " " + q(busy));
+    o = run_reader("compare " + test::shell_quoted(base) + " " + test::shell_quoted(busy));
     EXPECT_EQ(o.status, 2) << o.err;
     EXPECT_EQ(o.err, "contactbench compare: error: " + busy.string() + ": being written by `contactbench run` (pid " +
                          me + ", holding .lock): not a finished result; wait for it to finish\n");
@@ -413,7 +420,7 @@ TEST(HostileReaders, ResultsFoldersAreReadOnlyWhenWhole)
     // A FIFO among the run files is named, never opened.
     const fs::path fifo = copy_of_base("fifo");
     ASSERT_EQ(::mkfifo((fifo / "runs" / "zz__pgs.json").c_str(), 0644), 0);
-    o = run("compare " + q(base) + " " + q(fifo));
+    o = run_reader("compare " + test::shell_quoted(base) + " " + test::shell_quoted(fifo));
     EXPECT_EQ(o.status, 2) << o.err;
     EXPECT_EQ(o.err, "contactbench compare: error: " + (fifo / "runs" / "zz__pgs.json").string() + ": not a job of " +
                          (fifo / "jobs.json").string() + ": a stray or stale file (remove it, or run again)\n");
@@ -422,7 +429,7 @@ TEST(HostileReaders, ResultsFoldersAreReadOnlyWhenWhole)
     nlohmann::json strings = read_json_file((typed / "runs" / "plane__pgs.json").string());
     strings["time"]["samples_total_s"] = {"a", "b"};
     write_json_atomic((typed / "runs" / "plane__pgs.json").string(), strings);
-    o = run("compare " + q(base) + " " + q(typed));
+    o = run_reader("compare " + test::shell_quoted(base) + " " + test::shell_quoted(typed));
     EXPECT_EQ(o.status, 2) << o.err;
     EXPECT_EQ(o.err, "contactbench compare: error: " + (typed / "runs" / "plane__pgs.json").string() +
                          ": /time/samples_total_s: expected numbers (seconds), got \"a\"\n");
@@ -433,7 +440,7 @@ TEST(HostileReaders, ResultsFoldersAreReadOnlyWhenWhole)
         nlohmann::json record = read_json_file((to / "runs" / "plane__pgs.json").string());
         record[field] = v;
         write_json_atomic((to / "runs" / "plane__pgs.json").string(), record);
-        return run("compare " + q(base) + " " + q(to));
+        return run_reader("compare " + test::shell_quoted(base) + " " + test::shell_quoted(to));
     };
     o = confused("t1", nlohmann::json::json_pointer("/counters/iterations"), "12");
     EXPECT_EQ(o.status, 2) << o.out << o.err;
@@ -456,6 +463,6 @@ TEST(HostileReaders, ResultsFoldersAreReadOnlyWhenWhole)
     EXPECT_EQ(o.err, "contactbench compare: error: " + (dir / "t5" / "runs" / "plane__pgs.json").string() +
                          ": /counters/a_products: expected a number, got null\n");
     // The whole folders still compare.
-    o = run("compare " + q(base) + " " + q(copy_of_base("same")));
+    o = run_reader("compare " + test::shell_quoted(base) + " " + test::shell_quoted(copy_of_base("same")));
     EXPECT_EQ(o.status, 0) << o.out << o.err;
 }

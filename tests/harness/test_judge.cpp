@@ -26,18 +26,18 @@ using namespace cb;
 
 namespace {
 
-const fs::path& work_dir()
+const fs::path& judge_work_dir()
 {
     static const fs::path dir = test::make_test_work_dir("judge");
     return dir;
 }
 
 /// The scratch folder goes when the tests end.
-class CleanUp : public ::testing::Environment {
+class JudgeCleanUp : public ::testing::Environment {
 public:
-    void TearDown() override { fs::remove_all(work_dir()); }
+    void TearDown() override { fs::remove_all(judge_work_dir()); }
 };
-const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new CleanUp);
+const auto* const JUDGE_CLEAN_UP = ::testing::AddGlobalTestEnvironment(new JudgeCleanUp);
 
 /// Runs a subcommand in this process with its standard output captured.
 std::string run_command(int (*command)(const Args&), const Args& args)
@@ -63,7 +63,7 @@ std::vector<std::string> snapshots()
                                                                           {"plane", {{"nx", 2}, {"ny", 2}, {"nz", 2}}},
                                                                           {"coupled", nlohmann::json::object()}};
     for (const auto& [family, params] : families) {
-        const fs::path p = work_dir() / (family + ".qpsnap");
+        const fs::path p = judge_work_dir() / (family + ".qpsnap");
         write_qpsnap(p.string(), make_synthetic(family, params, 3));
         paths.push_back(p.string());
     }
@@ -116,7 +116,7 @@ TEST(Judge, SameErrorVerdictAndStatusAsSolveForEveryRegistrySolver)
             if (builtin_registry().entry(name).needs_settings)
                 continue;  // command: tests/python/test_command_solver.py
             SCOPED_TRACE(std::string(name).append(" on ").append(snap));
-            const fs::path dir = work_dir() / (fs::path(snap).stem().string() + "_" + name);
+            const fs::path dir = judge_work_dir() / (fs::path(snap).stem().string() + "_" + name);
             const std::string record_path = (dir / "run.json").string();
             fs::create_directories(dir);
             run_command(cmd_solve, {snap, "--solver", name, "--set", "max_iterations=300", "--json", record_path,
@@ -151,7 +151,7 @@ TEST(Judge, StatusesThatNeedTheRecordAppearOnlyWithIt)
 {
     // mprgp decouples the coupled rows: a converged run on the decoupled QP misses tol on the original.
     const std::string snap = snapshots()[2];
-    const fs::path dir = work_dir() / "relaxation";
+    const fs::path dir = judge_work_dir() / "relaxation";
     fs::create_directories(dir);
     run_command(cmd_solve, {snap, "--solver", "mprgp", "--json", (dir / "run.json").string(), "--save-solution",
                             (dir / "sol").string()});
@@ -186,7 +186,7 @@ TEST(Judge, ReadsNpyMatrixMarketAndTextTheSame)
 {
     const std::string snap = snapshots()[0];
     const Qp qp = read_qpsnap(snap);
-    const fs::path dir = work_dir() / "formats";
+    const fs::path dir = judge_work_dir() / "formats";
     fs::create_directories(dir);
     run_command(cmd_solve, {snap, "--solver", "active-set", "--save-solution", (dir / "sol").string()});
     const SolutionPoint mtx = read_solution((dir / "sol").string(), qp.n(), qp.m());
@@ -218,7 +218,7 @@ TEST(Judge, MalformedSolutionsNameTheFileAndTheField)
     const std::string snap = snapshots()[0];
     const Qp qp = read_qpsnap(snap);
     const long n = qp.n(), m = qp.m();
-    const fs::path dir = work_dir() / "malformed";
+    const fs::path dir = judge_work_dir() / "malformed";
     fs::create_directories(dir);
     auto error_for = [&](const fs::path& p) { return input_error_of([&] { read_solution(p.string(), n, m); }); };
     write_npy(dir / "short.npy", std::vector<double>(static_cast<size_t>(n - 1), 0.0));
@@ -256,7 +256,7 @@ TEST(Judge, MalformedSolutionsNameTheFileAndTheField)
 // frictionless relaxation, and never calls the point converged.
 TEST(Judge, FrictionalRunIsJudgedWithItsTangentialMultipliersOrNamedARelaxation)
 {
-    const fs::path dir = work_dir() / "friction";
+    const fs::path dir = judge_work_dir() / "friction";
     fs::create_directories(dir);
     const std::string snap = (dir / "pushed.qpsnap").string();
     write_qpsnap(snap, testing_qps::pushed_plane(0.2, 0.5));

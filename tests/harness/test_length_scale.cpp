@@ -93,7 +93,7 @@ double box_residual(const Qp& qp, const Vec& x, bool balanced = false)
 }
 
 /// Every registered solver that runs without settings of its own.
-std::vector<std::string> every_solver()
+std::vector<std::string> every_solver_without_settings()
 {
     std::vector<std::string> names;
     for (const auto& name : builtin_registry().names())
@@ -119,7 +119,7 @@ private:
     CommonSettings m_common;
 };
 
-RunOutcome run(const Qp& qp, const std::string& solver)
+RunOutcome run_scaled(const Qp& qp, const std::string& solver)
 {
     RunOptions options;
     options.record_history = false;
@@ -218,12 +218,12 @@ TEST(LengthScale, NearlySingularAKeepsTheVerdicts)
     EXPECT_EQ(far.length.source, "reference_extent");
     EXPECT_NEAR(far.length.value / near.length.value, 1.0, 1e-6);
 
-    std::vector<std::string> solvers = every_solver();
+    std::vector<std::string> solvers = every_solver_without_settings();
     solvers.push_back("start-point");
     int same_word = 0;
     for (const auto& solver : solvers) {
         SCOPED_TRACE(solver);
-        const RunOutcome a = run(near, solver), b = run(far, solver);
+        const RunOutcome a = run_scaled(near, solver), b = run_scaled(far, solver);
         EXPECT_EQ(a.scale.length, near.length.value);
         EXPECT_EQ(b.scale.length, far.length.value);
         if (a.result.status == b.result.status) {
@@ -236,8 +236,8 @@ TEST(LengthScale, NearlySingularAKeepsTheVerdicts)
             }
     }
     EXPECT_GE(same_word, 6);  // the relation was tested on real verdicts
-    EXPECT_NE(run(near, "start-point").status, "converged");
-    EXPECT_NE(run(far, "start-point").status, "converged");
+    EXPECT_NE(run_scaled(near, "start-point").status, "converged");
+    EXPECT_NE(run_scaled(far, "start-point").status, "converged");
 }
 
 // Every solver's `converged` run on a geometry-free box problem has solved it:
@@ -252,7 +252,7 @@ TEST(LengthScale, ConvergedOnABoxProblemMeansSolved)
                                                         {"random-1", random_box(1)},
                                                         {"random-2", random_box(2)}};
     problems.emplace_back("lmgc", read_qpsnap(std::string(CB_TEST_DATA_DIR) + "/lmgc_perio_normal.qpsnap"));
-    std::vector<std::string> solvers = every_solver();
+    std::vector<std::string> solvers = every_solver_without_settings();
     solvers.push_back("start-point");
     int converged = 0;
     for (auto& [name, qp] : problems) {
@@ -265,7 +265,7 @@ TEST(LengthScale, ConvergedOnABoxProblemMeansSolved)
         EXPECT_EQ(qp.length.source, name == "lmgc" ? "load_displacement" : "reference_extent");
         for (const auto& solver : solvers) {
             SCOPED_TRACE(solver);
-            const RunOutcome r = run(qp, solver);
+            const RunOutcome r = run_scaled(qp, solver);
             if (r.status != "converged") continue;
             ++converged;
             EXPECT_LE(box_residual(qp, r.result.x, true), 100 * 1e-6) << "e = " << r.accuracy.max();

@@ -3,6 +3,7 @@
 #include "harness/command_solver.hpp"
 #include "harness/printable_text.hpp"
 #include "harness/program_run.hpp"
+#include "tests/harness/process_exists.hpp"
 
 #include "tests/harness/cli_test_util.hpp"
 #include "tests/harness/remove_at_end.hpp"
@@ -19,13 +20,13 @@ using namespace cb;
 
 namespace {
 
-const fs::path& work_dir()
+const fs::path& program_work_dir()
 {
     static const fs::path dir = test::make_test_work_dir("program_run");
     return dir;
 }
 
-fs::path fresh_dir(const std::string& name) { return test::fresh_subdir(work_dir(), name); }
+fs::path fresh_program_dir(const std::string& name) { return test::fresh_subdir(program_work_dir(), name); }
 
 ProgramOutcome run_sh(const fs::path& dir, const std::string& script, ProgramOptions options = {})
 {
@@ -34,16 +35,14 @@ ProgramOutcome run_sh(const fs::path& dir, const std::string& script, ProgramOpt
                        options);
 }
 
-bool process_exists(pid_t pid) { return ::kill(pid, 0) == 0 || errno != ESRCH; }
-
-const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new test::RemoveAtEnd(work_dir));
+const auto* const PROGRAM_CLEAN_UP = ::testing::AddGlobalTestEnvironment(new test::RemoveAtEnd(program_work_dir));
 
 }  // namespace
 
 // C8: a program's own exit status 127 is its own; a program that cannot be started says why.
 TEST(ProgramRun, OwnExit127IsNotAnExecFailure)
 {
-    const fs::path d = fresh_dir("exit127");
+    const fs::path d = fresh_program_dir("exit127");
     const ProgramOutcome own = run_sh(d, "echo 'my own failure' >&2; exit 127");
     EXPECT_FALSE(own.exec_failed);
     EXPECT_EQ(own.exit_status, 127);
@@ -60,7 +59,7 @@ TEST(ProgramRun, OwnExit127IsNotAnExecFailure)
 // C6: the program starts in the folder it is given, so its relative writes land there.
 TEST(ProgramRun, StartsInItsWorkFolder)
 {
-    const fs::path d = fresh_dir("cwd"), work = fresh_dir("cwd/work");
+    const fs::path d = fresh_program_dir("cwd"), work = fresh_program_dir("cwd/work");
     ProgramOptions options;
     options.workdir = work.string();
     const ProgramOutcome run = run_sh(d, "pwd -P > here.txt", options);
@@ -73,7 +72,7 @@ TEST(ProgramRun, StartsInItsWorkFolder)
 // run_program returns; the setsid one is counted as an orphan.
 TEST(ProgramRun, OrphansThatLeftTheGroupAreKilled)
 {
-    const fs::path d = fresh_dir("orphans");
+    const fs::path d = fresh_program_dir("orphans");
     const ProgramOutcome run = run_sh(d,
                                       "setsid sleep 313 </dev/null >/dev/null 2>&1 & echo $! > setsid.pid; "
                                       "sleep 317 </dev/null >/dev/null 2>&1 & echo $! > group.pid; exit 0",
@@ -81,15 +80,15 @@ TEST(ProgramRun, OrphansThatLeftTheGroupAreKilled)
     EXPECT_EQ(run.failure(), "");
     const pid_t setsid_pid = std::stoi(test::slurp(d / "setsid.pid"));
     const pid_t group_pid = std::stoi(test::slurp(d / "group.pid"));
-    EXPECT_FALSE(process_exists(setsid_pid)) << "setsid child " << setsid_pid << " survived";
-    EXPECT_FALSE(process_exists(group_pid)) << "group child " << group_pid << " survived";
+    EXPECT_FALSE(test::process_exists(setsid_pid)) << "setsid child " << setsid_pid << " survived";
+    EXPECT_FALSE(test::process_exists(group_pid)) << "group child " << group_pid << " survived";
     EXPECT_GE(run.orphans_killed, 1);
 }
 
 // C11: stdout beyond the cap is counted, not stored; the last bytes are kept after a note.
 TEST(ProgramRun, OutputIsCapped)
 {
-    const fs::path d = fresh_dir("cap");
+    const fs::path d = fresh_program_dir("cap");
     const ProgramOutcome run = run_sh(d, "head -c 5000000 /dev/zero; printf END");
     EXPECT_EQ(run.failure(), "");
     EXPECT_EQ(run.stdout_bytes, 5000003u);
@@ -106,7 +105,7 @@ TEST(ProgramRun, OutputIsCapped)
 // C10: the program's peak resident memory comes back from wait4 (here about 200 MiB touched).
 TEST(ProgramRun, PeakMemoryOfTheProgram)
 {
-    const fs::path d = fresh_dir("peak");
+    const fs::path d = fresh_program_dir("peak");
     const ProgramOutcome run =
         run_program({"/usr/bin/python3", "-c", "b = b'x' * (200 * 1024 * 1024); print(len(b))"}, (d / "o.txt").string(),
                     (d / "e.txt").string(), ProgramOptions{60, "", PROGRAM_OUTPUT_CAP_BYTES, 2.0});
@@ -119,7 +118,7 @@ TEST(ProgramRun, PeakMemoryOfTheProgram)
 // The time limit kills a program that ignores SIGTERM.
 TEST(ProgramRun, TimeLimitKillsTheGroup)
 {
-    const fs::path d = fresh_dir("limit");
+    const fs::path d = fresh_program_dir("limit");
     ProgramOptions options;
     options.time_limit_s = 0.5;
     const ProgramOutcome run = run_sh(d, "trap '' TERM INT; while :; do sleep 1; done", options);

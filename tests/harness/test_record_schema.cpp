@@ -25,7 +25,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path fresh_dir(const std::string& name)
+fs::path fresh_schema_dir(const std::string& name)
 {
     fs::path dir = fs::temp_directory_path() / ("cb_test_record_schema_" + std::to_string(::getpid())) / name;
     fs::remove_all(dir);
@@ -69,7 +69,7 @@ TEST(RecordSchema, OtherColumnNamesPassUnchangedWithoutNotice)
 
 TEST(RecordSchema, OldPerfRecordColumnReadWithOneNotice)
 {
-    const fs::path dir = fresh_dir("perf");
+    const fs::path dir = fresh_schema_dir("perf");
     const std::string csv = (dir / "old.csv").string();
     write_file_atomic(csv, "snapshot,label,status,kkt_rel,tol\nbox,cg,converged,2.5e-07,1e-06\nbox,pgs,converged,3e-"
                            "07,1e-06\n");

@@ -7,6 +7,7 @@
 #include "problems/qpsnap.hpp"
 #include "problems/synthetic.hpp"
 #include "solvers/core/registry.hpp"
+#include "tests/harness/cli_test_util.hpp"
 
 #include <gtest/gtest.h>
 #include <cmath>
@@ -22,18 +23,12 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path fresh_dir(const std::string& name)
+fs::path fresh_results_dir(const std::string& name)
 {
     fs::path dir = fs::temp_directory_path() / ("cb_test_results_" + std::to_string(::getpid())) / name;
     fs::remove_all(dir);
     fs::create_directories(dir);
     return dir;
-}
-
-std::string slurp(const fs::path& p)
-{
-    std::ifstream in(p);
-    return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
 size_t count_tmp(const fs::path& dir)
@@ -44,7 +39,7 @@ size_t count_tmp(const fs::path& dir)
     return n;
 }
 
-std::string error_of(const std::function<void()>& f)
+std::string results_error_of(const std::function<void()>& f)
 {
     try {
         f();
@@ -55,20 +50,20 @@ std::string error_of(const std::function<void()>& f)
 }
 
 /// Removes the scratch folder after the last test.
-class CleanUp : public ::testing::Environment {
+class ResultsCleanUp : public ::testing::Environment {
 public:
     void TearDown() override
     {
         fs::remove_all(fs::temp_directory_path() / ("cb_test_results_" + std::to_string(::getpid())));
     }
 };
-const auto* const CLEAN_UP = ::testing::AddGlobalTestEnvironment(new CleanUp);
+const auto* const RESULTS_CLEAN_UP = ::testing::AddGlobalTestEnvironment(new ResultsCleanUp);
 
 }  // namespace
 
 TEST(Results, AtomicWriteReplacesAndLeavesNoTemporary)
 {
-    const fs::path dir = fresh_dir("atomic");
+    const fs::path dir = fresh_results_dir("atomic");
     const std::string path = (dir / "sub" / "a.json").string();
     write_json_atomic(path, {{"x", 1}});
     write_json_atomic(path, {{"x", 2}, {"nan", std::nan("")}});
@@ -76,7 +71,7 @@ TEST(Results, AtomicWriteReplacesAndLeavesNoTemporary)
     EXPECT_EQ(back["x"], 2);
     EXPECT_TRUE(back["nan"].is_null());
     EXPECT_EQ(count_tmp(dir), 0u);
-    EXPECT_EQ(error_of([&] { read_json_file((dir / "missing.json").string()); }),
+    EXPECT_EQ(results_error_of([&] { read_json_file((dir / "missing.json").string()); }),
               (dir / "missing.json").string() + ": cannot open: No such file or directory");
 }
 
@@ -137,13 +132,13 @@ TEST(Results, SummaryColumnsAndRow)
 
 TEST(Results, WriteSummaryReadsEveryRunFile)
 {
-    const fs::path dir = fresh_dir("summary");
+    const fs::path dir = fresh_results_dir("summary");
     write_json_atomic((dir / "runs" / run_file_name("b", "cg")).string(),
                       {{"label", "cg"}, {"solver", "cg"}, {"snapshot", {{"id", "b"}}}, {"status", "converged"}});
     write_json_atomic((dir / "runs" / run_file_name("a", "pgs")).string(),
                       {{"label", "pgs"}, {"solver", "pgs"}, {"snapshot", {{"id", "a"}}}, {"status", "stalled"}});
     EXPECT_EQ(write_summary(dir.string(), "s"), 2u);
-    const std::string csv = slurp(dir / "summary.csv");
+    const std::string csv = cb::test::slurp(dir / "summary.csv");
     // Sorted by file name: a__pgs before b__cg.
     EXPECT_NE(csv.find("\ns,a,pgs,pgs,stalled,"), std::string::npos) << csv;
     EXPECT_LT(csv.find("s,a,pgs"), csv.find("s,b,cg"));
@@ -178,26 +173,28 @@ TEST(Suite, RejectsBadSuitesNamingTheField)
         j[key] = value;
         return j;
     };
-    EXPECT_EQ(error_of([&] { parse_suite(with("colour", 1), "s.json"); }).substr(0, 24), "s.json: /colour: unknown");
-    EXPECT_EQ(error_of([&] { parse_suite(with("tol", -1), "s.json"); }), "s.json: /tol: must be > 0, got -1");
-    EXPECT_EQ(error_of([&] { parse_suite(with("decouple", "up"), "s.json"); }),
+    EXPECT_EQ(results_error_of([&] { parse_suite(with("colour", 1), "s.json"); }).substr(0, 24),
+              "s.json: /colour: unknown");
+    EXPECT_EQ(results_error_of([&] { parse_suite(with("tol", -1), "s.json"); }), "s.json: /tol: must be > 0, got -1");
+    EXPECT_EQ(results_error_of([&] { parse_suite(with("decouple", "up"), "s.json"); }),
               "s.json: /decouple: expected one of auto, none, authors, random, depth, got 'up'");
-    EXPECT_EQ(error_of([&] {
+    EXPECT_EQ(results_error_of([&] {
                   parse_suite(with("solvers", nlohmann::json::array({"cg", "cg"})), "s.json");
               }),
               "s.json: /solvers/1: /label: duplicate label 'cg'");
-    EXPECT_EQ(error_of([&] { parse_suite(with("repeat", 0), "s.json"); }), "s.json: /repeat: must be >= 1, got 0");
+    EXPECT_EQ(results_error_of([&] { parse_suite(with("repeat", 0), "s.json"); }),
+              "s.json: /repeat: must be >= 1, got 0");
     nlohmann::json no_solvers = good;
     no_solvers.erase("solvers");
-    EXPECT_EQ(error_of([&] { parse_suite(no_solvers, "s.json"); }),
+    EXPECT_EQ(results_error_of([&] { parse_suite(no_solvers, "s.json"); }),
               "s.json: /solvers: missing (an array of {label, solver, settings})");
-    EXPECT_EQ(error_of([&] { load_suite("/nonexistent/suite.json"); }),
+    EXPECT_EQ(results_error_of([&] { load_suite("/nonexistent/suite.json"); }),
               "/nonexistent/suite.json: cannot open: No such file or directory");
 }
 
 TEST(Suite, ResolvesGlobsFoldersDuplicatesAndGenerated)
 {
-    const fs::path dir = fresh_dir("resolve");
+    const fs::path dir = fresh_results_dir("resolve");
     const Qp qp = make_synthetic("plane", {{"nx", 2}, {"ny", 2}, {"nz", 2}}, 1);
     fs::create_directories(dir / "a");
     fs::create_directories(dir / "b");
@@ -224,7 +221,7 @@ TEST(Suite, ResolvesGlobsFoldersDuplicatesAndGenerated)
     EXPECT_EQ(read_qpsnap(snaps[3].path).n(), make_synthetic("plane", {{"nx", 2}}, 3).n());
     const Suite missing =
         parse_suite({{"name", "r"}, {"snapshots", {"zz*.qpsnap"}}, {"solvers", {"cg"}}}, (dir / "suite.json").string());
-    EXPECT_EQ(error_of([&] { resolve_snapshots(missing, (dir / "cache").string()); }),
+    EXPECT_EQ(results_error_of([&] { resolve_snapshots(missing, (dir / "cache").string()); }),
               (dir / "suite.json").string() + ": /snapshots/0: pattern '" + (dir / "zz*.qpsnap").string() +
                   "' matches no file");
 }
@@ -232,7 +229,7 @@ TEST(Suite, ResolvesGlobsFoldersDuplicatesAndGenerated)
 TEST(Reference, CachedByKeyAndAttached)
 {
     if (!builtin_registry().contains("active-set")) GTEST_SKIP() << "active-set not registered";
-    const fs::path dir = fresh_dir("reference");
+    const fs::path dir = fresh_results_dir("reference");
     const Qp qp = make_synthetic("plane", {{"nx", 2}, {"ny", 2}, {"nz", 2}}, 2);
     const nlohmann::json ref = reference_solution(qp, "k1", dir.string());
     ASSERT_TRUE(ref["objective"].is_number()) << ref.dump();

@@ -11,7 +11,7 @@ using namespace cb;
 
 namespace {
 
-nlohmann::json record(const std::string& label, const std::string& status, double total_s)
+nlohmann::json run_end_record(const std::string& label, const std::string& status, double total_s)
 {
     return {{"label", label}, {"solver", label}, {"status", status}, {"time", {{"total_s", total_s}}}};
 }
@@ -23,9 +23,10 @@ TEST(RunSummaryTable, SolvedStatusesAndShiftedGeometricMean)
     // Solved times 1, 3, 2, 4: median 2.5, shift 0.25. a: sqrt(1.25 * 3.25) - 0.25 = 1.7656;
     // b: its unsolved run at the 10 s penalty, sqrt(2.25 * 10.25) - 0.25 = 4.5523; c: its n/a run
     // is not judged, 4 s.
-    const std::vector<nlohmann::json> runs = {record("a", "converged", 1.0),      record("b", "converged", 2.0),
-                                              record("c", "not_applicable", 0.1), record("a", "converged", 3.0),
-                                              record("b", "max_iterations", 7.0), record("c", "converged", 4.0)};
+    const std::vector<nlohmann::json> runs = {
+        run_end_record("a", "converged", 1.0),      run_end_record("b", "converged", 2.0),
+        run_end_record("c", "not_applicable", 0.1), run_end_record("a", "converged", 3.0),
+        run_end_record("b", "max_iterations", 7.0), run_end_record("c", "converged", 4.0)};
     EXPECT_EQ(run_summary_table(runs, 10.0),
               "summary: solved = status converged (e <= tol on the original QP) of the runs judged (n/a left out);\n"
               "         sgm = shifted geometric mean of setup + solve time, unsolved runs at 10 s, shift 0.25 s\n"
@@ -37,7 +38,7 @@ TEST(RunSummaryTable, SolvedStatusesAndShiftedGeometricMean)
 
 TEST(RunSummaryTable, NoTimeLimitCountsUnsolvedAtTheLargestTime)
 {
-    const std::vector<nlohmann::json> runs = {record("long-label-x", "stalled", 8.0)};
+    const std::vector<nlohmann::json> runs = {run_end_record("long-label-x", "stalled", 8.0)};
     const std::string table = run_summary_table(runs, 0.0);
     EXPECT_NE(table.find("unsolved runs at 8 s, shift 1e-06 s"), std::string::npos) << table;
     EXPECT_NE(table.find("  long-label-x  0/1               8  stalled 1\n"), std::string::npos) << table;

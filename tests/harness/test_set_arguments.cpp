@@ -12,7 +12,7 @@ using namespace cb;
 
 namespace {
 
-std::string error_of(const std::vector<std::string>& assignments)
+std::string assignment_error_of(const std::vector<std::string>& assignments)
 {
     try {
         settings_from_assignments(assignments);
@@ -39,8 +39,8 @@ TEST(SetArguments, OneRuleForTheTypeOfAValue)
     EXPECT_EQ(setting_from_text("12abc"), nlohmann::json("12abc"));
     const nlohmann::json s = settings_from_assignments({"tol=1e-8", "precond=ichol", "max_iterations=20", "tol=1e-9"});
     EXPECT_EQ(s, nlohmann::json({{"tol", 1e-9}, {"precond", "ichol"}, {"max_iterations", 20}}));
-    EXPECT_EQ(error_of({"tol"}), "--set: tol: expected key=value");
-    EXPECT_EQ(error_of({"=1"}), "--set: =1: expected key=value");
+    EXPECT_EQ(assignment_error_of({"tol"}), "--set: tol: expected key=value");
+    EXPECT_EQ(assignment_error_of({"=1"}), "--set: =1: expected key=value");
 }
 
 TEST(RunDefaults, TheSuiteTolIsADefaultAndTheSolversOwnWins)

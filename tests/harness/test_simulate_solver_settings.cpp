@@ -9,7 +9,6 @@
 #include <sstream>
 
 using namespace cb;
-using namespace cb::test;
 using nlohmann::json;
 namespace fs = std::filesystem;
 
@@ -38,7 +37,7 @@ TEST(SettingsForSolver, AnotherSolverGetsOnlyTheCommonSettingsAndNoNativeToleran
 
 TEST(SimulateSolver, PgsStepsAMprgpSceneWithItsOwnDefaults)
 {
-    const fs::path dir = make_test_work_dir("simulate_solver");
+    const fs::path dir = test::make_test_work_dir("simulate_solver");
     std::ifstream in(std::string(CB_SOURCE_DIR) + "/scenes/demo.json");
     json scene = json::parse(in);
     scene["solver_settings"] = MPRGP_NATIVE;  // gamma is mprgp's: pgs would reject it
@@ -46,9 +45,10 @@ TEST(SimulateSolver, PgsStepsAMprgpSceneWithItsOwnDefaults)
         std::ofstream(dir / "demo_gamma.json") << scene.dump();
     }
     const fs::path out = dir / "out";
-    const Output run = run_captured("'" + contactbench_binary() + "' simulate '" + (dir / "demo_gamma.json").string() +
-                                        "' --solver pgs --frames 3 --no-snapshots --out '" + out.string() + "'",
-                                    dir);
+    const test::Output run =
+        test::run_captured("'" + test::contactbench_binary() + "' simulate '" + (dir / "demo_gamma.json").string() +
+                               "' --solver pgs --frames 3 --no-snapshots --out '" + out.string() + "'",
+                           dir);
     ASSERT_EQ(run.status, 0) << run.err;
     EXPECT_NE(run.err.find("simulate: --solver pgs: the scene's settings for mprgp not passed on: gamma stop tol "
                            "(pgs's defaults apply; docs/simulator.md)\n"),
@@ -56,7 +56,7 @@ TEST(SimulateSolver, PgsStepsAMprgpSceneWithItsOwnDefaults)
         << run.err;
     // Frame 2 has the lower box's ground rows: pgs stops on its default, e <= 1e-6 on every row
     // (with mprgp's native tol 1e-5 it would stop on its own natural residual instead).
-    std::stringstream steps(slurp(out / "steps.csv"));
+    std::stringstream steps(test::slurp(out / "steps.csv"));
     std::string line;
     std::getline(steps, line);
     ASSERT_EQ(line.rfind("frame,step,newton_iteration,solver,status,solver_status,iterations,accuracy,", 0), 0u)

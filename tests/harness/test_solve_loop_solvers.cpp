@@ -25,7 +25,7 @@ Qp problem_for(const std::string& solver)
     return make_synthetic("box", {{"nx", 3}}, 1);
 }
 
-std::vector<std::string> every_solver()
+std::vector<std::string> every_registered_solver()
 {
     std::vector<std::string> names = builtin_registry().names();
     return names;
@@ -33,7 +33,7 @@ std::vector<std::string> every_solver()
 
 TEST(SolveLoopSolvers, HistoryStartsAtTheSetupTime)
 {
-    for (const std::string& name : every_solver()) {
+    for (const std::string& name : every_registered_solver()) {
         SCOPED_TRACE(name);
         const Qp qp = problem_for(name);
         RunOptions options;
@@ -63,7 +63,7 @@ TEST(SolveLoopSolvers, TimeLimitCountsSetup)
 {
     // A limit far below any setup (a CHOLMOD factorisation, the power method, forming a dual):
     // every solver stops as TIME_LIMIT and says the limit was reached during setup.
-    for (const std::string& name : every_solver()) {
+    for (const std::string& name : every_registered_solver()) {
         SCOPED_TRACE(name);
         const Qp qp = problem_for(name);
         const auto solver = builtin_registry().create(name, {{"time_limit_s", 1e-12}});

@@ -11,7 +11,7 @@ using cb::Suite;
 
 namespace {
 
-std::string error_of(const std::function<void()>& f)
+std::string suite_error_of(const std::function<void()>& f)
 {
     try {
         f();
@@ -45,20 +45,20 @@ TEST(SuiteSolvers, ParsesOptionalAndProblemFilters)
 
 TEST(SuiteSolvers, RejectsBadEntriesNamingTheField)
 {
-    EXPECT_EQ(error_of([] {
+    EXPECT_EQ(suite_error_of([] {
                   parse_suite(suite_with({{{"solver", "cg"}, {"optional", "yes"}}}), "s.json");
               }),
               "s.json: /solvers/0: /optional: expected true or false, got \"yes\"");
-    EXPECT_EQ(error_of([] {
+    EXPECT_EQ(suite_error_of([] {
                   parse_suite(suite_with({{{"solver", "cg"}, {"problems", "box-*"}}}), "s.json");
               }),
               "s.json: /solvers/0: /problems: expected a non-empty array of snapshot id globs, got \"box-*\"");
     EXPECT_EQ(
-        error_of([] {
+        suite_error_of([] {
             parse_suite(suite_with({{{"solver", "cg"}, {"skip_problems", nlohmann::json::array({"a", 3})}}}), "s.json");
         }),
         "s.json: /solvers/0: /skip_problems/1: expected a non-empty string (a snapshot id glob), got 3");
-    EXPECT_EQ(error_of([] {
+    EXPECT_EQ(suite_error_of([] {
                   parse_suite(suite_with({{{"solver", "cg"}, {"colour", 1}}}), "s.json");
               }),
               "s.json: /solvers/0: /colour: unknown key; known: label, optional, problems, settings, "

@@ -4,6 +4,7 @@
 #include "harness/stress_families.hpp"
 #include "problems/synthetic.hpp"
 #include "solvers/linalg/a_product.hpp"
+#include "tests/perf/varied_vector.hpp"
 
 #include <gtest/gtest.h>
 
@@ -15,20 +16,11 @@ using namespace cb;
 
 namespace {
 
-Vec varied(Eigen::Index n, std::uint64_t seed)
-{
-    std::mt19937_64 rng(seed);
-    std::uniform_real_distribution<double> u(-1.0, 1.0);
-    Vec v(n);
-    for (Eigen::Index i = 0; i < n; ++i) v[i] = u(rng) * std::pow(10.0, 3.0 * u(rng));
-    return v;
-}
-
 /// Every product of `op` against Eigen's on A: y, the fused dots and the masked dots.
 void expect_same_products(const AOperator& op, const SpMat& A, const std::string& what)
 {
     SCOPED_TRACE(what);
-    const Vec x = varied(A.cols(), 3), w = varied(A.cols(), 4);
+    const Vec x = test::varied(A.cols(), 3), w = test::varied(A.cols(), 4);
     std::vector<char> skip(static_cast<size_t>(A.rows()));
     for (size_t i = 0; i < skip.size(); ++i) skip[i] = static_cast<char>(i % 5 == 1);
     const Vec oracle = A * x;
@@ -106,7 +98,7 @@ TEST(BlockProduct, BothKernelsEqualTheCsrProductOnALargeGrid)
         AOperator two(A);  // two row ranges (threads = 2): y to the last bit (the dots sum by range)
         ASSERT_EQ(two.prepare(AFormat::BSR, 2), AFormat::BSR);
         ASSERT_EQ(two.parts(), 2);
-        const Vec x = varied(A.cols(), 5);
+        const Vec x = test::varied(A.cols(), 5);
         Vec y;
         a_product(two, x, y);
         EXPECT_EQ((y - A * x).cwiseAbs().maxCoeff(), 0.0) << (scalar ? "scalar" : "default");
@@ -158,7 +150,7 @@ TEST(BlockProduct, StoresPartlyFilledBlocksWithZerosAndSumsInColumnOrder)
     EXPECT_DOUBLE_EQ(op.fill(), 36.0 / 34.0);
     EXPECT_EQ(op.blocks().value[9 * 1 + 3 * 1 + 0], 0.0);            // block (0, 1), entry (0, 4)
     EXPECT_EQ(op.blocks().value[9 * 1 + 3 * 0 + 1], A.coeff(1, 3));  // column-major within the block
-    const Vec x = varied(6, 9);
+    const Vec x = test::varied(6, 9);
     Vec y;
     a_product(op, x, y);
     const Vec oracle = A * x;

@@ -5,6 +5,7 @@
 #include "harness/stress_families.hpp"
 #include "problems/synthetic.hpp"
 #include "solvers/linalg/a_product.hpp"
+#include "tests/perf/varied_vector.hpp"
 
 #include <gtest/gtest.h>
 
@@ -16,21 +17,12 @@ using namespace cb;
 
 namespace {
 
-Vec varied(Eigen::Index n, std::uint64_t seed)
-{
-    std::mt19937_64 rng(seed);
-    std::uniform_real_distribution<double> u(-1.0, 1.0);
-    Vec v(n);
-    for (Eigen::Index i = 0; i < n; ++i) v[i] = u(rng) * std::pow(10.0, 3.0 * u(rng));
-    return v;
-}
-
 /// Every product of `op` against Eigen's on A: each y_i within a few roundings of |A||x| in row i
 /// (the terms meet in another order), the fused and masked dots likewise.
-void expect_products_to_rounding(const AOperator& op, const SpMat& A, const std::string& what)
+void expect_sym_products_to_rounding(const AOperator& op, const SpMat& A, const std::string& what)
 {
     SCOPED_TRACE(what);
-    const Vec x = varied(A.cols(), 3), w = varied(A.cols(), 4);
+    const Vec x = test::varied(A.cols(), 3), w = test::varied(A.cols(), 4);
     std::vector<char> skip(static_cast<size_t>(A.rows()));
     for (size_t i = 0; i < skip.size(); ++i) skip[i] = static_cast<char>(i % 5 == 1);
     const Vec oracle = A * x;
@@ -76,7 +68,7 @@ TEST(SymBlockProduct, EqualsTheCsrProductToRoundingOnEverySyntheticFamily)
                 << family;
             EXPECT_LT(op.matrix_bytes(), bsr.matrix_bytes()) << family;
         }
-        expect_products_to_rounding(op, qp.A, family);
+        expect_sym_products_to_rounding(op, qp.A, family);
     }
 }
 
@@ -89,7 +81,7 @@ TEST(SymBlockProduct, EqualsTheCsrProductToRoundingOnEveryStressFamily)
         const Qp qp = make_stress_qp(c);
         AOperator op(qp.A);
         if (op.prepare(AFormat::SBSR) == AFormat::CSR) csr.push_back(c.id + ": " + op.why_csr());
-        expect_products_to_rounding(op, qp.A, c.id);
+        expect_sym_products_to_rounding(op, qp.A, c.id);
     }
     EXPECT_GE(done.size(), 10u);
     EXPECT_EQ(csr, (std::vector<std::string>{}));  // every stress family's A is symmetric, of vertex blocks
@@ -103,7 +95,7 @@ TEST(SymBlockProduct, FallsBackToCsrWhenNIsNotAMultipleOfThree)
     AOperator op(A);
     EXPECT_EQ(op.prepare(AFormat::SBSR), AFormat::CSR);
     EXPECT_EQ(op.why_csr(), "the DOF count " + std::to_string(n) + " is not a positive multiple of 3");
-    expect_products_to_rounding(op, A, "n = " + std::to_string(n));
+    expect_sym_products_to_rounding(op, A, "n = " + std::to_string(n));
 }
 
 TEST(SymBlockProduct, FallsBackToCsrWhenANotSymmetric)
@@ -133,7 +125,7 @@ TEST(SymBlockProduct, FallsBackToCsrWhenANotSymmetric)
         AOperator op(A);
         EXPECT_EQ(op.prepare(AFormat::SBSR), AFormat::CSR);
         EXPECT_EQ(op.why_csr(), "A is not symmetric (9 nonzeros above its block diagonal, 8 below)");
-        expect_products_to_rounding(op, A, "one-sided entry");
+        expect_sym_products_to_rounding(op, A, "one-sided entry");
     }
     // The same A with its symmetry intact: SBSR, and its blocks are the upper ones only.
     const SpMat A = dense.sparseView();
@@ -153,7 +145,7 @@ TEST(SymBlockProduct, RunsOnOneThreadWhateverThreadsAsks)
     ASSERT_EQ(four.prepare(AFormat::SBSR, 4), AFormat::SBSR);
     EXPECT_EQ(four.parts(), 1);
     EXPECT_EQ(four.part_start(), (std::vector<int>{0, static_cast<int>(qp.n() / 3)}));
-    const Vec x = varied(qp.n(), 11), w = varied(qp.n(), 12);
+    const Vec x = test::varied(qp.n(), 11), w = test::varied(qp.n(), 12);
     Vec y1, y4;
     double xw1 = 0.0, xw4 = 0.0;
     const double xy1 = a_product_dots(one, x, y1, w, xw1);

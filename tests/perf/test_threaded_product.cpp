@@ -6,6 +6,7 @@
 #include "solvers/core/registry.hpp"
 #include "solvers/core/settings.hpp"
 #include "solvers/linalg/a_product.hpp"
+#include "tests/perf/varied_vector.hpp"
 
 #include <gtest/gtest.h>
 
@@ -16,22 +17,13 @@ using namespace cb;
 
 namespace {
 
-Vec varied(Eigen::Index n, std::uint64_t seed)
-{
-    std::mt19937_64 rng(seed);
-    std::uniform_real_distribution<double> u(-1.0, 1.0);
-    Vec v(n);
-    for (Eigen::Index i = 0; i < n; ++i) v[i] = u(rng) * std::pow(10.0, 3.0 * u(rng));
-    return v;
-}
-
 /// A plane large enough for several ranges of MIN_NONZEROS_PER_PART nonzeros.
 Qp large_plane() { return make_synthetic("plane", {{"nx", 10}, {"ny", 10}, {"nz", 10}}, 5); }
 
 /// y exact, x'y and x'w (all and masked) within 1e-14 of the sums of |terms|.
-void expect_products_to_rounding(const AOperator& op, const SpMat& A)
+void expect_threaded_products_to_rounding(const AOperator& op, const SpMat& A)
 {
-    const Vec x = varied(A.cols(), 3), w = varied(A.cols(), 4);
+    const Vec x = test::varied(A.cols(), 3), w = test::varied(A.cols(), 4);
     std::vector<char> skip(static_cast<size_t>(A.rows()));
     for (size_t i = 0; i < skip.size(); ++i) skip[i] = static_cast<char>(i % 5 == 1);
     const Vec oracle = A * x;
@@ -87,7 +79,7 @@ TEST(ThreadedProduct, TwoAndThreeThreadsGiveTheCsrProductAndItsDotsToRounding)
             op.prepare(format, threads);
             ASSERT_EQ(op.parts(), threads);
             const long before = a_product_count();
-            expect_products_to_rounding(op, qp.A);
+            expect_threaded_products_to_rounding(op, qp.A);
             EXPECT_EQ(a_product_count() - before, 3);  // one count per product, whatever the threads
         }
 }
@@ -105,7 +97,7 @@ TEST(ThreadedProduct, SmallAOrUncompressedAKeepsOneRange)
     AOperator raw(loose);
     raw.prepare(AFormat::CSR, 2);
     EXPECT_EQ(raw.parts(), 1);  // Eigen's product, one thread
-    expect_products_to_rounding(raw, large.A);
+    expect_threaded_products_to_rounding(raw, large.A);
 }
 
 TEST(ThreadedProduct, SameSettingsGiveTheSameIteratesOnEveryRun)

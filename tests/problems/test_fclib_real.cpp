@@ -23,12 +23,12 @@ namespace {
 namespace fs = std::filesystem;
 using cb::test::run_captured;
 
-const fs::path DATA = fs::path(CB_TEST_DATA_DIR) / "fclib";
+const fs::path FCLIB_DATA = fs::path(CB_TEST_DATA_DIR) / "fclib";
 
 std::string quote(const fs::path& p) { return "'" + p.string() + "'"; }
 
 /// A dense vector written by `solve --save-solution` (Matrix Market array format).
-cb::Vec read_mtx_vector(const fs::path& path)
+cb::Vec read_solution_mtx(const fs::path& path)
 {
     std::ifstream in(path);
     std::string line;
@@ -70,7 +70,7 @@ TEST_P(FclibReal, ImportsSolvesAndMatchesAnIndependentReference)
 
     // Without --drop-friction a local file is refused, naming its kind and the way out; a global one
     // keeps its friction (a version 2 snapshot: tests/problems/test_fclib_friction_global.cpp).
-    const auto plain = run_captured(bin + " convert " + quote(DATA / file.name) + " " + quote(snap), work);
+    const auto plain = run_captured(bin + " convert " + quote(FCLIB_DATA / file.name) + " " + quote(snap), work);
     if (std::string(file.kind) == "fclib_local") {
         EXPECT_EQ(plain.status, 2);
         EXPECT_NE(plain.err.find(std::string("this ") + file.kind + " problem has friction"), std::string::npos)
@@ -84,7 +84,7 @@ TEST_P(FclibReal, ImportsSolvesAndMatchesAnIndependentReference)
     }
 
     const auto converted =
-        run_captured(bin + " convert " + quote(DATA / file.name) + " " + quote(snap) + " " + file.flags, work);
+        run_captured(bin + " convert " + quote(FCLIB_DATA / file.name) + " " + quote(snap) + " " + file.flags, work);
     ASSERT_EQ(converted.status, 0) << converted.err;
     EXPECT_NE(converted.out.find("dropped friction"), std::string::npos) << converted.out;
     const cb::Qp qp = cb::read_qpsnap(snap.string());
@@ -96,10 +96,10 @@ TEST_P(FclibReal, ImportsSolvesAndMatchesAnIndependentReference)
     EXPECT_GT(provenance.at("dropped_friction").at("mu_max").get<double>(), 0.0);
 
     // `info` on the FCLIB file names it; `solve` on it says to convert.
-    const auto info = run_captured(bin + " info " + quote(DATA / file.name), work);
+    const auto info = run_captured(bin + " info " + quote(FCLIB_DATA / file.name), work);
     EXPECT_EQ(info.status, 0) << info.err;
     EXPECT_NE(info.out.find(std::string("an FCLIB ") + file.kind + " problem (HDF5)"), std::string::npos) << info.out;
-    const auto direct = run_captured(bin + " solve " + quote(DATA / file.name) + " --solver active-set", work);
+    const auto direct = run_captured(bin + " solve " + quote(FCLIB_DATA / file.name) + " --solver active-set", work);
     EXPECT_EQ(direct.status, 2);
     EXPECT_NE(direct.err.find("convert it first: contactbench convert"), std::string::npos) << direct.err;
 
@@ -110,7 +110,7 @@ TEST_P(FclibReal, ImportsSolvesAndMatchesAnIndependentReference)
                                           " --set tol=1e-10 --save-solution " + quote(out),
                                       work);
         ASSERT_EQ(run.status, 0) << solver << ": " << run.err << run.out;
-        x[solver] = read_mtx_vector(out / "x.mtx");
+        x[solver] = read_solution_mtx(out / "x.mtx");
         ASSERT_EQ(x[solver].size(), qp.n());
         std::printf("%s %s: F = %.17g, |x|_inf = %.6g\n", file.name, solver.c_str(), objective(qp, x[solver]),
                     x[solver].lpNorm<Eigen::Infinity>());

@@ -16,9 +16,9 @@ namespace {
 namespace fs = std::filesystem;
 using cb::FileFormat;
 
-const fs::path DATA = fs::path(CB_TEST_DATA_DIR);
+const fs::path TEST_DATA = fs::path(CB_TEST_DATA_DIR);
 
-std::string error_of(const std::function<void()>& f)
+std::string sniff_error_of(const std::function<void()>& f)
 {
     try {
         f();
@@ -31,16 +31,16 @@ std::string error_of(const std::function<void()>& f)
 TEST(FormatSniff, EachFormatByItsContent)
 {
     const fs::path work = cb::test::make_test_work_dir("format_sniff");
-    EXPECT_EQ(cb::sniff_format((DATA / "plane_2x2x2.qpsnap").string()), FileFormat::QPSNAP);
-    EXPECT_EQ(cb::sniff_format((DATA / "fclib/GFC3D_OneContact.dat").string()), FileFormat::SICONOS_DAT);
-    EXPECT_EQ(cb::sniff_format((DATA / "fclib/GFC3D_TwoRods1.dat").string()), FileFormat::SICONOS_DAT);
+    EXPECT_EQ(cb::sniff_format((TEST_DATA / "plane_2x2x2.qpsnap").string()), FileFormat::QPSNAP);
+    EXPECT_EQ(cb::sniff_format((TEST_DATA / "fclib/GFC3D_OneContact.dat").string()), FileFormat::SICONOS_DAT);
+    EXPECT_EQ(cb::sniff_format((TEST_DATA / "fclib/GFC3D_TwoRods1.dat").string()), FileFormat::SICONOS_DAT);
     if (!cb::fclib_version().empty()) {
-        EXPECT_EQ(cb::sniff_format((DATA / "fclib/CubeH8.hdf5").string()), FileFormat::FCLIB_GLOBAL);
-        EXPECT_EQ(cb::sniff_format((DATA / "fclib/Capsules-i125-1213.hdf5").string()), FileFormat::FCLIB_LOCAL);
+        EXPECT_EQ(cb::sniff_format((TEST_DATA / "fclib/CubeH8.hdf5").string()), FileFormat::FCLIB_GLOBAL);
+        EXPECT_EQ(cb::sniff_format((TEST_DATA / "fclib/Capsules-i125-1213.hdf5").string()), FileFormat::FCLIB_LOCAL);
     }
     // The name does not decide: an FCLIB file named .qpsnap, a snapshot named .hdf5.
-    fs::copy_file(DATA / "fclib/CubeH8.hdf5", work / "cube.qpsnap");
-    fs::copy_file(DATA / "plane_2x2x2.qpsnap", work / "plane.hdf5");
+    fs::copy_file(TEST_DATA / "fclib/CubeH8.hdf5", work / "cube.qpsnap");
+    fs::copy_file(TEST_DATA / "plane_2x2x2.qpsnap", work / "plane.hdf5");
     EXPECT_EQ(cb::sniff_format((work / "plane.hdf5").string()), FileFormat::QPSNAP);
     EXPECT_EQ(cb::sniff_format((work / "cube.qpsnap").string()),
               cb::fclib_version().empty() ? FileFormat::HDF5 : FileFormat::FCLIB_GLOBAL);
@@ -56,7 +56,7 @@ TEST(FormatSniff, EachFormatByItsContent)
     // A FIFO is refused by name, never opened for reading (which would block).
     const std::string fifo = (work / "fifo.qpsnap").string();
     ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
-    EXPECT_EQ(error_of([&] { cb::sniff_format(fifo); }), fifo + ": not a regular file (a FIFO)");
+    EXPECT_EQ(sniff_error_of([&] { cb::sniff_format(fifo); }), fifo + ": not a regular file (a FIFO)");
     fs::remove_all(work);
 }
 
@@ -64,7 +64,7 @@ TEST(FormatSniff, CommandsNameTheFormatAndSuggestConvert)
 {
     const fs::path work = cb::test::make_test_work_dir("format_commands");
     const std::string bin = cb::test::contactbench_binary();
-    const std::string dat = (DATA / "fclib/GFC3D_OneContact.dat").string();
+    const std::string dat = (TEST_DATA / "fclib/GFC3D_OneContact.dat").string();
     auto run = [&](const std::string& args) { return cb::test::run_captured(bin + " " + args, work); };
 
     // A Siconos .dat is summarised by info (this global one named, not imported: problems/siconos_dat.hpp);
@@ -91,7 +91,7 @@ TEST(FormatSniff, CommandsNameTheFormatAndSuggestConvert)
               std::string::npos)
         << judge_npy.err;
     if (cb::fclib_version().empty()) return;
-    const std::string cube = (DATA / "fclib/CubeH8.hdf5").string();
+    const std::string cube = (TEST_DATA / "fclib/CubeH8.hdf5").string();
     const auto solve = run("solve '" + cube + "' --solver active-set");
     EXPECT_EQ(solve.status, 2);
     EXPECT_EQ(solve.err, "contactbench solve: error: " + cube +
@@ -112,7 +112,7 @@ TEST(FormatSniff, CommandsNameTheFormatAndSuggestConvert)
     EXPECT_EQ(summary.at("convert"), "contactbench convert " + cube + " OUT.qpsnap");
     EXPECT_EQ(summary.at("friction_solve"), "contactbench friction-solve " + cube);
     // A local file (no A) converts only its normal part: --drop-friction is part of the suggestion.
-    const std::string local = (DATA / "fclib/Capsules-i125-1213.hdf5").string();
+    const std::string local = (TEST_DATA / "fclib/Capsules-i125-1213.hdf5").string();
     const auto solve_local = run("solve '" + local + "' --solver pgs");
     EXPECT_EQ(solve_local.status, 2);
     EXPECT_EQ(solve_local.err, "contactbench solve: error: " + local +

@@ -31,7 +31,7 @@ fs::path scratch()
     return dir;
 }
 
-template <typename F> std::string error_of(F&& f)
+template <typename F> std::string io_error_of(F&& f)
 {
     try {
         f();
@@ -45,11 +45,11 @@ TEST(IoUtil, SpecialFilesAreRefusedWithoutBlocking)
 {
     const fs::path fifo = scratch() / "fifo";
     ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
-    EXPECT_EQ(error_of([&] { read_regular_file(fifo.string()); }), fifo.string() + ": not a regular file (a FIFO)");
-    EXPECT_EQ(error_of([&] { read_json_checked(scratch().string()); }),
+    EXPECT_EQ(io_error_of([&] { read_regular_file(fifo.string()); }), fifo.string() + ": not a regular file (a FIFO)");
+    EXPECT_EQ(io_error_of([&] { read_json_checked(scratch().string()); }),
               scratch().string() + ": not a regular file (a folder)");
-    EXPECT_EQ(error_of([&] { require_regular_file("/dev/null"); }), "/dev/null: not a regular file (a device)");
-    EXPECT_EQ(error_of([&] { read_regular_file((scratch() / "missing").string()); }),
+    EXPECT_EQ(io_error_of([&] { require_regular_file("/dev/null"); }), "/dev/null: not a regular file (a device)");
+    EXPECT_EQ(io_error_of([&] { read_regular_file((scratch() / "missing").string()); }),
               (scratch() / "missing").string() + ": cannot open: No such file or directory");
 }
 
@@ -59,14 +59,15 @@ TEST(IoUtil, JsonDepthCountsBracketsOutsideStringsOnly)
     const std::string ok = std::string(64, '[') + std::string(64, ']');
     EXPECT_NO_THROW(parse_json_text(ok, "ok.json"));
     const std::string deep = std::string(65, '[') + std::string(65, ']');
-    EXPECT_EQ(error_of([&] { parse_json_text(deep, "deep.json"); }),
+    EXPECT_EQ(io_error_of([&] { parse_json_text(deep, "deep.json"); }),
               "deep.json: JSON nested deeper than 64 levels (at byte 64)");
     const std::string text = R"({"a": "[[[[\"{{{{", "b": [1, {"c": "]]]]"}]})";
     const nlohmann::json j = parse_json_text(std::string(60, '[') + text + std::string(60, ']'), "s.json");
     EXPECT_EQ(j[0][0][0][0].size(), 1u);
-    EXPECT_EQ(error_of([&] { parse_json_text("{\"a\": }", "bad.json"); }).rfind("bad.json: not valid JSON: ", 0), 0u);
+    EXPECT_EQ(io_error_of([&] { parse_json_text("{\"a\": }", "bad.json"); }).rfind("bad.json: not valid JSON: ", 0),
+              0u);
     const std::string three = "[[[";
-    EXPECT_EQ(error_of([&] { check_json_depth(three.data(), three.data() + three.size(), "h", "header", 2); }),
+    EXPECT_EQ(io_error_of([&] { check_json_depth(three.data(), three.data() + three.size(), "h", "header", 2); }),
               "h: header: JSON nested deeper than 2 levels (at byte 2)");
 }
 
@@ -81,7 +82,7 @@ TEST(IoUtil, AtomicWritePastAFileSizeLimitLeavesNothing)
         std::signal(SIGXFSZ, SIG_IGN);
         const rlimit limit{4096, 4096};
         ::setrlimit(RLIMIT_FSIZE, &limit);
-        const std::string message = error_of([&] { write_file_atomic(target.string(), std::string(100000, 'x')); });
+        const std::string message = io_error_of([&] { write_file_atomic(target.string(), std::string(100000, 'x')); });
         ::_exit(message == target.string() + ": write failed: File too large (nothing written)" ? 0 : 1);
     }
     int status = 0;
@@ -113,20 +114,21 @@ TEST(IoUtil, SpecialTargetsAreWrittenThroughOrRefusedNeverReplaced)
 {
     const fs::path fifo = scratch() / "out.fifo";
     ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
-    EXPECT_EQ(error_of([&] { write_file_atomic(fifo.string(), "x"); }),
+    EXPECT_EQ(io_error_of([&] { write_file_atomic(fifo.string(), "x"); }),
               fifo.string() + ": is a FIFO with no reader: nothing written");
-    EXPECT_EQ(error_of([&] { AtomicFile f(fifo.string(), SpecialTarget::REFUSE); }),
+    EXPECT_EQ(io_error_of([&] { AtomicFile f(fifo.string(), SpecialTarget::REFUSE); }),
               fifo.string() + ": is a FIFO: not replaced (this output needs a regular file)");
-    EXPECT_EQ(error_of([&] { write_file_atomic(scratch().string(), "x"); }),
+    EXPECT_EQ(io_error_of([&] { write_file_atomic(scratch().string(), "x"); }),
               scratch().string() + ": is a folder: not replaced (name a file)");
-    EXPECT_EQ(error_of([&] { write_file_atomic("", "x"); }), "(empty path): an output file name is required, got \"\"");
+    EXPECT_EQ(io_error_of([&] { write_file_atomic("", "x"); }),
+              "(empty path): an output file name is required, got \"\"");
     // Twins of /dev/null and /dev/full made here (root only), never the machine's own: a
     // regression would replace them.
     const fs::path null_twin = scratch() / "null", full_twin = scratch() / "full";
     struct stat st {};
     if (::mknod(null_twin.c_str(), S_IFCHR | 0666, makedev(1, 3)) == 0 &&
         ::mknod(full_twin.c_str(), S_IFCHR | 0666, makedev(1, 7)) == 0) {
-        EXPECT_EQ(error_of([&] { write_file_atomic(full_twin.string(), "x"); }),
+        EXPECT_EQ(io_error_of([&] { write_file_atomic(full_twin.string(), "x"); }),
                   full_twin.string() + ": write failed: No space left on device");
         write_file_atomic(null_twin.string(), "discarded");
         ASSERT_EQ(::lstat(null_twin.c_str(), &st), 0);
@@ -148,9 +150,9 @@ TEST(IoUtil, DescriptorLinksAreWrittenThroughNeverReplaced)
     ASSERT_EQ(::write(fd, "summary\n", 8), 8);
     const std::string link = "/proc/self/fd/" + std::to_string(fd);
     write_file_atomic(link, "{\"json\": 1}\n");
-    EXPECT_EQ(error_of([&] { AtomicFile f(link, SpecialTarget::REFUSE); }),
+    EXPECT_EQ(io_error_of([&] { AtomicFile f(link, SpecialTarget::REFUSE); }),
               link + ": is under /dev or /proc: this output needs a regular file of its own");
-    EXPECT_EQ(error_of([&] { write_file_atomic("/proc/self/cb-no-such-file", "x"); }),
+    EXPECT_EQ(io_error_of([&] { write_file_atomic("/proc/self/cb-no-such-file", "x"); }),
               "/proc/self/cb-no-such-file: is under /dev or /proc: only an existing device or stream is written there");
     ::close(fd);
     std::ifstream in(behind);

@@ -3,6 +3,7 @@
 // are reached with valid CRCs.
 #include "problems/qpsnap.hpp"
 #include "problems/synthetic.hpp"
+#include "tests/problems/file_bytes.hpp"
 
 #include <gtest/gtest.h>
 #include <zlib.h>
@@ -21,17 +22,11 @@
 namespace cb {
 namespace {
 
-std::string temp_path(const std::string& name)
+std::string qpsnap_temp_path(const std::string& name)
 {
     const auto dir = std::filesystem::temp_directory_path() / ("cb_test_qpsnap_" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir);
     return (dir / name).string();
-}
-
-std::string file_bytes(const std::string& path)
-{
-    std::ifstream in(path, std::ios::binary);
-    return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
 void put_bytes(const std::string& path, const std::string& bytes)
@@ -93,13 +88,13 @@ std::string write_raw(const std::string& name, const std::map<std::string, Raw>&
     std::string file(8, '\0');
     const std::uint64_t len = text.size();
     std::memcpy(&file[0], &len, 8);
-    std::string path = temp_path(name);
+    std::string path = qpsnap_temp_path(name);
     put_bytes(path, file + text + data);
     return path;
 }
 
 /// Expects read_qpsnap(path) to throw InputError with exactly "path: tail".
-void expect_error(const std::string& path, const std::string& tail)
+void expect_qpsnap_error(const std::string& path, const std::string& tail)
 {
     try {
         read_qpsnap(path);
@@ -131,7 +126,7 @@ TEST(Qpsnap, RoundTripIsBitExact)
     SnapshotExtras extras;
     extras.x_ref = qp.x0 * 0.5;
     extras.lambda_ref = Vec::LinSpaced(qp.m(), 0.0, 1.0);
-    const std::string p1 = temp_path("round1.qpsnap"), p2 = temp_path("round2.qpsnap");
+    const std::string p1 = qpsnap_temp_path("round1.qpsnap"), p2 = qpsnap_temp_path("round2.qpsnap");
     write_qpsnap(p1, qp, &extras);
     SnapshotExtras back_extras;
     const Qp back = read_qpsnap(p1, &back_extras);
@@ -149,10 +144,10 @@ TEST(Qpsnap, RoundTripIsBitExact)
     EXPECT_TRUE(back_extras.x_ref == extras.x_ref);
     EXPECT_TRUE(back_extras.lambda_ref == extras.lambda_ref);
     write_qpsnap(p2, back, &back_extras);
-    EXPECT_EQ(file_bytes(p1), file_bytes(p2));
+    EXPECT_EQ(test::file_bytes(p1), test::file_bytes(p2));
     // The data buffer starts 8-byte aligned in the file.
     std::uint64_t len = 0;
-    std::memcpy(&len, file_bytes(p1).data(), 8);
+    std::memcpy(&len, test::file_bytes(p1).data(), 8);
     EXPECT_EQ((8 + len) % 8, 0u);
     // No temporary left beside the file.
     int entries = 0;
@@ -164,7 +159,7 @@ TEST(Qpsnap, RoundTripIsBitExact)
 TEST(Qpsnap, EmptyJRoundTrip)
 {
     const Qp qp = make_synthetic("unconstrained", {{"nx", 1}, {"ny", 1}, {"nz", 1}}, 1);
-    const std::string path = temp_path("empty_j.qpsnap");
+    const std::string path = qpsnap_temp_path("empty_j.qpsnap");
     write_qpsnap(path, qp);
     const Qp back = read_qpsnap(path);
     EXPECT_EQ(back.m(), 0);
@@ -173,7 +168,7 @@ TEST(Qpsnap, EmptyJRoundTrip)
 
 TEST(Qpsnap, ContentHashIsFnv1a)
 {
-    const std::string path = temp_path("hash.bin");
+    const std::string path = qpsnap_temp_path("hash.bin");
     put_bytes(path, "a");
     EXPECT_EQ(qpsnap_content_hash(path), "af63dc4c8601ec8c");  // FNV-1a 64 of "a"
     put_bytes(path, "");
@@ -206,35 +201,35 @@ TEST(Qpsnap, TinyOneSidedEntryIsMirrored)
 
 TEST(QpsnapCorrupt, FileTooShort)
 {
-    const std::string path = temp_path("short.qpsnap");
+    const std::string path = qpsnap_temp_path("short.qpsnap");
     put_bytes(path, "abcde");
-    expect_error(path, "header: file too short: 5 bytes, a .qpsnap starts with an 8-byte header length");
+    expect_qpsnap_error(path, "header: file too short: 5 bytes, a .qpsnap starts with an 8-byte header length");
 }
 
 TEST(QpsnapCorrupt, HeaderLengthBeyondFile)
 {
     const std::string path = write_raw("hlen.qpsnap", tiny_arrays());
-    std::string bytes = file_bytes(path);
+    std::string bytes = test::file_bytes(path);
     const std::uint64_t huge = 1000000;
     std::memcpy(&bytes[0], &huge, 8);
     put_bytes(path, bytes);
-    expect_error(path, "header: header length 1000000 exceeds the file (" + std::to_string(bytes.size() - 8) +
-                           " bytes after the length field)");
+    expect_qpsnap_error(path, "header: header length 1000000 exceeds the file (" + std::to_string(bytes.size() - 8) +
+                                  " bytes after the length field)");
 }
 
 TEST(QpsnapCorrupt, HeaderNotJson)
 {
     const std::string path = write_raw("notjson.qpsnap", tiny_arrays());
-    std::string bytes = file_bytes(path);
+    std::string bytes = test::file_bytes(path);
     bytes[8] = '[';  // "{" -> "[": an array with a key in it
     put_bytes(path, bytes);
-    expect_error(path, "header: not valid UTF-8 JSON (parse error at header byte 10)");
+    expect_qpsnap_error(path, "header: not valid UTF-8 JSON (parse error at header byte 10)");
 }
 
 TEST(QpsnapCorrupt, HeaderNotUtf8)
 {
     const std::string path = write_raw("utf8.qpsnap", tiny_arrays());
-    std::string bytes = file_bytes(path);
+    std::string bytes = test::file_bytes(path);
     const size_t at = bytes.find("tiny");
     bytes[at] = char(0xff);
     put_bytes(path, bytes);
@@ -250,35 +245,35 @@ TEST(QpsnapCorrupt, HeaderNotUtf8)
 
 TEST(QpsnapCorrupt, FormatWrong)
 {
-    expect_error(write_raw("format.qpsnap", tiny_arrays(), 3, 2, [](nlohmann::json& h) { h["format"] = "npz"; }),
-                 "format: expected \"qpsnap\", got \"npz\"");
+    expect_qpsnap_error(write_raw("format.qpsnap", tiny_arrays(), 3, 2, [](nlohmann::json& h) { h["format"] = "npz"; }),
+                        "format: expected \"qpsnap\", got \"npz\"");
 }
 
 TEST(QpsnapCorrupt, VersionUnsupported)
 {
-    expect_error(write_raw("version.qpsnap", tiny_arrays(), 3, 2, [](nlohmann::json& h) { h["version"] = 3; }),
-                 "version: unsupported version 3 (this reader knows versions 1 and 2)");
+    expect_qpsnap_error(write_raw("version.qpsnap", tiny_arrays(), 3, 2, [](nlohmann::json& h) { h["version"] = 3; }),
+                        "version: unsupported version 3 (this reader knows versions 1 and 2)");
 }
 
 TEST(QpsnapCorrupt, NMissingOrNegative)
 {
-    expect_error(write_raw("nmissing.qpsnap", tiny_arrays(), 3, 2, [](nlohmann::json& h) { h.erase("n"); }),
-                 "n: missing");
-    expect_error(write_raw("mneg.qpsnap", tiny_arrays(), 3, -1), "m: expected a non-negative integer, got -1");
+    expect_qpsnap_error(write_raw("nmissing.qpsnap", tiny_arrays(), 3, 2, [](nlohmann::json& h) { h.erase("n"); }),
+                        "n: missing");
+    expect_qpsnap_error(write_raw("mneg.qpsnap", tiny_arrays(), 3, -1), "m: expected a non-negative integer, got -1");
 }
 
 TEST(QpsnapCorrupt, RequiredArrayMissing)
 {
     auto a = tiny_arrays();
     a.erase("J.data");
-    expect_error(write_raw("missing.qpsnap", a), "J.data: required array missing");
+    expect_qpsnap_error(write_raw("missing.qpsnap", a), "J.data: required array missing");
 }
 
 TEST(QpsnapCorrupt, UnknownArray)
 {
     auto a = tiny_arrays();
     a["extra"] = reals({1});
-    expect_error(write_raw("unknown.qpsnap", a), "arrays.extra: unknown array name");
+    expect_qpsnap_error(write_raw("unknown.qpsnap", a), "arrays.extra: unknown array name");
 }
 
 TEST(QpsnapCorrupt, WrongDtype)
@@ -287,22 +282,22 @@ TEST(QpsnapCorrupt, WrongDtype)
     a["b"].dtype = "int64";
     a["b"].i = {1, 2, 3};
     a["b"].f.clear();
-    expect_error(write_raw("dtype.qpsnap", a), "b.dtype: expected \"float64\", got \"int64\"");
+    expect_qpsnap_error(write_raw("dtype.qpsnap", a), "b.dtype: expected \"float64\", got \"int64\"");
 }
 
 TEST(QpsnapCorrupt, WrongShape)
 {
     auto a = tiny_arrays();
     a["x0"] = reals({0, 0, 0, 0});
-    expect_error(write_raw("shape.qpsnap", a), "x0.shape: expected [3] (n = 3), got [4]");
+    expect_qpsnap_error(write_raw("shape.qpsnap", a), "x0.shape: expected [3] (n = 3), got [4]");
     auto b = tiny_arrays();
     b["J.data"] = reals({1, -1});
-    expect_error(write_raw("shape2.qpsnap", b), "J.data.shape: expected [3] (the length of J.indices), got [2]");
+    expect_qpsnap_error(write_raw("shape2.qpsnap", b), "J.data.shape: expected [3] (the length of J.indices), got [2]");
 }
 
 TEST(QpsnapCorrupt, OffsetMisaligned)
 {
-    expect_error(
+    expect_qpsnap_error(
         write_raw("align.qpsnap", tiny_arrays(), 3, 2,
                   [](nlohmann::json& h) { h["arrays"]["b"]["offset"] = h["arrays"]["b"]["offset"].get<int>() + 4; }),
         "b.offset: 220 is not 8-byte aligned");
@@ -310,14 +305,14 @@ TEST(QpsnapCorrupt, OffsetMisaligned)
 
 TEST(QpsnapCorrupt, OffsetOutsideBuffer)
 {
-    expect_error(
+    expect_qpsnap_error(
         write_raw("outside.qpsnap", tiny_arrays(), 3, 2, [](nlohmann::json& h) { h["arrays"]["c"]["offset"] = 400; }),
         "c.offset: bytes [400, 416) lie outside the data buffer of 280 bytes");
 }
 
 TEST(QpsnapCorrupt, NbytesMismatch)
 {
-    expect_error(
+    expect_qpsnap_error(
         write_raw("nbytes.qpsnap", tiny_arrays(), 3, 2, [](nlohmann::json& h) { h["arrays"]["b"]["nbytes"] = 16; }),
         "b.nbytes: 16 does not match shape [3] (expected 24)");
 }
@@ -325,7 +320,7 @@ TEST(QpsnapCorrupt, NbytesMismatch)
 TEST(QpsnapCorrupt, CrcMismatch)
 {
     const std::string path = write_raw("crc.qpsnap", tiny_arrays());
-    std::string bytes = file_bytes(path);
+    std::string bytes = test::file_bytes(path);
     bytes[bytes.size() - 1] ^= 0x01;  // last byte of x0 (arrays are written in name order)
     put_bytes(path, bytes);
     const auto h = read_qpsnap_header(path);
@@ -344,60 +339,62 @@ TEST(QpsnapCorrupt, IndptrNotStartingAtZero)
 {
     auto a = tiny_arrays();
     a["J.indptr"] = ints({1, 1, 3});
-    expect_error(write_raw("indptr0.qpsnap", a), "J.indptr: must start at 0, starts at 1");
+    expect_qpsnap_error(write_raw("indptr0.qpsnap", a), "J.indptr: must start at 0, starts at 1");
 }
 
 TEST(QpsnapCorrupt, IndptrDecreasing)
 {
     auto a = tiny_arrays();
     a["A.indptr"] = ints({0, 5, 2, 7});
-    expect_error(write_raw("indptrdec.qpsnap", a), "A.indptr: decreases at row 1 (5 then 2)");
+    expect_qpsnap_error(write_raw("indptrdec.qpsnap", a), "A.indptr: decreases at row 1 (5 then 2)");
 }
 
 TEST(QpsnapCorrupt, IndptrEndNotNnz)
 {
     auto a = tiny_arrays();
     a["A.indptr"] = ints({0, 2, 5, 6});
-    expect_error(write_raw("indptrend.qpsnap", a), "A.indptr: ends at 6, expected nnz = 7 (the length of A.indices)");
+    expect_qpsnap_error(write_raw("indptrend.qpsnap", a),
+                        "A.indptr: ends at 6, expected nnz = 7 (the length of A.indices)");
 }
 
 TEST(QpsnapCorrupt, IndexOutOfRange)
 {
     auto a = tiny_arrays();
     a["A.indices"] = ints({0, 1, 0, 1, 2, 1, 7});
-    expect_error(write_raw("range.qpsnap", a), "A.indices: column 7 out of range [0, 3) in row 2");
+    expect_qpsnap_error(write_raw("range.qpsnap", a), "A.indices: column 7 out of range [0, 3) in row 2");
     auto j = tiny_arrays();
     j["J.indices"] = ints({-1, 1, 2});
-    expect_error(write_raw("range2.qpsnap", j), "J.indices: column -1 out of range [0, 3) in row 0");
+    expect_qpsnap_error(write_raw("range2.qpsnap", j), "J.indices: column -1 out of range [0, 3) in row 0");
 }
 
 TEST(QpsnapCorrupt, IndicesNotIncreasing)
 {
     auto a = tiny_arrays();
     a["J.indices"] = ints({0, 2, 1});
-    expect_error(write_raw("sorted.qpsnap", a), "J.indices: columns not strictly increasing in row 1 (2 then 1)");
+    expect_qpsnap_error(write_raw("sorted.qpsnap", a),
+                        "J.indices: columns not strictly increasing in row 1 (2 then 1)");
 }
 
 TEST(QpsnapCorrupt, NonFiniteValues)
 {
     auto a = tiny_arrays();
     a["b"] = reals({1, std::numeric_limits<double>::quiet_NaN(), 3});
-    expect_error(write_raw("nan.qpsnap", a), "b: non-finite value nan at index 1");
+    expect_qpsnap_error(write_raw("nan.qpsnap", a), "b: non-finite value nan at index 1");
     auto j = tiny_arrays();
     j["J.data"] = reals({1, -1, std::numeric_limits<double>::infinity()});
-    expect_error(write_raw("inf.qpsnap", j), "J.data: non-finite value inf at index 2");
+    expect_qpsnap_error(write_raw("inf.qpsnap", j), "J.data: non-finite value inf at index 2");
     auto d = tiny_arrays();
     d["A.data"] = reals({4, 1, 1, -std::numeric_limits<double>::infinity(), 2, 2, 6});
-    expect_error(write_raw("infa.qpsnap", d), "A.data: non-finite value -inf at index 3");
+    expect_qpsnap_error(write_raw("infa.qpsnap", d), "A.data: non-finite value -inf at index 3");
 }
 
 TEST(QpsnapCorrupt, AsymmetricNamesWorstEntry)
 {
     auto a = tiny_arrays();
     a["A.data"] = reals({4, 1, 1.5, 5, 2, 2.25, 6});
-    expect_error(write_raw("asym.qpsnap", a),
-                 "A: not symmetric: A(0, 1) = 1 but A(1, 0) = 1.5 (difference 0.5 > 1e-12 * max|A_ij| = "
-                 "6.0000000000000003e-12)");
+    expect_qpsnap_error(write_raw("asym.qpsnap", a),
+                        "A: not symmetric: A(0, 1) = 1 but A(1, 0) = 1.5 (difference 0.5 > 1e-12 * max|A_ij| = "
+                        "6.0000000000000003e-12)");
 }
 
 TEST(QpsnapCorrupt, OneSidedEntryTooLarge)
@@ -406,9 +403,9 @@ TEST(QpsnapCorrupt, OneSidedEntryTooLarge)
     a["A.indptr"] = ints({0, 3, 6, 8});
     a["A.indices"] = ints({0, 1, 2, 0, 1, 2, 1, 2});
     a["A.data"] = reals({4, 1, 0.5, 1, 5, 2, 2, 6});
-    expect_error(write_raw("onesided.qpsnap", a),
-                 "A: not symmetric: A(0, 2) = 0.5 but A(2, 0) = 0 (difference 0.5 > 1e-12 * max|A_ij| = "
-                 "6.0000000000000003e-12)");
+    expect_qpsnap_error(write_raw("onesided.qpsnap", a),
+                        "A: not symmetric: A(0, 2) = 0.5 but A(2, 0) = 0 (difference 0.5 > 1e-12 * max|A_ij| = "
+                        "6.0000000000000003e-12)");
 }
 
 TEST(QpsnapCorrupt, DiagonalMissingOrNotPositive)
@@ -417,30 +414,31 @@ TEST(QpsnapCorrupt, DiagonalMissingOrNotPositive)
     a["A.indptr"] = ints({0, 2, 4, 6});
     a["A.indices"] = ints({0, 1, 0, 2, 1, 2});
     a["A.data"] = reals({4, 1, 1, 2, 2, 6});
-    expect_error(write_raw("diagmissing.qpsnap", a), "A: diagonal entry A(1, 1) is missing (A must be SPD)");
+    expect_qpsnap_error(write_raw("diagmissing.qpsnap", a), "A: diagonal entry A(1, 1) is missing (A must be SPD)");
     auto b = tiny_arrays();
     b["A.data"] = reals({4, 1, 1, 5, 2, 2, -6});
-    expect_error(write_raw("diagneg.qpsnap", b), "A: diagonal entry A(2, 2) = -6 is not positive (A must be SPD)");
+    expect_qpsnap_error(write_raw("diagneg.qpsnap", b),
+                        "A: diagonal entry A(2, 2) = -6 is not positive (A must be SPD)");
 }
 
 TEST(QpsnapCorrupt, ContactArraysNeedMRows)
 {
     auto a = tiny_arrays();
     a["contact.kind"] = ints({0, 2, 2});
-    expect_error(write_raw("kind.qpsnap", a), "contact.kind.shape: expected [2] (m = 2), got [3]");
+    expect_qpsnap_error(write_raw("kind.qpsnap", a), "contact.kind.shape: expected [2] (m = 2), got [3]");
     auto v = tiny_arrays();
     v["contact.vertex"] = ints({0, -1, -1, -1, 1, 2, -1, -1});
-    expect_error(write_raw("vertex.qpsnap", v),
-                 "contact.vertex.shape: expected [2, 4] (m = 2, 4 vertices per row), got [8]");
+    expect_qpsnap_error(write_raw("vertex.qpsnap", v),
+                        "contact.vertex.shape: expected [2, 4] (m = 2, 4 vertices per row), got [8]");
     auto k = tiny_arrays();
     k["contact.kind"] = ints({0, 9});
-    expect_error(write_raw("kind9.qpsnap", k), "contact.kind: value 9 at row 1 is not a contact kind (0..4)");
+    expect_qpsnap_error(write_raw("kind9.qpsnap", k), "contact.kind: value 9 at row 1 is not a contact kind (0..4)");
 }
 
 TEST(QpsnapCorrupt, MissingFile)
 {
-    const std::string path = temp_path("does_not_exist.qpsnap");
-    expect_error(path, "cannot open: No such file or directory");
+    const std::string path = qpsnap_temp_path("does_not_exist.qpsnap");
+    expect_qpsnap_error(path, "cannot open: No such file or directory");
 }
 
 /// Load time of a ~107k-DOF FEM-like snapshot (printed, not asserted: machines differ).
@@ -451,7 +449,7 @@ TEST(QpsnapPerf, LoadTimeOf107kDofSnapshot)
     qp.b = Vec::Ones(qp.A.rows());
     qp.x0 = Vec::Zero(qp.A.rows());
     qp.J.resize(0, qp.A.rows());
-    const std::string path = temp_path("big.qpsnap");
+    const std::string path = qpsnap_temp_path("big.qpsnap");
     write_qpsnap(path, qp);
     read_qpsnap(path);  // warm the page cache
     const auto t0 = std::chrono::steady_clock::now();
@@ -521,7 +519,7 @@ std::map<std::string, Raw> tiny_friction_arrays()
 void version2(nlohmann::json& h) { h["version"] = 2; }
 
 /// A synthetic QP with every friction field set.
-Qp frictional_synthetic()
+Qp frictional_synthetic_3x2x3()
 {
     Qp qp = make_synthetic("coupled", {{"nx", 3}, {"ny", 2}, {"nz", 3}}, 5);
     const Eigen::Index m = qp.m(), n = qp.n();
@@ -540,10 +538,10 @@ Qp frictional_synthetic()
 
 TEST(QpsnapFriction, RoundTripIsBitExactAndVersion2)
 {
-    const Qp qp = frictional_synthetic();
+    const Qp qp = frictional_synthetic_3x2x3();
     ASSERT_TRUE(qp.frictional());
     ASSERT_TRUE(qp.view().frictional());
-    const std::string p1 = temp_path("fric1.qpsnap"), p2 = temp_path("fric2.qpsnap");
+    const std::string p1 = qpsnap_temp_path("fric1.qpsnap"), p2 = qpsnap_temp_path("fric2.qpsnap");
     write_qpsnap(p1, qp);
     EXPECT_EQ(read_qpsnap_header(p1)["version"], 2);
     EXPECT_EQ(read_qpsnap_header(p1)["h"], 1.0 / 60.0);
@@ -559,15 +557,15 @@ TEST(QpsnapFriction, RoundTripIsBitExactAndVersion2)
     EXPECT_TRUE(back.friction.v0 == qp.friction.v0);
     EXPECT_TRUE(back.frictional());
     write_qpsnap(p2, back);
-    EXPECT_EQ(file_bytes(p1), file_bytes(p2));
+    EXPECT_EQ(test::file_bytes(p1), test::file_bytes(p2));
 }
 
 TEST(QpsnapFriction, FrictionlessQpIsWrittenAsVersion1Unchanged)
 {
     // A QP without friction fields is the file it was before version 2, byte for byte.
-    Qp qp = frictional_synthetic();
+    Qp qp = frictional_synthetic_3x2x3();
     qp.friction = Friction{};
-    const std::string p = temp_path("nofric.qpsnap");
+    const std::string p = qpsnap_temp_path("nofric.qpsnap");
     write_qpsnap(p, qp);
     EXPECT_EQ(read_qpsnap_header(p)["version"], 1);
     EXPECT_FALSE(read_qpsnap_header(p).contains("h"));
@@ -576,7 +574,7 @@ TEST(QpsnapFriction, FrictionlessQpIsWrittenAsVersion1Unchanged)
     EXPECT_FALSE(back.frictional());
     EXPECT_FALSE(back.view().frictional());
     // mu = 0 everywhere: written (version 2), but not frictional.
-    qp = frictional_synthetic();
+    qp = frictional_synthetic_3x2x3();
     qp.friction.mu.setZero();
     write_qpsnap(p, qp);
     EXPECT_EQ(read_qpsnap_header(p)["version"], 2);
@@ -600,28 +598,29 @@ TEST(QpsnapFrictionCorrupt, MuNegativeOrNaN)
 {
     auto a = tiny_friction_arrays();
     a["mu"] = reals({0.3, -0.5});
-    expect_error(write_raw("mu_neg.qpsnap", a, 3, 2, version2), "mu: negative friction coefficient -0.5 at contact 1");
+    expect_qpsnap_error(write_raw("mu_neg.qpsnap", a, 3, 2, version2),
+                        "mu: negative friction coefficient -0.5 at contact 1");
     a["mu"] = reals({std::nan(""), 0.1});
-    expect_error(write_raw("mu_nan.qpsnap", a, 3, 2, version2), "mu: non-finite value nan at index 0");
+    expect_qpsnap_error(write_raw("mu_nan.qpsnap", a, 3, 2, version2), "mu: non-finite value nan at index 0");
     a["mu"] = reals({0.3});
-    expect_error(write_raw("mu_size.qpsnap", a, 3, 2, version2),
-                 "mu.shape: expected [2] (m = 2, one per contact row), got [1]");
+    expect_qpsnap_error(write_raw("mu_size.qpsnap", a, 3, 2, version2),
+                        "mu.shape: expected [2] (m = 2, one per contact row), got [1]");
 }
 
 TEST(QpsnapFrictionCorrupt, MuWithoutTangentsAndTangentsWithoutMu)
 {
     auto a = tiny_friction_arrays();
     for (const char* t : {"T.indptr", "T.indices", "T.data"}) a.erase(t);
-    expect_error(write_raw("mu_no_t.qpsnap", a, 3, 2, version2),
-                 "T: missing: mu needs the two tangent rows per contact (T, 2m x n)");
+    expect_qpsnap_error(write_raw("mu_no_t.qpsnap", a, 3, 2, version2),
+                        "T: missing: mu needs the two tangent rows per contact (T, 2m x n)");
     a = tiny_friction_arrays();
     a.erase("mu");
-    expect_error(write_raw("t_no_mu.qpsnap", a, 3, 2, version2),
-                 "mu: missing: T is given without friction coefficients");
+    expect_qpsnap_error(write_raw("t_no_mu.qpsnap", a, 3, 2, version2),
+                        "mu: missing: T is given without friction coefficients");
     a = tiny_friction_arrays();
     a.erase("T.data");
-    expect_error(write_raw("t_part.qpsnap", a, 3, 2, version2),
-                 "T.data: missing (T is given as T.indptr, T.indices, T.data)");
+    expect_qpsnap_error(write_raw("t_part.qpsnap", a, 3, 2, version2),
+                        "T.data: missing (T is given as T.indptr, T.indices, T.data)");
 }
 
 TEST(QpsnapFrictionCorrupt, TangentRowsOfTheWrongSize)
@@ -630,45 +629,48 @@ TEST(QpsnapFrictionCorrupt, TangentRowsOfTheWrongSize)
     a["T.indptr"] = ints({0, 1, 2, 3});  // 3 rows, not 2m = 4
     a["T.indices"] = ints({1, 2, 0});
     a["T.data"] = reals({1, 1, 1});
-    expect_error(write_raw("t_rows.qpsnap", a, 3, 2, version2),
-                 "T.indptr.shape: expected [5] (m = 2, two tangent rows per contact, 2m + 1 entries), got [4]");
+    expect_qpsnap_error(write_raw("t_rows.qpsnap", a, 3, 2, version2),
+                        "T.indptr.shape: expected [5] (m = 2, two tangent rows per contact, 2m + 1 entries), got [4]");
     a = tiny_friction_arrays();
     a["T.indices"] = ints({1, 2, 0, 1, 3});  // column 3 of n = 3
-    expect_error(write_raw("t_cols.qpsnap", a, 3, 2, version2), "T.indices: column 3 out of range [0, 3) in row 3");
+    expect_qpsnap_error(write_raw("t_cols.qpsnap", a, 3, 2, version2),
+                        "T.indices: column 3 out of range [0, 3) in row 3");
     a = tiny_friction_arrays();
     a["T.data"] = reals({1, 1, 1, std::numeric_limits<double>::infinity(), 1});
-    expect_error(write_raw("t_inf.qpsnap", a, 3, 2, version2), "T.data: non-finite value inf at index 3");
+    expect_qpsnap_error(write_raw("t_inf.qpsnap", a, 3, 2, version2), "T.data: non-finite value inf at index 3");
     a = tiny_friction_arrays();
     a["cT"] = reals({0, 0, 0});
-    expect_error(write_raw("ct_size.qpsnap", a, 3, 2, version2),
-                 "cT.shape: expected [4] (m = 2, two per contact), got [3]");
+    expect_qpsnap_error(write_raw("ct_size.qpsnap", a, 3, 2, version2),
+                        "cT.shape: expected [4] (m = 2, two per contact), got [3]");
 }
 
 TEST(QpsnapFrictionCorrupt, StepAndStartVelocities)
 {
     auto a = tiny_friction_arrays();
     a["v0"] = reals({0, 1, 2});
-    expect_error(write_raw("v0_no_h.qpsnap", a, 3, 2, version2), "h: missing: v0 is given without the step h");
-    expect_error(write_raw("h_neg.qpsnap", a, 3, 2, [](nlohmann::json& h) { h["version"] = 2, h["h"] = -0.01; }),
-                 "h: expected a positive finite time step, got -0.01");
-    expect_error(write_raw("h_str.qpsnap", a, 3, 2, [](nlohmann::json& h) { h["version"] = 2, h["h"] = "0.01"; }),
-                 "h: expected a positive finite time step, got \"0.01\"");
+    expect_qpsnap_error(write_raw("v0_no_h.qpsnap", a, 3, 2, version2), "h: missing: v0 is given without the step h");
+    expect_qpsnap_error(write_raw("h_neg.qpsnap", a, 3, 2, [](nlohmann::json& h) { h["version"] = 2, h["h"] = -0.01; }),
+                        "h: expected a positive finite time step, got -0.01");
+    expect_qpsnap_error(
+        write_raw("h_str.qpsnap", a, 3, 2, [](nlohmann::json& h) { h["version"] = 2, h["h"] = "0.01"; }),
+        "h: expected a positive finite time step, got \"0.01\"");
     a["v0"] = reals({0, 1});
-    expect_error(write_raw("v0_size.qpsnap", a, 3, 2, [](nlohmann::json& h) { h["version"] = 2, h["h"] = 0.01; }),
-                 "v0.shape: expected [3] (n = 3), got [2]");
+    expect_qpsnap_error(
+        write_raw("v0_size.qpsnap", a, 3, 2, [](nlohmann::json& h) { h["version"] = 2, h["h"] = 0.01; }),
+        "v0.shape: expected [3] (n = 3), got [2]");
 }
 
 TEST(QpsnapFrictionCorrupt, Version2FieldsInAVersion1File)
 {
-    expect_error(write_raw("v1_mu.qpsnap", tiny_friction_arrays()),
-                 "arrays.T.data: a version 2 array in a version 1 snapshot");
-    expect_error(write_raw("v1_h.qpsnap", tiny_arrays(), 3, 2, [](nlohmann::json& h) { h["h"] = 0.01; }),
-                 "h: a version 2 field in a version 1 snapshot");
+    expect_qpsnap_error(write_raw("v1_mu.qpsnap", tiny_friction_arrays()),
+                        "arrays.T.data: a version 2 array in a version 1 snapshot");
+    expect_qpsnap_error(write_raw("v1_h.qpsnap", tiny_arrays(), 3, 2, [](nlohmann::json& h) { h["h"] = 0.01; }),
+                        "h: a version 2 field in a version 1 snapshot");
 }
 
 TEST(QpsnapFrictionCorrupt, WriterRefusesWhatTheReaderRefuses)
 {
-    const std::string p = temp_path("w_bad.qpsnap");
+    const std::string p = qpsnap_temp_path("w_bad.qpsnap");
     auto expect_write_error = [&](const Qp& qp, const std::string& tail) {
         try {
             write_qpsnap(p, qp);
@@ -678,21 +680,21 @@ TEST(QpsnapFrictionCorrupt, WriterRefusesWhatTheReaderRefuses)
         }
         EXPECT_FALSE(std::filesystem::exists(p));
     };
-    Qp qp = frictional_synthetic();
+    Qp qp = frictional_synthetic_3x2x3();
     qp.friction.mu[2] = -1.0;
     expect_write_error(qp, "mu: negative friction coefficient -1 at contact 2");
-    qp = frictional_synthetic();
+    qp = frictional_synthetic_3x2x3();
     qp.friction.mu[0] = std::nan("");
     expect_write_error(qp, "mu: non-finite value nan at index 0");
-    qp = frictional_synthetic();
+    qp = frictional_synthetic_3x2x3();
     qp.friction.T.resize(qp.m(), qp.n());
     expect_write_error(qp, "T: expected 2m x n = " + std::to_string(2 * qp.m()) + " x " + std::to_string(qp.n()) +
                                " (two tangent rows per contact), got " + std::to_string(qp.m()) + " x " +
                                std::to_string(qp.n()));
-    qp = frictional_synthetic();
+    qp = frictional_synthetic_3x2x3();
     qp.friction.T = SpMat();
     expect_write_error(qp, "T: missing: mu needs the two tangent rows per contact (T, 2m x n)");
-    qp = frictional_synthetic();
+    qp = frictional_synthetic_3x2x3();
     qp.friction.h = 0.0;
     expect_write_error(qp, "h: missing: v0 is given without the step h");
 }

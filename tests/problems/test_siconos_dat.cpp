@@ -24,16 +24,16 @@ namespace {
 namespace fs = std::filesystem;
 using cb::test::run_captured;
 
-const fs::path DATA = fs::path(CB_TEST_DATA_DIR) / "siconos_dat";
-const fs::path ROVER = DATA / "Rover4396.dat";                         // dense, 2 contacts
-const fs::path SPHERES = DATA / "NESpheres_10_1.dat";                  // dense, 9 contacts
-const fs::path CONFETI = DATA / "Confeti-ex13-4contact-Fc3D-SBM.dat";  // sparse block, 4 contacts
-const fs::path CAPSULES = DATA / "Capsules-i101-404.dat";              // sparse block, 225 contacts
+const fs::path DAT_FILES = fs::path(CB_TEST_DATA_DIR) / "siconos_dat";
+const fs::path ROVER = DAT_FILES / "Rover4396.dat";                         // dense, 2 contacts
+const fs::path SPHERES = DAT_FILES / "NESpheres_10_1.dat";                  // dense, 9 contacts
+const fs::path CONFETI = DAT_FILES / "Confeti-ex13-4contact-Fc3D-SBM.dat";  // sparse block, 4 contacts
+const fs::path CAPSULES = DAT_FILES / "Capsules-i101-404.dat";              // sparse block, 225 contacts
 const std::vector<fs::path> REAL = {ROVER, SPHERES, CONFETI, CAPSULES};
 
 void write(const fs::path& file, const std::string& text) { std::ofstream(file, std::ios::binary) << text; }
 
-std::string error_of(const std::function<void()>& f)
+std::string dat_error_of(const std::function<void()>& f)
 {
     try {
         f();
@@ -261,7 +261,7 @@ TEST(SiconosDat, AnLcpConvertsAsAQpAndIsNotAFrictionProblem)
                          "c = 0)\n");
     // A non-symmetric M is not a QP: refused naming the pair (column-major: M(1,0) = 2).
     write(dir / "asym.dat", "3\n0\n3\n3\n3\t3\n1 2 2\n0 1 2\n0 0 1\n-1 -1 -1\n");
-    EXPECT_EQ(error_of([&] { cb::read_siconos_dat_qp((dir / "asym.dat").string()); }),
+    EXPECT_EQ(dat_error_of([&] { cb::read_siconos_dat_qp((dir / "asym.dat").string()); }),
               (dir / "asym.dat").string() +
                   ": M: the LCP matrix M is not symmetric: (0, 1) = 0 but (1, 0) = 2 (beyond 1e-12 of its largest "
                   "entry); `convert --symmetrise` averages it with its transpose");
@@ -362,7 +362,7 @@ TEST(SiconosDat, ConvertOfAHostileFileWritesNothing)
     EXPECT_EQ(o.err, "contactbench convert: error: " + (dir / "bad.dat").string() +
                          ": mu[1]: contact 1 has mu = -1 (a friction coefficient is finite and >= 0)\n");
     EXPECT_FALSE(fs::exists(dir / "out.qpsnap"));
-    EXPECT_EQ(error_of([&] { cb::read_siconos_dat_qp((dir / "missing.dat").string()); }),
+    EXPECT_EQ(dat_error_of([&] { cb::read_siconos_dat_qp((dir / "missing.dat").string()); }),
               (dir / "missing.dat").string() + ": cannot open: No such file or directory");
     fs::remove_all(dir);
 }

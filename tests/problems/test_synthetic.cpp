@@ -1,6 +1,7 @@
 // Synthetic families: symmetric SPD A, the promised row structure, seeded reproducibility.
 #include "problems/qpsnap.hpp"
 #include "problems/synthetic.hpp"
+#include "tests/problems/file_bytes.hpp"
 
 #include <Eigen/Dense>
 #include <Eigen/SparseCholesky>
@@ -15,17 +16,11 @@
 namespace cb {
 namespace {
 
-std::string temp_path(const std::string& name)
+std::string synthetic_temp_path(const std::string& name)
 {
     const auto dir = std::filesystem::temp_directory_path() / ("cb_test_synthetic_" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir);
     return (dir / name).string();
-}
-
-std::string file_bytes(const std::string& path)
-{
-    std::ifstream in(path, std::ios::binary);
-    return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
 /// Largest |A(i,j) - A(j,i)| (exact comparison: 0 for an exactly symmetric matrix).
@@ -286,14 +281,14 @@ TEST(Synthetic, UnitScalesChangeNumbersNotTheSolution)
 TEST(Synthetic, SameSeedSameBytesOtherSeedOtherBytes)
 {
     for (const char* family : {"plane", "coupled", "box", "random-spd"}) {
-        const std::string p1 = temp_path(std::string(family) + "_1.qpsnap");
-        const std::string p2 = temp_path(std::string(family) + "_2.qpsnap");
-        const std::string p3 = temp_path(std::string(family) + "_3.qpsnap");
+        const std::string p1 = synthetic_temp_path(std::string(family) + "_1.qpsnap");
+        const std::string p2 = synthetic_temp_path(std::string(family) + "_2.qpsnap");
+        const std::string p3 = synthetic_temp_path(std::string(family) + "_3.qpsnap");
         write_qpsnap(p1, make_synthetic(family, {}, 42));
         write_qpsnap(p2, make_synthetic(family, {}, 42));
         write_qpsnap(p3, make_synthetic(family, {}, 43));
-        EXPECT_EQ(file_bytes(p1), file_bytes(p2)) << family;
-        EXPECT_NE(file_bytes(p1), file_bytes(p3)) << family;
+        EXPECT_EQ(test::file_bytes(p1), test::file_bytes(p2)) << family;
+        EXPECT_NE(test::file_bytes(p1), test::file_bytes(p3)) << family;
         const Qp back = read_qpsnap(p1);  // every family passes the reader's validation
         EXPECT_EQ(back.meta["generator"]["seed"], 42);
     }

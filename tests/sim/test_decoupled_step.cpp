@@ -24,7 +24,7 @@ const std::string DEMO = std::string(CB_SOURCE_DIR) + "/scenes/demo.json";
 
 Scene demo() { return load_scene(DEMO, default_path_roots(DEMO, "")); }
 
-SimulatorOptions options(const std::string& decouple = "auto")
+SimulatorOptions decouple_options(const std::string& decouple = "auto")
 {
     SimulatorOptions opt;
     opt.solve_step = harness_step_solver();
@@ -32,7 +32,7 @@ SimulatorOptions options(const std::string& decouple = "auto")
     return opt;
 }
 
-fs::path fresh_dir(const std::string& name)
+fs::path fresh_decoupled_dir(const std::string& name)
 {
     const char* tmp = std::getenv("TMPDIR");
     fs::path p = fs::path(tmp ? tmp : "/tmp") / ("cb_test_decoupled_" + std::to_string(::getpid()) + "_" + name);
@@ -64,8 +64,8 @@ std::vector<std::map<std::string, std::string>> read_csv(const fs::path& path)
 
 TEST(DecoupledStep, IsJudgedOnTheOriginalQpAsSolveJudgesItsSnapshot)
 {
-    const fs::path out = fresh_dir("judge");
-    SimulatorOptions opt = options();
+    const fs::path out = fresh_decoupled_dir("judge");
+    SimulatorOptions opt = decouple_options();
     opt.out_dir = out.string();
     opt.frames = 8;
     Simulator sim(demo(), opt);
@@ -106,7 +106,7 @@ TEST(DecoupledStep, ExactSolverKeepsEveryRowAndConverges)
     Scene scene = demo();
     scene.solver = "active-set";
     scene.solver_settings = nlohmann::json::object();
-    Simulator sim(std::move(scene), options());
+    Simulator sim(std::move(scene), decouple_options());
     long with_rows = 0;
     for (int s = 0; s < 8; ++s)
         for (const StepRecord& r : sim.step()) {
@@ -122,8 +122,8 @@ TEST(DecoupledStep, ExactSolverKeepsEveryRowAndConverges)
 TEST(DecoupledStep, OrdersKeepDifferentRowsAndAuthorsIsTheDefault)
 {
     // The default (auto) is the authors' order: the same chain, bit for bit.
-    Simulator by_default(demo(), options()), authors(demo(), options("authors")), depth(demo(), options("depth")),
-        random(demo(), options("random"));
+    Simulator by_default(demo(), decouple_options()), authors(demo(), decouple_options("authors")),
+        depth(demo(), decouple_options("depth")), random(demo(), decouple_options("random"));
     std::map<std::string, long> kept;
     for (int s = 0; s < 7; ++s) {
         by_default.step();
@@ -143,7 +143,7 @@ TEST(DecoupledStep, WithoutTheHarnessTheChainIsTheSameAndTheStatusTheSolvers)
 {
     // Callers outside the harness (stress families) leave solve_step unset: same chain, the
     // solver's own word as the status.
-    Simulator judged(demo(), options()), plain(demo(), SimulatorOptions{});
+    Simulator judged(demo(), decouple_options()), plain(demo(), SimulatorOptions{});
     for (int s = 0; s < 8; ++s) {
         const StepRecord a = judged.step().back(), b = plain.step().back();
         EXPECT_EQ(b.status, b.solver_status);
@@ -159,12 +159,12 @@ TEST(DecoupledStep, WithoutTheHarnessTheChainIsTheSameAndTheStatusTheSolvers)
 
 TEST(DecoupledStep, HalfTheStepKeepsTheFrameDuration)
 {
-    SimulatorOptions half = options();
+    SimulatorOptions half = decouple_options();
     half.h = 0.005;
     Simulator sim(demo(), half);
     EXPECT_EQ(sim.step_h(), 0.005);
     EXPECT_EQ(sim.steps_per_frame(), 2);
-    SimulatorOptions odd = options();
+    SimulatorOptions odd = decouple_options();
     odd.h = 0.003;
     try {
         Simulator bad(demo(), odd);
@@ -186,7 +186,7 @@ TEST(ChainDistance, RmsAndMaxOverVertices)
 
 TEST(Chains, DemoDecoupledChainsPenetrateWhereTheExactOneDoesNot)
 {
-    const fs::path out = fresh_dir("chains");
+    const fs::path out = fresh_decoupled_dir("chains");
     ChainOptions opt;
     opt.out_dir = out.string();
     opt.frames = 10;

@@ -45,7 +45,7 @@ json slide_scene()
             {"obstacles", {{{"type", "plane"}, {"normal", {0, 1, 0}}, {"point", {0, 0, 0}}}}}};
 }
 
-fs::path fresh_dir(const std::string& name)
+fs::path fresh_chains_dir(const std::string& name)
 {
     const char* tmp = std::getenv("TMPDIR");
     fs::path p = fs::path(tmp ? tmp : "/tmp") / ("cb_test_friction_chains_" + std::to_string(::getpid()) + "_" + name);
@@ -97,7 +97,7 @@ ChainOptions frictional_chains(const fs::path& out)
 
 TEST(FrictionChains, TheExactChainIsSimulatesFrames)
 {
-    const fs::path out = fresh_dir("slide");
+    const fs::path out = fresh_chains_dir("slide");
     const json scene = slide_scene();
     ASSERT_TRUE(run_chains([&] { return load_scene_json(scene, "slide.json", PathRoots{}); }, frictional_chains(out)));
     const auto rows = chain_rows(out / "chains.csv", "exact");
@@ -135,7 +135,7 @@ TEST(FrictionChains, Bmf03SlidesWhereTheExactChainSticks)
 {
     if (!siconos_fc3d_built()) GTEST_SKIP() << "contactbench is built without Siconos numerics (siconos-nsn)";
     // scenes/friction_incline.json: mu 0.5 > tan 20 deg, the stiff box must stay put.
-    const fs::path out = fresh_dir("incline");
+    const fs::path out = fresh_chains_dir("incline");
     ChainOptions opt = frictional_chains(out);
     opt.chains[0].solver = "siconos-nsn";
     opt.frames = 10;

@@ -12,6 +12,7 @@
 #include "solvers/core/registry.hpp"
 #include "solvers/friction/friction_nsgs.hpp"
 #include "solvers/peers/siconos_fc3d.hpp"
+#include "tests/sim/harness_step_options.hpp"
 
 #include <gtest/gtest.h>
 #include <cmath>
@@ -62,13 +63,6 @@ json incline_scene(double mu, const std::string& solver = "siconos-nsn")
 #define REQUIRE_SICONOS()                                                                                              \
     if (!siconos_fc3d_built()) GTEST_SKIP() << "contactbench is built without Siconos numerics (siconos-nsn)"
 
-SimulatorOptions options()
-{
-    SimulatorOptions opt;
-    opt.solve_step = harness_step_solver();
-    return opt;
-}
-
 Vec3 mean_of(const Vec& v)
 {
     Vec3 s = Vec3::Zero();
@@ -76,7 +70,7 @@ Vec3 mean_of(const Vec& v)
     return s / double(v.size() / 3);
 }
 
-std::string error_of(const json& j)
+std::string scene_error_of(const json& j)
 {
     try {
         load_scene_json(j, "s.json", PathRoots{});
@@ -92,7 +86,7 @@ TEST(FrictionIncline, BoxWithMu05StaysWithin1e3OfItsSizeFor1s)
 {
     REQUIRE_SICONOS();
     ASSERT_LT(std::tan(THETA), 0.5);  // the static case: friction can hold the box
-    Simulator sim(load_scene_json(incline_scene(0.5), "incline.json", PathRoots{}), options());
+    Simulator sim(load_scene_json(incline_scene(0.5), "incline.json", PathRoots{}), test::harness_step_options());
     const Vec3 start = mean_of(sim.positions());
     double drift = 0;
     for (int s = 0; s < 100; ++s) {  // 1 s
@@ -113,7 +107,7 @@ TEST(FrictionIncline, BoxWithMu02SlidesWithAccelerationWithin5Percent)
 {
     REQUIRE_SICONOS();
     const double mu = 0.2;
-    Simulator sim(load_scene_json(incline_scene(mu), "incline.json", PathRoots{}), options());
+    Simulator sim(load_scene_json(incline_scene(mu), "incline.json", PathRoots{}), test::harness_step_options());
     const double expected = G * (std::sin(THETA) - mu * std::cos(THETA));
     // Backward Euler gains h a per step exactly under a constant force, so the velocity's change
     // over [0.5 s, 1 s] gives the acceleration without the bias of a position fit.
@@ -137,8 +131,9 @@ TEST(FrictionIncline, VanishingMuMeetsTheFrictionlessQpStep)
 {
     // Two independent solvers of the same contact problem: active-set on the QP (mu = 0) and the
     // frictional path (local problem + NSGS) with mu = 1e-12, whose friction force is below rounding.
-    Simulator qp(load_scene_json(incline_scene(0.0), "incline.json", PathRoots{}), options());
-    Simulator fr(load_scene_json(incline_scene(1e-12, "nsgs"), "incline.json", PathRoots{}), options());
+    Simulator qp(load_scene_json(incline_scene(0.0), "incline.json", PathRoots{}), test::harness_step_options());
+    Simulator fr(load_scene_json(incline_scene(1e-12, "nsgs"), "incline.json", PathRoots{}),
+                 test::harness_step_options());
     for (int s = 0; s < 3; ++s) {  // NSGS needs ~10 s a step here (see REQUIRE_SICONOS)
         const auto a = qp.step(), b = fr.step();
         ASSERT_EQ(a[0].solver, "active-set");
@@ -158,8 +153,9 @@ TEST(FrictionIncline, NsgsAndSiconosNsnStepAlike)
     // The first steps of the sticking box with our NSGS and with Siconos' NSN: two independent
     // solvers of each step's local problem, each to FCLIB error 1e-10.
     REQUIRE_SICONOS();
-    Simulator a(load_scene_json(incline_scene(0.5, "nsgs"), "incline.json", PathRoots{}), options());
-    Simulator b(load_scene_json(incline_scene(0.5, "siconos-nsn"), "incline.json", PathRoots{}), options());
+    Simulator a(load_scene_json(incline_scene(0.5, "nsgs"), "incline.json", PathRoots{}), test::harness_step_options());
+    Simulator b(load_scene_json(incline_scene(0.5, "siconos-nsn"), "incline.json", PathRoots{}),
+                test::harness_step_options());
     for (int s = 0; s < 3; ++s) {
         const auto ra = a.step(), rb = b.step();
         ASSERT_EQ(ra[0].solver, "nsgs");
@@ -186,17 +182,18 @@ TEST(FrictionIncline, TangentFrameIsOrthonormalAndRightHanded)
 TEST(FrictionIncline, SceneFrictionKeysAreChecked)
 {
     json j = incline_scene(-0.1);
-    EXPECT_EQ(error_of(j), "s.json: /mu: must be in (-1e-300, 1e+06], got -0.1");
+    EXPECT_EQ(scene_error_of(j), "s.json: /mu: must be in (-1e-300, 1e+06], got -0.1");
     j = incline_scene(0.0);
     j["friction_settings"] = {{"tol", 1e-8}};
-    EXPECT_EQ(error_of(j), "s.json: /friction_settings: applies only to a frictional scene (\"mu\" > 0)");
+    EXPECT_EQ(scene_error_of(j), "s.json: /friction_settings: applies only to a frictional scene (\"mu\" > 0)");
     j = incline_scene(0.3);
     j["friction_settings"] = {{"solver", "pgs"}};
-    EXPECT_EQ(error_of(j),
+    EXPECT_EQ(scene_error_of(j),
               "s.json: /friction_settings/solver: must be one of nsgs, siconos-nsn, siconos-nsgs, got 'pgs'");
     j["friction_settings"] = {{"tolerance", 1e-8}};
-    EXPECT_EQ(error_of(j), "s.json: /friction_settings/tolerance: unknown key (see scenes/README.md for the keys of "
-                           "this object)");
+    EXPECT_EQ(scene_error_of(j),
+              "s.json: /friction_settings/tolerance: unknown key (see scenes/README.md for the keys of "
+              "this object)");
     j["friction_settings"] = {{"tol", 1e-8}, {"max_iterations", 50}};
     const Scene s = load_scene_json(j, "s.json", PathRoots{});
     EXPECT_EQ(s.friction.mu, 0.3);
@@ -237,7 +234,7 @@ TEST(FrictionIncline, AStepMissingItsToleranceIsReported)
     j["frames"] = 2;
     j["output"] = {{"snapshots", false}, {"strip_frames", 0}};
     const char* tmp = std::getenv("TMPDIR");
-    SimulatorOptions opt = options();
+    SimulatorOptions opt = test::harness_step_options();
     opt.out_dir = std::string(tmp ? tmp : "/tmp") + "/cb_test_friction_" + std::to_string(::getpid());
     opt.fresh = true;
     std::ostringstream log;
@@ -270,7 +267,7 @@ TEST(FrictionIncline, SnapshotHoldsTheCoulombProblemOfTheStep)
     j["frames"] = 2;
     j["output"] = {{"strip_frames", 0}};
     const char* tmp = std::getenv("TMPDIR");
-    SimulatorOptions opt = options();
+    SimulatorOptions opt = test::harness_step_options();
     opt.out_dir = std::string(tmp ? tmp : "/tmp") + "/cb_test_friction_snap_" + std::to_string(::getpid());
     opt.fresh = true;
     Simulator sim(load_scene_json(j, "incline.json", PathRoots{}), opt);

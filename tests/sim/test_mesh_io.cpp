@@ -3,6 +3,7 @@
 #include "sim/mesh_io.hpp"
 #include "sim/render.hpp"
 #include "sim/tetrahedralize.hpp"
+#include "tests/sim/input_error.hpp"
 
 #include <gtest/gtest.h>
 #include <cstdio>
@@ -25,15 +26,6 @@ std::string write(const std::string& name, const std::string& text)
     std::string p = tmp_path(name);
     std::ofstream(p) << text;
     return p;
-}
-std::string error_of(const std::function<void()>& f)
-{
-    try {
-        f();
-    } catch (const InputError& e) {
-        return e.what();
-    }
-    return "(no error)";
 }
 void expect_unit_tet(const TetMesh& m)
 {
@@ -82,24 +74,26 @@ TEST(MeshIo, ErrorsNameFileLineAndProblem)
 {
     const std::string abq =
         write("bad.abq", "*NODE\n1, 0,0,0\n2, 1,0,0\n3, 0,1,0\n4, 0,0,1\n*ELEMENT, TYPE=C3D4\n1, 1,2,3\n");
-    EXPECT_EQ(error_of([&] { read_abq(abq); }), abq + ": line 7: expected 5 integers 'id,n1,n2,n3,n4', got '1, 1,2,3'");
+    EXPECT_EQ(test::input_error_of([&] { read_abq(abq); }),
+              abq + ": line 7: expected 5 integers 'id,n1,n2,n3,n4', got '1, 1,2,3'");
     const std::string abq2 = write("bad2.abq", "*NODE\n1, 0,0,zero\n");
-    EXPECT_EQ(error_of([&] { read_abq(abq2); }), abq2 + ": line 2: expected a finite number, got 'zero'");
+    EXPECT_EQ(test::input_error_of([&] { read_abq(abq2); }), abq2 + ": line 2: expected a finite number, got 'zero'");
     const std::string abq3 =
         write("bad3.abq", "*NODE\n1, 0,0,0\n2, 1,0,0\n3, 0,1,0\n4, 0,0,1\n*ELEMENT, TYPE=C3D4\n1, 1,2,3,9\n");
-    EXPECT_EQ(error_of([&] { read_abq(abq3); }), abq3 + ": line 7: tet refers to undefined vertex id 9");
+    EXPECT_EQ(test::input_error_of([&] { read_abq(abq3); }), abq3 + ": line 7: tet refers to undefined vertex id 9");
     const std::string flat =
         write("flat.abq", "*NODE\n1, 0,0,0\n2, 1,0,0\n3, 0,1,0\n4, 1,1,0\n*ELEMENT, TYPE=C3D4\n1, 1,2,3,4\n");
-    EXPECT_NE(error_of([&] { read_abq(flat); }).find(flat + ": tet 1: degenerate"), std::string::npos);
+    EXPECT_NE(test::input_error_of([&] { read_abq(flat); }).find(flat + ": tet 1: degenerate"), std::string::npos);
     const std::string off = write("bad.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n");
-    EXPECT_EQ(error_of([&] { read_off(off); }), off + ": line 6: vertex index 7 out of range (3 vertices)");
+    EXPECT_EQ(test::input_error_of([&] { read_off(off); }), off + ": line 6: vertex index 7 out of range (3 vertices)");
     const std::string msh = write("bad.msh", "$MeshFormat\n2.2 1 8\n$EndMeshFormat\n");
-    EXPECT_NE(error_of([&] { read_gmsh(msh); }).find(msh + ": line 2: only ASCII"), std::string::npos);
-    EXPECT_NE(error_of([&] {
+    EXPECT_NE(test::input_error_of([&] { read_gmsh(msh); }).find(msh + ": line 2: only ASCII"), std::string::npos);
+    EXPECT_NE(test::input_error_of([&] {
                   read_tet_mesh(tmp_path("missing.abq"));
               }).find("missing.abq: cannot open: No such file or directory"),
               std::string::npos);
-    EXPECT_NE(error_of([&] { read_tet_mesh("x.vtk"); }).find("unknown tet mesh extension '.vtk'"), std::string::npos);
+    EXPECT_NE(test::input_error_of([&] { read_tet_mesh("x.vtk"); }).find("unknown tet mesh extension '.vtk'"),
+              std::string::npos);
 }
 
 TEST(Tetrahedralize, OctahedronVolumeConvergesAndQualityIsReported)

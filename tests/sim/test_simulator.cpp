@@ -5,6 +5,8 @@
 #include "problems/qpsnap.hpp"
 #include "sim/simulator.hpp"
 #include "solvers/core/registry.hpp"
+#include "tests/sim/harness_step_options.hpp"
+#include "tests/sim/input_error.hpp"
 
 #include <gtest/gtest.h>
 #include <fstream>
@@ -20,7 +22,7 @@ const std::string SOURCE = CB_SOURCE_DIR;
 // The authors' data where `make paper-data` writes it ($CB_CACHE/paper-data); the test using it skips without it.
 const std::string PAPER_DATA = cb::cache_dir() + "/paper-data";
 
-std::string tmp_dir(const std::string& name)
+std::string sim_tmp_dir(const std::string& name)
 {
     const char* dir = std::getenv("TMPDIR");
     std::string p = std::string(dir ? dir : "/tmp") + "/cb_test_sim_" + std::to_string(::getpid()) + "_" + name;
@@ -31,22 +33,6 @@ bool exists(const std::string& p)
 {
     struct stat st {};
     return ::stat(p.c_str(), &st) == 0;
-}
-std::string error_of(const std::function<void()>& f)
-{
-    try {
-        f();
-    } catch (const InputError& e) {
-        return e.what();
-    }
-    return "(no error)";
-}
-/// Options with the harness's step solver (the simulator needs one).
-SimulatorOptions options()
-{
-    SimulatorOptions opt;
-    opt.solve_step = harness_step_solver();
-    return opt;
 }
 std::string reference_solver() { return builtin_registry().contains("active-set") ? "active-set" : "mprgp"; }
 
@@ -72,7 +58,7 @@ TEST(Simulator, LongCubeHasThePapersSize)
     ASSERT_EQ(scene.bodies.size(), 1u);
     EXPECT_EQ(scene.bodies[0].mesh.vertices(), 9537);
     EXPECT_EQ(scene.bodies[0].mesh.tet_count(), 49152);
-    Simulator sim(std::move(scene), options());
+    Simulator sim(std::move(scene), test::harness_step_options());
     EXPECT_EQ(sim.dofs(), 28611);
     EXPECT_EQ(sim.tets(), 49152);
     // Scaled by 0.5: 0.5 x 0.5 x 1 m of density 1000.
@@ -90,7 +76,7 @@ TEST(Simulator, BoxRestingOnPlaneStaysOnItFor100Steps)
                     {"detection", {{"margin", 0.005}}},
                     {"bodies", {box_body(Vec3(0, 0.15, 0), Vec3::Zero())}},
                     {"obstacles", {{{"type", "plane"}, {"normal", {0, 1, 0}}, {"point", {0, 0, 0}}}}}};
-    Simulator sim(load_scene_json(j, "rest.json", PathRoots{}), options());
+    Simulator sim(load_scene_json(j, "rest.json", PathRoots{}), test::harness_step_options());
     double min_y = 1e300, max_y = -1e300;
     for (int s = 0; s < 100; ++s) {
         const auto recs = sim.step();
@@ -120,7 +106,7 @@ TEST(Simulator, TwoBodiesInFreeFlightConserveLinearMomentum)
               {"a_K", 0.02},
               {"bodies", {box_body(Vec3(0, 0, 0), Vec3(1, 0, 0)), box_body(Vec3(1, 0.1, 0), Vec3(-2, 0.5, 0.3))}}};
     j["bodies"][1]["rotate_deg"] = {10, 20, 30};
-    Simulator sim(load_scene_json(j, "flight.json", PathRoots{}), options());
+    Simulator sim(load_scene_json(j, "flight.json", PathRoots{}), test::harness_step_options());
     // Spin the second body so that the elastic forces work during the flight.
     const long nv = sim.vertices();
     for (long i = nv / 2; i < nv; ++i) {
@@ -140,27 +126,31 @@ TEST(Simulator, MalformedScenesNameFileAndKey)
 {
     json j = {{"bodies", {box_body(Vec3::Zero(), Vec3::Zero())}}};
     j["bodies"][0]["materal"] = json::object();
-    EXPECT_EQ(error_of([&] { load_scene_json(j, "s.json", PathRoots{}); }),
+    EXPECT_EQ(test::input_error_of([&] { load_scene_json(j, "s.json", PathRoots{}); }),
               "s.json: /bodies/0/materal: unknown key (see scenes/README.md for the keys of this object)");
     json k = {{"h", "0.01"}, {"bodies", {box_body(Vec3::Zero(), Vec3::Zero())}}};
-    EXPECT_EQ(error_of([&] { load_scene_json(k, "s.json", PathRoots{}); }),
+    EXPECT_EQ(test::input_error_of([&] { load_scene_json(k, "s.json", PathRoots{}); }),
               "s.json: /h: expected a number, got string \"0.01\"");
     json l = {{"bodies", {{{"mesh", {"data:meshes/nope.abq", "missing.off"}}}}}};
-    const std::string e = error_of([&] { load_scene_json(l, "s.json", PathRoots{"", "", "/nonexistent"}); });
+    const std::string e = test::input_error_of([&] {
+        load_scene_json(l, "s.json", PathRoots{"", "", "/nonexistent"});
+    });
     EXPECT_EQ(e,
               "s.json: /bodies/0/mesh: no mesh alternative is available: tried data:meshes/nope.abq (no --data given); "
               "/nonexistent/missing.off (not found)");
     json m = {{"bodies", {box_body(Vec3::Zero(), Vec3::Zero())}}, {"obstacles", {{{"type", "cone"}}}}};
-    EXPECT_EQ(error_of([&] { load_scene_json(m, "s.json", PathRoots{}); }),
+    EXPECT_EQ(test::input_error_of([&] { load_scene_json(m, "s.json", PathRoots{}); }),
               "s.json: /obstacles/0/type: must be one of plane, sphere, box, cylinder, mesh, stairs, got 'cone'");
     json n = {{"bodies", {box_body(Vec3::Zero(), Vec3::Zero())}}, {"solver", "no-such-solver"}};
-    EXPECT_NE(error_of([&] { Simulator(load_scene_json(n, "s.json", PathRoots{}), options()); }).find("no-such-solver"),
+    EXPECT_NE(test::input_error_of([&] {
+                  Simulator(load_scene_json(n, "s.json", PathRoots{}), test::harness_step_options());
+              }).find("no-such-solver"),
               std::string::npos);
     // A malformed mesh file is reported with its file and line through the scene.
-    const std::string dir = tmp_dir("badmesh");
+    const std::string dir = sim_tmp_dir("badmesh");
     std::ofstream(dir + "/bad.abq") << "*NODE\n1, 0,0,0\n*ELEMENT, TYPE=C3D4\n1, 1,1\n";
     json o = {{"bodies", {{{"mesh", "bad.abq"}}}}};
-    EXPECT_EQ(error_of([&] {
+    EXPECT_EQ(test::input_error_of([&] {
                   load_scene_json(o, "s.json", PathRoots{"", "", dir});
               }),
               dir + "/bad.abq: line 4: expected 5 integers 'id,n1,n2,n3,n4', got '1, 1,1'");
@@ -188,8 +178,8 @@ TEST(Simulator, TwoDinosFrame11HasInterBodyRowsOf12Nonzeros)
 {
     if (!exists(PAPER_DATA + "/meshes/dino_1303_4014.abq")) GTEST_SKIP() << "no authors' data at " << PAPER_DATA;
     const std::string path = SOURCE + "/scenes/two_dinos_1303.json";
-    SimulatorOptions opt = options();
-    opt.out_dir = tmp_dir("two_dinos");
+    SimulatorOptions opt = test::harness_step_options();
+    opt.out_dir = sim_tmp_dir("two_dinos");
     opt.frames = 12;
     Scene scene = load_scene(path, default_path_roots(path, PAPER_DATA));
     scene.output.snapshot_first = 11;
@@ -213,8 +203,8 @@ TEST(Simulator, TwoDinosFrame11HasInterBodyRowsOf12Nonzeros)
 TEST(Simulator, DemoWritesCsvPngAndObj)
 {
     const std::string path = SOURCE + "/scenes/demo.json";
-    SimulatorOptions opt = options();
-    opt.out_dir = tmp_dir("demo");
+    SimulatorOptions opt = test::harness_step_options();
+    opt.out_dir = sim_tmp_dir("demo");
     opt.frames = 20;
     Scene scene = load_scene(path, default_path_roots(path, ""));
     Simulator sim(std::move(scene), opt);

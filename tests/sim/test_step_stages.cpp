@@ -21,7 +21,7 @@ using nlohmann::json;
 
 namespace {
 
-std::string tmp_dir(const std::string& name)
+std::string stages_tmp_dir(const std::string& name)
 {
     const char* dir = std::getenv("TMPDIR");
     std::string p = std::string(dir ? dir : "/tmp") + "/cb_test_stages_" + std::to_string(::getpid()) + "_" + name;
@@ -85,7 +85,7 @@ TEST(StepStages, StepsCsvHasEveryStageFiniteAndNonNegative)
 {
     SimulatorOptions opt;
     opt.solve_step = harness_step_solver();
-    opt.out_dir = tmp_dir("csv");
+    opt.out_dir = stages_tmp_dir("csv");
     Simulator sim(load_scene_json(resting_box(2), "stages.json", PathRoots{}), opt);
     ASSERT_TRUE(sim.run());
     const auto rows = read_steps(opt.out_dir + "/steps.csv");

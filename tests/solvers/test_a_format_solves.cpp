@@ -32,18 +32,18 @@ public:
     std::vector<Vec> xs;
 };
 
-struct Run {
+struct FormatRun {
     SolverResult result;
     std::vector<Vec> first;
 };
 
-Run solve_with(const std::string& solver, const Qp& qp, const std::string& a_format)
+FormatRun solve_with(const std::string& solver, const Qp& qp, const std::string& a_format)
 {
     const nlohmann::json settings = {{"a_format", a_format}, {"max_iterations", 3000}};
     FirstIterates monitor;
     SolveContext context;
     context.monitor = &monitor;
-    Run run{builtin_registry().create(solver, settings)->solve(qp.view(), context), {}};
+    FormatRun run{builtin_registry().create(solver, settings)->solve(qp.view(), context), {}};
     run.first = std::move(monitor.xs);
     return run;
 }
@@ -62,9 +62,9 @@ std::string storage_for(const SpMat& A, AFormat format)
 /// near the stop threshold: 201 against 203 on one stress family). @return whether sbsr ran.
 bool expect_formats_agree(const std::string& solver, const Qp& qp)
 {
-    const Run csr = solve_with(solver, qp, "csr");
-    const Run bsr = solve_with(solver, qp, "bsr");
-    const Run sbsr = solve_with(solver, qp, "sbsr");
+    const FormatRun csr = solve_with(solver, qp, "csr");
+    const FormatRun bsr = solve_with(solver, qp, "bsr");
+    const FormatRun sbsr = solve_with(solver, qp, "sbsr");
     EXPECT_EQ(bsr.result.status, csr.result.status);
     EXPECT_EQ(sbsr.result.status, csr.result.status);
     if (!csr.result.info.contains("a_format")) return false;  // stopped before its products (not applicable ...)

@@ -26,18 +26,18 @@
 namespace cb {
 namespace {
 
-constexpr double TOL = 1e-6;
+constexpr double METAMORPHIC_TOL = 1e-6;
 
 /// A named problem and a point (x, lambda) near its solution, not on it (every part nonzero-ish).
-struct Fixture {
+struct MetamorphicFixture {
     std::string name;
     Qp qp;
 };
 
-const std::vector<Fixture>& fixtures()
+const std::vector<MetamorphicFixture>& fixtures()
 {
-    static const std::vector<Fixture> all = [] {
-        std::vector<Fixture> f;
+    static const std::vector<MetamorphicFixture> all = [] {
+        std::vector<MetamorphicFixture> f;
         f.push_back({"plane", make_synthetic("plane", {{"nx", 3}, {"ny", 2}, {"nz", 3}}, 3)});
         f.push_back({"coupled", make_synthetic("coupled", {{"nx", 3}, {"ny", 2}, {"nz", 3}}, 5)});
         const auto fem = select_stress_cases(stress_cases(false), {"fem-stiff-1e10"});
@@ -62,7 +62,7 @@ std::pair<Vec, Vec> probe_point(const Qp& qp)
     return {x, lambda};
 }
 
-struct Mapped {
+struct MappedQp {
     std::string name;
     Qp qp;
     std::function<Vec(const Vec&)> map_x, map_lambda, unmap_x, unmap_lambda;
@@ -120,9 +120,9 @@ Qp translate(const Qp& qp, const Vec& t)
     return out;
 }
 
-std::vector<Mapped> maps_of(const Qp& qp)
+std::vector<MappedQp> maps_of(const Qp& qp)
 {
-    std::vector<Mapped> maps;
+    std::vector<MappedQp> maps;
     const auto same = [](const Vec& v) { return v; };
     for (int e : {-26, 26}) {  // a = 2^-26 ~ 1.5e-8 and 2^26 ~ 6.7e7
         const double a = std::ldexp(1.0, e);
@@ -152,7 +152,7 @@ void expect_same_measure(const AccuracyParts& e, const AccuracyParts& f, bool ex
     const double parts_f[] = {f.stationarity, f.primal, f.dual, f.complementarity, f.gap, f.max()};
     const char* names[] = {"stationarity", "primal", "dual", "complementarity", "gap", "max"};
     for (int k = 0; k < 6; ++k) {
-        const double bound = exact ? 1e-9 * std::abs(parts_e[k]) : TOL / 10;
+        const double bound = exact ? 1e-9 * std::abs(parts_e[k]) : METAMORPHIC_TOL / 10;
         EXPECT_NEAR(parts_f[k], parts_e[k], bound) << what << ": " << names[k];
     }
 }
@@ -161,14 +161,14 @@ void expect_same_measure(const AccuracyParts& e, const AccuracyParts& f, bool ex
 
 TEST(AccuracyMetamorphic, MeasureOfMappedPointsAgrees)
 {
-    for (const Fixture& fx : fixtures()) {
+    for (const MetamorphicFixture& fx : fixtures()) {
         const auto [x, lambda] = probe_point(fx.qp);
         const AccuracyScale scale = accuracy_scale(fx.qp.view());
         const AccuracyParts e = accuracy(fx.qp.view(), scale, x, lambda);
         // The probe is off the solution in every part, so the agreement is not 0 = 0.
         ASSERT_GT(e.stationarity, 1e-8) << fx.name;
         ASSERT_GT(e.dual, 1e-8) << fx.name;
-        for (const Mapped& mp : maps_of(fx.qp)) {
+        for (const MappedQp& mp : maps_of(fx.qp)) {
             const std::string what = fx.name + " " + mp.name;
             const AccuracyScale mapped_scale = accuracy_scale(mp.qp.view());
             EXPECT_EQ(mapped_scale.length_source, scale.length_source) << what;
@@ -207,13 +207,13 @@ TEST(AccuracyMetamorphic, EverySolversConvergedHoldsOnTheMappedProblem)
     options.record_history = false;
     const std::vector<std::string> solvers = builtin_registry().names();
     long converged_runs = 0;
-    for (const Fixture& fx : fixtures()) {
+    for (const MetamorphicFixture& fx : fixtures()) {
         if (fx.qp.n() > 700) continue;  // the FEM snapshot: measure only (a solver sweep there is slow)
         for (const std::string& solver : solvers) {
-            const RunOutcome base = run_solver(fx.qp, solver, {{"tol", TOL}}, options);
-            for (const Mapped& mp : maps_of(fx.qp)) {
+            const RunOutcome base = run_solver(fx.qp, solver, {{"tol", METAMORPHIC_TOL}}, options);
+            for (const MappedQp& mp : maps_of(fx.qp)) {
                 const std::string what = fx.name + " / " + solver + " / " + mp.name;
-                const RunOutcome run = run_solver(mp.qp, solver, {{"tol", TOL}}, options);
+                const RunOutcome run = run_solver(mp.qp, solver, {{"tol", METAMORPHIC_TOL}}, options);
                 if (run.result.iterations != base.result.iterations)
                     std::cout << "[ finding ] " << what << ": " << base.status << " in " << base.result.iterations
                               << " iterations -> " << run.status << " in " << run.result.iterations << "\n";
@@ -229,7 +229,7 @@ TEST(AccuracyMetamorphic, EverySolversConvergedHoldsOnTheMappedProblem)
                 const AccuracyParts own = accuracy(mp.qp.view(), run.result.x, run.lambda_full);
                 const AccuracyParts back =
                     accuracy(fx.qp.view(), mp.unmap_x(run.result.x), mp.unmap_lambda(run.lambda_full));
-                EXPECT_LE(own.max(), TOL * (1 + 1e-9)) << what;
+                EXPECT_LE(own.max(), METAMORPHIC_TOL * (1 + 1e-9)) << what;
                 expect_same_measure(own, back, mp.exact, what);
             }
         }
@@ -245,21 +245,21 @@ TEST(AccuracyMetamorphic, MprgpOnCoupledRowsIsConvergedOnlyWhenTheOriginalRowsHo
     const Qp qp = make_synthetic("coupled", {}, 5);
     RunOptions options;
     options.record_history = false;
-    const RunOutcome run = run_solver(qp, "mprgp", {{"tol", TOL}}, options);
+    const RunOutcome run = run_solver(qp, "mprgp", {{"tol", METAMORPHIC_TOL}}, options);
     ASSERT_EQ(run.result.status, SolveStatus::CONVERGED) << run.result.message;
     ASSERT_LT(run.m_solved, qp.m());
-    EXPECT_LE(run.accuracy_solved.max(), TOL * (1 + 1e-9));
+    EXPECT_LE(run.accuracy_solved.max(), METAMORPHIC_TOL * (1 + 1e-9));
     // Dropped rows are violated by far more than tol of the scene size at mprgp's point.
-    EXPECT_GT(run.accuracy.primal, 100 * TOL);
+    EXPECT_GT(run.accuracy.primal, 100 * METAMORPHIC_TOL);
     EXPECT_EQ(run.status, "solved_relaxation");
     EXPECT_EQ(run.record["status"], "solved_relaxation");
     EXPECT_EQ(run.record["solver_status"], "converged");
     EXPECT_EQ(run.record["m_solved"].get<long>(), run.m_solved);
     EXPECT_TRUE(run.status_confirmed);  // its claim holds on the problem it solved
     // A solver on the original rows reaches converged on the same snapshot.
-    const RunOutcome coupled = run_solver(qp, "mprgp-coupled", {{"tol", TOL}}, options);
+    const RunOutcome coupled = run_solver(qp, "mprgp-coupled", {{"tol", METAMORPHIC_TOL}}, options);
     EXPECT_EQ(coupled.status, "converged") << coupled.result.message;
-    EXPECT_LE(coupled.accuracy.max(), TOL * (1 + 1e-9));
+    EXPECT_LE(coupled.accuracy.max(), METAMORPHIC_TOL * (1 + 1e-9));
 }
 
 // An empty feasible set: no solver's run is "converged", whatever it says.
@@ -272,9 +272,10 @@ TEST(AccuracyMetamorphic, InfeasibleSetIsNeverConverged)
         for (const std::string& solver : builtin_registry().names()) {
             // A cap keeps the solvers that iterate on an empty set (siconos-nsn: 10,000 Newton
             // steps, over a minute) short; the claim tested is the verdict, not the iteration count.
-            const RunOutcome run = run_solver(qp, solver, {{"tol", TOL}, {"max_iterations", 1000}}, options);
+            const RunOutcome run =
+                run_solver(qp, solver, {{"tol", METAMORPHIC_TOL}, {"max_iterations", 1000}}, options);
             EXPECT_NE(run.status, "converged") << c.id << " / " << solver << ": " << run.result.message;
-            EXPECT_GT(run.accuracy.primal, TOL) << c.id << " / " << solver;
+            EXPECT_GT(run.accuracy.primal, METAMORPHIC_TOL) << c.id << " / " << solver;
         }
     }
 }
@@ -295,11 +296,11 @@ TEST(AccuracyMetamorphic, StartMovedOneKilometreGivesTheSameConvergedAccuracy)
     const AccuracyScale scale = accuracy_scale(qp.view());
     for (const std::string& solver : builtin_registry().names()) {
         for (const Qp* p : {&qp, static_cast<const Qp*>(&moved)}) {
-            const RunOutcome run = run_solver(*p, solver, {{"tol", TOL}}, options);
+            const RunOutcome run = run_solver(*p, solver, {{"tol", METAMORPHIC_TOL}}, options);
             if (run.status != "converged") continue;
             const std::string what = solver + (p == &qp ? " (start)" : " (start moved 1 km)");
-            EXPECT_LE(run.accuracy.max(), TOL * (1 + 1e-9)) << what;
-            EXPECT_LE(energy_gap(scale, run.objective, ref.objective), 2 * TOL) << what;
+            EXPECT_LE(run.accuracy.max(), METAMORPHIC_TOL * (1 + 1e-9)) << what;
+            EXPECT_LE(energy_gap(scale, run.objective, ref.objective), 2 * METAMORPHIC_TOL) << what;
         }
     }
 }

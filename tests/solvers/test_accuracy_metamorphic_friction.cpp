@@ -22,7 +22,7 @@
 namespace cb {
 namespace {
 
-constexpr double TOL = 1e-6;
+constexpr double FRICTION_METAMORPHIC_TOL = 1e-6;
 
 /// A frictional plane (mu cycling through 0.1 .. 0.9 and 0) and a point near its solution: the
 /// frictionless solution perturbed, with tangential multipliers of a fixed pattern.
@@ -51,16 +51,16 @@ Probe probe()
     return p;
 }
 
-struct Mapped {
+struct MappedFrictionQp {
     std::string name;
     Qp qp;
     std::function<Vec(const Vec&)> map_x, map_lambda, map_lambda_t;
     bool exact = true;
 };
 
-std::vector<Mapped> maps_of(const Qp& qp)
+std::vector<MappedFrictionQp> friction_maps_of(const Qp& qp)
 {
-    std::vector<Mapped> maps;
+    std::vector<MappedFrictionQp> maps;
     const auto same = [](const Vec& v) { return v; };
     const Eigen::Index m = qp.m(), n = qp.n();
     for (int e : {-26, 26}) {
@@ -113,13 +113,13 @@ std::vector<Mapped> maps_of(const Qp& qp)
     return maps;
 }
 
-void expect_same_measure(const AccuracyParts& e, const AccuracyParts& f, bool exact, const std::string& what)
+void expect_same_friction_measure(const AccuracyParts& e, const AccuracyParts& f, bool exact, const std::string& what)
 {
     const double parts_e[] = {e.stationarity, e.primal, e.dual, e.complementarity, e.gap, e.friction, e.max()};
     const double parts_f[] = {f.stationarity, f.primal, f.dual, f.complementarity, f.gap, f.friction, f.max()};
     const char* names[] = {"stationarity", "primal", "dual", "complementarity", "gap", "friction", "max"};
     for (int k = 0; k < 7; ++k) {
-        const double bound = exact ? 1e-9 * std::abs(parts_e[k]) : TOL / 10;
+        const double bound = exact ? 1e-9 * std::abs(parts_e[k]) : FRICTION_METAMORPHIC_TOL / 10;
         EXPECT_NEAR(parts_f[k], parts_e[k], bound) << what << ": " << names[k];
     }
 }
@@ -136,11 +136,11 @@ TEST(AccuracyMetamorphicFriction, MeasureOfMappedPointsAgrees)
     ASSERT_GT(e.friction, 1e-8);
     ASSERT_GT(e.stationarity, 1e-8);
     ASSERT_GT(e.gap, 1e-12);
-    for (const Mapped& mp : maps_of(p.qp)) {
+    for (const MappedFrictionQp& mp : friction_maps_of(p.qp)) {
         const Vec lambda_t = mp.map_lambda_t(p.lambda_t);
         const AccuracyParts f =
             accuracy(mp.qp.view(), accuracy_scale(mp.qp.view()), mp.map_x(p.x), mp.map_lambda(p.lambda), &lambda_t);
-        expect_same_measure(e, f, mp.exact, mp.name);
+        expect_same_friction_measure(e, f, mp.exact, mp.name);
     }
 }
 

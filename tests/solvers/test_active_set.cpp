@@ -26,7 +26,10 @@ SolverResult run_active_set(const Qp& qp, const nlohmann::json& settings = nlohm
     return solver.solve(qp.view(), cb::SolveContext{});
 }
 
-double relative_kkt(const Qp& qp, const SolverResult& r) { return cb::accuracy(qp.view(), r.x, r.lambda).max(); }
+double relative_kkt_of_result(const Qp& qp, const SolverResult& r)
+{
+    return cb::accuracy(qp.view(), r.x, r.lambda).max();
+}
 
 /// Checks the multiplier sign and the exact zero on clearly inactive rows.
 void expect_multipliers_clean(const Qp& qp, const SolverResult& r)
@@ -118,7 +121,7 @@ TEST(ActiveSet, DegenerateVertex)
     EXPECT_NEAR(JtL[0], 0.0 + 2 + 1 + 3, 1e-12);  // A x* - b = (3,3) + (3,3)
     EXPECT_NEAR(JtL[1], 6.0, 1e-12);
     EXPECT_GE(r.lambda.minCoeff(), 0.0);
-    EXPECT_LE(relative_kkt(qp, r), 1e-12);
+    EXPECT_LE(relative_kkt_of_result(qp, r), 1e-12);
     EXPECT_LE(r.info["working_set"].get<long>(), 2);  // at most 2 independent rows in 2-D
 }
 
@@ -273,7 +276,7 @@ TEST(ActiveSet, MatchesEnumerationOfActiveSetsOnRandomDenseQps)
         ASSERT_EQ(r.status, SolveStatus::CONVERGED) << "trial " << trial << ": " << r.message;
         EXPECT_NEAR(cb::objective(qp.view(), r.x), f_ref, 1e-10 * std::max(1.0, std::abs(f_ref)));
         EXPECT_LE((r.x - x_ref).lpNorm<Eigen::Infinity>(), 1e-8) << "trial " << trial;
-        EXPECT_LE(relative_kkt(qp, r), 1e-10);
+        EXPECT_LE(relative_kkt_of_result(qp, r), 1e-10);
         expect_multipliers_clean(qp, r);
     }
 }
@@ -326,7 +329,7 @@ TEST_P(ActiveSetFamilies, ReachesRelativeKkt1e10)
         ASSERT_GT(qp.m(), 0);
         const SolverResult r = run_active_set(qp);
         ASSERT_EQ(r.status, SolveStatus::CONVERGED) << fc.family << " seed " << seed << ": " << r.message;
-        EXPECT_LE(relative_kkt(qp, r), 1e-10) << fc.family << " seed " << seed;
+        EXPECT_LE(relative_kkt_of_result(qp, r), 1e-10) << fc.family << " seed " << seed;
         EXPECT_LE(cb::max_violation(qp.view(), r.x), 1e-10 * std::max(1.0, qp.c.lpNorm<Eigen::Infinity>()));
         expect_multipliers_clean(qp, r);
         EXPECT_GT(r.info["working_set"].get<long>(), 0);
@@ -380,7 +383,7 @@ TEST(ActiveSet, HandlesTwoThousandRows)
     ASSERT_GT(qp.m(), 1500);
     const SolverResult r = run_active_set(qp);
     ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
-    EXPECT_LE(relative_kkt(qp, r), 1e-10);
+    EXPECT_LE(relative_kkt_of_result(qp, r), 1e-10);
     expect_multipliers_clean(qp, r);
     std::cout << "m = " << qp.m() << ", n = " << qp.n() << ": setup " << r.setup_s << " s, solve " << r.solve_s
               << " s, info " << r.info.dump() << "\n";

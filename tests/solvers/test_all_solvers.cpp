@@ -16,7 +16,7 @@ using cb::SolverResult;
 using cb::SolveStatus;
 using cb::Vec;
 
-constexpr double TOL = 1e-9;
+constexpr double ALL_SOLVERS_TOL = 1e-9;
 
 struct HandCase {
     std::string name;
@@ -47,7 +47,7 @@ TEST_P(AllSolvers, TinyHandDerivedQpsSatisfyKkt)
 {
     for (const HandCase& hc : hand_cases()) {
         SCOPED_TRACE(GetParam() + " on " + hc.name);
-        const auto solver = cb::builtin_registry().create(GetParam(), {{"tol", TOL}});
+        const auto solver = cb::builtin_registry().create(GetParam(), {{"tol", ALL_SOLVERS_TOL}});
         if (solver->requires_decoupled() && !hc.decoupled) continue;
         const SolverResult r = solver->solve(hc.qp.view(), cb::SolveContext{});
         ASSERT_EQ(r.x.size(), hc.qp.n());
@@ -63,7 +63,7 @@ TEST_P(AllSolvers, TinyHandDerivedQpsSatisfyKkt)
         ASSERT_EQ(r.status, SolveStatus::CONVERGED) << cb::to_string(r.status) << ": " << r.message;
         const cb::AccuracyParts e = cb::accuracy(hc.qp.view(), r.x, r.lambda);
         if (r.criterion == cb::StopCriterion::ACCURACY) {
-            EXPECT_LE(e.max(), TOL * (1 + 1e-6)) << "status honesty";
+            EXPECT_LE(e.max(), ALL_SOLVERS_TOL * (1 + 1e-6)) << "status honesty";
         }
         EXPECT_LE(e.stationarity, 1e-6);
         EXPECT_LE(e.primal, 1e-6);

@@ -20,7 +20,7 @@ using cb::SolverResult;
 using cb::SolveStatus;
 using cb::Vec;
 
-SolverResult run_cg(const Qp& qp, nlohmann::json settings)
+SolverResult run_deflated_cg(const Qp& qp, nlohmann::json settings)
 {
     // 1e-9: a direct solve of the tipping column reads e = 1.6e-10 (its bodies' motion at the
     // rounding of a backward-stable solve), so 1e-10 is out of any double-precision solver's reach.
@@ -48,8 +48,8 @@ TEST(CgDeflation, StiffBodySameSolutionFewerIcholIterations)
     ASSERT_EQ(ldlt.info(), Eigen::Success);
     const Vec exact = ldlt.solve(qp.b);
     for (const char* precond : {"jacobi", "ichol"}) {
-        const SolverResult plain = run_cg(qp, {{"precond", precond}});
-        const SolverResult rigid = run_cg(qp, {{"precond", precond}, {"deflation", "rigid"}});
+        const SolverResult plain = run_deflated_cg(qp, {{"precond", precond}});
+        const SolverResult rigid = run_deflated_cg(qp, {{"precond", precond}, {"deflation", "rigid"}});
         ASSERT_EQ(plain.status, SolveStatus::CONVERGED) << plain.message;
         ASSERT_EQ(rigid.status, SolveStatus::CONVERGED) << rigid.message;
         EXPECT_FALSE(plain.info.contains("deflation"));
@@ -106,8 +106,8 @@ TEST(CgDeflation, NoSlowModeLeavesPlainPcgUnchanged)
     const Qp random = cb::make_synthetic("random-spd", {{"n", 99}, {"m", 20}, {"condition", 1e6}}, 1);
     const Qp soft = cb::make_synthetic("plane", {{"youngs", 1e3}}, 1);
     for (const Qp* qp : {&random, &soft}) {
-        const SolverResult plain = run_cg(*qp, {{"precond", "jacobi"}});
-        const SolverResult rigid = run_cg(*qp, {{"precond", "jacobi"}, {"deflation", "rigid"}});
+        const SolverResult plain = run_deflated_cg(*qp, {{"precond", "jacobi"}});
+        const SolverResult rigid = run_deflated_cg(*qp, {{"precond", "jacobi"}, {"deflation", "rigid"}});
         ASSERT_EQ(plain.status, SolveStatus::CONVERGED) << plain.message;
         ASSERT_EQ(rigid.status, SolveStatus::CONVERGED) << rigid.message;
         EXPECT_FALSE(rigid.info["deflation"]["active"].get<bool>());

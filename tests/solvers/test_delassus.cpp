@@ -10,11 +10,11 @@ namespace cb {
 namespace {
 
 /// A random SPD A = B'B + n I (n x n, about 4 entries a row in B) and random rows H (k x n, 3 a row).
-struct Pair {
+struct DelassusPair {
     SpMat A, H;
 };
 
-Pair random_pair(int n, int k, unsigned seed)
+DelassusPair random_pair(int n, int k, unsigned seed)
 {
     std::mt19937 rng(seed);
     std::uniform_int_distribution<int> col(0, n - 1);
@@ -33,11 +33,11 @@ Pair random_pair(int n, int k, unsigned seed)
     return {A, H};
 }
 
-double max_abs(const Eigen::MatrixXd& X) { return X.cwiseAbs().maxCoeff(); }
+double max_abs_entry(const Eigen::MatrixXd& X) { return X.cwiseAbs().maxCoeff(); }
 
 TEST(Delassus, DenseFormEqualsTheDenseCholeskyAndIsSymmetric)
 {
-    const Pair p = random_pair(200, 150, 3);
+    const DelassusPair p = random_pair(200, 150, 3);
     Delassus delassus;
     Counters counters;
     ASSERT_TRUE(delassus.factor(SpMatCol(p.A), counters));
@@ -53,29 +53,29 @@ TEST(Delassus, DenseFormEqualsTheDenseCholeskyAndIsSymmetric)
     const Eigen::LLT<Eigen::MatrixXd> llt(A);
     const Eigen::MatrixXd Y_ref = llt.solve(H.transpose());
     const Eigen::MatrixXd W_ref = H * Y_ref;
-    EXPECT_LE(max_abs(W - W_ref), 1e-13 * max_abs(W_ref));
-    EXPECT_LE(max_abs(Y - Y_ref), 1e-13 * max_abs(Y_ref));
-    EXPECT_EQ(max_abs(W - W.transpose()), 0.0);  // symmetrised exactly
+    EXPECT_LE(max_abs_entry(W - W_ref), 1e-13 * max_abs_entry(W_ref));
+    EXPECT_LE(max_abs_entry(Y - Y_ref), 1e-13 * max_abs_entry(Y_ref));
+    EXPECT_EQ(max_abs_entry(W - W.transpose()), 0.0);  // symmetrised exactly
 
     // Another block size solves the same columns: the same W to rounding.
     Eigen::MatrixXd W1;
     DelassusForming one_column;
     one_column.block = 1;
     ASSERT_TRUE(delassus.form_dense(p.H, W1, counters, one_column));
-    EXPECT_LE(max_abs(W1 - W), 1e-14 * max_abs(W));
+    EXPECT_LE(max_abs_entry(W1 - W), 1e-14 * max_abs_entry(W));
     EXPECT_EQ(counters.cholmod_solves, 300);
 }
 
 TEST(Delassus, SparseFormEqualsTheDenseForm)
 {
-    const Pair p = random_pair(120, 90, 5);
+    const DelassusPair p = random_pair(120, 90, 5);
     Delassus delassus;
     Counters counters;
     ASSERT_TRUE(delassus.factor(SpMatCol(p.A), counters));
     Eigen::MatrixXd W;
     ASSERT_TRUE(delassus.form_dense(p.H, W, counters));
     const Eigen::MatrixXd W_sparse(delassus.form_sparse(p.H, counters));
-    EXPECT_LE(max_abs(W_sparse - W), 1e-13 * max_abs(W));
+    EXPECT_LE(max_abs_entry(W_sparse - W), 1e-13 * max_abs_entry(W));
     EXPECT_EQ(counters.cholmod_solves, 180);
 }
 
@@ -98,7 +98,7 @@ TEST(Delassus, BlockDiagonalAGivesABlockSparseW)
 
 TEST(Delassus, TimeUpStopsAfterTheBlockFormed)
 {
-    const Pair p = random_pair(100, 100, 7);
+    const DelassusPair p = random_pair(100, 100, 7);
     Delassus delassus;
     Counters counters;
     ASSERT_TRUE(delassus.factor(SpMatCol(p.A), counters));
@@ -124,7 +124,7 @@ TEST(Delassus, IndefiniteAIsRefused)
 
 TEST(Delassus, SolveCountsOneSolve)
 {
-    const Pair p = random_pair(50, 10, 9);
+    const DelassusPair p = random_pair(50, 10, 9);
     Delassus delassus;
     Counters counters;
     ASSERT_TRUE(delassus.factor(SpMatCol(p.A), counters));

@@ -10,6 +10,7 @@
 #include "solvers/friction/friction_nsgs.hpp"
 #include "solvers/measure/friction_error.hpp"
 #include "solvers/peers/siconos_fc3d.hpp"
+#include "tests/solvers/fclib_data.hpp"
 
 #include <gtest/gtest.h>
 
@@ -20,7 +21,6 @@
 
 namespace {
 
-const std::filesystem::path DATA = std::filesystem::path(CB_TEST_DATA_DIR) / "fclib";
 const char* const LOCAL_FILES[] = {"Capsules-i125-1213.hdf5", "LMGC_100_PR_PerioBox-i00361-60-03000.hdf5"};
 
 /// A random point with contacts in every regime: inside the cone, outside, in the polar cone, zero.
@@ -66,7 +66,7 @@ TEST(FrictionError, MatchesSiconosOnRealLocalFiles)
     if (!cb::siconos_fc3d_built()) GTEST_SKIP() << "Siconos numerics is not built";
     std::mt19937 rng(48);
     for (const char* name : LOCAL_FILES) {
-        const cb::FrictionLocal p = cb::read_fclib_local_friction((DATA / name).string());
+        const cb::FrictionLocal p = cb::read_fclib_local_friction((cb::test::FCLIB_DATA / name).string());
         const Eigen::Index m = p.contacts();
         expect_same_error(p, cb::Vec::Zero(3 * m), std::string(name) + " at r = 0");
         for (const double scale : {1e-6, 1e-2, 1.0, 1e3})

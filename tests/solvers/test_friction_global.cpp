@@ -9,6 +9,7 @@
 #include "solvers/friction/friction_global_reduction.hpp"
 #include "solvers/measure/friction_error.hpp"
 #include "solvers/peers/siconos_gfc3d.hpp"
+#include "tests/solvers/fclib_data.hpp"
 
 #include <gtest/gtest.h>
 
@@ -18,7 +19,6 @@
 
 namespace {
 
-const std::filesystem::path DATA = std::filesystem::path(CB_TEST_DATA_DIR) / "fclib";
 const char* const GLOBAL_FILES[] = {"CubeH8.hdf5",
                                     "LMGC_GlobalFrictionContactProblem00046.hdf5",
                                     "LMGC_GFC3D-i00001-1-00000.hdf5",
@@ -38,7 +38,7 @@ TEST(FrictionGlobal, ReductionEqualsTheDenseComputationOnTheRealFiles)
 {
     if (cb::fclib_version().empty()) GTEST_SKIP() << "FCLIB import not built (libfclib-dev missing)";
     for (const char* name : GLOBAL_FILES) {
-        const cb::FrictionGlobal p = cb::read_fclib_global_friction((DATA / name).string());
+        const cb::FrictionGlobal p = cb::read_fclib_global_friction((cb::test::FCLIB_DATA / name).string());
         const cb::GlobalReduction reduction(p);
         const Eigen::MatrixXd M(p.M), H(p.H);
         const Eigen::LLT<Eigen::MatrixXd> llt(M);
@@ -94,7 +94,7 @@ TEST(FrictionGlobal, ErrorMatchesSiconosGfc3dComputeErrorOnTheRealFiles)
     if (!cb::siconos_gfc3d_built()) GTEST_SKIP() << "Siconos numerics is not built";
     std::mt19937 rng(48);
     for (const char* name : GLOBAL_FILES) {
-        const cb::FrictionGlobal p = cb::read_fclib_global_friction((DATA / name).string());
+        const cb::FrictionGlobal p = cb::read_fclib_global_friction((cb::test::FCLIB_DATA / name).string());
         const Eigen::Index m3 = 3 * p.contacts(), n = p.unknowns();
         expect_same_global_error(p, cb::Vec::Zero(m3), cb::Vec::Zero(n), std::string(name) + " at 0");
         const cb::GlobalReduction reduction(p);

@@ -14,6 +14,8 @@
 #include "solvers/measure/accuracy.hpp"
 #include "solvers/measure/friction_error.hpp"
 #include "solvers/mprgp/mprgp_box.hpp"
+#include "tests/solvers/max_abs.hpp"
+#include "tests/solvers/quiet_run_options.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -42,16 +44,7 @@ const std::vector<std::string> NEW_ENTRIES = {"mprgp-tresca-fp", "mprgp+ica-fric
 /// Newton matrix: `friction-solve` on the same problem as FCLIB global says so too); the run must say so.
 const std::string GFC3D_NSN_FAILS = "siconos-gfc3d-nsn";
 
-RunOptions quiet()
-{
-    RunOptions options;
-    options.record_history = false;
-    return options;
-}
-
 bool is_peer(const std::string& name) { return name.rfind("siconos-", 0) == 0; }
-
-double max_abs(const Vec& v) { return v.size() ? v.cwiseAbs().maxCoeff() : 0.0; }
 
 /// The two frictional snapshots: a deformable body pushed sideways by 0.2 of its weight with mu = 0.5
 /// (some contacts stick, some slide: tests/solvers/test_nsgs_friction.cpp counts them), and 12
@@ -69,7 +62,8 @@ const std::vector<Snapshot>& snapshots()
         out.push_back({"pushed body", testing_qps::pushed_plane(0.2, 0.5), {}});
         out.push_back({"particles", particles_on_a_plane(12), {}});
         for (Snapshot& s : out)
-            s.reference = run_solver(s.qp, "nsgs-friction", {{"tol", 1e-10}, {"max_iterations", 100000}}, quiet());
+            s.reference = run_solver(s.qp, "nsgs-friction", {{"tol", 1e-10}, {"max_iterations", 100000}},
+                                     test::quiet_run_options());
         return out;
     }();
     return all;
@@ -90,7 +84,7 @@ TEST_P(FrictionRegistry, ConvergesOnTheFrictionalErrorAndAgreesWithNsgsFriction)
         ASSERT_TRUE(qp.frictional());
         const RunOutcome& ref = snapshot.reference;
         ASSERT_EQ(ref.status, "converged") << ref.result.message;
-        const RunOutcome run = run_solver(qp, name, {{"tol", 1e-6}}, quiet());
+        const RunOutcome run = run_solver(qp, name, {{"tol", 1e-6}}, test::quiet_run_options());
         if (name == GFC3D_NSN_FAILS && snapshot.name == "pushed body") {
             EXPECT_EQ(run.status, "stalled") << run.result.message;
             EXPECT_NE(run.result.message.find("gfc3d_driver info 1"), std::string::npos) << run.result.message;
@@ -111,10 +105,10 @@ TEST_P(FrictionRegistry, ConvergesOnTheFrictionalErrorAndAgreesWithNsgsFriction)
         // The same point as nsgs-friction's: x to 1e-6 of the scene size, the forces to 5e-4 of the
         // largest normal force (measured at tol 1e-6: at most 7.6e-5, mprgp-tresca-fp's tangential ones).
         const double l = run.scale.length;
-        EXPECT_LE(max_abs(run.result.x - ref.result.x) / l, 1e-6) << what;
-        const double force = max_abs(ref.lambda_full);
-        EXPECT_LE(max_abs(run.lambda_full - ref.lambda_full), 5e-4 * force) << what;
-        EXPECT_LE(max_abs(run.result.lambda_t - ref.result.lambda_t), 5e-4 * force) << what;
+        EXPECT_LE(test::max_abs(run.result.x - ref.result.x) / l, 1e-6) << what;
+        const double force = test::max_abs(ref.lambda_full);
+        EXPECT_LE(test::max_abs(run.lambda_full - ref.lambda_full), 5e-4 * force) << what;
+        EXPECT_LE(test::max_abs(run.result.lambda_t - ref.result.lambda_t), 5e-4 * force) << what;
     }
 }
 
@@ -123,18 +117,18 @@ TEST_P(FrictionRegistry, RunsAtMuZeroWithAndWithoutFrictionFields)
     const std::string name = GetParam();
     if (!builtin_registry().contains(name)) GTEST_SKIP() << name << " is not built (Siconos numerics not found)";
     Qp qp = make_synthetic("plane", {{"nx", 3}, {"ny", 2}, {"nz", 3}}, 5);
-    const RunOutcome exact = run_solver(qp, "active-set", {{"tol", 1e-12}}, quiet());
+    const RunOutcome exact = run_solver(qp, "active-set", {{"tol", 1e-12}}, test::quiet_run_options());
     ASSERT_EQ(exact.status, "converged");
     for (const bool with_fields : {false, true}) {
         if (with_fields) testing_qps::add_friction(qp, [](Eigen::Index) { return 0.0; });
         const std::string what = name + (with_fields ? " (mu = 0 given)" : " (no friction fields)");
-        const RunOutcome run = run_solver(qp, name, {{"tol", 1e-6}}, quiet());
+        const RunOutcome run = run_solver(qp, name, {{"tol", 1e-6}}, test::quiet_run_options());
         ASSERT_EQ(run.status, "converged") << what << ": " << run.result.message;
         EXPECT_LE(run.accuracy.max(), 1e-6) << what;
-        EXPECT_LE(max_abs(run.result.x - exact.result.x) / run.scale.length, 1e-5) << what;
+        EXPECT_LE(test::max_abs(run.result.x - exact.result.x) / run.scale.length, 1e-5) << what;
         EXPECT_EQ(run.result.lambda_t.size(), with_fields ? 2 * qp.m() : 0) << what;
         // No tangential force at mu = 0 (Siconos' fc3d Newton leaves 1.8e-15 of rounding).
-        EXPECT_LE(max_abs(run.result.lambda_t), 1e-12 * max_abs(exact.lambda_full)) << what;
+        EXPECT_LE(test::max_abs(run.result.lambda_t), 1e-12 * test::max_abs(exact.lambda_full)) << what;
     }
 }
 
@@ -147,7 +141,7 @@ INSTANTIATE_TEST_SUITE_P(Entries, FrictionRegistry, ::testing::ValuesIn(NEW_ENTR
                          });
 
 /// Records every iterate's x.
-struct Iterates : Monitor {
+struct FrictionIterates : Monitor {
     std::vector<Vec> x;
     bool on_iteration(const IterationInfo& info) override
     {
@@ -185,7 +179,7 @@ TEST(FrictionRegistryMuZero, MprgpTrescaFpReturnsMprgpBoxsIterateOnTheNormalBloc
         MprgpBoxSettings box_settings;
         box_settings.common.stop = StopRule::NATIVE;
         box_settings.common.tol = 1e-8;
-        Iterates box;
+        FrictionIterates box;
         SolveContext context;
         context.monitor = &box;
         const SolverResult box_run = MprgpBoxSolver(box_settings).solve(normal.view(), context);

@@ -15,7 +15,7 @@ using test::GridQpParams;
 using test::make_grid_qp;
 using test::relative_kkt;
 
-SolverResult run(const Qp& qp, const nlohmann::json& settings, const SolveContext& context = {})
+SolverResult run_ica(const Qp& qp, const nlohmann::json& settings, const SolveContext& context = {})
 {
     return builtin_registry().create("ica", settings)->solve(qp.view(), context);
 }
@@ -24,7 +24,7 @@ TEST(Ica, ConvergesOnPlaneRowsToTheCommonKkt)
 {
     const Qp qp = make_grid_qp(GridQpParams{});
     ASSERT_GT(qp.m(), 10);
-    const SolverResult r = run(qp, {{"tol", 1e-6}});
+    const SolverResult r = run_ica(qp, {{"tol", 1e-6}});
     ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
     EXPECT_EQ(r.criterion, cb::StopCriterion::ACCURACY);
     EXPECT_LE(relative_kkt(qp, r.x, r.lambda), 1e-6);
@@ -47,7 +47,7 @@ TEST(Ica, ConvergesWithCoupledRows)
     GridQpParams p;
     p.coupled = true;
     const Qp qp = make_grid_qp(p);
-    const SolverResult r = run(qp, {{"tol", 1e-6}, {"max_iterations", 20000}});
+    const SolverResult r = run_ica(qp, {{"tol", 1e-6}, {"max_iterations", 20000}});
     ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
     EXPECT_LE(relative_kkt(qp, r.x, r.lambda), 1e-6);
     EXPECT_EQ(r.info.at("B_diagonal"), false);
@@ -56,7 +56,7 @@ TEST(Ica, ConvergesWithCoupledRows)
 TEST(Ica, ReportsMaxIterationsHonestly)
 {
     const Qp qp = make_grid_qp(GridQpParams{});
-    const SolverResult r = run(qp, {{"tol", 1e-12}, {"max_iterations", 3}});
+    const SolverResult r = run_ica(qp, {{"tol", 1e-12}, {"max_iterations", 3}});
     EXPECT_EQ(r.status, SolveStatus::MAX_ITERATIONS);
     EXPECT_EQ(r.iterations, 3);
     EXPECT_EQ(r.criterion, cb::StopCriterion::NONE);
@@ -71,7 +71,7 @@ TEST(Ica, NativeStopMeetsStationarityWhileStillPenetrating)
     p.stiffness = 200.0;  // stiff: GS sweeps propagate the contact forces slowly
     const Qp qp = make_grid_qp(p);
     const double tol = 1e-2;
-    const SolverResult r = run(qp, {{"stop", "native"}, {"tol", tol}});
+    const SolverResult r = run_ica(qp, {{"stop", "native"}, {"tol", tol}});
     ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
     EXPECT_EQ(r.criterion, cb::StopCriterion::NATIVE);
     EXPECT_LE(r.native_residual, tol);
@@ -99,7 +99,7 @@ TEST(Ica, NativeStopMeetsStationarityWhileStillPenetrating)
 TEST(Ica, UnconstrainedStartIsTimedApartAndCounted)
 {
     const Qp qp = make_grid_qp(GridQpParams{});
-    const SolverResult r = run(qp, {{"tol", 1e-6}, {"start", "unconstrained"}});
+    const SolverResult r = run_ica(qp, {{"tol", 1e-6}, {"start", "unconstrained"}});
     ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
     EXPECT_LE(relative_kkt(qp, r.x, r.lambda), 1e-6);
     EXPECT_EQ(r.counters.cholmod_factorizations, 1);
@@ -114,7 +114,7 @@ TEST(Ica, EmptyJIsBlockGaussSeidel)
     Qp qp = make_grid_qp(GridQpParams{});
     qp.J = SpMat(0, qp.n());
     qp.c = Vec(0);
-    const SolverResult r = run(qp, {{"tol", 1e-8}});
+    const SolverResult r = run_ica(qp, {{"tol", 1e-8}});
     ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
     const Vec exact = Eigen::SimplicialLDLT<SpMatCol>(SpMatCol(qp.A)).solve(qp.b);
     EXPECT_LT((r.x - exact).lpNorm<Eigen::Infinity>(), 1e-6);
@@ -133,7 +133,7 @@ TEST(Ica, ZeroRowsOfJAreHarmless)
     qp.J = J;
     qp.c.conservativeResize(qp.J.rows());
     qp.c.tail(2).setZero();
-    const SolverResult r = run(qp, {{"tol", 1e-6}});
+    const SolverResult r = run_ica(qp, {{"tol", 1e-6}});
     ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
     EXPECT_LE(relative_kkt(qp, r.x, r.lambda), 1e-6);
     EXPECT_EQ(r.lambda.tail(2), Vec::Zero(2));
@@ -144,7 +144,7 @@ TEST(Ica, RefusesNonSpdBlocks)
 {
     Qp qp = make_grid_qp(GridQpParams{});
     qp.A.coeffRef(4, 4) = -1.0;
-    const SolverResult r = run(qp, {});
+    const SolverResult r = run_ica(qp, {});
     EXPECT_EQ(r.status, SolveStatus::INVALID_INPUT);
     EXPECT_EQ(r.message, "ica: A must be SPD: 3x3 diagonal block of vertex 1 (rows 3..5) is not positive definite");
 }
@@ -155,7 +155,7 @@ TEST(Ica, TimeLimitStopsTheLoop)
     p.nx = 12, p.ny = 6, p.nz = 12;
     p.stiffness = 1e4;
     const Qp qp = make_grid_qp(p);
-    const SolverResult r = run(qp, {{"tol", 1e-14}, {"time_limit_s", 0.05}, {"max_iterations", 100000000}});
+    const SolverResult r = run_ica(qp, {{"tol", 1e-14}, {"time_limit_s", 0.05}, {"max_iterations", 100000000}});
     EXPECT_EQ(r.status, SolveStatus::TIME_LIMIT);
     EXPECT_LT(r.setup_s + r.solve_s, 0.5);
 }

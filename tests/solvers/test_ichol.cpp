@@ -5,6 +5,7 @@
 #include "solvers/core/registry.hpp"
 #include "solvers/linalg/ichol.hpp"
 #include "solvers/measure/accuracy.hpp"
+#include "tests/solvers/dual_test_problems.hpp"
 
 #include <Eigen/SparseCholesky>
 #include <gtest/gtest.h>
@@ -17,11 +18,6 @@ namespace {
 using cb::Qp;
 using cb::SolveStatus;
 using cb::Vec;
-
-double relative_kkt(const Qp& qp, const Vec& x, const Vec& lambda)
-{
-    return cb::accuracy(qp.view(), x, lambda).max();  // the accuracy measure (docs/accuracy.md)
-}
 
 /// A stiff body on the ground with every other row of J active at x0 (x0 moved onto them).
 struct FaceFixture {
@@ -115,7 +111,7 @@ TEST_P(IcholStiffFamily, MprgpWithinTwiceCg)
                                     ->solve(qp.view(), {});
     ASSERT_EQ(cg.status, SolveStatus::CONVERGED) << cg.message;
     ASSERT_EQ(mp.status, SolveStatus::CONVERGED) << mp.message;
-    EXPECT_LE(relative_kkt(qp, mp.x, mp.lambda), 1e-8);
+    EXPECT_LE(cb::test::relative_kkt(qp, mp.x, mp.lambda), 1e-8);
     EXPECT_LE(mp.iterations, 2 * cg.iterations) << "mprgp " << mp.iterations << ", cg " << cg.iterations;
     EXPECT_GE(mp.counters.precond_factorizations, 1);
     std::printf(

@@ -9,6 +9,7 @@
 #include "solvers/mprgp/decouple.hpp"
 #include "solvers/mprgp/mprgp.hpp"
 #include "solvers/mprgp/mprgp_kernels.hpp"
+#include "tests/solvers/dual_test_problems.hpp"
 
 #include <gtest/gtest.h>
 
@@ -36,15 +37,13 @@ Qp decoupled(const Qp& qp, cb::DecoupleOrder order = cb::DecoupleOrder::RANDOM, 
     return cb::select_rows(qp, report.kept_rows);
 }
 
-double relative_kkt(const Qp& qp, const cb::Vec& x, const cb::Vec& lambda)
-{
-    return cb::accuracy(qp.view(), x, lambda).max();
-}
-
 /// Records F(P(x)) at every monitor call (P computed here, with the closed form of §2).
-class ObjectiveRecorder : public cb::Monitor {
+class MprgpObjectiveRecorder : public cb::Monitor {
 public:
-    explicit ObjectiveRecorder(const Qp& qp) : m_qp(qp), m_rows(cb::make_decoupled_rows(qp.J, cb::Vec::Ones(qp.n()))) {}
+    explicit MprgpObjectiveRecorder(const Qp& qp)
+        : m_qp(qp), m_rows(cb::make_decoupled_rows(qp.J, cb::Vec::Ones(qp.n())))
+    {
+    }
     bool on_iteration(const cb::IterationInfo& info) override
     {
         cb::Vec y;
@@ -61,18 +60,18 @@ private:
     cb::DecoupledRows m_rows;
 };
 
-struct Case {
+struct MprgpCase {
     const char* name;
     const char* family;
     nlohmann::json params;
     bool decouple;
 };
 
-class MprgpAgreement : public ::testing::TestWithParam<Case> {};
+class MprgpAgreement : public ::testing::TestWithParam<MprgpCase> {};
 
 TEST_P(MprgpAgreement, MatchesActiveSetObjectiveAndKkt)
 {
-    const Case& tc = GetParam();
+    const MprgpCase& tc = GetParam();
     for (std::uint64_t seed : {1u, 2u}) {
         Qp qp = cb::make_synthetic(tc.family, tc.params, seed);
         if (tc.decouple) qp = decoupled(qp);
@@ -82,7 +81,7 @@ TEST_P(MprgpAgreement, MatchesActiveSetObjectiveAndKkt)
         ASSERT_EQ(ref.status, SolveStatus::CONVERGED) << tc.name << ": " << ref.message;
         const double f_ref = cb::objective(qp.view(), ref.x);
 
-        ObjectiveRecorder recorder(qp);
+        MprgpObjectiveRecorder recorder(qp);
         cb::SolveContext context;
         context.monitor = &recorder;
         const cb::SolverResult r = mprgp({{"tol", 1e-10}, {"max_iterations", 20000}})->solve(qp.view(), context);
@@ -90,7 +89,7 @@ TEST_P(MprgpAgreement, MatchesActiveSetObjectiveAndKkt)
         const double f = cb::objective(qp.view(), r.x);
         EXPECT_LE(std::abs(f - f_ref), 1e-8 * std::max(std::abs(f_ref), 1e-300))
             << tc.name << " F " << f << " F* " << f_ref;
-        EXPECT_LE(relative_kkt(qp, r.x, r.lambda), 1e-8) << tc.name;
+        EXPECT_LE(cb::test::relative_kkt(qp, r.x, r.lambda), 1e-8) << tc.name;
         EXPECT_LE(cb::max_violation(qp.view(), r.x), 1e-9 * std::max(1.0, qp.c.lpNorm<Eigen::Infinity>())) << tc.name;
         // Appendix B: with decoupled rows the safeguards never fire.
         EXPECT_EQ(r.counters.safeguard_steps, 0) << tc.name;
@@ -114,22 +113,22 @@ nlohmann::json with(nlohmann::json base, const nlohmann::json& extra)
 }
 
 const auto families = ::testing::Values(
-    Case{"plane", "plane", small, false}, Case{"tilted", "plane", with(small, {{"tilt_deg", 17.0}}), false},
-    Case{"stiff", "plane", with(small, {{"youngs", 1e10}}), false},
-    Case{"mm", "plane", with(small, {{"length_scale", 1e-3}}), false}, Case{"box", "box", small, true},
-    Case{"coupled", "coupled", {{"nx", 3}, {"ny", 2}, {"nz", 3}}, true},
-    Case{"duplicate", "duplicate-rows", small, true}, Case{"scaled", "scaled-rows", small, true},
-    Case{"zero", "zero-rows", small, true});
+    MprgpCase{"plane", "plane", small, false}, MprgpCase{"tilted", "plane", with(small, {{"tilt_deg", 17.0}}), false},
+    MprgpCase{"stiff", "plane", with(small, {{"youngs", 1e10}}), false},
+    MprgpCase{"mm", "plane", with(small, {{"length_scale", 1e-3}}), false}, MprgpCase{"box", "box", small, true},
+    MprgpCase{"coupled", "coupled", {{"nx", 3}, {"ny", 2}, {"nz", 3}}, true},
+    MprgpCase{"duplicate", "duplicate-rows", small, true}, MprgpCase{"scaled", "scaled-rows", small, true},
+    MprgpCase{"zero", "zero-rows", small, true});
 INSTANTIATE_TEST_SUITE_P(Families, MprgpAgreement, families,
                          [](const auto& info) { return std::string(info.param.name); });
 
 // The literature expansion variants (docs/DESIGN.md "Adding an MPRGP variant") reach the
 // active-set solution on every family (most take no expansion: then the variant is the default).
-class MprgpExpansionVariants : public ::testing::TestWithParam<Case> {};
+class MprgpExpansionVariants : public ::testing::TestWithParam<MprgpCase> {};
 
 TEST_P(MprgpExpansionVariants, MatchActiveSetObjectiveAndKkt)
 {
-    const Case& tc = GetParam();
+    const MprgpCase& tc = GetParam();
     Qp qp = cb::make_synthetic(tc.family, tc.params, 1);
     if (tc.decouple) qp = decoupled(qp);
     const cb::SolverResult ref = reference_solver()->solve(qp.view(), {});
@@ -142,7 +141,7 @@ TEST_P(MprgpExpansionVariants, MatchActiveSetObjectiveAndKkt)
         const double f = cb::objective(qp.view(), r.x);
         EXPECT_LE(std::abs(f - f_ref), 1e-8 * std::max(std::abs(f_ref), 1e-300))
             << tc.name << " " << expansion << " F " << f << " F* " << f_ref;
-        EXPECT_LE(relative_kkt(qp, r.x, r.lambda), 1e-8) << tc.name << " " << expansion;
+        EXPECT_LE(cb::test::relative_kkt(qp, r.x, r.lambda), 1e-8) << tc.name << " " << expansion;
         EXPECT_LE(cb::max_violation(qp.view(), r.x), 1e-9 * std::max(1.0, qp.c.lpNorm<Eigen::Infinity>()))
             << tc.name << " " << expansion;
     }
@@ -158,7 +157,7 @@ TEST(Mprgp, BarzilaiBorweinExpansionStaysMonotone)
     const Qp qp = decoupled(cb::make_synthetic("random-spd", {{"n", 200}, {"m", 190}}, 1));
     const cb::SolverResult ref = reference_solver()->solve(qp.view(), {});
     ASSERT_EQ(ref.status, SolveStatus::CONVERGED) << ref.message;
-    ObjectiveRecorder recorder(qp);
+    MprgpObjectiveRecorder recorder(qp);
     cb::SolveContext context;
     context.monitor = &recorder;
     const cb::SolverResult r =
@@ -166,7 +165,7 @@ TEST(Mprgp, BarzilaiBorweinExpansionStaysMonotone)
     ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
     const double f_ref = cb::objective(qp.view(), ref.x);
     EXPECT_LE(std::abs(cb::objective(qp.view(), r.x) - f_ref), 1e-8 * std::abs(f_ref));
-    EXPECT_LE(relative_kkt(qp, r.x, r.lambda), 1e-8);
+    EXPECT_LE(cb::test::relative_kkt(qp, r.x, r.lambda), 1e-8);
     EXPECT_GT(r.info.at("bb_fallbacks").get<long>(), 0);  // the case exercises the fallback
     for (size_t k = 1; k < recorder.values.size(); ++k) {
         const double prev = recorder.values[k - 1], now = recorder.values[k];
@@ -181,7 +180,7 @@ TEST(Mprgp, ProjectedCgExpansionStaysMonotone)
     const Qp qp = decoupled(cb::make_synthetic("random-spd", {{"n", 200}, {"m", 190}}, 1));
     const cb::SolverResult ref = reference_solver()->solve(qp.view(), {});
     ASSERT_EQ(ref.status, SolveStatus::CONVERGED) << ref.message;
-    ObjectiveRecorder recorder(qp);
+    MprgpObjectiveRecorder recorder(qp);
     cb::SolveContext context;
     context.monitor = &recorder;
     const cb::SolverResult r =
@@ -189,7 +188,7 @@ TEST(Mprgp, ProjectedCgExpansionStaysMonotone)
     ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
     const double f_ref = cb::objective(qp.view(), ref.x);
     EXPECT_LE(std::abs(cb::objective(qp.view(), r.x) - f_ref), 1e-8 * std::abs(f_ref));
-    EXPECT_LE(relative_kkt(qp, r.x, r.lambda), 1e-8);
+    EXPECT_LE(cb::test::relative_kkt(qp, r.x, r.lambda), 1e-8);
     EXPECT_GT(r.counters.expansion_steps, 0);
     EXPECT_GT(r.counters.safeguard_steps, 0);  // P(y) raised F: the safeguard ran
     for (size_t k = 1; k < recorder.values.size(); ++k) {
@@ -248,7 +247,7 @@ TEST(Mprgp, OptionsReachTheSameSolution)
         const cb::SolverResult r = mprgp(settings)->solve(qp.view(), {});
         ASSERT_EQ(r.status, SolveStatus::CONVERGED) << s.dump() << ": " << r.message;
         EXPECT_LE(std::abs(cb::objective(qp.view(), r.x) - f_ref), 1e-8 * std::abs(f_ref)) << s.dump();
-        EXPECT_LE(relative_kkt(qp, r.x, r.lambda), 1e-8) << s.dump();
+        EXPECT_LE(cb::test::relative_kkt(qp, r.x, r.lambda), 1e-8) << s.dump();
     }
 }
 
@@ -297,7 +296,7 @@ TEST(Mprgp, NonConvergenceIsReported)
     EXPECT_EQ(r.status, SolveStatus::MAX_ITERATIONS);
     EXPECT_EQ(r.iterations, 3);
     EXPECT_EQ(r.criterion, cb::StopCriterion::NONE);
-    EXPECT_GT(relative_kkt(qp, r.x, r.lambda), 1e-12);
+    EXPECT_GT(cb::test::relative_kkt(qp, r.x, r.lambda), 1e-12);
     EXPECT_LE(cb::max_violation(qp.view(), r.x), 1e-9);  // the returned x is projected
 
     const Qp big = cb::make_synthetic("plane", {{"nx", 16}, {"ny", 8}, {"nz", 16}}, 8);

@@ -70,7 +70,7 @@ cb::Qp incline_step(const std::vector<Particle>& particles, double springs = 0.0
     return qp;
 }
 
-cb::SolverResult solve(const std::string& solver, const cb::Qp& qp, double tol = 1e-10)
+cb::SolverResult solve_named(const std::string& solver, const cb::Qp& qp, double tol = 1e-10)
 {
     return cb::builtin_registry().create(solver, {{"tol", tol}})->solve(qp.view(), cb::SolveContext{});
 }
@@ -87,7 +87,7 @@ TEST(MprgpBmf03, StickingParticleEndsWithZeroTangentialVelocity)
 {
     // v_T before friction 0.01 + h g sin = 0.0436 m/s; mu dv_N = 0.8 h g cos = 0.0737 m/s: static.
     const cb::Qp qp = incline_step({{0.01, 0.8}});
-    const cb::SolverResult r = solve("mprgp+bmf03", qp);
+    const cb::SolverResult r = solve_named("mprgp+bmf03", qp);
     ASSERT_EQ(r.status, cb::SolveStatus::CONVERGED) << r.message;
     EXPECT_LE(tangential_velocity(qp, r.x, 0).norm(), 1e-12);
     EXPECT_EQ(r.info["contacts"]["sticking"], 1);
@@ -98,7 +98,7 @@ TEST(MprgpBmf03, SlidingParticleLosesExactlyMuDvNOfTangentialSpeed)
 {
     const double mu = 0.3, v0 = 1.0;
     const cb::Qp qp = incline_step({{v0, mu}});
-    const cb::SolverResult r = solve("mprgp+bmf03", qp);
+    const cb::SolverResult r = solve_named("mprgp+bmf03", qp);
     ASSERT_EQ(r.status, cb::SolveStatus::CONVERGED) << r.message;
     // Frictionless: v_T = v0 + h g sin; the plane took the normal velocity h g cos (dv_N).
     const double v_t = v0 + H * G * std::sin(THETA), dv_n = H * G * std::cos(THETA);
@@ -113,7 +113,7 @@ TEST(MprgpBmf03, SlidingParticleLosesExactlyMuDvNOfTangentialSpeed)
 TEST(MprgpBmf03, AtMuZeroItIsMprgpCoupled)
 {
     cb::Qp qp = incline_step({{1.0, 0.0}, {0.01, 0.0}, {0.3, 0.0}}, 50.0);
-    const cb::SolverResult bmf = solve("mprgp+bmf03", qp), coupled = solve("mprgp-coupled", qp);
+    const cb::SolverResult bmf = solve_named("mprgp+bmf03", qp), coupled = solve_named("mprgp-coupled", qp);
     ASSERT_EQ(bmf.status, cb::SolveStatus::CONVERGED) << bmf.message;
     EXPECT_EQ(bmf.x, coupled.x);
     EXPECT_EQ(bmf.lambda, coupled.lambda);
@@ -125,7 +125,7 @@ TEST(MprgpBmf03, AgreesWithNsgsFrictionOnFreeParticles)
 {
     // Each particle alone on the plane: BMF03's update is Coulomb's law, two independent solvers.
     const cb::Qp qp = incline_step({{0.01, 0.8}, {1.0, 0.3}, {0.02, 0.9}, {-0.5, 0.2}, {0.0, 0.36}});
-    const cb::SolverResult bmf = solve("mprgp+bmf03", qp), nsgs = solve("nsgs-friction", qp);
+    const cb::SolverResult bmf = solve_named("mprgp+bmf03", qp), nsgs = solve_named("nsgs-friction", qp);
     ASSERT_EQ(bmf.status, cb::SolveStatus::CONVERGED) << bmf.message;
     ASSERT_EQ(nsgs.status, cb::SolveStatus::CONVERGED) << nsgs.message;
     EXPECT_LE((bmf.x - nsgs.x).lpNorm<Eigen::Infinity>(), 1e-9);
@@ -138,7 +138,7 @@ TEST(MprgpBmf03, CoupledParticlesEndStalledWithTheErrorsInItsMessage)
 {
     // Springs between the particles: the local update ignores them, so the point is not Coulomb's.
     const cb::Qp qp = incline_step({{0.01, 0.8}, {1.0, 0.3}, {0.2, 0.5}, {-0.5, 0.2}}, 500.0);
-    const cb::SolverResult r = solve("mprgp+bmf03", qp, 1e-8);
+    const cb::SolverResult r = solve_named("mprgp+bmf03", qp, 1e-8);
     ASSERT_EQ(r.status, cb::SolveStatus::STALLED) << r.message;
     EXPECT_EQ(r.message.substr(0, 63), "mprgp+bmf03: the stop rule does not hold at the returned point:");
     EXPECT_NE(r.message.find("one BMF03 velocity update after mprgp-coupled"), std::string::npos) << r.message;
@@ -150,13 +150,13 @@ TEST(MprgpBmf03, WithoutStepOrStartVelocitiesItIsNotApplicable)
 {
     cb::Qp qp = incline_step({{1.0, 0.3}});
     qp.friction.h = 0.0;
-    cb::SolverResult r = solve("mprgp+bmf03", qp);
+    cb::SolverResult r = solve_named("mprgp+bmf03", qp);
     EXPECT_EQ(r.status, cb::SolveStatus::NOT_APPLICABLE);
     EXPECT_EQ(r.message,
               "mprgp+bmf03: a velocity update needs a simulator's frictional step (qpsnap version 2 with h and "
               "v0); this problem has no time step h");
     qp.friction.v0.resize(0);
-    r = solve("mprgp+bmf03", qp);
+    r = solve_named("mprgp+bmf03", qp);
     EXPECT_EQ(r.status, cb::SolveStatus::NOT_APPLICABLE);
     EXPECT_NE(r.message.find("no time step h and no start velocities v0"), std::string::npos) << r.message;
     EXPECT_EQ(r.x.size(), qp.n());

@@ -4,6 +4,7 @@
 #include "solvers/core/registry.hpp"
 #include "solvers/measure/accuracy.hpp"
 #include "solvers/mprgp/mprgp_box.hpp"
+#include "tests/solvers/dual_test_problems.hpp"
 
 #include <gtest/gtest.h>
 
@@ -13,11 +14,6 @@ namespace {
 
 using cb::Qp;
 using cb::SolveStatus;
-
-double relative_kkt(const Qp& qp, const cb::Vec& x, const cb::Vec& lambda)
-{
-    return cb::accuracy(qp.view(), x, lambda).max();
-}
 
 class Monotone : public cb::Monitor {
 public:
@@ -72,7 +68,7 @@ TEST(MprgpBox, AgreesWithActiveSetOnLowerAndUpperBounds)
                         ->solve(qp.view(), context);
                 ASSERT_EQ(r.status, SolveStatus::CONVERGED) << family << " " << precond << ": " << r.message;
                 EXPECT_LE(std::abs(cb::objective(qp.view(), r.x) - f_ref), 1e-8 * std::abs(f_ref)) << family;
-                EXPECT_LE(relative_kkt(qp, r.x, r.lambda), 1e-8) << family;
+                EXPECT_LE(cb::test::relative_kkt(qp, r.x, r.lambda), 1e-8) << family;
                 EXPECT_LE(cb::max_violation(qp.view(), r.x), 1e-12);
                 for (size_t k = 1; k < monitor.values.size(); ++k)
                     EXPECT_LE(monitor.values[k], monitor.values[k - 1] + 1e-11 * std::abs(monitor.values[k - 1]));

@@ -4,6 +4,7 @@
 #include "solvers/core/registry.hpp"
 #include "solvers/measure/accuracy.hpp"
 #include "solvers/mprgp/decouple.hpp"
+#include "tests/solvers/dual_test_problems.hpp"
 
 #include <gtest/gtest.h>
 
@@ -16,11 +17,6 @@ namespace {
 
 using cb::Qp;
 using cb::SolveStatus;
-
-double relative_kkt(const Qp& qp, const cb::Vec& x, const cb::Vec& lambda)
-{
-    return cb::accuracy(qp.view(), x, lambda).max();
-}
 
 class Recorder : public cb::Monitor {
 public:
@@ -46,7 +42,7 @@ void expect_agreement(const Qp& qp, const nlohmann::json& settings, const std::s
     const cb::SolverResult r = cb::builtin_registry().create("mprgp-coupled", s)->solve(qp.view(), context);
     ASSERT_EQ(r.status, SolveStatus::CONVERGED) << what << ": " << r.message;
     EXPECT_LE(std::abs(cb::objective(qp.view(), r.x) - f_ref), 1e-8 * std::abs(f_ref)) << what;
-    EXPECT_LE(relative_kkt(qp, r.x, r.lambda), 1e-8) << what;
+    EXPECT_LE(cb::test::relative_kkt(qp, r.x, r.lambda), 1e-8) << what;
     EXPECT_LE(cb::max_violation(qp.view(), r.x), 1e-9) << what;
     // The face operators ran: some component's face was factored (dense or CHOLMOD).
     EXPECT_GT(r.info["components"]["face_refactorizations"].get<long>(), 0) << what;
@@ -128,7 +124,7 @@ TEST(MprgpCoupled, OneProductPerCgStep)
 
 namespace {
 
-class StepRecorder : public cb::Monitor {
+class CoupledStepRecorder : public cb::Monitor {
 public:
     bool on_iteration(const cb::IterationInfo& info) override
     {
@@ -138,7 +134,8 @@ public:
     std::vector<cb::StepKind> steps;
 };
 
-cb::SolverResult run_recorded(const Qp& qp, const std::string& solver, nlohmann::json settings, StepRecorder& rec)
+cb::SolverResult run_recorded(const Qp& qp, const std::string& solver, nlohmann::json settings,
+                              CoupledStepRecorder& rec)
 {
     settings["tol"] = 1e-10;
     settings["max_iterations"] = 20000;
@@ -164,13 +161,13 @@ TEST(MprgpCoupled, ReducesToMprgpOnDecoupledRows)
     for (Eigen::Index j = 1; j < lifted.n(); j += 3) lifted.x0[j] += 0.2 * cb::accuracy_scale(plane.view()).length;
     long expansions = 0;
     for (const Qp* qp : std::vector<const Qp*>{&decoupled, &plane, &lifted}) {
-        StepRecorder ref_steps;
+        CoupledStepRecorder ref_steps;
         const cb::SolverResult ref = run_recorded(*qp, "mprgp", {}, ref_steps);
         ASSERT_EQ(ref.status, SolveStatus::CONVERGED) << ref.message;
         expansions += ref.counters.expansion_steps;
         const double l = cb::accuracy_scale(qp->view()).length;
         for (const char* projection : {"face", "all"}) {
-            StepRecorder steps;
+            CoupledStepRecorder steps;
             const cb::SolverResult r =
                 run_recorded(*qp, "mprgp-coupled", {{"expansion_projection", projection}}, steps);
             ASSERT_EQ(r.status, SolveStatus::CONVERGED) << projection << ": " << r.message;
@@ -202,14 +199,14 @@ TEST(MprgpCoupled, FaceKeepingExpansionsOnCoupledRows)
             Qp qp = cb::make_synthetic("coupled", {{"nx", 6}, {"ny", 2}, {"nz", 6}}, seed);
             const cb::Vec open = qp.J.transpose() * cb::Vec::Ones(qp.m());
             qp.x0 += open * (0.05 * cb::accuracy_scale(qp.view()).length / open.lpNorm<Eigen::Infinity>());
-            StepRecorder face_steps, all_steps;
+            CoupledStepRecorder face_steps, all_steps;
             const cb::SolverResult face =
                 run_recorded(qp, "mprgp-coupled", {{"expansion_projection", "face"}, {"precond", precond}}, face_steps);
             const cb::SolverResult all =
                 run_recorded(qp, "mprgp-coupled", {{"expansion_projection", "all"}, {"precond", precond}}, all_steps);
             ASSERT_EQ(face.status, SolveStatus::CONVERGED) << face.message;
             ASSERT_EQ(all.status, SolveStatus::CONVERGED) << all.message;
-            EXPECT_LE(relative_kkt(qp, face.x, face.lambda), 1e-9);
+            EXPECT_LE(cb::test::relative_kkt(qp, face.x, face.lambda), 1e-9);
             EXPECT_LE(face.counters.expansion_steps, all.counters.expansion_steps) << precond << ", seed " << seed;
             const double l = cb::accuracy_scale(qp.view()).length;
             EXPECT_LE((face.x - all.x).lpNorm<Eigen::Infinity>() / l, 1e-8) << precond << ", seed " << seed;

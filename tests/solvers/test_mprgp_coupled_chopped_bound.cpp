@@ -9,6 +9,7 @@
 #include "solvers/core/registry.hpp"
 #include "solvers/linalg/row_components.hpp"
 #include "solvers/measure/accuracy.hpp"
+#include "tests/solvers/coupled_test_qps.hpp"
 
 #include <gtest/gtest.h>
 
@@ -23,7 +24,7 @@ using cb::SolveStatus;
 using cb::Vec;
 
 /// Step kinds only: wants_iterate() false, so the solver skips the monitor's preparation.
-class StepRecorder : public cb::Monitor {
+class ChoppedStepRecorder : public cb::Monitor {
 public:
     bool on_iteration(const cb::IterationInfo& info) override
     {
@@ -64,21 +65,19 @@ private:
     Vec m_weight;
 };
 
-double scene_size(const Qp& qp) { return cb::accuracy_scale(qp.view()).length; }
-
 /// The 196-row coupled patch of test_mprgp_coupled_operators.cpp with a random extra load, so
 /// that the face changes during the solve.
 Qp loaded_patch(std::uint64_t seed)
 {
     Qp qp = cb::make_synthetic("coupled", {{"nx", 13}, {"ny", 2}, {"nz", 13}}, seed);
     std::srand(static_cast<unsigned>(seed));
-    const Vec push = Vec::Random(qp.n()) * 0.5 * scene_size(qp) / 10.0;
+    const Vec push = Vec::Random(qp.n()) * 0.5 * cb::coupled_test_qps::scene_size(qp) / 10.0;
     qp.b += qp.A * push;
     return qp;
 }
 
-cb::SolverResult solve(const Qp& qp, cb::Monitor& monitor, const std::string& operators, const std::string& stop,
-                       const std::string& precond)
+cb::SolverResult solve_chopped(const Qp& qp, cb::Monitor& monitor, const std::string& operators,
+                               const std::string& stop, const std::string& precond)
 {
     const nlohmann::json s = {
         {"tol", 1e-8}, {"max_iterations", 20000}, {"operators", operators}, {"stop", stop}, {"precond", precond}};
@@ -101,15 +100,16 @@ TEST(MprgpCoupledChoppedBound, MonitorSeesExactMultipliersAndChangesNoStep)
                     what += ", " + operators;
                     what += ", stop " + stop;
                     what += ", " + precond;
-                    StepRecorder quiet;
+                    ChoppedStepRecorder quiet;
                     ResidualRecorder reader(qp, precond);
-                    const cb::SolverResult a = solve(qp, quiet, operators, stop, precond);
-                    const cb::SolverResult b = solve(qp, reader, operators, stop, precond);
+                    const cb::SolverResult a = solve_chopped(qp, quiet, operators, stop, precond);
+                    const cb::SolverResult b = solve_chopped(qp, reader, operators, stop, precond);
                     ASSERT_EQ(a.status, SolveStatus::CONVERGED) << what << ": " << a.message;
                     ASSERT_EQ(b.status, SolveStatus::CONVERGED) << what << ": " << b.message;
                     EXPECT_EQ(quiet.steps, reader.steps) << what;
                     EXPECT_EQ(a.counters.iterations, b.counters.iterations) << what;
-                    EXPECT_LE((a.x - b.x).lpNorm<Eigen::Infinity>() / scene_size(qp), 1e-9) << what;
+                    EXPECT_LE((a.x - b.x).lpNorm<Eigen::Infinity>() / cb::coupled_test_qps::scene_size(qp), 1e-9)
+                        << what;
                     // Every iteration the monitor saw carried x, lambda >= 0 and the exact native residual.
                     EXPECT_EQ(reader.missing, 0) << what;
                     EXPECT_LE(reader.worst_gap, 1e-8) << what;

@@ -23,7 +23,7 @@ using cb::coupled_test_qps::loaded;
 using cb::coupled_test_qps::scene_size;
 using cb::coupled_test_qps::with_dependent_row;
 
-class IterateRecorder : public cb::Monitor {
+class OperatorIterateRecorder : public cb::Monitor {
 public:
     bool on_iteration(const cb::IterationInfo& info) override
     {
@@ -35,12 +35,13 @@ public:
     std::vector<Vec> xs;
 };
 
-struct Run {
+struct OperatorRun {
     cb::SolverResult result;
-    IterateRecorder recorder;
+    OperatorIterateRecorder recorder;
 };
 
-void solve(const Qp& qp, const std::string& operators, const std::string& precond, Run& run, long dense_max_rows = 400)
+void solve_with_operators(const Qp& qp, const std::string& operators, const std::string& precond, OperatorRun& run,
+                          long dense_max_rows = 400)
 {
     const nlohmann::json s = {{"tol", 1e-10},
                               {"max_iterations", 20000},
@@ -58,9 +59,9 @@ cb::RowComponents components(const Qp& qp) { return cb::find_row_components(qp.J
 /// @param dense_max_rows  400: every component dense; 1: every component of 2+ rows on CHOLMOD
 void expect_same_run(const Qp& qp, const std::string& precond, const std::string& what, long dense_max_rows = 400)
 {
-    Run global, comp;
-    solve(qp, "global", precond, global);
-    solve(qp, "components", precond, comp, dense_max_rows);
+    OperatorRun global, comp;
+    solve_with_operators(qp, "global", precond, global);
+    solve_with_operators(qp, "components", precond, comp, dense_max_rows);
     ASSERT_EQ(global.result.status, SolveStatus::CONVERGED) << what << ": " << global.result.message;
     ASSERT_EQ(comp.result.status, SolveStatus::CONVERGED) << what << ": " << comp.result.message;
     // Same step kinds, iteration by iteration.
@@ -147,7 +148,7 @@ TEST(MprgpCoupledOperators, LargeComponentRowUpdatesAgreeWithGlobal)
     const Qp qp = loaded(cb::make_synthetic("coupled", {{"nx", 13}, {"ny", 2}, {"nz", 13}}, 7), 7);
     ASSERT_GT(components(qp).largest(), 128);
     for (long max_updates : {1L, 64L}) {
-        ::Run comp;
+        ::OperatorRun comp;
         // precond = jacobi: two masked face factors (J J' and J D^-1 J') and more face changes to follow
         const nlohmann::json s = {
             {"tol", 1e-10}, {"max_iterations", 20000}, {"sparse_max_updates", max_updates}, {"precond", "jacobi"}};

@@ -26,7 +26,7 @@ using cb::coupled_test_qps::loaded;
 using cb::coupled_test_qps::scene_size;
 using cb::coupled_test_qps::with_dependent_row;
 
-cb::SolverResult solve(const Qp& qp, nlohmann::json settings)
+cb::SolverResult solve_precond(const Qp& qp, nlohmann::json settings)
 {
     settings["tol"] = 1e-10;
     settings["max_iterations"] = 20000;
@@ -55,7 +55,7 @@ const std::vector<Variant>& variants()
 cb::SolverResult expect_variants_agree(const Qp& qp, const std::string& what, long dense_max_rows = 128,
                                        const Vec* x_star = nullptr)
 {
-    cb::SolverResult ref = solve(qp, {{"precond", "jacobi"}, {"dense_max_rows", dense_max_rows}});
+    cb::SolverResult ref = solve_precond(qp, {{"precond", "jacobi"}, {"dense_max_rows", dense_max_rows}});
     EXPECT_EQ(ref.status, SolveStatus::CONVERGED) << what << ": " << ref.message;
     // The face changes during the solve (several components refactor their face factors).
     EXPECT_GT(ref.info["components"]["face_refactorizations"].get<long>(), 1) << what;
@@ -65,7 +65,7 @@ cb::SolverResult expect_variants_agree(const Qp& qp, const std::string& what, lo
     for (const Variant& v : variants()) {
         nlohmann::json s = v.settings;
         s["dense_max_rows"] = dense_max_rows;
-        const cb::SolverResult r = solve(qp, s);
+        const cb::SolverResult r = solve_precond(qp, s);
         const std::string label = what + ", " + v.name;
         EXPECT_EQ(r.status, SolveStatus::CONVERGED) << label << ": " << r.message;
         if (r.status != SolveStatus::CONVERGED) continue;
@@ -175,7 +175,7 @@ TEST(MprgpCoupledPrecond, RigidModesCutIterationsOnAStiffCoupledQp)
     const cb::SolverResult exact = cb::builtin_registry().create("active-set", {{"tol", 1e-11}})->solve(qp.view(), {});
     ASSERT_EQ(exact.status, SolveStatus::CONVERGED) << exact.message;
     const cb::SolverResult ref = expect_variants_agree(qp, "stiff coupled", 128, &exact.x);
-    const cb::SolverResult rigid = solve(qp, {{"precond", "ichol"}, {"deflation", "rigid"}});
+    const cb::SolverResult rigid = solve_precond(qp, {{"precond", "ichol"}, {"deflation", "rigid"}});
     ASSERT_EQ(rigid.status, SolveStatus::CONVERGED) << rigid.message;
     EXPECT_LT(rigid.iterations, ref.iterations) << "ichol rigid against jacobi";
 }
@@ -202,8 +202,8 @@ TEST(MprgpCoupledPrecond, ScaledVariablesHalveTheFaceSolvesAndRefuseRigidModes)
     // precond = scaled: one face factor (J_A D^-1 J_A' of x is J_A J_A' of y), so a CG step costs
     // one CHOLMOD solve where jacobi's costs two; the 196-row patch runs on the CHOLMOD block.
     const Qp qp = loaded(cb::make_synthetic("coupled", {{"nx", 13}, {"ny", 2}, {"nz", 13}}, 7), 7);
-    const cb::SolverResult jacobi = solve(qp, {{"precond", "jacobi"}});
-    const cb::SolverResult scaled = solve(qp, {{"precond", "scaled"}});
+    const cb::SolverResult jacobi = solve_precond(qp, {{"precond", "jacobi"}});
+    const cb::SolverResult scaled = solve_precond(qp, {{"precond", "scaled"}});
     ASSERT_EQ(jacobi.status, SolveStatus::CONVERGED) << jacobi.message;
     ASSERT_EQ(scaled.status, SolveStatus::CONVERGED) << scaled.message;
     const double per_step_jacobi = static_cast<double>(jacobi.counters.cholmod_solves) / jacobi.counters.cg_steps;
@@ -211,7 +211,7 @@ TEST(MprgpCoupledPrecond, ScaledVariablesHalveTheFaceSolvesAndRefuseRigidModes)
     EXPECT_LT(per_step_scaled, 0.75 * per_step_jacobi) << per_step_scaled << " against " << per_step_jacobi;
     // The run is judged, and returns x, in the file's variables: the harness's measure agrees.
     EXPECT_LE(cb::accuracy(qp.view(), scaled.x, scaled.lambda).max(), 1e-9);
-    const cb::SolverResult refused = solve(qp, {{"precond", "scaled"}, {"deflation", "rigid"}});
+    const cb::SolverResult refused = solve_precond(qp, {{"precond", "scaled"}, {"deflation", "rigid"}});
     EXPECT_EQ(refused.status, SolveStatus::INVALID_INPUT);
     EXPECT_EQ(refused.message, "mprgp-coupled: precond=scaled takes deflation=none (rigid modes are of x, not of y)");
     EXPECT_EQ(refused.x, qp.x0);
@@ -224,8 +224,8 @@ TEST(MprgpCoupledPrecond, AutoTakesScaledOnlyForComponentsBeyondTheDenseBlocks)
     // runs jacobi. The record names the choice and why.
     const Qp qp = loaded(cb::make_synthetic("coupled", {{"nx", 13}, {"ny", 2}, {"nz", 13}}, 7), 7);
     EXPECT_EQ(cb::builtin_registry().create("mprgp-coupled", {})->settings()["precond"], "auto");
-    const cb::SolverResult automatic = solve(qp, {});
-    const cb::SolverResult scaled = solve(qp, {{"precond", "scaled"}});
+    const cb::SolverResult automatic = solve_precond(qp, {});
+    const cb::SolverResult scaled = solve_precond(qp, {{"precond", "scaled"}});
     ASSERT_EQ(automatic.status, SolveStatus::CONVERGED) << automatic.message;
     EXPECT_EQ(automatic.info["precond"], "scaled");
     EXPECT_EQ(automatic.info["precond_rule"], "auto: scaled (largest component 196 rows, dense_max_rows 128)");
@@ -233,8 +233,8 @@ TEST(MprgpCoupledPrecond, AutoTakesScaledOnlyForComponentsBeyondTheDenseBlocks)
     EXPECT_EQ(automatic.x, scaled.x);
     EXPECT_FALSE(scaled.info.contains("precond_rule"));
 
-    const cb::SolverResult dense = solve(qp, {{"dense_max_rows", 256}});
-    const cb::SolverResult jacobi = solve(qp, {{"precond", "jacobi"}, {"dense_max_rows", 256}});
+    const cb::SolverResult dense = solve_precond(qp, {{"dense_max_rows", 256}});
+    const cb::SolverResult jacobi = solve_precond(qp, {{"precond", "jacobi"}, {"dense_max_rows", 256}});
     ASSERT_EQ(dense.status, SolveStatus::CONVERGED) << dense.message;
     EXPECT_EQ(dense.info["precond"], "jacobi");
     EXPECT_EQ(dense.info["precond_rule"], "auto: jacobi (largest component 196 rows, dense_max_rows 256)");
@@ -242,7 +242,7 @@ TEST(MprgpCoupledPrecond, AutoTakesScaledOnlyForComponentsBeyondTheDenseBlocks)
     EXPECT_LE(cb::accuracy(qp.view(), dense.x, dense.lambda).max(), 1e-9);
 
     // Rigid modes are of x: auto keeps jacobi with them rather than refusing.
-    const cb::SolverResult rigid = solve(qp, {{"deflation", "rigid"}});
+    const cb::SolverResult rigid = solve_precond(qp, {{"deflation", "rigid"}});
     ASSERT_EQ(rigid.status, SolveStatus::CONVERGED) << rigid.message;
     EXPECT_EQ(rigid.info["precond"], "jacobi");
     EXPECT_EQ(rigid.info["precond_rule"], "auto: jacobi (deflation = rigid)");
@@ -289,7 +289,7 @@ TEST(MprgpCoupledPrecond, IncrementalRigidFaceUpdateMatchesAFreshOne)
 
 namespace {
 
-class StepRecorder : public cb::Monitor {
+class PrecondStepRecorder : public cb::Monitor {
 public:
     bool on_iteration(const cb::IterationInfo& info) override
     {
@@ -309,7 +309,7 @@ TEST(MprgpCoupledPrecond, ComponentOperatorsTakeTheGlobalOperatorsSteps)
     // the global CHOLMOD oracle give the same step kinds and iterates to rounding.
     const Qp qp = loaded(cb::make_synthetic("coupled", {{"nx", 6}, {"ny", 2}, {"nz", 6}}, 7), 7);
     for (const char* deflation : {"none", "rigid"}) {
-        StepRecorder global, comp;
+        PrecondStepRecorder global, comp;
         for (auto* run : {&global, &comp}) {
             const nlohmann::json s = {{"tol", 1e-10},
                                       {"max_iterations", 20000},
@@ -345,7 +345,7 @@ TEST(MprgpCoupledPrecond, ScaledVariablesWithoutACopyOfAFollowTheScaledQp)
         for (cb::SpMat::InnerIterator it(in_y.J, i); it; ++it) it.valueRef() *= u[it.col()];
     in_y.b = u.cwiseProduct(qp.b);
     in_y.x0 = qp.x0.cwiseQuotient(u);
-    struct Iterates : cb::Monitor {
+    struct PrecondIterates : cb::Monitor {
         bool on_iteration(const cb::IterationInfo& info) override
         {
             if (info.x != nullptr && xs.size() < 20) xs.push_back(*info.x);

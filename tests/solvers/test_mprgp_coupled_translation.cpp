@@ -14,12 +14,12 @@ namespace {
 using cb::Qp;
 using cb::SolveStatus;
 
-struct Pair {
+struct TranslationPair {
     const char* original;
     const char* translated;
 };
 
-class CoupledTranslation : public ::testing::TestWithParam<Pair> {};
+class CoupledTranslation : public ::testing::TestWithParam<TranslationPair> {};
 
 TEST_P(CoupledTranslation, ConvergesAsUntranslated)
 {
@@ -45,7 +45,7 @@ TEST_P(CoupledTranslation, ConvergesAsUntranslated)
 }
 
 INSTANTIATE_TEST_SUITE_P(Stress, CoupledTranslation,
-                         ::testing::Values(Pair{"baseline-coupled", "coupled-translated-100m"},
-                                           Pair{"stiffness-coupled-1e9", "coupled-stiff-translated-100m"}));
+                         ::testing::Values(TranslationPair{"baseline-coupled", "coupled-translated-100m"},
+                                           TranslationPair{"stiffness-coupled-1e9", "coupled-stiff-translated-100m"}));
 
 }  // namespace

@@ -26,9 +26,12 @@ std::vector<char> every_other_row(const Qp& qp, Eigen::Index first)
 }
 
 /// Records F(P(x)) at every monitor call.
-class ObjectiveRecorder : public cb::Monitor {
+class DeflationObjectiveRecorder : public cb::Monitor {
 public:
-    explicit ObjectiveRecorder(const Qp& qp) : m_qp(qp), m_rows(cb::make_decoupled_rows(qp.J, Vec::Ones(qp.n()))) {}
+    explicit DeflationObjectiveRecorder(const Qp& qp)
+        : m_qp(qp), m_rows(cb::make_decoupled_rows(qp.J, Vec::Ones(qp.n())))
+    {
+    }
     bool on_iteration(const cb::IterationInfo& info) override
     {
         Vec y;
@@ -137,7 +140,7 @@ TEST(MprgpDeflation, TippingColumnWithinTwiceCgIchol)
         return cb::builtin_registry().create("mprgp", settings)->solve(qp.view(), context);
     };
     EXPECT_EQ(cb::builtin_registry().create("mprgp", {{"precond", "ichol"}})->settings()["deflation"], "rigid");
-    ObjectiveRecorder recorder(qp);
+    DeflationObjectiveRecorder recorder(qp);
     const cb::SolverResult mp = mprgp({}, &recorder);
     ASSERT_EQ(mp.status, SolveStatus::CONVERGED) << mp.message;
     EXPECT_LE(cb::accuracy(qp.view(), mp.x, mp.lambda).max(), 1e-8);

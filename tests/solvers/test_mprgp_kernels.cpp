@@ -15,14 +15,14 @@ using cb::Vec;
 
 /// A decoupled J with rows of random sign/size over random vertices (some rows with 12 nnz),
 /// c and x such that part of the rows are active, part violated, part slack.
-struct Fixture {
+struct KernelFixture {
     cb::SpMat J;
     Vec c, x, g, dinv;
     cb::DecoupledRows rows;
     std::vector<char> active;
 };
 
-Fixture make_fixture(std::uint64_t seed)
+KernelFixture make_fixture(std::uint64_t seed)
 {
     std::mt19937_64 rng(seed);
     std::normal_distribution<double> normal(0.0, 1.0);
@@ -38,7 +38,7 @@ Fixture make_fixture(std::uint64_t seed)
             for (int d = 0; d < 3; ++d) t.emplace_back(row, 3 * perm[next] + d, normal(rng));
         ++row;
     }
-    Fixture f;
+    KernelFixture f;
     f.J.resize(row, n);
     f.J.setFromTriplets(t.begin(), t.end());
     f.x = Vec::NullaryExpr(n, [&]() { return normal(rng); });
@@ -57,7 +57,7 @@ Fixture make_fixture(std::uint64_t seed)
 
 TEST(MprgpKernels, FixtureIsDecoupledWithActiveRows)
 {
-    const Fixture f = make_fixture(1);
+    const KernelFixture f = make_fixture(1);
     EXPECT_TRUE(cb::is_decoupled(f.J));
     int active = 0;
     for (char a : f.active) active += a;
@@ -68,7 +68,7 @@ TEST(MprgpKernels, FixtureIsDecoupledWithActiveRows)
 TEST(MprgpKernels, ProjectionIsFeasibleAndOptimal)
 {
     for (std::uint64_t seed : {1u, 2u, 3u}) {
-        Fixture f = make_fixture(seed);
+        KernelFixture f = make_fixture(seed);
         std::mt19937_64 rng(seed + 100);
         std::normal_distribution<double> normal(0.0, 1.0);
         const Vec z = f.x + Vec::NullaryExpr(f.x.size(), [&]() { return normal(rng); });
@@ -92,7 +92,7 @@ TEST(MprgpKernels, ProjectionIsFeasibleAndOptimal)
 TEST(MprgpKernels, FreeAndChoppedGradientsMeetTheirDefinitions)
 {
     for (std::uint64_t seed : {1u, 2u, 3u}) {
-        const Fixture f = make_fixture(seed);
+        const KernelFixture f = make_fixture(seed);
         Vec phi, beta;
         cb::free_gradient(f.J, f.rows, f.active, f.g, phi);
         cb::chopped_gradient(f.J, f.rows, f.active, f.g, beta);
@@ -126,7 +126,7 @@ TEST(MprgpKernels, FreeAndChoppedGradientsMeetTheirDefinitions)
 
 TEST(MprgpKernels, ReducedFreeGradientMatchesItsDefinition)
 {
-    const Fixture f = make_fixture(4);
+    const KernelFixture f = make_fixture(4);
     Vec phi;
     cb::free_gradient(f.J, f.rows, f.active, f.g, phi);
     for (double alpha_bar : {1e-3, 0.1, 1.0, 10.0}) {
@@ -143,7 +143,7 @@ TEST(MprgpKernels, ReducedFreeGradientMatchesItsDefinition)
 TEST(MprgpKernels, JacobiPreconditionerKeepsTheFace)
 {
     for (std::uint64_t seed : {1u, 2u}) {
-        const Fixture f = make_fixture(seed);
+        const KernelFixture f = make_fixture(seed);
         Vec z;
         cb::jacobi_face_precondition(f.J, f.rows, f.active, f.dinv, f.g, z);
         const Vec jz = f.J * z;

@@ -50,18 +50,18 @@ void expect_same_iterates(const SolverResult& cheap, const SolverResult& rec, co
     EXPECT_EQ(rec.counters.a_products, cheap.counters.a_products + trials);
 }
 
-struct Case {
+struct RecomputeCase {
     const char* name;
     nlohmann::json params;
     nlohmann::json settings;
     bool chain_ends;  ///< the run has expansion and proportioning steps (the test covers them)
 };
 
-class MprgpRecompute : public ::testing::TestWithParam<Case> {};
+class MprgpRecompute : public ::testing::TestWithParam<RecomputeCase> {};
 
 TEST_P(MprgpRecompute, TakesCheapsIterates)
 {
-    const Case& c = GetParam();
+    const RecomputeCase& c = GetParam();
     const Qp qp = cb::make_synthetic("plane", c.params, 1);
     nlohmann::json settings = c.settings;
     settings["max_iterations"] = 20000;
@@ -88,11 +88,13 @@ const nlohmann::json PLANE = {{"nx", 6}, {"ny", 4}, {"nz", 6}};
 const nlohmann::json STIFF = {{"h", 0.05}, {"youngs", 1e9}, {"speed", 3.0}, {"tilt_deg", 20.0}};
 
 INSTANTIATE_TEST_SUITE_P(Families, MprgpRecompute,
-                         ::testing::Values(Case{"plane_kkt", PLANE, {{"tol", 1e-10}}, false},
-                                           Case{"plane_published", PLANE, published(1e-9), false},
-                                           Case{"stiff_kkt", STIFF, {{"tol", 1e-10}}, true},
-                                           Case{"stiff_published", STIFF, published(1e-9), true}),
-                         [](const ::testing::TestParamInfo<Case>& info) { return std::string(info.param.name); });
+                         ::testing::Values(RecomputeCase{"plane_kkt", PLANE, {{"tol", 1e-10}}, false},
+                                           RecomputeCase{"plane_published", PLANE, published(1e-9), false},
+                                           RecomputeCase{"stiff_kkt", STIFF, {{"tol", 1e-10}}, true},
+                                           RecomputeCase{"stiff_published", STIFF, published(1e-9), true}),
+                         [](const ::testing::TestParamInfo<RecomputeCase>& info) {
+                             return std::string(info.param.name);
+                         });
 
 TEST(MprgpRecomputeDiagnostics, DirectComparisonWouldHaveDecidedOtherwiseOnStiffProblem)
 {

@@ -7,6 +7,8 @@
 #include "problems/synthetic.hpp"
 #include "solvers/core/registry.hpp"
 #include "solvers/measure/accuracy.hpp"
+#include "tests/solvers/max_abs.hpp"
+#include "tests/solvers/quiet_run_options.hpp"
 
 #include <gtest/gtest.h>
 
@@ -17,17 +19,8 @@
 namespace cb {
 namespace {
 
-RunOptions quiet()
-{
-    RunOptions options;
-    options.record_history = false;
-    return options;
-}
-
-double max_abs(const Vec& v) { return v.size() ? v.cwiseAbs().maxCoeff() : 0.0; }
-
 /// Every iterate x a solver reports.
-class IterateRecorder : public Monitor {
+class StaggeredIterateRecorder : public Monitor {
 public:
     bool on_iteration(const IterationInfo& info) override
     {
@@ -43,7 +36,7 @@ TEST(MprgpStaggered, AtMuZeroTakesMprgpCoupledsIterates)
         Qp qp = make_synthetic(family, {{"nx", 3}, {"ny", 2}, {"nz", 3}}, 5);
         testing_qps::add_friction(qp, [](Eigen::Index) { return 0.0; });
         const nlohmann::json settings = {{"tol", 1e-10}};
-        IterateRecorder ours, coupled;
+        StaggeredIterateRecorder ours, coupled;
         const SolverResult r =
             builtin_registry().create("mprgp-staggered", settings)->solve(qp.view(), SolveContext{&ours});
         const SolverResult ref =
@@ -57,12 +50,12 @@ TEST(MprgpStaggered, AtMuZeroTakesMprgpCoupledsIterates)
         ASSERT_GT(ours.iterates.size(), 3u);
         const double l = accuracy_scale(qp.view()).length;
         for (size_t k = 0; k < ours.iterates.size(); ++k)
-            EXPECT_LE(max_abs(ours.iterates[k] - coupled.iterates[k]), 1e-14 * l) << "iterate " << k;
-        EXPECT_LE(max_abs(r.lambda - ref.lambda), 0.0);
-        EXPECT_EQ(max_abs(r.lambda_t), 0.0);
+            EXPECT_LE(test::max_abs(ours.iterates[k] - coupled.iterates[k]), 1e-14 * l) << "iterate " << k;
+        EXPECT_LE(test::max_abs(r.lambda - ref.lambda), 0.0);
+        EXPECT_EQ(test::max_abs(r.lambda_t), 0.0);
         EXPECT_EQ(r.message.rfind("mprgp-staggered: converged: accuracy error ", 0), 0u) << r.message;
         // The harness judges it on the snapshot with its friction fields: converged.
-        const RunOutcome run = run_solver(qp, "mprgp-staggered", settings, quiet());
+        const RunOutcome run = run_solver(qp, "mprgp-staggered", settings, test::quiet_run_options());
         EXPECT_EQ(run.status, "converged") << run.result.message;
     }
 }
@@ -74,20 +67,21 @@ TEST(MprgpStaggered, ConvergesOnAFrictionalSnapshotAndAgreesWithNsgsFriction)
     for (const double mu : {0.5, 0.1}) {
         const Qp qp = testing_qps::pushed_plane(0.2, mu);
         const std::string what = "mu = " + std::to_string(mu);
-        const RunOutcome run = run_solver(qp, "mprgp-staggered", {{"tol", 1e-8}}, quiet());
+        const RunOutcome run = run_solver(qp, "mprgp-staggered", {{"tol", 1e-8}}, test::quiet_run_options());
         ASSERT_EQ(run.status, "converged") << what << ": " << run.result.message;
         EXPECT_GT(run.result.info.value("rounds", 0L), 1) << what;  // friction takes more than one round
         const Vec& x = run.result.x;
         const double e = accuracy(qp.view(), x, run.result.lambda, &run.result.lambda_t).max();
         EXPECT_LE(e, 1e-8 * (1 + 1e-9)) << what;
         EXPECT_LE(run.record["fclib_error"].get<double>(), 1e-6) << what;
-        const RunOutcome ref = run_solver(qp, "nsgs-friction", {{"tol", 1e-10}, {"max_iterations", 100000}}, quiet());
+        const RunOutcome ref =
+            run_solver(qp, "nsgs-friction", {{"tol", 1e-10}, {"max_iterations", 100000}}, test::quiet_run_options());
         ASSERT_EQ(ref.status, "converged") << what << ": " << ref.result.message;
         const double l = run.scale.length;
-        EXPECT_LE(max_abs(x - ref.result.x) / l, 1e-6) << what;
-        const double force = max_abs(ref.lambda_full);
-        EXPECT_LE(max_abs(run.lambda_full - ref.lambda_full), 1e-5 * force) << what;
-        EXPECT_LE(max_abs(run.result.lambda_t - ref.result.lambda_t), 1e-5 * force) << what;
+        EXPECT_LE(test::max_abs(x - ref.result.x) / l, 1e-6) << what;
+        const double force = test::max_abs(ref.lambda_full);
+        EXPECT_LE(test::max_abs(run.lambda_full - ref.lambda_full), 1e-5 * force) << what;
+        EXPECT_LE(test::max_abs(run.result.lambda_t - ref.result.lambda_t), 1e-5 * force) << what;
     }
 }
 
@@ -98,7 +92,8 @@ TEST(MprgpStaggered, StopNativeReachesFclibsError)
     for (const double mu : {0.5, 0.1}) {
         const Qp qp = testing_qps::pushed_plane(0.2, mu);
         for (const double tol : {1e-8, 1e-10}) {
-            const RunOutcome run = run_solver(qp, "mprgp-staggered", {{"tol", tol}, {"stop", "native"}}, quiet());
+            const RunOutcome run =
+                run_solver(qp, "mprgp-staggered", {{"tol", tol}, {"stop", "native"}}, test::quiet_run_options());
             const std::string what = "mu = " + std::to_string(mu) + ", tol " + std::to_string(tol);
             ASSERT_EQ(run.result.status, SolveStatus::CONVERGED) << what << ": " << run.result.message;
             EXPECT_LE(run.record["fclib_error"].get<double>(), tol * (1 + 1e-9)) << what;

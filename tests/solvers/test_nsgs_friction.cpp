@@ -6,21 +6,14 @@
 #include "problems/synthetic.hpp"
 #include "solvers/core/registry.hpp"
 #include "solvers/measure/accuracy.hpp"
+#include "tests/solvers/max_abs.hpp"
+#include "tests/solvers/quiet_run_options.hpp"
 
 #include <gtest/gtest.h>
 #include <cmath>
 
 namespace cb {
 namespace {
-
-RunOptions quiet()
-{
-    RunOptions options;
-    options.record_history = false;
-    return options;
-}
-
-double max_abs(const Vec& v) { return v.size() ? v.cwiseAbs().maxCoeff() : 0.0; }
 
 TEST(NsgsFriction, AtMuZeroAgreesWithPgsAndActiveSet)
 {
@@ -30,18 +23,19 @@ TEST(NsgsFriction, AtMuZeroAgreesWithPgsAndActiveSet)
             if (with_fields) testing_qps::add_friction(qp, [](Eigen::Index) { return 0.0; });
             const std::string what = std::string(family) + (with_fields ? " (mu = 0 given)" : " (no friction fields)");
             const double l = accuracy_scale(qp.view()).length;
-            const RunOutcome ours =
-                run_solver(qp, "nsgs-friction", {{"tol", 1e-12}, {"max_iterations", 100000}}, quiet());
+            const RunOutcome ours = run_solver(qp, "nsgs-friction", {{"tol", 1e-12}, {"max_iterations", 100000}},
+                                               test::quiet_run_options());
             ASSERT_EQ(ours.status, "converged") << what << ": " << ours.result.message;
             for (const char* other : {"pgs", "active-set"}) {
-                const RunOutcome ref = run_solver(qp, other, {{"tol", 1e-12}, {"max_iterations", 100000}}, quiet());
+                const RunOutcome ref =
+                    run_solver(qp, other, {{"tol", 1e-12}, {"max_iterations", 100000}}, test::quiet_run_options());
                 ASSERT_EQ(ref.status, "converged") << what << " " << other << ": " << ref.result.message;
-                EXPECT_LE(max_abs(ours.result.x - ref.result.x) / l, 1e-8) << what << " vs " << other;
-                EXPECT_LE(max_abs(ours.lambda_full - ref.lambda_full), 1e-8 * max_abs(ref.lambda_full))
+                EXPECT_LE(test::max_abs(ours.result.x - ref.result.x) / l, 1e-8) << what << " vs " << other;
+                EXPECT_LE(test::max_abs(ours.lambda_full - ref.lambda_full), 1e-8 * test::max_abs(ref.lambda_full))
                     << what << " vs " << other;
             }
             EXPECT_FALSE(ours.record.contains("fclib_error")) << what;
-            EXPECT_LE(max_abs(ours.result.lambda_t), 0.0) << what;  // no tangential force at mu = 0
+            EXPECT_LE(test::max_abs(ours.result.lambda_t), 0.0) << what;  // no tangential force at mu = 0
         }
     }
 }
@@ -53,7 +47,8 @@ TEST(NsgsFriction, SticksAndSlidesAsCoulombSays)
     double widest_slip[2] = {0.0, 0.0};
     for (const double mu : {0.5, 0.1}) {
         const Qp qp = testing_qps::pushed_plane(0.2, mu);
-        const RunOutcome run = run_solver(qp, "nsgs-friction", {{"tol", 1e-8}, {"max_iterations", 100000}}, quiet());
+        const RunOutcome run =
+            run_solver(qp, "nsgs-friction", {{"tol", 1e-8}, {"max_iterations", 100000}}, test::quiet_run_options());
         const std::string what = "mu = " + std::to_string(mu);
         ASSERT_EQ(run.status, "converged") << what << ": " << run.result.message;
         EXPECT_LE(run.accuracy.max(), 1e-8) << what;
@@ -99,7 +94,7 @@ TEST(NsgsFriction, FrictionlessSolversOnAFrictionalProblemSolveTheRelaxation)
     ASSERT_TRUE(qp.frictional());
     long relaxations = 0;
     for (const std::string& solver : builtin_registry().names()) {
-        const RunOutcome run = run_solver(qp, solver, {{"tol", 1e-6}}, quiet());
+        const RunOutcome run = run_solver(qp, solver, {{"tol", 1e-6}}, test::quiet_run_options());
         const SolverEntry& entry = builtin_registry().entry(solver);
         if (!entry.needs_settings && entry.make(nlohmann::json::object())->handles_friction()) {
             // A frictional solver (tests/solvers/test_friction_registry.cpp) solves the Coulomb problem or fails.

@@ -6,6 +6,7 @@
 #include "problems/synthetic.hpp"
 #include "solvers/core/registry.hpp"
 #include "solvers/measure/accuracy.hpp"
+#include "tests/solvers/ci_suite_cases.hpp"
 
 #include <gtest/gtest.h>
 #include <algorithm>
@@ -20,22 +21,6 @@ using cb::SolverResult;
 using cb::SolveStatus;
 using cb::Vec;
 
-struct CiCase {
-    std::string id, family;
-    std::uint64_t seed;
-    nlohmann::json params;
-};
-
-// The generate block of suites/ci.json.
-std::vector<CiCase> ci_cases()
-{
-    return {{"plane-small", "plane", 11, {{"nx", 4}, {"ny", 4}, {"nz", 4}}},
-            {"plane-tilted", "plane", 12, {{"nx", 4}, {"ny", 3}, {"nz", 4}, {"tilt_deg", 20}}},
-            {"coupled", "coupled", 13, {{"nx", 4}, {"ny", 2}, {"nz", 4}}},
-            {"box", "box", 14, {{"nx", 4}, {"ny", 4}, {"nz", 4}}},
-            {"stiff", "plane", 15, {{"nx", 4}, {"ny", 4}, {"nz", 4}, {"youngs", 1e9}}}};
-}
-
 class Peers : public ::testing::TestWithParam<std::string> {};
 
 }  // namespace
@@ -43,7 +28,7 @@ class Peers : public ::testing::TestWithParam<std::string> {};
 TEST_P(Peers, AgreeWithActiveSetOnTheCiSuite)
 {
     if (!cb::builtin_registry().contains(GetParam())) GTEST_SKIP() << GetParam() << " is not built";
-    for (const CiCase& cc : ci_cases()) {
+    for (const cb::test::CiCase& cc : cb::test::ci_cases()) {
         SCOPED_TRACE(GetParam() + " on " + cc.id);
         const Qp qp = cb::make_synthetic(cc.family, cc.params, cc.seed);
         const auto view = qp.view();

@@ -6,6 +6,7 @@
 #include "solvers/core/registry.hpp"
 #include "solvers/measure/accuracy.hpp"
 #include "solvers/mprgp/mprgp_box.hpp"
+#include "tests/solvers/ci_suite_cases.hpp"
 #include "tiny_qps.hpp"
 
 #include <gtest/gtest.h>
@@ -25,26 +26,9 @@ using cb::Vec;
 
 bool built(const std::string& name) { return cb::builtin_registry().contains(name); }
 
-SolverResult solve(const std::string& name, const Qp& qp, const nlohmann::json& settings)
+SolverResult solve_peer(const std::string& name, const Qp& qp, const nlohmann::json& settings)
 {
     return cb::builtin_registry().create(name, settings)->solve(qp.view(), cb::SolveContext{});
-}
-
-// The CI suite's problems (suites/ci.json): plane-small, box and stiff have bound rows (an axis
-// plane, signed unit rows), plane-tilted and coupled do not.
-struct CiCase {
-    std::string id, family;
-    std::uint64_t seed;
-    nlohmann::json params;
-};
-
-std::vector<CiCase> ci_cases()
-{
-    return {{"plane-small", "plane", 11, {{"nx", 4}, {"ny", 4}, {"nz", 4}}},
-            {"plane-tilted", "plane", 12, {{"nx", 4}, {"ny", 3}, {"nz", 4}, {"tilt_deg", 20}}},
-            {"coupled", "coupled", 13, {{"nx", 4}, {"ny", 2}, {"nz", 4}}},
-            {"box", "box", 14, {{"nx", 4}, {"ny", 4}, {"nz", 4}}},
-            {"stiff", "plane", 15, {{"nx", 4}, {"ny", 4}, {"nz", 4}, {"youngs", 1e9}}}};
 }
 
 }  // namespace
@@ -56,11 +40,11 @@ TEST(TaoTron, AgreesWithActiveSetOnBoundRowsAndRefusesOtherRows)
 {
     if (!built("tao-tron")) GTEST_SKIP() << "tao-tron is not built";
     int solved = 0, refused = 0;
-    for (const CiCase& cc : ci_cases()) {
+    for (const cb::test::CiCase& cc : cb::test::ci_cases()) {
         SCOPED_TRACE(cc.id);
         const Qp qp = cb::make_synthetic(cc.family, cc.params, cc.seed);
         const auto view = qp.view();
-        const SolverResult r = solve("tao-tron", qp, {{"tol", 1e-8}});
+        const SolverResult r = solve_peer("tao-tron", qp, {{"tol", 1e-8}});
         if (!cb::is_bound_rows(qp.J)) {
             ++refused;
             EXPECT_EQ(r.status, SolveStatus::NOT_APPLICABLE) << r.message;
@@ -71,7 +55,7 @@ TEST(TaoTron, AgreesWithActiveSetOnBoundRowsAndRefusesOtherRows)
             continue;
         }
         ++solved;
-        const SolverResult ref = solve("active-set", qp, {{"tol", 1e-9}});
+        const SolverResult ref = solve_peer("active-set", qp, {{"tol", 1e-9}});
         ASSERT_EQ(ref.status, SolveStatus::CONVERGED) << ref.message;
         ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
         ASSERT_EQ(r.lambda.size(), qp.m());
@@ -98,7 +82,7 @@ TEST(TaoTron, ContradictoryBoundsAreInfeasible)
     J << 1, 0, -1, 0;
     const Qp qp = cb::testing_qps::dense_qp(2.0 * Eigen::MatrixXd::Identity(2, 2), Eigen::Vector2d(0, 2), J,
                                             Eigen::Vector2d(1, 0), Vec::Zero(2));
-    const SolverResult r = solve("tao-tron", qp, {});
+    const SolverResult r = solve_peer("tao-tron", qp, {});
     EXPECT_EQ(r.status, SolveStatus::INFEASIBLE) << r.message;
     EXPECT_EQ(r.message, "tao-tron: DOF 0 has lower bound 1 > upper bound 0");
 }
@@ -107,7 +91,7 @@ TEST(TaoTron, ContradictoryBoundsAreInfeasible)
 TEST(TaoTron, TinyQpSolutionAndMultiplier)
 {
     if (!built("tao-tron")) GTEST_SKIP() << "tao-tron is not built";
-    const SolverResult r = solve("tao-tron", cb::testing_qps::tiny_active_qp(), {{"tol", 1e-10}});
+    const SolverResult r = solve_peer("tao-tron", cb::testing_qps::tiny_active_qp(), {{"tol", 1e-10}});
     ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
     EXPECT_NEAR(r.x[0], 1.0, 1e-12);
     EXPECT_NEAR(r.x[1], 1.0, 1e-10);
@@ -120,11 +104,11 @@ TEST(TaoTron, HonoursMaxIterationsAndTimeLimit)
 {
     if (!built("tao-tron")) GTEST_SKIP() << "tao-tron is not built";
     const Qp qp = cb::make_synthetic("box", {{"nx", 4}, {"ny", 4}, {"nz", 4}}, 14);
-    const SolverResult capped = solve("tao-tron", qp, {{"max_iterations", 1}, {"tol", 1e-10}});
+    const SolverResult capped = solve_peer("tao-tron", qp, {{"max_iterations", 1}, {"tol", 1e-10}});
     EXPECT_EQ(capped.status, SolveStatus::MAX_ITERATIONS) << capped.message;
     EXPECT_EQ(capped.info.value("tao_reason", ""), "DIVERGED_MAXITS");
     EXPECT_EQ(capped.iterations, 1);
-    const SolverResult timed = solve("tao-tron", qp, {{"time_limit_s", 1e-9}});
+    const SolverResult timed = solve_peer("tao-tron", qp, {{"time_limit_s", 1e-9}});
     EXPECT_EQ(timed.status, SolveStatus::TIME_LIMIT) << timed.message;
     const std::string killed = "; the child process was killed";
     ASSERT_GE(timed.message.size(), killed.size());
@@ -142,7 +126,7 @@ TEST(TaoPdipm, EndlessNewtonRetriesAreEndedAndStalled)
     const double a = std::ldexp(1.0, -26);
     qp.A *= a;
     qp.b *= a;
-    const SolverResult r = solve("tao-pdipm", qp, {{"tol", 1e-6}});
+    const SolverResult r = solve_peer("tao-pdipm", qp, {{"tol", 1e-6}});
     EXPECT_EQ(r.status, SolveStatus::STALLED) << r.message;
     EXPECT_EQ(r.info.value("tao_reason", ""), "DIVERGED_USER");
     EXPECT_TRUE(r.info.value("tao_stuck", false));
@@ -150,7 +134,7 @@ TEST(TaoPdipm, EndlessNewtonRetriesAreEndedAndStalled)
     EXPECT_NE(r.message.find("Newton step failed 50 times in a row at iteration 0"), std::string::npos) << r.message;
     // The same QP unscaled is solved (the guard does not fire on a run that advances).
     const SolverResult plain =
-        solve("tao-pdipm", cb::make_synthetic("coupled", {{"nx", 3}, {"ny", 2}, {"nz", 3}}, 5), {{"tol", 1e-6}});
+        solve_peer("tao-pdipm", cb::make_synthetic("coupled", {{"nx", 3}, {"ny", 2}, {"nz", 3}}, 5), {{"tol", 1e-6}});
     EXPECT_EQ(plain.status, SolveStatus::CONVERGED) << plain.message;
     EXPECT_FALSE(plain.info.value("tao_stuck", true));
 }
@@ -166,13 +150,13 @@ TEST(TaoPdipm, StopsOnTheHarnessTestWhateverTheObjectiveScale)
     const double a = std::ldexp(1.0, -26);
     scaled.A *= a;
     scaled.b *= a;
-    const SolverResult r = solve("tao-pdipm", qp, {{"tol", 1e-6}});
-    const SolverResult rs = solve("tao-pdipm", scaled, {{"tol", 1e-6}});
+    const SolverResult r = solve_peer("tao-pdipm", qp, {{"tol", 1e-6}});
+    const SolverResult rs = solve_peer("tao-pdipm", scaled, {{"tol", 1e-6}});
     for (const SolverResult* p : {&r, &rs}) {
         EXPECT_EQ(p->status, SolveStatus::CONVERGED) << p->message;
         EXPECT_EQ(p->info.value("tao_reason", ""), "CONVERGED_USER") << p->message;
     }
-    const SolverResult ref = solve("active-set", qp, {{"tol", 1e-10}});
+    const SolverResult ref = solve_peer("active-set", qp, {{"tol", 1e-10}});
     const double scale = (ref.x - qp.x0).lpNorm<Eigen::Infinity>();
     EXPECT_LE((rs.x - ref.x).lpNorm<Eigen::Infinity>(), 1e-4 * scale);
 }
@@ -199,8 +183,8 @@ TEST(TaoPeers, StartOpenMpiInTheirOwnSessionFolder)
     const std::string saved = old ? old : "";
     ::setenv("TMPDIR", folder.c_str(), 1);
     const Qp qp = cb::make_synthetic("box", {{"nx", 3}, {"ny", 3}, {"nz", 3}}, 2);
-    const SolverResult pdipm = solve("tao-pdipm", qp, {{"tol", 1e-6}});
-    const SolverResult tron = solve("tao-tron", qp, {{"tol", 1e-6}});
+    const SolverResult pdipm = solve_peer("tao-pdipm", qp, {{"tol", 1e-6}});
+    const SolverResult tron = solve_peer("tao-tron", qp, {{"tol", 1e-6}});
     if (old)
         ::setenv("TMPDIR", saved.c_str(), 1);
     else

@@ -15,7 +15,7 @@ using test::GridQpParams;
 using test::make_grid_qp;
 using test::relative_kkt;
 
-SolverResult run(const std::string& solver, const Qp& qp, const nlohmann::json& settings)
+SolverResult run_registered(const std::string& solver, const Qp& qp, const nlohmann::json& settings)
 {
     return builtin_registry().create(solver, settings)->solve(qp.view(), SolveContext{});
 }
@@ -25,7 +25,7 @@ double relative_gap(double a, double b) { return std::abs(a - b) / std::max(1.0,
 TEST(Pgs, ConvergesOnPlaneRowsToTheCommonKkt)
 {
     const Qp qp = make_grid_qp(GridQpParams{});
-    const SolverResult r = run("pgs", qp, {{"tol", 1e-8}});
+    const SolverResult r = run_registered("pgs", qp, {{"tol", 1e-8}});
     ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
     EXPECT_EQ(r.criterion, cb::StopCriterion::ACCURACY);
     EXPECT_LE(relative_kkt(qp, r.x, r.lambda), 1e-8);
@@ -40,8 +40,8 @@ TEST(Pgs, AgreesWithIcaOnCoupledRows)
     GridQpParams p;
     p.coupled = true;
     const Qp qp = make_grid_qp(p);
-    const SolverResult a = run("pgs", qp, {{"tol", 1e-10}, {"max_iterations", 100000}});
-    const SolverResult b = run("ica", qp, {{"tol", 1e-10}, {"max_iterations", 100000}});
+    const SolverResult a = run_registered("pgs", qp, {{"tol", 1e-10}, {"max_iterations", 100000}});
+    const SolverResult b = run_registered("ica", qp, {{"tol", 1e-10}, {"max_iterations", 100000}});
     ASSERT_EQ(a.status, SolveStatus::CONVERGED) << a.message;
     ASSERT_EQ(b.status, SolveStatus::CONVERGED) << b.message;
     EXPECT_LT(relative_gap(objective(qp.view(), a.x), objective(qp.view(), b.x)), 1e-8);
@@ -55,8 +55,8 @@ TEST(Pgs, AgreesWithActiveSetReference)
         GridQpParams p;
         p.coupled = coupled;
         const Qp qp = make_grid_qp(p);
-        const SolverResult ref = run("active-set", qp, {});
-        const SolverResult r = run("pgs", qp, {{"tol", 1e-10}, {"max_iterations", 100000}});
+        const SolverResult ref = run_registered("active-set", qp, {});
+        const SolverResult r = run_registered("pgs", qp, {{"tol", 1e-10}, {"max_iterations", 100000}});
         ASSERT_EQ(ref.status, SolveStatus::CONVERGED) << ref.message;
         ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
         EXPECT_LT(relative_gap(objective(qp.view(), r.x), objective(qp.view(), ref.x)), 1e-8) << coupled;
@@ -66,7 +66,7 @@ TEST(Pgs, AgreesWithActiveSetReference)
 TEST(Pgs, NativeStopIsTheNaturalResidual)
 {
     const Qp qp = make_grid_qp(GridQpParams{});
-    const SolverResult r = run("pgs", qp, {{"stop", "native"}, {"tol", 1e-9}});
+    const SolverResult r = run_registered("pgs", qp, {{"stop", "native"}, {"tol", 1e-9}});
     ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
     EXPECT_EQ(r.criterion, cb::StopCriterion::NATIVE);
     // ||min(lambda, Jx - c)||_inf at the returned point (Jx - c = S lambda - q at x = x(lambda)).
@@ -78,7 +78,7 @@ TEST(Pgs, NativeStopIsTheNaturalResidual)
 TEST(Pgs, RefusesTooManyRowsWithTheLimitInTheMessage)
 {
     const Qp qp = make_grid_qp(GridQpParams{});
-    const SolverResult r = run("pgs", qp, {{"max_rows", 10}});
+    const SolverResult r = run_registered("pgs", qp, {{"max_rows", 10}});
     EXPECT_EQ(r.status, SolveStatus::NOT_APPLICABLE);
     EXPECT_EQ(r.message, "pgs: m = " + std::to_string(qp.m()) +
                              " rows exceeds max_rows = 10 (S = J A^-1 J' is a dense m x m matrix formed "
@@ -102,7 +102,7 @@ Qp with_zero_rows(Qp qp, double c_value)
 TEST(Pgs, ZeroRowsKeepZeroMultipliers)
 {
     const Qp qp = with_zero_rows(make_grid_qp(GridQpParams{}), -1.0);
-    const SolverResult r = run("pgs", qp, {{"tol", 1e-8}});
+    const SolverResult r = run_registered("pgs", qp, {{"tol", 1e-8}});
     ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
     EXPECT_LE(relative_kkt(qp, r.x, r.lambda), 1e-8);
     EXPECT_EQ(r.lambda.tail(2), Vec::Zero(2));
@@ -112,7 +112,7 @@ TEST(Pgs, ZeroRowsKeepZeroMultipliers)
 TEST(Pgs, ZeroRowWithPositiveRightHandSideIsInfeasible)
 {
     const Qp qp = with_zero_rows(make_grid_qp(GridQpParams{}), 0.5);
-    const SolverResult r = run("pgs", qp, {});
+    const SolverResult r = run_registered("pgs", qp, {});
     EXPECT_EQ(r.status, SolveStatus::INFEASIBLE);
     EXPECT_EQ(r.message, "pgs: row " + std::to_string(qp.m() - 2) + " of J is zero but c_" +
                              std::to_string(qp.m() - 2) + " = 0.5 > 0: the constraint 0 >= c_i cannot hold");
@@ -123,7 +123,7 @@ TEST(Pgs, EmptyJGivesTheUnconstrainedMinimiser)
     Qp qp = make_grid_qp(GridQpParams{});
     qp.J = SpMat(0, qp.n());
     qp.c = Vec(0);
-    const SolverResult r = run("pgs", qp, {});
+    const SolverResult r = run_registered("pgs", qp, {});
     ASSERT_EQ(r.status, SolveStatus::CONVERGED) << r.message;
     const Vec exact = Eigen::SimplicialLDLT<SpMatCol>(SpMatCol(qp.A)).solve(qp.b);
     EXPECT_LT((r.x - exact).lpNorm<Eigen::Infinity>(), 1e-10);
@@ -134,7 +134,7 @@ TEST(Pgs, SweepCapIsReported)
     GridQpParams p;
     p.coupled = true;
     const Qp qp = make_grid_qp(p);
-    const SolverResult r = run("pgs", qp, {{"tol", 1e-14}, {"max_iterations", 2}});
+    const SolverResult r = run_registered("pgs", qp, {{"tol", 1e-14}, {"max_iterations", 2}});
     EXPECT_EQ(r.status, SolveStatus::MAX_ITERATIONS);
     EXPECT_EQ(r.iterations, 2);
     EXPECT_EQ(r.criterion, cb::StopCriterion::NONE);
@@ -157,17 +157,18 @@ TEST_P(SyntheticFamilies, PgsAndIcaMeetTheirToleranceAndAgreeWithActiveSet)
 {
     const Qp qp = make_synthetic(GetParam(), nlohmann::json::object(), 7);
     ASSERT_GT(qp.m(), 0);
-    const SolverResult ref = run("active-set", qp, {});
+    const SolverResult ref = run_registered("active-set", qp, {});
     ASSERT_EQ(ref.status, SolveStatus::CONVERGED) << ref.message;
     const double f_ref = objective(qp.view(), ref.x);
 
-    const SolverResult p = run("pgs", qp, {{"tol", 1e-10}, {"max_iterations", 200000}, {"time_limit_s", 20}});
+    const SolverResult p =
+        run_registered("pgs", qp, {{"tol", 1e-10}, {"max_iterations", 200000}, {"time_limit_s", 20}});
     ASSERT_EQ(p.status, SolveStatus::CONVERGED) << p.message;
     EXPECT_LE(relative_kkt(qp, p.x, p.lambda), 1e-10);
     const double gap = relative_gap(objective(qp.view(), p.x), f_ref);
     EXPECT_LT(gap, 1e-8);
 
-    const SolverResult i = run("ica", qp, {{"tol", 1e-6}, {"max_iterations", 200000}, {"time_limit_s", 20}});
+    const SolverResult i = run_registered("ica", qp, {{"tol", 1e-6}, {"max_iterations", 200000}, {"time_limit_s", 20}});
     const double kkt_i = relative_kkt(qp, i.x, i.lambda);
     if (i.status == SolveStatus::CONVERGED)
         EXPECT_LE(kkt_i, 1e-6);
