@@ -11,9 +11,12 @@ if [ -z "$tidy" ]; then
   echo "tidy: clang-tidy is not installed (apt-get install clang-tidy)" >&2
   exit 2
 fi
-if [ ! -f "$build/compile_commands.json" ]; then
-  cmake -S . -B "$build" -DCMAKE_EXPORT_COMPILE_COMMANDS=ON >/dev/null
-fi
+# The build compiles most sources inside unity batches (CB_UNITY_BUILD), so its compile database names
+# the batch files, not the sources: clang-tidy reads a per-file database configured (not built) beside
+# it, without the GCC-only heap option that clang does not know.
+db="$build-tidy"
+cmake -S . -B "$db" -DCMAKE_BUILD_TYPE=Release -DCB_UNITY_BUILD=OFF -DCB_GCC_LARGE_HEAP=OFF \
+      -DCMAKE_EXPORT_COMPILE_COMMANDS=ON >/dev/null
 mapfile -t files < <( { git diff --name-only --diff-filter=ACMR "$base" -- '*.cpp'; \
                         git ls-files --others --exclude-standard -- '*.cpp'; } | sort -u)
 # A changed header is checked through one source beside it that includes it.
@@ -27,10 +30,10 @@ mapfile -t files < <(printf '%s\n' "${files[@]}" | sort -u | grep -v -e '^tests/
 # switched off) has no compile command: clang-tidy could not find its headers. Say so and skip it.
 built=()
 for f in "${files[@]}"; do
-  if grep -q "\"file\": \"$(pwd)/$f\"" "$build/compile_commands.json" 2>/dev/null; then
+  if grep -q "\"file\": \"$(pwd)/$f\"" "$db/compile_commands.json" 2>/dev/null; then
     built+=("$f")
   else
-    echo "tidy: $f is not compiled in this configuration ($build): skipped"
+    echo "tidy: $f is not compiled in this configuration ($db): skipped"
   fi
 done
 files=("${built[@]+"${built[@]}"}")
@@ -45,4 +48,4 @@ if [ "$max" -gt 0 ] && [ ${#files[@]} -gt "$max" ]; then
   exit 0
 fi
 echo "tidy: $tidy on ${#files[@]} file(s) changed against $base"
-"$tidy" -p "$build" --quiet "${files[@]}"
+"$tidy" -p "$db" --quiet "${files[@]}"

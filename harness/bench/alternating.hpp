@@ -93,7 +93,8 @@ inline std::ptrdiff_t triad_length(double bytes)
 
 /// Registers `body` once per snapshot of CB_BENCH_SNAPSHOTS (colon-separated .qpsnap paths) as
 /// `prefix`/<stem>, one iteration each, in milliseconds of manual time.
-inline bool register_per_snapshot(const std::string& prefix, std::function<void(benchmark::State&, const Qp&)> body)
+inline bool register_per_snapshot(const std::string& prefix,
+                                  const std::function<void(benchmark::State&, const Qp&)>& body)
 {
     const char* list = std::getenv("CB_BENCH_SNAPSHOTS");
     if (list == nullptr) return false;
