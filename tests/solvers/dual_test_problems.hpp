@@ -42,7 +42,7 @@ inline Qp make_grid_qp(const GridQpParams& p)
         for (int j = 0; j < p.ny; ++j)
             for (int i = 0; i < p.nx; ++i) {
                 const int v = grid_vertex(p, i, j, k);
-                rest.segment<3>(3 * v) << 0.1 * i, 0.1 * j, 0.1 * k;
+                rest.segment<3>(3 * static_cast<Eigen::Index>(v)) << 0.1 * i, 0.1 * j, 0.1 * k;
                 if (i + 1 < p.nx) couple(v, grid_vertex(p, i + 1, j, k));
                 if (j + 1 < p.ny) couple(v, grid_vertex(p, i, j + 1, k));
                 if (k + 1 < p.nz) couple(v, grid_vertex(p, i, j, k + 1));

@@ -9,6 +9,7 @@
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <cctype>
 #include <iostream>
 #include <random>
 
@@ -318,6 +319,16 @@ struct FamilyCase {
     const char* family;
     const char* params;
 };
+/// ctest names an instance by its printed parameter: the case's name, not its bytes (pointers that
+/// moved from build to build).
+// NOLINTNEXTLINE(readability-identifier-naming): GoogleTest looks up this name
+void PrintTo(const FamilyCase& c, std::ostream* os)
+{
+    std::string name = std::string(c.family) + c.params;
+    for (char& ch : name)
+        if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
+    *os << name;
+}
 
 class ActiveSetFamilies : public ::testing::TestWithParam<FamilyCase> {};
 

@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <ostream>
 
 namespace {
 
@@ -29,7 +30,10 @@ std::unique_ptr<cb::Solver> reference_solver()
     return cb::active_set_entry().make(settings);
 }
 
-std::unique_ptr<cb::Solver> mprgp(nlohmann::json settings) { return cb::builtin_registry().create("mprgp", settings); }
+std::unique_ptr<cb::Solver> mprgp(const nlohmann::json& settings)
+{
+    return cb::builtin_registry().create("mprgp", settings);
+}
 
 Qp decoupled(const Qp& qp, cb::DecoupleOrder order = cb::DecoupleOrder::RANDOM, std::uint64_t seed = 3)
 {
@@ -66,6 +70,10 @@ struct MprgpCase {
     nlohmann::json params;
     bool decouple;
 };
+/// ctest names an instance by its printed parameter: the case's name, not its bytes (pointers that
+/// moved from build to build).
+// NOLINTNEXTLINE(readability-identifier-naming): GoogleTest looks up this name
+void PrintTo(const MprgpCase& c, std::ostream* os) { *os << c.name; }
 
 class MprgpAgreement : public ::testing::TestWithParam<MprgpCase> {};
 

@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <ostream>
 
 namespace {
 
@@ -18,6 +19,10 @@ struct TranslationPair {
     const char* original;
     const char* translated;
 };
+/// ctest names an instance by its printed parameter: the case's name, not its bytes (pointers that
+/// moved from build to build).
+// NOLINTNEXTLINE(readability-identifier-naming): GoogleTest looks up this name
+void PrintTo(const TranslationPair& p, std::ostream* os) { *os << p.translated; }
 
 class CoupledTranslation : public ::testing::TestWithParam<TranslationPair> {};
 

@@ -13,6 +13,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <ostream>
 #include <unistd.h>
 
 namespace {
@@ -56,6 +57,10 @@ struct RecomputeCase {
     nlohmann::json settings;
     bool chain_ends;  ///< the run has expansion and proportioning steps (the test covers them)
 };
+/// ctest names an instance by its printed parameter: the case's name, not its bytes (pointers that
+/// moved from build to build).
+// NOLINTNEXTLINE(readability-identifier-naming): GoogleTest looks up this name
+void PrintTo(const RecomputeCase& c, std::ostream* os) { *os << c.name; }
 
 class MprgpRecompute : public ::testing::TestWithParam<RecomputeCase> {};
 
