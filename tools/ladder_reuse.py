@@ -10,16 +10,10 @@ import json
 import os
 import sys
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "plots"))
+from qpsnap import content_hash  # noqa: E402  (the FNV-1a 64 that `simulate` records for the scene file)
+
 RESUME_MAGIC = b"cb-resume 1\n"  # sim/resume_state.cpp
-
-
-def content_hash(path: str) -> str:
-    """problems/qpsnap.cpp's qpsnap_content_hash: FNV-1a 64 of the bytes, 16 hex digits."""
-    h = 14695981039346656037
-    with open(path, "rb") as f:
-        for byte in f.read():
-            h = ((h ^ byte) * 1099511628211) & 0xFFFFFFFFFFFFFFFF
-    return f"{h:016x}"
 
 
 def simulated_scene_hash(resume_state: str) -> str:
