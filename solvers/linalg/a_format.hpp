@@ -9,7 +9,8 @@ enum class AFormat {
     CSR,   ///< A itself (Eigen's compressed rows: a value and a 32-bit column per nonzero)
     BSR,   ///< 3x3 blocks (a vertex's three DOFs): nine values and one 32-bit block column per block
     SBSR,  ///< BSR's upper block triangle only (A symmetric): about half the bytes; one thread
-    AUTO,  ///< a request only (prepare() never settles on it): BSR when A has the blocks, else CSR
+    AUTO,  ///< a request only (prepare() never settles on it): SBSR for a large A on one thread, else
+           ///< BSR when A has the blocks, else CSR (AOperator::prepare)
 };
 
 /// The setting's text: "csr", "bsr", "sbsr" or "auto".

@@ -186,9 +186,13 @@ double block_product(const BlockRows& B, std::ptrdiff_t first, std::ptrdiff_t la
 /// block row before it has added its part to y_I, so y_I is complete there and its dots are
 /// summed in the same pass. y_I's terms come in another order than the CSR row's, so y equals
 /// CSR's to rounding, not to the bit. One thread: the scatter writes rows other threads would own.
-template <Dots D>
-double sym_block_product(const BlockRows& B, std::ptrdiff_t nb, const double* __restrict px, double* __restrict py,
-                         const double* __restrict pw, const char* __restrict skip, double& xw)
+/// Each block's three products are summed before they meet the row's sum (one dependent addition
+/// per block, not three); the AVX2 kernel below sums in exactly this order. With SCALED as
+/// block_product: px holds U x, y_I is multiplied by u once complete, the dots read pd = x.
+template <Dots D, bool SCALED = false>
+double sym_block_product_scalar(const BlockRows& B, std::ptrdiff_t nb, const double* __restrict px,
+                                double* __restrict py, const double* __restrict pw, const char* __restrict skip,
+                                double& xw, const double* __restrict pu, const double* __restrict pd)
 {
     const int* __restrict start = B.start.data();
     const int* __restrict column = B.column.data();
@@ -219,19 +223,138 @@ double sym_block_product(const BlockRows& B, std::ptrdiff_t nb, const double* __
             py[j + 1] += b[3] * xi0 + b[4] * xi1 + b[5] * xi2;
             py[j + 2] += b[6] * xi0 + b[7] * xi1 + b[8] * xi2;
         }
+        if constexpr (SCALED) {
+            s0 *= pu[i];
+            s1 *= pu[i + 1];
+            s2 *= pu[i + 2];
+        }
         py[i] = s0;
         py[i + 1] = s1;
         py[i + 2] = s2;
         if constexpr (D != Dots::NONE) {
-            xy += xi0 * s0;
-            xy += xi1 * s1;
-            xy += xi2 * s2;
+            xy += pd[i] * s0;
+            xy += pd[i + 1] * s1;
+            xy += pd[i + 2] * s2;
             for (std::ptrdiff_t r = i; r < i + 3; ++r)
-                if (D == Dots::ALL || !skip[r]) dot_w += px[r] * pw[r];
+                if (D == Dots::ALL || !skip[r]) dot_w += pd[r] * pw[r];
         }
     }
     xw = dot_w;
     return xy;
+}
+
+#ifdef CB_HAVE_AVX2_KERNEL
+/// Block row I's part of the product: (B x)_I summed as the scalar loop sums it (the three column
+/// products added pairwise first, then to the row's sum).
+__attribute__((target("avx2"))) inline __m256d sym_block_terms(const double* __restrict b, const double* __restrict xj)
+{
+    const __m256d m0 = _mm256_mul_pd(_mm256_loadu_pd(b), _mm256_broadcast_sd(xj));
+    const __m256d m1 = _mm256_mul_pd(_mm256_loadu_pd(b + 3), _mm256_broadcast_sd(xj + 1));
+    const __m256d m2 = _mm256_mul_pd(_mm256_loadu_pd(b + 6), _mm256_broadcast_sd(xj + 2));
+    return _mm256_add_pd(_mm256_add_pd(m0, m1), m2);
+}
+
+/// y_J += B' x_I: B's rows r (lanes c = B(r, c), lane 3 zero) out of its stored columns, each times
+/// x_I[r], summed as the scalar loop sums column c of B times x_I; y_J's three entries are read
+/// and written alone (the fourth belongs to another block row, and y may end there).
+__attribute__((target("avx2"))) inline void sym_block_scatter(const double* __restrict b, __m256d xi0, __m256d xi1,
+                                                              __m256d xi2, double* __restrict yj)
+{
+    const __m256d c0 = _mm256_loadu_pd(b), c1 = _mm256_loadu_pd(b + 3), c2 = _mm256_loadu_pd(b + 6);
+    const __m256d zero = _mm256_setzero_pd();
+    const __m256d lo01 = _mm256_unpacklo_pd(c0, c1);             // b00 b01 b20 b21
+    const __m256d hi01 = _mm256_unpackhi_pd(c0, c1);             // b10 b11 .   .
+    const __m256d lo2 = _mm256_unpacklo_pd(c2, zero);            // b02 0   b22 0
+    const __m256d hi2 = _mm256_unpackhi_pd(c2, zero);            // b12 0   .   0
+    const __m256d r0 = _mm256_permute2f128_pd(lo01, lo2, 0x20);  // b00 b01 b02 0
+    const __m256d r1 = _mm256_permute2f128_pd(hi01, hi2, 0x20);  // b10 b11 b12 0
+    const __m256d r2 = _mm256_permute2f128_pd(lo01, lo2, 0x31);  // b20 b21 b22 0
+    const __m256d t =
+        _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r0, xi0), _mm256_mul_pd(r1, xi1)), _mm256_mul_pd(r2, xi2));
+    _mm_storeu_pd(yj, _mm_add_pd(_mm_loadu_pd(yj), _mm256_castpd256_pd128(t)));
+    _mm_store_sd(yj + 2, _mm_add_sd(_mm_load_sd(yj + 2), _mm256_extractf128_pd(t, 1)));
+}
+
+/// Block rows per chunk of the AVX2 symmetric kernel: its dots are summed from y still in cache.
+constexpr std::ptrdiff_t SYM_CHUNK = 1024;
+/// Doubles ahead of the block in hand that the symmetric kernel asks the cache for (16 blocks):
+/// one stream of blocks outran the hardware's prefetch (docs/a_product.md).
+constexpr std::ptrdiff_t SYM_PREFETCH = 9 * 16;
+
+/// sym_block_product_scalar() with AVX2, the same sums in the same order (y and the dots equal to
+/// the last bit). y is zeroed just ahead of the rows the scatter reaches instead of in a pass of
+/// its own: `formed` is the first block row not yet cleared. With SCALED, U x is formed there too:
+/// ux (the buffer px reads) gets pu[i] * pd[i] row by row just before any block reads it.
+template <Dots D, bool SCALED>
+__attribute__((target("avx2"))) double sym_block_product_avx2(const BlockRows& B, std::ptrdiff_t nb, const double* px,
+                                                              double* __restrict py, const double* __restrict pw,
+                                                              const char* __restrict skip, double& xw,
+                                                              const double* __restrict pu, const double* __restrict pd,
+                                                              double* ux)
+{
+    const int* __restrict start = B.start.data();
+    const int* __restrict column = B.column.data();
+    const double* __restrict val = B.value.data();
+    const double* __restrict scale_y = SCALED ? pu : nullptr;
+    std::ptrdiff_t formed = 0;
+    double xy = 0.0, dot_w = 0.0;
+    for (std::ptrdiff_t c = 0; c < nb; c += SYM_CHUNK) {
+        const std::ptrdiff_t end = std::min(nb, c + SYM_CHUNK);
+        for (std::ptrdiff_t I = c; I < end; ++I) {
+            int k = start[I];
+            const int last = start[I + 1];
+            const std::ptrdiff_t reach = 1 + (k < last ? std::max<std::ptrdiff_t>(I, column[last - 1]) : I);
+            if (formed < reach) {
+                std::fill(py + 3 * formed, py + 3 * reach, 0.0);
+                if constexpr (SCALED)
+                    for (std::ptrdiff_t i = 3 * formed; i < 3 * reach; ++i) ux[i] = pu[i] * pd[i];
+                formed = reach;
+            }
+            const double* xi = px + 3 * I;
+            const double* yi = py + 3 * I;
+            __m256d s = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(yi)), _mm_load_sd(yi + 2), 1);
+            if (k < last && column[k] == I) {  // the diagonal block: no transpose to scatter
+                s = _mm256_add_pd(s, sym_block_terms(val + 9 * static_cast<std::ptrdiff_t>(k), xi));
+                ++k;
+            }
+            const __m256d xi0 = _mm256_broadcast_sd(xi), xi1 = _mm256_broadcast_sd(xi + 1),
+                          xi2 = _mm256_broadcast_sd(xi + 2);
+            for (; k < last; ++k) {
+                const double* b = val + 9 * static_cast<std::ptrdiff_t>(k);
+                const std::ptrdiff_t j = 3 * static_cast<std::ptrdiff_t>(column[k]);
+                _mm_prefetch(reinterpret_cast<const char*>(b + SYM_PREFETCH), _MM_HINT_T0);
+                s = _mm256_add_pd(s, sym_block_terms(b, px + j));
+                sym_block_scatter(b, xi0, xi1, xi2, py + j);
+            }
+            store_block_row(I, s, py, scale_y);
+        }
+        if constexpr (D != Dots::NONE) {
+            for (std::ptrdiff_t i = 3 * c; i < 3 * end; ++i) {
+                xy += pd[i] * py[i];
+                if (D == Dots::ALL || !skip[i]) dot_w += pd[i] * pw[i];
+            }
+        }
+    }
+    xw = dot_w;
+    return xy;
+}
+#endif
+
+/// The symmetric product on the CPU's kernel (AVX2 or the scalar loop: the same y and dots). With
+/// SCALED, px is ux, the buffer that receives U x (u = pu, x = pd): formed here, not by the caller.
+template <Dots D, bool SCALED = false>
+double sym_block_product(const BlockRows& B, std::ptrdiff_t nb, const double* px, double* __restrict py,
+                         const double* __restrict pw, const char* __restrict skip, double& xw,
+                         const double* __restrict pu = nullptr, const double* __restrict pd = nullptr,
+                         double* ux = nullptr)
+{
+    if constexpr (!SCALED) pd = px;
+#ifdef CB_HAVE_AVX2_KERNEL
+    if (simd_block_kernel()) return sym_block_product_avx2<D, SCALED>(B, nb, px, py, pw, skip, xw, pu, pd, ux);
+#endif
+    if constexpr (SCALED)
+        for (std::ptrdiff_t i = 0; i < 3 * nb; ++i) ux[i] = pu[i] * pd[i];
+    return sym_block_product_scalar<D, SCALED>(B, nb, px, py, pw, skip, xw, pu, pd);
 }
 
 /// The CSR loop of the fused product (compressed A) over rows first .. last - 1: row i's sum, then
@@ -314,29 +437,35 @@ AFormat AOperator::prepare(AFormat wanted, int threads)
     m_blocks = BlockRows{};
     m_why_csr.clear();
     m_fill = 0.0;
-    // AUTO: the blocks whose sums follow CSR's order (SBSR's other order changed iteration counts
-    // on suites/ci.json; docs/a_product.md).
-    const AFormat asked = wanted == AFormat::AUTO ? AFormat::BSR : wanted;
-    if (asked == AFormat::BSR || asked == AFormat::SBSR) {
+    const SpMat& A = *m_csr;
+    const long nnz = static_cast<long>(A.nonZeros());
+    // AUTO: on one thread and a large A the upper blocks (half the bytes of a product that streams
+    // A from memory); else, or when A is not symmetric to the bit, the blocks whose sums follow
+    // CSR's order (SBSR's other order moved iteration counts on suites/ci.json; docs/a_product.md).
+    std::vector<AFormat> tries{wanted};
+    if (wanted == AFormat::AUTO) {
+        tries = {AFormat::BSR};
+        if (auto_prefers_upper_blocks(nnz, std::max(1, threads))) tries.insert(tries.begin(), AFormat::SBSR);
+    }
+    for (const AFormat asked : tries) {
+        if (asked != AFormat::BSR && asked != AFormat::SBSR) break;
         double fill = 0.0;
         const bool upper = asked == AFormat::SBSR;
-        const bool built = upper ? build_upper_block_rows(*m_csr, m_blocks, MAX_FILL, fill, m_why_csr) &&
-                                       upper_blocks_mirror_a(*m_csr, m_blocks, m_why_csr)
-                                 : build_block_rows(*m_csr, m_blocks, MAX_FILL, fill, m_why_csr);
+        m_why_csr.clear();
+        const bool built = upper ? build_upper_block_rows(A, m_blocks, MAX_FILL, fill, m_why_csr) &&
+                                       upper_blocks_mirror_a(A, m_blocks, m_why_csr)
+                                 : build_block_rows(A, m_blocks, MAX_FILL, fill, m_why_csr);
         if (built) {
             m_format = asked;
             (void)fill;  // per nonzero of the stored part; fill() is per nonzero of A
-            m_fill = 9.0 * static_cast<double>(m_blocks.column.size()) /
-                     static_cast<double>(std::max<Eigen::Index>(1, m_csr->nonZeros()));
-        } else {
-            m_blocks = BlockRows{};
+            m_fill = 9.0 * static_cast<double>(m_blocks.column.size()) / static_cast<double>(std::max(1L, nnz));
+            break;
         }
+        m_blocks = BlockRows{};
     }
     // Threads only where the raw loops run (compressed A); each range keeps enough nonzeros to
     // repay waking its thread. The ranges depend on A and threads only, never on the machine.
     // The symmetric blocks run on one thread (their transposes scatter into other rows).
-    const SpMat& A = *m_csr;
-    const long nnz = static_cast<long>(A.nonZeros());
     int parts = std::max(1, threads);
     parts = static_cast<int>(std::min<long>(parts, std::max(1L, nnz / MIN_NONZEROS_PER_PART)));
     if (!A.isCompressed()) parts = 1;
@@ -428,13 +557,22 @@ double scaled_product(const AOperator& A, const Vec& x, Vec& y, const Vec* w, co
 {
     const Vec& u = *A.scaling();
     Vec& ux = A.scaled_input();
-    ux = u.cwiseProduct(x);
+    if (A.format() != AFormat::SBSR) ux = u.cwiseProduct(x);
     if (A.format() == AFormat::BSR && A.parts() == 1) {
         // One thread on blocks: y scaled and the dots summed inside the kernel, no pass after it
         // (the same y and dots as that pass, below, to the last bit).
         y.resize(A.rows());
         const double xy = block_product<D, true>(A.blocks(), 0, A.rows() / 3, ux.data(), y.data(),
                                                  w != nullptr ? w->data() : nullptr, skip, xw, u.data(), x.data());
+        g_a_products.fetch_add(1, std::memory_order_relaxed);
+        return xy;
+    }
+    if (A.format() == AFormat::SBSR) {  // likewise: y_I is final once its block row is reached, and U x
+        y.resize(A.rows());             // is formed by the kernel just ahead of its use
+        ux.resize(A.rows());
+        const double xy =
+            sym_block_product<D, true>(A.blocks(), A.rows() / 3, ux.data(), y.data(),
+                                       w != nullptr ? w->data() : nullptr, skip, xw, u.data(), x.data(), ux.data());
         g_a_products.fetch_add(1, std::memory_order_relaxed);
         return xy;
     }

@@ -57,8 +57,10 @@ public:
     /// about equal nonzeros (fewer when A is small: at least MIN_NONZEROS_PER_PART each); the same
     /// A and threads give the same ranges, so y is the same to the last bit and the fused dots,
     /// summed range by range in range order, the same on every run (docs/a_product.md).
-    /// AUTO (the common setting `a_format`'s default): BSR, which keeps the iterates bit-equal to
-    /// CSR's; SBSR changed iteration counts on suites/ci.json, so it is asked for by name only.
+    /// AUTO (the common setting `a_format`'s default): on one thread and an A of at least
+    /// AUTO_SYMMETRIC_MIN_NONZEROS, SBSR when A is symmetric to the bit; else BSR, which keeps the
+    /// iterates bit-equal to CSR's (SBSR's order moved iteration counts on suites/ci.json, whose
+    /// QPs are all far smaller). The choice depends on A and threads only, never on the machine.
     AFormat prepare(AFormat wanted, int threads = 1);
     /// Row ranges the products are split into (1: one thread, today's loops).
     int parts() const { return static_cast<int>(m_part_start.size()) - 1; }
@@ -99,6 +101,17 @@ private:
     double m_fill = 0.0;
     std::vector<int> m_part_start{0, 0};
 };
+
+/// Nonzeros of A from which `a_format = auto` reads the upper blocks on one thread: about 70 MB of
+/// BSR blocks, beyond the last-level caches, where a product streams A from memory and half the
+/// bytes is nearly half the time (docs/a_product.md).
+constexpr long AUTO_SYMMETRIC_MIN_NONZEROS = 8L << 20;
+
+/// Whether `a_format = auto` tries the upper blocks first for an A of `nonzeros` on `threads`.
+inline bool auto_prefers_upper_blocks(long nonzeros, int threads)
+{
+    return threads <= 1 && nonzeros >= AUTO_SYMMETRIC_MIN_NONZEROS;
+}
 
 /// Fewest nonzeros of A per row range of a threaded product: below about this many a range's
 /// work is shorter than waking a thread for it.

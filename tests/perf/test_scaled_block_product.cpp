@@ -1,5 +1,6 @@
 // mprgp-coupled's precond = scaled multiplies by U A U (U = diag(u)) without a scaled copy of A. On
-// BSR with one thread the block kernels scale each row's sum and sum the dots as they store y;
+// BSR with one thread and on SBSR the block kernels scale each row's sum and sum the dots as they
+// store y (SBSR's AVX2 kernel also forms U x just ahead of the rows that read it);
 // this checks them against the pass they replaced (U x into a buffer, the plain product, then y
 // scaled and the dots summed in index order): every y entry and every dot equal to the last bit,
 // for both kernels.
@@ -59,33 +60,34 @@ TEST(ScaledBlockProduct, FusedScalingEqualsTheBufferedPassesToTheLastBit)
     const Vec x = spread(A.rows(), 12, 3.0), w = spread(A.rows(), 13, 3.0);
     std::vector<char> skip(static_cast<size_t>(A.rows()));
     for (size_t i = 0; i < skip.size(); ++i) skip[i] = static_cast<char>(i % 7 == 2);
-    for (const bool scalar : {false, true}) {
-        SCOPED_TRACE(scalar ? "scalar kernel" : "default kernel");
-        force_scalar_block_kernel(scalar);
-        AOperator plain(A), scaled(A);
-        ASSERT_EQ(plain.prepare(AFormat::BSR), AFormat::BSR);
-        ASSERT_EQ(scaled.prepare(AFormat::BSR), AFormat::BSR);
-        scaled.scale_by(&u);
-        const Unfused ref = unfused(plain, u, x, w, skip);
-        const long before = a_product_count();
-        Vec y1, y2, y3;
-        a_product(scaled, x, y1);
-        double xw = 0.0, xw_masked = 0.0;
-        const double xy = a_product_dots(scaled, x, y2, w, xw);
-        const double xy_masked = a_product_dots(scaled, x, y3, w, skip.data(), xw_masked);
-        EXPECT_EQ(a_product_count() - before, 3);
-        long differing = 0;
-        for (Eigen::Index i = 0; i < A.rows(); ++i)
-            differing += (y1[i] != ref.y[i]) + (y2[i] != ref.y[i]) + (y3[i] != ref.y[i]);
-        EXPECT_EQ(differing, 0);
-        EXPECT_EQ(xy, ref.xy);
-        EXPECT_EQ(xw, ref.xw);
-        EXPECT_EQ(xy_masked, ref.xy);
-        EXPECT_EQ(xw_masked, ref.xw_masked);
-        // Not vacuous: U changes the product.
-        Vec plain_y;
-        a_product(plain, x, plain_y);
-        EXPECT_GT((plain_y - ref.y).cwiseAbs().maxCoeff(), 0.0);
-    }
+    for (const AFormat format : {AFormat::BSR, AFormat::SBSR})
+        for (const bool scalar : {false, true}) {
+            SCOPED_TRACE(std::string(to_string(format)) + (scalar ? ", scalar kernel" : ", default kernel"));
+            force_scalar_block_kernel(scalar);
+            AOperator plain(A), scaled(A);
+            ASSERT_EQ(plain.prepare(format), format);
+            ASSERT_EQ(scaled.prepare(format), format);
+            scaled.scale_by(&u);
+            const Unfused ref = unfused(plain, u, x, w, skip);
+            const long before = a_product_count();
+            Vec y1, y2, y3;
+            a_product(scaled, x, y1);
+            double xw = 0.0, xw_masked = 0.0;
+            const double xy = a_product_dots(scaled, x, y2, w, xw);
+            const double xy_masked = a_product_dots(scaled, x, y3, w, skip.data(), xw_masked);
+            EXPECT_EQ(a_product_count() - before, 3);
+            long differing = 0;
+            for (Eigen::Index i = 0; i < A.rows(); ++i)
+                differing += (y1[i] != ref.y[i]) + (y2[i] != ref.y[i]) + (y3[i] != ref.y[i]);
+            EXPECT_EQ(differing, 0);
+            EXPECT_EQ(xy, ref.xy);
+            EXPECT_EQ(xw, ref.xw);
+            EXPECT_EQ(xy_masked, ref.xy);
+            EXPECT_EQ(xw_masked, ref.xw_masked);
+            // Not vacuous: U changes the product.
+            Vec plain_y;
+            a_product(plain, x, plain_y);
+            EXPECT_GT((plain_y - ref.y).cwiseAbs().maxCoeff(), 0.0);
+        }
     force_scalar_block_kernel(false);
 }

@@ -154,3 +154,51 @@ TEST(SymBlockProduct, RunsOnOneThreadWhateverThreadsAsks)
     EXPECT_EQ(xy1, xy4);
     EXPECT_EQ(xw1, xw4);
 }
+
+// Several chunks of the AVX2 symmetric kernel (1024 block rows a chunk): both kernels give the same
+// y and dots to the last bit (they sum in the same order), and both equal CSR's to rounding.
+TEST(SymBlockProduct, BothKernelsGiveTheSameSumsToTheLastBitOnALargeGrid)
+{
+    FemGridParams p;
+    p.nx = 40;
+    p.ny = 22;
+    p.nz = 20;  // 19803 vertices
+    const SpMat A = fem_like_matrix(p);
+    const Vec x = test::varied(A.cols(), 21), w = test::varied(A.cols(), 22);
+    std::vector<char> skip(static_cast<size_t>(A.rows()));
+    for (size_t i = 0; i < skip.size(); ++i) skip[i] = static_cast<char>(i % 3 == 0);
+    Vec y[2], y_dots[2], y_masked[2];
+    double xy[2], xw[2], xy_masked[2], xw_masked[2];
+    for (const int scalar : {0, 1}) {
+        force_scalar_block_kernel(scalar == 1);
+        AOperator op(A);
+        ASSERT_EQ(op.prepare(AFormat::SBSR), AFormat::SBSR) << op.why_csr();
+        expect_sym_products_to_rounding(op, A, scalar ? "scalar kernel" : "default kernel");
+        a_product(op, x, y[scalar]);
+        xy[scalar] = a_product_dots(op, x, y_dots[scalar], w, xw[scalar]);
+        xy_masked[scalar] = a_product_dots(op, x, y_masked[scalar], w, skip.data(), xw_masked[scalar]);
+    }
+    force_scalar_block_kernel(false);
+    long differing = 0;
+    for (Eigen::Index i = 0; i < A.rows(); ++i)
+        differing += (y[0][i] != y[1][i]) + (y_dots[0][i] != y[1][i]) + (y_masked[0][i] != y[1][i]);
+    EXPECT_EQ(differing, 0);
+    EXPECT_EQ(xy[0], xy[1]);
+    EXPECT_EQ(xw[0], xw[1]);
+    EXPECT_EQ(xy_masked[0], xy_masked[1]);
+    EXPECT_EQ(xw_masked[0], xw_masked[1]);
+}
+
+// `a_format = auto` reads the upper blocks only on one thread and from AUTO_SYMMETRIC_MIN_NONZEROS on;
+// below that it keeps BSR (CSR's sums to the bit), which a small symmetric A shows.
+TEST(SymBlockProduct, AutoChoosesTheUpperBlocksOnlyForALargeAOnOneThread)
+{
+    EXPECT_FALSE(auto_prefers_upper_blocks(AUTO_SYMMETRIC_MIN_NONZEROS - 1, 1));
+    EXPECT_TRUE(auto_prefers_upper_blocks(AUTO_SYMMETRIC_MIN_NONZEROS, 1));
+    EXPECT_TRUE(auto_prefers_upper_blocks(AUTO_SYMMETRIC_MIN_NONZEROS, 0));  // threads <= 1: one thread
+    EXPECT_FALSE(auto_prefers_upper_blocks(AUTO_SYMMETRIC_MIN_NONZEROS, 2));
+    const Qp qp = make_synthetic("plane", {{"nx", 6}, {"ny", 6}, {"nz", 6}}, 1);
+    ASSERT_LT(qp.A.nonZeros(), AUTO_SYMMETRIC_MIN_NONZEROS);
+    AOperator op(qp.A);
+    EXPECT_EQ(op.prepare(AFormat::AUTO, 1), AFormat::BSR);
+}

@@ -116,7 +116,7 @@ TEST(AFormatSolves, BoxBoundsGiveCsrIteratesWithBlocks)
 
 TEST(AFormatSolves, AutoTakesTheBlocksThatKeepCsrIterates)
 {
-    // auto = bsr: sbsr changed iteration counts on suites/ci.json (docs/a_product.md), so it is opt-in
+    // Below 8M nonzeros auto = bsr: sbsr changed iteration counts on suites/ci.json (docs/a_product.md)
     const Qp stress = make_stress_qp(stress_cases().front());
     const Qp box = make_synthetic("box", {{"nx", 4}, {"ny", 3}, {"nz", 4}}, 1);
     for (const std::string solver : {"mprgp", "mprgp-coupled", "mprgp-box", "cg", "ica"}) {
