@@ -13,6 +13,7 @@
 #include "solvers/measure/accuracy.hpp"
 #include "solvers/mprgp/coupled_face_operators.hpp"
 #include "solvers/mprgp/coupled_preconditioner.hpp"
+#include "solvers/mprgp/coupled_touched_rows.hpp"
 #include "solvers/mprgp/mprgp_coupled_setup.hpp"
 #include "solvers/mprgp/mprgp_engine.hpp"
 #include "solvers/mprgp/mprgp_kernels.hpp"
@@ -118,28 +119,7 @@ private:
         m_touched.clear();
     }
     /// d'Ad over the touched rows of A (A symmetric, d sparse); precond = scaled: d'UAUd.
-    double d_a_d() const
-    {
-        const int* outer = m_A.outerIndexPtr();
-        const int* inner = m_A.innerIndexPtr();
-        const double* val = m_A.valuePtr();
-        double dad = 0.0;
-        if (m_unscale != nullptr) {
-            const double* u = m_unscale->data();
-            for (int j : m_touched) {
-                double s = 0.0;
-                for (int k = outer[j]; k < outer[j + 1]; ++k) s += val[k] * (u[inner[k]] * m_d[inner[k]]);
-                dad += (u[j] * m_d[j]) * s;
-            }
-            return dad;
-        }
-        for (int j : m_touched) {
-            double s = 0.0;
-            for (int k = outer[j]; k < outer[j + 1]; ++k) s += val[k] * m_d[inner[k]];
-            dad += m_d[j] * s;
-        }
-        return dad;
-    }
+    double d_a_d() const { return m_rows_of_a->d_a_d(m_touched, m_d); }
     /// The nonzeros of A's columns at the touched DOFs (the work of d_a_d or add_a_d).
     double touched_nonzeros() const
     {
@@ -150,22 +130,7 @@ private:
     }
     /// g += A d (columns of A = rows, A symmetric), O(nnz of the touched columns); precond =
     /// scaled: g += U A U d.
-    void add_a_d(Vec& g) const
-    {
-        const int* outer = m_A.outerIndexPtr();
-        const int* inner = m_A.innerIndexPtr();
-        const double* val = m_A.valuePtr();
-        if (m_unscale != nullptr) {
-            const double* u = m_unscale->data();
-            for (int j : m_touched) {
-                const double ud = u[j] * m_d[j];
-                for (int k = outer[j]; k < outer[j + 1]; ++k) g[inner[k]] += u[inner[k]] * (val[k] * ud);
-            }
-            return;
-        }
-        for (int j : m_touched)
-            for (int k = outer[j]; k < outer[j + 1]; ++k) g[inner[k]] += val[k] * m_d[j];
-    }
+    void add_a_d(Vec& g) const { m_rows_of_a->add_a_d(m_touched, m_d, g); }
     /// x = P(x) with g updated sparsely (g += A J'lam). @return whether x moved.
     /// With keep_face, the projection keeps the face rows as equalities (the expansion's projections).
     bool project_x(bool strict, bool keep_face = false)
@@ -330,6 +295,7 @@ private:
     const QpView m_qp;                          // the QP iterated on: m_original or m_scaled's (A: the original's)
     const SpMat& m_A;
     AOperator m_a_op;  // the product with A (prepared in the setup)
+    std::unique_ptr<TouchedRowsOfA> m_rows_of_a;  // d'Ad and A d for sparse d (after m_a_op's prepare)
     const SpMat& m_J;
     const Vec& m_c;
     const MprgpCoupledSettings& m_st;
