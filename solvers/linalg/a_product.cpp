@@ -187,12 +187,12 @@ double block_product(const BlockRows& B, std::ptrdiff_t first, std::ptrdiff_t la
 /// summed in the same pass. y_I's terms come in another order than the CSR row's, so y equals
 /// CSR's to rounding, not to the bit. One thread: the scatter writes rows other threads would own.
 /// Each block's three products are summed before they meet the row's sum (one dependent addition
-/// per block, not three); the AVX2 kernel below sums in exactly this order. With SCALED as
-/// block_product: px holds U x, y_I is multiplied by u once complete, the dots read pd = x.
-template <Dots D, bool SCALED = false>
+/// per block, not three); the AVX2 kernel below sums in exactly this order. (precond = scaled
+/// scales the stored blocks instead: AOperator::scale_by.)
+template <Dots D>
 double sym_block_product_scalar(const BlockRows& B, std::ptrdiff_t nb, const double* __restrict px,
                                 double* __restrict py, const double* __restrict pw, const char* __restrict skip,
-                                double& xw, const double* __restrict pu, const double* __restrict pd)
+                                double& xw)
 {
     const int* __restrict start = B.start.data();
     const int* __restrict column = B.column.data();
@@ -223,20 +223,15 @@ double sym_block_product_scalar(const BlockRows& B, std::ptrdiff_t nb, const dou
             py[j + 1] += b[3] * xi0 + b[4] * xi1 + b[5] * xi2;
             py[j + 2] += b[6] * xi0 + b[7] * xi1 + b[8] * xi2;
         }
-        if constexpr (SCALED) {
-            s0 *= pu[i];
-            s1 *= pu[i + 1];
-            s2 *= pu[i + 2];
-        }
         py[i] = s0;
         py[i + 1] = s1;
         py[i + 2] = s2;
         if constexpr (D != Dots::NONE) {
-            xy += pd[i] * s0;
-            xy += pd[i + 1] * s1;
-            xy += pd[i + 2] * s2;
+            xy += xi0 * s0;
+            xy += xi1 * s1;
+            xy += xi2 * s2;
             for (std::ptrdiff_t r = i; r < i + 3; ++r)
-                if (D == Dots::ALL || !skip[r]) dot_w += pd[r] * pw[r];
+                if (D == Dots::ALL || !skip[r]) dot_w += px[r] * pw[r];
         }
     }
     xw = dot_w;
@@ -283,20 +278,17 @@ constexpr std::ptrdiff_t SYM_PREFETCH = 9 * 16;
 
 /// sym_block_product_scalar() with AVX2, the same sums in the same order (y and the dots equal to
 /// the last bit). y is zeroed just ahead of the rows the scatter reaches instead of in a pass of
-/// its own: `formed` is the first block row not yet cleared. With SCALED, U x is formed there too:
-/// ux (the buffer px reads) gets pu[i] * pd[i] row by row just before any block reads it.
-template <Dots D, bool SCALED>
-__attribute__((target("avx2"))) double sym_block_product_avx2(const BlockRows& B, std::ptrdiff_t nb, const double* px,
-                                                              double* __restrict py, const double* __restrict pw,
-                                                              const char* __restrict skip, double& xw,
-                                                              const double* __restrict pu, const double* __restrict pd,
-                                                              double* ux)
+/// its own: `zeroed` is the first block row not yet cleared.
+template <Dots D>
+__attribute__((target("avx2"))) double sym_block_product_avx2(const BlockRows& B, std::ptrdiff_t nb,
+                                                              const double* __restrict px, double* __restrict py,
+                                                              const double* __restrict pw, const char* __restrict skip,
+                                                              double& xw)
 {
     const int* __restrict start = B.start.data();
     const int* __restrict column = B.column.data();
     const double* __restrict val = B.value.data();
-    const double* __restrict scale_y = SCALED ? pu : nullptr;
-    std::ptrdiff_t formed = 0;
+    std::ptrdiff_t zeroed = 0;
     double xy = 0.0, dot_w = 0.0;
     for (std::ptrdiff_t c = 0; c < nb; c += SYM_CHUNK) {
         const std::ptrdiff_t end = std::min(nb, c + SYM_CHUNK);
@@ -304,11 +296,9 @@ __attribute__((target("avx2"))) double sym_block_product_avx2(const BlockRows& B
             int k = start[I];
             const int last = start[I + 1];
             const std::ptrdiff_t reach = 1 + (k < last ? std::max<std::ptrdiff_t>(I, column[last - 1]) : I);
-            if (formed < reach) {
-                std::fill(py + 3 * formed, py + 3 * reach, 0.0);
-                if constexpr (SCALED)
-                    for (std::ptrdiff_t i = 3 * formed; i < 3 * reach; ++i) ux[i] = pu[i] * pd[i];
-                formed = reach;
+            if (zeroed < reach) {
+                std::fill(py + 3 * zeroed, py + 3 * reach, 0.0);
+                zeroed = reach;
             }
             const double* xi = px + 3 * I;
             const double* yi = py + 3 * I;
@@ -326,12 +316,12 @@ __attribute__((target("avx2"))) double sym_block_product_avx2(const BlockRows& B
                 s = _mm256_add_pd(s, sym_block_terms(b, px + j));
                 sym_block_scatter(b, xi0, xi1, xi2, py + j);
             }
-            store_block_row(I, s, py, scale_y);
+            store_block_row(I, s, py, nullptr);
         }
         if constexpr (D != Dots::NONE) {
             for (std::ptrdiff_t i = 3 * c; i < 3 * end; ++i) {
-                xy += pd[i] * py[i];
-                if (D == Dots::ALL || !skip[i]) dot_w += pd[i] * pw[i];
+                xy += px[i] * py[i];
+                if (D == Dots::ALL || !skip[i]) dot_w += px[i] * pw[i];
             }
         }
     }
@@ -340,21 +330,15 @@ __attribute__((target("avx2"))) double sym_block_product_avx2(const BlockRows& B
 }
 #endif
 
-/// The symmetric product on the CPU's kernel (AVX2 or the scalar loop: the same y and dots). With
-/// SCALED, px is ux, the buffer that receives U x (u = pu, x = pd): formed here, not by the caller.
-template <Dots D, bool SCALED = false>
-double sym_block_product(const BlockRows& B, std::ptrdiff_t nb, const double* px, double* __restrict py,
-                         const double* __restrict pw, const char* __restrict skip, double& xw,
-                         const double* __restrict pu = nullptr, const double* __restrict pd = nullptr,
-                         double* ux = nullptr)
+/// The symmetric product on the CPU's kernel (AVX2 or the scalar loop: the same y and dots).
+template <Dots D>
+double sym_block_product(const BlockRows& B, std::ptrdiff_t nb, const double* __restrict px, double* __restrict py,
+                         const double* __restrict pw, const char* __restrict skip, double& xw)
 {
-    if constexpr (!SCALED) pd = px;
 #ifdef CB_HAVE_AVX2_KERNEL
-    if (simd_block_kernel()) return sym_block_product_avx2<D, SCALED>(B, nb, px, py, pw, skip, xw, pu, pd, ux);
+    if (simd_block_kernel()) return sym_block_product_avx2<D>(B, nb, px, py, pw, skip, xw);
 #endif
-    if constexpr (SCALED)
-        for (std::ptrdiff_t i = 0; i < 3 * nb; ++i) ux[i] = pu[i] * pd[i];
-    return sym_block_product_scalar<D, SCALED>(B, nb, px, py, pw, skip, xw, pu, pd);
+    return sym_block_product_scalar<D>(B, nb, px, py, pw, skip, xw);
 }
 
 /// The CSR loop of the fused product (compressed A) over rows first .. last - 1: row i's sum, then
@@ -457,6 +441,8 @@ AFormat AOperator::prepare(AFormat wanted, int threads)
                                  : build_block_rows(A, m_blocks, MAX_FILL, fill, m_why_csr);
         if (built) {
             m_format = asked;
+            m_blocks_scaled = false;
+            if (asked == AFormat::SBSR && m_scale != nullptr) scale_blocks();
             (void)fill;  // per nonzero of the stored part; fill() is per nonzero of A
             m_fill = 9.0 * static_cast<double>(m_blocks.column.size()) / static_cast<double>(std::max(1L, nnz));
             break;
@@ -478,6 +464,32 @@ AFormat AOperator::prepare(AFormat wanted, int threads)
     else
         m_part_start = {0, static_cast<int>(A.rows())};
     return m_format;
+}
+
+void AOperator::scale_blocks()
+{
+    const Vec& u = *m_scale;
+    const std::ptrdiff_t nb = static_cast<std::ptrdiff_t>(m_blocks.start.size()) - 1;
+    for (std::ptrdiff_t I = 0; I < nb; ++I)
+        for (int k = m_blocks.start[static_cast<size_t>(I)]; k < m_blocks.start[static_cast<size_t>(I) + 1]; ++k) {
+            const std::ptrdiff_t J = m_blocks.column[static_cast<size_t>(k)];
+            double* b = m_blocks.value.data() + 9 * static_cast<std::ptrdiff_t>(k);
+            for (int c = 0; c < 3; ++c)
+                for (int r = 0; r < 3; ++r) b[3 * c + r] = u[3 * I + r] * b[3 * c + r] * u[3 * J + c];
+        }
+    m_blocks_scaled = true;
+}
+
+void AOperator::scale_by(const Vec* u)
+{
+    if (m_format == AFormat::SBSR && m_blocks_scaled) {  // back to A's own blocks first
+        std::string why;
+        double fill = 0.0;
+        build_upper_block_rows(*m_csr, m_blocks, MAX_FILL, fill, why);
+        m_blocks_scaled = false;
+    }
+    m_scale = u;
+    if (m_format == AFormat::SBSR && m_scale != nullptr) scale_blocks();
 }
 
 bool a_product_parallel_build()
@@ -557,7 +569,7 @@ double scaled_product(const AOperator& A, const Vec& x, Vec& y, const Vec* w, co
 {
     const Vec& u = *A.scaling();
     Vec& ux = A.scaled_input();
-    if (A.format() != AFormat::SBSR) ux = u.cwiseProduct(x);
+    if (!A.blocks_scaled()) ux = u.cwiseProduct(x);
     if (A.format() == AFormat::BSR && A.parts() == 1) {
         // One thread on blocks: y scaled and the dots summed inside the kernel, no pass after it
         // (the same y and dots as that pass, below, to the last bit).
@@ -567,12 +579,10 @@ double scaled_product(const AOperator& A, const Vec& x, Vec& y, const Vec* w, co
         g_a_products.fetch_add(1, std::memory_order_relaxed);
         return xy;
     }
-    if (A.format() == AFormat::SBSR) {  // likewise: y_I is final once its block row is reached, and U x
-        y.resize(A.rows());             // is formed by the kernel just ahead of its use
-        ux.resize(A.rows());
-        const double xy =
-            sym_block_product<D, true>(A.blocks(), A.rows() / 3, ux.data(), y.data(),
-                                       w != nullptr ? w->data() : nullptr, skip, xw, u.data(), x.data(), ux.data());
+    if (A.blocks_scaled()) {  // SBSR's blocks hold U A U: x itself in, y out, the dots in the pass
+        y.resize(A.rows());
+        const double xy = sym_block_product<D>(A.blocks(), A.rows() / 3, x.data(), y.data(),
+                                               w != nullptr ? w->data() : nullptr, skip, xw);
         g_a_products.fetch_add(1, std::memory_order_relaxed);
         return xy;
     }

@@ -79,21 +79,30 @@ public:
     const BlockRows& blocks() const { return m_blocks; }
     Eigen::Index rows() const { return m_csr->rows(); }
     /// From now on the products give U A U x (U = diag(u)) instead of A x, without a scaled copy
-    /// of A (mprgp-coupled's precond = scaled: the QP in y = U^-1 x): x is scaled into a buffer
-    /// before the product; on BSR with one thread the block kernels scale each row's sum before
-    /// storing it and sum the dots with it, else y is scaled in a pass on the way out. Both give
-    /// the same y and dots to the last bit.
-    /// u must outlive the operator; nullptr: A itself again.
-    void scale_by(const Vec* u) { m_scale = u; }
+    /// of A (mprgp-coupled's precond = scaled: the QP in y = U^-1 x). On BSR and CSR x is scaled
+    /// into a buffer before the product; on BSR with one thread the block kernels scale each row's
+    /// sum before storing it and sum the dots with it, else y is scaled in a pass on the way out.
+    /// Both give the same y and dots to the last bit. On SBSR, whose blocks are a copy already,
+    /// the blocks themselves are scaled (entry (r, c) becomes (u_r a_rc) u_c), in prepare() or
+    /// here: the product then reads x itself, with no pass before or after it (y equal to the
+    /// buffered product's to rounding, as SBSR's own order is).
+    /// u must outlive the operator and keep its values; nullptr: A itself again.
+    void scale_by(const Vec* u);
     /// The scaling of the products (nullptr when they give A x).
     const Vec* scaling() const { return m_scale; }
+    /// Whether the stored blocks already hold U A U (SBSR with a scaling): the products then
+    /// read x as it is.
+    bool blocks_scaled() const { return m_blocks_scaled; }
     /// The buffer holding U x during a scaled product (one per operator: products on one
     /// operator run one at a time).
     Vec& scaled_input() const { return m_scaled_x; }
 
 private:
+    /// Multiplies SBSR's stored blocks by u on both sides (after they were built from A).
+    void scale_blocks();
     const SpMat* m_csr;
     const Vec* m_scale = nullptr;
+    bool m_blocks_scaled = false;  ///< SBSR's blocks hold U A U (scale_by)
     mutable Vec m_scaled_x;
     AFormat m_format = AFormat::CSR;
     BlockRows m_blocks;

@@ -1,6 +1,5 @@
 // mprgp-coupled's precond = scaled multiplies by U A U (U = diag(u)) without a scaled copy of A. On
-// BSR with one thread and on SBSR the block kernels scale each row's sum and sum the dots as they
-// store y (SBSR's AVX2 kernel also forms U x just ahead of the rows that read it);
+// BSR with one thread the block kernels scale each row's sum and sum the dots as they store y;
 // this checks them against the pass they replaced (U x into a buffer, the plain product, then y
 // scaled and the dots summed in index order): every y entry and every dot equal to the last bit,
 // for both kernels.
@@ -9,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -60,34 +60,93 @@ TEST(ScaledBlockProduct, FusedScalingEqualsTheBufferedPassesToTheLastBit)
     const Vec x = spread(A.rows(), 12, 3.0), w = spread(A.rows(), 13, 3.0);
     std::vector<char> skip(static_cast<size_t>(A.rows()));
     for (size_t i = 0; i < skip.size(); ++i) skip[i] = static_cast<char>(i % 7 == 2);
-    for (const AFormat format : {AFormat::BSR, AFormat::SBSR})
-        for (const bool scalar : {false, true}) {
-            SCOPED_TRACE(std::string(to_string(format)) + (scalar ? ", scalar kernel" : ", default kernel"));
-            force_scalar_block_kernel(scalar);
-            AOperator plain(A), scaled(A);
-            ASSERT_EQ(plain.prepare(format), format);
-            ASSERT_EQ(scaled.prepare(format), format);
-            scaled.scale_by(&u);
-            const Unfused ref = unfused(plain, u, x, w, skip);
-            const long before = a_product_count();
-            Vec y1, y2, y3;
-            a_product(scaled, x, y1);
-            double xw = 0.0, xw_masked = 0.0;
-            const double xy = a_product_dots(scaled, x, y2, w, xw);
-            const double xy_masked = a_product_dots(scaled, x, y3, w, skip.data(), xw_masked);
-            EXPECT_EQ(a_product_count() - before, 3);
-            long differing = 0;
-            for (Eigen::Index i = 0; i < A.rows(); ++i)
-                differing += (y1[i] != ref.y[i]) + (y2[i] != ref.y[i]) + (y3[i] != ref.y[i]);
-            EXPECT_EQ(differing, 0);
-            EXPECT_EQ(xy, ref.xy);
-            EXPECT_EQ(xw, ref.xw);
-            EXPECT_EQ(xy_masked, ref.xy);
-            EXPECT_EQ(xw_masked, ref.xw_masked);
-            // Not vacuous: U changes the product.
-            Vec plain_y;
-            a_product(plain, x, plain_y);
-            EXPECT_GT((plain_y - ref.y).cwiseAbs().maxCoeff(), 0.0);
-        }
+    for (const bool scalar : {false, true}) {
+        SCOPED_TRACE(scalar ? "scalar kernel" : "default kernel");
+        force_scalar_block_kernel(scalar);
+        AOperator plain(A), scaled(A);
+        ASSERT_EQ(plain.prepare(AFormat::BSR), AFormat::BSR);
+        ASSERT_EQ(scaled.prepare(AFormat::BSR), AFormat::BSR);
+        scaled.scale_by(&u);
+        const Unfused ref = unfused(plain, u, x, w, skip);
+        const long before = a_product_count();
+        Vec y1, y2, y3;
+        a_product(scaled, x, y1);
+        double xw = 0.0, xw_masked = 0.0;
+        const double xy = a_product_dots(scaled, x, y2, w, xw);
+        const double xy_masked = a_product_dots(scaled, x, y3, w, skip.data(), xw_masked);
+        EXPECT_EQ(a_product_count() - before, 3);
+        long differing = 0;
+        for (Eigen::Index i = 0; i < A.rows(); ++i)
+            differing += (y1[i] != ref.y[i]) + (y2[i] != ref.y[i]) + (y3[i] != ref.y[i]);
+        EXPECT_EQ(differing, 0);
+        EXPECT_EQ(xy, ref.xy);
+        EXPECT_EQ(xw, ref.xw);
+        EXPECT_EQ(xy_masked, ref.xy);
+        EXPECT_EQ(xw_masked, ref.xw_masked);
+        // Not vacuous: U changes the product.
+        Vec plain_y;
+        a_product(plain, x, plain_y);
+        EXPECT_GT((plain_y - ref.y).cwiseAbs().maxCoeff(), 0.0);
+    }
     force_scalar_block_kernel(false);
+}
+
+// On SBSR the blocks are a copy already, so scale_by() scales them in place: the product of U A U
+// then reads x itself. Its y equals the buffered product's to rounding (another order of the
+// same products), whether the scaling came before prepare() or after it, both kernels give the
+// same bits, and scale_by(nullptr) gives A's own product back to the bit.
+TEST(ScaledBlockProduct, SymmetricBlocksScaledInPlaceEqualTheBufferedPassesToRounding)
+{
+    FemGridParams p;
+    p.nx = 12;
+    p.ny = 10;
+    p.nz = 9;
+    const SpMat A = fem_like_matrix(p);
+    const Vec u = spread(A.rows(), 21, 2.0).cwiseAbs();
+    const Vec x = spread(A.rows(), 22, 3.0), w = spread(A.rows(), 23, 3.0);
+    std::vector<char> skip(static_cast<size_t>(A.rows()));
+    for (size_t i = 0; i < skip.size(); ++i) skip[i] = static_cast<char>(i % 7 == 2);
+    AOperator bsr(A);
+    ASSERT_EQ(bsr.prepare(AFormat::BSR), AFormat::BSR);
+    const Unfused ref = unfused(bsr, u, x, w, skip);
+    // |U||A||U||x| per row: the size of each y_i's terms, for the rounding bound.
+    const Vec size = u.asDiagonal() * (A.cwiseAbs() * u.cwiseProduct(x).cwiseAbs());
+    Vec y_kernel[2];
+    for (const int scalar : {0, 1}) {
+        force_scalar_block_kernel(scalar == 1);
+        AOperator before(A), after(A);
+        before.scale_by(&u);
+        ASSERT_EQ(before.prepare(AFormat::SBSR), AFormat::SBSR);
+        ASSERT_EQ(after.prepare(AFormat::SBSR), AFormat::SBSR);
+        after.scale_by(&u);
+        EXPECT_TRUE(before.blocks_scaled());
+        EXPECT_TRUE(after.blocks_scaled());
+        Vec y_before, y_after, y_masked;
+        double xw = 0.0, xw_masked = 0.0;
+        const double xy = a_product_dots(before, x, y_before, w, xw);
+        const double xy_masked = a_product_dots(before, x, y_masked, w, skip.data(), xw_masked);
+        a_product(after, x, y_after);
+        double worst = 0.0;
+        for (Eigen::Index i = 0; i < A.rows(); ++i) worst = std::max(worst, std::abs(y_before[i] - ref.y[i]) / size[i]);
+        EXPECT_LT(worst, 1e-14);
+        EXPECT_GT(worst, 0.0);  // not the buffered order: the rounding differs somewhere
+        EXPECT_EQ((y_before - y_after).cwiseAbs().maxCoeff(), 0.0);
+        EXPECT_EQ((y_before - y_masked).cwiseAbs().maxCoeff(), 0.0);
+        EXPECT_NEAR(xy, ref.xy, 1e-14 * x.cwiseAbs().dot(size));
+        EXPECT_NEAR(xy_masked, ref.xy, 1e-14 * x.cwiseAbs().dot(size));
+        EXPECT_EQ(xw, ref.xw);  // x'w does not read A
+        EXPECT_EQ(xw_masked, ref.xw_masked);
+        y_kernel[scalar] = y_before;
+        // A's own product again, to the bit.
+        after.scale_by(nullptr);
+        EXPECT_FALSE(after.blocks_scaled());
+        AOperator plain(A);
+        ASSERT_EQ(plain.prepare(AFormat::SBSR), AFormat::SBSR);
+        Vec y_plain, y_unscaled;
+        a_product(plain, x, y_plain);
+        a_product(after, x, y_unscaled);
+        EXPECT_EQ((y_plain - y_unscaled).cwiseAbs().maxCoeff(), 0.0);
+    }
+    force_scalar_block_kernel(false);
+    EXPECT_EQ((y_kernel[0] - y_kernel[1]).cwiseAbs().maxCoeff(), 0.0);
 }
