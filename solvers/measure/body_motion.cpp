@@ -53,17 +53,17 @@ long double BodyMotion::spatial_row_sums(const SpMat& A, Eigen::Index p, const d
         case 0:
             t0 += a;
             q4 += a * dv[2];
-            q5 += a * -dv[1];
+            q5 -= a * dv[1];
             break;
         case 1:
             t1 += a;
             q5 += a * dv[0];
-            q3 += a * -dv[2];
+            q3 -= a * dv[2];
             break;
         default:
             t2 += a;
             q3 += a * dv[1];
-            q4 += a * -dv[0];
+            q4 -= a * dv[0];
             break;
         }
     }
