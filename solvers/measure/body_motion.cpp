@@ -35,7 +35,8 @@ long double BodyMotion::spatial_row_sums(const SpMat& A, Eigen::Index p, const d
 {
     // mode_row() unrolled by the column's axis, with the sums in named locals rather than an
     // indexed array (which kept every long double in memory): each sum still takes its terms in
-    // column order, so the values are the same to the last bit.
+    // column order, so the values are the same to the last bit. a * (-d) is subtracted as a * d:
+    // rounding is symmetric in sign, and the negation no longer goes through the stack.
     const int* inner = A.innerIndexPtr();
     const double* val = A.valuePtr();
     const double* x0 = m_x0.data();
