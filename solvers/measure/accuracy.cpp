@@ -42,7 +42,51 @@ Vec diagonal_sums(const SpMat& A)
     return diag;
 }
 
+/// The rows' parts of the scale: 1 / n_i and n_i / k_i (k_i from s.inv_diag).
+void row_scales(const QpView& qp, AccuracyScale& s)
+{
+    const Eigen::Index m = qp.m();
+    s.inv_row_norm = Vec::Zero(m);
+    s.length_per_multiplier = Vec::Zero(m);
+    for (Eigen::Index i = 0; i < m; ++i) {
+        double n2 = 0.0, k_n2 = 0.0;  // n_i^2 and n_i^2 k_i
+        for (SpMat::InnerIterator it(qp.J, i); it; ++it) {
+            n2 += it.value() * it.value();
+            k_n2 += it.value() * it.value() / s.inv_diag[it.col()];
+        }
+        if (n2 > 0.0 && std::isfinite(n2)) {
+            const double norm = std::sqrt(n2);
+            s.inv_row_norm[i] = 1.0 / norm;
+            s.length_per_multiplier[i] = norm * n2 / k_n2;  // n_i / k_i with k_i = k_n2 / n2
+        }
+    }
+}
+
+/// The scene size before its fallbacks: the view's fixed length (given, or the harness's reference
+/// extent, fixed before any solver ran), else x0's extent (0 for a point-like start).
+double first_length(const QpView& qp, std::string& source)
+{
+    if (qp.length != nullptr && qp.length->value > 0.0 && std::isfinite(qp.length->value)) {
+        source = qp.length->source;
+        return qp.length->value;
+    }
+    return point_extent(qp.x0, source);
+}
+
 }  // namespace
+
+AccuracyScale accuracy_scale_with_rows(const AccuracyScale& shared, const QpView& qp)
+{
+    std::string source;
+    const double l = first_length(qp, source);
+    // The later fallbacks spend A-products (counted by the harness) or read the rows.
+    const bool same_length = l > 0.0 && std::isfinite(l) && l == shared.length && source == shared.length_source;
+    if (!same_length || shared.inv_diag.size() != qp.n() || shared.a_products != 0) return accuracy_scale(qp);
+    AccuracyScale s = shared;
+    row_scales(qp, s);
+    s.bodies = shared.bodies.with_rows(qp.J, qp.friction);
+    return s;
+}
 
 /// Largest axis extent of x read as 3-D points (n a multiple of 3), else the range of its entries.
 double point_extent(const Vec& x, std::string& source)
@@ -111,33 +155,13 @@ AccuracyScale accuracy_scale(const QpView& qp)
         s.inv_diag[j] = 1.0 / (diag[j] > 0.0 && std::isfinite(diag[j]) ? diag[j] : d_max);
     s.stiffness = d_count > 0 ? d_sum / static_cast<double>(d_count) : 1.0;
 
-    s.inv_row_norm = Vec::Zero(m);
-    s.length_per_multiplier = Vec::Zero(m);
-    for (Eigen::Index i = 0; i < m; ++i) {
-        double n2 = 0.0, k_n2 = 0.0;  // n_i^2 and n_i^2 k_i
-        for (SpMat::InnerIterator it(qp.J, i); it; ++it) {
-            n2 += it.value() * it.value();
-            k_n2 += it.value() * it.value() / s.inv_diag[it.col()];
-        }
-        if (n2 > 0.0 && std::isfinite(n2)) {
-            const double norm = std::sqrt(n2);
-            s.inv_row_norm[i] = 1.0 / norm;
-            s.length_per_multiplier[i] = norm * n2 / k_n2;  // n_i / k_i with k_i = k_n2 / n2
-        }
-    }
+    row_scales(qp, s);
 
     // The scene size: x0's extent is unchanged by a rigid move of the start and scales with the
     // length unit. A degenerate start (a point, e.g. x0 = 0) falls back on lengths of the
     // problem itself that share those invariances (docs/accuracy.md).
     std::string source;
-    double l = 0.0;
-    if (qp.length != nullptr && qp.length->value > 0.0 && std::isfinite(qp.length->value)) {
-        // Fixed for the problem before any solver ran (given, or the harness's reference extent).
-        l = qp.length->value;
-        source = qp.length->source;
-    } else {
-        l = point_extent(qp.x0, source);
-    }
+    double l = first_length(qp, source);
     if (!(l > 0.0) || !std::isfinite(l)) {
         // Where the unconstrained problem would move a point-like start: the extent of its
         // minimiser, estimated by Jacobi-PCG from x0 (it follows x0 under every map (a)-(d)).

@@ -178,6 +178,17 @@ BodyMotion::BodyMotion(const QpView& qp, double length)
         m_tangents = row_loads(qp.friction->T);
 }
 
+BodyMotion BodyMotion::with_rows(const SpMat& J, const Friction* friction) const
+{
+    BodyMotion out = *this;
+    if (m_body.empty()) return out;  // the constructor stopped before the rows
+    out.m_rows = row_loads(J);
+    out.m_tangents = RowLoads{};
+    if (friction && friction->T.rows() == 2 * J.rows() && friction->T.cols() == m_x0.size())
+        out.m_tangents = row_loads(friction->T);
+    return out;
+}
+
 BodyMotion::RowLoads BodyMotion::row_loads(const SpMat& rows) const
 {
     RowLoads out;
