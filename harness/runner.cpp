@@ -203,13 +203,15 @@ void measure_outcome(RunOutcome& out, RunFacts& facts, const CommonSettings& com
         const SpMat no_rows(0, original.n());
         const Vec no_c(0);
         const QpView relaxed{original.A, original.b, no_rows, no_c, original.x0, &original.length};
-        out.accuracy_solved = accuracy_from_gradient(relaxed, accuracy_scale(relaxed), x, g, Vec(0));
+        out.accuracy_solved = accuracy_from_gradient(relaxed, accuracy_scale_with_rows(scale, relaxed), x, g, Vec(0));
     } else {
         // The decoupled rows, or the rows without their friction: the view with no friction fields.
         const QpView solved{view.A, view.b, view.J, view.c, view.x0, view.length, nullptr};
         Vec lambda_solved;
         bool fitted_solved = result.lambda_fitted;
-        out.accuracy_solved = measure_point(solved, accuracy_scale(solved), x, g, own_valid ? &result.lambda : nullptr,
+        // The same A, b and x0 as the problem's own scale: only the rows' parts are formed again.
+        out.accuracy_solved = measure_point(solved, accuracy_scale_with_rows(scale, solved), x, g,
+                                            own_valid ? &result.lambda : nullptr,
                                             facts.accuracy_tol, lambda_solved, fitted_solved);
     }
     history.finish(x, lambda, result.iterations, result.setup_s, result.solve_s, result.counters.a_products,

@@ -89,12 +89,16 @@ bool build_blocks(const SpMat& A, bool upper, BlockRows& out, double max_fill, d
     // Pass 1: how many blocks each block row has (columns must increase along a row, or the block
     // sums would not follow the CSR sums' order).
     std::vector<int> start(static_cast<size_t>(nb) + 1, 0);
+    // Each block row's first group at or past `from` when its rows are whole groups, else -1:
+    // pass 2 copies those rows without checking their columns again.
+    std::vector<int> group_first(static_cast<size_t>(nb), -1);
     long long blocks = 0;
     long long lower_nonzeros = 0;  // entries left out by `upper`
     for (std::ptrdiff_t I = 0; I < nb; ++I) {
         const int from = upper ? static_cast<int>(I) : 0;
         int groups = 0, first = 0;
         if (whole_groups(outer, inner, I, from, groups, first)) {
+            group_first[static_cast<size_t>(I)] = first;
             blocks += groups - first;
             lower_nonzeros += 9LL * first;
             if (blocks > std::numeric_limits<int>::max() / 9) {
@@ -138,8 +142,9 @@ bool build_blocks(const SpMat& A, bool upper, BlockRows& out, double max_fill, d
     double* value = out.value.data();
     for (std::ptrdiff_t I = 0; I < nb; ++I) {
         std::ptrdiff_t q = out.start[static_cast<size_t>(I)];
-        int groups = 0, first = 0;
-        if (whole_groups(outer, inner, I, upper ? static_cast<int>(I) : 0, groups, first)) {
+        const int first = group_first[static_cast<size_t>(I)];
+        if (first >= 0) {
+            const int groups = first + (out.start[static_cast<size_t>(I) + 1] - out.start[static_cast<size_t>(I)]);
             const double* v0 = val + outer[3 * I];
             const double* v1 = val + outer[3 * I + 1];
             const double* v2 = val + outer[3 * I + 2];

@@ -21,11 +21,14 @@ public:
         }
         return v;
     }
+    /// The larger root hangs under the smaller, so a component's root is its smallest member and a
+    /// graph met in index order (a mesh) keeps its trees shallow; labels() do not depend on it.
     void join(int a, int b)
     {
         a = find(a);
         b = find(b);
-        if (a != b) m_parent[static_cast<size_t>(a)] = b;
+        if (a < b) m_parent[static_cast<size_t>(b)] = a;
+        if (b < a) m_parent[static_cast<size_t>(a)] = b;
     }
     /// The component of every member, numbered by first appearance; `count` receives how many.
     std::vector<int> labels(int& count)

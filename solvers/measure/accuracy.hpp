@@ -78,6 +78,12 @@ struct AccuracyScale {
 /// A scene size fixed on the view (qp.length, docs/accuracy.md) is used as is, before all of these.
 AccuracyScale accuracy_scale(const QpView& qp);
 
+/// The scale of `qp` when it shares A, b and x0 with the QP `shared` was built for and differs in its
+/// rows (a decoupled J, or none): equal to accuracy_scale(qp) to the last bit, without the passes
+/// over A. Falls back on accuracy_scale(qp) when the scene size would differ or came from A-products
+/// or the rows (the fallbacks after the start's extent), or when the sizes do not match.
+AccuracyScale accuracy_scale_with_rows(const AccuracyScale& shared, const QpView& qp);
+
 /// The largest axis extent of x read as 3-D points when its size is a multiple of 3 (source
 /// "x0_extent"), else the range of its entries ("x0_range"); 0 for an empty x.
 double point_extent(const Vec& x, std::string& source);

@@ -35,7 +35,8 @@ long double BodyMotion::spatial_row_sums(const SpMat& A, Eigen::Index p, const d
 {
     // mode_row() unrolled by the column's axis, with the sums in named locals rather than an
     // indexed array (which kept every long double in memory): each sum still takes its terms in
-    // column order, so the values are the same to the last bit.
+    // column order, so the values are the same to the last bit. a * (-d) is subtracted as a * d:
+    // rounding is symmetric in sign, and the negation no longer goes through the stack.
     const int* inner = A.innerIndexPtr();
     const double* val = A.valuePtr();
     const double* x0 = m_x0.data();
@@ -53,23 +54,48 @@ long double BodyMotion::spatial_row_sums(const SpMat& A, Eigen::Index p, const d
         case 0:
             t0 += a;
             q4 += a * dv[2];
-            q5 += a * -dv[1];
+            q5 -= a * dv[1];
             break;
         case 1:
             t1 += a;
             q5 += a * dv[0];
-            q3 += a * -dv[2];
+            q3 -= a * dv[2];
             break;
         default:
             t2 += a;
             q3 += a * dv[1];
-            q4 += a * -dv[0];
+            q4 -= a * dv[0];
             break;
         }
     }
     av = LongVec6{t0, t1, t2, q3, q4, q5};
     return r0;
 }
+
+namespace {
+
+/// The connected components of A's node graph (node = DOF / per_node; stored zeros do not join),
+/// numbered by their smallest node (DisjointSets' labels depend on the partition alone). A node's
+/// rows mostly name the same neighbours: `joined` keeps each pair to one join.
+std::vector<int> node_bodies(const SpMat& A, int per_node, int nodes, int& bodies)
+{
+    DisjointSets sets(nodes);
+    std::vector<int> joined(static_cast<size_t>(nodes), -1);
+    for (Eigen::Index r = 0; r < A.outerSize(); ++r) {
+        const int node = static_cast<int>(per_node == 3 ? r / 3 : r);  // no division by a variable
+        joined[static_cast<size_t>(node)] = node;
+        for (SpMat::InnerIterator it(A, r); it; ++it) {
+            const int other = static_cast<int>(per_node == 3 ? it.col() / 3 : it.col());
+            if (it.value() == 0.0 || joined[static_cast<size_t>(other)] == node)
+                continue;  // a stored zero couples nothing
+            sets.join(node, other);
+            joined[static_cast<size_t>(other)] = node;
+        }
+    }
+    return sets.labels(bodies);
+}
+
+}  // namespace
 
 BodyMotion::BodyMotion(const QpView& qp, double length)
 {
@@ -81,22 +107,8 @@ BodyMotion::BodyMotion(const QpView& qp, double length)
     m_inv_length = length > 0.0 && std::isfinite(length) ? 1.0 / length : 1.0;
     const int nodes = static_cast<int>(n / m_per_node);
 
-    DisjointSets sets(nodes);
-    // A vertex's three rows mostly name the same neighbours: `joined` keeps each pair to one join.
-    std::vector<int> joined(static_cast<size_t>(nodes), -1);
-    for (Eigen::Index r = 0; r < A.outerSize(); ++r) {
-        const int node = static_cast<int>(r / m_per_node);
-        joined[static_cast<size_t>(node)] = node;
-        for (SpMat::InnerIterator it(A, r); it; ++it) {
-            const int other = static_cast<int>(m_spatial ? it.col() / 3 : it.col());
-            if (it.value() == 0.0 || joined[static_cast<size_t>(other)] == node)
-                continue;  // a stored zero couples nothing
-            sets.join(node, other);
-            joined[static_cast<size_t>(other)] = node;
-        }
-    }
     int bodies = 0;
-    m_body = sets.labels(bodies);
+    m_body = node_bodies(A, m_per_node, nodes, bodies);
     auto body_of = [&](Eigen::Index p) { return static_cast<size_t>(m_body[static_cast<size_t>(p / m_per_node)]); };
 
     if (m_spatial) {
@@ -113,10 +125,12 @@ BodyMotion::BodyMotion(const QpView& qp, double length)
     }
     m_x0 = qp.x0;
 
-    // AV and V'(A x0 - b), one pass over A with long double sums (see the header: the stiffness
-    // parts of a row cancel, and must do so before rounding to double).
-    m_av.setZero(n, MODES);
+    // AV, V'(A x0 - b) and E = V'AV per body, one pass over A with long double sums (see the
+    // header: the stiffness parts of a row cancel, and must do so before rounding to double).
+    // E takes row p of AV right after it is rounded, in the order of p, as a separate pass would.
+    m_av.resize(n, MODES);  // every row is written below
     std::vector<LongVec6> load(static_cast<size_t>(bodies), LongVec6{});
+    std::vector<Mat6> E(static_cast<size_t>(bodies), Mat6::Zero());
     int mode[3];
     double value[3];
     const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> scaled_offset = m_offset * m_inv_length;
@@ -133,20 +147,16 @@ BodyMotion::BodyMotion(const QpView& qp, double length)
             }
         for (int k = 0; k < MODES; ++k) m_av(p, k) = static_cast<double>(av[static_cast<size_t>(k)]);
         const int rn = mode_row(p, mode, value);
-        LongVec6& l = load[body_of(p)];
+        const size_t b = body_of(p);
+        LongVec6& l = load[b];
         for (int s = 0; s < rn; ++s) l[static_cast<size_t>(mode[s])] += value[s] * r0;
+        Mat6& Eb = E[b];
+        for (int s = 0; s < rn; ++s) Eb.row(mode[s]) += value[s] * m_av.row(p);
     }
     m_load0.assign(static_cast<size_t>(bodies), Vec6::Zero());
     for (size_t b = 0; b < load.size(); ++b)
         for (int k = 0; k < MODES; ++k) m_load0[b][k] = static_cast<double>(load[b][static_cast<size_t>(k)]);
 
-    // E = V'AV per body, from AV.
-    std::vector<Mat6> E(static_cast<size_t>(bodies), Mat6::Zero());
-    for (Eigen::Index p = 0; p < n; ++p) {
-        const int rn = mode_row(p, mode, value);
-        Mat6& Eb = E[body_of(p)];
-        for (int s = 0; s < rn; ++s) Eb.row(mode[s]) += value[s] * m_av.row(p);
-    }
     m_pinv.assign(static_cast<size_t>(bodies), Mat6::Zero());
     for (size_t b = 0; b < E.size(); ++b) {
         if (!m_spatial) {
@@ -166,6 +176,17 @@ BodyMotion::BodyMotion(const QpView& qp, double length)
     m_rows = row_loads(qp.J);
     if (qp.friction && qp.friction->T.rows() == 2 * qp.J.rows() && qp.friction->T.cols() == n)
         m_tangents = row_loads(qp.friction->T);
+}
+
+BodyMotion BodyMotion::with_rows(const SpMat& J, const Friction* friction) const
+{
+    BodyMotion out = *this;
+    if (m_body.empty()) return out;  // the constructor stopped before the rows
+    out.m_rows = row_loads(J);
+    out.m_tangents = RowLoads{};
+    if (friction && friction->T.rows() == 2 * J.rows() && friction->T.cols() == m_x0.size())
+        out.m_tangents = row_loads(friction->T);
+    return out;
 }
 
 BodyMotion::RowLoads BodyMotion::row_loads(const SpMat& rows) const

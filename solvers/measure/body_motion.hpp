@@ -47,6 +47,11 @@ public:
 
     int bodies() const { return static_cast<int>(m_pinv.size()); }
 
+    /// What BodyMotion(qp, length) gives for a QP that shares this one's A, b, x0 and length and has
+    /// the rows J (and friction's T when it has 2 m rows): the bodies and AV carry over, only the
+    /// rows' loads are formed again. O(n) copies + O(nnz(J) + nnz(T)).
+    BodyMotion with_rows(const SpMat& J, const Friction* friction) const;
+
 private:
     using LongVec6 = std::array<long double, MODES>;
 

@@ -125,11 +125,10 @@ struct ScaledVariables {
                                                  const MprgpCoupledSettings& st)
     {
         if (precond != "scaled" || st.deflation != "none") return nullptr;
-        Vec dinv;
-        std::string refusal;
-        if (!jacobi_inverse_diagonal(qp.A, dinv, refusal)) return nullptr;
+        const Vec diag = qp.A.diagonal();  // once: a search per row of A
+        if (!(diag.array() > 0.0).all()) return nullptr;  // jacobi_inverse_diagonal's refusal (NaN too)
         auto s = std::make_unique<ScaledVariables>();
-        s->unscale = qp.A.diagonal().cwiseSqrt().cwiseInverse();
+        s->unscale = diag.cwiseSqrt().cwiseInverse();
         const Vec& u = s->unscale;
         s->J = qp.J;
         for (Eigen::Index i = 0; i < s->J.outerSize(); ++i)
