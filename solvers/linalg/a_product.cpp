@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cstddef>
+#include <cstring>
 #include <limits>
 
 #if defined(__x86_64__) && defined(__GNUC__)
@@ -187,8 +188,9 @@ double block_product(const BlockRows& B, std::ptrdiff_t first, std::ptrdiff_t la
 /// summed in the same pass. y_I's terms come in another order than the CSR row's, so y equals
 /// CSR's to rounding, not to the bit. One thread: the scatter writes rows other threads would own.
 /// Each block's three products are summed before they meet the row's sum (one dependent addition
-/// per block, not three); the AVX2 kernel below sums in exactly this order. (precond = scaled
-/// scales the stored blocks instead: AOperator::scale_by.)
+/// per block, not three), and the dots in four partial sums (entry i into sum i mod 4, added
+/// pairwise at the end: no chain of one addition per entry); the AVX2 kernel below sums in exactly
+/// this order. (precond = scaled scales the stored blocks instead: AOperator::scale_by.)
 template <Dots D>
 double sym_block_product_scalar(const BlockRows& B, std::ptrdiff_t nb, const double* __restrict px,
                                 double* __restrict py, const double* __restrict pw, const char* __restrict skip,
@@ -198,7 +200,7 @@ double sym_block_product_scalar(const BlockRows& B, std::ptrdiff_t nb, const dou
     const int* __restrict column = B.column.data();
     const double* __restrict val = B.value.data();
     std::fill(py, py + 3 * nb, 0.0);
-    double xy = 0.0, dot_w = 0.0;
+    double xy[4] = {0.0, 0.0, 0.0, 0.0}, dot_w[4] = {0.0, 0.0, 0.0, 0.0};  // entry i into lane i % 4
     for (std::ptrdiff_t I = 0; I < nb; ++I) {
         const std::ptrdiff_t i = 3 * I;
         const double xi0 = px[i], xi1 = px[i + 1], xi2 = px[i + 2];
@@ -227,15 +229,14 @@ double sym_block_product_scalar(const BlockRows& B, std::ptrdiff_t nb, const dou
         py[i + 1] = s1;
         py[i + 2] = s2;
         if constexpr (D != Dots::NONE) {
-            xy += xi0 * s0;
-            xy += xi1 * s1;
-            xy += xi2 * s2;
-            for (std::ptrdiff_t r = i; r < i + 3; ++r)
-                if (D == Dots::ALL || !skip[r]) dot_w += px[r] * pw[r];
+            for (std::ptrdiff_t r = i; r < i + 3; ++r) {
+                xy[r % 4] += px[r] * py[r];
+                if (D == Dots::ALL || !skip[r]) dot_w[r % 4] += px[r] * pw[r];
+            }
         }
     }
-    xw = dot_w;
-    return xy;
+    xw = (dot_w[0] + dot_w[1]) + (dot_w[2] + dot_w[3]);
+    return (xy[0] + xy[1]) + (xy[2] + xy[3]);
 }
 
 #ifdef CB_HAVE_AVX2_KERNEL
@@ -272,9 +273,45 @@ __attribute__((target("avx2"))) inline void sym_block_scatter(const double* __re
 
 /// Block rows per chunk of the AVX2 symmetric kernel: its dots are summed from y still in cache.
 constexpr std::ptrdiff_t SYM_CHUNK = 1024;
-/// Doubles ahead of the block in hand that the symmetric kernel asks the cache for (16 blocks):
+/// Doubles ahead of the block in hand that the symmetric kernel asks the cache for (32 blocks):
 /// one stream of blocks outran the hardware's prefetch (docs/a_product.md).
-constexpr std::ptrdiff_t SYM_PREFETCH = 9 * 16;
+constexpr std::ptrdiff_t SYM_PREFETCH = 9 * 32;
+
+/// The fused dots of entries first .. last - 1 (first a multiple of 4) into the lanes of vxy and
+/// vxw, entry i into lane i % 4, as the scalar loop sums them; a skipped entry leaves its lane as
+/// it is (a blend, not an added zero, so even a zero's sign is the scalar loop's).
+template <Dots D>
+__attribute__((target("avx2"))) inline void sym_chunk_dots(std::ptrdiff_t first, std::ptrdiff_t last,
+                                                           const double* __restrict px, const double* __restrict py,
+                                                           const double* __restrict pw, const char* __restrict skip,
+                                                           __m256d& vxy, __m256d& vxw)
+{
+    std::ptrdiff_t i = first;
+    for (; i + 4 <= last; i += 4) {
+        const __m256d x = _mm256_loadu_pd(px + i);
+        vxy = _mm256_add_pd(vxy, _mm256_mul_pd(x, _mm256_loadu_pd(py + i)));
+        const __m256d with_w = _mm256_add_pd(vxw, _mm256_mul_pd(x, _mm256_loadu_pd(pw + i)));
+        if constexpr (D == Dots::ALL) {
+            vxw = with_w;
+        } else {
+            int bytes;
+            std::memcpy(&bytes, skip + i, sizeof bytes);
+            const __m256i flags = _mm256_cvtepi8_epi64(_mm_cvtsi32_si128(bytes));
+            const __m256d skipped = _mm256_castsi256_pd(_mm256_cmpeq_epi64(flags, _mm256_setzero_si256()));
+            vxw = _mm256_blendv_pd(vxw, with_w, skipped);  // lanes whose flag is 0 take the sum
+        }
+    }
+    if (i == last) return;
+    alignas(32) double lane_xy[4], lane_xw[4];  // the tail (at most 3 entries), lane by lane
+    _mm256_store_pd(lane_xy, vxy);
+    _mm256_store_pd(lane_xw, vxw);
+    for (; i < last; ++i) {
+        lane_xy[i % 4] += px[i] * py[i];
+        if (D == Dots::ALL || !skip[i]) lane_xw[i % 4] += px[i] * pw[i];
+    }
+    vxy = _mm256_load_pd(lane_xy);
+    vxw = _mm256_load_pd(lane_xw);
+}
 
 /// sym_block_product_scalar() with AVX2, the same sums in the same order (y and the dots equal to
 /// the last bit). y is zeroed just ahead of the rows the scatter reaches instead of in a pass of
@@ -289,7 +326,7 @@ __attribute__((target("avx2"))) double sym_block_product_avx2(const BlockRows& B
     const int* __restrict column = B.column.data();
     const double* __restrict val = B.value.data();
     std::ptrdiff_t zeroed = 0;
-    double xy = 0.0, dot_w = 0.0;
+    __m256d vxy = _mm256_setzero_pd(), vxw = _mm256_setzero_pd();  // lane l: the entries i with i % 4 == l
     for (std::ptrdiff_t c = 0; c < nb; c += SYM_CHUNK) {
         const std::ptrdiff_t end = std::min(nb, c + SYM_CHUNK);
         for (std::ptrdiff_t I = c; I < end; ++I) {
@@ -318,15 +355,13 @@ __attribute__((target("avx2"))) double sym_block_product_avx2(const BlockRows& B
             }
             store_block_row(I, s, py, nullptr);
         }
-        if constexpr (D != Dots::NONE) {
-            for (std::ptrdiff_t i = 3 * c; i < 3 * end; ++i) {
-                xy += px[i] * py[i];
-                if (D == Dots::ALL || !skip[i]) dot_w += px[i] * pw[i];
-            }
-        }
+        if constexpr (D != Dots::NONE) sym_chunk_dots<D>(3 * c, 3 * end, px, py, pw, skip, vxy, vxw);
     }
-    xw = dot_w;
-    return xy;
+    alignas(32) double lane_xy[4], lane_xw[4];
+    _mm256_store_pd(lane_xy, vxy);
+    _mm256_store_pd(lane_xw, vxw);
+    xw = (lane_xw[0] + lane_xw[1]) + (lane_xw[2] + lane_xw[3]);
+    return (lane_xy[0] + lane_xy[1]) + (lane_xy[2] + lane_xy[3]);
 }
 #endif
 
