@@ -275,7 +275,7 @@ __attribute__((target("avx2"))) inline void sym_block_scatter(const double* __re
 constexpr std::ptrdiff_t SYM_CHUNK = 1024;
 /// Doubles ahead of the block in hand that the symmetric kernel asks the cache for (32 blocks):
 /// one stream of blocks outran the hardware's prefetch (docs/a_product.md).
-constexpr std::ptrdiff_t SYM_PREFETCH = 9 * 32;
+constexpr std::ptrdiff_t SYM_PREFETCH = std::ptrdiff_t{9} * 32;
 
 /// The fused dots of entries first .. last - 1 (first a multiple of 4) into the lanes of vxy and
 /// vxw, entry i into lane i % 4, as the scalar loop sums them; a skipped entry leaves its lane as
