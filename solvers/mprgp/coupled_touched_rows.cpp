@@ -5,6 +5,20 @@
 
 namespace cb {
 
+namespace {
+
+/// f(c, b) for each block of row j's block row in B: c = 3J, the block's first column, and b row j's
+/// entries there (b[0], b[3], b[6] for columns c, c + 1, c + 2; blocks are stored column by column).
+template <class F> void for_row_blocks(const BlockRows& B, int j, F&& f)
+{
+    const int I = j / 3;
+    const double* row = B.value.data() + (j - 3 * I);
+    for (int k = B.start[static_cast<size_t>(I)]; k < B.start[static_cast<size_t>(I) + 1]; ++k)
+        f(3 * static_cast<std::ptrdiff_t>(B.column[static_cast<size_t>(k)]), row + 9 * static_cast<std::ptrdiff_t>(k));
+}
+
+}  // namespace
+
 TouchedRowsOfA::TouchedRowsOfA(const AOperator& op, const Vec* u) : m_A(op.csr()), m_u(u)
 {
     // SBSR keeps the upper blocks only: a row's left part is not stored there.
@@ -17,16 +31,9 @@ double TouchedRowsOfA::d_a_d(const std::vector<int>& touched, const Vec& d) cons
     const double* u = m_u != nullptr ? m_u->data() : nullptr;
     double dad = 0.0;
     if (m_blocks != nullptr) {
-        const int* start = m_blocks->start.data();
-        const int* column = m_blocks->column.data();
-        const double* value = m_blocks->value.data();
         for (int j : touched) {
-            const int I = j / 3;
-            const double* row = value + (j - 3 * I);  // row j's entry of column c in block k: row[9k + 3c]
             double s = 0.0;
-            for (int k = start[I]; k < start[I + 1]; ++k) {
-                const double* b = row + 9 * static_cast<std::ptrdiff_t>(k);
-                const std::ptrdiff_t c = 3 * static_cast<std::ptrdiff_t>(column[k]);
+            for_row_blocks(*m_blocks, j, [&](std::ptrdiff_t c, const double* b) {
                 if (u != nullptr) {
                     s += b[0] * (u[c] * pd[c]);
                     s += b[3] * (u[c + 1] * pd[c + 1]);
@@ -36,7 +43,7 @@ double TouchedRowsOfA::d_a_d(const std::vector<int>& touched, const Vec& d) cons
                     s += b[3] * pd[c + 1];
                     s += b[6] * pd[c + 2];
                 }
-            }
+            });
             dad += (u != nullptr ? u[j] * pd[j] : pd[j]) * s;
         }
         return dad;
@@ -63,16 +70,9 @@ void TouchedRowsOfA::add_a_d(const std::vector<int>& touched, const Vec& d, Vec&
     const double* u = m_u != nullptr ? m_u->data() : nullptr;
     double* pg = g.data();
     if (m_blocks != nullptr) {
-        const int* start = m_blocks->start.data();
-        const int* column = m_blocks->column.data();
-        const double* value = m_blocks->value.data();
         for (int j : touched) {
-            const int I = j / 3;
-            const double* row = value + (j - 3 * I);
             const double dj = u != nullptr ? u[j] * pd[j] : pd[j];
-            for (int k = start[I]; k < start[I + 1]; ++k) {
-                const double* b = row + 9 * static_cast<std::ptrdiff_t>(k);
-                const std::ptrdiff_t c = 3 * static_cast<std::ptrdiff_t>(column[k]);
+            for_row_blocks(*m_blocks, j, [&](std::ptrdiff_t c, const double* b) {
                 if (u != nullptr) {
                     pg[c] += u[c] * (b[0] * dj);
                     pg[c + 1] += u[c + 1] * (b[3] * dj);
@@ -82,7 +82,7 @@ void TouchedRowsOfA::add_a_d(const std::vector<int>& touched, const Vec& d, Vec&
                     pg[c + 1] += b[3] * dj;
                     pg[c + 2] += b[6] * dj;
                 }
-            }
+            });
         }
         return;
     }
