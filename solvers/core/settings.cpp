@@ -41,7 +41,7 @@ const SettingsTable<CommonSettings>& common_settings_table()
                 "a_format", [](const C& s) { return std::string(to_string(s.a_format)); },
                 "auto | csr | bsr | sbsr: storage of A for the solvers' products with A (bsr: 3x3 blocks, "
                 "iterates bit-equal to csr's; sbsr: the upper block triangle, about half the bytes, iterates equal "
-                "to rounding, one thread; auto: sbsr for an A of 4M nonzeros or more on one thread, else bsr; a "
+                "to rounding, one thread; auto: sbsr for an A of 1M nonzeros (2^20) or more on one thread, else bsr; a "
                 "format A lacks falls back to csr, auto's sbsr to bsr first): docs/a_product.md",
                 [](SettingsReader& reader, C& s) {
                     parse_a_format(reader.choice("a_format", to_string(s.a_format), {"auto", "csr", "bsr", "sbsr"}),

@@ -111,10 +111,10 @@ private:
     std::vector<int> m_part_start{0, 0};
 };
 
-/// Nonzeros of A from which `a_format = auto` reads the upper blocks on one thread: about 36 MB of
-/// BSR blocks, beyond a 32 MB last-level cache, where a product streams A from memory and half the
-/// bytes is nearly half the time (docs/a_product.md).
-constexpr long AUTO_SYMMETRIC_MIN_NONZEROS = 4L << 20;
+/// Nonzeros of A from which `a_format = auto` reads the upper blocks on one thread (about 9 MB of
+/// BSR blocks). The upper blocks were faster on every frame measured, small ones too; the bound
+/// only keeps the small QPs of suites/ci.json on BSR's bits (docs/a_product.md).
+constexpr long AUTO_SYMMETRIC_MIN_NONZEROS = 1L << 20;
 
 /// Whether `a_format = auto` tries the upper blocks first for an A of `nonzeros` on `threads`.
 inline bool auto_prefers_upper_blocks(long nonzeros, int threads)
