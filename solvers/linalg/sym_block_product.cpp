@@ -19,13 +19,15 @@ namespace {
 /// pairwise at the end: no chain of one addition per entry); the AVX2 kernel below sums in exactly
 /// this order. (precond = scaled scales the stored blocks instead: AOperator::scale_by.)
 template <Dots D>
-double sym_block_product_scalar(const BlockRows& B, std::ptrdiff_t nb, const double* __restrict px,
-                                double* __restrict py, const double* __restrict pw, const char* __restrict skip,
-                                double& xw)
+double sym_block_product_scalar(const BlockRows& B, std::ptrdiff_t nb, const double* px, double* __restrict py,
+                                const double* __restrict pw, const char* __restrict skip, double& xw,
+                                DirectionUpdate update)
 {
     const int* __restrict start = B.start.data();
     const int* __restrict column = B.column.data();
     const double* __restrict val = B.value.data();
+    if (update.x != nullptr)
+        for (std::ptrdiff_t i = 0; i < 3 * nb; ++i) update.x[i] = update.z[i] - update.beta * update.x[i];
     std::fill(py, py + 3 * nb, 0.0);
     double xy[4] = {0.0, 0.0, 0.0, 0.0}, dot_w[4] = {0.0, 0.0, 0.0, 0.0};  // entry i into lane i % 4
     for (std::ptrdiff_t I = 0; I < nb; ++I) {
@@ -140,14 +142,25 @@ __attribute__((target("avx2"))) inline void sym_chunk_dots(std::ptrdiff_t first,
     vxw = _mm256_load_pd(lane_xw);
 }
 
+/// x = z - beta x on entries first .. last - 1 (the update's own rounding: a product, then a difference).
+__attribute__((target("avx2"))) inline void update_direction(const DirectionUpdate& u, std::ptrdiff_t first,
+                                                             std::ptrdiff_t last)
+{
+    const __m256d beta = _mm256_set1_pd(u.beta);
+    std::ptrdiff_t i = first;
+    for (; i + 4 <= last; i += 4)
+        _mm256_storeu_pd(u.x + i, _mm256_sub_pd(_mm256_loadu_pd(u.z + i), _mm256_mul_pd(beta, _mm256_loadu_pd(u.x + i))));
+    for (; i < last; ++i) u.x[i] = u.z[i] - u.beta * u.x[i];
+}
+
 /// sym_block_product_scalar() with AVX2, the same sums in the same order (y and the dots equal to
-/// the last bit). y is zeroed just ahead of the rows the scatter reaches instead of in a pass of
-/// its own: `zeroed` is the first block row not yet cleared.
+/// the last bit). y is zeroed (and x updated) just ahead of the rows the scatter reaches instead of
+/// in a pass of its own: `zeroed` is the first block row not yet cleared.
 template <Dots D>
 __attribute__((target("avx2"))) double sym_block_product_avx2(const BlockRows& B, std::ptrdiff_t nb,
-                                                              const double* __restrict px, double* __restrict py,
+                                                              const double* px, double* __restrict py,
                                                               const double* __restrict pw, const char* __restrict skip,
-                                                              double& xw)
+                                                              double& xw, DirectionUpdate update)
 {
     const int* __restrict start = B.start.data();
     const int* __restrict column = B.column.data();
@@ -160,8 +173,9 @@ __attribute__((target("avx2"))) double sym_block_product_avx2(const BlockRows& B
             int k = start[I];
             const int last = start[I + 1];
             const std::ptrdiff_t reach = 1 + (k < last ? std::max<std::ptrdiff_t>(I, column[last - 1]) : I);
-            if (zeroed < reach) {
+            if (zeroed < reach) {  // every row I reads lies below reach
                 std::fill(py + 3 * zeroed, py + 3 * reach, 0.0);
+                if (update.x != nullptr) update_direction(update, 3 * zeroed, 3 * reach);
                 zeroed = reach;
             }
             const double* xi = px + 3 * I;
@@ -194,29 +208,29 @@ __attribute__((target("avx2"))) double sym_block_product_avx2(const BlockRows& B
 
 /// The symmetric product on the CPU's kernel (AVX2 or the scalar loop: the same y and dots).
 template <Dots D>
-double sym_kernel(const BlockRows& B, std::ptrdiff_t nb, const double* __restrict px, double* __restrict py,
-                  const double* __restrict pw, const char* __restrict skip, double& xw)
+double sym_kernel(const BlockRows& B, std::ptrdiff_t nb, const double* px, double* __restrict py,
+                  const double* __restrict pw, const char* __restrict skip, double& xw, DirectionUpdate update)
 {
 #ifdef CB_HAVE_AVX2_KERNEL
-    if (block_kernel_is_simd()) return sym_block_product_avx2<D>(B, nb, px, py, pw, skip, xw);
+    if (block_kernel_is_simd()) return sym_block_product_avx2<D>(B, nb, px, py, pw, skip, xw, update);
 #endif
-    return sym_block_product_scalar<D>(B, nb, px, py, pw, skip, xw);
+    return sym_block_product_scalar<D>(B, nb, px, py, pw, skip, xw, update);
 }
 
 }  // namespace
 
 double sym_block_product(Dots dots, const BlockRows& B, std::ptrdiff_t nb, const double* px, double* py,
-                         const double* pw, const char* skip, double& xw)
+                         const double* pw, const char* skip, double& xw, DirectionUpdate update)
 {
     switch (dots) {
     case Dots::NONE:
-        return sym_kernel<Dots::NONE>(B, nb, px, py, pw, skip, xw);
+        return sym_kernel<Dots::NONE>(B, nb, px, py, pw, skip, xw, update);
     case Dots::ALL:
-        return sym_kernel<Dots::ALL>(B, nb, px, py, pw, skip, xw);
+        return sym_kernel<Dots::ALL>(B, nb, px, py, pw, skip, xw, update);
     case Dots::MASKED:
         break;
     }
-    return sym_kernel<Dots::MASKED>(B, nb, px, py, pw, skip, xw);
+    return sym_kernel<Dots::MASKED>(B, nb, px, py, pw, skip, xw, update);
 }
 
 }  // namespace cb

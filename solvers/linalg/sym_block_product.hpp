@@ -10,9 +10,19 @@
 
 namespace cb {
 
+/// The CG direction's update x = z - beta x, done inside the product's pass (x null: none). x is the
+/// product's own x (the same array as its px); z must not alias x or y.
+struct DirectionUpdate {
+    double* x = nullptr;
+    const double* z = nullptr;
+    double beta = 0.0;
+};
+
 /// y = A x over the nb block rows of B (y's 3 nb entries all written; y must not alias x); with
-/// `dots` != NONE also x'y (returned) and x'w into xw (MASKED: only where skip[i] == 0).
+/// `dots` != NONE also x'y (returned) and x'w into xw (MASKED: only where skip[i] == 0). With
+/// `update`, x is first replaced by z - beta x, entry by entry just ahead of the rows that read it:
+/// the same bits as a pass of its own before the product, without reading x from memory twice.
 double sym_block_product(Dots dots, const BlockRows& B, std::ptrdiff_t nb, const double* px, double* py,
-                         const double* pw, const char* skip, double& xw);
+                         const double* pw, const char* skip, double& xw, DirectionUpdate update = {});
 
 }  // namespace cb

@@ -157,6 +157,7 @@ private:
     /// ten vectors measured 3x slower than eight Eigen passes, flank_press's n, cold cache).
     void face_gradient(bool with_z, const Vec* ap = nullptr, double alpha = 0.0)
     {
+        settle_direction();  // z changes below
         if (ap != nullptr) {
             // x -= alpha p, g -= alpha Ap and phi = g in one pass (no reduction in it, so it vectorises)
             double* __restrict px = m_x.data();
@@ -226,6 +227,7 @@ private:
     /// (the expansion's intermediate face; z and p are then stale until the next restart).
     void restart(bool galerkin = false, bool with_z = true)
     {
+        if (with_z) m_p_pending = false;  // p = z below
         if (galerkin && m_precond) m_precond->galerkin_steps(m_x, m_g, m_c, m_s, m_cnt);
         rows_times(m_x, m_jx);
         bool changed = false;
@@ -280,6 +282,13 @@ private:
 
     /// The preconditioned face direction z: m_z, or phi itself without a preconditioner.
     const Vec& direction() const { return m_precond || m_jacobi ? m_z : m_phi; }
+    /// p = z - beta p now, when an accepted CG step left it to the next product and z is to change.
+    void settle_direction()
+    {
+        if (!m_p_pending) return;
+        m_p = direction() - m_p_beta * m_p;
+        m_p_pending = false;
+    }
     /// x of the original QP from the iterate (precond = scaled: x = D^-1/2 y), in m_x_out.
     const Vec& original_x(const Vec& v)
     {
@@ -320,6 +329,8 @@ private:
     bool m_keep_face = false;
     double m_f_x = 0.0, m_corr_x = 0.0;
     double m_zphi = 0.0, m_zap = 0.0;  // z'phi and z'Ap of face_gradient
+    bool m_p_pending = false;          // p = z - m_p_beta p is still to be formed (settle_direction)
+    double m_p_beta = 0.0;
     bool m_x_feasible = true;
     double m_native = 0.0, m_error = 0.0, m_face_error = 0.0, m_beta2 = 0.0, m_phi2 = 0.0;
     double m_primal = 0.0, m_beta2_upper = 0.0;

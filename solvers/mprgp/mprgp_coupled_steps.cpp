@@ -150,7 +150,9 @@ Trial CoupledRun::cg_trial(std::string& why)
     // F(P(y)) - F(P(x)) in difference form
     Trial t;
     double pg = 0.0;  // p'phi = p'g on the chain's face, summed in the product's pass
-    const double pap = a_product_dots(m_a_op, m_p, m_Ap, m_phi, pg);
+    const double pap = m_p_pending ? a_product_dots_next_direction(m_a_op, m_p, direction(), m_p_beta, m_Ap, m_phi, pg)
+                                   : a_product_dots(m_a_op, m_p, m_Ap, m_phi, pg);
+    m_p_pending = false;
     ++m_cnt.a_products;
     if (!(pap > 0.0) || !std::isfinite(pap)) {
         t.broke = pap == 0.0 ? SolveStatus::STALLED : SolveStatus::DIVERGED;
@@ -183,8 +185,9 @@ Trial CoupledRun::cg_trial(std::string& why)
     clear_d();
     if (accept) {
         face_gradient(true, &m_Ap, alpha);  // x -= alpha p, g -= alpha Ap, then phi and z
-        const double beta_cg = m_zap / pap;
-        m_p = direction() - beta_cg * m_p;
+        // p = z - beta p is left to the next trial's product, which forms it in its own pass
+        m_p_beta = m_zap / pap;
+        m_p_pending = true;
         m_f_x += df;
         m_corr_x = corr_y;
         m_x_feasible = !moved;

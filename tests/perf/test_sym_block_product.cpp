@@ -202,3 +202,48 @@ TEST(SymBlockProduct, AutoChoosesTheUpperBlocksOnlyForALargeAOnOneThread)
     AOperator op(qp.A);
     EXPECT_EQ(op.prepare(AFormat::AUTO, 1), AFormat::BSR);
 }
+
+// The CG step's next direction formed inside the product's pass (a_product_dots_next_direction)
+// equals the pass of its own before the product, p = z - beta p then a_product_dots, to the last
+// bit: p, y and both dots, on SBSR with either kernel (scaled blocks too) and on the formats that
+// take the separate pass (BSR, CSR), with a grid of several chunks and a frontier that moves by
+// blocks, not rows.
+TEST(SymBlockProduct, NextDirectionInThePassEqualsTheSeparateUpdateToTheLastBit)
+{
+    FemGridParams grid;
+    grid.nx = 40;
+    grid.ny = 22;
+    grid.nz = 20;
+    const SpMat A = fem_like_matrix(grid);
+    const Vec p0 = test::varied(A.cols(), 31), z = test::varied(A.cols(), 32), w = test::varied(A.cols(), 33);
+    const Vec u = A.diagonal().cwiseSqrt().cwiseInverse();
+    const double beta = 0.6180339887498949;
+    struct Case {
+        AFormat format;
+        bool scalar, scaled;
+    };
+    const Case cases[] = {{AFormat::SBSR, false, false}, {AFormat::SBSR, true, false}, {AFormat::SBSR, false, true},
+                          {AFormat::SBSR, true, true},   {AFormat::BSR, false, false}, {AFormat::CSR, false, false}};
+    for (const Case& c : cases) {
+        SCOPED_TRACE(std::string(to_string(c.format)) + (c.scalar ? " scalar" : "") + (c.scaled ? " scaled" : ""));
+        force_scalar_block_kernel(c.scalar);
+        AOperator op(A);
+        ASSERT_EQ(op.prepare(c.format), c.format) << op.why_csr();
+        if (c.scaled) op.scale_by(&u);
+        Vec p_separate = p0, y_separate, p_fused = p0, y_fused;
+        double pw_separate = 0.0, pw_fused = 0.0;
+        p_separate = z - beta * p_separate;
+        const double py_separate = a_product_dots(op, p_separate, y_separate, w, pw_separate);
+        const long before = a_product_count();
+        const double py_fused = a_product_dots_next_direction(op, p_fused, z, beta, y_fused, w, pw_fused);
+        EXPECT_EQ(a_product_count() - before, 1);
+        long differing = 0;
+        for (Eigen::Index i = 0; i < A.rows(); ++i)
+            differing += (p_fused[i] != p_separate[i]) + (y_fused[i] != y_separate[i]);
+        EXPECT_EQ(differing, 0);
+        EXPECT_EQ(py_fused, py_separate);
+        EXPECT_EQ(pw_fused, pw_separate);
+        EXPECT_NE(p_fused[0], p0[0]);  // the update did happen
+    }
+    force_scalar_block_kernel(false);
+}
