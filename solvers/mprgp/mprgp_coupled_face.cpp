@@ -19,9 +19,8 @@ void CoupledRun::evaluate(bool exact)
     // difference cancels on the face rows.)
     rows_times(m_phi, m_jphi);
     // The parts of the accuracy error that do not depend on mu: the feasibility, and the
-    // stationarity at DOFs no face row touches (there g - J_A'mu = g = phi for every mu): one
-    // vectorised pass over every DOF with the face DOFs weighted 0, then the face DOFs alone.
-    m_stat_free = m_n > 0 ? m_phi.cwiseAbs().cwiseProduct(m_free_weight).maxCoeff() : 0.0;
+    // stationarity at DOFs no face row touches (there g - J_A'mu = g = phi for every mu): over every
+    // DOF with the face DOFs weighted 0, in face_gradient's pass (m_stat_free), then the face DOFs alone.
     const double stat_free = m_stat_free;
     double stat_phi = stat_free;
     for (int j : m_face_dofs) stat_phi = std::max(stat_phi, std::abs(m_phi[j]) * m_scale.inv_diag[j]);
