@@ -152,14 +152,14 @@ private:
     }
     /// nu, phi = g - J_A' nu and (with with_z) the direction z and z'phi, from the current g and
     /// face; with `ap`, first the accepted CG step x -= alpha p, g -= alpha Ap, and z'Ap (the CG
-    /// coefficient). Every pass is a short Eigen one: after an A-product the vectors come from
-    /// memory, and a loop over few streams keeps the hardware prefetch (one fused pass over the
-    /// ten vectors measured 3x slower than eight Eigen passes, flank_press's n, cold cache).
+    /// coefficient). The step, phi = g and the free DOFs' stationarity share one pass; the dots stay
+    /// Eigen's own (one fused pass over the ten vectors measured 3x slower than short passes,
+    /// flank_press's n, cold cache; and the dots' order of summation decides the CG chains' rounding).
     void face_gradient(bool with_z, const Vec* ap = nullptr, double alpha = 0.0)
     {
         settle_direction();  // z changes below
         if (ap != nullptr) {
-            // x -= alpha p, g -= alpha Ap and phi = g in one pass (no reduction in it, so it vectorises)
+            // x -= alpha p, g -= alpha Ap, phi = g and the free DOFs' largest |phi_j| w_j in one pass
             double* __restrict px = m_x.data();
             double* __restrict pg = m_g.data();
             double* __restrict pphi = m_phi.data();
