@@ -1,7 +1,8 @@
 // Issue 47's "part of an iteration outside its A-products": decoupled `mprgp` (the authors' row
 // order) and `mprgp-coupled`, registry defaults, on each snapshot of CB_BENCH_SNAPSHOTS. A monitor
 // reads the thread's CPU clock and the A-product counter at the first and the last iteration;
-// then the fused product-with-dots on the solvers' storage (BSR, `threads` as the solvers) is timed
+// then the fused product-with-dots on the solvers' storage (`a_format = auto` as the solvers: SBSR
+// on one thread from 1M nonzeros, else BSR; `threads` as the solvers) is timed
 // alone (harness/bench/alternating.hpp). outside_<s> = 1 - products x product time / iteration
 // time: the share of an iteration spent in vector passes, projections and the stop test.
 // CB_BENCH_THREADS (default 1) sets the solvers' and the product's `threads` (then wall clock:
@@ -63,7 +64,7 @@ void measure_share(benchmark::State& state, const cb::Qp& qp)
     const cb::Qp decoupled = cb::select_rows(qp, report.kept_rows);
     const nlohmann::json settings = {{"threads", threads()}};
     cb::AOperator op(qp.A);
-    op.prepare(cb::AFormat::BSR, threads());
+    op.prepare(cb::AFormat::AUTO, threads());
     const cb::Vec x = cb::Vec::LinSpaced(qp.n(), -1.0, 1.0), w = cb::Vec::Constant(qp.n(), 0.5);
     cb::Vec y(qp.n());
     for (auto _ : state) {
@@ -96,7 +97,7 @@ void measure_share(benchmark::State& state, const cb::Qp& qp)
     }
     state.counters["threads"] = threads();
     state.counters["n"] = static_cast<double>(qp.n());
-    state.SetLabel(op.format() == cb::AFormat::BSR ? "bsr" : "csr fallback: " + op.why_csr());
+    state.SetLabel(op.format() == cb::AFormat::CSR ? "csr fallback: " + op.why_csr() : cb::to_string(op.format()));
 }
 
 const bool share_registered = register_per_snapshot("BM_IterationShare", measure_share);
