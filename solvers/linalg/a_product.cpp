@@ -449,16 +449,16 @@ double a_product_dots(const AOperator& A, const Vec& x, Vec& y, const Vec& w, do
 }
 
 double a_product_dots_next_direction(const AOperator& A, Vec& p, const Vec& z, double beta, Vec& y, const Vec& w,
-                                     double& pw)
+                                     const char* skip, double& pw)
 {
     const bool in_pass = A.format() == AFormat::SBSR && (A.scaling() == nullptr || A.blocks_scaled());
     if (!in_pass) {
         p = z - beta * p;
-        return a_product_dots(A, p, y, w, pw);
+        return skip != nullptr ? a_product_dots(A, p, y, w, skip, pw) : a_product_dots(A, p, y, w, pw);
     }
     y.resize(A.rows());
-    const double py = sym_block_product(Dots::ALL, A.blocks(), A.rows() / 3, p.data(), y.data(), w.data(), nullptr,
-                                        pw, DirectionUpdate{p.data(), z.data(), beta});
+    const double py = sym_block_product(skip != nullptr ? Dots::MASKED : Dots::ALL, A.blocks(), A.rows() / 3, p.data(),
+                                        y.data(), w.data(), skip, pw, DirectionUpdate{p.data(), z.data(), beta});
     g_a_products.fetch_add(1, std::memory_order_relaxed);
     return py;
 }

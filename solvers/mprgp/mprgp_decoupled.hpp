@@ -55,6 +55,10 @@ private:
     }
     /// out = A v; returns v'Av and sets vg = v'g (one pass over A).
     double product_dot(const Vec& v, Vec& out, double& vg);
+    /// The trial's product with p (Ap, p'Ap returned, p'g in pg), forming a pending p first.
+    double direction_product_dot(double& pg);
+    /// p_j as the pending update will form it (the same operations: the same bits).
+    double p_at(int j) const { return m_p_pending ? m_z[j] - m_p_beta * m_p[j] : m_p[j]; }
     double objective_from_gradient() const { return 0.5 * (m_x.dot(m_g) - m_b.dot(m_x)); }
     void refresh_gradient()
     {
@@ -142,6 +146,8 @@ private:
     double m_rz = 0.0;        // z'g
     double m_gg_out = 0.0;    // sum of g_j^2 over DOFs in no row
     double m_pg_rows = 0.0;   // p'phi over the DOFs of rows (from evaluate_rows)
+    bool m_p_pending = false;  // p = z - m_p_beta p is still to be formed (by the next product; p_at)
+    double m_p_beta = 0.0;
     double m_ginf_free = 0;   // max |g_j| / D_jj over DOFs in no row (the measure's stationarity part)
     double m_f_x = 0.0;       // F(x)
     double m_corr_x = 0.0;    // F(P(x)) - F(x)

@@ -102,6 +102,7 @@ void DecoupledMprgp::face_precondition(Vec& z)
 
 void DecoupledMprgp::restart(bool galerkin)
 {
+    m_p_pending = false;  // p = z below
     active_rows(m_J, m_c, m_rows, m_x, m_active);
     if (m_deflate) {
         if (galerkin) {
@@ -169,7 +170,7 @@ void DecoupledMprgp::evaluate_rows()
             const int j = inner[k];
             jx += val[k] * m_x[j];
             jg += val[k] * m_g[j];
-            jp += val[k] * m_p[j];
+            jp += val[k] * p_at(j);
         }
         m_jx[i] = jx;
         m_jg[i] = jg;
@@ -194,7 +195,7 @@ void DecoupledMprgp::evaluate_rows()
             const double r_phi = gk - val[k] * t;      // phi_k
             pb2 += r_pb * r_pb;
             phi2 += r_phi * r_phi;
-            pg_rows += m_p[inner[k]] * r_phi;
+            pg_rows += p_at(inner[k]) * r_phi;
             stat = std::max(stat, std::abs(r_pb) * m_scale.inv_diag[inner[k]]);
         }
         rows.add_row(m_c[i], jx - m_c[i], lambda, m_scale.inv_row_norm[i], m_scale.length_per_multiplier[i]);

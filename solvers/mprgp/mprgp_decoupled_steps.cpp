@@ -169,11 +169,23 @@ double DecoupledMprgp::product_dot(const Vec& v, Vec& out, double& vg)
     return vav;
 }
 
+double DecoupledMprgp::direction_product_dot(double& pg)
+{
+    if (!m_p_pending) return product_dot(m_p, m_Ap, pg);
+    double dot_g = 0.0;
+    const double vav = a_product_dots_next_direction(m_a_op, m_p, m_z, m_p_beta, m_Ap, m_g,
+                                                     m_rows.dof_in_row.data(), dot_g);
+    m_p_pending = false;
+    ++m_cnt.a_products;
+    pg = dot_g + m_pg_rows;
+    return vav;
+}
+
 Trial DecoupledMprgp::cg_trial(std::string& why)
 {
     Trial t;
     double pg = 0.0;
-    const double pap = product_dot(m_p, m_Ap, pg);
+    const double pap = direction_product_dot(pg);
     if (!(pap > 0.0) || !std::isfinite(pap)) {
         if (m_native == 0.0 || pap == 0.0) {
             t.broke = SolveStatus::STALLED;
@@ -265,12 +277,10 @@ void DecoupledMprgp::cg_update(double alpha, double pap, double df, double corr_
         }
     }
     ++m_cnt.precond_applications;
-    const double beta_cg = zap / pap;
-    {
-        double* __restrict pp = m_p.data();
-        const double* __restrict pz = m_z.data();
-        for (Eigen::Index j = 0; j < m_n; ++j) pp[j] = pz[j] - beta_cg * pp[j];
-    }
+    // p = z - beta p is left to the next trial's product, which forms it in its own pass
+    // (evaluate_rows reads the rows' entries through p_at meanwhile).
+    m_p_beta = zap / pap;
+    m_p_pending = true;
     m_rz = zg;
     m_gg_out = gg;
     m_ginf_free = ginf;

@@ -235,7 +235,7 @@ TEST(SymBlockProduct, NextDirectionInThePassEqualsTheSeparateUpdateToTheLastBit)
         p_separate = z - beta * p_separate;
         const double py_separate = a_product_dots(op, p_separate, y_separate, w, pw_separate);
         const long before = a_product_count();
-        const double py_fused = a_product_dots_next_direction(op, p_fused, z, beta, y_fused, w, pw_fused);
+        const double py_fused = a_product_dots_next_direction(op, p_fused, z, beta, y_fused, w, nullptr, pw_fused);
         EXPECT_EQ(a_product_count() - before, 1);
         long differing = 0;
         for (Eigen::Index i = 0; i < A.rows(); ++i)
@@ -244,6 +244,21 @@ TEST(SymBlockProduct, NextDirectionInThePassEqualsTheSeparateUpdateToTheLastBit)
         EXPECT_EQ(py_fused, py_separate);
         EXPECT_EQ(pw_fused, pw_separate);
         EXPECT_NE(p_fused[0], p0[0]);  // the update did happen
+        // The masked dot (decoupled mprgp's p'g off its rows' DOFs) likewise.
+        std::vector<char> skip(static_cast<size_t>(A.rows()));
+        for (size_t i = 0; i < skip.size(); ++i) skip[i] = static_cast<char>(i % 7 == 2);
+        Vec p_masked_separate = p0, y_masked_separate, p_masked_fused = p0, y_masked_fused;
+        double pw_masked_separate = 0.0, pw_masked_fused = 0.0;
+        p_masked_separate = z - beta * p_masked_separate;
+        const double py_masked_separate =
+            a_product_dots(op, p_masked_separate, y_masked_separate, w, skip.data(), pw_masked_separate);
+        const double py_masked_fused = a_product_dots_next_direction(op, p_masked_fused, z, beta, y_masked_fused, w,
+                                                                     skip.data(), pw_masked_fused);
+        EXPECT_EQ((p_masked_fused - p_masked_separate).lpNorm<Eigen::Infinity>(), 0.0);
+        EXPECT_EQ((y_masked_fused - y_masked_separate).lpNorm<Eigen::Infinity>(), 0.0);
+        EXPECT_EQ(py_masked_fused, py_masked_separate);
+        EXPECT_EQ(pw_masked_fused, pw_masked_separate);
+        EXPECT_NE(pw_masked_fused, pw_fused);  // the mask did leave entries out
     }
     force_scalar_block_kernel(false);
 }
