@@ -24,6 +24,11 @@ namespace {
 // flops, about what one of CHOLMOD's row modifications costs on flank_press's 1152-row factor.
 constexpr int DENSE_SET_MAX_ROWS = 128;
 
+// The sweep start of an LCP (LargeBlock::sweep_start) is tried on drops of more rows than this and
+// than a factor modification takes: its 20 sweeps cost about half a refactorisation, more than
+// the few extra row changes that the overshoot of a smaller drop costs.
+constexpr long SWEEP_START_MIN_ROWS = 32;
+
 // ---------------------------------------------------------------------------------------------
 // Sparse blocks on CHOLMOD: all rows (the global oracle) or a component too large for dense work.
 
@@ -282,7 +287,8 @@ class LargeBlock final : public RowBlock {
 public:
     LargeBlock(const SpMat& J, std::vector<int> rows, const Vec& dinv, const CoupledOperatorOptions& opt)
         : RowBlock(std::move(rows)), m_jacobi(opt.jacobi), m_max_pivots(opt.lcp_max_pivots),
-          m_max_sweeps(opt.pgs_max_sweeps)
+          m_max_sweeps(opt.pgs_max_sweeps), m_max_updates(std::max(1L, opt.sparse_max_updates)),
+          m_sweep_start_sweeps(opt.sweep_start_sweeps)
     {
         {
             const SpMat JB = block_rows(J, m_rows);
@@ -330,6 +336,9 @@ public:
         m_z.setZero(static_cast<Eigen::Index>(k));
         m_cur.setZero(static_cast<Eigen::Index>(k));
         m_w.setZero(static_cast<Eigen::Index>(k));
+        m_y.setZero(static_cast<Eigen::Index>(k));
+        m_inv_diag = m_scaled.diagonal().cwiseInverse();
+        m_in_universe.assign(k, 0);
         m_bad.reserve(k);
     }
 
@@ -409,6 +418,44 @@ private:
         m_face_d_stale = m_jacobi;
     }
 
+    /// m_sweep_start_sweeps projected Gauss-Seidel sweeps over the block rows U = `universe` on the
+    /// scaled problem (unit diagonal: lam = scale y), from m_cur (lam >= 0 off the fixed rows, zero
+    /// off `set`); then `set` = the fixed rows and those with y > 0, m_cur = lam there (feasible, so
+    /// the active-set loop's ratio tests may start from it).
+    void sweep_start(const std::vector<int>& universe, const double* q, const char* fixed, std::vector<char>& set,
+                     Counters& cnt)
+    {
+        const size_t ku = universe.size();
+        std::fill(m_in_universe.begin(), m_in_universe.end(), 0);
+        for (size_t r = 0; r < ku; ++r) {
+            const int j = universe[r];
+            m_in_universe[static_cast<size_t>(j)] = 1;
+            m_y[j] = m_cur[j] / m_scale[j];
+        }
+        const int* outer = m_scaled.outerIndexPtr();
+        const int* inner = m_scaled.innerIndexPtr();
+        const double* value = m_scaled.valuePtr();
+        double touched = 0.0;
+        for (long sweep = 0; sweep < m_sweep_start_sweeps; ++sweep) {
+            for (size_t r = 0; r < ku; ++r) {
+                const int j = universe[r];
+                double gy = 0.0;  // (G y)_j over U (G symmetric: column j is row j)
+                for (int k = outer[j]; k < outer[j + 1]; ++k)
+                    if (m_in_universe[static_cast<size_t>(inner[k])]) gy += value[k] * m_y[inner[k]];
+                const double next = m_y[j] - (gy - m_scale[j] * q[r]) * m_inv_diag[j];
+                m_y[j] = fixed != nullptr && fixed[r] ? next : std::max(0.0, next);
+                touched += outer[j + 1] - outer[j];
+            }
+        }
+        cnt.work_flops += sparse_product_flops(touched);
+        cnt.pgs_sweeps += m_sweep_start_sweeps;
+        for (size_t r = 0; r < ku; ++r) {
+            const int j = universe[r];
+            set[r] = (fixed != nullptr && fixed[r]) || m_y[j] > 0.0;
+            m_cur[j] = set[r] ? m_scale[j] * m_y[j] : 0.0;
+        }
+    }
+
     /// m_z = G(S, S)^-1 q_S on the set S (zero off it), with the set's factor modified to S.
     bool solve_on_set(const std::vector<int>& universe, const double* q, const std::vector<char>& set,
                       MaskedGramFactor& f, DenseSetFactor* dense, Counters& cnt)
@@ -473,6 +520,7 @@ private:
         m_cur.setZero();
         bool solved = solve_on_set(universe, q, set, f, dense, cnt);
         bool dropped = false;  // else m_z is already the first step's solve on the same set
+        long leaving = 0;
         if (solved) {
             for (size_t r = 0; r < ku; ++r) {
                 if (!set[r]) continue;
@@ -482,9 +530,22 @@ private:
                 } else {
                     set[r] = 0;
                     dropped = true;
+                    ++leaving;
                 }
             }
         }
+        // At most once per LCP, a drop of more rows than a factor modification takes: dropping every
+        // negative row of the set's solution overshoots on strongly coupled rows (their neighbours
+        // then come back, for a dozen steps of hundreds of row changes on flank_press's cold
+        // projection); projected Gauss-Seidel sweeps from the clipped solution land near the final
+        // set, at about a fortieth of a refactorisation a sweep.
+        bool swept = m_sweep_start_sweeps <= 0;
+        auto sweep_if_far = [&]() {
+            if (swept || leaving <= std::max(m_max_updates, SWEEP_START_MIN_ROWS)) return;
+            swept = true;
+            sweep_start(universe, q, fixed, set, cnt);
+        };
+        sweep_if_far();
         // Blocks of rows leave (every negative one) and enter (every one with w < 0) while the
         // objective at the set minimisers decreases; after a step that did not, or an addition undone
         // at once, the method goes careful: ratio tests and one entering row at a time (finite).
@@ -507,16 +568,19 @@ private:
                 blocked = true;
             }
             if (blocked && !careful) {
+                leaving = 0;
                 for (size_t r = 0; r < ku; ++r) {
                     if (!set[r]) continue;
                     const int j = universe[r];
                     if (!is_fixed(r) && m_z[j] < -tol_l) {
                         set[r] = 0;
                         m_cur[j] = 0.0;
+                        ++leaving;
                     } else {
                         m_cur[j] = is_fixed(r) ? m_z[j] : std::max(0.0, m_z[j]);
                     }
                 }
+                sweep_if_far();
                 continue;
             }
             if (blocked) {
@@ -591,6 +655,8 @@ private:
 
     bool m_jacobi;
     long m_max_pivots, m_max_sweeps;
+    long m_max_updates;  // a set change of more rows refactors; a drop of more picks the set by sweeps
+    long m_sweep_start_sweeps;
     SpMatCol m_gram;  // J_B J_B' in block order, unscaled
     Vec m_scale, m_scale_d;
     std::unique_ptr<MaskedGramFactor> m_face_factor, m_face_factor_d, m_chopped_factor;
@@ -604,6 +670,8 @@ private:
     std::vector<int> m_all, m_bad;
     std::vector<char> m_mask, m_added;
     Vec m_b, m_z, m_cur, m_w;
+    Vec m_y, m_inv_diag;              // sweep_start's scaled iterate and 1 / diag(m_scaled)
+    std::vector<char> m_in_universe;  // sweep_start: the block rows of its universe
 };
 
 }  // namespace
