@@ -340,6 +340,7 @@ public:
         m_inv_diag = m_scaled.diagonal().cwiseInverse();
         m_in_universe.assign(k, 0);
         m_bad.reserve(k);
+        m_members.reserve(k);
     }
 
     void face_solve(const double* rhs, double* out, bool weighted, Counters& cnt) override
@@ -461,12 +462,13 @@ private:
                       MaskedGramFactor& f, DenseSetFactor* dense, Counters& cnt)
     {
         std::fill(m_mask.begin(), m_mask.end(), 0);
-        int in = 0;
+        m_members.clear();
         for (size_t r = 0; r < universe.size(); ++r)
             if (set[r]) {
                 m_mask[static_cast<size_t>(universe[r])] = 1;
-                ++in;
+                m_members.push_back(static_cast<int>(r));
             }
+        const int in = static_cast<int>(m_members.size());
         if (in == 0) {
             // Nothing to factor: z = 0, and the factor stays warm for the next set (flank_press
             // frame 0: 5 refactorisations to the identity before).
@@ -478,15 +480,19 @@ private:
         const bool on_dense = dense != nullptr && in <= dense->capacity() && dense->set_mask(m_mask, cnt);
         if (!on_dense && !f.set_mask(m_mask, cnt, &m_donors)) return false;
         m_b.setZero();
-        for (size_t r = 0; r < universe.size(); ++r)
-            if (set[r]) m_b[universe[r]] = m_scale[universe[r]] * q[r];
+        for (int r : m_members)
+            m_b[universe[static_cast<size_t>(r)]] = m_scale[universe[static_cast<size_t>(r)]] * q[r];
         if (on_dense) {
             dense->solve(m_b.data(), cnt);
             ++m_dense_solves;
         } else {
             f.solve(m_b.data(), cnt);
         }
-        m_z = m_scale.cwiseProduct(m_b);
+        // z on the set only: the loop reads it nowhere else.
+        for (int r : m_members) {
+            const int j = universe[static_cast<size_t>(r)];
+            m_z[j] = m_scale[j] * m_b[j];
+        }
         ++cnt.lcp_iterations;
         return true;
     }
@@ -554,23 +560,25 @@ private:
         const long max_steps = m_max_pivots + 2 * static_cast<long>(ku);
         for (long step = 0; solved && step < max_steps; ++step) {
             if ((step > 0 || dropped) && !(solved = solve_on_set(universe, q, set, f, dense, cnt))) break;
+            // The set's rows (m_members, ascending, as solved): a step's passes go over them, not
+            // over all of U (the in-loop projections' sets hold 10-100 of flank_press's 1152 rows).
             double zinf = 0.0;
-            for (size_t r = 0; r < ku; ++r)
-                if (set[r]) zinf = std::max(zinf, std::abs(m_z[universe[r]]));
+            for (int r : m_members) zinf = std::max(zinf, std::abs(m_z[universe[static_cast<size_t>(r)]]));
             const double tol_l = 1e-12 * std::max(1e-300, zinf);
             // Ratio test: the longest step from m_cur towards z that keeps lam >= 0.
             double alpha = 1.0;
             bool blocked = false;
-            for (size_t r = 0; r < ku; ++r) {
+            for (int rr : m_members) {
+                const size_t r = static_cast<size_t>(rr);
                 const int j = universe[r];
-                if (!set[r] || is_fixed(r) || !(m_z[j] < -tol_l)) continue;
+                if (is_fixed(r) || !(m_z[j] < -tol_l)) continue;
                 alpha = std::min(alpha, m_cur[j] / (m_cur[j] - m_z[j]));
                 blocked = true;
             }
             if (blocked && !careful) {
                 leaving = 0;
-                for (size_t r = 0; r < ku; ++r) {
-                    if (!set[r]) continue;
+                for (int rr : m_members) {
+                    const size_t r = static_cast<size_t>(rr);
                     const int j = universe[r];
                     if (!is_fixed(r) && m_z[j] < -tol_l) {
                         set[r] = 0;
@@ -585,8 +593,8 @@ private:
             }
             if (blocked) {
                 bool undid_addition = false;
-                for (size_t r = 0; r < ku; ++r) {
-                    if (!set[r]) continue;
+                for (int rr : m_members) {
+                    const size_t r = static_cast<size_t>(rr);
                     const int j = universe[r];
                     m_cur[j] += alpha * (m_z[j] - m_cur[j]);
                     if (!is_fixed(r) && m_z[j] < -tol_l && m_cur[j] <= tol_l) {
@@ -599,13 +607,16 @@ private:
                 continue;
             }
             // z >= 0 on the set: the minimiser there. Rows off the set with w < 0 enter.
-            for (size_t r = 0; r < ku; ++r)
-                if (set[r]) m_cur[universe[r]] = is_fixed(r) ? m_z[universe[r]] : std::max(0.0, m_z[universe[r]]);
-            // w = G cur over the columns of the set only (projection sets hold 10-100 of flank_press's
-            // 1152 rows); the same sums in the same order as the full product.
+            for (int rr : m_members) {
+                const size_t r = static_cast<size_t>(rr);
+                m_cur[universe[r]] = is_fixed(r) ? m_z[universe[r]] : std::max(0.0, m_z[universe[r]]);
+            }
+            // w = G cur over the columns of the set only (cur is zero off it; U ascending, so the
+            // same sums in the same order as the full product).
             m_w.setZero();
             long touched = 0;
-            for (Eigen::Index j = 0; j < m_gram.outerSize(); ++j) {
+            for (int rr : m_members) {
+                const int j = universe[static_cast<size_t>(rr)];
                 const double cj = m_cur[j];
                 if (cj == 0.0) continue;
                 for (SpMatCol::InnerIterator it(m_gram, j); it; ++it) m_w[it.index()] += it.value() * cj;
@@ -613,8 +624,8 @@ private:
             }
             cnt.work_flops += sparse_product_flops(static_cast<double>(touched));
             double f_set = 0.0;  // 1/2 lam'G lam - q'lam
-            for (size_t r = 0; r < ku; ++r)
-                if (set[r]) f_set += m_cur[universe[r]] * (0.5 * m_w[universe[r]] - q[r]);
+            for (int r : m_members)
+                f_set += m_cur[universe[static_cast<size_t>(r)]] * (0.5 * m_w[universe[static_cast<size_t>(r)]] - q[r]);
             careful = careful || !(f_set < best_f);
             best_f = std::min(best_f, f_set);
             const bool single = careful;
@@ -668,6 +679,7 @@ private:
     std::array<std::unique_ptr<DenseSetFactor>, PROJECTION_USES> m_dense_sets;
     long m_dense_solves = 0;
     std::vector<int> m_all, m_bad;
+    std::vector<int> m_members;  // solve_on_set: the set's U positions, ascending
     std::vector<char> m_mask, m_added;
     Vec m_b, m_z, m_cur, m_w;
     Vec m_y, m_inv_diag;              // sweep_start's scaled iterate and 1 / diag(m_scaled)
