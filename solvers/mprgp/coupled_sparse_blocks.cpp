@@ -312,10 +312,11 @@ public:
         // frame 0: chopped LCP steps 60 -> 49, row modifications 510 -> 404).
         m_fresh_face_set = 1;
         m_scale = unit_diagonal_scale(m_gram);
-        m_face_factor = std::make_unique<MaskedGramFactor>(scaled_shifted(m_gram, m_scale), max_updates);
-        m_chopped_factor = std::make_unique<MaskedGramFactor>(scaled_shifted(m_gram, m_scale), max_updates);
-        for (auto& f : m_projection_factors)
-            f = std::make_unique<MaskedGramFactor>(scaled_shifted(m_gram, m_scale), max_updates);
+        m_scaled = scaled_shifted(m_gram, m_scale);
+        // One analysis of the scaled, shifted J_B J_B', copied to the other factors of it.
+        m_face_factor = std::make_unique<MaskedGramFactor>(m_scaled, max_updates);
+        m_chopped_factor = std::make_unique<MaskedGramFactor>(*m_face_factor, max_updates);
+        for (auto& f : m_projection_factors) f = std::make_unique<MaskedGramFactor>(*m_face_factor, max_updates);
         for (auto& set : m_use_sets) set.assign(m_rows.size(), 0);
         if (m_jacobi) {
             const SpMatCol gram_d = SpMatCol(JB * dinv.asDiagonal() * JB.transpose());
@@ -326,7 +327,6 @@ public:
         // an expansion's projection set nearly equals the next face, the face the chopped set.
         m_donors = {m_face_factor.get(), m_chopped_factor.get(), m_projection_factors[0].get(),
                     m_projection_factors[1].get(), m_projection_factors[2].get()};
-        m_scaled = scaled_shifted(m_gram, m_scale);
         for (auto& d : m_dense_sets) d = std::make_unique<DenseSetFactor>(m_scaled, DENSE_SET_MAX_ROWS);
         const size_t k = m_rows.size();
         m_all.resize(k);
