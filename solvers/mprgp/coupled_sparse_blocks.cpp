@@ -28,6 +28,11 @@ constexpr int DENSE_SET_MAX_ROWS = 128;
 // than a factor modification takes: its 20 sweeps cost about half a refactorisation, more than
 // the few extra row changes that the overshoot of a smaller drop costs.
 constexpr long SWEEP_START_MIN_ROWS = 32;
+// A cold LCP (no warm set: the first projection of x0) sweeps until the sign pattern has held
+// for this many sweeps, at most COLD_SWEEPS_MAX: on flank_press_wide's first projection 20 sweeps
+// left 213 rows to drop and 26 steps; sweeping to rest, 2 steps. Warm LCPs gained nothing by it.
+constexpr long COLD_SWEEPS_QUIET = 5;
+constexpr long COLD_SWEEPS_MAX = 200;
 
 // ---------------------------------------------------------------------------------------------
 // Sparse blocks on CHOLMOD: all rows (the global oracle) or a component too large for dense work.
@@ -419,12 +424,13 @@ private:
         m_face_d_stale = m_jacobi;
     }
 
-    /// m_sweep_start_sweeps projected Gauss-Seidel sweeps over the block rows U = `universe` on the
+    /// m_sweep_start_sweeps projected Gauss-Seidel sweeps (`cold`: until no row changed sign in
+    /// COLD_SWEEPS_QUIET sweeps, at most COLD_SWEEPS_MAX) over the block rows U = `universe` on the
     /// scaled problem (unit diagonal: lam = scale y), from m_cur (lam >= 0 off the fixed rows, zero
     /// off `set`); then `set` = the fixed rows and those with y > 0, m_cur = lam there (feasible, so
     /// the active-set loop's ratio tests may start from it).
     void sweep_start(const std::vector<int>& universe, const double* q, const char* fixed, std::vector<char>& set,
-                     Counters& cnt)
+                     bool cold, Counters& cnt)
     {
         const size_t ku = universe.size();
         std::fill(m_in_universe.begin(), m_in_universe.end(), 0);
@@ -437,19 +443,25 @@ private:
         const int* inner = m_scaled.innerIndexPtr();
         const double* value = m_scaled.valuePtr();
         double touched = 0.0;
-        for (long sweep = 0; sweep < m_sweep_start_sweeps; ++sweep) {
+        const long most = cold ? COLD_SWEEPS_MAX : m_sweep_start_sweeps;
+        long sweeps = 0, quiet = 0;
+        for (; sweeps < most && (!cold || quiet < COLD_SWEEPS_QUIET); ++sweeps) {
+            long flips = 0;
             for (size_t r = 0; r < ku; ++r) {
                 const int j = universe[r];
                 double gy = 0.0;  // (G y)_j over U (G symmetric: column j is row j)
                 for (int k = outer[j]; k < outer[j + 1]; ++k)
                     if (m_in_universe[static_cast<size_t>(inner[k])]) gy += value[k] * m_y[inner[k]];
                 const double next = m_y[j] - (gy - m_scale[j] * q[r]) * m_inv_diag[j];
+                const bool was_in = m_y[j] > 0.0;
                 m_y[j] = fixed != nullptr && fixed[r] ? next : std::max(0.0, next);
+                flips += was_in != (m_y[j] > 0.0);
                 touched += outer[j + 1] - outer[j];
             }
+            quiet = flips == 0 ? quiet + 1 : 0;
         }
         cnt.work_flops += sparse_product_flops(touched);
-        cnt.pgs_sweeps += m_sweep_start_sweeps;
+        cnt.pgs_sweeps += sweeps;
         for (size_t r = 0; r < ku; ++r) {
             const int j = universe[r];
             set[r] = (fixed != nullptr && fixed[r]) || m_y[j] > 0.0;
@@ -522,6 +534,8 @@ private:
         }
         const double tol_w = 1e-12 * std::max(1.0, qinf);
         m_added.assign(ku, 0);
+        bool cold = true;  // no warm set: the first LCP of this use
+        for (size_t r = 0; r < ku && cold; ++r) cold = !set[r] || (fixed != nullptr && fixed[r]);
         // A feasible start from the warm set: the set's solution with its negative rows dropped.
         m_cur.setZero();
         bool solved = solve_on_set(universe, q, set, f, dense, cnt);
@@ -549,7 +563,7 @@ private:
         auto sweep_if_far = [&]() {
             if (swept || leaving <= std::max(m_max_updates, SWEEP_START_MIN_ROWS)) return;
             swept = true;
-            sweep_start(universe, q, fixed, set, cnt);
+            sweep_start(universe, q, fixed, set, cold, cnt);
         };
         sweep_if_far();
         // Blocks of rows leave (every negative one) and enter (every one with w < 0) while the
