@@ -30,7 +30,7 @@ constexpr int DENSE_SET_MAX_ROWS = 128;
 constexpr long SWEEP_START_MIN_ROWS = 32;
 // A cold LCP (no warm set: the first projection of x0) sweeps until the sign pattern has held
 // for this many sweeps, at most COLD_SWEEPS_MAX: on flank_press_wide's first projection 20 sweeps
-// left 213 rows to drop and 26 steps; sweeping to rest, 2 steps. Warm LCPs gained nothing by it.
+// left 213 rows to drop and 27 LCP steps; sweeping to rest, 4. Warm LCPs gained nothing by it.
 constexpr long COLD_SWEEPS_QUIET = 5;
 constexpr long COLD_SWEEPS_MAX = 200;
 
