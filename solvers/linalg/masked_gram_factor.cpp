@@ -17,6 +17,41 @@ MaskedGramFactor::MaskedGramFactor(const SpMatCol& S, long max_updates)
     : m_k(static_cast<int>(S.rows())), m_max_updates(max_updates), m_S(S)
 {
     m_S.makeCompressed();
+    allocate();
+    // The symbolic analysis of the whole S: every masked pattern is a subset of it.
+    int* p = static_cast<int*>(m_masked->p);
+    int* ri = static_cast<int*>(m_masked->i);
+    double* v = static_cast<double*>(m_masked->x);
+    int nz = 0;
+    for (int j = 0; j < m_k; ++j) {
+        p[j] = nz;
+        for (SpMatCol::InnerIterator it(m_S, j); it; ++it)
+            if (it.row() >= j) {
+                ri[nz] = static_cast<int>(it.row());
+                v[nz++] = it.value();
+            }
+    }
+    p[m_k] = nz;
+    m_L = cholmod_analyze(m_masked, &m_cm);
+    if (m_L == nullptr) throw std::runtime_error("MaskedGramFactor: CHOLMOD's analysis failed");
+    m_factor_flops = m_cm.fl;
+    m_lnz = m_cm.lnz;
+}
+
+MaskedGramFactor::MaskedGramFactor(const MaskedGramFactor& twin, long max_updates)
+    : m_k(twin.m_k), m_max_updates(max_updates), m_S(twin.m_S)
+{
+    if (twin.m_factored) throw std::logic_error("MaskedGramFactor: the twin must not be factored yet");
+    allocate();
+    // A symbolic factor's copy is its pattern and ordering (no values): what the analysis gives.
+    m_L = cholmod_copy_factor(twin.m_L, &m_cm);
+    if (m_L == nullptr) throw std::runtime_error("MaskedGramFactor: CHOLMOD could not copy the analysis");
+    m_factor_flops = twin.m_factor_flops;
+    m_lnz = twin.m_lnz;
+}
+
+void MaskedGramFactor::allocate()
+{
     m_mask.assign(static_cast<size_t>(m_k), 0);
     cholmod_start(&m_cm);
     // The caller's order (AMD once per block), no postorder: row k of the factor is row k of S,
@@ -40,25 +75,6 @@ MaskedGramFactor::MaskedGramFactor(const SpMatCol& S, long max_updates)
     m_b = cholmod_zeros(static_cast<size_t>(m_k), 1, CHOLMOD_REAL, &m_cm);
     if (m_masked == nullptr || m_column == nullptr || m_b == nullptr)
         throw std::runtime_error("MaskedGramFactor: CHOLMOD could not allocate its workspace");
-
-    // The symbolic analysis of the whole S: every masked pattern is a subset of it.
-    int* p = static_cast<int*>(m_masked->p);
-    int* ri = static_cast<int*>(m_masked->i);
-    double* v = static_cast<double*>(m_masked->x);
-    int nz = 0;
-    for (int j = 0; j < m_k; ++j) {
-        p[j] = nz;
-        for (SpMatCol::InnerIterator it(m_S, j); it; ++it)
-            if (it.row() >= j) {
-                ri[nz] = static_cast<int>(it.row());
-                v[nz++] = it.value();
-            }
-    }
-    p[m_k] = nz;
-    m_L = cholmod_analyze(m_masked, &m_cm);
-    if (m_L == nullptr) throw std::runtime_error("MaskedGramFactor: CHOLMOD's analysis failed");
-    m_factor_flops = m_cm.fl;
-    m_lnz = m_cm.lnz;
 }
 
 MaskedGramFactor::~MaskedGramFactor()

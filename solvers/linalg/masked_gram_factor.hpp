@@ -33,6 +33,8 @@ public:
     /// @param S            symmetric positive definite, both triangles stored, already in a fill-reducing order
     /// @param max_updates  a mask change of more rows than this is refactored instead of modified
     MaskedGramFactor(const SpMatCol& S, long max_updates);
+    /// A factor of the same S as `twin` (not yet factored): its symbolic analysis is copied, not redone.
+    MaskedGramFactor(const MaskedGramFactor& twin, long max_updates);
     ~MaskedGramFactor();
     MaskedGramFactor(const MaskedGramFactor&) = delete;
     MaskedGramFactor& operator=(const MaskedGramFactor&) = delete;
@@ -53,6 +55,9 @@ public:
     const MaskedFactorTally& tally() const { return m_tally; }
 
 private:
+    /// The workspace of every factor of S (m_S set): CHOLMOD's common, the masked lower triangle's
+    /// and one column's arrays, the right-hand side.
+    void allocate();
     bool refactor(Counters& cnt);
 
     int m_k;

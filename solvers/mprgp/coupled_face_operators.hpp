@@ -29,6 +29,9 @@ struct CoupledOperatorOptions {
     long lcp_max_pivots = 200;  ///< block principal pivoting iterations before the PGS fallback
     long pgs_max_sweeps = 10000;
     long sparse_max_updates = 64;  ///< large components: a set change of more rows refactors instead of modifying
+    /// Large components: projected Gauss-Seidel sweeps that pick an LCP's set when the active-set
+    /// method would drop more than sparse_max_updates rows at once (0: drop them all, as before).
+    long sweep_start_sweeps = 20;
 };
 
 class RowBlock;

@@ -24,6 +24,16 @@ namespace {
 // flops, about what one of CHOLMOD's row modifications costs on flank_press's 1152-row factor.
 constexpr int DENSE_SET_MAX_ROWS = 128;
 
+// The sweep start of an LCP (LargeBlock::sweep_start) is tried on drops of more rows than this and
+// than a factor modification takes: its 20 sweeps cost about half a refactorisation, more than
+// the few extra row changes that the overshoot of a smaller drop costs.
+constexpr long SWEEP_START_MIN_ROWS = 32;
+// A cold LCP (no warm set: the first projection of x0) sweeps until the sign pattern has held
+// for this many sweeps, at most COLD_SWEEPS_MAX: on flank_press_wide's first projection 20 sweeps
+// left 213 rows to drop and 27 LCP steps; sweeping to rest, 4. Warm LCPs gained nothing by it.
+constexpr long COLD_SWEEPS_QUIET = 5;
+constexpr long COLD_SWEEPS_MAX = 200;
+
 // ---------------------------------------------------------------------------------------------
 // Sparse blocks on CHOLMOD: all rows (the global oracle) or a component too large for dense work.
 
@@ -282,7 +292,8 @@ class LargeBlock final : public RowBlock {
 public:
     LargeBlock(const SpMat& J, std::vector<int> rows, const Vec& dinv, const CoupledOperatorOptions& opt)
         : RowBlock(std::move(rows)), m_jacobi(opt.jacobi), m_max_pivots(opt.lcp_max_pivots),
-          m_max_sweeps(opt.pgs_max_sweeps)
+          m_max_sweeps(opt.pgs_max_sweeps), m_max_updates(std::max(1L, opt.sparse_max_updates)),
+          m_sweep_start_sweeps(opt.sweep_start_sweeps)
     {
         {
             const SpMat JB = block_rows(J, m_rows);
@@ -306,10 +317,11 @@ public:
         // frame 0: chopped LCP steps 60 -> 49, row modifications 510 -> 404).
         m_fresh_face_set = 1;
         m_scale = unit_diagonal_scale(m_gram);
-        m_face_factor = std::make_unique<MaskedGramFactor>(scaled_shifted(m_gram, m_scale), max_updates);
-        m_chopped_factor = std::make_unique<MaskedGramFactor>(scaled_shifted(m_gram, m_scale), max_updates);
-        for (auto& f : m_projection_factors)
-            f = std::make_unique<MaskedGramFactor>(scaled_shifted(m_gram, m_scale), max_updates);
+        m_scaled = scaled_shifted(m_gram, m_scale);
+        // One analysis of the scaled, shifted J_B J_B', copied to the other factors of it.
+        m_face_factor = std::make_unique<MaskedGramFactor>(m_scaled, max_updates);
+        m_chopped_factor = std::make_unique<MaskedGramFactor>(*m_face_factor, max_updates);
+        for (auto& f : m_projection_factors) f = std::make_unique<MaskedGramFactor>(*m_face_factor, max_updates);
         for (auto& set : m_use_sets) set.assign(m_rows.size(), 0);
         if (m_jacobi) {
             const SpMatCol gram_d = SpMatCol(JB * dinv.asDiagonal() * JB.transpose());
@@ -320,7 +332,6 @@ public:
         // an expansion's projection set nearly equals the next face, the face the chopped set.
         m_donors = {m_face_factor.get(), m_chopped_factor.get(), m_projection_factors[0].get(),
                     m_projection_factors[1].get(), m_projection_factors[2].get()};
-        m_scaled = scaled_shifted(m_gram, m_scale);
         for (auto& d : m_dense_sets) d = std::make_unique<DenseSetFactor>(m_scaled, DENSE_SET_MAX_ROWS);
         const size_t k = m_rows.size();
         m_all.resize(k);
@@ -330,7 +341,11 @@ public:
         m_z.setZero(static_cast<Eigen::Index>(k));
         m_cur.setZero(static_cast<Eigen::Index>(k));
         m_w.setZero(static_cast<Eigen::Index>(k));
+        m_y.setZero(static_cast<Eigen::Index>(k));
+        m_inv_diag = m_scaled.diagonal().cwiseInverse();
+        m_in_universe.assign(k, 0);
         m_bad.reserve(k);
+        m_members.reserve(k);
     }
 
     void face_solve(const double* rhs, double* out, bool weighted, Counters& cnt) override
@@ -409,17 +424,63 @@ private:
         m_face_d_stale = m_jacobi;
     }
 
+    /// m_sweep_start_sweeps projected Gauss-Seidel sweeps (`cold`: until no row changed sign in
+    /// COLD_SWEEPS_QUIET sweeps, at most COLD_SWEEPS_MAX) over the block rows U = `universe` on the
+    /// scaled problem (unit diagonal: lam = scale y), from m_cur (lam >= 0 off the fixed rows, zero
+    /// off `set`); then `set` = the fixed rows and those with y > 0, m_cur = lam there (feasible, so
+    /// the active-set loop's ratio tests may start from it).
+    void sweep_start(const std::vector<int>& universe, const double* q, const char* fixed, std::vector<char>& set,
+                     bool cold, Counters& cnt)
+    {
+        const size_t ku = universe.size();
+        std::fill(m_in_universe.begin(), m_in_universe.end(), 0);
+        for (size_t r = 0; r < ku; ++r) {
+            const int j = universe[r];
+            m_in_universe[static_cast<size_t>(j)] = 1;
+            m_y[j] = m_cur[j] / m_scale[j];
+        }
+        const int* outer = m_scaled.outerIndexPtr();
+        const int* inner = m_scaled.innerIndexPtr();
+        const double* value = m_scaled.valuePtr();
+        double touched = 0.0;
+        const long most = cold ? COLD_SWEEPS_MAX : m_sweep_start_sweeps;
+        long sweeps = 0, quiet = 0;
+        for (; sweeps < most && (!cold || quiet < COLD_SWEEPS_QUIET); ++sweeps) {
+            long flips = 0;
+            for (size_t r = 0; r < ku; ++r) {
+                const int j = universe[r];
+                double gy = 0.0;  // (G y)_j over U (G symmetric: column j is row j)
+                for (int k = outer[j]; k < outer[j + 1]; ++k)
+                    if (m_in_universe[static_cast<size_t>(inner[k])]) gy += value[k] * m_y[inner[k]];
+                const double next = m_y[j] - (gy - m_scale[j] * q[r]) * m_inv_diag[j];
+                const bool was_in = m_y[j] > 0.0;
+                m_y[j] = fixed != nullptr && fixed[r] ? next : std::max(0.0, next);
+                flips += was_in != (m_y[j] > 0.0);
+                touched += outer[j + 1] - outer[j];
+            }
+            quiet = flips == 0 ? quiet + 1 : 0;
+        }
+        cnt.work_flops += sparse_product_flops(touched);
+        cnt.pgs_sweeps += sweeps;
+        for (size_t r = 0; r < ku; ++r) {
+            const int j = universe[r];
+            set[r] = (fixed != nullptr && fixed[r]) || m_y[j] > 0.0;
+            m_cur[j] = set[r] ? m_scale[j] * m_y[j] : 0.0;
+        }
+    }
+
     /// m_z = G(S, S)^-1 q_S on the set S (zero off it), with the set's factor modified to S.
     bool solve_on_set(const std::vector<int>& universe, const double* q, const std::vector<char>& set,
                       MaskedGramFactor& f, DenseSetFactor* dense, Counters& cnt)
     {
         std::fill(m_mask.begin(), m_mask.end(), 0);
-        int in = 0;
+        m_members.clear();
         for (size_t r = 0; r < universe.size(); ++r)
             if (set[r]) {
                 m_mask[static_cast<size_t>(universe[r])] = 1;
-                ++in;
+                m_members.push_back(static_cast<int>(r));
             }
+        const int in = static_cast<int>(m_members.size());
         if (in == 0) {
             // Nothing to factor: z = 0, and the factor stays warm for the next set (flank_press
             // frame 0: 5 refactorisations to the identity before).
@@ -431,15 +492,19 @@ private:
         const bool on_dense = dense != nullptr && in <= dense->capacity() && dense->set_mask(m_mask, cnt);
         if (!on_dense && !f.set_mask(m_mask, cnt, &m_donors)) return false;
         m_b.setZero();
-        for (size_t r = 0; r < universe.size(); ++r)
-            if (set[r]) m_b[universe[r]] = m_scale[universe[r]] * q[r];
+        for (int r : m_members)
+            m_b[universe[static_cast<size_t>(r)]] = m_scale[universe[static_cast<size_t>(r)]] * q[r];
         if (on_dense) {
             dense->solve(m_b.data(), cnt);
             ++m_dense_solves;
         } else {
             f.solve(m_b.data(), cnt);
         }
-        m_z = m_scale.cwiseProduct(m_b);
+        // z on the set only: the loop reads it nowhere else.
+        for (int r : m_members) {
+            const int j = universe[static_cast<size_t>(r)];
+            m_z[j] = m_scale[j] * m_b[j];
+        }
         ++cnt.lcp_iterations;
         return true;
     }
@@ -469,10 +534,13 @@ private:
         }
         const double tol_w = 1e-12 * std::max(1.0, qinf);
         m_added.assign(ku, 0);
+        bool cold = true;  // no warm set: the first LCP of this use
+        for (size_t r = 0; r < ku && cold; ++r) cold = !set[r] || (fixed != nullptr && fixed[r]);
         // A feasible start from the warm set: the set's solution with its negative rows dropped.
         m_cur.setZero();
         bool solved = solve_on_set(universe, q, set, f, dense, cnt);
         bool dropped = false;  // else m_z is already the first step's solve on the same set
+        long leaving = 0;
         if (solved) {
             for (size_t r = 0; r < ku; ++r) {
                 if (!set[r]) continue;
@@ -482,9 +550,22 @@ private:
                 } else {
                     set[r] = 0;
                     dropped = true;
+                    ++leaving;
                 }
             }
         }
+        // At most once per LCP, a drop of more rows than a factor modification takes: dropping every
+        // negative row of the set's solution overshoots on strongly coupled rows (their neighbours
+        // then come back, for a dozen steps of hundreds of row changes on flank_press's cold
+        // projection); projected Gauss-Seidel sweeps from the clipped solution land near the final
+        // set, at about a fortieth of a refactorisation a sweep.
+        bool swept = m_sweep_start_sweeps <= 0;
+        auto sweep_if_far = [&]() {
+            if (swept || leaving <= std::max(m_max_updates, SWEEP_START_MIN_ROWS)) return;
+            swept = true;
+            sweep_start(universe, q, fixed, set, cold, cnt);
+        };
+        sweep_if_far();
         // Blocks of rows leave (every negative one) and enter (every one with w < 0) while the
         // objective at the set minimisers decreases; after a step that did not, or an addition undone
         // at once, the method goes careful: ratio tests and one entering row at a time (finite).
@@ -493,36 +574,41 @@ private:
         const long max_steps = m_max_pivots + 2 * static_cast<long>(ku);
         for (long step = 0; solved && step < max_steps; ++step) {
             if ((step > 0 || dropped) && !(solved = solve_on_set(universe, q, set, f, dense, cnt))) break;
+            // The set's rows (m_members, ascending, as solved): a step's passes go over them, not
+            // over all of U (the in-loop projections' sets hold 10-100 of flank_press's 1152 rows).
             double zinf = 0.0;
-            for (size_t r = 0; r < ku; ++r)
-                if (set[r]) zinf = std::max(zinf, std::abs(m_z[universe[r]]));
+            for (int r : m_members) zinf = std::max(zinf, std::abs(m_z[universe[static_cast<size_t>(r)]]));
             const double tol_l = 1e-12 * std::max(1e-300, zinf);
             // Ratio test: the longest step from m_cur towards z that keeps lam >= 0.
             double alpha = 1.0;
             bool blocked = false;
-            for (size_t r = 0; r < ku; ++r) {
+            for (int rr : m_members) {
+                const size_t r = static_cast<size_t>(rr);
                 const int j = universe[r];
-                if (!set[r] || is_fixed(r) || !(m_z[j] < -tol_l)) continue;
+                if (is_fixed(r) || !(m_z[j] < -tol_l)) continue;
                 alpha = std::min(alpha, m_cur[j] / (m_cur[j] - m_z[j]));
                 blocked = true;
             }
             if (blocked && !careful) {
-                for (size_t r = 0; r < ku; ++r) {
-                    if (!set[r]) continue;
+                leaving = 0;
+                for (int rr : m_members) {
+                    const size_t r = static_cast<size_t>(rr);
                     const int j = universe[r];
                     if (!is_fixed(r) && m_z[j] < -tol_l) {
                         set[r] = 0;
                         m_cur[j] = 0.0;
+                        ++leaving;
                     } else {
                         m_cur[j] = is_fixed(r) ? m_z[j] : std::max(0.0, m_z[j]);
                     }
                 }
+                sweep_if_far();
                 continue;
             }
             if (blocked) {
                 bool undid_addition = false;
-                for (size_t r = 0; r < ku; ++r) {
-                    if (!set[r]) continue;
+                for (int rr : m_members) {
+                    const size_t r = static_cast<size_t>(rr);
                     const int j = universe[r];
                     m_cur[j] += alpha * (m_z[j] - m_cur[j]);
                     if (!is_fixed(r) && m_z[j] < -tol_l && m_cur[j] <= tol_l) {
@@ -535,13 +621,16 @@ private:
                 continue;
             }
             // z >= 0 on the set: the minimiser there. Rows off the set with w < 0 enter.
-            for (size_t r = 0; r < ku; ++r)
-                if (set[r]) m_cur[universe[r]] = is_fixed(r) ? m_z[universe[r]] : std::max(0.0, m_z[universe[r]]);
-            // w = G cur over the columns of the set only (projection sets hold 10-100 of flank_press's
-            // 1152 rows); the same sums in the same order as the full product.
+            for (int rr : m_members) {
+                const size_t r = static_cast<size_t>(rr);
+                m_cur[universe[r]] = is_fixed(r) ? m_z[universe[r]] : std::max(0.0, m_z[universe[r]]);
+            }
+            // w = G cur over the columns of the set only (cur is zero off it; U ascending, so the
+            // same sums in the same order as the full product).
             m_w.setZero();
             long touched = 0;
-            for (Eigen::Index j = 0; j < m_gram.outerSize(); ++j) {
+            for (int rr : m_members) {
+                const int j = universe[static_cast<size_t>(rr)];
                 const double cj = m_cur[j];
                 if (cj == 0.0) continue;
                 for (SpMatCol::InnerIterator it(m_gram, j); it; ++it) m_w[it.index()] += it.value() * cj;
@@ -549,8 +638,8 @@ private:
             }
             cnt.work_flops += sparse_product_flops(static_cast<double>(touched));
             double f_set = 0.0;  // 1/2 lam'G lam - q'lam
-            for (size_t r = 0; r < ku; ++r)
-                if (set[r]) f_set += m_cur[universe[r]] * (0.5 * m_w[universe[r]] - q[r]);
+            for (int r : m_members)
+                f_set += m_cur[universe[static_cast<size_t>(r)]] * (0.5 * m_w[universe[static_cast<size_t>(r)]] - q[r]);
             careful = careful || !(f_set < best_f);
             best_f = std::min(best_f, f_set);
             const bool single = careful;
@@ -591,6 +680,8 @@ private:
 
     bool m_jacobi;
     long m_max_pivots, m_max_sweeps;
+    long m_max_updates;  // a set change of more rows refactors; a drop of more picks the set by sweeps
+    long m_sweep_start_sweeps;
     SpMatCol m_gram;  // J_B J_B' in block order, unscaled
     Vec m_scale, m_scale_d;
     std::unique_ptr<MaskedGramFactor> m_face_factor, m_face_factor_d, m_chopped_factor;
@@ -602,8 +693,11 @@ private:
     std::array<std::unique_ptr<DenseSetFactor>, PROJECTION_USES> m_dense_sets;
     long m_dense_solves = 0;
     std::vector<int> m_all, m_bad;
+    std::vector<int> m_members;  // solve_on_set: the set's U positions, ascending
     std::vector<char> m_mask, m_added;
     Vec m_b, m_z, m_cur, m_w;
+    Vec m_y, m_inv_diag;              // sweep_start's scaled iterate and 1 / diag(m_scaled)
+    std::vector<char> m_in_universe;  // sweep_start: the block rows of its universe
 };
 
 }  // namespace
