@@ -53,10 +53,9 @@ private:
         a_product(m_a_op, v, out);
         ++m_cnt.a_products;
     }
-    /// out = A v; returns v'Av and sets vg = v'g (one pass over A).
+    /// The CG trial's product with v = p (out = A p, p'Ap returned, p'g in vg), forming a pending p
+    /// first (v then changes with m_p).
     double product_dot(const Vec& v, Vec& out, double& vg);
-    /// The trial's product with p (Ap, p'Ap returned, p'g in pg), forming a pending p first.
-    double direction_product_dot(double& pg);
     /// p_j as the pending update will form it (the same operations: the same bits).
     double p_at(int j) const { return m_p_pending ? m_z[j] - m_p_beta * m_p[j] : m_p[j]; }
     double objective_from_gradient() const { return 0.5 * (m_x.dot(m_g) - m_b.dot(m_x)); }

@@ -163,21 +163,13 @@ bool DecoupledMprgp::proportional()
 double DecoupledMprgp::product_dot(const Vec& v, Vec& out, double& vg)
 {
     double dot_g = 0.0;
-    const double vav = a_product_dots(m_a_op, v, out, m_g, m_rows.dof_in_row.data(), dot_g);
-    ++m_cnt.a_products;
-    vg = dot_g + m_pg_rows;  // the row DOFs' part comes from evaluate_rows (face form, no cancellation)
-    return vav;
-}
-
-double DecoupledMprgp::direction_product_dot(double& pg)
-{
-    if (!m_p_pending) return product_dot(m_p, m_Ap, pg);
-    double dot_g = 0.0;
-    const double vav = a_product_dots_next_direction(m_a_op, m_p, m_z, m_p_beta, m_Ap, m_g,
-                                                     m_rows.dof_in_row.data(), dot_g);
+    const char* in_row = m_rows.dof_in_row.data();
+    // v is p: a pending p = z - beta p is formed inside the product's own pass
+    const double vav = m_p_pending ? a_product_dots_next_direction(m_a_op, m_p, m_z, m_p_beta, out, m_g, in_row, dot_g)
+                                   : a_product_dots(m_a_op, v, out, m_g, in_row, dot_g);
     m_p_pending = false;
     ++m_cnt.a_products;
-    pg = dot_g + m_pg_rows;
+    vg = dot_g + m_pg_rows;  // the row DOFs' part comes from evaluate_rows (face form, no cancellation)
     return vav;
 }
 
@@ -185,7 +177,7 @@ Trial DecoupledMprgp::cg_trial(std::string& why)
 {
     Trial t;
     double pg = 0.0;
-    const double pap = direction_product_dot(pg);
+    const double pap = product_dot(m_p, m_Ap, pg);
     if (!(pap > 0.0) || !std::isfinite(pap)) {
         if (m_native == 0.0 || pap == 0.0) {
             t.broke = SolveStatus::STALLED;
