@@ -254,13 +254,15 @@ RunOutcome run_solver(const SolverRegistry& registry, const Qp& original, const 
     QpView view = problem.view();
     if (!handles_friction) view.friction = nullptr;
     const QpView original_view = original.view();
-    // One scale for both: decoupling keeps A, b and x0, so D and l are the original's.
-    const AccuracyScale scale = accuracy_scale(original_view);
+    // One scale for both: decoupling keeps A, b and x0, so D and l are the original's. The solver
+    // is given it too (QpView::scale): its own accuracy_scale() then shares the body modes.
+    RunOutcome out;
+    out.scale = accuracy_scale(original_view);
+    const AccuracyScale& scale = out.scale;
+    view.scale = &scale;
     Vec lambda0_kept;
     const Vec* lambda0 = warm_multipliers(warm.lambda0, original, problem, lambda0_kept);
 
-    RunOutcome out;
-    out.scale = scale;
     HistoryMonitor history(original_view, scale, options.history_max, options.record_history, problem.kept_rows);
     Repeats repeats =
         solve_repeats(registry, solver_name, settings, std::move(solver), view, options, lambda0, warm, &history);

@@ -17,7 +17,8 @@ public:
                                                   qp.c,
                                                   qp.x0,
                                                   qp.length,
-                                                  qp.friction}
+                                                  qp.friction,
+                                                  qp.A.isCompressed() ? qp.scale : nullptr}
     {
     }
     CompressedQpView(const CompressedQpView&) = delete;

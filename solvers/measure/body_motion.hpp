@@ -26,6 +26,7 @@
 
 #include <Eigen/Dense>
 #include <array>
+#include <memory>
 #include <vector>
 
 namespace cb {
@@ -45,11 +46,11 @@ public:
     /// 0 for n = 0; infinity when x or lambda is not finite. O(n + nnz(J) + nnz(T)).
     double displacement(const Vec& x, const Vec& lambda, const Vec& lambda_t = Vec()) const;
 
-    int bodies() const { return static_cast<int>(m_pinv.size()); }
+    int bodies() const { return m_bodies ? static_cast<int>(m_bodies->pinv.size()) : 0; }
 
     /// What BodyMotion(qp, length) gives for a QP that shares this one's A, b, x0 and length and has
     /// the rows J (and friction's T when it has 2 m rows): the bodies and AV carry over, only the
-    /// rows' loads are formed again. O(n) copies + O(nnz(J) + nnz(T)).
+    /// rows' loads are formed again (the rest is shared, not copied). O(nnz(J) + nnz(T)).
     BodyMotion with_rows(const SpMat& J, const Friction* friction) const;
 
 private:
@@ -65,11 +66,18 @@ private:
     bool m_spatial = false;     ///< 3-D reading: nodes are vertices, 6 modes per body
     int m_per_node = 1;         ///< DOFs per node
     double m_inv_length = 1.0;  ///< rotation modes are (e_k x d) / l: the columns stay O(1)
-    std::vector<int> m_body;    ///< body of each node
-    Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> m_offset;  ///< vertex - its body's centroid
-    Vec m_x0;                                                            ///< the start the loads are taken from
-    Eigen::Matrix<double, Eigen::Dynamic, MODES, Eigen::RowMajor> m_av;  ///< row p: (AV)_p on its body's modes
-    std::vector<Vec6> m_load0;                                           ///< V'(A x0 - b) per body
+    /// What depends on A, b and x0 alone, never changed after the constructor: held once and shared
+    /// by copies (the harness's scale, its monitor's and each solver's), since AV alone is n x 6
+    /// doubles, 50 MB at a million DOFs.
+    struct Bodies {
+        std::vector<int> body;                                             ///< body of each node
+        Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> offset;  ///< vertex - its body's centroid
+        Vec x0;                                                            ///< the start the loads are taken from
+        Eigen::Matrix<double, Eigen::Dynamic, MODES, Eigen::RowMajor> av;  ///< row p: (AV)_p on its body's modes
+        std::vector<Vec6> load0;                                           ///< V'(A x0 - b) per body
+        std::vector<Mat6> pinv;  ///< (V'AV)^+ per body (1 x 1 in the top-left corner without 3-D)
+    };
+    std::shared_ptr<const Bodies> m_bodies;  ///< null: the constructor stopped early (n = 0)
     /// Each row's load per body it touches (a contact row touches one or two bodies).
     struct RowLoads {
         std::vector<int> start;  ///< (JV) entries of row i: [start_i, start_i+1)
@@ -82,7 +90,6 @@ private:
     static bool subtract(const RowLoads& rows, const Vec& lambda, std::vector<Vec6>& load);
     RowLoads m_rows;           ///< J's
     RowLoads m_tangents;       ///< the friction's T (no rows without friction)
-    std::vector<Mat6> m_pinv;  ///< (V'AV)^+ per body (1 x 1 in the top-left corner without 3-D)
 };
 
 }  // namespace cb
