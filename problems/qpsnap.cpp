@@ -102,6 +102,8 @@ void refuse_sparse(const std::string& path, int fd, std::uint64_t size)
 }
 
 /// The whole file mapped read-only (no copy out of the page cache); empty files are not mapped.
+/// Pages are mapped as the passes reach them (not populated up front) and given back behind them
+/// (PageRelease), so the file never sits whole in the process beside the matrices built from it.
 class MappedFile {
 public:
     explicit MappedFile(const std::string& path)
@@ -117,12 +119,15 @@ public:
             throw;
         }
         if (m_size > 0) {
-            void* p = ::mmap(nullptr, m_size, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
+            void* p = ::mmap(nullptr, m_size, PROT_READ, MAP_PRIVATE, fd, 0);
             if (p == MAP_FAILED) {
                 ::close(fd);
                 throw_input_error(path, "", std::string("cannot map: ") + std::strerror(errno));
             }
             m_data = static_cast<const unsigned char*>(p);
+#ifdef MADV_SEQUENTIAL
+            ::madvise(p, m_size, MADV_SEQUENTIAL);  // each pass walks an array front to back: read ahead
+#endif
         }
         ::close(fd);
     }
@@ -139,6 +144,50 @@ private:
     const unsigned char* m_data = nullptr;
     std::uint64_t m_size = 0;
     unsigned char m_empty = 0;
+};
+
+/// Gives the pages of a read-only file mapping back once a pass over them is done (MADV_DONTNEED:
+/// they stay in the page cache, and a later pass maps them again from there; nothing was written,
+/// so nothing is lost). The reader walks the big arrays four times (checksum, structure, values,
+/// copy); with the whole 760 MB file of a million DOFs resident beside the 550 MB matrix built
+/// from it, the load was the process's peak. Default-constructed (bytes in memory): releases nothing.
+class PageRelease {
+public:
+    /// Bytes a pass handles before it releases them.
+    static constexpr std::uint64_t CHUNK = std::uint64_t(8) << 20;
+
+    PageRelease() = default;
+    bool releases() const { return m_begin != nullptr; }
+    PageRelease(const unsigned char* begin, std::uint64_t size) : m_begin(begin), m_end(begin + size) {}
+
+    /// Releases the pages that [from, to) covers inside the mapping (a page shared with bytes
+    /// still to be read is only mapped again when they are: safe, at the cost of a fault).
+    void release(const void* from, const void* to) const
+    {
+        const auto* lo = std::max(static_cast<const unsigned char*>(from), m_begin);
+        const auto* hi = std::min(static_cast<const unsigned char*>(to), m_end);
+        if (lo >= hi) return;
+        const std::uintptr_t page = std::uintptr_t(::sysconf(_SC_PAGESIZE));
+        const std::uintptr_t first = reinterpret_cast<std::uintptr_t>(lo) & ~(page - 1);
+        const std::uintptr_t last = reinterpret_cast<std::uintptr_t>(hi);
+        // The address is only rounded as an integer; the advised pointer is lo's own moved back.
+        ::madvise(const_cast<unsigned char*>(lo) - (reinterpret_cast<std::uintptr_t>(lo) - first), last - first,
+                  MADV_DONTNEED);
+    }
+
+    /// Calls work(offset, bytes) over [p, p + nbytes) in CHUNK pieces, releasing each when done.
+    template <typename Work> void in_chunks(const unsigned char* p, std::uint64_t nbytes, Work&& work) const
+    {
+        for (std::uint64_t offset = 0; offset < nbytes; offset += CHUNK) {
+            const std::uint64_t bytes = std::min(CHUNK, nbytes - offset);
+            work(offset, bytes);
+            release(p + offset, p + offset + bytes);
+        }
+    }
+
+private:
+    const unsigned char* m_begin = nullptr;
+    const unsigned char* m_end = nullptr;
 };
 
 /// Asks for transparent huge pages on a fresh large buffer before it is first written: a 50 MB
@@ -274,21 +323,29 @@ std::uint64_t get_uint(const std::string& path, const std::string& field, const 
     return v.get<std::uint64_t>();
 }
 
+/// zlib CRC32 of [p, p + nbytes), continued piece by piece (the same value as in one call).
+std::uint64_t crc32_pieces(std::uint64_t crc, const unsigned char* p, std::uint64_t nbytes, const PageRelease& pages)
+{
+    pages.in_chunks(p, nbytes,
+                    [&](std::uint64_t offset, std::uint64_t bytes) { crc = crc32_z(crc, p + offset, bytes); });
+    return crc;
+}
+
 /// zlib CRC32; a large array is split in two halves checked on two threads and combined.
-std::uint64_t crc32_of(const unsigned char* p, std::uint64_t nbytes)
+std::uint64_t crc32_of(const unsigned char* p, std::uint64_t nbytes, const PageRelease& pages)
 {
     const std::uint64_t init = crc32_z(0L, Z_NULL, 0);
-    if (nbytes < (16u << 20)) return crc32_z(init, p, nbytes);
+    if (nbytes < (16u << 20)) return crc32_pieces(init, p, nbytes, pages);
     const std::uint64_t half = nbytes / 2;
     std::uint64_t second = 0;
-    std::thread worker([&] { second = crc32_z(init, p + half, nbytes - half); });
-    const std::uint64_t first = crc32_z(init, p, half);
+    std::thread worker([&] { second = crc32_pieces(init, p + half, nbytes - half, pages); });
+    const std::uint64_t first = crc32_pieces(init, p, half, pages);
     worker.join();
     return crc32_combine(first, second, z_off_t(nbytes - half));
 }
 
 Located locate(const std::string& path, const std::string& name, const char* dtype, const nlohmann::json& entry,
-               const unsigned char* buffer, std::uint64_t buffer_size)
+               const unsigned char* buffer, std::uint64_t buffer_size, const PageRelease& pages)
 {
     Located a;
     a.present = true;
@@ -321,7 +378,7 @@ Located locate(const std::string& path, const std::string& name, const char* dty
                           "bytes [" + str(offset) + ", " + str(offset + nbytes) + ") lie outside the data buffer of " +
                               str(buffer_size) + " bytes");
     a.ptr = buffer + offset;
-    const std::uint64_t actual = crc32_of(a.ptr, nbytes);
+    const std::uint64_t actual = crc32_of(a.ptr, nbytes, pages);
     if (actual != crc)
         throw_input_error(path, name + ".crc32", "mismatch: header says " + str(crc) + ", data has " + str(actual));
     return a;
@@ -339,23 +396,29 @@ void expect_shape(const std::string& path, const std::string& name, const Locate
     throw_input_error(path, name + ".shape", "expected " + show(shape) + " (" + why + "), got " + show(a.shape));
 }
 
-void check_finite(const std::string& path, const std::string& name, const double* v, std::uint64_t count)
+void check_finite(const std::string& path, const std::string& name, const double* v, std::uint64_t count,
+                  const PageRelease& pages = PageRelease())
 {
     // One pass without branches; locate the culprit only on failure.
     double acc[4] = {0, 0, 0, 0};  // NaN or Inf times 0 is NaN; finite times 0 is 0
-    std::uint64_t i = 0;
-    for (; i + 4 <= count; i += 4)
-        for (int k = 0; k < 4; ++k) acc[k] += v[i + k] * 0.0;
-    for (; i < count; ++i) acc[0] += v[i] * 0.0;
+    pages.in_chunks(reinterpret_cast<const unsigned char*>(v), count * 8,
+                    [&](std::uint64_t offset, std::uint64_t bytes) {
+                        const double* w = v + offset / 8;
+                        const std::uint64_t k_count = bytes / 8;
+                        std::uint64_t i = 0;
+                        for (; i + 4 <= k_count; i += 4)
+                            for (int k = 0; k < 4; ++k) acc[k] += w[i + k] * 0.0;
+                        for (; i < k_count; ++i) acc[0] += w[i] * 0.0;
+                    });
     if (acc[0] + acc[1] + acc[2] + acc[3] == 0.0) return;
-    for (i = 0; i < count; ++i)
+    for (std::uint64_t i = 0; i < count; ++i)
         if (!std::isfinite(v[i]))
             throw_input_error(path, name, "non-finite value " + fmt_double(v[i]) + " at index " + str(i));
 }
 
 /// Checks a CSR structure (indptr, indices) of `rows` rows with `cols` columns.
 void check_csr(const std::string& path, const std::string& mat, const Located& indptr, const Located& indices,
-               std::uint64_t rows, std::uint64_t cols)
+               std::uint64_t rows, std::uint64_t cols, const PageRelease& pages)
 {
     const std::int64_t* p = indptr.i64();
     const std::int64_t* ix = indices.i64();
@@ -370,7 +433,12 @@ void check_csr(const std::string& path, const std::string& mat, const Located& i
                           "ends at " + str(p[rows]) + ", expected nnz = " + str(nnz) + " (the length of " + mat +
                               ".indices)");
     const std::int64_t ncols = std::int64_t(cols);
+    std::int64_t released = 0;  // indices before this one are given back
     for (std::uint64_t r = 0; r < rows; ++r) {
+        if (std::uint64_t(p[r] - released) * 8 >= PageRelease::CHUNK) {
+            pages.release(ix + released, ix + p[r]);
+            released = p[r];
+        }
         std::int64_t prev = -1;
         for (std::int64_t e = p[r]; e < p[r + 1]; ++e) {
             const std::int64_t j = ix[e];
@@ -384,11 +452,13 @@ void check_csr(const std::string& path, const std::string& mat, const Located& i
             prev = j;
         }
     }
+    pages.release(ix + released, ix + nnz);
+    pages.release(p, p + rows + 1);
 }
 
 /// Builds a compressed row-major matrix from checked CSR arrays.
 void build_csr(SpMat& M, std::uint64_t rows, std::uint64_t cols, const Located& indptr, const Located& indices,
-               const Located& data)
+               const Located& data, const PageRelease& pages)
 {
     M.resize(Eigen::Index(rows), Eigen::Index(cols));
     M.resizeNonZeros(Eigen::Index(indices.count));
@@ -397,10 +467,16 @@ void build_csr(SpMat& M, std::uint64_t rows, std::uint64_t cols, const Located& 
     int* outer = M.outerIndexPtr();
     const std::int64_t* p = indptr.i64();
     for (std::uint64_t r = 0; r <= rows; ++r) outer[r] = int(p[r]);
+    pages.release(p, p + rows + 1);
     int* inner = M.innerIndexPtr();
     const std::int64_t* ix = indices.i64();
-    for (std::uint64_t e = 0; e < indices.count; ++e) inner[e] = int(ix[e]);
-    if (data.count) std::memcpy(M.valuePtr(), data.ptr, data.count * 8);
+    pages.in_chunks(indices.ptr, indices.count * 8, [&](std::uint64_t offset, std::uint64_t bytes) {
+        for (std::uint64_t e = offset / 8; e < (offset + bytes) / 8; ++e) inner[e] = int(ix[e]);
+    });
+    auto* values = reinterpret_cast<unsigned char*>(M.valuePtr());
+    pages.in_chunks(data.ptr, data.count * 8, [&](std::uint64_t offset, std::uint64_t bytes) {
+        std::memcpy(values + offset, data.ptr + offset, bytes);
+    });
 }
 
 /// Symmetry check and exact symmetrisation of A (row-major, sorted rows). Fast path: the
@@ -603,13 +679,38 @@ nlohmann::json read_qpsnap_header(const std::string& path)
     return parse_header(path, f.data.get(), f.size, nullptr);
 }
 
+namespace {
+
+QpsnapPassObserver g_pass_observer = nullptr;
+
+/// Tells the test hook (if any) that a pass over the arrays is done.
+void pass_done(const char* pass, const PageRelease& pages, const unsigned char* bytes, std::uint64_t size)
+{
+    if (g_pass_observer && pages.releases()) g_pass_observer(pass, bytes, size);
+}
+
+Qp read_snapshot(const std::string& path, const unsigned char* bytes, std::uint64_t size, SnapshotExtras* extras,
+                 const PageRelease& pages);
+
+}  // namespace
+
+void set_qpsnap_pass_observer(QpsnapPassObserver observer) { g_pass_observer = observer; }
+
 Qp read_qpsnap(const std::string& path, SnapshotExtras* extras)
 {
     const MappedFile f(path);
-    return read_qpsnap_bytes(path, f.data(), f.size(), extras);
+    return read_snapshot(path, f.data(), f.size(), extras, PageRelease(f.data(), f.size()));
 }
 
 Qp read_qpsnap_bytes(const std::string& path, const unsigned char* bytes, std::uint64_t size, SnapshotExtras* extras)
+{
+    return read_snapshot(path, bytes, size, extras, PageRelease());
+}
+
+namespace {
+
+Qp read_snapshot(const std::string& path, const unsigned char* bytes, std::uint64_t size, SnapshotExtras* extras,
+                 const PageRelease& pages)
 {
     std::uint64_t N = 0;
     const nlohmann::json h = parse_header(path, bytes, size, &N);
@@ -637,8 +738,9 @@ Qp read_qpsnap_bytes(const std::string& path, const unsigned char* bytes, std::u
             a[spec.name] = Located{};
             continue;
         }
-        a[spec.name] = locate(path, spec.name, spec.dtype, arrays[spec.name], buffer, buffer_size);
+        a[spec.name] = locate(path, spec.name, spec.dtype, arrays[spec.name], buffer, buffer_size, pages);
     }
+    pass_done("checksums", pages, bytes, size);
     // Shapes.
     const std::string nn = "n = " + str(n), mm = "m = " + str(m);
     expect_shape(path, "A.indptr", a["A.indptr"], {n + 1}, nn + ", n + 1 entries");
@@ -688,12 +790,14 @@ Qp read_qpsnap_bytes(const std::string& path, const unsigned char* bytes, std::u
     if (a["cT"].present) expect_shape(path, "cT", a["cT"], {mt}, mm + ", two per contact");
     if (a["v0"].present) expect_shape(path, "v0", a["v0"], {n}, nn);
     // Structure and values.
-    check_csr(path, "A", a["A.indptr"], a["A.indices"], n, n);
-    check_csr(path, "J", a["J.indptr"], a["J.indices"], m, n);
-    if (has_t) check_csr(path, "T", a["T.indptr"], a["T.indices"], mt, n);
+    check_csr(path, "A", a["A.indptr"], a["A.indices"], n, n, pages);
+    check_csr(path, "J", a["J.indptr"], a["J.indices"], m, n, pages);
+    if (has_t) check_csr(path, "T", a["T.indptr"], a["T.indices"], mt, n, pages);
+    pass_done("structure", pages, bytes, size);
     for (const char* name :
          {"A.data", "b", "x0", "J.data", "c", "contact.depth", "x_ref", "lambda_ref", "mu", "T.data", "cT", "v0"})
-        if (a[name].present) check_finite(path, name, a[name].f64(), a[name].count);
+        if (a[name].present) check_finite(path, name, a[name].f64(), a[name].count, pages);
+    pass_done("values", pages, bytes, size);
     if (a["mu"].present)
         for (std::uint64_t r = 0; r < m; ++r)
             if (a["mu"].f64()[r] < 0)
@@ -721,10 +825,11 @@ Qp read_qpsnap_bytes(const std::string& path, const unsigned char* bytes, std::u
         }
 
     Qp qp;
-    build_csr(qp.A, n, n, a["A.indptr"], a["A.indices"], a["A.data"]);
+    build_csr(qp.A, n, n, a["A.indptr"], a["A.indices"], a["A.data"], pages);
+    pass_done("A built", pages, bytes, size);
     symmetrise(path, qp.A);
     check_diagonal(path, qp.A);
-    build_csr(qp.J, m, n, a["J.indptr"], a["J.indices"], a["J.data"]);
+    build_csr(qp.J, m, n, a["J.indptr"], a["J.indices"], a["J.data"], pages);
     qp.b = Eigen::Map<const Vec>(a["b"].f64(), Eigen::Index(n));
     qp.x0 = Eigen::Map<const Vec>(a["x0"].f64(), Eigen::Index(n));
     qp.c = Eigen::Map<const Vec>(a["c"].f64(), Eigen::Index(m));
@@ -736,7 +841,7 @@ Qp read_qpsnap_bytes(const std::string& path, const unsigned char* bytes, std::u
     Friction& fr = qp.friction;
     if (a["mu"].present) {
         fr.mu = Eigen::Map<const Vec>(a["mu"].f64(), Eigen::Index(m));
-        build_csr(fr.T, mt, n, a["T.indptr"], a["T.indices"], a["T.data"]);
+        build_csr(fr.T, mt, n, a["T.indptr"], a["T.indices"], a["T.data"], pages);
     }
     if (a["cT"].present) fr.cT = Eigen::Map<const Vec>(a["cT"].f64(), Eigen::Index(mt));
     if (h.contains("h")) fr.h = h["h"].get<double>();
@@ -748,6 +853,8 @@ Qp read_qpsnap_bytes(const std::string& path, const unsigned char* bytes, std::u
     }
     return qp;
 }
+
+}  // namespace
 
 namespace {
 
