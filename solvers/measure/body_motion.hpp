@@ -47,6 +47,9 @@ public:
     double displacement(const Vec& x, const Vec& lambda, const Vec& lambda_t = Vec()) const;
 
     int bodies() const { return m_bodies ? static_cast<int>(m_bodies->pinv.size()) : 0; }
+    /// True when `other` holds the same body modes (a copy or a with_rows() of this one): shared,
+    /// not duplicated.
+    bool shares_modes_with(const BodyMotion& other) const { return m_bodies && m_bodies == other.m_bodies; }
 
     /// What BodyMotion(qp, length) gives for a QP that shares this one's A, b, x0 and length and has
     /// the rows J (and friction's T when it has 2 m rows): the bodies and AV carry over, only the
