@@ -17,8 +17,7 @@ public:
                                                   qp.c,
                                                   qp.x0,
                                                   qp.length,
-                                                  qp.friction,
-                                                  qp.A.isCompressed() ? qp.scale : nullptr}
+                                                  qp.friction}
     {
     }
     CompressedQpView(const CompressedQpView&) = delete;

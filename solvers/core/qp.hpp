@@ -47,8 +47,6 @@ struct Friction {
     bool empty() const { return mu.size() == 0 && T.size() == 0 && cT.size() == 0 && h == 0.0 && v0.size() == 0; }
 };
 
-struct AccuracyScale;  // solvers/measure/accuracy.hpp
-
 /// Const views of a QP; no ownership. A: n x n SPD (full, both triangles), J: m x n.
 struct QpView {
     const SpMat& A;
@@ -58,10 +56,6 @@ struct QpView {
     const Vec& x0;                        ///< start point (may be infeasible)
     const FixedLength* length = nullptr;  ///< the problem's fixed scene size, if any
     const Friction* friction = nullptr;   ///< the rows' Coulomb friction, if any
-    /// The accuracy measure's scale already built by the caller for a view of these same A, b and
-    /// x0 (the harness's): accuracy_scale() then forms only the rows' parts again, to the same
-    /// bits, instead of a second copy of its n x 6 body modes. Null: built afresh.
-    const AccuracyScale* scale = nullptr;
     Eigen::Index n() const { return A.rows(); }
     bool frictional() const { return friction && friction->frictional(); }
     Eigen::Index m() const { return J.rows(); }

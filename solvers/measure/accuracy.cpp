@@ -73,8 +73,6 @@ double first_length(const QpView& qp, std::string& source)
     return point_extent(qp.x0, source);
 }
 
-AccuracyScale fresh_scale(const QpView& qp);
-
 }  // namespace
 
 AccuracyScale accuracy_scale_with_rows(const AccuracyScale& shared, const QpView& qp)
@@ -83,7 +81,7 @@ AccuracyScale accuracy_scale_with_rows(const AccuracyScale& shared, const QpView
     const double l = first_length(qp, source);
     // The later fallbacks spend A-products (counted by the harness) or read the rows.
     const bool same_length = l > 0.0 && std::isfinite(l) && l == shared.length && source == shared.length_source;
-    if (!same_length || shared.inv_diag.size() != qp.n() || shared.a_products != 0) return fresh_scale(qp);
+    if (!same_length || shared.inv_diag.size() != qp.n() || shared.a_products != 0) return accuracy_scale(qp);
     AccuracyScale s = shared;
     row_scales(qp, s);
     s.bodies = shared.bodies.with_rows(qp.J, qp.friction);
@@ -138,20 +136,7 @@ nlohmann::json AccuracyScale::to_json() const
 
 AccuracyScale accuracy_scale(const QpView& qp)
 {
-    const AccuracyScale* given = qp.scale;
-    if (given && given->origin_A == &qp.A && given->origin_b == &qp.b && given->origin_x0 == &qp.x0)
-        return accuracy_scale_with_rows(*given, qp);
-    return fresh_scale(qp);
-}
-
-namespace {
-
-AccuracyScale fresh_scale(const QpView& qp)
-{
     AccuracyScale s;
-    s.origin_A = &qp.A;
-    s.origin_b = &qp.b;
-    s.origin_x0 = &qp.x0;
     const Eigen::Index n = qp.n(), m = qp.m();
     // D = diag(A). A non-positive or non-finite diagonal (not SPD: the solvers refuse it) borrows
     // the largest one so that the measure stays defined.
@@ -226,8 +211,6 @@ AccuracyScale fresh_scale(const QpView& qp)
     s.bodies = BodyMotion(qp, l);
     return s;
 }
-
-}  // namespace
 
 double AccuracyScale::stationarity(const Vec& r, const Vec& x, const Vec& lambda) const
 {

@@ -60,10 +60,6 @@ struct AccuracyScale {
     double inv_energy = 1.0;    ///< 1 / (d_ref l^2)
     long a_products = 0;        ///< A-products spent computing this scale
     BodyMotion bodies;          ///< the rigid half of stationarity (built from the QP and l)
-    /// The A, b and x0 this scale was built from (QpView::scale is reused only on a view of them).
-    const SpMat* origin_A = nullptr;
-    const Vec* origin_b = nullptr;
-    const Vec* origin_x0 = nullptr;
     /// The stationarity part at (x, lambda) whose residual force is r = Ax - b - J'lambda:
     /// max(|D^-1 r|_inf, the bodies' motion) / l (a lambda of another size than m counts as 0).
     double stationarity(const Vec& r, const Vec& x, const Vec& lambda) const;
@@ -80,8 +76,6 @@ struct AccuracyScale {
 /// residual of 1e-3, at most 200 iterations; its A-products are counted), then
 /// max_i |c_i - J_i x0| / n_i, then 1.
 /// A scene size fixed on the view (qp.length, docs/accuracy.md) is used as is, before all of these.
-/// A scale attached to the view (qp.scale) built from the same A, b and x0 is reused through
-/// accuracy_scale_with_rows: the same bits, and its body modes shared rather than built again.
 AccuracyScale accuracy_scale(const QpView& qp);
 
 /// The scale of `qp` when it shares A, b and x0 with the QP `shared` was built for and differs in its

@@ -3,6 +3,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <limits>
 
@@ -13,7 +14,23 @@ namespace {
 /// Eigenvalues below this fraction of a body's largest are modes the body cannot move.
 constexpr double RANK_CUTOFF = 1e-12;
 
+std::atomic<long> g_live_modes{0};
+std::atomic<long> g_peak_live_modes{0};
+
 }  // namespace
+
+BodyMotion::Bodies::Gauge::Gauge()
+{
+    const long now = ++g_live_modes;
+    long seen = g_peak_live_modes.load();
+    while (now > seen && !g_peak_live_modes.compare_exchange_weak(seen, now)) {}
+}
+
+BodyMotion::Bodies::Gauge::~Gauge() { --g_live_modes; }
+
+long BodyMotion::live_modes() { return g_live_modes.load(); }
+long BodyMotion::peak_live_modes() { return g_peak_live_modes.load(); }
+void BodyMotion::reset_peak_live_modes() { g_peak_live_modes = g_live_modes.load(); }
 
 int BodyMotion::mode_row(Eigen::Index p, int mode[3], double value[3]) const
 {

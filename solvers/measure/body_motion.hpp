@@ -51,6 +51,13 @@ public:
     /// not duplicated.
     bool shares_modes_with(const BodyMotion& other) const { return m_bodies && m_bodies == other.m_bodies; }
 
+    /// Body-mode blocks alive in the process now, and the most alive at once since the last
+    /// reset_peak_live_modes() (each is n x 6 doubles of AV plus n-sized parts: what a run must
+    /// not hold twice without need). Counters, for tests and reports; thread-safe.
+    static long live_modes();
+    static long peak_live_modes();
+    static void reset_peak_live_modes();
+
     /// What BodyMotion(qp, length) gives for a QP that shares this one's A, b, x0 and length and has
     /// the rows J (and friction's T when it has 2 m rows): the bodies and AV carry over, only the
     /// rows' loads are formed again (the rest is shared, not copied). O(nnz(J) + nnz(T)).
@@ -70,9 +77,16 @@ private:
     int m_per_node = 1;         ///< DOFs per node
     double m_inv_length = 1.0;  ///< rotation modes are (e_k x d) / l: the columns stay O(1)
     /// What depends on A, b and x0 alone, never changed after the constructor: held once and shared
-    /// by copies (the harness's scale, its monitor's and each solver's), since AV alone is n x 6
-    /// doubles, 50 MB at a million DOFs.
+    /// by copies and with_rows() (the harness's record and monitor, a decoupled view's scale), since
+    /// AV alone is n x 6 doubles, 50 MB at a million DOFs.
     struct Bodies {
+        /// Counts the block in live_modes() for its lifetime.
+        struct Gauge {
+            Gauge();
+            ~Gauge();
+            Gauge(const Gauge&) = delete;
+            Gauge& operator=(const Gauge&) = delete;
+        } gauge;
         std::vector<int> body;                                             ///< body of each node
         Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> offset;  ///< vertex - its body's centroid
         Vec x0;                                                            ///< the start the loads are taken from
@@ -91,8 +105,8 @@ private:
     RowLoads row_loads(const SpMat& rows) const;
     /// load -= (JV)' lambda over `rows`; false when lambda is not finite.
     static bool subtract(const RowLoads& rows, const Vec& lambda, std::vector<Vec6>& load);
-    RowLoads m_rows;           ///< J's
-    RowLoads m_tangents;       ///< the friction's T (no rows without friction)
+    RowLoads m_rows;      ///< J's
+    RowLoads m_tangents;  ///< the friction's T (no rows without friction)
 };
 
 }  // namespace cb

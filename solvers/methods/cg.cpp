@@ -130,7 +130,7 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
     ++counters.a_products;
     // cg solves the unconstrained relaxation: its stop test measures that QP (J without rows).
     const Vec no_c(0);
-    const AccuracyScale scale = accuracy_scale(QpView{qp.A, qp.b, no_rows, no_c, qp.x0, qp.length, nullptr, qp.scale});
+    const AccuracyScale scale = accuracy_scale(QpView{qp.A, qp.b, no_rows, no_c, qp.x0, qp.length});
     counters.a_products += scale.a_products;
     // Stop test of cg: native = |r|_2 absolute; accuracy = the error of the unconstrained
     // relaxation (its stationarity part, docs/accuracy.md).
