@@ -102,8 +102,8 @@ void refuse_sparse(const std::string& path, int fd, std::uint64_t size)
 }
 
 /// The whole file mapped read-only (no copy out of the page cache); empty files are not mapped.
-/// Pages are mapped as the passes reach them (not populated up front) and given back behind them
-/// (PageRelease), so the file never sits whole in the process beside the matrices built from it.
+/// Populated up front: the checks walk it all; the copy into the matrices gives its pages back
+/// behind it (PageRelease), so the file never sits whole beside the matrices built from it.
 class MappedFile {
 public:
     explicit MappedFile(const std::string& path)
@@ -119,15 +119,12 @@ public:
             throw;
         }
         if (m_size > 0) {
-            void* p = ::mmap(nullptr, m_size, PROT_READ, MAP_PRIVATE, fd, 0);
+            void* p = ::mmap(nullptr, m_size, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
             if (p == MAP_FAILED) {
                 ::close(fd);
                 throw_input_error(path, "", std::string("cannot map: ") + std::strerror(errno));
             }
             m_data = static_cast<const unsigned char*>(p);
-#ifdef MADV_SEQUENTIAL
-            ::madvise(p, m_size, MADV_SEQUENTIAL);  // each pass walks an array front to back: read ahead
-#endif
         }
         ::close(fd);
     }
@@ -146,14 +143,15 @@ private:
     unsigned char m_empty = 0;
 };
 
-/// Gives the pages of a read-only file mapping back once a pass over them is done (MADV_DONTNEED:
-/// they stay in the page cache, and a later pass maps them again from there; nothing was written,
-/// so nothing is lost). The reader walks the big arrays four times (checksum, structure, values,
-/// copy); with the whole 760 MB file of a million DOFs resident beside the 550 MB matrix built
-/// from it, the load was the process's peak. Default-constructed (bytes in memory): releases nothing.
+/// Gives the pages of a read-only file mapping back once the copy out of them is done
+/// (MADV_DONTNEED: they stay in the page cache; nothing was written, so nothing is lost). The 760 MB
+/// file of a million DOFs held whole beside the 550 MB matrix built from it made the load the
+/// process's peak. Only the last pass releases: releasing after each of the checks too (checksum,
+/// structure, values) halved that peak again but mapped the pages anew each time, 0.2 s more per
+/// load. Default-constructed (bytes in memory): releases nothing.
 class PageRelease {
 public:
-    /// Bytes a pass handles before it releases them.
+    /// Bytes the copy handles before it releases them.
     static constexpr std::uint64_t CHUNK = std::uint64_t(8) << 20;
 
     PageRelease() = default;
@@ -161,7 +159,7 @@ public:
     PageRelease(const unsigned char* begin, std::uint64_t size) : m_begin(begin), m_end(begin + size) {}
 
     /// Releases the pages that [from, to) covers inside the mapping (a page shared with bytes
-    /// still to be read is only mapped again when they are: safe, at the cost of a fault).
+    /// still to be read is mapped again when they are: safe, at the cost of a fault).
     void release(const void* from, const void* to) const
     {
         const auto* lo = std::max(static_cast<const unsigned char*>(from), m_begin);
@@ -323,29 +321,21 @@ std::uint64_t get_uint(const std::string& path, const std::string& field, const 
     return v.get<std::uint64_t>();
 }
 
-/// zlib CRC32 of [p, p + nbytes), continued piece by piece (the same value as in one call).
-std::uint64_t crc32_pieces(std::uint64_t crc, const unsigned char* p, std::uint64_t nbytes, const PageRelease& pages)
-{
-    pages.in_chunks(p, nbytes,
-                    [&](std::uint64_t offset, std::uint64_t bytes) { crc = crc32_z(crc, p + offset, bytes); });
-    return crc;
-}
-
 /// zlib CRC32; a large array is split in two halves checked on two threads and combined.
-std::uint64_t crc32_of(const unsigned char* p, std::uint64_t nbytes, const PageRelease& pages)
+std::uint64_t crc32_of(const unsigned char* p, std::uint64_t nbytes)
 {
     const std::uint64_t init = crc32_z(0L, Z_NULL, 0);
-    if (nbytes < (16u << 20)) return crc32_pieces(init, p, nbytes, pages);
+    if (nbytes < (16u << 20)) return crc32_z(init, p, nbytes);
     const std::uint64_t half = nbytes / 2;
     std::uint64_t second = 0;
-    std::thread worker([&] { second = crc32_pieces(init, p + half, nbytes - half, pages); });
-    const std::uint64_t first = crc32_pieces(init, p, half, pages);
+    std::thread worker([&] { second = crc32_z(init, p + half, nbytes - half); });
+    const std::uint64_t first = crc32_z(init, p, half);
     worker.join();
     return crc32_combine(first, second, z_off_t(nbytes - half));
 }
 
 Located locate(const std::string& path, const std::string& name, const char* dtype, const nlohmann::json& entry,
-               const unsigned char* buffer, std::uint64_t buffer_size, const PageRelease& pages)
+               const unsigned char* buffer, std::uint64_t buffer_size)
 {
     Located a;
     a.present = true;
@@ -378,7 +368,7 @@ Located locate(const std::string& path, const std::string& name, const char* dty
                           "bytes [" + str(offset) + ", " + str(offset + nbytes) + ") lie outside the data buffer of " +
                               str(buffer_size) + " bytes");
     a.ptr = buffer + offset;
-    const std::uint64_t actual = crc32_of(a.ptr, nbytes, pages);
+    const std::uint64_t actual = crc32_of(a.ptr, nbytes);
     if (actual != crc)
         throw_input_error(path, name + ".crc32", "mismatch: header says " + str(crc) + ", data has " + str(actual));
     return a;
@@ -396,29 +386,23 @@ void expect_shape(const std::string& path, const std::string& name, const Locate
     throw_input_error(path, name + ".shape", "expected " + show(shape) + " (" + why + "), got " + show(a.shape));
 }
 
-void check_finite(const std::string& path, const std::string& name, const double* v, std::uint64_t count,
-                  const PageRelease& pages = PageRelease())
+void check_finite(const std::string& path, const std::string& name, const double* v, std::uint64_t count)
 {
     // One pass without branches; locate the culprit only on failure.
     double acc[4] = {0, 0, 0, 0};  // NaN or Inf times 0 is NaN; finite times 0 is 0
-    pages.in_chunks(reinterpret_cast<const unsigned char*>(v), count * 8,
-                    [&](std::uint64_t offset, std::uint64_t bytes) {
-                        const double* w = v + offset / 8;
-                        const std::uint64_t k_count = bytes / 8;
-                        std::uint64_t i = 0;
-                        for (; i + 4 <= k_count; i += 4)
-                            for (int k = 0; k < 4; ++k) acc[k] += w[i + k] * 0.0;
-                        for (; i < k_count; ++i) acc[0] += w[i] * 0.0;
-                    });
+    std::uint64_t i = 0;
+    for (; i + 4 <= count; i += 4)
+        for (int k = 0; k < 4; ++k) acc[k] += v[i + k] * 0.0;
+    for (; i < count; ++i) acc[0] += v[i] * 0.0;
     if (acc[0] + acc[1] + acc[2] + acc[3] == 0.0) return;
-    for (std::uint64_t i = 0; i < count; ++i)
+    for (i = 0; i < count; ++i)
         if (!std::isfinite(v[i]))
             throw_input_error(path, name, "non-finite value " + fmt_double(v[i]) + " at index " + str(i));
 }
 
 /// Checks a CSR structure (indptr, indices) of `rows` rows with `cols` columns.
 void check_csr(const std::string& path, const std::string& mat, const Located& indptr, const Located& indices,
-               std::uint64_t rows, std::uint64_t cols, const PageRelease& pages)
+               std::uint64_t rows, std::uint64_t cols)
 {
     const std::int64_t* p = indptr.i64();
     const std::int64_t* ix = indices.i64();
@@ -433,12 +417,7 @@ void check_csr(const std::string& path, const std::string& mat, const Located& i
                           "ends at " + str(p[rows]) + ", expected nnz = " + str(nnz) + " (the length of " + mat +
                               ".indices)");
     const std::int64_t ncols = std::int64_t(cols);
-    std::int64_t released = 0;  // indices before this one are given back
     for (std::uint64_t r = 0; r < rows; ++r) {
-        if (std::uint64_t(p[r] - released) * 8 >= PageRelease::CHUNK) {
-            pages.release(ix + released, ix + p[r]);
-            released = p[r];
-        }
         std::int64_t prev = -1;
         for (std::int64_t e = p[r]; e < p[r + 1]; ++e) {
             const std::int64_t j = ix[e];
@@ -452,8 +431,6 @@ void check_csr(const std::string& path, const std::string& mat, const Located& i
             prev = j;
         }
     }
-    pages.release(ix + released, ix + nnz);
-    pages.release(p, p + rows + 1);
 }
 
 /// Builds a compressed row-major matrix from checked CSR arrays.
@@ -738,7 +715,7 @@ Qp read_snapshot(const std::string& path, const unsigned char* bytes, std::uint6
             a[spec.name] = Located{};
             continue;
         }
-        a[spec.name] = locate(path, spec.name, spec.dtype, arrays[spec.name], buffer, buffer_size, pages);
+        a[spec.name] = locate(path, spec.name, spec.dtype, arrays[spec.name], buffer, buffer_size);
     }
     pass_done("checksums", pages, bytes, size);
     // Shapes.
@@ -790,13 +767,13 @@ Qp read_snapshot(const std::string& path, const unsigned char* bytes, std::uint6
     if (a["cT"].present) expect_shape(path, "cT", a["cT"], {mt}, mm + ", two per contact");
     if (a["v0"].present) expect_shape(path, "v0", a["v0"], {n}, nn);
     // Structure and values.
-    check_csr(path, "A", a["A.indptr"], a["A.indices"], n, n, pages);
-    check_csr(path, "J", a["J.indptr"], a["J.indices"], m, n, pages);
-    if (has_t) check_csr(path, "T", a["T.indptr"], a["T.indices"], mt, n, pages);
+    check_csr(path, "A", a["A.indptr"], a["A.indices"], n, n);
+    check_csr(path, "J", a["J.indptr"], a["J.indices"], m, n);
+    if (has_t) check_csr(path, "T", a["T.indptr"], a["T.indices"], mt, n);
     pass_done("structure", pages, bytes, size);
     for (const char* name :
          {"A.data", "b", "x0", "J.data", "c", "contact.depth", "x_ref", "lambda_ref", "mu", "T.data", "cT", "v0"})
-        if (a[name].present) check_finite(path, name, a[name].f64(), a[name].count, pages);
+        if (a[name].present) check_finite(path, name, a[name].f64(), a[name].count);
     pass_done("values", pages, bytes, size);
     if (a["mu"].present)
         for (std::uint64_t r = 0; r < m; ++r)

@@ -25,7 +25,7 @@ Qp read_qpsnap(const std::string& path, SnapshotExtras* extras = nullptr);
 
 /// Test hook: called by read_qpsnap after each pass over the mapped file's arrays ("checksums",
 /// "structure", "values", "A built") with the mapping's address and size, so that a test can see
-/// how much of the file the reader holds mapped (its pages are given back behind each pass).
+/// how much of the file the reader holds mapped (the copy into A gives A's pages back).
 using QpsnapPassObserver = void (*)(const char* pass, const unsigned char* mapping, std::uint64_t size);
 void set_qpsnap_pass_observer(QpsnapPassObserver observer);
 
