@@ -254,16 +254,19 @@ RunOutcome run_solver(const SolverRegistry& registry, const Qp& original, const 
     QpView view = problem.view();
     if (!handles_friction) view.friction = nullptr;
     const QpView original_view = original.view();
-    // One scale for both: decoupling keeps A, b and x0, so D and l are the original's.
-    const AccuracyScale scale = accuracy_scale(original_view);
     Vec lambda0_kept;
     const Vec* lambda0 = warm_multipliers(warm.lambda0, original, problem, lambda0_kept);
 
+    // The harness's own scale, the measure the solver cannot have changed (one for both problems:
+    // decoupling keeps A, b and x0, so D and l are the original's). It is built after the solve
+    // unless the monitor measures iterates during it: the solver builds its own for its stop test,
+    // and holding both at once held the body modes twice (n x 6 doubles, 50 MB at a million DOFs).
     RunOutcome out;
-    out.scale = scale;
-    HistoryMonitor history(original_view, scale, options.history_max, options.record_history, problem.kept_rows);
+    if (options.record_history) out.scale = accuracy_scale(original_view);
+    HistoryMonitor history(original_view, out.scale, options.history_max, options.record_history, problem.kept_rows);
     Repeats repeats =
         solve_repeats(registry, solver_name, settings, std::move(solver), view, options, lambda0, warm, &history);
+    if (!options.record_history) out.scale = accuracy_scale(original_view);
     out.result = std::move(repeats.first);
     const SolverResult& result = out.result;
 

@@ -23,6 +23,12 @@ struct SnapshotExtras {
 /// half a problem. A is symmetrised exactly after the asymmetry check.
 Qp read_qpsnap(const std::string& path, SnapshotExtras* extras = nullptr);
 
+/// Test hook: called by read_qpsnap after each pass over the mapped file's arrays ("checksums",
+/// "structure", "values", "A built") with the mapping's address and size, so that a test can see
+/// how much of the file the reader holds mapped (the copy into A gives A's pages back).
+using QpsnapPassObserver = void (*)(const char* pass, const unsigned char* mapping, std::uint64_t size);
+void set_qpsnap_pass_observer(QpsnapPassObserver observer);
+
 /// The same checks on a snapshot already in memory (`path` only names it in messages); used by
 /// the fuzzer, which would otherwise spend most of its time writing files.
 Qp read_qpsnap_bytes(const std::string& path, const unsigned char* bytes, std::uint64_t size,

@@ -3,6 +3,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <limits>
 
@@ -13,7 +14,23 @@ namespace {
 /// Eigenvalues below this fraction of a body's largest are modes the body cannot move.
 constexpr double RANK_CUTOFF = 1e-12;
 
+std::atomic<long> g_live_modes{0};
+std::atomic<long> g_peak_live_modes{0};
+
 }  // namespace
+
+BodyMotion::Bodies::Gauge::Gauge()
+{
+    const long now = ++g_live_modes;
+    long seen = g_peak_live_modes.load();
+    while (now > seen && !g_peak_live_modes.compare_exchange_weak(seen, now)) {}
+}
+
+BodyMotion::Bodies::Gauge::~Gauge() { --g_live_modes; }
+
+long BodyMotion::live_modes() { return g_live_modes.load(); }
+long BodyMotion::peak_live_modes() { return g_peak_live_modes.load(); }
+void BodyMotion::reset_peak_live_modes() { g_peak_live_modes = g_live_modes.load(); }
 
 int BodyMotion::mode_row(Eigen::Index p, int mode[3], double value[3]) const
 {
@@ -22,7 +39,7 @@ int BodyMotion::mode_row(Eigen::Index p, int mode[3], double value[3]) const
     if (!m_spatial) return 1;
     // (e_k x d)_a for the two axes k != a: +d_{a+2} for k = a+1 and -d_{a+1} for k = a+2 (mod 3).
     const int a = static_cast<int>(p % 3), k1 = (a + 1) % 3, k2 = (a + 2) % 3;
-    const auto d = m_offset.row(p / 3);
+    const auto d = m_bodies->offset.row(p / 3);
     mode[1] = 3 + k1;
     value[1] = d[k2] * m_inv_length;
     mode[2] = 3 + k2;
@@ -39,7 +56,7 @@ long double BodyMotion::spatial_row_sums(const SpMat& A, Eigen::Index p, const d
     // rounding is symmetric in sign, and the negation no longer goes through the stack.
     const int* inner = A.innerIndexPtr();
     const double* val = A.valuePtr();
-    const double* x0 = m_x0.data();
+    const double* x0 = m_bodies->x0.data();
     const double* d = scaled_offset;
     const int first = A.outerIndexPtr()[p];
     const int last = A.isCompressed() ? A.outerIndexPtr()[p + 1] : first + A.innerNonZeroPtr()[p];
@@ -106,10 +123,13 @@ BodyMotion::BodyMotion(const QpView& qp, double length)
     m_per_node = m_spatial ? 3 : 1;
     m_inv_length = length > 0.0 && std::isfinite(length) ? 1.0 / length : 1.0;
     const int nodes = static_cast<int>(n / m_per_node);
+    const auto own = std::make_shared<Bodies>();
+    m_bodies = own;  // mode_row() and spatial_row_sums() read it while it is filled
+    Bodies& B = *own;
 
     int bodies = 0;
-    m_body = node_bodies(A, m_per_node, nodes, bodies);
-    auto body_of = [&](Eigen::Index p) { return static_cast<size_t>(m_body[static_cast<size_t>(p / m_per_node)]); };
+    B.body = node_bodies(A, m_per_node, nodes, bodies);
+    auto body_of = [&](Eigen::Index p) { return static_cast<size_t>(B.body[static_cast<size_t>(p / m_per_node)]); };
 
     if (m_spatial) {
         std::vector<Eigen::Vector3d> centroid(static_cast<size_t>(bodies), Eigen::Vector3d::Zero());
@@ -119,21 +139,21 @@ BodyMotion::BodyMotion(const QpView& qp, double length)
             count[body_of(3 * v)] += 1.0;
         }
         for (size_t b = 0; b < centroid.size(); ++b) centroid[b] /= count[b];
-        m_offset.resize(nodes, 3);
+        B.offset.resize(nodes, 3);
         for (Eigen::Index v = 0; v < nodes; ++v)
-            m_offset.row(v) = (qp.x0.segment<3>(3 * v) - centroid[body_of(3 * v)]).transpose();
+            B.offset.row(v) = (qp.x0.segment<3>(3 * v) - centroid[body_of(3 * v)]).transpose();
     }
-    m_x0 = qp.x0;
+    B.x0 = qp.x0;
 
     // AV, V'(A x0 - b) and E = V'AV per body, one pass over A with long double sums (see the
     // header: the stiffness parts of a row cancel, and must do so before rounding to double).
     // E takes row p of AV right after it is rounded, in the order of p, as a separate pass would.
-    m_av.resize(n, MODES);  // every row is written below
+    B.av.resize(n, MODES);  // every row is written below
     std::vector<LongVec6> load(static_cast<size_t>(bodies), LongVec6{});
     std::vector<Mat6> E(static_cast<size_t>(bodies), Mat6::Zero());
     int mode[3];
     double value[3];
-    const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> scaled_offset = m_offset * m_inv_length;
+    const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> scaled_offset = B.offset * m_inv_length;
     for (Eigen::Index p = 0; p < A.outerSize(); ++p) {
         LongVec6 av{};
         long double r0 = -static_cast<long double>(qp.b[p]);
@@ -145,22 +165,22 @@ BodyMotion::BodyMotion(const QpView& qp, double length)
                 r0 += static_cast<long double>(it.value()) * qp.x0[it.col()];
                 av[0] += static_cast<long double>(it.value());
             }
-        for (int k = 0; k < MODES; ++k) m_av(p, k) = static_cast<double>(av[static_cast<size_t>(k)]);
+        for (int k = 0; k < MODES; ++k) B.av(p, k) = static_cast<double>(av[static_cast<size_t>(k)]);
         const int rn = mode_row(p, mode, value);
         const size_t b = body_of(p);
         LongVec6& l = load[b];
         for (int s = 0; s < rn; ++s) l[static_cast<size_t>(mode[s])] += value[s] * r0;
         Mat6& Eb = E[b];
-        for (int s = 0; s < rn; ++s) Eb.row(mode[s]) += value[s] * m_av.row(p);
+        for (int s = 0; s < rn; ++s) Eb.row(mode[s]) += value[s] * B.av.row(p);
     }
-    m_load0.assign(static_cast<size_t>(bodies), Vec6::Zero());
+    B.load0.assign(static_cast<size_t>(bodies), Vec6::Zero());
     for (size_t b = 0; b < load.size(); ++b)
-        for (int k = 0; k < MODES; ++k) m_load0[b][k] = static_cast<double>(load[b][static_cast<size_t>(k)]);
+        for (int k = 0; k < MODES; ++k) B.load0[b][k] = static_cast<double>(load[b][static_cast<size_t>(k)]);
 
-    m_pinv.assign(static_cast<size_t>(bodies), Mat6::Zero());
+    B.pinv.assign(static_cast<size_t>(bodies), Mat6::Zero());
     for (size_t b = 0; b < E.size(); ++b) {
         if (!m_spatial) {
-            if (E[b](0, 0) > 0.0 && std::isfinite(E[b](0, 0))) m_pinv[b](0, 0) = 1.0 / E[b](0, 0);
+            if (E[b](0, 0) > 0.0 && std::isfinite(E[b](0, 0))) B.pinv[b](0, 0) = 1.0 / E[b](0, 0);
             continue;
         }
         if (!E[b].allFinite()) continue;  // not SPD: the Jacobi half of the measure still judges it
@@ -170,7 +190,7 @@ BodyMotion::BodyMotion(const QpView& qp, double length)
         Vec6 inv = Vec6::Zero();
         for (int k = 0; k < MODES; ++k)
             if (lambda[k] > cutoff && lambda[k] > 0.0) inv[k] = 1.0 / lambda[k];
-        m_pinv[b] = eig.eigenvectors() * inv.asDiagonal() * eig.eigenvectors().transpose();
+        B.pinv[b] = eig.eigenvectors() * inv.asDiagonal() * eig.eigenvectors().transpose();
     }
 
     m_rows = row_loads(qp.J);
@@ -181,10 +201,10 @@ BodyMotion::BodyMotion(const QpView& qp, double length)
 BodyMotion BodyMotion::with_rows(const SpMat& J, const Friction* friction) const
 {
     BodyMotion out = *this;
-    if (m_body.empty()) return out;  // the constructor stopped before the rows
+    if (!m_bodies) return out;  // the constructor stopped before the rows
     out.m_rows = row_loads(J);
     out.m_tangents = RowLoads{};
-    if (friction && friction->T.rows() == 2 * J.rows() && friction->T.cols() == m_x0.size())
+    if (friction && friction->T.rows() == 2 * J.rows() && friction->T.cols() == m_bodies->x0.size())
         out.m_tangents = row_loads(friction->T);
     return out;
 }
@@ -192,7 +212,8 @@ BodyMotion BodyMotion::with_rows(const SpMat& J, const Friction* friction) const
 BodyMotion::RowLoads BodyMotion::row_loads(const SpMat& rows) const
 {
     RowLoads out;
-    const Eigen::Index m = rows.rows(), n = m_x0.size();
+    const Eigen::Index m = rows.rows(), n = m_bodies->x0.size();
+    const std::vector<int>& body = m_bodies->body;
     int cmode[3];
     double cvalue[3];
     out.start.assign(static_cast<size_t>(m) + 1, 0);
@@ -200,7 +221,7 @@ BodyMotion::RowLoads BodyMotion::row_loads(const SpMat& rows) const
         const auto first = out.body.size();
         for (SpMat::InnerIterator it(rows, i); it; ++it) {
             if (it.value() == 0.0 || it.col() >= n) continue;
-            const int b = m_body[static_cast<size_t>(it.col() / m_per_node)];
+            const int b = body[static_cast<size_t>(it.col() / m_per_node)];
             size_t e = first;
             while (e < out.body.size() && out.body[e] != b) ++e;
             if (e == out.body.size()) {
@@ -230,34 +251,36 @@ bool BodyMotion::subtract(const RowLoads& rows, const Vec& lambda, std::vector<V
 
 double BodyMotion::displacement(const Vec& x, const Vec& lambda, const Vec& lambda_t) const
 {
-    if (m_body.empty()) return 0.0;
-    if (x.size() != m_x0.size() || !x.allFinite()) return std::numeric_limits<double>::infinity();
-    std::vector<Vec6> load = m_load0;  // V'r per body
+    if (!m_bodies) return 0.0;
+    const Bodies& B = *m_bodies;
+    const std::vector<int>& body = B.body;
+    if (x.size() != B.x0.size() || !x.allFinite()) return std::numeric_limits<double>::infinity();
+    std::vector<Vec6> load = B.load0;  // V'r per body
     // Node by node, a run of nodes of one body summed in a local (the bodies' nodes mostly come in
     // runs) and stored when the body changes: the same terms added in the same order as straight
     // into load[b], so the same bits, without a store and a reload per DOF.
-    const auto nodes = static_cast<Eigen::Index>(m_body.size());
+    const auto nodes = static_cast<Eigen::Index>(body.size());
     Eigen::Index v = 0;
     while (v < nodes) {
-        const int b = m_body[static_cast<size_t>(v)];
+        const int b = body[static_cast<size_t>(v)];
         Vec6 sum = load[static_cast<size_t>(b)];
-        for (; v < nodes && m_body[static_cast<size_t>(v)] == b; ++v)
+        for (; v < nodes && body[static_cast<size_t>(v)] == b; ++v)
             for (Eigen::Index p = v * m_per_node; p < (v + 1) * m_per_node; ++p)
-                sum += m_av.row(p).transpose() * (x[p] - m_x0[p]);
+                sum += B.av.row(p).transpose() * (x[p] - B.x0[p]);
         load[static_cast<size_t>(b)] = sum;
     }
     if (!subtract(m_rows, lambda, load) || !subtract(m_tangents, lambda_t, load))
         return std::numeric_limits<double>::infinity();
     std::vector<Vec6> motion(load.size());
-    for (size_t b = 0; b < load.size(); ++b) motion[b] = m_pinv[b] * load[b];
+    for (size_t b = 0; b < load.size(); ++b) motion[b] = B.pinv[b] * load[b];
     double widest = 0.0;
     for (v = 0; v < nodes; ++v) {
-        const Vec6& y = motion[static_cast<size_t>(m_body[static_cast<size_t>(v)])];
+        const Vec6& y = motion[static_cast<size_t>(body[static_cast<size_t>(v)])];
         if (!m_spatial) {
             widest = std::max(widest, std::abs(y[0]));
             continue;
         }
-        const Eigen::Vector3d d = m_offset.row(v).transpose();
+        const Eigen::Vector3d d = B.offset.row(v).transpose();
         const Eigen::Vector3d u = y.head<3>() + y.tail<3>().cross(d) * m_inv_length;
         widest = std::max(widest, u.cwiseAbs().maxCoeff());
     }

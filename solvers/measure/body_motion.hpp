@@ -26,6 +26,7 @@
 
 #include <Eigen/Dense>
 #include <array>
+#include <memory>
 #include <vector>
 
 namespace cb {
@@ -45,11 +46,21 @@ public:
     /// 0 for n = 0; infinity when x or lambda is not finite. O(n + nnz(J) + nnz(T)).
     double displacement(const Vec& x, const Vec& lambda, const Vec& lambda_t = Vec()) const;
 
-    int bodies() const { return static_cast<int>(m_pinv.size()); }
+    int bodies() const { return m_bodies ? static_cast<int>(m_bodies->pinv.size()) : 0; }
+    /// True when `other` holds the same body modes (a copy or a with_rows() of this one): shared,
+    /// not duplicated.
+    bool shares_modes_with(const BodyMotion& other) const { return m_bodies && m_bodies == other.m_bodies; }
+
+    /// Body-mode blocks alive in the process now, and the most alive at once since the last
+    /// reset_peak_live_modes() (each is n x 6 doubles of AV plus n-sized parts: what a run must
+    /// not hold twice without need). Counters, for tests and reports; thread-safe.
+    static long live_modes();
+    static long peak_live_modes();
+    static void reset_peak_live_modes();
 
     /// What BodyMotion(qp, length) gives for a QP that shares this one's A, b, x0 and length and has
     /// the rows J (and friction's T when it has 2 m rows): the bodies and AV carry over, only the
-    /// rows' loads are formed again. O(n) copies + O(nnz(J) + nnz(T)).
+    /// rows' loads are formed again (the rest is shared, not copied). O(nnz(J) + nnz(T)).
     BodyMotion with_rows(const SpMat& J, const Friction* friction) const;
 
 private:
@@ -65,11 +76,25 @@ private:
     bool m_spatial = false;     ///< 3-D reading: nodes are vertices, 6 modes per body
     int m_per_node = 1;         ///< DOFs per node
     double m_inv_length = 1.0;  ///< rotation modes are (e_k x d) / l: the columns stay O(1)
-    std::vector<int> m_body;    ///< body of each node
-    Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> m_offset;  ///< vertex - its body's centroid
-    Vec m_x0;                                                            ///< the start the loads are taken from
-    Eigen::Matrix<double, Eigen::Dynamic, MODES, Eigen::RowMajor> m_av;  ///< row p: (AV)_p on its body's modes
-    std::vector<Vec6> m_load0;                                           ///< V'(A x0 - b) per body
+    /// What depends on A, b and x0 alone, never changed after the constructor: held once and shared
+    /// by copies and with_rows() (the harness's record and monitor, a decoupled view's scale), since
+    /// AV alone is n x 6 doubles, 50 MB at a million DOFs.
+    struct Bodies {
+        /// Counts the block in live_modes() for its lifetime.
+        struct Gauge {
+            Gauge();
+            ~Gauge();
+            Gauge(const Gauge&) = delete;
+            Gauge& operator=(const Gauge&) = delete;
+        } gauge;
+        std::vector<int> body;                                             ///< body of each node
+        Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> offset;  ///< vertex - its body's centroid
+        Vec x0;                                                            ///< the start the loads are taken from
+        Eigen::Matrix<double, Eigen::Dynamic, MODES, Eigen::RowMajor> av;  ///< row p: (AV)_p on its body's modes
+        std::vector<Vec6> load0;                                           ///< V'(A x0 - b) per body
+        std::vector<Mat6> pinv;  ///< (V'AV)^+ per body (1 x 1 in the top-left corner without 3-D)
+    };
+    std::shared_ptr<const Bodies> m_bodies;  ///< null: the constructor stopped early (n = 0)
     /// Each row's load per body it touches (a contact row touches one or two bodies).
     struct RowLoads {
         std::vector<int> start;  ///< (JV) entries of row i: [start_i, start_i+1)
@@ -80,9 +105,8 @@ private:
     RowLoads row_loads(const SpMat& rows) const;
     /// load -= (JV)' lambda over `rows`; false when lambda is not finite.
     static bool subtract(const RowLoads& rows, const Vec& lambda, std::vector<Vec6>& load);
-    RowLoads m_rows;           ///< J's
-    RowLoads m_tangents;       ///< the friction's T (no rows without friction)
-    std::vector<Mat6> m_pinv;  ///< (V'AV)^+ per body (1 x 1 in the top-left corner without 3-D)
+    RowLoads m_rows;      ///< J's
+    RowLoads m_tangents;  ///< the friction's T (no rows without friction)
 };
 
 }  // namespace cb
