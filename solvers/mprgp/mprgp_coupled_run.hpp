@@ -160,30 +160,7 @@ private:
         settle_direction();  // z changes below
         if (ap != nullptr) {
             // x -= alpha p, g -= alpha Ap, phi = g and the free DOFs' largest |phi_j| w_j in one pass
-            double* __restrict px = m_x.data();
-            double* __restrict pg = m_g.data();
-            double* __restrict pphi = m_phi.data();
-            const double* __restrict pp = m_p.data();
-            const double* __restrict pap = ap->data();
-            const double* __restrict pw = m_free_weight.data();
-            double widest[4] = {0.0, 0.0, 0.0, 0.0};  // max |phi_j| w_j, entry j into lane j % 4
-            Eigen::Index j = 0;
-            for (; j + 4 <= m_n; j += 4)
-                for (int l = 0; l < 4; ++l) {
-                    px[j + l] -= alpha * pp[j + l];
-                    const double gj = pg[j + l] - alpha * pap[j + l];
-                    pg[j + l] = gj;
-                    pphi[j + l] = gj;
-                    widest[l] = std::max(widest[l], std::abs(gj) * pw[j + l]);
-                }
-            for (; j < m_n; ++j) {
-                px[j] -= alpha * pp[j];
-                const double gj = pg[j] - alpha * pap[j];
-                pg[j] = gj;
-                pphi[j] = gj;
-                widest[0] = std::max(widest[0], std::abs(gj) * pw[j]);
-            }
-            m_stat_free = std::max(std::max(widest[0], widest[1]), std::max(widest[2], widest[3]));
+            m_stat_free = cg_step_pass(alpha, m_p, *ap, m_free_weight, m_x, m_g, m_phi);
             m_jx -= alpha * m_jp;  // J x by the step's own J p (the trial's); restarts form it afresh
         } else {
             m_phi = m_g;

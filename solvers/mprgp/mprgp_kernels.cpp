@@ -6,6 +6,10 @@
 #include "solvers/linalg/a_product.hpp"
 #include "solvers/measure/accuracy.hpp"
 
+#include <algorithm>
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#endif
 #include <cmath>
 #include <random>
 
@@ -151,6 +155,58 @@ PowerResult power_method(const AOperator& A, Vec& v, PowerRule rule, long max_pr
         if (deadline_check && deadline_check(deadline_data)) break;
     }
     return result;
+}
+
+namespace {
+
+double cg_step_pass_scalar(double alpha, const double* __restrict p, const double* __restrict ap,
+                           const double* __restrict w, double* __restrict x, double* __restrict g,
+                           double* __restrict phi, Eigen::Index n)
+{
+    double widest = 0.0;
+    for (Eigen::Index j = 0; j < n; ++j) {
+        x[j] -= alpha * p[j];
+        const double gj = g[j] - alpha * ap[j];
+        g[j] = gj;
+        phi[j] = gj;
+        widest = std::max(widest, std::abs(gj) * w[j]);
+    }
+    return widest;
+}
+
+#if defined(__x86_64__) && defined(__GNUC__)
+__attribute__((target("avx2"))) double cg_step_pass_avx2(double alpha, const double* __restrict p,
+                                                         const double* __restrict ap, const double* __restrict w,
+                                                         double* __restrict x, double* __restrict g,
+                                                         double* __restrict phi, Eigen::Index n)
+{
+    const __m256d a = _mm256_set1_pd(alpha);
+    const __m256d sign = _mm256_set1_pd(-0.0);
+    __m256d widest = _mm256_setzero_pd();
+    Eigen::Index j = 0;
+    for (; j + 4 <= n; j += 4) {
+        _mm256_storeu_pd(x + j, _mm256_sub_pd(_mm256_loadu_pd(x + j), _mm256_mul_pd(a, _mm256_loadu_pd(p + j))));
+        const __m256d gj = _mm256_sub_pd(_mm256_loadu_pd(g + j), _mm256_mul_pd(a, _mm256_loadu_pd(ap + j)));
+        _mm256_storeu_pd(g + j, gj);
+        _mm256_storeu_pd(phi + j, gj);
+        widest = _mm256_max_pd(widest, _mm256_mul_pd(_mm256_andnot_pd(sign, gj), _mm256_loadu_pd(w + j)));
+    }
+    alignas(32) double lanes[4];
+    _mm256_store_pd(lanes, widest);
+    const double tail = cg_step_pass_scalar(alpha, p + j, ap + j, w + j, x + j, g + j, phi + j, n - j);
+    return std::max(std::max(std::max(lanes[0], lanes[1]), std::max(lanes[2], lanes[3])), tail);
+}
+#endif
+
+}  // namespace
+
+double cg_step_pass(double alpha, const Vec& p, const Vec& ap, const Vec& w, Vec& x, Vec& g, Vec& phi)
+{
+#if defined(__x86_64__) && defined(__GNUC__)
+    static const bool avx2 = __builtin_cpu_supports("avx2");
+    if (avx2) return cg_step_pass_avx2(alpha, p.data(), ap.data(), w.data(), x.data(), g.data(), phi.data(), x.size());
+#endif
+    return cg_step_pass_scalar(alpha, p.data(), ap.data(), w.data(), x.data(), g.data(), phi.data(), x.size());
 }
 
 }  // namespace cb

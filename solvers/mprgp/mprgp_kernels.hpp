@@ -90,4 +90,9 @@ struct PowerResult {
 PowerResult power_method(const AOperator& A, Vec& v, PowerRule rule, long max_products, double tol, bool warm,
                          std::uint64_t seed, bool (*deadline_check)(void*) = nullptr, void* deadline_data = nullptr);
 
+/// An accepted CG step's pass over the DOFs: x -= alpha p, g -= alpha ap, phi = g, and the largest
+/// |g_j| w_j (returned). AVX2 where the CPU has it: the same x, g and phi to the bit (a product,
+/// then a difference, entry by entry), and a maximum is the same in any order.
+double cg_step_pass(double alpha, const Vec& p, const Vec& ap, const Vec& w, Vec& x, Vec& g, Vec& phi);
+
 }  // namespace cb

@@ -203,3 +203,39 @@ TEST(MprgpKernels, PowerMethodEstimatesTheNormFromBelowAndWarmStartHelps)
 }
 
 }  // namespace
+
+// The accepted CG step's pass (AVX2 where the CPU has it) against the plain loop: x, g and phi to
+// the bit and the same largest |g_j| w_j, on a length that leaves a tail, with zero weights (a face
+// DOF's), signed zeros and entries whose product rounds.
+TEST(MprgpKernels, CgStepPassEqualsThePlainLoopToTheBit)
+{
+    const Eigen::Index n = 1003;
+    std::mt19937_64 rng(47);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    Vec p(n), ap(n), w(n), x(n), g(n);
+    for (Eigen::Index j = 0; j < n; ++j) {
+        p[j] = u(rng) * 1e3;
+        ap[j] = u(rng) * 1e-2;
+        w[j] = j % 5 == 0 ? 0.0 : std::abs(u(rng));
+        x[j] = u(rng);
+        g[j] = j % 11 == 0 ? -0.0 : u(rng) * 1e4;
+    }
+    const double alpha = 0.7390851332151607;
+    Vec x_plain = x, g_plain = g, phi_plain(n);
+    double widest_plain = 0.0;
+    for (Eigen::Index j = 0; j < n; ++j) {
+        x_plain[j] -= alpha * p[j];
+        g_plain[j] = g_plain[j] - alpha * ap[j];
+        phi_plain[j] = g_plain[j];
+        widest_plain = std::max(widest_plain, std::abs(g_plain[j]) * w[j]);
+    }
+    Vec phi(n);
+    const double widest = cb::cg_step_pass(alpha, p, ap, w, x, g, phi);
+    long differing = 0;
+    for (Eigen::Index j = 0; j < n; ++j)
+        differing += (x[j] != x_plain[j]) + (g[j] != g_plain[j]) + (phi[j] != phi_plain[j]) +
+                     (std::signbit(g[j]) != std::signbit(g_plain[j]));
+    EXPECT_EQ(differing, 0);
+    EXPECT_EQ(widest, widest_plain);
+    EXPECT_GT(widest, 0.0);
+}
