@@ -149,7 +149,8 @@ __attribute__((target("avx2"))) inline void update_direction(const DirectionUpda
     const __m256d beta = _mm256_set1_pd(u.beta);
     std::ptrdiff_t i = first;
     for (; i + 4 <= last; i += 4)
-        _mm256_storeu_pd(u.x + i, _mm256_sub_pd(_mm256_loadu_pd(u.z + i), _mm256_mul_pd(beta, _mm256_loadu_pd(u.x + i))));
+        _mm256_storeu_pd(u.x + i,
+                         _mm256_sub_pd(_mm256_loadu_pd(u.z + i), _mm256_mul_pd(beta, _mm256_loadu_pd(u.x + i))));
     for (; i < last; ++i) u.x[i] = u.z[i] - u.beta * u.x[i];
 }
 
@@ -157,10 +158,10 @@ __attribute__((target("avx2"))) inline void update_direction(const DirectionUpda
 /// the last bit). y is zeroed (and x updated) just ahead of the rows the scatter reaches instead of
 /// in a pass of its own: `zeroed` is the first block row not yet cleared.
 template <Dots D>
-__attribute__((target("avx2"))) double sym_block_product_avx2(const BlockRows& B, std::ptrdiff_t nb,
-                                                              const double* px, double* __restrict py,
-                                                              const double* __restrict pw, const char* __restrict skip,
-                                                              double& xw, DirectionUpdate update)
+__attribute__((target("avx2"))) double sym_block_product_avx2(const BlockRows& B, std::ptrdiff_t nb, const double* px,
+                                                              double* __restrict py, const double* __restrict pw,
+                                                              const char* __restrict skip, double& xw,
+                                                              DirectionUpdate update)
 {
     const int* __restrict start = B.start.data();
     const int* __restrict column = B.column.data();

@@ -150,8 +150,9 @@ Trial CoupledRun::cg_trial(std::string& why)
     // F(P(y)) - F(P(x)) in difference form
     Trial t;
     double pg = 0.0;  // p'phi = p'g on the chain's face, summed in the product's pass
-    const double pap = m_p_pending ? a_product_dots_next_direction(m_a_op, m_p, direction(), m_p_beta, m_Ap, m_phi, nullptr, pg)
-                                   : a_product_dots(m_a_op, m_p, m_Ap, m_phi, pg);
+    const double pap = m_p_pending
+                           ? a_product_dots_next_direction(m_a_op, m_p, direction(), m_p_beta, m_Ap, m_phi, nullptr, pg)
+                           : a_product_dots(m_a_op, m_p, m_Ap, m_phi, pg);
     m_p_pending = false;
     ++m_cnt.a_products;
     if (!(pap > 0.0) || !std::isfinite(pap)) {

@@ -252,8 +252,8 @@ TEST(SymBlockProduct, NextDirectionInThePassEqualsTheSeparateUpdateToTheLastBit)
         p_masked_separate = z - beta * p_masked_separate;
         const double py_masked_separate =
             a_product_dots(op, p_masked_separate, y_masked_separate, w, skip.data(), pw_masked_separate);
-        const double py_masked_fused = a_product_dots_next_direction(op, p_masked_fused, z, beta, y_masked_fused, w,
-                                                                     skip.data(), pw_masked_fused);
+        const double py_masked_fused =
+            a_product_dots_next_direction(op, p_masked_fused, z, beta, y_masked_fused, w, skip.data(), pw_masked_fused);
         EXPECT_EQ((p_masked_fused - p_masked_separate).lpNorm<Eigen::Infinity>(), 0.0);
         EXPECT_EQ((y_masked_fused - y_masked_separate).lpNorm<Eigen::Infinity>(), 0.0);
         EXPECT_EQ(py_masked_fused, py_masked_separate);
