@@ -178,7 +178,7 @@ LoadedSnapshot load_snapshot(const SuiteSnapshot& snap, const nlohmann::json& ha
         fix_length_scale(*loaded.qp, snap.path, key, GivenLength{suite.length_scale, suite.length_scale_source});
         loaded.info = {{"id", snap.id},
                        {"path", snap.path},
-                       {"hash", hash.is_string() ? hash : nlohmann::json(qpsnap_content_hash(snap.path))},
+                       {"hash", key},
                        {"n", loaded.qp->n()},
                        {"m", loaded.qp->m()},
                        {"meta", loaded.qp->meta},

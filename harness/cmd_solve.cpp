@@ -115,10 +115,11 @@ int cmd_solve(const Args& args)
 
     expect_qpsnap(snap, "solve");  // an FCLIB, .dat or .npy file is named, with how to convert it
     Qp qp = read_qpsnap(snap);
-    fix_length_scale(qp, snap, qpsnap_content_hash(snap), given);
+    const std::string hash = qpsnap_content_hash(snap);  // once: a byte-by-byte pass over the whole file
+    fix_length_scale(qp, snap, hash, given);
     const nlohmann::json info = {{"id", std::filesystem::path(snap).stem().string()},
                                  {"path", snap},
-                                 {"hash", qpsnap_content_hash(snap)},
+                                 {"hash", hash},
                                  {"n", qp.n()},
                                  {"m", qp.m()},
                                  {"meta", qp.meta}};
