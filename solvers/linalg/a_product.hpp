@@ -154,9 +154,9 @@ double a_product_dots(const AOperator& A, const Vec& x, Vec& y, const Vec& w, co
 
 /// The CG step's next direction and its product: p = z - beta p, then y = A p with p'y (returned)
 /// and p'w (pw; with `skip`, only where skip[i] == 0), counted as one product. On SBSR the update
-/// runs inside the product's pass, just ahead of the rows that read p (p and z read from memory
-/// once, not twice); elsewhere in a pass of its own first. p, y and the dots are the same to the bit
-/// either way. y must not alias p, z or w; z not p.
+/// runs inside the product's pass, ahead of the rows that read p (no pass of its own); elsewhere
+/// in a pass of its own first. p, y and the dots are the same to the bit either way. y must not
+/// alias p, z or w; z not p.
 double a_product_dots_next_direction(const AOperator& A, Vec& p, const Vec& z, double beta, Vec& y, const Vec& w,
                                      const char* skip, double& pw);
 

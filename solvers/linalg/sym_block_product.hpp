@@ -20,8 +20,8 @@ struct DirectionUpdate {
 
 /// y = A x over the nb block rows of B (y's 3 nb entries all written; y must not alias x); with
 /// `dots` != NONE also x'y (returned) and x'w into xw (MASKED: only where skip[i] == 0). With
-/// `update`, x is first replaced by z - beta x, entry by entry just ahead of the rows that read it:
-/// the same bits as a pass of its own before the product, without reading x from memory twice.
+/// `update`, x is first replaced by z - beta x, entry by entry ahead of the rows that read it (at
+/// y's zeroing frontier): the same bits as a pass of its own before the product, without its loop.
 double sym_block_product(Dots dots, const BlockRows& B, std::ptrdiff_t nb, const double* px, double* py,
                          const double* pw, const char* skip, double& xw, DirectionUpdate update = {});
 
