@@ -19,19 +19,7 @@ MaskedGramFactor::MaskedGramFactor(const SpMatCol& S, long max_updates)
     m_S.makeCompressed();
     allocate();
     // The symbolic analysis of the whole S: every masked pattern is a subset of it.
-    int* p = static_cast<int*>(m_masked->p);
-    int* ri = static_cast<int*>(m_masked->i);
-    double* v = static_cast<double*>(m_masked->x);
-    int nz = 0;
-    for (int j = 0; j < m_k; ++j) {
-        p[j] = nz;
-        for (SpMatCol::InnerIterator it(m_S, j); it; ++it)
-            if (it.row() >= j) {
-                ri[nz] = static_cast<int>(it.row());
-                v[nz++] = it.value();
-            }
-    }
-    p[m_k] = nz;
+    fill_lower(true);
     m_L = cholmod_analyze(m_masked, &m_cm);
     if (m_L == nullptr) throw std::runtime_error("MaskedGramFactor: CHOLMOD's analysis failed");
     m_factor_flops = m_cm.fl;
@@ -89,27 +77,33 @@ MaskedGramFactor::~MaskedGramFactor()
     cholmod_finish(&m_cm);
 }
 
-bool MaskedGramFactor::refactor(Counters& cnt)
+void MaskedGramFactor::fill_lower(bool whole)
 {
     int* p = static_cast<int*>(m_masked->p);
     int* ri = static_cast<int*>(m_masked->i);
     double* v = static_cast<double*>(m_masked->x);
+    auto kept = [&](Eigen::Index row) { return whole || m_mask[static_cast<size_t>(row)] != 0; };
     int nz = 0;
     for (int j = 0; j < m_k; ++j) {
         p[j] = nz;
-        if (!m_mask[static_cast<size_t>(j)]) {
+        if (!kept(j)) {
             ri[nz] = j;  // an identity row: its solve returns the (zero) right-hand side
             v[nz++] = 1.0;
             continue;
         }
         for (SpMatCol::InnerIterator it(m_S, j); it; ++it)
-            if (it.row() >= j && m_mask[static_cast<size_t>(it.row())]) {
+            if (it.row() >= j && kept(it.row())) {
                 ri[nz] = static_cast<int>(it.row());
                 v[nz++] = it.value();
             }
     }
     p[m_k] = nz;
     m_masked->nzmax = std::max<size_t>(m_masked->nzmax, static_cast<size_t>(nz));
+}
+
+bool MaskedGramFactor::refactor(Counters& cnt)
+{
+    fill_lower(false);
     const int status = cholmod_factorize(m_masked, m_L, &m_cm);
     ++m_tally.refactorizations;
     ++cnt.cholmod_factorizations;

@@ -58,6 +58,9 @@ private:
     /// The workspace of every factor of S (m_S set): CHOLMOD's common, the masked lower triangle's
     /// and one column's arrays, the right-hand side.
     void allocate();
+    /// m_masked = the lower triangle of S (`whole`), or of S masked by m_mask with an identity row
+    /// for each row outside it.
+    void fill_lower(bool whole);
     bool refactor(Counters& cnt);
 
     int m_k;

@@ -1,6 +1,7 @@
 // Dense blocks of the coupled face operators: a component's Gram matrices formed once per solve,
 // Cholesky factors per face, the LCPs by principal pivoting on dense factors.
 #include "solvers/mprgp/coupled_row_block.hpp"
+#include "solvers/mprgp/coupled_sparse_lcp.hpp"
 
 #include "solvers/measure/work_units.hpp"
 
@@ -225,17 +226,7 @@ private:
                     if (!is_fixed(r)) lam[r] = std::max(0.0, lam[r]);
                 return true;
             }
-            const long count = static_cast<long>(m_bad.size());
-            if (count < best) {
-                best = count;
-                chances = 3;
-                for (int r : m_bad) set[static_cast<size_t>(r)] ^= 1;
-            } else if (chances > 0) {
-                --chances;
-                for (int r : m_bad) set[static_cast<size_t>(r)] ^= 1;
-            } else {
-                set[static_cast<size_t>(m_bad.back())] ^= 1;  // Murty: finite for P-matrices
-            }
+            flip_infeasible(m_bad, set, best, chances);
         }
         // Projected Gauss-Seidel fallback.
         ++tally.pgs_fallbacks;

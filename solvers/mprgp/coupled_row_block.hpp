@@ -2,7 +2,7 @@
 /// A block of rows closed under J's row graph (a component, or all rows) with its face and its
 /// solves: the interface of the coupled face operators' blocks (solvers/mprgp/coupled_face_operators.*).
 /// Dense blocks: solvers/mprgp/coupled_dense_block.cpp; CHOLMOD blocks (the global oracle and large
-/// components): solvers/mprgp/coupled_sparse_blocks.cpp.
+/// components): solvers/mprgp/coupled_sparse_blocks.cpp, their LCPs solvers/mprgp/coupled_sparse_lcp.*.
 #include "solvers/linalg/masked_gram_factor.hpp"
 #include "solvers/mprgp/coupled_face_operators.hpp"
 

@@ -4,6 +4,7 @@
 #include "harness/stress_families.hpp"
 #include "problems/synthetic.hpp"
 #include "solvers/linalg/a_product.hpp"
+#include "tests/perf/fem_grid.hpp"
 #include "tests/perf/varied_vector.hpp"
 
 #include <gtest/gtest.h>
@@ -84,11 +85,7 @@ TEST(BlockProduct, EqualsTheCsrProductOnEveryStressFamily)
 // odd block row count; both kernels (AVX2 where the CPU has it, and the scalar loop) are compared.
 TEST(BlockProduct, BothKernelsEqualTheCsrProductOnALargeGrid)
 {
-    FemGridParams p;
-    p.nx = 40;
-    p.ny = 22;
-    p.nz = 20;  // 41 * 23 * 21 = 19803 vertices: an odd count of block rows
-    const SpMat A = fem_like_matrix(p);
+    const SpMat A = test::fem_grid(40, 22, 20);  // 41 * 23 * 21 = 19803 vertices: an odd count of block rows
     ASSERT_EQ(A.rows() / 3 % 2, 1);
     for (const bool scalar : {false, true}) {
         force_scalar_block_kernel(scalar);
@@ -163,11 +160,7 @@ TEST(BlockProduct, StoresPartlyFilledBlocksWithZerosAndSumsInColumnOrder)
 // also when some rows (here: one entry dropped) take the merge beside them.
 TEST(BlockProduct, BlocksCopiedFromWholeColumnGroupsHoldTheEntriesOfA)
 {
-    FemGridParams p;
-    p.nx = 6;
-    p.ny = 5;
-    p.nz = 4;
-    SpMat A = fem_like_matrix(p);
+    SpMat A = test::fem_grid(6, 5, 4);
     SpMat gapped = A;
     gapped.coeffRef(4, 1) = 0.0;
     gapped.prune(0.0);  // block row 1 now has rows of different patterns: the merge's path

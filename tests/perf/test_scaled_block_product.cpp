@@ -5,6 +5,7 @@
 // for both kernels.
 #include "problems/synthetic.hpp"
 #include "solvers/linalg/a_product.hpp"
+#include "tests/perf/fem_grid.hpp"
 
 #include <gtest/gtest.h>
 
@@ -50,11 +51,7 @@ Unfused unfused(const AOperator& plain, const Vec& u, const Vec& x, const Vec& w
 // Several chunks of the AVX2 kernel's row pairs (4096 block rows a chunk) and an odd block-row count.
 TEST(ScaledBlockProduct, FusedScalingEqualsTheBufferedPassesToTheLastBit)
 {
-    FemGridParams p;
-    p.nx = 40;
-    p.ny = 22;
-    p.nz = 20;  // 19803 vertices
-    const SpMat A = fem_like_matrix(p);
+    const SpMat A = test::fem_grid(40, 22, 20);  // 19803 vertices
     ASSERT_EQ(A.rows() / 3 % 2, 1);
     const Vec u = spread(A.rows(), 11, 2.0).cwiseAbs();  // D^-1/2: positive, spread over decades
     const Vec x = spread(A.rows(), 12, 3.0), w = spread(A.rows(), 13, 3.0);
@@ -97,11 +94,7 @@ TEST(ScaledBlockProduct, FusedScalingEqualsTheBufferedPassesToTheLastBit)
 // same bits, and scale_by(nullptr) gives A's own product back to the bit.
 TEST(ScaledBlockProduct, SymmetricBlocksScaledInPlaceEqualTheBufferedPassesToRounding)
 {
-    FemGridParams p;
-    p.nx = 12;
-    p.ny = 10;
-    p.nz = 9;
-    const SpMat A = fem_like_matrix(p);
+    const SpMat A = test::fem_grid(12, 10, 9);
     const Vec u = spread(A.rows(), 21, 2.0).cwiseAbs();
     const Vec x = spread(A.rows(), 22, 3.0), w = spread(A.rows(), 23, 3.0);
     std::vector<char> skip(static_cast<size_t>(A.rows()));

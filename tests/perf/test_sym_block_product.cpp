@@ -5,6 +5,7 @@
 #include "harness/stress_families.hpp"
 #include "problems/synthetic.hpp"
 #include "solvers/linalg/a_product.hpp"
+#include "tests/perf/fem_grid.hpp"
 #include "tests/perf/varied_vector.hpp"
 
 #include <gtest/gtest.h>
@@ -159,11 +160,7 @@ TEST(SymBlockProduct, RunsOnOneThreadWhateverThreadsAsks)
 // y and dots to the last bit (they sum in the same order), and both equal CSR's to rounding.
 TEST(SymBlockProduct, BothKernelsGiveTheSameSumsToTheLastBitOnALargeGrid)
 {
-    FemGridParams p;
-    p.nx = 40;
-    p.ny = 22;
-    p.nz = 20;  // 19803 vertices
-    const SpMat A = fem_like_matrix(p);
+    const SpMat A = test::fem_grid(40, 22, 20);  // 19803 vertices
     const Vec x = test::varied(A.cols(), 21), w = test::varied(A.cols(), 22);
     std::vector<char> skip(static_cast<size_t>(A.rows()));
     for (size_t i = 0; i < skip.size(); ++i) skip[i] = static_cast<char>(i % 3 == 0);
@@ -210,11 +207,7 @@ TEST(SymBlockProduct, AutoChoosesTheUpperBlocksOnlyForALargeAOnOneThread)
 // blocks, not rows.
 TEST(SymBlockProduct, NextDirectionInThePassEqualsTheSeparateUpdateToTheLastBit)
 {
-    FemGridParams grid;
-    grid.nx = 40;
-    grid.ny = 22;
-    grid.nz = 20;
-    const SpMat A = fem_like_matrix(grid);
+    const SpMat A = test::fem_grid(40, 22, 20);
     const Vec p0 = test::varied(A.cols(), 31), z = test::varied(A.cols(), 32), w = test::varied(A.cols(), 33);
     const Vec u = A.diagonal().cwiseSqrt().cwiseInverse();
     const double beta = 0.6180339887498949;
