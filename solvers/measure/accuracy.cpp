@@ -229,6 +229,11 @@ double AccuracyScale::body_motion(const Vec& x, const Vec& lambda, const Vec& la
     return sanitize(bodies.displacement(x, lambda, lambda_t)) * inv_length;
 }
 
+double AccuracyScale::body_motion_scaled(const Vec& u, const Vec& y, const Vec& lambda) const
+{
+    return sanitize(bodies.displacement_scaled(u, y, lambda)) * inv_length;
+}
+
 AccuracyParts accuracy_from_gradient(const QpView& qp, const AccuracyScale& scale, const Vec& x, const Vec& g,
                                      const Vec& lambda, const Vec* lambda_t)
 {

@@ -67,6 +67,8 @@ struct AccuracyScale {
     double stationarity(const Vec& r, const Vec& x, const Vec& lambda, const Vec& lambda_t) const;
     /// Its rigid half alone, the bodies' motion / l (for solvers whose fused passes hold the rest).
     double body_motion(const Vec& x, const Vec& lambda, const Vec& lambda_t = Vec()) const;
+    /// body_motion(u .* y, lambda) to the bit, without forming u .* y (BodyMotion::displacement_scaled).
+    double body_motion_scaled(const Vec& u, const Vec& y, const Vec& lambda) const;
     nlohmann::json to_json() const;  ///< {length_scale, length_scale_source, stiffness_scale}
 };
 

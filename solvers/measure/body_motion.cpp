@@ -251,24 +251,42 @@ bool BodyMotion::subtract(const RowLoads& rows, const Vec& lambda, std::vector<V
 
 double BodyMotion::displacement(const Vec& x, const Vec& lambda, const Vec& lambda_t) const
 {
+    return displacement_at([&](Eigen::Index p) { return x[p]; }, x.size(), lambda, lambda_t);
+}
+
+double BodyMotion::displacement_scaled(const Vec& u, const Vec& y, const Vec& lambda, const Vec& lambda_t) const
+{
+    if (u.size() != y.size()) return std::numeric_limits<double>::infinity();
+    return displacement_at([&](Eigen::Index p) { return u[p] * y[p]; }, y.size(), lambda, lambda_t);
+}
+
+template <class XAt>
+double BodyMotion::displacement_at(XAt x_at, Eigen::Index n, const Vec& lambda, const Vec& lambda_t) const
+{
     if (!m_bodies) return 0.0;
     const Bodies& B = *m_bodies;
     const std::vector<int>& body = B.body;
-    if (x.size() != B.x0.size() || !x.allFinite()) return std::numeric_limits<double>::infinity();
+    if (n != B.x0.size()) return std::numeric_limits<double>::infinity();
     std::vector<Vec6> load = B.load0;  // V'r per body
     // Node by node, a run of nodes of one body summed in a local (the bodies' nodes mostly come in
     // runs) and stored when the body changes: the same terms added in the same order as straight
-    // into load[b], so the same bits, without a store and a reload per DOF.
+    // into load[b], so the same bits, without a store and a reload per DOF. Whether x is finite is
+    // gathered on the way (a separate pass read x once more); the sums of a non-finite x are dropped.
     const auto nodes = static_cast<Eigen::Index>(body.size());
+    bool finite = true;
     Eigen::Index v = 0;
     while (v < nodes) {
         const int b = body[static_cast<size_t>(v)];
         Vec6 sum = load[static_cast<size_t>(b)];
         for (; v < nodes && body[static_cast<size_t>(v)] == b; ++v)
-            for (Eigen::Index p = v * m_per_node; p < (v + 1) * m_per_node; ++p)
-                sum += B.av.row(p).transpose() * (x[p] - B.x0[p]);
+            for (Eigen::Index p = v * m_per_node; p < (v + 1) * m_per_node; ++p) {
+                const double xp = x_at(p);
+                finite = finite & std::isfinite(xp);
+                sum += B.av.row(p).transpose() * (xp - B.x0[p]);
+            }
         load[static_cast<size_t>(b)] = sum;
     }
+    if (!finite) return std::numeric_limits<double>::infinity();
     if (!subtract(m_rows, lambda, load) || !subtract(m_tangents, lambda_t, load))
         return std::numeric_limits<double>::infinity();
     std::vector<Vec6> motion(load.size());

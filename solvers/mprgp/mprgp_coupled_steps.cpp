@@ -71,7 +71,7 @@ bool CoupledRun::criterion()
     // when the rest already meets the rule, the one time it can change the decision.
     auto error_with_bodies = [&]() {
         if (!m_loop.rule_holds(m_native, m_error)) return m_error;
-        return std::max(m_error, m_scale.body_motion(original_x(m_x), m_mu));
+        return std::max(m_error, bodies_motion());
     };
     return m_x_feasible && m_loop.criterion_met(m_native, error_with_bodies);
 }
@@ -327,7 +327,7 @@ SolverResult CoupledRun::run()
     // converged run's message already states it.
     std::string detail = "safeguard firings " + std::to_string(m_cnt.safeguard_steps);
     if (status != SolveStatus::CONVERGED)
-        detail = "accuracy error " + format_e(std::max(m_error, m_scale.body_motion(original_x(m_x), m_mu)), 3) + ", " +
+        detail = "accuracy error " + format_e(std::max(m_error, bodies_motion()), 3) + ", " +
                  detail;
     if (!m_loop.owns(status)) detail = "mprgp-coupled: not converged: " + why + " (" + detail + ")";
     if (m_ops->lcp_failures() > 0)

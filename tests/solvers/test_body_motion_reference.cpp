@@ -266,6 +266,13 @@ void expect_same_bits(const Built& q, double length)
         const double got = motion.displacement(x, lambda), want = reference.displacement(x, lambda);
         EXPECT_EQ(std::memcmp(&got, &want, sizeof got), 0) << "trial " << trial << ": " << got << " against " << want;
         EXPECT_GT(want, 0.0);  // a point that moves the bodies: the comparison reads real sums
+        // Scaled variables (x = u .* y, as mprgp-coupled's precond = scaled iterates): read through u.
+        const Vec scale = Vec::NullaryExpr(q.x0.size(), [&] { return 1.5 + u(rng); });
+        const Vec y = x.cwiseQuotient(scale);
+        const double scaled = motion.displacement_scaled(scale, y, lambda);
+        const double formed = reference.displacement(scale.cwiseProduct(y), lambda);
+        EXPECT_EQ(std::memcmp(&scaled, &formed, sizeof scaled), 0)
+            << "trial " << trial << ": " << scaled << " against " << formed;
     }
 }
 
@@ -297,6 +304,27 @@ TEST(BodyMotionReference, UncompressedStorageEqualsThePlainPasses)
 TEST(BodyMotionReference, OneModePerNodeWhenTheDofCountIsNotAMultipleOfThree)
 {
     expect_same_bits(build(2, 20, true, 14, 3 * 40 - 2), 3.0);
+}
+
+// A point that is not finite, given or only once scaled (u .* y overflows), is infinitely far.
+TEST(BodyMotionReference, ScaledPointsThatAreNotFiniteAreInfinitelyFar)
+{
+    const Built q = build(2, 20, true, 16);
+    const cb::BodyMotion motion(QpView{q.A, q.b, q.J, q.c, q.x0}, 3.0);
+    const Vec lambda = Vec::Zero(q.J.rows());
+    const double inf = std::numeric_limits<double>::infinity();
+    const Vec ones = Vec::Ones(q.x0.size());
+    Vec y = q.x0;
+    EXPECT_LT(motion.displacement_scaled(ones, y, lambda), inf);
+    y[y.size() - 1] = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_EQ(motion.displacement_scaled(ones, y, lambda), inf);
+    EXPECT_EQ(motion.displacement(y, lambda), inf);
+    Vec big = ones;
+    big[5] = 1e308;
+    y = q.x0;
+    y[5] = 1e10;
+    EXPECT_EQ(motion.displacement_scaled(big, y, lambda), inf);
+    EXPECT_EQ(motion.displacement_scaled(Vec::Ones(3), y, lambda), inf);  // u of another size
 }
 
 // diag(A) by a search per row gives the scan's bits, and so the measure's weights 1 / D_jj, also
