@@ -14,6 +14,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <future>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
@@ -114,8 +115,11 @@ int cmd_solve(const Args& args)
     if (cl.has("--length-scale")) given = {parse_length_scale("solve", cl.value("--length-scale")), "given"};
 
     expect_qpsnap(snap, "solve");  // an FCLIB, .dat or .npy file is named, with how to convert it
+    // The content hash is a serial byte-by-byte pass over the whole file (about the load's own time
+    // on a large snapshot): it runs on a second thread while the reader loads, before any solver starts.
+    std::future<std::string> hashing = std::async(std::launch::async, qpsnap_content_hash, snap);
     Qp qp = read_qpsnap(snap);
-    const std::string hash = qpsnap_content_hash(snap);  // once: a byte-by-byte pass over the whole file
+    const std::string hash = hashing.get();
     fix_length_scale(qp, snap, hash, given);
     const nlohmann::json info = {{"id", std::filesystem::path(snap).stem().string()},
                                  {"path", snap},
