@@ -189,8 +189,12 @@ private:
             for (int j : m_face_dofs) m_z[j] = m_dinv[j] * m_tmp[j];
         }
         const Vec& z = direction();
-        m_zphi = z.dot(m_phi);
-        m_zap = ap != nullptr ? z.dot(*ap) : 0.0;
+        if (ap != nullptr) {
+            two_dots(z, m_phi, *ap, m_zphi, m_zap);  // z'phi and z'Ap as Eigen's two dots, z read once
+        } else {
+            m_zphi = z.dot(m_phi);
+            m_zap = 0.0;
+        }
         // phi'phi for evaluate (every evaluate follows a face_gradient with z): z'phi itself when z = phi.
         m_phi2 = &z == &m_phi ? m_zphi : m_phi.squaredNorm();
     }

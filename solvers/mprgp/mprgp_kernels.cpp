@@ -209,4 +209,51 @@ double cg_step_pass(double alpha, const Vec& p, const Vec& ap, const Vec& w, Vec
     return cg_step_pass_scalar(alpha, p.data(), ap.data(), w.data(), x.data(), g.data(), phi.data(), x.size());
 }
 
+void two_dots(const Vec& a, const Vec& b, const Vec& c, double& ab, double& ac)
+{
+    // Eigen 3.4's redux of a.cwiseProduct(b) for a dynamic vector (Redux.h, LinearVectorizedTraversal):
+    // packets from entry 0 (Vec's data are aligned), two running packet sums over pairs of packets,
+    // their sum, one more packet when an odd one is left, the packet's lanes summed, then the tail.
+    using Packet = Eigen::internal::packet_traits<double>::type;
+    constexpr Eigen::Index P = Eigen::internal::packet_traits<double>::size;
+    const Eigen::Index n = a.size();
+    const double* pa = a.data();
+    const double* pb = b.data();
+    const double* pc = c.data();
+    const Eigen::Index whole = (n / P) * P, pairs = (n / (2 * P)) * (2 * P);
+    if (n == 0 || whole == 0) {  // Eigen's plain loop (or 0 for no entry)
+        ab = a.dot(b);
+        ac = a.dot(c);
+        return;
+    }
+    using Eigen::internal::padd;
+    using Eigen::internal::pload;
+    using Eigen::internal::pmul;
+    Packet b0 = pmul(pload<Packet>(pa), pload<Packet>(pb));
+    Packet c0 = pmul(pload<Packet>(pa), pload<Packet>(pc));
+    if (whole > P) {
+        Packet b1 = pmul(pload<Packet>(pa + P), pload<Packet>(pb + P));
+        Packet c1 = pmul(pload<Packet>(pa + P), pload<Packet>(pc + P));
+        for (Eigen::Index i = 2 * P; i < pairs; i += 2 * P) {
+            const Packet a0 = pload<Packet>(pa + i), a1 = pload<Packet>(pa + i + P);
+            b0 = padd(b0, pmul(a0, pload<Packet>(pb + i)));
+            b1 = padd(b1, pmul(a1, pload<Packet>(pb + i + P)));
+            c0 = padd(c0, pmul(a0, pload<Packet>(pc + i)));
+            c1 = padd(c1, pmul(a1, pload<Packet>(pc + i + P)));
+        }
+        b0 = padd(b0, b1);
+        c0 = padd(c0, c1);
+        if (whole > pairs) {
+            b0 = padd(b0, pmul(pload<Packet>(pa + pairs), pload<Packet>(pb + pairs)));
+            c0 = padd(c0, pmul(pload<Packet>(pa + pairs), pload<Packet>(pc + pairs)));
+        }
+    }
+    ab = Eigen::internal::predux(b0);
+    ac = Eigen::internal::predux(c0);
+    for (Eigen::Index i = whole; i < n; ++i) {
+        ab += pa[i] * pb[i];
+        ac += pa[i] * pc[i];
+    }
+}
+
 }  // namespace cb

@@ -95,4 +95,9 @@ PowerResult power_method(const AOperator& A, Vec& v, PowerRule rule, long max_pr
 /// then a difference, entry by entry), and a maximum is the same in any order.
 double cg_step_pass(double alpha, const Vec& p, const Vec& ap, const Vec& w, Vec& x, Vec& g, Vec& phi);
 
+/// a'b and a'c in one pass over a (returned in ab, ac), each summed in the order of Eigen's
+/// a.dot(b) (its packets, two partial packet sums, then the tail entry by entry): the same bits as
+/// the two dots, with a read once instead of twice. a, b and c have one size.
+void two_dots(const Vec& a, const Vec& b, const Vec& c, double& ab, double& ac);
+
 }  // namespace cb

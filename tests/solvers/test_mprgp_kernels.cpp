@@ -7,6 +7,7 @@
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <random>
 
 namespace {
@@ -239,3 +240,37 @@ TEST(MprgpKernels, CgStepPassEqualsThePlainLoopToTheBit)
     EXPECT_EQ(widest, widest_plain);
     EXPECT_GT(widest, 0.0);
 }
+
+// The fused pair of dots is Eigen's two dots to the bit, on every size around the packets' edges
+// (none, one packet, an odd packet after the pairs, a tail) and on sums that cancel.
+TEST(MprgpKernels, TwoDotsEqualEigensDotsToTheBit)
+{
+    std::mt19937_64 rng(2047);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    long differing = 0, compared = 0;
+    for (Eigen::Index n : {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 15, 16, 17, 1001, 1003, 4096}) {
+        Vec a(n), b(n), c(n);
+        for (Eigen::Index j = 0; j < n; ++j) {
+            a[j] = u(rng) * (j % 7 == 0 ? 1e8 : 1.0);
+            b[j] = u(rng) * (j % 3 == 0 ? 1e-6 : 1e4);
+            c[j] = j % 13 == 0 ? -0.0 : u(rng);
+        }
+        double ab = 1.0, ac = 1.0;
+        cb::two_dots(a, b, c, ab, ac);
+        const double want_ab = a.dot(b), want_ac = a.dot(c);
+        differing += std::memcmp(&ab, &want_ab, sizeof ab) != 0;
+        differing += std::memcmp(&ac, &want_ac, sizeof ac) != 0;
+        compared += 2;
+    }
+    EXPECT_EQ(differing, 0) << "of " << compared;
+    Vec a = Vec::NullaryExpr(4096, [&] { return u(rng) * 1e8; });
+    Vec b = Vec::NullaryExpr(4096, [&] { return u(rng); });
+    double plain = 0.0;
+    for (Eigen::Index j = 0; j < a.size(); ++j) plain += a[j] * b[j];
+    double ab = 0.0, aa = 0.0;
+    cb::two_dots(a, b, a, ab, aa);
+    EXPECT_NE(ab, plain);  // so the comparison above can tell one order from another
+    const double want_aa = a.dot(a);
+    EXPECT_EQ(std::memcmp(&aa, &want_aa, sizeof aa), 0);
+}
+
