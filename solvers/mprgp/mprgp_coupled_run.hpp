@@ -290,7 +290,8 @@ private:
     /// The measure's rigid half at the iterate's x (precond = scaled: read through D^-1/2, not formed).
     double bodies_motion() const
     {
-        return m_unscale != nullptr ? m_scale.body_motion_scaled(*m_unscale, m_x, m_mu) : m_scale.body_motion(m_x, m_mu);
+        return m_unscale != nullptr ? m_scale.body_motion_scaled(*m_unscale, m_x, m_mu)
+                                    : m_scale.body_motion(m_x, m_mu);
     }
     /// x of the original QP from the iterate (precond = scaled: x = D^-1/2 y), in m_x_out.
     const Vec& original_x(const Vec& v)

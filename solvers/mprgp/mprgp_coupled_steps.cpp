@@ -327,8 +327,7 @@ SolverResult CoupledRun::run()
     // converged run's message already states it.
     std::string detail = "safeguard firings " + std::to_string(m_cnt.safeguard_steps);
     if (status != SolveStatus::CONVERGED)
-        detail = "accuracy error " + format_e(std::max(m_error, bodies_motion()), 3) + ", " +
-                 detail;
+        detail = "accuracy error " + format_e(std::max(m_error, bodies_motion()), 3) + ", " + detail;
     if (!m_loop.owns(status)) detail = "mprgp-coupled: not converged: " + why + " (" + detail + ")";
     if (m_ops->lcp_failures() > 0)
         detail += "; " + std::to_string(m_ops->lcp_failures()) + " LCP solves missed their tolerance";

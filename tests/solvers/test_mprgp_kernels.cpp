@@ -273,4 +273,3 @@ TEST(MprgpKernels, TwoDotsEqualEigensDotsToTheBit)
     const double want_aa = a.dot(a);
     EXPECT_EQ(std::memcmp(&aa, &want_aa, sizeof aa), 0);
 }
-
