@@ -303,8 +303,8 @@ private:
             long flips = 0;
             for (size_t r = 0; r < ku; ++r) {
                 const int j = universe[r];
-                double gy = 0.0;  // (G y)_j over U (G symmetric: column j is row j)
-                for (int k = outer[j]; k < outer[j + 1]; ++k) gy += value[k] * m_y[inner[k]];
+                // (G y)_j over U (G symmetric: column j is row j)
+                const double gy = sparse_column_dot(outer[j], outer[j + 1], inner, value, m_y.data());
                 const double next = m_y[j] - (gy - m_scale[j] * q[r]) * m_inv_diag[j];
                 const bool was_in = m_y[j] > 0.0;
                 m_y[j] = fixed != nullptr && fixed[r] ? next : std::max(0.0, next);
