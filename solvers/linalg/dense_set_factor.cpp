@@ -7,6 +7,28 @@
 
 namespace cb {
 
+namespace {
+
+/// sum over p < n of row[p] v[p] in four partial sums (entry p into sum p mod 4): L's rows are
+/// contiguous, and a single sum waits on every addition.
+double row_dot(const double* row, const double* v, int n)
+{
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+    int p = 0;
+    for (; p + 4 <= n; p += 4) {
+        s0 += row[p] * v[p];
+        s1 += row[p + 1] * v[p + 1];
+        s2 += row[p + 2] * v[p + 2];
+        s3 += row[p + 3] * v[p + 3];
+    }
+    if (p < n) s0 += row[p] * v[p];
+    if (p + 1 < n) s1 += row[p + 1] * v[p + 1];
+    if (p + 2 < n) s2 += row[p + 2] * v[p + 2];
+    return (s0 + s1) + (s2 + s3);
+}
+
+}  // namespace
+
 DenseSetFactor::DenseSetFactor(const SpMatCol& S, int capacity)
     : m_S(S), m_k(static_cast<int>(S.rows())), m_cap(std::max(1, capacity))
 {
@@ -64,8 +86,7 @@ bool DenseSetFactor::append(int j, Counters& cnt)
     const int s = size();
     for (SpMatCol::InnerIterator it(m_S, j); it; ++it) m_col[static_cast<size_t>(it.row())] = it.value();
     for (int r = 0; r < s; ++r) {
-        double v = m_col[static_cast<size_t>(m_rows[static_cast<size_t>(r)])];
-        for (int p = 0; p < r; ++p) v -= at(r, p) * m_v[static_cast<size_t>(p)];
+        const double v = m_col[static_cast<size_t>(m_rows[static_cast<size_t>(r)])] - row_dot(&at(r, 0), m_v.data(), r);
         m_v[static_cast<size_t>(r)] = v / at(r, r);
     }
     double d = m_col[static_cast<size_t>(j)];
@@ -118,15 +139,14 @@ void DenseSetFactor::remove(int position, Counters& cnt)
 void DenseSetFactor::solve(double* b, Counters& cnt)
 {
     const int s = size();
-    for (int r = 0; r < s; ++r) {
-        double v = b[m_rows[static_cast<size_t>(r)]];
-        for (int p = 0; p < r; ++p) v -= at(r, p) * m_v[static_cast<size_t>(p)];
-        m_v[static_cast<size_t>(r)] = v / at(r, r);
-    }
+    double* v = m_v.data();
+    for (int r = 0; r < s; ++r) v[r] = (b[m_rows[static_cast<size_t>(r)]] - row_dot(&at(r, 0), v, r)) / at(r, r);
+    // L'x = y by rows of L (contiguous): x_r final, then its column's terms leave the rows above.
     for (int r = s - 1; r >= 0; --r) {
-        double v = m_v[static_cast<size_t>(r)];
-        for (int p = r + 1; p < s; ++p) v -= at(p, r) * m_v[static_cast<size_t>(p)];
-        m_v[static_cast<size_t>(r)] = v / at(r, r);
+        const double xr = v[r] / at(r, r);
+        v[r] = xr;
+        const double* row = &at(r, 0);
+        for (int p = 0; p < r; ++p) v[p] -= row[p] * xr;
     }
     for (int r = 0; r < s; ++r) b[m_rows[static_cast<size_t>(r)]] = m_v[static_cast<size_t>(r)];
     cnt.work_flops += 2.0 * static_cast<double>(s) * static_cast<double>(s);

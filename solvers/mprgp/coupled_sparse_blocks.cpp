@@ -197,7 +197,6 @@ public:
         m_w.setZero(static_cast<Eigen::Index>(k));
         m_y.setZero(static_cast<Eigen::Index>(k));
         m_inv_diag = m_scaled.diagonal().cwiseInverse();
-        m_in_universe.assign(k, 0);
         m_bad.reserve(k);
         m_members.reserve(k);
     }
@@ -287,10 +286,11 @@ private:
                      bool cold, Counters& cnt)
     {
         const size_t ku = universe.size();
-        std::fill(m_in_universe.begin(), m_in_universe.end(), 0);
+        // y = 0 off U: a column's sum then needs no test of its rows (a product with y_i = 0 adds an
+        // exact zero, and a sum that starts at +0 stays what the tested loop gives, to the bit).
+        m_y.setZero();
         for (size_t r = 0; r < ku; ++r) {
             const int j = universe[r];
-            m_in_universe[static_cast<size_t>(j)] = 1;
             m_y[j] = m_cur[j] / m_scale[j];
         }
         const int* outer = m_scaled.outerIndexPtr();
@@ -303,9 +303,8 @@ private:
             long flips = 0;
             for (size_t r = 0; r < ku; ++r) {
                 const int j = universe[r];
-                double gy = 0.0;  // (G y)_j over U (G symmetric: column j is row j)
-                for (int k = outer[j]; k < outer[j + 1]; ++k)
-                    if (m_in_universe[static_cast<size_t>(inner[k])]) gy += value[k] * m_y[inner[k]];
+                // (G y)_j over U (G symmetric: column j is row j)
+                const double gy = sparse_column_dot(outer[j], outer[j + 1], inner, value, m_y.data());
                 const double next = m_y[j] - (gy - m_scale[j] * q[r]) * m_inv_diag[j];
                 const bool was_in = m_y[j] > 0.0;
                 m_y[j] = fixed != nullptr && fixed[r] ? next : std::max(0.0, next);
@@ -550,8 +549,7 @@ private:
     std::vector<int> m_members;  // solve_on_set: the set's U positions, ascending
     std::vector<char> m_mask, m_added;
     Vec m_b, m_z, m_cur, m_w;
-    Vec m_y, m_inv_diag;              // sweep_start's scaled iterate and 1 / diag(m_scaled)
-    std::vector<char> m_in_universe;  // sweep_start: the block rows of its universe
+    Vec m_y, m_inv_diag;  // sweep_start's scaled iterate (0 off its universe) and 1 / diag(m_scaled)
 };
 
 }  // namespace

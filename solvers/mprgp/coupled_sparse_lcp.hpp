@@ -27,6 +27,25 @@ struct SparseFactor {
     Vec solve(const Vec& rhs, Counters& cnt);
 };
 
+/// sum over k in [begin, end) of value[k] y[inner[k]] (a column of a compressed matrix times y), in
+/// four partial sums (entry k into sum (k - begin) mod 4, added as (s0 + s1) + (s2 + s3)): one sum
+/// waits on every addition, and the large components' sweep starts are made of these columns.
+inline double sparse_column_dot(int begin, int end, const int* inner, const double* value, const double* y)
+{
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+    int k = begin;
+    for (; k + 4 <= end; k += 4) {
+        s0 += value[k] * y[inner[k]];
+        s1 += value[k + 1] * y[inner[k + 1]];
+        s2 += value[k + 2] * y[inner[k + 2]];
+        s3 += value[k + 3] * y[inner[k + 3]];
+    }
+    if (k < end) s0 += value[k] * y[inner[k]];
+    if (k + 1 < end) s1 += value[k + 1] * y[inner[k + 1]];
+    if (k + 2 < end) s2 += value[k + 2] * y[inner[k + 2]];
+    return (s0 + s1) + (s2 + s3);
+}
+
 /// Projected Gauss-Seidel on 0 <= lambda perp M lambda - q >= 0 from lambda (clipped), the
 /// fallback of the principal pivoting; `set` becomes the rows with lambda > 0 (and the fixed ones).
 bool projected_gauss_seidel(const SpMatCol& M, const Vec& q, const char* fixed, std::vector<char>& set, Vec& lambda,

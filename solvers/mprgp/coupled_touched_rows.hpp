@@ -7,6 +7,11 @@
 /// reads push the blocks out between products (flank_press frame 0: the contact patch's rows are
 /// about a sixth of A). Each row is summed in column order as the CSR loop sums it; the blocks'
 /// stored zeros add exact zeros, so the results equal the CSR loop's (but for the sign of a zero).
+/// On SBSR (A's upper block triangle, scaled in place with precond = scaled) they read those blocks
+/// too: d'Ad over the upper blocks of d's block rows, A d with the blocks above a block row found
+/// through an index of the upper blocks by column (built here); the sums come in another order, so
+/// the results equal the CSR loop's to rounding. The CSR rows, read otherwise, are not in the cache
+/// that the products keep warm (docs/preconditioners.md).
 #include "solvers/core/types.hpp"
 #include "solvers/linalg/a_product.hpp"
 
@@ -25,11 +30,25 @@ public:
     void add_a_d(const std::vector<int>& touched, const Vec& d, Vec& g) const;
     /// Whether the block rows are read (else the CSR rows).
     bool reads_blocks() const { return m_blocks != nullptr; }
+    /// Whether they are SBSR's upper blocks.
+    bool reads_upper_blocks() const { return m_upper; }
 
 private:
+    /// m_rows_of_d = the block rows of the DOFs `touched`, once each, flagged in m_row_flag.
+    void list_block_rows(const std::vector<int>& touched) const;
+    void clear_block_rows() const;
+    double upper_d_a_d(const Vec& d) const;
+    void upper_add_a_d(const Vec& d, Vec& g) const;
+
     const SpMat& m_A;
     const BlockRows* m_blocks = nullptr;
-    const Vec* m_u;
+    const Vec* m_u;                        // applied here unless the blocks hold U A U already
+    bool m_upper = false;                  // m_blocks: SBSR's upper block triangle
+    std::vector<int> m_above_start;        // SBSR: block column J's blocks above the diagonal are
+    std::vector<int> m_above_block;        //   m_above_block[m_above_start[J] .. m_above_start[J + 1] - 1]
+    std::vector<int> m_above_row;          //   in the block rows m_above_row[same range]
+    mutable std::vector<char> m_row_flag;  // per block row: d has a DOF there
+    mutable std::vector<int> m_rows_of_d;
 };
 
 }  // namespace cb

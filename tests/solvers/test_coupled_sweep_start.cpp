@@ -7,6 +7,7 @@
 #include "problems/synthetic.hpp"
 #include "solvers/linalg/row_components.hpp"
 #include "solvers/mprgp/coupled_face_operators.hpp"
+#include "solvers/mprgp/coupled_sparse_lcp.hpp"
 
 #include <gtest/gtest.h>
 
@@ -212,4 +213,35 @@ TEST(CoupledSweepStart, ProjectionWithKeptRowsAndChoppedMultipliersEqualTheOldPa
     for (Eigen::Index i = 0; i < m; ++i)
         if (!face[static_cast<size_t>(i)]) q_face[i] = 0.0;
     expect_kkt(qp.J, q_face, mu[0], face, "chopped multipliers on the face");
+}
+
+TEST(CoupledSweepStart, ColumnDotInFourSumsEqualsTheSequentialSum)
+{
+    // Every length up to 13 (all tails) at an offset: small integers sum exactly in any order, so a
+    // term left out or counted twice shows; random reals agree to rounding.
+    std::mt19937 rng(31);
+    std::uniform_int_distribution<int> small(-9, 9);
+    std::uniform_real_distribution<double> real(-1.0, 1.0);
+    std::vector<double> y(40);
+    for (double& v : y) v = small(rng);
+    for (int length = 0; length <= 13; ++length) {
+        const int begin = 5;
+        std::vector<int> inner(static_cast<size_t>(begin + length));
+        std::vector<double> value(inner.size()), real_value(inner.size());
+        for (size_t k = 0; k < inner.size(); ++k) {
+            inner[k] = static_cast<int>(rng() % y.size());
+            value[k] = small(rng);
+            real_value[k] = real(rng);
+        }
+        double exact = 0.0, sequential = 0.0;
+        for (int k = begin; k < begin + length; ++k) {
+            exact += value[static_cast<size_t>(k)] * y[static_cast<size_t>(inner[static_cast<size_t>(k)])];
+            sequential += real_value[static_cast<size_t>(k)] * y[static_cast<size_t>(inner[static_cast<size_t>(k)])];
+        }
+        EXPECT_EQ(cb::sparse_column_dot(begin, begin + length, inner.data(), value.data(), y.data()), exact)
+            << "length " << length;
+        EXPECT_NEAR(cb::sparse_column_dot(begin, begin + length, inner.data(), real_value.data(), y.data()), sequential,
+                    1e-13 * (1.0 + std::abs(sequential)))
+            << "length " << length;
+    }
 }

@@ -16,13 +16,13 @@ namespace coupled_touched_rows_test {
 using cb::SpMat;
 using cb::Vec;
 
-/// A random symmetric positive definite A of nb x nb blocks of 3x3 (diagonally dominant), some
-/// entries of the stored blocks left out of the CSR (the blocks then hold zeros there).
-SpMat random_block_spd(int nb, std::mt19937& rng)
+/// A random symmetric positive definite A of nb x nb blocks of 3x3 (diagonally dominant), a share
+/// of the stored blocks' entries left out of the CSR (the blocks then hold zeros there).
+SpMat random_block_spd(int nb, std::mt19937& rng, double absent_share = 0.1)
 {
     std::uniform_real_distribution<double> value(-1.0, 1.0);
     std::uniform_int_distribution<int> block(0, nb - 1);
-    std::bernoulli_distribution absent(0.1);
+    std::bernoulli_distribution absent(absent_share);
     const int n = 3 * nb;
     Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(n, n);
     for (int I = 0; I < nb; ++I)
@@ -86,6 +86,47 @@ TEST(CoupledTouchedRows, BlockRowsGiveTheCsrRowsResultsToTheLastBit)
             from_csr.add_a_d(touched, d, g_csr);
             for (int i = 0; i < n; ++i) EXPECT_EQ(g_blocks[i], g_csr[i]) << "trial " << trial << " row " << i;
             EXPECT_LE((g_blocks - (g0 + ad)).lpNorm<Eigen::Infinity>(), 1e-12 * (1.0 + ad.lpNorm<Eigen::Infinity>()));
+        }
+    }
+}
+
+TEST(CoupledTouchedRows, UpperBlocksGiveTheCsrRowsResultsToRounding)
+{
+    // SBSR's upper blocks: the part of a row left of the diagonal comes from the blocks above it (the
+    // column index), d's own block rows along the rows; scaled in place (U A U) or with U applied here.
+    std::mt19937 rng(4747);
+    for (int trial = 0; trial < 4; ++trial) {
+        const SpMat A = random_block_spd(40 + 17 * trial, rng, 0.02);  // SBSR takes at most 25% stored zeros
+        const int n = static_cast<int>(A.rows());
+        const Vec u = Vec::Random(n).cwiseAbs() + Vec::Constant(n, 0.5);
+        cb::AOperator upper(A), upper_scaled(A), csr(A);
+        ASSERT_EQ(upper.prepare(cb::AFormat::SBSR), cb::AFormat::SBSR) << upper.why_csr();
+        upper_scaled.scale_by(&u);
+        ASSERT_EQ(upper_scaled.prepare(cb::AFormat::SBSR), cb::AFormat::SBSR);
+        ASSERT_TRUE(upper_scaled.blocks_scaled());
+        ASSERT_EQ(csr.prepare(cb::AFormat::CSR), cb::AFormat::CSR);
+        struct Case {
+            const cb::AOperator& op;
+            const Vec* scale;
+        };
+        for (const Case& c : {Case{upper, nullptr}, Case{upper, &u}, Case{upper_scaled, &u}}) {
+            const cb::TouchedRowsOfA from_upper(c.op, c.scale), from_csr(csr, c.scale);
+            ASSERT_TRUE(from_upper.reads_upper_blocks());
+            for (int draw = 0; draw < 3; ++draw) {
+                std::vector<int> touched;
+                Vec d;
+                random_correction(n, rng, touched, d);
+                const double want = from_csr.d_a_d(touched, d);
+                EXPECT_NEAR(from_upper.d_a_d(touched, d), want, 1e-13 * std::abs(want)) << "trial " << trial;
+
+                const Vec g0 = Vec::Random(n);
+                Vec g_upper = g0, g_csr = g0;
+                from_upper.add_a_d(touched, d, g_upper);
+                from_csr.add_a_d(touched, d, g_csr);
+                const double scale = 1.0 + (g_csr - g0).lpNorm<Eigen::Infinity>();
+                for (int i = 0; i < n; ++i)
+                    EXPECT_NEAR(g_upper[i], g_csr[i], 1e-13 * scale) << "trial " << trial << " row " << i;
+            }
         }
     }
 }
