@@ -80,7 +80,7 @@ struct BlockBuild {
 };
 
 /// Block row I's first entry read in each of its rows (lo[3]): the row's start, or with
-/// `rows_known_sorted` and `upper` its first entry of block column >= I.
+/// `rows_known_sorted` and `upper` its first entry of block column >= I (a binary search).
 void read_from(const int* outer, const int* inner, std::ptrdiff_t I, const BlockBuild& how, int* lo)
 {
     for (int r = 0; r < 3; ++r) {
