@@ -2,6 +2,7 @@
 // three-way merge of a block row's CSR rows, a straight copy for FEM rows, and the symmetry check of
 // the upper blocks.
 #include "solvers/linalg/a_product.hpp"
+#include "solvers/linalg/prefault.hpp"
 
 #include <algorithm>
 #include <limits>
@@ -196,6 +197,8 @@ bool build_blocks(const SpMat& A, const BlockBuild& how, BlockRows& out, double 
     out.column.resize(static_cast<size_t>(blocks));
     out.value.resize(static_cast<size_t>(blocks) * 9 + 1);  // unwritten: every entry is set below
     out.value.back() = 0.0;                                 // see block_step
+    prefault_for_writing(out.value.data(), out.value.size() * sizeof(double));
+    prefault_for_writing(out.column.data(), out.column.size() * sizeof(int));
     int* column = out.column.data();
     double* value = out.value.data();
     const double* u = how.scale ? how.scale->data() : nullptr;
