@@ -12,6 +12,7 @@ namespace cb {
 namespace {
 
 std::atomic<long> g_a_products{0};
+std::atomic<long> g_mirror_checks{0};
 
 /// Block entries stored per nonzero beyond which BSR is refused: at 1.25 it still reads about
 /// 10.6 bytes per nonzero against CSR's 12.
@@ -258,14 +259,17 @@ AFormat AOperator::prepare(AFormat wanted, int threads)
         // An A its reader made symmetric to the bit is not checked again, and its blocks are scaled
         // as they are built; otherwise the mirror is checked on A's own blocks, then scaled.
         const bool trusted = upper && m_a_symmetric;
-        m_mirror_checked = m_mirror_checked || (upper && !trusted);
         bool built = false;
-        if (trusted)
+        if (trusted) {
             built = build_symmetric_upper_block_rows(A, m_scale, m_blocks, MAX_FILL, fill, m_why_csr);
-        else if (upper)
-            built = build_upper_block_rows(A, m_blocks, MAX_FILL, fill, m_why_csr) &&
-                    upper_blocks_mirror_a(A, m_blocks, m_why_csr);
-        else
+        } else if (upper) {
+            built = build_upper_block_rows(A, m_blocks, MAX_FILL, fill, m_why_csr);
+            if (built) {
+                m_mirror_checked = true;
+                g_mirror_checks.fetch_add(1, std::memory_order_relaxed);
+                built = upper_blocks_mirror_a(A, m_blocks, m_why_csr);
+            }
+        } else
             built = build_block_rows(A, m_blocks, MAX_FILL, fill, m_why_csr);
         if (built) {
             m_format = asked;
@@ -510,6 +514,8 @@ Vec a_product(const AOperator& A, const Vec& x)
 }
 
 long a_product_count() { return g_a_products.load(std::memory_order_relaxed); }
+
+long mirror_check_count() { return g_mirror_checks.load(std::memory_order_relaxed); }
 
 bool block_kernel_is_simd() { return simd_block_kernel(); }
 

@@ -187,6 +187,10 @@ Vec a_product(const SpMat& A, const Vec& x);
 /// A-products done through a_product() by this process so far (all threads).
 long a_product_count();
 
+/// Checks of A's mirror (upper_blocks_mirror_a) AOperator::prepare() did in this process so far:
+/// SBSR on an A whose symmetry the QP did not carry (Qp::a_symmetric).
+long mirror_check_count();
+
 /// Whether the BSR products run the AVX2 kernel (the CPU has AVX2 and the scalar loop is not
 /// forced). Both kernels give the same y and dots to the last bit; tests compare them.
 bool block_kernel_is_simd();
