@@ -59,13 +59,13 @@ bool whole_groups(const int* outer, const int* inner, std::ptrdiff_t I, const in
     groups = len / 3;
     first = groups;
     int previous = -1;
-    for (int g = 0; g < groups; ++g) {
+    for (std::ptrdiff_t g = 0; g < groups; ++g) {
         const int col = c0[3 * g];
         if (col % 3 != 0 || col / 3 <= previous || c0[3 * g + 1] != col + 1 || c0[3 * g + 2] != col + 2) return false;
-        for (int e = 3 * g; e < 3 * g + 3; ++e)
+        for (std::ptrdiff_t e = 3 * g; e < 3 * g + 3; ++e)
             if (c1[e] != c0[e] || c2[e] != c0[e]) return false;
         previous = col / 3;
-        if (first == groups && previous >= from) first = g;
+        if (first == groups && previous >= from) first = static_cast<int>(g);
     }
     return true;
 }
@@ -102,13 +102,13 @@ void copy_groups(const int* inner, const double* val, std::ptrdiff_t I, const in
     const double* v0 = val + lo[0];
     const double* v1 = val + lo[1];
     const double* v2 = val + lo[2];
-    for (int g = first; g < groups; ++g, ++q) {
+    for (std::ptrdiff_t g = first; g < groups; ++g, ++q) {
         const int J = inner[lo[0] + 3 * g] / 3;
         column[q] = J;
         double* b = value + 9 * q;
-        for (int c = 0; c < 3; ++c) {
+        for (std::ptrdiff_t c = 0; c < 3; ++c) {
             if constexpr (SCALED) {
-                const double uc = u[3 * J + c];
+                const double uc = u[3 * static_cast<std::ptrdiff_t>(J) + c];
                 b[3 * c] = u[3 * I] * v0[3 * g + c] * uc;
                 b[3 * c + 1] = u[3 * I + 1] * v1[3 * g + c] * uc;
                 b[3 * c + 2] = u[3 * I + 2] * v2[3 * g + c] * uc;

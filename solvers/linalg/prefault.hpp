@@ -20,11 +20,12 @@ inline bool prefault_for_writing(void* data, std::size_t bytes)
 #ifndef MADV_POPULATE_WRITE
 #define MADV_POPULATE_WRITE 23  // Linux 5.14; older C headers lack the name
 #endif
-    constexpr std::uintptr_t page = 4096;
-    const std::uintptr_t begin = (reinterpret_cast<std::uintptr_t>(data) + page - 1) & ~(page - 1);
-    const std::uintptr_t end = (reinterpret_cast<std::uintptr_t>(data) + bytes) & ~(page - 1);
-    if (end <= begin) return false;
-    return madvise(reinterpret_cast<void*>(begin), end - begin, MADV_POPULATE_WRITE) == 0;
+    constexpr std::size_t page = 4096;
+    const std::size_t head = (page - reinterpret_cast<std::uintptr_t>(data) % page) % page;  // to the first whole page
+    if (bytes <= head) return false;
+    const std::size_t length = (bytes - head) / page * page;
+    if (length == 0) return false;
+    return madvise(static_cast<char*>(data) + head, length, MADV_POPULATE_WRITE) == 0;
 #else
     (void)data;
     (void)bytes;

@@ -43,7 +43,8 @@ TEST(KnownSymmetryRuns, ReadQpsSkipTheMirrorCheckGeneratedOnesDoNot)
         const Qp read = read_qpsnap(path);
         ASSERT_TRUE(read.a_symmetric);
         for (const std::string solver : {"mprgp-coupled", "mprgp", "cg", "ica"}) {
-            SCOPED_TRACE(family + " " + solver);
+            SCOPED_TRACE(family);
+            SCOPED_TRACE(solver);
             EXPECT_EQ(known_symmetry_mirror_checks(read, solver), 0);
             EXPECT_GE(known_symmetry_mirror_checks(generated, solver), 1);
         }

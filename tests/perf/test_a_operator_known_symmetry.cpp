@@ -49,6 +49,7 @@ SpMat scattered_symmetric(int blocks, unsigned seed)
     std::uniform_real_distribution<double> value(-1.0, 1.0);
     std::vector<Eigen::Triplet<double>> t;
     const int n = 3 * blocks;
+    t.reserve(static_cast<size_t>(n) + 72 * static_cast<size_t>(blocks) + 1);
     for (int i = 0; i < n; ++i) t.emplace_back(i, i, 8.0 + value(rng));
     for (int e = 0; e < 4 * blocks; ++e) {
         const int I = block(rng), J = block(rng);
