@@ -25,7 +25,8 @@ struct SolverProblem {
     {
         if (!applied) return original->view();
         // Friction's rows are the original's: a decoupled solver is frictionless and gets none.
-        return QpView{original->A, original->b, decoupled_J, decoupled_c, original->x0, &original->length, nullptr};
+        return QpView{original->A,  original->b,       decoupled_J, decoupled_c,
+                      original->x0, &original->length, nullptr,     original->a_symmetric};
     }
 };
 

@@ -642,6 +642,7 @@ void validate_qp(const std::string& where, Qp& qp)
                                                    : "T",
                                       "columns not strictly increasing in row " + str(std::int64_t(r)));
     symmetrise(where, qp.A);
+    qp.a_symmetric = true;  // symmetrise made A equal A' to the bit (or refused it); rows sorted above
     check_diagonal(where, qp.A);
 }
 
@@ -805,6 +806,7 @@ Qp read_snapshot(const std::string& path, const unsigned char* bytes, std::uint6
     build_csr(qp.A, n, n, a["A.indptr"], a["A.indices"], a["A.data"], pages);
     pass_done("A built", pages, bytes, size);
     symmetrise(path, qp.A);
+    qp.a_symmetric = true;  // symmetrise made A equal A' to the bit (or refused it); rows sorted above
     check_diagonal(path, qp.A);
     build_csr(qp.J, m, n, a["J.indptr"], a["J.indices"], a["J.data"], pages);
     qp.b = Eigen::Map<const Vec>(a["b"].f64(), Eigen::Index(n));

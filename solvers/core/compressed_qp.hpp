@@ -17,7 +17,8 @@ public:
                                                   qp.c,
                                                   qp.x0,
                                                   qp.length,
-                                                  qp.friction}
+                                                  qp.friction,
+                                                  qp.a_symmetric}  // a compressed copy keeps A's values
     {
     }
     CompressedQpView(const CompressedQpView&) = delete;

@@ -56,6 +56,8 @@ struct QpView {
     const Vec& x0;                        ///< start point (may be infeasible)
     const FixedLength* length = nullptr;  ///< the problem's fixed scene size, if any
     const Friction* friction = nullptr;   ///< the rows' Coulomb friction, if any
+    /// A equals A' to the bit (Qp::a_symmetric); false unless the view was made from a Qp that says so.
+    bool a_symmetric = false;
     Eigen::Index n() const { return A.rows(); }
     bool frictional() const { return friction && friction->frictional(); }
     Eigen::Index m() const { return J.rows(); }
@@ -72,8 +74,14 @@ struct Qp {
     nlohmann::json meta = nlohmann::json::object();
     FixedLength length;  ///< set by the harness (harness/length_scale.hpp) before any solver runs
     Friction friction;   ///< empty: frictionless
+    /// A equals A' to the bit, established by the code that made it so: set only by the readers
+    /// (problems/: validate_qp and read_qpsnap, right after their exact symmetrisation), copied with
+    /// A (select_rows). Whoever writes A afterwards must set it to false. The block products trust
+    /// it instead of checking A's mirror again (AOperator::prepare, SBSR); a wrong true would make
+    /// them use A's upper triangle for an A that is not symmetric.
+    bool a_symmetric = false;
 
-    QpView view() const { return QpView{A, b, J, c, x0, &length, &friction}; }
+    QpView view() const { return QpView{A, b, J, c, x0, &length, &friction, a_symmetric}; }
     Eigen::Index n() const { return A.rows(); }
     bool frictional() const { return friction.frictional(); }
     Eigen::Index m() const { return J.rows(); }

@@ -130,7 +130,7 @@ SolverResult NsgsFrictionSolver::solve(const QpView& qp, const SolveContext& con
         return loop.finish(result, SolveStatus::INVALID_INPUT, e.what());
     }
     result.info["y_stored"] = keep_y;
-    AOperator a_op(qp.A);
+    AOperator a_op(qp);
     a_op.prepare(AFormat::CSR, static_cast<int>(s.common.threads));
     if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT);
     const AccuracyScale scale = accuracy_scale(qp);

@@ -12,6 +12,7 @@ namespace cb {
 namespace {
 
 std::atomic<long> g_a_products{0};
+std::atomic<long> g_mirror_checks{0};
 
 /// Block entries stored per nonzero beyond which BSR is refused: at 1.25 it still reads about
 /// 10.6 bytes per nonzero against CSR's 12.
@@ -248,18 +249,32 @@ AFormat AOperator::prepare(AFormat wanted, int threads)
         tries = {AFormat::BSR};
         if (auto_prefers_upper_blocks(nnz, std::max(1, threads))) tries.insert(tries.begin(), AFormat::SBSR);
     }
+    m_mirror_checked = false;
+    m_blocks_scaled = false;
     for (const AFormat asked : tries) {
         if (asked != AFormat::BSR && asked != AFormat::SBSR) break;
         double fill = 0.0;
         const bool upper = asked == AFormat::SBSR;
         m_why_csr.clear();
-        const bool built = upper ? build_upper_block_rows(A, m_blocks, MAX_FILL, fill, m_why_csr) &&
-                                       upper_blocks_mirror_a(A, m_blocks, m_why_csr)
-                                 : build_block_rows(A, m_blocks, MAX_FILL, fill, m_why_csr);
+        // An A its reader made symmetric to the bit is not checked again, and its blocks are scaled
+        // as they are built; otherwise the mirror is checked on A's own blocks, then scaled.
+        const bool trusted = upper && m_a_symmetric;
+        bool built = false;
+        if (trusted) {
+            built = build_symmetric_upper_block_rows(A, m_scale, m_blocks, MAX_FILL, fill, m_why_csr);
+        } else if (upper) {
+            built = build_upper_block_rows(A, m_blocks, MAX_FILL, fill, m_why_csr);
+            if (built) {
+                m_mirror_checked = true;
+                g_mirror_checks.fetch_add(1, std::memory_order_relaxed);
+                built = upper_blocks_mirror_a(A, m_blocks, m_why_csr);
+            }
+        } else
+            built = build_block_rows(A, m_blocks, MAX_FILL, fill, m_why_csr);
         if (built) {
             m_format = asked;
-            m_blocks_scaled = false;
-            if (asked == AFormat::SBSR && m_scale != nullptr) scale_blocks();
+            m_blocks_scaled = trusted && m_scale != nullptr;
+            if (asked == AFormat::SBSR && m_scale != nullptr && !m_blocks_scaled) scale_blocks();
             (void)fill;  // per nonzero of the stored part; fill() is per nonzero of A
             m_fill = 9.0 * static_cast<double>(m_blocks.column.size()) / static_cast<double>(std::max(1L, nnz));
             break;
@@ -302,7 +317,10 @@ void AOperator::scale_by(const Vec* u)
     if (m_format == AFormat::SBSR && m_blocks_scaled) {  // back to A's own blocks first
         std::string why;
         double fill = 0.0;
-        build_upper_block_rows(*m_csr, m_blocks, MAX_FILL, fill, why);
+        if (m_a_symmetric)
+            build_symmetric_upper_block_rows(*m_csr, nullptr, m_blocks, MAX_FILL, fill, why);
+        else
+            build_upper_block_rows(*m_csr, m_blocks, MAX_FILL, fill, why);
         m_blocks_scaled = false;
     }
     m_scale = u;
@@ -496,6 +514,8 @@ Vec a_product(const AOperator& A, const Vec& x)
 }
 
 long a_product_count() { return g_a_products.load(std::memory_order_relaxed); }
+
+long mirror_check_count() { return g_mirror_checks.load(std::memory_order_relaxed); }
 
 bool block_kernel_is_simd() { return simd_block_kernel(); }
 

@@ -4,6 +4,7 @@
 /// so the harness can count A-products itself (around each solve) instead of trusting the
 /// solver's own count, and so A's storage for the product is chosen in one place.
 /// Work that bypasses it (CHOLMOD, sparse partial products) shows up in instruction counts instead.
+#include "solvers/core/qp.hpp"
 #include "solvers/core/types.hpp"
 #include "solvers/linalg/a_format.hpp"
 
@@ -47,7 +48,11 @@ struct BlockRows {
 /// outlive it. prepare() may build a block copy; products then read it instead of A.
 class AOperator {
 public:
+    /// An A of no known symmetry: SBSR checks that A equals A' before it reads the upper blocks.
     explicit AOperator(const SpMat& A) : m_csr(&A) {}
+    /// The QP's A, with what its reader established: when qp.a_symmetric (A equals A' to the bit,
+    /// rows sorted) SBSR reads the upper blocks without checking their mirror again.
+    explicit AOperator(const QpView& qp) : m_csr(&qp.A), m_a_symmetric(qp.a_symmetric) {}
     /// Chooses the storage of the products: BSR (or SBSR) when asked and A has the block structure
     /// (n a multiple of 3, compressed, sorted columns, at most 25% stored zeros), else CSR;
     /// why_csr() says why. BSR and CSR sum each row in column order, so y is the same to the last
@@ -67,6 +72,8 @@ public:
     /// Range p covers rows (BSR: block rows) part_start()[p] .. part_start()[p + 1] - 1.
     const std::vector<int>& part_start() const { return m_part_start; }
     AFormat format() const { return m_format; }
+    /// Whether the last prepare() checked that A equals A' (SBSR asked of an A not known symmetric).
+    bool mirror_checked() const { return m_mirror_checked; }
     /// Why the products read CSR (empty when blocks, or when blocks were not asked for).
     const std::string& why_csr() const { return m_why_csr; }
     /// Stored block entries per nonzero of A (BSR >= 1, SBSR about half that; 0 when CSR).
@@ -101,6 +108,8 @@ private:
     /// Multiplies SBSR's stored blocks by u on both sides (after they were built from A).
     void scale_blocks();
     const SpMat* m_csr;
+    bool m_a_symmetric = false;  ///< A equals A' to the bit, as its reader established (Qp::a_symmetric)
+    bool m_mirror_checked = false;
     const Vec* m_scale = nullptr;
     bool m_blocks_scaled = false;  ///< SBSR's blocks hold U A U (scale_by)
     mutable Vec m_scaled_x;
@@ -137,6 +146,13 @@ bool build_block_rows(const SpMat& A, BlockRows& out, double max_fill, double& f
 /// >= block row); `fill` is per nonzero of that part of A.
 bool build_upper_block_rows(const SpMat& A, BlockRows& out, double max_fill, double& fill, std::string& why);
 
+/// As build_upper_block_rows() for an A known to equal A' to the bit with increasing columns in
+/// every row (Qp::a_symmetric): each row is read from its block diagonal on (the part left of it is
+/// neither read nor checked), and with `scale` the blocks hold U A U, entry (r, c) of block (I, J)
+/// being (u_r a_rc) u_c as AOperator::scale_by forms it, in the same pass.
+bool build_symmetric_upper_block_rows(const SpMat& A, const Vec* scale, BlockRows& out, double max_fill, double& fill,
+                                      std::string& why);
+
 /// Whether the upper blocks U of A (build_upper_block_rows) stand for all of A, i.e. A is symmetric
 /// to the bit; `why` names the first entry that differs.
 bool upper_blocks_mirror_a(const SpMat& A, const BlockRows& U, std::string& why);
@@ -170,6 +186,10 @@ Vec a_product(const SpMat& A, const Vec& x);
 
 /// A-products done through a_product() by this process so far (all threads).
 long a_product_count();
+
+/// Checks of A's mirror (upper_blocks_mirror_a) AOperator::prepare() did in this process so far:
+/// SBSR on an A whose symmetry the QP did not carry (Qp::a_symmetric).
+long mirror_check_count();
 
 /// Whether the BSR products run the AVX2 kernel (the CPU has AVX2 and the scalar loop is not
 /// forced). Both kernels give the same y and dots to the last bit; tests compare them.

@@ -175,7 +175,7 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
         return chol.solve(rhs);
     };
     // CSR: a few products (the stop test's gradients) would not repay a block copy of A.
-    AOperator a_op(qp.A);
+    AOperator a_op(qp);
     a_op.prepare(AFormat::CSR, static_cast<int>(common.threads));
     if (!loop.end_setup()) {
         result.x = qp.x0;

@@ -57,7 +57,7 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
                            "cg: sizes disagree (A " + std::to_string(qp.A.rows()) + "x" + std::to_string(qp.A.cols()) +
                                ", b " + std::to_string(qp.b.size()) + ", x0 " + std::to_string(qp.x0.size()) + ")");
     }
-    AOperator a_op(qp.A);  // the product with A: 3x3 blocks when A has them, built in the setup
+    AOperator a_op(qp);  // the product with A: 3x3 blocks when A has them, built in the setup
     a_op.prepare(common.a_format, static_cast<int>(common.threads));
     result.info["a_format"] = to_string(a_op.format());  // the storage the products read
     const bool jacobi = m_settings.precond == "jacobi";

@@ -185,7 +185,7 @@ SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
         result.info["start_solve_s"] = loop.elapsed_s() - start_begin_s;
         result.info["start_solver"] = "cholmod";
     }
-    AOperator a_op(qp.A);  // the product with A: 3x3 blocks when A has them, built in the setup
+    AOperator a_op(qp);  // the product with A: 3x3 blocks when A has them, built in the setup
     a_op.prepare(s.common.a_format, static_cast<int>(s.common.threads));
     result.info["a_format"] = to_string(a_op.format());  // the storage the products read
     Vec lambda = Vec::Zero(m);

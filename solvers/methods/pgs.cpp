@@ -95,7 +95,7 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
     const Vec S_diag = S.diagonal();
     result.info["y_stored"] = keep_y;
     // CSR: a few products (the stop test's gradients) would not repay a block copy of A.
-    AOperator a_op(qp.A);
+    AOperator a_op(qp);
     a_op.prepare(AFormat::CSR, static_cast<int>(s.common.threads));
     if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT);
     const AccuracyScale scale = accuracy_scale(qp);

@@ -51,7 +51,7 @@ SolverResult TemplateSolver::solve(const QpView& qp, const SolveContext& context
         norm_inf = std::max(norm_inf, row);
     }
     const double step = norm_inf > 0 ? m_settings.step_scale / norm_inf : 1.0;
-    AOperator a_op(qp.A);  // the product with A: 3x3 blocks when A has them, built in the setup
+    AOperator a_op(qp);  // the product with A: 3x3 blocks when A has them, built in the setup
     a_op.prepare(common.a_format, static_cast<int>(common.threads));
     result.info["a_format"] = to_string(a_op.format());  // the storage the products read
     const AccuracyScale scale = accuracy_scale(qp);

@@ -144,6 +144,7 @@ Qp select_rows(const Qp& qp, const std::vector<int>& rows)
 {
     Qp out;
     out.A = qp.A;
+    out.a_symmetric = qp.a_symmetric;  // the same A
     out.b = qp.b;
     out.x0 = qp.x0;
     out.meta = qp.meta;

@@ -85,7 +85,7 @@ SolverResult mprgp_box_solve(const QpView& qp, const MprgpBoxSettings& settings,
     std::string error;
     if (settings.precond == "jacobi" && !jacobi_inverse_diagonal(qp.A, dinv, error))
         return loop.finish(result, SolveStatus::INVALID_INPUT, "mprgp-box: " + error);
-    AOperator a_op(qp.A);  // the product with A: 3x3 blocks when A has them, built in the setup
+    AOperator a_op(qp);  // the product with A: 3x3 blocks when A has them, built in the setup
     a_op.prepare(common.a_format, static_cast<int>(common.threads));
     result.info["a_format"] = to_string(a_op.format());  // the storage the products read
     const PowerResult power = estimate_norm(a_op, context, PowerRule::POWER, settings.power_max, common, cnt);

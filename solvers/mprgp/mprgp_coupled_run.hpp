@@ -35,7 +35,7 @@ public:
     CoupledRun(const QpView& qp, const MprgpCoupledSettings& st, const SolveContext& context)
         : m_loop("mprgp-coupled", qp, st.common, context), m_original(qp), m_choice(PrecondChoice::make(qp, st)),
           m_scaled(ScaledVariables::make(qp, m_choice.name, st)),
-          m_qp(m_scaled ? QpView{qp.A, m_scaled->b, m_scaled->J, qp.c, m_scaled->y0} : qp), m_A(m_qp.A), m_a_op(m_A),
+          m_qp(m_scaled ? QpView{qp.A, m_scaled->b, m_scaled->J, qp.c, m_scaled->y0} : qp), m_A(m_qp.A), m_a_op(qp),
           m_J(m_qp.J), m_c(m_qp.c), m_st(st), m_ctx(context), m_n(qp.n()), m_m(qp.m()),
           m_unscale(m_scaled ? &m_scaled->unscale : nullptr)
     {

@@ -3,6 +3,7 @@
 /// `info`), the preconditioner choice (precond = auto) and the scaled variables (precond = scaled).
 #include "solvers/core/qp.hpp"
 #include "solvers/linalg/row_components.hpp"
+#include "solvers/linalg/row_search.hpp"
 #include "solvers/mprgp/mprgp_coupled.hpp"
 #include "solvers/mprgp/mprgp_parts.hpp"
 
@@ -125,10 +126,10 @@ struct ScaledVariables {
                                                  const MprgpCoupledSettings& st)
     {
         if (precond != "scaled" || st.deflation != "none") return nullptr;
-        const Vec diag = qp.A.diagonal();  // once: a search per row of A
-        if (!(diag.array() > 0.0).all()) return nullptr;  // jacobi_inverse_diagonal's refusal (NaN too)
         auto s = std::make_unique<ScaledVariables>();
-        s->unscale = diag.cwiseSqrt().cwiseInverse();
+        s->unscale = sorted_rows_diagonal(qp.A);  // D, once: a search per row of A (rows ahead prefetched)
+        if (!(s->unscale.array() > 0.0).all()) return nullptr;  // jacobi_inverse_diagonal's refusal (NaN too)
+        s->unscale = s->unscale.cwiseSqrt().cwiseInverse();     // D^-1/2 in place
         const Vec& u = s->unscale;
         s->J = qp.J;
         for (Eigen::Index i = 0; i < s->J.outerSize(); ++i)

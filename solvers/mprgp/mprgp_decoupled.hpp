@@ -29,8 +29,8 @@ namespace cb {
 class DecoupledMprgp {
 public:
     DecoupledMprgp(const QpView& qp, const MprgpSettings& settings, const SolveContext& context)
-        : m_qp(qp), m_A(qp.A), m_a_op(qp.A), m_J(qp.J), m_b(qp.b), m_c(qp.c), m_st(settings), m_ctx(context),
-          m_n(qp.n()), m_m(qp.m()), m_loop("mprgp", qp, settings.common, context)
+        : m_qp(qp), m_A(qp.A), m_a_op(qp), m_J(qp.J), m_b(qp.b), m_c(qp.c), m_st(settings), m_ctx(context), m_n(qp.n()),
+          m_m(qp.m()), m_loop("mprgp", qp, settings.common, context)
     {
     }
 

@@ -9,6 +9,7 @@
 #include "solvers/core/solve_loop.hpp"
 #include "solvers/core/solver.hpp"
 #include "solvers/core/types.hpp"
+#include "solvers/linalg/row_search.hpp"
 #include "solvers/mprgp/mprgp_kernels.hpp"
 
 #include <cmath>
@@ -21,7 +22,7 @@ namespace cb {
 /// entry) when a diagonal entry of A is not positive: D^-1 would not be SPD.
 inline bool jacobi_inverse_diagonal(const SpMat& A, Vec& dinv, std::string& error)
 {
-    const Vec diag = A.diagonal();
+    const Vec diag = sorted_rows_diagonal(A);  // A.diagonal()'s values, the rows ahead prefetched
     dinv.resize(diag.size());
     for (Eigen::Index j = 0; j < diag.size(); ++j) {
         if (!(diag[j] > 0.0)) {
