@@ -1,5 +1,6 @@
 #include "solvers/measure/accuracy.hpp"
 #include "solvers/linalg/a_product.hpp"
+#include "solvers/linalg/row_search.hpp"
 #include "solvers/measure/accuracy_rows.hpp"
 
 #include <Eigen/SparseCholesky>
@@ -30,9 +31,14 @@ Vec diagonal_sums(const SpMat& A)
     Vec diag(A.rows());
     const int* inner = A.innerIndexPtr();
     const double* val = A.valuePtr();
+    const int* outer = A.outerIndexPtr();
     for (Eigen::Index r = 0; r < A.rows(); ++r) {
-        const int first = A.outerIndexPtr()[r];
-        const int last = A.isCompressed() ? A.outerIndexPtr()[r + 1] : first + A.innerNonZeroPtr()[r];
+        const int first = outer[r];
+        const int last = A.isCompressed() ? outer[r + 1] : first + A.innerNonZeroPtr()[r];
+        // The search's value load waited on memory row after row: a row ahead's middle, asked early
+        // (solvers/linalg/row_search.hpp).
+        if (A.isCompressed() && r + DIAGONAL_PREFETCH_AHEAD < A.rows())
+            __builtin_prefetch(val + (outer[r + DIAGONAL_PREFETCH_AHEAD] + outer[r + DIAGONAL_PREFETCH_AHEAD + 1]) / 2);
         double d = 0.0;
         for (const int* k = std::lower_bound(inner + first, inner + last, static_cast<int>(r));
              k != inner + last && *k == r; ++k)

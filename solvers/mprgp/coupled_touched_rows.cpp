@@ -1,6 +1,7 @@
 // d'Ad and g += A d over a correction's DOFs, from A's blocks or its CSR rows (coupled_touched_rows.hpp).
 #include "solvers/mprgp/coupled_touched_rows.hpp"
 
+#include <algorithm>
 #include <cstddef>
 #include <vector>
 
@@ -20,7 +21,7 @@ template <class F> void for_row_blocks(const BlockRows& B, int j, F&& f)
 
 }  // namespace
 
-TouchedRowsOfA::TouchedRowsOfA(const AOperator& op, const Vec* u) : m_A(op.csr()), m_u(u)
+TouchedRowsOfA::TouchedRowsOfA(const AOperator& op, const Vec* u, const SpMat* rows) : m_A(op.csr()), m_u(u)
 {
     if (op.format() == AFormat::BSR) m_blocks = &op.blocks();
     if (op.format() != AFormat::SBSR) return;
@@ -30,11 +31,19 @@ TouchedRowsOfA::TouchedRowsOfA(const AOperator& op, const Vec* u) : m_A(op.csr()
     // A block row's part left of the diagonal is stored in the rows above, as their blocks' transposes.
     const BlockRows& B = *m_blocks;
     const size_t nb = B.start.size() - 1;
+    if (rows != nullptr) {
+        m_indexed.assign(nb, 0);
+        for (Eigen::Index i = 0; i < rows->outerSize(); ++i)
+            for (SpMat::InnerIterator it(*rows, i); it; ++it)
+                if (static_cast<size_t>(it.col() / 3) < nb) m_indexed[static_cast<size_t>(it.col() / 3)] = 1;
+    }
+    auto indexed = [&](size_t J) { return m_indexed.empty() || m_indexed[J]; };
     m_above_start.assign(nb + 1, 0);
     for (size_t I = 0; I < nb; ++I)
-        for (int k = B.start[I]; k < B.start[I + 1]; ++k)
-            if (static_cast<size_t>(B.column[static_cast<size_t>(k)]) != I)
-                ++m_above_start[static_cast<size_t>(B.column[static_cast<size_t>(k)]) + 1];
+        for (int k = B.start[I]; k < B.start[I + 1]; ++k) {
+            const size_t J = static_cast<size_t>(B.column[static_cast<size_t>(k)]);
+            if (J != I && indexed(J)) ++m_above_start[J + 1];
+        }
     for (size_t J = 0; J < nb; ++J) m_above_start[J + 1] += m_above_start[J];
     m_above_block.resize(static_cast<size_t>(m_above_start[nb]));
     m_above_row.resize(m_above_block.size());
@@ -42,7 +51,7 @@ TouchedRowsOfA::TouchedRowsOfA(const AOperator& op, const Vec* u) : m_A(op.csr()
     for (size_t I = 0; I < nb; ++I)
         for (int k = B.start[I]; k < B.start[I + 1]; ++k) {
             const size_t J = static_cast<size_t>(B.column[static_cast<size_t>(k)]);
-            if (J == I) continue;
+            if (J == I || !indexed(J)) continue;
             const size_t at = static_cast<size_t>(next[J]++);
             m_above_block[at] = k;
             m_above_row[at] = static_cast<int>(I);
@@ -122,6 +131,10 @@ void TouchedRowsOfA::upper_add_a_d(const Vec& d, Vec& g) const
             add(c + 1, b[3] * d0 + b[4] * d1 + b[5] * d2);
             add(c + 2, b[6] * d0 + b[7] * d1 + b[8] * d2);
         }
+        if (!m_indexed.empty() && !m_indexed[static_cast<size_t>(I)]) {
+            add_above_by_search(I, d, g);
+            continue;
+        }
         for (int a = m_above_start[static_cast<size_t>(I)]; a < m_above_start[static_cast<size_t>(I) + 1]; ++a) {
             const int K = m_above_row[static_cast<size_t>(a)];
             if (m_row_flag[static_cast<size_t>(K)]) continue;  // done along row K
@@ -131,6 +144,31 @@ void TouchedRowsOfA::upper_add_a_d(const Vec& d, Vec& g) const
             add(c + 1, b[1] * d0 + b[4] * d1 + b[7] * d2);
             add(c + 2, b[2] * d0 + b[5] * d1 + b[8] * d2);
         }
+    }
+}
+
+void TouchedRowsOfA::add_above_by_search(int I, const Vec& d, Vec& g) const
+{
+    // The same terms in the same order as the index gives them (block rows K ascending).
+    const BlockRows& B = *m_blocks;
+    const double* pd = d.data();
+    const double* u = m_u != nullptr ? m_u->data() : nullptr;
+    double* pg = g.data();
+    auto ud = [&](std::ptrdiff_t c) { return u != nullptr ? u[c] * pd[c] : pd[c]; };
+    auto add = [&](std::ptrdiff_t c, double v) { pg[c] += u != nullptr ? u[c] * v : v; };
+    const std::ptrdiff_t r = 3 * static_cast<std::ptrdiff_t>(I);
+    const double d0 = ud(r), d1 = ud(r + 1), d2 = ud(r + 2);
+    for (int K = 0; K < I; ++K) {
+        if (m_row_flag[static_cast<size_t>(K)]) continue;  // done along row K
+        const int* first = B.column.data() + B.start[static_cast<size_t>(K)];
+        const int* last = B.column.data() + B.start[static_cast<size_t>(K) + 1];
+        const int* at = std::lower_bound(first, last, I);
+        if (at == last || *at != I) continue;
+        const double* b = B.value.data() + 9 * (at - B.column.data());
+        const std::ptrdiff_t c = 3 * static_cast<std::ptrdiff_t>(K);
+        add(c, b[0] * d0 + b[3] * d1 + b[6] * d2);
+        add(c + 1, b[1] * d0 + b[4] * d1 + b[7] * d2);
+        add(c + 2, b[2] * d0 + b[5] * d1 + b[8] * d2);
     }
 }
 

@@ -23,7 +23,10 @@ class TouchedRowsOfA {
 public:
     /// @param op  the run's operator, prepared (its format decides the storage read); must outlive this
     /// @param u   the scaling U (precond = scaled), or nullptr
-    TouchedRowsOfA(const AOperator& op, const Vec* u);
+    /// @param rows  the constraint rows whose DOFs d lives on (d = J'lam), or nullptr for any DOF: on
+    ///              SBSR the column index then covers their block columns only (not a copy of A's
+    ///              block pattern, 20 MB on press_1m); a d outside them is still right, slowly
+    TouchedRowsOfA(const AOperator& op, const Vec* u, const SpMat* rows = nullptr);
     /// d'Ad over the DOFs `touched` (d zero elsewhere).
     double d_a_d(const std::vector<int>& touched, const Vec& d) const;
     /// g += A d over the DOFs `touched` (d zero elsewhere).
@@ -39,6 +42,9 @@ private:
     void clear_block_rows() const;
     double upper_d_a_d(const Vec& d) const;
     void upper_add_a_d(const Vec& d, Vec& g) const;
+    /// g_K += A_KI d_I for the blocks above block row I by a search of every block row K < I: the
+    /// index's stand-in for a column it does not cover.
+    void add_above_by_search(int I, const Vec& d, Vec& g) const;
 
     const SpMat& m_A;
     const BlockRows* m_blocks = nullptr;
@@ -47,6 +53,7 @@ private:
     std::vector<int> m_above_start;        // SBSR: block column J's blocks above the diagonal are
     std::vector<int> m_above_block;        //   m_above_block[m_above_start[J] .. m_above_start[J + 1] - 1]
     std::vector<int> m_above_row;          //   in the block rows m_above_row[same range]
+    std::vector<char> m_indexed;           // SBSR: block column J is in the index (empty: every one)
     mutable std::vector<char> m_row_flag;  // per block row: d has a DOF there
     mutable std::vector<int> m_rows_of_d;
 };

@@ -259,7 +259,7 @@ SolverResult CoupledRun::run()
             return m_loop.finish(result, result.status);
         }
     m_a_op.prepare(m_st.common.a_format, static_cast<int>(m_st.common.threads));
-    m_rows_of_a = std::make_unique<TouchedRowsOfA>(m_a_op, m_unscale);
+    m_rows_of_a = std::make_unique<TouchedRowsOfA>(m_a_op, m_unscale, &m_J);
     const PowerResult power = estimate_norm(m_a_op, m_ctx, PowerRule::POWER, m_st.power_max, common, m_cnt);
     m_alpha_bar = fixed_step_length(power);
     m_scale = accuracy_scale(m_original);

@@ -131,4 +131,44 @@ TEST(CoupledTouchedRows, UpperBlocksGiveTheCsrRowsResultsToRounding)
     }
 }
 
+TEST(CoupledTouchedRows, ColumnIndexOfTheRowsDofsGivesTheWholeIndexBits)
+{
+    // The index restricted to the block columns of J's DOFs: the same g and d'Ad to the bit for a d on
+    // those DOFs (J'lam), and for a d off them too (the search stands in for the missing columns).
+    std::mt19937 rng(4748);
+    const SpMat A = random_block_spd(60, rng, 0.02);
+    const int n = static_cast<int>(A.rows());
+    SpMat J(5, n);
+    std::vector<Eigen::Triplet<double>> entries;
+    for (int i = 0; i < 5; ++i)
+        for (int e = 0; e < 3; ++e) entries.emplace_back(i, static_cast<int>(rng() % n), 1.0 + i + e);
+    J.setFromTriplets(entries.begin(), entries.end());
+    J.makeCompressed();
+    cb::AOperator upper(A);
+    ASSERT_EQ(upper.prepare(cb::AFormat::SBSR), cb::AFormat::SBSR) << upper.why_csr();
+    const Vec u = Vec::Random(n).cwiseAbs() + Vec::Constant(n, 0.5);
+    const cb::TouchedRowsOfA whole(upper, &u), of_rows(upper, &u, &J);
+    std::vector<int> on_rows;
+    for (int k = 0; k < J.outerSize(); ++k)
+        for (SpMat::InnerIterator it(J, k); it; ++it) on_rows.push_back(static_cast<int>(it.col()));
+    std::sort(on_rows.begin(), on_rows.end());
+    on_rows.erase(std::unique(on_rows.begin(), on_rows.end()), on_rows.end());
+    std::vector<int> anywhere;
+    Vec d_anywhere;
+    random_correction(n, rng, anywhere, d_anywhere);
+    Vec d_on_rows = Vec::Zero(n);
+    for (int j : on_rows) d_on_rows[j] = 0.5 + j % 7;
+    for (const auto& [touched, d] : {std::pair{on_rows, d_on_rows}, std::pair{anywhere, d_anywhere}}) {
+        const Vec g0 = Vec::Random(n);
+        Vec g_whole = g0, g_rows = g0;
+        whole.add_a_d(touched, d, g_whole);
+        of_rows.add_a_d(touched, d, g_rows);
+        EXPECT_GT((g_whole - g0).lpNorm<Eigen::Infinity>(), 0.0);
+        long differing = 0;
+        for (int i = 0; i < n; ++i) differing += g_whole[i] != g_rows[i];
+        EXPECT_EQ(differing, 0) << touched.size() << " DOFs";
+        EXPECT_EQ(whole.d_a_d(touched, d), of_rows.d_a_d(touched, d));
+    }
+}
+
 }  // namespace coupled_touched_rows_test
