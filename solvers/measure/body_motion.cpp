@@ -1,6 +1,6 @@
 #include "solvers/measure/body_motion.hpp"
-#include "solvers/linalg/prefault.hpp"
 #include "solvers/linalg/disjoint_sets.hpp"
+#include "solvers/linalg/prefault.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <array>
@@ -150,7 +150,8 @@ BodyMotion::BodyMotion(const QpView& qp, double length)
     // header: the stiffness parts of a row cancel, and must do so before rounding to double).
     // E takes row p of AV right after it is rounded, in the order of p, as a separate pass would.
     B.av.resize(n, MODES);  // every row is written below
-    prefault_for_writing(B.av.data(), static_cast<size_t>(B.av.size()) * sizeof(double));  // one call, not a fault a page
+    // Faulted in with one call, not a fault a page (solvers/linalg/prefault.hpp).
+    prefault_for_writing(B.av.data(), static_cast<size_t>(B.av.size()) * sizeof(double));
     std::vector<LongVec6> load(static_cast<size_t>(bodies), LongVec6{});
     std::vector<Mat6> E(static_cast<size_t>(bodies), Mat6::Zero());
     int mode[3];
