@@ -35,10 +35,7 @@ Vec diagonal_sums(const SpMat& A)
     for (Eigen::Index r = 0; r < A.rows(); ++r) {
         const int first = outer[r];
         const int last = A.isCompressed() ? outer[r + 1] : first + A.innerNonZeroPtr()[r];
-        // The search's value load waited on memory row after row: a row ahead's middle, asked early
-        // (solvers/linalg/row_search.hpp).
-        if (A.isCompressed() && r + DIAGONAL_PREFETCH_AHEAD < A.rows())
-            __builtin_prefetch(val + (outer[r + DIAGONAL_PREFETCH_AHEAD] + outer[r + DIAGONAL_PREFETCH_AHEAD + 1]) / 2);
+        if (A.isCompressed()) prefetch_diagonal_ahead(outer, val, r, A.rows());
         double d = 0.0;
         for (const int* k = std::lower_bound(inner + first, inner + last, static_cast<int>(r));
              k != inner + last && *k == r; ++k)

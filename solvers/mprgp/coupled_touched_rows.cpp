@@ -131,44 +131,28 @@ void TouchedRowsOfA::upper_add_a_d(const Vec& d, Vec& g) const
             add(c + 1, b[3] * d0 + b[4] * d1 + b[5] * d2);
             add(c + 2, b[6] * d0 + b[7] * d1 + b[8] * d2);
         }
-        if (!m_indexed.empty() && !m_indexed[static_cast<size_t>(I)]) {
-            add_above_by_search(I, d, g);
-            continue;
-        }
-        for (int a = m_above_start[static_cast<size_t>(I)]; a < m_above_start[static_cast<size_t>(I) + 1]; ++a) {
-            const int K = m_above_row[static_cast<size_t>(a)];
-            if (m_row_flag[static_cast<size_t>(K)]) continue;  // done along row K
+        // Block (K, I) above d's block row I, in a row K that d does not touch: g_K += A_KI d_I.
+        auto add_above = [&](int K, const double* b) {
+            if (m_row_flag[static_cast<size_t>(K)]) return;  // done along row K
             const std::ptrdiff_t c = 3 * static_cast<std::ptrdiff_t>(K);
-            const double* b = B.value.data() + 9 * static_cast<std::ptrdiff_t>(m_above_block[static_cast<size_t>(a)]);
             add(c, b[0] * d0 + b[3] * d1 + b[6] * d2);
             add(c + 1, b[1] * d0 + b[4] * d1 + b[7] * d2);
             add(c + 2, b[2] * d0 + b[5] * d1 + b[8] * d2);
+        };
+        if (m_indexed.empty() || m_indexed[static_cast<size_t>(I)]) {
+            for (int a = m_above_start[static_cast<size_t>(I)]; a < m_above_start[static_cast<size_t>(I) + 1]; ++a)
+                add_above(m_above_row[static_cast<size_t>(a)],
+                          B.value.data() + 9 * static_cast<std::ptrdiff_t>(m_above_block[static_cast<size_t>(a)]));
+            continue;
         }
-    }
-}
-
-void TouchedRowsOfA::add_above_by_search(int I, const Vec& d, Vec& g) const
-{
-    // The same terms in the same order as the index gives them (block rows K ascending).
-    const BlockRows& B = *m_blocks;
-    const double* pd = d.data();
-    const double* u = m_u != nullptr ? m_u->data() : nullptr;
-    double* pg = g.data();
-    auto ud = [&](std::ptrdiff_t c) { return u != nullptr ? u[c] * pd[c] : pd[c]; };
-    auto add = [&](std::ptrdiff_t c, double v) { pg[c] += u != nullptr ? u[c] * v : v; };
-    const std::ptrdiff_t r = 3 * static_cast<std::ptrdiff_t>(I);
-    const double d0 = ud(r), d1 = ud(r + 1), d2 = ud(r + 2);
-    for (int K = 0; K < I; ++K) {
-        if (m_row_flag[static_cast<size_t>(K)]) continue;  // done along row K
-        const int* first = B.column.data() + B.start[static_cast<size_t>(K)];
-        const int* last = B.column.data() + B.start[static_cast<size_t>(K) + 1];
-        const int* at = std::lower_bound(first, last, I);
-        if (at == last || *at != I) continue;
-        const double* b = B.value.data() + 9 * (at - B.column.data());
-        const std::ptrdiff_t c = 3 * static_cast<std::ptrdiff_t>(K);
-        add(c, b[0] * d0 + b[3] * d1 + b[6] * d2);
-        add(c + 1, b[1] * d0 + b[4] * d1 + b[7] * d2);
-        add(c + 2, b[2] * d0 + b[5] * d1 + b[8] * d2);
+        // A column the index does not cover (d off the rows' DOFs): each block row K < I searched for
+        // block column I, in the index's order (K ascending).
+        for (int K = 0; K < I; ++K) {
+            const int* first = B.column.data() + B.start[static_cast<size_t>(K)];
+            const int* last = B.column.data() + B.start[static_cast<size_t>(K) + 1];
+            const int* at = std::lower_bound(first, last, I);
+            if (at != last && *at == I) add_above(K, B.value.data() + 9 * (at - B.column.data()));
+        }
     }
 }
 

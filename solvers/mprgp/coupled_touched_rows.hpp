@@ -42,9 +42,6 @@ private:
     void clear_block_rows() const;
     double upper_d_a_d(const Vec& d) const;
     void upper_add_a_d(const Vec& d, Vec& g) const;
-    /// g_K += A_KI d_I for the blocks above block row I by a search of every block row K < I: the
-    /// index's stand-in for a column it does not cover.
-    void add_above_by_search(int I, const Vec& d, Vec& g) const;
 
     const SpMat& m_A;
     const BlockRows* m_blocks = nullptr;
