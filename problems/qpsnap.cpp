@@ -6,6 +6,7 @@
 #include "problems/qpsnap.hpp"
 
 #include "problems/io_util.hpp"
+#include "solvers/linalg/prefault.hpp"
 
 #include <zlib.h>
 
@@ -187,22 +188,6 @@ private:
     const unsigned char* m_begin = nullptr;
     const unsigned char* m_end = nullptr;
 };
-
-/// Asks for transparent huge pages on a fresh large buffer before it is first written: a 50 MB
-/// array then costs a few dozen page faults instead of twelve thousand. Only a hint.
-void advise_huge_pages(void* p, std::size_t bytes)
-{
-#ifdef MADV_HUGEPAGE
-    const std::size_t huge = 2u << 20;
-    if (bytes < 2 * huge) return;
-    // The whole huge pages inside [p, p + bytes), as offsets from p: the address is only read
-    // (pointer to integer), the advised pointer is p's own char* moved forward.
-    const std::size_t misalign = reinterpret_cast<std::uintptr_t>(p) & (huge - 1);
-    const std::size_t begin = (huge - misalign) & (huge - 1);
-    const std::size_t end = bytes - ((misalign + bytes) & (huge - 1));
-    if (end > begin) ::madvise(static_cast<char*>(p) + begin, end - begin, MADV_HUGEPAGE);
-#endif
-}
 
 std::uint64_t load_u64_le(const unsigned char* p)
 {

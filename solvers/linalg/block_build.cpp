@@ -197,8 +197,9 @@ bool build_blocks(const SpMat& A, const BlockBuild& how, BlockRows& out, double 
     out.column.resize(static_cast<size_t>(blocks));
     out.value.resize(static_cast<size_t>(blocks) * 9 + 1);  // unwritten: every entry is set below
     out.value.back() = 0.0;                                 // see block_step
-    prefault_for_writing(out.value.data(), out.value.size() * sizeof(double));
-    prefault_for_writing(out.column.data(), out.column.size() * sizeof(int));
+    // On 2 MB pages: the products stream the values and gather across them (docs/a_product.md).
+    prefault_huge_for_writing(out.value.data(), out.value.size() * sizeof(double));
+    prefault_huge_for_writing(out.column.data(), out.column.size() * sizeof(int));
     int* column = out.column.data();
     double* value = out.value.data();
     const double* u = how.scale ? how.scale->data() : nullptr;
