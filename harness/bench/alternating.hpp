@@ -4,6 +4,7 @@
 // them alike; the figures are medians of per-repetition times and ratios, with their spread.
 // CB_BENCH_REPS sets the repetitions (default 15); repetition 0 warms up and is not kept.
 #include "problems/qpsnap.hpp"
+#include "solvers/linalg/prefault.hpp"
 
 #include <benchmark/benchmark.h>
 
@@ -89,6 +90,16 @@ inline void triad(double* a, const double* b, const double* c, std::ptrdiff_t fi
 inline std::ptrdiff_t triad_length(double bytes)
 {
     return std::max<std::ptrdiff_t>(std::ptrdiff_t{1} << 22, static_cast<std::ptrdiff_t>(bytes / 24.0));
+}
+
+/// A triad array of t entries, all equal to `value`, on huge pages where the system gives them as A's
+/// blocks are (solvers/linalg/prefault.hpp): the ceiling measured on the pages the products read.
+inline Vec triad_array(std::ptrdiff_t t, double value)
+{
+    Vec v(t);  // not written yet: the advice takes effect at the first touch below
+    advise_huge_pages(v.data(), static_cast<std::size_t>(t) * sizeof(double));
+    v.setConstant(value);
+    return v;
 }
 
 /// Registers `body` once per snapshot of CB_BENCH_SNAPSHOTS (colon-separated .qpsnap paths) as

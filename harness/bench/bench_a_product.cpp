@@ -36,7 +36,7 @@ void measure_formats(benchmark::State& state, const cb::Qp& qp)
     const cb::Vec x = cb::Vec::LinSpaced(n, -1.0, 1.0);
     cb::Vec y_csr(n), y_bsr(n), y_sbsr(n);
     const std::ptrdiff_t t = triad_length(csr.matrix_bytes());
-    cb::Vec a = cb::Vec::Zero(t), b = cb::Vec::Constant(t, 1.0), c = cb::Vec::Constant(t, 2.0);
+    cb::Vec a = triad_array(t, 0.0), b = triad_array(t, 1.0), c = triad_array(t, 2.0);
     std::vector<std::vector<double>> times;
     for (auto _ : state) {
         times = alternate({[&] {

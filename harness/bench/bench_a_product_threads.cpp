@@ -63,7 +63,7 @@ void measure_threads(benchmark::State& state, const cb::Qp& qp)
     const cb::Vec x = cb::Vec::LinSpaced(n, -1.0, 1.0);
     cb::Vec y1(n), y2(n), z1(n), z2(n);
     const std::ptrdiff_t t = triad_length(csr1.matrix_bytes());
-    cb::Vec a = cb::Vec::Zero(t), b = cb::Vec::Constant(t, 1.0), c = cb::Vec::Constant(t, 2.0);
+    cb::Vec a = triad_array(t, 0.0), b = triad_array(t, 1.0), c = triad_array(t, 2.0);
     const auto product = [](const cb::AOperator& op, const cb::Vec& in, cb::Vec& out) {
         return [&op, &in, &out] {
             cb::a_product(op, in, out);
