@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 namespace cb {
 
@@ -278,31 +279,40 @@ double BodyMotion::displacement_at(XAt x_at, Eigen::Index n, const Vec& lambda, 
     // gathered on the way (a separate pass read x once more); the sums of a non-finite x are dropped.
     const auto nodes = static_cast<Eigen::Index>(body.size());
     bool finite = true;
-    Eigen::Index v = 0;
-    // AV's rows asked for 128 DOFs (6 KB) ahead: the pass waited on their loads (docs/a_product.md);
-    // a prefetch changes no sum.
+    // On an AV beyond the caches its rows are asked for 128 DOFs (6 KB) ahead: the pass waited on
+    // their loads (docs/a_product.md). A small AV skips the prefetch and its instructions. Neither
+    // changes a sum.
     constexpr Eigen::Index AV_AHEAD = 128;
+    constexpr Eigen::Index AV_PREFETCH_MIN_BYTES = Eigen::Index{8} << 20;
     const double* av_data = B.av.data();
     const Eigen::Index av_last = B.av.size() - 1;
-    while (v < nodes) {
-        const int b = body[static_cast<size_t>(v)];
-        Vec6 sum = load[static_cast<size_t>(b)];
-        for (; v < nodes && body[static_cast<size_t>(v)] == b; ++v)
-            for (Eigen::Index p = v * m_per_node; p < (v + 1) * m_per_node; ++p) {
-                __builtin_prefetch(av_data + std::min<Eigen::Index>(MODES * (p + AV_AHEAD), av_last));
-                const double xp = x_at(p);
-                finite = finite & std::isfinite(xp);
-                sum += B.av.row(p).transpose() * (xp - B.x0[p]);
-            }
-        load[static_cast<size_t>(b)] = sum;
-    }
+    const auto accumulate = [&](auto prefetch) {
+        Eigen::Index v = 0;
+        while (v < nodes) {
+            const int b = body[static_cast<size_t>(v)];
+            Vec6 sum = load[static_cast<size_t>(b)];
+            for (; v < nodes && body[static_cast<size_t>(v)] == b; ++v)
+                for (Eigen::Index p = v * m_per_node; p < (v + 1) * m_per_node; ++p) {
+                    if constexpr (decltype(prefetch)::value)
+                        __builtin_prefetch(av_data + std::min<Eigen::Index>(MODES * (p + AV_AHEAD), av_last));
+                    const double xp = x_at(p);
+                    finite = finite & std::isfinite(xp);
+                    sum += B.av.row(p).transpose() * (xp - B.x0[p]);
+                }
+            load[static_cast<size_t>(b)] = sum;
+        }
+    };
+    if (B.av.size() * static_cast<Eigen::Index>(sizeof(double)) >= AV_PREFETCH_MIN_BYTES)
+        accumulate(std::true_type{});
+    else
+        accumulate(std::false_type{});
     if (!finite) return std::numeric_limits<double>::infinity();
     if (!subtract(m_rows, lambda, load) || !subtract(m_tangents, lambda_t, load))
         return std::numeric_limits<double>::infinity();
     std::vector<Vec6> motion(load.size());
     for (size_t b = 0; b < load.size(); ++b) motion[b] = B.pinv[b] * load[b];
     double widest = 0.0;
-    for (v = 0; v < nodes; ++v) {
+    for (Eigen::Index v = 0; v < nodes; ++v) {
         const Vec6& y = motion[static_cast<size_t>(body[static_cast<size_t>(v)])];
         if (!m_spatial) {
             widest = std::max(widest, std::abs(y[0]));
