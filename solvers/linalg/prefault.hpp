@@ -35,13 +35,13 @@ inline bool prefault_for_writing(void* data, std::size_t bytes)
 #endif
 }
 
-/// The 2 MB pages wholly inside [data, data + bytes), as offsets [begin, end) from data; false when
-/// there are none (the buffer is smaller than two huge pages).
-inline bool huge_page_interior(const void* data, std::size_t bytes, std::size_t& begin, std::size_t& end)
+/// The 2 MB pages wholly inside the `bytes` from `address`, as offsets [begin, end) from it; false
+/// when there are none (fewer than two huge pages' bytes). The address is only read as a number.
+inline bool huge_page_interior(std::uintptr_t address, std::size_t bytes, std::size_t& begin, std::size_t& end)
 {
     constexpr std::size_t huge = std::size_t{2} << 20;
     if (bytes < 2 * huge) return false;
-    const std::size_t misalign = reinterpret_cast<std::uintptr_t>(data) & (huge - 1);
+    const std::size_t misalign = address & (huge - 1);
     begin = (huge - misalign) & (huge - 1);
     end = bytes - ((misalign + bytes) & (huge - 1));
     return end > begin;
@@ -53,7 +53,7 @@ inline bool advise_huge_pages(void* data, std::size_t bytes)
 {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
     std::size_t begin = 0, end = 0;
-    if (!huge_page_interior(data, bytes, begin, end)) return false;
+    if (!huge_page_interior(reinterpret_cast<std::uintptr_t>(data), bytes, begin, end)) return false;
     return madvise(static_cast<char*>(data) + begin, end - begin, MADV_HUGEPAGE) == 0;
 #else
     (void)data;

@@ -10,12 +10,21 @@
 #include <gtest/gtest.h>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <numeric>
 #include <random>
 #include <vector>
 
 namespace body_motion_reference {
+
+/// The bits of a double: equal bits mean the same value, sign of zero and NaN payload included.
+std::uint64_t bits(double v)
+{
+    std::uint64_t u = 0;
+    std::memcpy(&u, &v, sizeof u);
+    return u;
+}
 
 using cb::QpView;
 using cb::SpMat;
@@ -62,14 +71,16 @@ public:
             std::vector<Eigen::Vector3d> centroid(static_cast<size_t>(bodies), Eigen::Vector3d::Zero());
             std::vector<double> count(static_cast<size_t>(bodies), 0.0);
             for (int v = 0; v < nodes; ++v) {
-                centroid[static_cast<size_t>(body[static_cast<size_t>(v)])] += qp.x0.segment<3>(3 * v);
+                centroid[static_cast<size_t>(body[static_cast<size_t>(v)])] +=
+                    qp.x0.segment<3>(3 * static_cast<Eigen::Index>(v));
                 count[static_cast<size_t>(body[static_cast<size_t>(v)])] += 1.0;
             }
             for (size_t b = 0; b < centroid.size(); ++b) centroid[b] /= count[b];
             offset.resize(nodes, 3);
             for (int v = 0; v < nodes; ++v)
-                offset.row(v) =
-                    (qp.x0.segment<3>(3 * v) - centroid[static_cast<size_t>(body[static_cast<size_t>(v)])]).transpose();
+                offset.row(v) = (qp.x0.segment<3>(3 * static_cast<Eigen::Index>(v)) -
+                                 centroid[static_cast<size_t>(body[static_cast<size_t>(v)])])
+                                    .transpose();
         }
         x0 = qp.x0;
         av.setZero(n, 6);
@@ -235,7 +246,8 @@ Built build(int bodies, int vertices, bool quirks, std::uint32_t seed, Eigen::In
         for (int r = 0; r < 3; ++r)
             for (int s = 0; s < 3; ++s) pair(3 * 0 + r, 3 * (nv - 1) + s, 0.0);  // a block of stored zeros
         pair(3 * 1 + 1, 3 * 2 + 2, 0.0);                                         // a zero inside a coupled block
-        pair(3 * 1, 3 * (vertices - 1) + 2, 0.5);  // a coupling held by one entry: rows not whole groups
+        pair(Eigen::Index{3} * 1, 3 * Eigen::Index{vertices - 1} + 2,
+             0.5);  // a coupling held by one entry: rows not whole groups
     }
     Built out;
     out.A = SpMat(n, n);
@@ -267,15 +279,14 @@ void expect_same_bits(const Built& q, double length)
         const Vec lambda =
             trial < 2 ? Vec::Zero(q.J.rows()) : Vec(Vec::NullaryExpr(q.J.rows(), [&] { return u(rng); }));
         const double got = motion.displacement(x, lambda), want = reference.displacement(x, lambda);
-        EXPECT_EQ(std::memcmp(&got, &want, sizeof got), 0) << "trial " << trial << ": " << got << " against " << want;
+        EXPECT_EQ(bits(got), bits(want)) << "trial " << trial << ": " << got << " against " << want;
         EXPECT_GT(want, 0.0);  // a point that moves the bodies: the comparison reads real sums
         // Scaled variables (x = u .* y, as mprgp-coupled's precond = scaled iterates): read through u.
         const Vec scale = Vec::NullaryExpr(q.x0.size(), [&] { return 1.5 + u(rng); });
         const Vec y = x.cwiseQuotient(scale);
         const double scaled = motion.displacement_scaled(scale, y, lambda);
         const double formed = reference.displacement(scale.cwiseProduct(y), lambda);
-        EXPECT_EQ(std::memcmp(&scaled, &formed, sizeof scaled), 0)
-            << "trial " << trial << ": " << scaled << " against " << formed;
+        EXPECT_EQ(bits(scaled), bits(formed)) << "trial " << trial << ": " << scaled << " against " << formed;
     }
 }
 
@@ -356,7 +367,7 @@ TEST(AccuracyScaleReference, InverseDiagonalEqualsTheScanOfEveryEntry)
     ASSERT_EQ(scale.inv_diag.size(), diag.size());
     for (Eigen::Index j = 0; j < diag.size(); ++j) {
         const double want = 1.0 / (diag[j] > 0.0 ? diag[j] : largest);
-        EXPECT_EQ(std::memcmp(&scale.inv_diag[j], &want, sizeof want), 0) << "j = " << j;
+        EXPECT_EQ(bits(scale.inv_diag[j]), bits(want)) << "j = " << j;
     }
     EXPECT_EQ(scale.inv_diag[10], 1.0 / largest);
 }
@@ -404,8 +415,7 @@ TEST(AccuracyScaleReference, RowsOfAnotherQpReuseTheScaleToTheLastBit)
             const std::vector<double> want = parts_of(solved, fresh, x, lambda),
                                       got = parts_of(solved, reused, x, lambda);
             for (size_t k = 0; k < want.size(); ++k)
-                EXPECT_EQ(std::memcmp(&got[k], &want[k], sizeof want[k]), 0)
-                    << "part " << k << ": " << got[k] << " against " << want[k];
+                EXPECT_EQ(bits(got[k]), bits(want[k])) << "part " << k << ": " << got[k] << " against " << want[k];
             EXPECT_GT(want[0], 0.0);  // stationarity reads the rows' loads
         }
     }

@@ -41,9 +41,8 @@ TEST(HugePages, InteriorIsTheWholeHugePagesInsideTheBuffer)
     constexpr std::size_t huge = std::size_t{2} << 20;
     for (std::uintptr_t start : {huge * 8, huge * 8 + 8, huge * 9 - 8, huge * 8 + 4096})
         for (std::size_t bytes : {2 * huge - 1, 2 * huge, 3 * huge + 100, 10 * huge}) {
-            const auto* data = reinterpret_cast<const void*>(start);  // only read as a number
             std::size_t begin = 0, end = 0;
-            const bool any = cb::huge_page_interior(data, bytes, begin, end);
+            const bool any = cb::huge_page_interior(start, bytes, begin, end);
             // Expected: from the first multiple of 2 MB at or after start to the last at or before the end.
             const std::uintptr_t first = (start + huge - 1) / huge * huge, last = (start + bytes) / huge * huge;
             const bool expect_any = bytes >= 2 * huge && last > first;
