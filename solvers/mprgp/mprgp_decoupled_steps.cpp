@@ -214,30 +214,10 @@ void DecoupledMprgp::cg_update(double alpha, double pap, double df, double corr_
 {
     // Fused update: x, g, z = D^-1 g and the dot products in one pass (DOFs in no
     // row; the rows' DOFs are summed below in face form, see face_dot).
-    double gg = 0.0, zg = 0.0, zap = 0.0, ginf = 0.0;
-    {
-        double* __restrict px = m_x.data();
-        double* __restrict pgr = m_g.data();
-        double* __restrict pz = m_z.data();
-        const double* __restrict pp = m_p.data();
-        const double* __restrict pap_v = m_Ap.data();
-        const double* __restrict pd = m_dinv.data();
-        const double* __restrict pw = m_scale.inv_diag.data();
-        const char* __restrict in_row = m_rows.dof_in_row.data();
-        for (Eigen::Index j = 0; j < m_n; ++j) {
-            px[j] -= alpha * pp[j];
-            const double gj = pgr[j] - alpha * pap_v[j];
-            pgr[j] = gj;
-            const double zj = pd[j] * gj;
-            pz[j] = zj;
-            if (!in_row[j]) {
-                zg += zj * gj;
-                zap += zj * pap_v[j];
-                ginf = std::max(ginf, std::abs(gj) * pw[j]);
-                gg += gj * gj;
-            }
-        }
-    }
+    const CgUpdateSums sums =
+        cg_update_pass(alpha, m_p, m_Ap, m_dinv, m_scale.inv_diag, m_rows.dof_in_row.data(), m_x, m_g, m_z);
+    double zg = sums.zg, zap = sums.zap;
+    const double gg = sums.gg, ginf = sums.ginf;
     if (m_ichol || m_deflate) {
         // The fused pass computed z = D^-1 g; replace it by the face direction (IC and/or balanced).
         face_precondition(m_z);

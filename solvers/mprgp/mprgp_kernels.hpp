@@ -95,6 +95,17 @@ PowerResult power_method(const AOperator& A, Vec& v, PowerRule rule, long max_pr
 /// then a difference, entry by entry), and a maximum is the same in any order.
 double cg_step_pass(double alpha, const Vec& p, const Vec& ap, const Vec& w, Vec& x, Vec& g, Vec& phi);
 
+/// Decoupled MPRGP's accepted CG step over the DOFs: x -= alpha p, g -= alpha ap, z = dinv .* g,
+/// and over the DOFs in no row (in_row[j] == 0) the sums z'g, z'ap, g'g, added in DOF order as one
+/// loop adds them, and the largest |g_j| w_j. AVX2 where the CPU has it: the entries' products and
+/// differences in packets of four, each sum still one chain in DOF order (a skipped DOF adds +0.0,
+/// which leaves a sum that started at +0.0 as it is), so the same bits as the plain loop.
+struct CgUpdateSums {
+    double zg = 0.0, zap = 0.0, gg = 0.0, ginf = 0.0;
+};
+CgUpdateSums cg_update_pass(double alpha, const Vec& p, const Vec& ap, const Vec& dinv, const Vec& w,
+                            const char* in_row, Vec& x, Vec& g, Vec& z);
+
 /// a'b and a'c in one pass over a (returned in ab, ac), each summed in the order of Eigen's
 /// a.dot(b) (its packets, two partial packet sums, then the tail entry by entry): the same bits as
 /// the two dots, with a read once instead of twice. a, b and c have one size.

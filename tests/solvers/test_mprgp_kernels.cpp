@@ -7,10 +7,21 @@
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <cstring>
+#include <limits>
 #include <random>
+#include <vector>
 
 namespace {
+
+/// The bits of a double: equal bits mean the same value, sign of zero included.
+std::uint64_t bits(double v)
+{
+    std::uint64_t b = 0;
+    std::memcpy(&b, &v, sizeof b);
+    return b;
+}
 
 using cb::Vec;
 
@@ -258,8 +269,8 @@ TEST(MprgpKernels, TwoDotsEqualEigensDotsToTheBit)
         double ab = 1.0, ac = 1.0;
         cb::two_dots(a, b, c, ab, ac);
         const double want_ab = a.dot(b), want_ac = a.dot(c);
-        differing += std::memcmp(&ab, &want_ab, sizeof ab) != 0;
-        differing += std::memcmp(&ac, &want_ac, sizeof ac) != 0;
+        differing += bits(ab) != bits(want_ab);
+        differing += bits(ac) != bits(want_ac);
         compared += 2;
     }
     EXPECT_EQ(differing, 0) << "of " << compared;
@@ -271,5 +282,59 @@ TEST(MprgpKernels, TwoDotsEqualEigensDotsToTheBit)
     cb::two_dots(a, b, a, ab, aa);
     EXPECT_NE(ab, plain);  // so the comparison above can tell one order from another
     const double want_aa = a.dot(a);
-    EXPECT_EQ(std::memcmp(&aa, &want_aa, sizeof aa), 0);
+    EXPECT_EQ(bits(aa), bits(want_aa));
+}
+
+// cg_update_pass against the plain loop it replaced in decoupled MPRGP's CG step: x, g, z and the
+// four results to the bit, on sizes around the packet of four, rows on a fifth of the DOFs, and a
+// DOF whose weighted gradient is 0 * inf = NaN (skipped by the maximum, as std::max skips it).
+TEST(MprgpKernels, CgUpdatePassEqualsThePlainLoopToTheBit)
+{
+    std::mt19937_64 rng(4099);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    long differing = 0, compared = 0;
+    for (Eigen::Index n : {0, 1, 3, 4, 5, 7, 8, 9, 17, 1001, 4099}) {
+        const double alpha = n % 2 == 0 ? 1.0 : 0.37;
+        Vec p(n), ap(n), dinv(n), w(n), x(n), g(n);
+        std::vector<char> in_row(static_cast<size_t>(n));
+        for (Eigen::Index j = 0; j < n; ++j) {
+            p[j] = u(rng) * (j % 7 == 0 ? 1e6 : 1.0);
+            ap[j] = u(rng) * (j % 3 == 0 ? 1e-5 : 1e3);
+            dinv[j] = 0.5 + u(rng) * 0.25;
+            w[j] = 1.0 + u(rng) * 0.5;
+            x[j] = u(rng) * 10.0;
+            g[j] = u(rng) * 1e2;
+            in_row[static_cast<size_t>(j)] = static_cast<char>(rng() % 5 == 0);
+        }
+        if (n > 5) {  // g - alpha ap = 0 exactly at DOF 5, weighted by inf: a NaN term
+            ap[5] = g[5] / alpha;
+            g[5] = alpha * ap[5];
+            w[5] = std::numeric_limits<double>::infinity();
+            in_row[5] = 0;
+        }
+        Vec x1 = x, g1 = g, z1(n);
+        const cb::CgUpdateSums got = cb::cg_update_pass(alpha, p, ap, dinv, w, in_row.data(), x1, g1, z1);
+        Vec x2 = x, g2 = g, z2(n);
+        double zg = 0.0, zap = 0.0, gg = 0.0, ginf = 0.0;
+        for (Eigen::Index j = 0; j < n; ++j) {  // the loop decoupled MPRGP ran before
+            x2[j] -= alpha * p[j];
+            const double gj = g2[j] - alpha * ap[j];
+            g2[j] = gj;
+            const double zj = dinv[j] * gj;
+            z2[j] = zj;
+            if (!in_row[static_cast<size_t>(j)]) {
+                zg += zj * gj;
+                zap += zj * ap[j];
+                ginf = std::max(ginf, std::abs(gj) * w[j]);
+                gg += gj * gj;
+            }
+        }
+        for (Eigen::Index j = 0; j < n; ++j)
+            differing += (bits(x1[j]) != bits(x2[j])) + (bits(g1[j]) != bits(g2[j])) + (bits(z1[j]) != bits(z2[j]));
+        differing += (bits(got.zg) != bits(zg)) + (bits(got.zap) != bits(zap)) + (bits(got.gg) != bits(gg)) +
+                     (bits(got.ginf) != bits(ginf));
+        compared += 3 * n + 4;
+        EXPECT_FALSE(std::isnan(got.ginf)) << "n = " << n;
+    }
+    EXPECT_EQ(differing, 0) << "of " << compared;
 }
