@@ -160,15 +160,35 @@ PowerResult power_method(const AOperator& A, Vec& v, PowerRule rule, long max_pr
 
 namespace {
 
+/// An accepted CG step on entry j: x_j -= alpha p_j and g_j -= alpha ap_j, each a product, then a
+/// difference; returns the new g_j. Shared by both step passes below and their AVX2 forms.
+inline double step_entry(double alpha, const double* p, const double* ap, double* x, double* g, Eigen::Index j)
+{
+    x[j] -= alpha * p[j];
+    const double gj = g[j] - alpha * ap[j];
+    g[j] = gj;
+    return gj;
+}
+
+#if defined(__x86_64__) && defined(__GNUC__)
+/// step_entry on entries j .. j + 3 (apj: ap's four entries there); returns the new g's.
+__attribute__((target("avx2"))) inline __m256d step_packet(__m256d alpha, const double* p, __m256d apj, double* x,
+                                                           double* g, Eigen::Index j)
+{
+    _mm256_storeu_pd(x + j, _mm256_sub_pd(_mm256_loadu_pd(x + j), _mm256_mul_pd(alpha, _mm256_loadu_pd(p + j))));
+    const __m256d gj = _mm256_sub_pd(_mm256_loadu_pd(g + j), _mm256_mul_pd(alpha, apj));
+    _mm256_storeu_pd(g + j, gj);
+    return gj;
+}
+#endif
+
 double cg_step_pass_scalar(double alpha, const double* __restrict p, const double* __restrict ap,
                            const double* __restrict w, double* __restrict x, double* __restrict g,
                            double* __restrict phi, Eigen::Index n)
 {
     double widest = 0.0;
     for (Eigen::Index j = 0; j < n; ++j) {
-        x[j] -= alpha * p[j];
-        const double gj = g[j] - alpha * ap[j];
-        g[j] = gj;
+        const double gj = step_entry(alpha, p, ap, x, g, j);
         phi[j] = gj;
         widest = std::max(widest, std::abs(gj) * w[j]);
     }
@@ -186,9 +206,7 @@ __attribute__((target("avx2"))) double cg_step_pass_avx2(double alpha, const dou
     __m256d widest = _mm256_setzero_pd();
     Eigen::Index j = 0;
     for (; j + 4 <= n; j += 4) {
-        _mm256_storeu_pd(x + j, _mm256_sub_pd(_mm256_loadu_pd(x + j), _mm256_mul_pd(a, _mm256_loadu_pd(p + j))));
-        const __m256d gj = _mm256_sub_pd(_mm256_loadu_pd(g + j), _mm256_mul_pd(a, _mm256_loadu_pd(ap + j)));
-        _mm256_storeu_pd(g + j, gj);
+        const __m256d gj = step_packet(a, p, _mm256_loadu_pd(ap + j), x, g, j);
         _mm256_storeu_pd(phi + j, gj);
         widest = _mm256_max_pd(widest, _mm256_mul_pd(_mm256_andnot_pd(sign, gj), _mm256_loadu_pd(w + j)));
     }
@@ -219,9 +237,7 @@ void cg_update_scalar(double alpha, const double* __restrict p, const double* __
                       Eigen::Index n, CgUpdateSums& sums)
 {
     for (Eigen::Index j = first; j < n; ++j) {
-        x[j] -= alpha * p[j];
-        const double gj = g[j] - alpha * ap[j];
-        g[j] = gj;
+        const double gj = step_entry(alpha, p, ap, x, g, j);
         const double zj = dinv[j] * gj;
         z[j] = zj;
         if (!in_row[j]) {
@@ -260,10 +276,8 @@ __attribute__((target("avx2"))) CgUpdateSums cg_update_avx2(double alpha, const 
     CgUpdateSums sums;
     Eigen::Index j = 0;
     for (; j + 4 <= n; j += 4) {
-        _mm256_storeu_pd(x + j, _mm256_sub_pd(_mm256_loadu_pd(x + j), _mm256_mul_pd(a, _mm256_loadu_pd(p + j))));
         const __m256d apj = _mm256_loadu_pd(ap + j);
-        const __m256d gj = _mm256_sub_pd(_mm256_loadu_pd(g + j), _mm256_mul_pd(a, apj));
-        _mm256_storeu_pd(g + j, gj);
+        const __m256d gj = step_packet(a, p, apj, x, g, j);
         const __m256d zj = _mm256_mul_pd(_mm256_loadu_pd(dinv + j), gj);
         _mm256_storeu_pd(z + j, zj);
         int flags;
