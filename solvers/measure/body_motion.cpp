@@ -10,6 +10,10 @@
 #include <limits>
 #include <type_traits>
 
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#endif
+
 namespace cb {
 
 namespace {
@@ -19,6 +23,104 @@ constexpr double RANK_CUTOFF = 1e-12;
 
 std::atomic<long> g_live_modes{0};
 std::atomic<long> g_peak_live_modes{0};
+
+/// max(widest, |u_v|_inf over `count` vertices), u_v = y_t + (y_w x d_v) / length: a rigid motion
+/// y = (translation, rotation) of one body read at its vertices' offsets d (row-major, 3 a vertex).
+/// The terms of Eigen's cross product and sum, in the same order, one vertex at a time.
+double widest_rigid_move_scalar(const double* d, Eigen::Index count, const BodyMotion::Vec6& y, double inv_length,
+                                double widest)
+{
+    for (Eigen::Index v = 0; v < count; ++v) {
+        const Eigen::Vector3d dv(d[3 * v], d[3 * v + 1], d[3 * v + 2]);
+        const Eigen::Vector3d u = y.head<3>() + y.tail<3>().cross(dv) * inv_length;
+        widest = std::max(widest, u.cwiseAbs().maxCoeff());
+    }
+    return widest;
+}
+
+#if defined(__x86_64__) && defined(__GNUC__)
+/// widest_rigid_move_scalar four vertices at a time: the same products, differences and sums per
+/// coordinate (no fused multiply-add), so every |u| has the same bits, and their maximum is the
+/// same in any order. The pass had waited on a chain of scalar maxima (docs/a_product.md).
+__attribute__((target("avx2"))) double widest_rigid_move_avx2(const double* __restrict d, Eigen::Index count,
+                                                              const BodyMotion::Vec6& y, double inv_length,
+                                                              double widest)
+{
+    const __m256d tx = _mm256_set1_pd(y[0]), ty = _mm256_set1_pd(y[1]), tz = _mm256_set1_pd(y[2]);
+    const __m256d wx = _mm256_set1_pd(y[3]), wy = _mm256_set1_pd(y[4]), wz = _mm256_set1_pd(y[5]);
+    const __m256d il = _mm256_set1_pd(inv_length), sign = _mm256_set1_pd(-0.0);
+    __m256d most = _mm256_setzero_pd();
+    Eigen::Index v = 0;
+    for (; v + 4 <= count; v += 4) {
+        // Four vertices' x y z x | y z x y | z x y z, to one register per coordinate.
+        const __m256d r0 = _mm256_loadu_pd(d + 3 * v), r1 = _mm256_loadu_pd(d + 3 * v + 4),
+                      r2 = _mm256_loadu_pd(d + 3 * v + 8);
+        const __m256d a = _mm256_blend_pd(r0, r1, 0b1100);       // x0 y0 x2 y2
+        const __m256d b = _mm256_permute2f128_pd(r0, r2, 0x21);  // z0 x1 z2 x3
+        const __m256d c = _mm256_blend_pd(r1, r2, 0b1100);       // y1 z1 y3 z3
+        const __m256d dx = _mm256_shuffle_pd(a, b, 0b1010), dy = _mm256_shuffle_pd(a, c, 0b0101),
+                      dz = _mm256_shuffle_pd(b, c, 0b1010);
+        const __m256d cx = _mm256_sub_pd(_mm256_mul_pd(wy, dz), _mm256_mul_pd(wz, dy));
+        const __m256d cy = _mm256_sub_pd(_mm256_mul_pd(wz, dx), _mm256_mul_pd(wx, dz));
+        const __m256d cz = _mm256_sub_pd(_mm256_mul_pd(wx, dy), _mm256_mul_pd(wy, dx));
+        // max(term, most): a NaN term keeps `most`, as std::max(widest, term) keeps widest.
+        most = _mm256_max_pd(_mm256_andnot_pd(sign, _mm256_add_pd(tx, _mm256_mul_pd(cx, il))), most);
+        most = _mm256_max_pd(_mm256_andnot_pd(sign, _mm256_add_pd(ty, _mm256_mul_pd(cy, il))), most);
+        most = _mm256_max_pd(_mm256_andnot_pd(sign, _mm256_add_pd(tz, _mm256_mul_pd(cz, il))), most);
+    }
+    alignas(32) double lane[4];
+    _mm256_store_pd(lane, most);
+    for (double l : lane) widest = std::max(widest, l);
+    return widest_rigid_move_scalar(d + 3 * v, count - v, y, inv_length, widest);
+}
+#endif
+
+double widest_rigid_move(const double* d, Eigen::Index count, const BodyMotion::Vec6& y, double inv_length,
+                         double widest)
+{
+#if defined(__x86_64__) && defined(__GNUC__)
+    static const bool avx2 = __builtin_cpu_supports("avx2");
+    if (avx2) return widest_rigid_move_avx2(d, count, y, inv_length, widest);
+#endif
+    return widest_rigid_move_scalar(d, count, y, inv_length, widest);
+}
+
+/// On an AV beyond the caches its rows are asked for 128 DOFs (6 KB) ahead: the pass waited on their
+/// loads (docs/a_product.md). A small AV skips the prefetch and its instructions. Neither changes a sum.
+constexpr Eigen::Index AV_AHEAD = 128;
+constexpr Eigen::Index AV_PREFETCH_MIN_BYTES = Eigen::Index{8} << 20;
+
+/// One body's run of DOFs [first, last) in the measure's pass: x_p = u_p y_p, or y_p without u.
+struct AvRun {
+    const double* av;  ///< AV, row-major, MODES a DOF
+    const double* u;
+    const double* y;
+    const double* x0;
+    Eigen::Index first, last;
+    Eigen::Index av_last;  ///< the last index of AV, which a prefetch does not pass
+};
+
+/// sum += AV_p' (x_p - x0_p) in DOF order over the run; false when some x_p is not finite.
+template <bool SCALED, bool PREFETCH> bool add_av_run_as(const AvRun& r, BodyMotion::Vec6& sum)
+{
+    bool finite = true;
+    BodyMotion::Vec6 s = sum;  // a local: no store and reload of the sums per DOF
+    for (Eigen::Index p = r.first; p < r.last; ++p) {
+        if constexpr (PREFETCH)
+            __builtin_prefetch(r.av + std::min<Eigen::Index>(BodyMotion::MODES * (p + AV_AHEAD), r.av_last));
+        const double xp = SCALED ? r.u[p] * r.y[p] : r.y[p];
+        finite = finite & std::isfinite(xp);
+        s += Eigen::Map<const BodyMotion::Vec6>(r.av + BodyMotion::MODES * p) * (xp - r.x0[p]);
+    }
+    sum = s;
+    return finite;
+}
+
+bool add_av_run(const AvRun& r, bool prefetch, BodyMotion::Vec6& sum)
+{
+    if (r.u) return prefetch ? add_av_run_as<true, true>(r, sum) : add_av_run_as<true, false>(r, sum);
+    return prefetch ? add_av_run_as<false, true>(r, sum) : add_av_run_as<false, false>(r, sum);
+}
 
 }  // namespace
 
@@ -256,71 +358,61 @@ bool BodyMotion::subtract(const RowLoads& rows, const Vec& lambda, std::vector<V
 
 double BodyMotion::displacement(const Vec& x, const Vec& lambda, const Vec& lambda_t) const
 {
-    return displacement_at([&](Eigen::Index p) { return x[p]; }, x.size(), lambda, lambda_t);
+    return displacement_at(nullptr, x.data(), x.size(), lambda, lambda_t);
 }
 
 double BodyMotion::displacement_scaled(const Vec& u, const Vec& y, const Vec& lambda, const Vec& lambda_t) const
 {
     if (u.size() != y.size()) return std::numeric_limits<double>::infinity();
-    return displacement_at([&](Eigen::Index p) { return u[p] * y[p]; }, y.size(), lambda, lambda_t);
+    return displacement_at(u.data(), y.data(), y.size(), lambda, lambda_t);
 }
 
-template <class XAt>
-double BodyMotion::displacement_at(XAt x_at, Eigen::Index n, const Vec& lambda, const Vec& lambda_t) const
+double BodyMotion::displacement_at(const double* u, const double* y, Eigen::Index n, const Vec& lambda,
+                                   const Vec& lambda_t) const
 {
     if (!m_bodies) return 0.0;
     const Bodies& B = *m_bodies;
     const std::vector<int>& body = B.body;
     if (n != B.x0.size()) return std::numeric_limits<double>::infinity();
     std::vector<Vec6> load = B.load0;  // V'r per body
-    // Node by node, a run of nodes of one body summed in a local (the bodies' nodes mostly come in
-    // runs) and stored when the body changes: the same terms added in the same order as straight
+    // Run by run of one body's nodes (the bodies' nodes mostly come in runs), the run summed in a
+    // local and stored when the body changes: the same terms added in the same order as straight
     // into load[b], so the same bits, without a store and a reload per DOF. Whether x is finite is
     // gathered on the way (a separate pass read x once more); the sums of a non-finite x are dropped.
     const auto nodes = static_cast<Eigen::Index>(body.size());
     bool finite = true;
-    // On an AV beyond the caches its rows are asked for 128 DOFs (6 KB) ahead: the pass waited on
-    // their loads (docs/a_product.md). A small AV skips the prefetch and its instructions. Neither
-    // changes a sum.
-    constexpr Eigen::Index AV_AHEAD = 128;
-    constexpr Eigen::Index AV_PREFETCH_MIN_BYTES = Eigen::Index{8} << 20;
-    const double* av_data = B.av.data();
-    const Eigen::Index av_last = B.av.size() - 1;
-    const auto accumulate = [&](auto prefetch) {
-        Eigen::Index v = 0;
-        while (v < nodes) {
-            const int b = body[static_cast<size_t>(v)];
-            Vec6 sum = load[static_cast<size_t>(b)];
-            for (; v < nodes && body[static_cast<size_t>(v)] == b; ++v)
-                for (Eigen::Index p = v * m_per_node; p < (v + 1) * m_per_node; ++p) {
-                    if constexpr (decltype(prefetch)::value)
-                        __builtin_prefetch(av_data + std::min<Eigen::Index>(MODES * (p + AV_AHEAD), av_last));
-                    const double xp = x_at(p);
-                    finite = finite & std::isfinite(xp);
-                    sum += B.av.row(p).transpose() * (xp - B.x0[p]);
-                }
-            load[static_cast<size_t>(b)] = sum;
-        }
-    };
-    if (B.av.size() * static_cast<Eigen::Index>(sizeof(double)) >= AV_PREFETCH_MIN_BYTES)
-        accumulate(std::true_type{});
-    else
-        accumulate(std::false_type{});
+    AvRun run{B.av.data(), u, y, B.x0.data(), 0, 0, B.av.size() - 1};
+    const bool prefetch = B.av.size() * static_cast<Eigen::Index>(sizeof(double)) >= AV_PREFETCH_MIN_BYTES;
+    Eigen::Index v = 0;
+    while (v < nodes) {
+        const int b = body[static_cast<size_t>(v)];
+        Eigen::Index end = v + 1;
+        while (end < nodes && body[static_cast<size_t>(end)] == b) ++end;
+        run.first = v * m_per_node;
+        run.last = end * m_per_node;
+        finite = add_av_run(run, prefetch, load[static_cast<size_t>(b)]) && finite;
+        v = end;
+    }
     if (!finite) return std::numeric_limits<double>::infinity();
     if (!subtract(m_rows, lambda, load) || !subtract(m_tangents, lambda_t, load))
         return std::numeric_limits<double>::infinity();
     std::vector<Vec6> motion(load.size());
     for (size_t b = 0; b < load.size(); ++b) motion[b] = B.pinv[b] * load[b];
     double widest = 0.0;
-    for (Eigen::Index v = 0; v < nodes; ++v) {
-        const Vec6& y = motion[static_cast<size_t>(body[static_cast<size_t>(v)])];
-        if (!m_spatial) {
-            widest = std::max(widest, std::abs(y[0]));
-            continue;
+    if (!m_spatial) {
+        for (Eigen::Index v = 0; v < nodes; ++v)
+            widest = std::max(widest, std::abs(motion[static_cast<size_t>(body[static_cast<size_t>(v)])][0]));
+    } else {
+        // Run by run of one body's vertices: the maximum is the same whatever the order it is taken in.
+        Eigen::Index v = 0;
+        while (v < nodes) {
+            const int b = body[static_cast<size_t>(v)];
+            Eigen::Index end = v + 1;
+            while (end < nodes && body[static_cast<size_t>(end)] == b) ++end;
+            widest = widest_rigid_move(B.offset.row(v).data(), end - v, motion[static_cast<size_t>(b)], m_inv_length,
+                                       widest);
+            v = end;
         }
-        const Eigen::Vector3d d = B.offset.row(v).transpose();
-        const Eigen::Vector3d u = y.head<3>() + y.tail<3>().cross(d) * m_inv_length;
-        widest = std::max(widest, u.cwiseAbs().maxCoeff());
     }
     return std::isfinite(widest) ? widest : std::numeric_limits<double>::infinity();
 }

@@ -69,8 +69,10 @@ public:
 private:
     using LongVec6 = std::array<long double, MODES>;
 
-    /// displacement's body: x_at(p) gives x_p; the finiteness test rides in the pass over the nodes.
-    template <class XAt> double displacement_at(XAt x_at, Eigen::Index n, const Vec& lambda, const Vec& lambda_t) const;
+    /// displacement's body at x = u .* y (x = y when u is null); the finiteness test rides in the
+    /// pass over the nodes.
+    double displacement_at(const double* u, const double* y, Eigen::Index n, const Vec& lambda,
+                           const Vec& lambda_t) const;
     /// Row p of V: up to three (mode, value) pairs; returns how many.
     int mode_row(Eigen::Index p, int mode[3], double value[3]) const;
     /// (AV)_p in `av` and r0 + (A x0)_p, returned, summed in extended precision (3-D reading;

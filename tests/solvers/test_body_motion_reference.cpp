@@ -307,6 +307,16 @@ TEST(BodyMotionReference, AnAvBeyondTheCachesIsPrefetchedToTheSameBits)
     expect_same_bits(q, 9.0);
 }
 
+TEST(BodyMotionReference, BodiesOfEveryRunLengthEqualThePlainPasses)
+{
+    // The widest move is taken four vertices at a time and the rest one by one: bodies of 1 to 9
+    // vertices put the widest vertex in every lane and in the remainder.
+    for (int vertices = 1; vertices <= 9; ++vertices) {
+        SCOPED_TRACE(vertices);
+        expect_same_bits(build(5, vertices, false, 20 + static_cast<std::uint32_t>(vertices)), 2.0);
+    }
+}
+
 TEST(BodyMotionReference, StoredZerosAndRowsThatAreNotWholeGroupsEqualThePlainPasses)
 {
     const Built q = build(3, 30, true, 12);
