@@ -1,5 +1,6 @@
 // `mprgp` on decoupled rows: the row pass (residuals, multipliers, the measure), the face, its
 // preconditioners (jacobi, ichol, rigid-mode deflation) and the projected objective's correction.
+#include "solvers/linalg/row_gather_prefetch.hpp"
 #include "solvers/mprgp/mprgp_decoupled.hpp"
 
 #include "solvers/measure/accuracy_rows.hpp"
@@ -164,7 +165,10 @@ void DecoupledMprgp::evaluate_rows()
     RowParts rows;  // the accuracy measure's row parts
     bool infeasible = false;
     long active_count = 0;
+    const bool prefetch = row_gather_prefetches(m_n);
+    const std::array<const double*, 5> read = {m_x.data(), m_g.data(), m_p.data(), m_z.data(), m_scale.inv_diag.data()};
     for (Eigen::Index i = 0; i < m_m; ++i) {
+        if (prefetch) prefetch_row_ahead(m_J, i, read);
         double jx = 0.0, jg = 0.0, jp = 0.0;
         for (int k = outer[i]; k < outer[i + 1]; ++k) {
             const int j = inner[k];

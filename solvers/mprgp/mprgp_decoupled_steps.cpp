@@ -3,6 +3,7 @@
 #include "solvers/mprgp/mprgp_decoupled.hpp"
 
 #include "solvers/core/format_number.hpp"
+#include "solvers/linalg/row_gather_prefetch.hpp"
 #include "solvers/mprgp/decouple.hpp"
 
 #include <algorithm>
@@ -228,7 +229,10 @@ void DecoupledMprgp::cg_update(double alpha, double pap, double df, double corr_
         const int* outer = m_J.outerIndexPtr();
         const int* inner = m_J.innerIndexPtr();
         const double* val = m_J.valuePtr();
+        const bool prefetch = row_gather_prefetches(m_n);
+        const std::array<const double*, 4> read = {m_z.data(), m_g.data(), m_Ap.data(), m_dinv.data()};
         for (Eigen::Index i = 0; i < m_m; ++i) {
+            if (prefetch) prefetch_row_ahead(m_J, i, read);
             double t = 0.0;
             if (m_active[static_cast<size_t>(i)]) {
                 double wg = 0.0, jg = 0.0;  // (W g)_i = J_i D^-1 g; J_i g
