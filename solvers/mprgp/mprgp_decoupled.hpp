@@ -136,6 +136,9 @@ private:
     Vec m_work;
     double m_alpha_bar = 0.0;
     AccuracyScale m_scale;
+    /// The measure's 1 / D, or m_dinv when the two hold the same values (precond = jacobi on a
+    /// positive diagonal): the CG step pass then streams one vector for both.
+    const Vec* m_stat_weight = nullptr;
 
     Vec m_x, m_g, m_z, m_p, m_Ap, m_tmp, m_d, m_lambda, m_jx, m_jg, m_jp;
     std::vector<char> m_active;

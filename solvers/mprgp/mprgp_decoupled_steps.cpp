@@ -216,7 +216,7 @@ void DecoupledMprgp::cg_update(double alpha, double pap, double df, double corr_
     // Fused update: x, g, z = D^-1 g and the dot products in one pass (DOFs in no
     // row; the rows' DOFs are summed below in face form, see face_dot).
     const CgUpdateSums sums =
-        cg_update_pass(alpha, m_p, m_Ap, m_dinv, m_scale.inv_diag, m_rows.dof_in_row.data(), m_x, m_g, m_z);
+        cg_update_pass(alpha, m_p, m_Ap, m_dinv, *m_stat_weight, m_rows.dof_in_row.data(), m_x, m_g, m_z);
     double zg = sums.zg, zap = sums.zap;
     const double gg = sums.gg, ginf = sums.ginf;
     if (m_ichol || m_deflate) {
@@ -319,6 +319,7 @@ SolverResult DecoupledMprgp::run()
                             {"warm_start", power.warm}};
     result.info["alpha_bar"] = m_alpha_bar;
     m_scale = accuracy_scale(m_qp);
+    m_stat_weight = m_dinv == m_scale.inv_diag ? &m_dinv : &m_scale.inv_diag;
     m_cnt.a_products += m_scale.a_products;
     const bool setup_in_time = m_loop.end_setup();
     result.info["power"]["seconds"] = m_loop.setup_s();
