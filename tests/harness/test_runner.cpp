@@ -49,7 +49,7 @@ public:
     {
         SettingsReader reader(settings, "toy");
         m_common = reader.common();
-        m_mode = reader.choice("mode", "honest", {"honest", "lie", "nan", "climb"});
+        m_mode = reader.choice("mode", "honest", {"honest", "lie", "nan", "inf", "climb"});
         reader.finish();
     }
     std::string name() const override { return "toy"; }
@@ -85,7 +85,9 @@ public:
                 x = (x - g.cwiseQuotient(2.0 * d)).cwiseMax(qp.c);
             }
             if (m_mode == "nan" && it == 3) x[0] = std::numeric_limits<double>::quiet_NaN();
+            if (m_mode == "inf" && it == 3) x[x.size() - 1] = -std::numeric_limits<double>::infinity();
             if (m_mode == "nan" && it == 4) x[0] = 0.0;
+            if (m_mode == "inf" && it == 4) x[x.size() - 1] = 0.0;
             g = qp.A * x - qp.b;
             const Vec lambda = fit_multipliers(qp, scale, x, g);
             IterationInfo info;
@@ -264,6 +266,9 @@ TEST(Runner, DetectsNonfiniteAndNonMonotone)
     const RunOutcome nan_run = run_toy({{"mode", "nan"}, {"max_iterations", 20}});
     EXPECT_TRUE(nan_run.nonfinite);
     EXPECT_TRUE(nan_run.record["nonfinite"].get<bool>());
+    // An infinite entry for one iteration only, in the last place: seen by the per-iteration check.
+    const RunOutcome inf_run = run_toy({{"mode", "inf"}, {"max_iterations", 20}});
+    EXPECT_TRUE(inf_run.nonfinite);
     const RunOutcome honest = run_toy({{"max_iterations", 20}});
     EXPECT_FALSE(honest.nonfinite);
     EXPECT_TRUE(honest.monotone);
