@@ -35,17 +35,6 @@ def git(repo: str, *args: str) -> Optional[str]:
     return done.stdout if done.returncode == 0 else None
 
 
-def paragraph(lines: List[str], index: int) -> str:
-    """The blank-line-delimited paragraph around lines[index]."""
-    start = index
-    while start > 0 and lines[start - 1].strip():
-        start -= 1
-    end = index
-    while end + 1 < len(lines) and lines[end + 1].strip():
-        end += 1
-    return "\n".join(lines[start:end + 1])
-
-
 def changed_since(repo: str, commit: str, covers: Sequence[str]) -> Optional[List[str]]:
     """Files under COVERS (folders end in '/', else globs) changed between COMMIT and HEAD; None
     when COMMIT is not in this clone."""
@@ -70,19 +59,48 @@ def changed_since(repo: str, commit: str, covers: Sequence[str]) -> Optional[Lis
     return changed
 
 
+def paragraphs(lines: List[str]):
+    """(index of the first line, the lines joined by spaces) of each blank-line-delimited paragraph:
+    a measured line wrapped over two or more lines is read whole."""
+    i = 0
+    while i < len(lines):
+        if not lines[i].strip():
+            i += 1
+            continue
+        j = i
+        while j + 1 < len(lines) and lines[j + 1].strip():
+            j += 1
+        yield i, " ".join(line.strip() for line in lines[i:j + 1])
+        i = j + 1
+
+
+def line_of(lines: List[str], first: int, text: str, offset: int) -> int:
+    """The index of the line of the paragraph starting at FIRST that holds character OFFSET of TEXT
+    (the paragraph's lines joined by single spaces)."""
+    seen = 0
+    index = first
+    while index < len(lines) and lines[index].strip():
+        seen += len(lines[index].strip()) + 1
+        if offset < seen:
+            return index
+        index += 1
+    return index - 1
+
+
 def check_measured(repo: str, rel: str, lines: List[str]) -> List[str]:
     """One problem per stale or uncheckable measured block of document REL."""
     problems: List[str] = []
-    for i, line in enumerate(lines):
-        for m in MEASURED_RE.finditer(line):
+    for first, text in paragraphs(lines):
+        for m in MEASURED_RE.finditer(text):
             commit, command = m.group(1), m.group(2)
             covers = m.group(3).split() if m.group(3) else list(DEFAULT_COVERS)
             changed = changed_since(repo, commit, covers)
+            i = line_of(lines, first, text, m.start())
             where = f"{rel}:{i + 1}"
             if changed is None:
                 problems.append(f"{where}: figures measured at {commit}, a commit this clone does not have "
                                 f"(cannot tell whether `{command}` would still give them)")
-            elif changed and not STILL_STANDS_RE.search(paragraph(lines, i)):
+            elif changed and not STILL_STANDS_RE.search(text):
                 shown = ", ".join(changed[:3]) + (f" and {len(changed) - 3} more" if len(changed) > 3 else "")
                 problems.append(f"{where}: figures measured at {commit} with `{command}` predate changes to "
                                 f"{shown}: re-measure, or say why they still stand (\"Still stands: ...\") or that they were not "

@@ -180,6 +180,20 @@ class ReportsStaleFigures(unittest.TestCase):
             "changes to solvers/mprgp/mprgp.cpp: re-measure, or say why they still stand (\"Still stands: ...\") or that "
             "they were not re-measured (\"Not re-measured: ...\")"])
 
+    def test_a_measured_line_wrapped_over_lines_is_read_whole(self):
+        # "Measured at <commit>" at the end of one line and "with `command`" on the next: the block
+        # is checked as if on one line, and reported at the line where "Measured at" starts.
+        write(self.root, "docs/work.md", f"# Work\n\n224 iterations,\nall converged. Measured at {self.measured}\n"
+                                         "with `contactbench solve\nf.qpsnap` (covers\nsolvers/).\n")
+        self.commit("doc")
+        self.assertEqual(stale_figures_problems(self.root), [])
+        write(self.root, "solvers/mprgp/mprgp.cpp", "int iterations = 317;\n")
+        self.commit("solver")
+        self.assertEqual(stale_figures_problems(self.root), [
+            f"docs/work.md:4: figures measured at {self.measured} with `contactbench solve f.qpsnap` predate "
+            "changes to solvers/mprgp/mprgp.cpp: re-measure, or say why they still stand (\"Still stands: ...\") or that "
+            "they were not re-measured (\"Not re-measured: ...\")"])
+
     def test_a_pure_move_leaves_them_fresh_and_a_later_change_does_not(self):
         self.doc()
         os.makedirs(os.path.join(self.root, "solvers", "engine"))
