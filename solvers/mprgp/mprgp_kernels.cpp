@@ -208,7 +208,8 @@ __attribute__((target("avx2"))) double cg_step_pass_avx2(double alpha, const dou
     for (; j + 4 <= n; j += 4) {
         const __m256d gj = step_packet(a, p, _mm256_loadu_pd(ap + j), x, g, j);
         _mm256_storeu_pd(phi + j, gj);
-        widest = _mm256_max_pd(widest, _mm256_mul_pd(_mm256_andnot_pd(sign, gj), _mm256_loadu_pd(w + j)));
+        // max(term, widest): a NaN term keeps widest, as std::max(widest, term) does.
+        widest = _mm256_max_pd(_mm256_mul_pd(_mm256_andnot_pd(sign, gj), _mm256_loadu_pd(w + j)), widest);
     }
     alignas(32) double lanes[4];
     _mm256_store_pd(lanes, widest);
