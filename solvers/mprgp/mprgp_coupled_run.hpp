@@ -10,6 +10,7 @@
 ///      projection, Alg. 3.
 #include "solvers/core/solve_loop.hpp"
 #include "solvers/linalg/a_product.hpp"
+#include "solvers/linalg/row_gather_prefetch.hpp"
 #include "solvers/measure/accuracy.hpp"
 #include "solvers/mprgp/coupled_face_operators.hpp"
 #include "solvers/mprgp/coupled_preconditioner.hpp"
@@ -56,13 +57,22 @@ public:
 private:
     void rows_times(const Vec& v, Vec& out) const
     {
-        for (Eigen::Index i = 0; i < m_m; ++i) out[i] = row_dot(m_J, i, v);
+        const bool prefetch = row_gather_prefetches(m_n);
+        const std::array<const double*, 1> read = {v.data()};
+        for (Eigen::Index i = 0; i < m_m; ++i) {
+            if (prefetch) prefetch_row_ahead(m_J, i, read);
+            out[i] = row_dot(m_J, i, v);
+        }
     }
     /// v += a J' coef over the rows with coef_i != 0.
     void add_rows_transpose(const Vec& coef, double a, Vec& v) const
     {
-        for (Eigen::Index i = 0; i < m_m; ++i)
+        const bool prefetch = row_gather_prefetches(m_n);
+        const std::array<const double*, 1> written = {v.data()};
+        for (Eigen::Index i = 0; i < m_m; ++i) {
+            if (prefetch && coef[std::min(i + ROW_GATHER_AHEAD, m_m - 1)] != 0.0) prefetch_row_ahead(m_J, i, written);
             if (coef[i] != 0.0) row_axpy(m_J, i, a * coef[i], v);
+        }
     }
     void exact_gradient()
     {
