@@ -182,7 +182,7 @@ public:
 
     int bodies = 0;
 
-private:
+    // The reference's state, open to the tests like the rest of it.
     size_t body_of(Eigen::Index p) const { return static_cast<size_t>(body[static_cast<size_t>(p / per_node)]); }
     int mode_row(Eigen::Index p, int mode[3], double value[3]) const
     {
