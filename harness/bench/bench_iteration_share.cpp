@@ -5,6 +5,9 @@
 // on one thread from 1M nonzeros, else BSR; `threads` as the solvers) is timed
 // alone (harness/bench/alternating.hpp). outside_<s> = 1 - products x product time / iteration
 // time: the share of an iteration spent in vector passes, projections and the stop test.
+// CB_BENCH_SOLVES (default 3) rounds of both solves, each solve followed by its product's timing:
+// one solve moves with the machine's memory by 10-20%, so the counters are medians over the rounds,
+// with outside_<s>_low / _high their extremes.
 // CB_BENCH_THREADS (default 1) sets the solvers' and the product's `threads` (then wall clock:
 // a threaded product's CPU time is summed over its threads).
 //   CB_BENCH_SNAPSHOTS=a.qpsnap:b.qpsnap build/bin/cb_bench --benchmark_filter=IterationShare
@@ -15,7 +18,9 @@
 
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cstdlib>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -30,6 +35,18 @@ int threads()
 }
 
 Clock clock_for_threads() { return threads() > 1 ? Clock::WALL : Clock::THREAD_CPU; }
+
+int solve_rounds()
+{
+    const char* env = std::getenv("CB_BENCH_SOLVES");
+    return std::max(1, env ? std::atoi(env) : 3);
+}
+
+/// One solver's figures over the rounds: seconds an iteration, a product's seconds alone, the share.
+struct ShareRounds {
+    std::vector<double> per_iteration, product, outside;
+    double iterations = 0.0, products_per_iteration = 0.0, product_spread = 0.0;
+};
 
 /// Clock and A-product count at the first and the last outer iteration.
 class ShareMonitor : public cb::Monitor {
@@ -68,30 +85,41 @@ void measure_share(benchmark::State& state, const cb::Qp& qp)
     const cb::Vec x = cb::Vec::LinSpaced(qp.n(), -1.0, 1.0), w = cb::Vec::Constant(qp.n(), 0.5);
     cb::Vec y(qp.n());
     for (auto _ : state) {
+        std::map<std::string, ShareRounds> by_key;
+        for (int round = 0; round < solve_rounds(); ++round)
+            for (const std::string& name : {std::string("mprgp"), std::string("mprgp-coupled")}) {
+                const auto solver = cb::builtin_registry().create(name, settings);
+                ShareMonitor monitor;
+                cb::SolveContext context;
+                context.monitor = &monitor;
+                const cb::SolverResult r = solver->solve(name == "mprgp" ? decoupled.view() : qp.view(), context);
+                const std::vector<std::vector<double>> t =
+                    alternate({[&] {
+                                  double xw = 0.0;
+                                  benchmark::DoNotOptimize(cb::a_product_dots(op, x, y, w, xw));
+                              }},
+                              clock_for_threads());
+                ShareRounds& k = by_key[name == "mprgp" ? "mprgp" : "coupled"];
+                const double iterations = static_cast<double>(std::max(1L, monitor.iterations()));
+                const double per_it = monitor.seconds() / iterations;
+                k.iterations = static_cast<double>(r.counters.iterations);
+                k.products_per_iteration = static_cast<double>(monitor.products()) / iterations;
+                k.per_iteration.push_back(per_it);
+                k.product.push_back(median(t[0]));
+                k.product_spread = std::max(k.product_spread, spread(t[0]));
+                k.outside.push_back(1.0 - k.products_per_iteration * median(t[0]) / per_it);
+            }
         double total = 0.0;
-        for (const std::string& name : {std::string("mprgp"), std::string("mprgp-coupled")}) {
-            const auto solver = cb::builtin_registry().create(name, settings);
-            ShareMonitor monitor;
-            cb::SolveContext context;
-            context.monitor = &monitor;
-            const cb::SolverResult r = solver->solve(name == "mprgp" ? decoupled.view() : qp.view(), context);
-            const std::vector<std::vector<double>> t =
-                alternate({[&] {
-                              double xw = 0.0;
-                              benchmark::DoNotOptimize(cb::a_product_dots(op, x, y, w, xw));
-                          }},
-                          clock_for_threads());
-            const std::string key = name == "mprgp" ? "mprgp" : "coupled";
-            const double per_it = monitor.seconds() / static_cast<double>(std::max(1L, monitor.iterations()));
-            const double products_per_it =
-                static_cast<double>(monitor.products()) / static_cast<double>(std::max(1L, monitor.iterations()));
-            state.counters[key + "_it"] = static_cast<double>(r.counters.iterations);
-            state.counters[key + "_ms_per_it"] = 1e3 * per_it;
-            state.counters[key + "_products_per_it"] = products_per_it;
-            state.counters[key + "_product_ms"] = 1e3 * median(t[0]);
-            state.counters[key + "_product_spread"] = spread(t[0]);
-            state.counters["outside_" + key] = 1.0 - products_per_it * median(t[0]) / per_it;
-            total += per_it;
+        for (const auto& [key, k] : by_key) {
+            state.counters[key + "_it"] = k.iterations;
+            state.counters[key + "_ms_per_it"] = 1e3 * median(k.per_iteration);
+            state.counters[key + "_products_per_it"] = k.products_per_iteration;
+            state.counters[key + "_product_ms"] = 1e3 * median(k.product);
+            state.counters[key + "_product_spread"] = k.product_spread;
+            state.counters["outside_" + key] = median(k.outside);
+            state.counters["outside_" + key + "_low"] = *std::min_element(k.outside.begin(), k.outside.end());
+            state.counters["outside_" + key + "_high"] = *std::max_element(k.outside.begin(), k.outside.end());
+            total += median(k.per_iteration);
         }
         state.SetIterationTime(total);
     }
