@@ -7,9 +7,10 @@ A measured block in a Markdown document carries one visible line of this form:
 
 It is stale when the code it describes changed after <commit>: by default the solver, problem and
 simulator sources (DEFAULT_COVERS), or the paths it names after "covers". A stale block fails the
-docs-check unless its paragraph says why the figures still stand ("Still stands: <reason>") or says
-openly that they were not measured again ("Not re-measured: <what changed, what to run>"), so a change
-to the code cannot leave a quoted figure behind without a word. A commit this clone does not
+docs-check unless its paragraph says openly that the figures were not measured again ("Not
+re-measured: <what changed, what to run>") or says why they still stand ("Still stands: <commit>
+<reason>"). A reason vouches for the code up to the newest commit it names: a change after that
+commit makes the block stale again, so a reason written for one change cannot cover the next. A commit this clone does not
 have (a shallow clone, a tarball) is reported too: the claim cannot be checked there.
 """
 import fnmatch
@@ -23,7 +24,9 @@ DEFAULT_COVERS = ("solvers/", "problems/", "sim/")
 #: the subject prefix of a commit that only moves files (and rewrites the paths naming them)
 PURE_MOVE = "Pure move:"
 MEASURED_RE = re.compile(r"Measured at ([0-9a-f]{7,40}) with `([^`]+)`(?:\s*\(covers ([^)]*)\))?")
-STILL_STANDS_RE = re.compile(r"(?:Still stands|Not re-measured):\s*\S")
+NOT_REMEASURED_RE = re.compile(r"Not re-measured:\s*\S")
+STILL_STANDS_RE = re.compile(r"Still stands:\s*\S")
+HASH_RE = re.compile(r"\b[0-9a-f]{7,40}\b")
 
 
 def git(repo: str, *args: str) -> Optional[str]:
@@ -87,6 +90,17 @@ def line_of(lines: List[str], first: int, text: str, offset: int) -> int:
     return index - 1
 
 
+def newest_named(repo: str, commit: str, text: str) -> str:
+    """The newest of COMMIT and the commits TEXT's "Still stands:" reasons name (a name that is not a
+    commit of this clone, or not on COMMIT's line of history, is passed over)."""
+    newest = commit
+    for reason in re.split(r"Still stands:", text)[1:]:
+        for name in HASH_RE.findall(reason):
+            if git(repo, "merge-base", "--is-ancestor", newest, name) is not None:
+                newest = name
+    return newest
+
+
 def check_measured(repo: str, rel: str, lines: List[str]) -> List[str]:
     """One problem per stale or uncheckable measured block of document REL."""
     problems: List[str] = []
@@ -100,10 +114,16 @@ def check_measured(repo: str, rel: str, lines: List[str]) -> List[str]:
             if changed is None:
                 problems.append(f"{where}: figures measured at {commit}, a commit this clone does not have "
                                 f"(cannot tell whether `{command}` would still give them)")
-            elif changed and not STILL_STANDS_RE.search(text):
+            elif changed and not NOT_REMEASURED_RE.search(text):
+                vouched = newest_named(repo, commit, text) if STILL_STANDS_RE.search(text) else commit
+                if vouched != commit:
+                    changed = changed_since(repo, vouched, covers)
+                if not changed:
+                    continue
                 shown = ", ".join(changed[:3]) + (f" and {len(changed) - 3} more" if len(changed) > 3 else "")
-                problems.append(f"{where}: figures measured at {commit} with `{command}` predate changes to "
-                                f"{shown}: re-measure, or say why they still stand (\"Still stands: ...\") or that they were not "
+                said = f" (said to still stand at {vouched})" if vouched != commit else ""
+                problems.append(f"{where}: figures measured at {commit} with `{command}`{said} predate changes to "
+                                f"{shown}: re-measure, or say why they still stand (\"Still stands: <commit> ...\") or that they were not "
                                 f"re-measured (\"Not re-measured: ...\")")
     return problems
 

@@ -177,7 +177,7 @@ class ReportsStaleFigures(unittest.TestCase):
         self.commit("solver")
         self.assertEqual(stale_figures_problems(self.root), [
             f"docs/work.md:3: figures measured at {self.measured} with `contactbench solve f.qpsnap` predate "
-            "changes to solvers/mprgp/mprgp.cpp: re-measure, or say why they still stand (\"Still stands: ...\") or that "
+            "changes to solvers/mprgp/mprgp.cpp: re-measure, or say why they still stand (\"Still stands: <commit> ...\") or that "
             "they were not re-measured (\"Not re-measured: ...\")"])
 
     def test_a_measured_line_wrapped_over_lines_is_read_whole(self):
@@ -191,7 +191,7 @@ class ReportsStaleFigures(unittest.TestCase):
         self.commit("solver")
         self.assertEqual(stale_figures_problems(self.root), [
             f"docs/work.md:4: figures measured at {self.measured} with `contactbench solve f.qpsnap` predate "
-            "changes to solvers/mprgp/mprgp.cpp: re-measure, or say why they still stand (\"Still stands: ...\") or that "
+            "changes to solvers/mprgp/mprgp.cpp: re-measure, or say why they still stand (\"Still stands: <commit> ...\") or that "
             "they were not re-measured (\"Not re-measured: ...\")"])
 
     def test_a_pure_move_leaves_them_fresh_and_a_later_change_does_not(self):
@@ -206,11 +206,27 @@ class ReportsStaleFigures(unittest.TestCase):
         self.assertEqual(len(stale_figures_problems(self.root)), 1)
         self.assertIn("predate changes to solvers/engine/mprgp.cpp:", stale_figures_problems(self.root)[0])
 
-    def test_a_stated_reason_keeps_them(self):
-        self.doc("\nStill stands: the change after it renames a variable.")
+    def test_a_stated_reason_keeps_them_up_to_the_commit_it_names(self):
+        self.doc()
         write(self.root, "solvers/mprgp/mprgp.cpp", "int iterations_ = 224;\n")
         self.commit("solver")
+        renamed = self.git("rev-parse", "--short=10", "HEAD").strip()
+        # A reason that names no commit vouches for nothing after the measurement.
+        write(self.root, "docs/work.md", f"# Work\n\n224 iterations. Measured at {self.measured} with "
+                                         "`contactbench solve f.qpsnap`.\nStill stands: a variable was renamed.\n")
+        self.commit("reason without a commit")
+        self.assertEqual(len(stale_figures_problems(self.root)), 1)
+        write(self.root, "docs/work.md", f"# Work\n\n224 iterations. Measured at {self.measured} with "
+                                         f"`contactbench solve f.qpsnap`.\nStill stands: {renamed} renames a variable.\n")
+        self.commit("reason")
         self.assertEqual(stale_figures_problems(self.root), [])
+        # The next change to the solver is not covered by that reason.
+        write(self.root, "solvers/mprgp/mprgp.cpp", "int iterations_ = 317;\n")
+        self.commit("solver again")
+        self.assertEqual(stale_figures_problems(self.root), [
+            f"docs/work.md:3: figures measured at {self.measured} with `contactbench solve f.qpsnap` (said to still "
+            f"stand at {renamed}) predate changes to solvers/mprgp/mprgp.cpp: re-measure, or say why they still stand "
+            "(\"Still stands: <commit> ...\") or that they were not re-measured (\"Not re-measured: ...\")"])
 
     def test_saying_they_were_not_re_measured_keeps_them_visible(self):
         self.doc("\nNot re-measured: the solver changed after it; `make ladder` gives today's figures.")
