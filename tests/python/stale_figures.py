@@ -23,7 +23,7 @@ from typing import List, Optional, Sequence
 DEFAULT_COVERS = ("solvers/", "problems/", "sim/")
 #: the subject prefix of a commit that only moves files (and rewrites the paths naming them)
 PURE_MOVE = "Pure move:"
-MEASURED_RE = re.compile(r"Measured at ([0-9a-f]{7,40}) with `([^`]+)`(?:\s*\(covers ([^)]*)\))?")
+MEASURED_RE = re.compile(r"[Mm]easured at ([0-9a-f]{7,40}) with `([^`]+)`(?:\s*\(covers ([^)]*)\))?")
 NOT_REMEASURED_RE = re.compile(r"Not re-measured:\s*\S")
 STILL_STANDS_RE = re.compile(r"Still stands:\s*\S")
 HASH_RE = re.compile(r"\b[0-9a-f]{7,40}\b")

@@ -194,6 +194,14 @@ class ReportsStaleFigures(unittest.TestCase):
             "changes to solvers/mprgp/mprgp.cpp: re-measure, or say why they still stand (\"Still stands: <commit> ...\") or that "
             "they were not re-measured (\"Not re-measured: ...\")"])
 
+    def test_a_measured_line_in_mid_sentence_is_read_too(self):
+        write(self.root, "docs/work.md", f"# Work\n\nThe share, measured at {self.measured} with `make share`, "
+                                         "was 0.16.\n")
+        self.commit("doc")
+        write(self.root, "solvers/mprgp/mprgp.cpp", "int iterations = 317;\n")
+        self.commit("solver")
+        self.assertEqual(len(stale_figures_problems(self.root)), 1)
+
     def test_a_pure_move_leaves_them_fresh_and_a_later_change_does_not(self):
         self.doc()
         os.makedirs(os.path.join(self.root, "solvers", "engine"))
