@@ -1,4 +1,5 @@
 #include "solvers/measure/body_motion.hpp"
+#include "solvers/linalg/avx2_lanes.hpp"
 #include "solvers/linalg/disjoint_sets.hpp"
 #include "solvers/linalg/prefault.hpp"
 
@@ -9,10 +10,6 @@
 #include <cmath>
 #include <limits>
 #include <type_traits>
-
-#if defined(__x86_64__) && defined(__GNUC__)
-#include <immintrin.h>
-#endif
 
 namespace cb {
 
@@ -68,12 +65,7 @@ __attribute__((target("avx2"))) double widest_rigid_move_avx2(const double* __re
         most = _mm256_max_pd(_mm256_andnot_pd(sign, _mm256_add_pd(ty, _mm256_mul_pd(cy, il))), most);
         most = _mm256_max_pd(_mm256_andnot_pd(sign, _mm256_add_pd(tz, _mm256_mul_pd(cz, il))), most);
     }
-    // The four lanes to two, then the upper halves cleared before the scalar (SSE) code: GCC 12 left
-    // them dirty before the tail call, and SSE code after a dirty upper state ran up to 1.5x slower
-    // (`make test`'s monitor timing: cg monitored against unmonitored, the measure being the monitor's).
-    const __m128d pair = _mm_max_pd(_mm256_castpd256_pd128(most), _mm256_extractf128_pd(most, 1));
-    _mm256_zeroupper();
-    widest = std::max(widest, std::max(_mm_cvtsd_f64(pair), _mm_cvtsd_f64(_mm_unpackhi_pd(pair, pair))));
+    widest = std::max(widest, max_lane_clearing_upper(most));
     return widest_rigid_move_scalar(d + 3 * v, count - v, y, inv_length, widest);
 }
 #endif

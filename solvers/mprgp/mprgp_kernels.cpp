@@ -4,6 +4,7 @@
 #include "solvers/mprgp/mprgp_kernels.hpp"
 
 #include "solvers/linalg/a_product.hpp"
+#include "solvers/linalg/avx2_lanes.hpp"
 #include "solvers/measure/accuracy.hpp"
 
 #include <algorithm>
@@ -211,10 +212,8 @@ __attribute__((target("avx2"))) double cg_step_pass_avx2(double alpha, const dou
         // max(term, widest): a NaN term keeps widest, as std::max(widest, term) does.
         widest = _mm256_max_pd(_mm256_mul_pd(_mm256_andnot_pd(sign, gj), _mm256_loadu_pd(w + j)), widest);
     }
-    alignas(32) double lanes[4];
-    _mm256_store_pd(lanes, widest);
-    const double tail = cg_step_pass_scalar(alpha, p + j, ap + j, w + j, x + j, g + j, phi + j, n - j);
-    return std::max(std::max(std::max(lanes[0], lanes[1]), std::max(lanes[2], lanes[3])), tail);
+    const double lanes = max_lane_clearing_upper(widest);
+    return std::max(lanes, cg_step_pass_scalar(alpha, p + j, ap + j, w + j, x + j, g + j, phi + j, n - j));
 }
 #endif
 
@@ -293,12 +292,7 @@ __attribute__((target("avx2"))) CgUpdateSums cg_update_avx2(double alpha, const 
         const __m256d term = _mm256_and_pd(keep, _mm256_mul_pd(_mm256_andnot_pd(sign, gj), _mm256_loadu_pd(w + j)));
         widest = _mm256_max_pd(term, widest);
     }
-    // The lanes' maximum (never NaN: a NaN term never entered them), then the upper halves cleared
-    // before the scalar (SSE) tail and the caller: GCC 12 emitted no vzeroupper here, and SSE code
-    // after a dirty upper state ran up to 1.5x slower on this project's machine.
-    const __m128d pair = _mm_max_pd(_mm256_castpd256_pd128(widest), _mm256_extractf128_pd(widest, 1));
-    _mm256_zeroupper();
-    sums.ginf = std::max(_mm_cvtsd_f64(pair), _mm_cvtsd_f64(_mm_unpackhi_pd(pair, pair)));
+    sums.ginf = max_lane_clearing_upper(widest);
     cg_update_scalar(alpha, p, ap, dinv, w, in_row, x, g, z, j, n, sums);
     return sums;
 }
