@@ -1,5 +1,6 @@
 #include "solvers/core/solve_loop.hpp"
 
+#include <algorithm>
 #include <limits>
 #include <sstream>
 
@@ -19,6 +20,22 @@ bool SolveLoop::end_setup()
         m_setup_done = true;
     }
     return !(m_time_limit_s > 0.0 && m_setup_s >= m_time_limit_s);
+}
+
+void SolveLoop::setup_phase(const char* name)
+{
+    if (m_setup_done) return;
+    const double now = elapsed_s();
+    m_phases.emplace_back(name, now - m_phase_mark);
+    m_phase_mark = now;
+}
+
+double SolveLoop::setup_phase_s(const std::string& name) const
+{
+    double s = 0.0;
+    for (const auto& [phase, seconds] : m_phases)
+        if (phase == name) s += seconds;
+    return s;
 }
 
 SolveStatus SolveLoop::check(long iterations, bool finite, bool converged)
@@ -109,6 +126,16 @@ SolverResult SolveLoop::finish(SolverResult& result, SolveStatus status, const s
     result.iterations = result.counters.iterations;
     result.setup_s = setup_s();
     result.solve_s = solve_s();
+    if (!m_phases.empty()) {
+        nlohmann::json phases = nlohmann::json::object();
+        double covered = 0.0;
+        for (const auto& [phase, seconds] : m_phases) {
+            phases[phase] = phases.value(phase, 0.0) + seconds;
+            covered += seconds;
+        }
+        phases["other"] = std::max(0.0, result.setup_s - covered);
+        result.info["setup_phases_s"] = phases;
+    }
     if (result.x.size() == 0 && m_qp.n() > 0) result.x = m_qp.x0;
     if (result.lambda.size() == 0 && m_qp.m() > 0) result.lambda = Vec::Zero(m_qp.m());
     return std::move(result);

@@ -35,6 +35,7 @@
 #include <string>
 #include <type_traits>
 #include <utility>
+#include <vector>
 
 namespace cb {
 
@@ -47,6 +48,12 @@ public:
     /// during setup: the solver then finishes with TIME_LIMIT and time_limit_message().
     bool end_setup();
     bool in_setup() const { return !m_setup_done; }
+    /// Ends a named part of the setup: the time since the last mark (or the start) goes to
+    /// `name` in the result's info.setup_phases_s (finish()), beside `other`, the setup time no
+    /// mark covers. Marks after end_setup() are ignored.
+    void setup_phase(const char* name);
+    /// Seconds recorded under `name` so far (0 when none).
+    double setup_phase_s(const std::string& name) const;
 
     double elapsed_s() const { return m_watch.seconds(); }  ///< since the start of setup, monitor excluded
     double setup_s() const { return m_setup_done ? m_setup_s : elapsed_s(); }
@@ -183,6 +190,8 @@ private:
     Stopwatch m_watch;
     bool m_setup_done = false;
     double m_setup_s = 0.0;
+    std::vector<std::pair<std::string, double>> m_phases;  ///< setup_phase()'s parts, in order
+    double m_phase_mark = 0.0;                             ///< elapsed_s() at the last mark
     SolveStatus m_decided = SolveStatus::NOT_RUN;  ///< the last exit a check or verdict decided
     double m_met_value = 0.0;                      ///< the measure that met the rule last
     double m_unmet_value = 0.0;                    ///< the measure a STALLED verdict saw

@@ -85,14 +85,18 @@ SolverResult mprgp_box_solve(const QpView& qp, const MprgpBoxSettings& settings,
     std::string error;
     if (settings.precond == "jacobi" && !jacobi_inverse_diagonal(qp.A, dinv, error))
         return loop.finish(result, SolveStatus::INVALID_INPUT, "mprgp-box: " + error);
+    loop.setup_phase("bounds_and_diagonal");
     AOperator a_op(qp);  // the product with A: 3x3 blocks when A has them, built in the setup
     a_op.prepare(common.a_format, static_cast<int>(common.threads));
+    loop.setup_phase("a_prepare");
     result.info["a_format"] = to_string(a_op.format());  // the storage the products read
     const PowerResult power = estimate_norm(a_op, context, PowerRule::POWER, settings.power_max, common, cnt);
+    loop.setup_phase("power");
     const double alpha_bar = fixed_step_length(power);
     result.info["alpha_bar"] = alpha_bar;
     result.info["power"] = {{"products", power.products}, {"estimate", power.estimate}, {"warm_start", power.warm}};
     const AccuracyScale scale = accuracy_scale(qp);
+    loop.setup_phase("measure_scale");
     cnt.a_products += scale.a_products;
     if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT);
 

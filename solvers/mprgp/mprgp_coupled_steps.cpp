@@ -223,6 +223,7 @@ SolverResult CoupledRun::run()
         if (!m_choice.rule.empty()) result.message += " (" + m_choice.rule + ")";
         return m_loop.finish(result, result.status);
     }
+    m_loop.setup_phase("precond_and_scaling");  // the constructor's choice and scaled variables
     // Every string setting is read here, once: the steps read flags.
     m_jacobi = m_choice.name == "jacobi";
     m_keep_face = m_st.expansion_projection == "face";
@@ -258,11 +259,15 @@ SolverResult CoupledRun::run()
             result.message = "mprgp-coupled: row " + std::to_string(i) + " is zero but c > 0: empty feasible set";
             return m_loop.finish(result, result.status);
         }
+    m_loop.setup_phase("face_operators");
     m_a_op.prepare(m_st.common.a_format, static_cast<int>(m_st.common.threads));
     m_rows_of_a = std::make_unique<TouchedRowsOfA>(m_a_op, m_unscale, &m_J);
+    m_loop.setup_phase("a_prepare");
     const PowerResult power = estimate_norm(m_a_op, m_ctx, PowerRule::POWER, m_st.power_max, common, m_cnt);
+    m_loop.setup_phase("power");
     m_alpha_bar = fixed_step_length(power);
     m_scale = accuracy_scale(m_original);
+    m_loop.setup_phase("measure_scale");
     m_cnt.a_products += m_scale.a_products;
     // precond = scaled: the residual in y is D^-1/2 that in x, so the measure's D^-1 weights act
     // on it as D^-1/2 = unscale; lengths, rows and multipliers are the same in both variables.

@@ -14,7 +14,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 #include <ostream>
+#include <string>
+#include <vector>
 
 namespace {
 
@@ -417,6 +420,39 @@ TEST(Mprgp, StoredZerosOnAnotherRowsDofsChangeNothing)
     EXPECT_LT(slack.cwiseAbs().minCoeff(), 1e-9);  // with a face for the correction to act on
     EXPECT_EQ(stored.iterations, plain.iterations);
     EXPECT_LE((stored.x - plain.x).cwiseAbs().maxCoeff(), 1e-13 * plain.x.cwiseAbs().maxCoeff());
+}
+
+}  // namespace
+
+namespace {
+
+// The setup's parts in the result (info.setup_phases_s, SolveLoop::setup_phase): the phases each
+// MPRGP solver names, and info.power.seconds as the power method's own time, not the whole setup.
+TEST(Mprgp, SetupPhasesNameWhereTheSetupWent)
+{
+    const Qp qp = cb::make_synthetic("plane", small, 5);
+    const std::map<std::string, std::vector<std::string>> expected = {
+        {"mprgp", {"a_prepare", "measure_scale", "other", "power", "rows_and_diagonal"}},
+        {"mprgp-coupled", {"a_prepare", "face_operators", "measure_scale", "other", "power", "precond_and_scaling"}},
+    };
+    for (const auto& [name, keys] : expected) {
+        const cb::SolverResult r = cb::builtin_registry().create(name, {{"tol", 1e-8}})->solve(qp.view(), {});
+        ASSERT_EQ(r.status, SolveStatus::CONVERGED) << name << ": " << r.message;
+        ASSERT_TRUE(r.info.contains("setup_phases_s")) << name;
+        const nlohmann::json& p = r.info["setup_phases_s"];
+        std::vector<std::string> got;
+        double sum = 0.0;
+        for (const auto& [key, value] : p.items()) {
+            got.push_back(key);
+            EXPECT_GE(value.get<double>(), 0.0) << name << " " << key;
+            sum += value.get<double>();
+        }
+        EXPECT_EQ(got, keys) << name;  // nlohmann's object: keys in sorted order
+        EXPECT_NEAR(sum, r.setup_s, 1e-9) << name;
+    }
+    const cb::SolverResult d = mprgp({{"tol", 1e-8}})->solve(qp.view(), {});
+    EXPECT_EQ(d.info["power"]["seconds"].get<double>(), d.info["setup_phases_s"]["power"].get<double>());
+    EXPECT_LT(d.info["power"]["seconds"].get<double>(), d.setup_s);
 }
 
 }  // namespace

@@ -250,6 +250,42 @@ TEST(SolveLoop, FinishFillsCountersAndTimes)
     EXPECT_DOUBLE_EQ(out.setup_s, loop.setup_s());
 }
 
+// Setup phases (info.setup_phases_s): each mark takes the time since the last one, a repeated name
+// adds up, the unmarked rest is `other`, and together they are the setup time; marks after the
+// setup and a loop without marks add nothing.
+TEST(SolveLoop, SetupPhasesPartTheSetupTime)
+{
+    const Fixture f;
+    const SolveContext context;
+    SolveLoop loop("t", f.view(), limits(10, 0.0), context);
+    spend(loop, 2e-3);
+    loop.setup_phase("first");
+    spend(loop, loop.elapsed_s() + 2e-3);
+    loop.setup_phase("second");
+    spend(loop, loop.elapsed_s() + 1e-3);
+    loop.setup_phase("first");
+    spend(loop, loop.elapsed_s() + 1e-3);  // unmarked
+    ASSERT_TRUE(loop.end_setup());
+    loop.setup_phase("after");
+    SolverResult result;
+    const SolverResult out = loop.finish(result, SolveStatus::STALLED);
+    ASSERT_TRUE(out.info.contains("setup_phases_s")) << out.info.dump();
+    const nlohmann::json& p = out.info["setup_phases_s"];
+    EXPECT_EQ(p.size(), 3U) << p.dump();
+    EXPECT_FALSE(p.contains("after"));
+    EXPECT_GE(p["first"].get<double>(), 3e-3);
+    EXPECT_GE(p["second"].get<double>(), 2e-3);
+    EXPECT_GE(p["other"].get<double>(), 1e-3);
+    EXPECT_NEAR(p["first"].get<double>() + p["second"].get<double>() + p["other"].get<double>(), out.setup_s, 1e-12);
+    EXPECT_DOUBLE_EQ(loop.setup_phase_s("first"), p["first"].get<double>());
+    EXPECT_EQ(loop.setup_phase_s("after"), 0.0);
+
+    SolveLoop unmarked("t", f.view(), limits(10, 0.0), context);
+    ASSERT_TRUE(unmarked.end_setup());
+    SolverResult plain;
+    EXPECT_FALSE(unmarked.finish(plain, SolveStatus::STALLED).info.contains("setup_phases_s"));
+}
+
 TEST(SolveLoop, TheRuleReadsOnlyItsOwnMeasure)
 {
     const Fixture f;
