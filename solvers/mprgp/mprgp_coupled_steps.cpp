@@ -243,6 +243,7 @@ SolverResult CoupledRun::run()
                 ? std::make_unique<CoupledFaceOperators>(m_J, m_dinv, opt, std::move(*m_choice.components))
                 : std::make_unique<CoupledFaceOperators>(m_J, m_dinv, opt);
     m_gram = SpMat(m_J * m_J.transpose());
+    m_loop.setup_phase("face_operators");
     if (m_choice.name == "ichol" || m_st.deflation == "rigid") {
         m_precond = std::make_unique<CoupledPreconditioner>(m_A, m_J, m_dinv, *m_ops, m_choice.name);
         std::string error;
@@ -251,6 +252,7 @@ SolverResult CoupledRun::run()
             result.message = "mprgp-coupled: precond=ichol: " + error;
             return m_loop.finish(result, result.status);
         }
+        m_loop.setup_phase("preconditioner");  // ichol's factor, the rigid modes
     }
     m_s = m_ops->row_norm2();
     for (Eigen::Index i = 0; i < m_m; ++i)
@@ -259,7 +261,7 @@ SolverResult CoupledRun::run()
             result.message = "mprgp-coupled: row " + std::to_string(i) + " is zero but c > 0: empty feasible set";
             return m_loop.finish(result, result.status);
         }
-    m_loop.setup_phase("face_operators");
+    m_loop.setup_phase("face_operators");  // the row norms: added to the part above
     m_a_op.prepare(m_st.common.a_format, static_cast<int>(m_st.common.threads));
     m_rows_of_a = std::make_unique<TouchedRowsOfA>(m_a_op, m_unscale, &m_J);
     m_loop.setup_phase("a_prepare");

@@ -291,8 +291,10 @@ SolverResult DecoupledMprgp::run()
     m_recompute = m_st.objective == "recompute";
     m_gamma2 = m_st.gamma * m_st.gamma;
     if (m_st.deflation == "rigid") {
+        m_loop.setup_phase("rows_and_diagonal");
         m_deflate = m_defl.build(m_A, m_J, m_qp.x0, RigidDeflation::SLOW_RAYLEIGH);
         m_cnt.a_products += m_defl.build_products();
+        m_loop.setup_phase("deflation");  // the rigid modes and their products
     }
     m_rows = make_decoupled_rows(m_J, m_dinv);
     for (Eigen::Index i = 0; i < m_m; ++i) {

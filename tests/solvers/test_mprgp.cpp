@@ -453,6 +453,12 @@ TEST(Mprgp, SetupPhasesNameWhereTheSetupWent)
     const cb::SolverResult d = mprgp({{"tol", 1e-8}})->solve(qp.view(), {});
     EXPECT_EQ(d.info["power"]["seconds"].get<double>(), d.info["setup_phases_s"]["power"].get<double>());
     EXPECT_LT(d.info["power"]["seconds"].get<double>(), d.setup_s);
+    // A setup's optional parts get names of their own, not their neighbours'.
+    const cb::SolverResult rigid = mprgp({{"tol", 1e-8}, {"deflation", "rigid"}})->solve(qp.view(), {});
+    EXPECT_TRUE(rigid.info["setup_phases_s"].contains("deflation")) << rigid.info["setup_phases_s"].dump();
+    const cb::SolverResult ichol =
+        cb::builtin_registry().create("mprgp-coupled", {{"tol", 1e-8}, {"precond", "ichol"}})->solve(qp.view(), {});
+    EXPECT_TRUE(ichol.info["setup_phases_s"].contains("preconditioner")) << ichol.info["setup_phases_s"].dump();
 }
 
 }  // namespace
