@@ -59,6 +59,7 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
     }
     AOperator a_op(qp);  // the product with A: 3x3 blocks when A has them, built in the setup
     a_op.prepare(common.a_format, static_cast<int>(common.threads));
+    loop.setup_phase("a_prepare");
     result.info["a_format"] = to_string(a_op.format());  // the storage the products read
     const bool jacobi = m_settings.precond == "jacobi";
     Vec inv_diag;
@@ -100,6 +101,7 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
         ++counters.precond_applications;
         return inv_diag.cwiseProduct(r);
     };
+    loop.setup_phase("preconditioner");
     // deflation = rigid: V = the slow rigid modes of each body of A. cg has no face (it ignores
     // J), so V is built over all DOFs with no rows: the face with no active row.
     const SpMat no_rows(0, n);
@@ -110,7 +112,14 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
         counters.a_products += defl.build_products();
         if (deflate && defl.set_face(qp.A, no_rows, DecoupledRows{}, std::vector<char>(), &counters.work_flops))
             counters.a_products += RigidDeflation::MODES;  // A V
+        loop.setup_phase("deflation");
     }
+    // cg solves the unconstrained relaxation: its stop test measures that QP (J without rows). The
+    // scale is setup, as in the other solvers (it was formed after end_setup(), on the solve's clock).
+    const Vec no_c(0);
+    const AccuracyScale scale = accuracy_scale(QpView{qp.A, qp.b, no_rows, no_c, qp.x0, qp.length});
+    counters.a_products += scale.a_products;
+    loop.setup_phase("measure_scale");
     // The search direction: M^-1 r, made A-conjugate to V when deflating (deflated PCG).
     auto direction = [&](const Vec& r) -> Vec {
         Vec z = precondition(r);
@@ -128,10 +137,6 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
     Vec x = m_settings.start == "zero" ? Vec(Vec::Zero(n)) : qp.x0;
     Vec r = qp.b - a_product(a_op, x);  // r = -g
     ++counters.a_products;
-    // cg solves the unconstrained relaxation: its stop test measures that QP (J without rows).
-    const Vec no_c(0);
-    const AccuracyScale scale = accuracy_scale(QpView{qp.A, qp.b, no_rows, no_c, qp.x0, qp.length});
-    counters.a_products += scale.a_products;
     // Stop test of cg: native = |r|_2 absolute; accuracy = the error of the unconstrained
     // relaxation (its stationarity part, docs/accuracy.md).
     const Vec no_lambda(0);

@@ -8,6 +8,9 @@
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
 
+#include <string>
+#include <vector>
+
 namespace {
 
 using cb::Qp;
@@ -190,3 +193,28 @@ TEST(Cg, SettingsAreCheckedByName)
     EXPECT_EQ(d.to_json()["precond"], "jacobi");
     EXPECT_EQ(d.to_json()["tol"], 1e-6);
 }
+
+namespace {
+
+// cg's setup in the record (info.setup_phases_s): the accuracy measure's scale is part of the
+// setup, as in the other solvers, and the preconditioner and deflation have parts of their own.
+TEST(Cg, SetupPhasesIncludeTheMeasureScale)
+{
+    const Qp qp = cb::make_synthetic("plane", {{"nx", 4}, {"ny", 3}, {"nz", 4}}, 2);
+    const SolverResult plain = run_cg(qp, {{"tol", 1e-8}});
+    ASSERT_TRUE(plain.info.contains("setup_phases_s")) << plain.info.dump();
+    std::vector<std::string> keys;
+    double sum = 0.0;
+    for (const auto& [key, value] : plain.info["setup_phases_s"].items()) {
+        keys.push_back(key);
+        sum += value.get<double>();
+    }
+    EXPECT_EQ(keys, (std::vector<std::string>{"a_prepare", "measure_scale", "other", "preconditioner"}));
+    EXPECT_NEAR(sum, plain.setup_s, 1e-9);
+    EXPECT_GT(plain.info["setup_phases_s"]["measure_scale"].get<double>(), 0.0);
+    const SolverResult rigid = run_cg(qp, {{"tol", 1e-8}, {"deflation", "rigid"}});
+    EXPECT_TRUE(rigid.info["setup_phases_s"].contains("deflation")) << rigid.info.dump();
+    EXPECT_GT(rigid.iterations, 0);
+}
+
+}  // namespace
