@@ -175,16 +175,18 @@ SolverResult ActiveSetSolver::solve(const QpView& qp, const SolveContext& contex
         return chol.solve(rhs);
     };
     // CSR: a few products (the stop test's gradients) would not repay a block copy of A.
+    loop.setup_phase("factorization");  // the row norms and A's Cholesky factor
     AOperator a_op(qp);
     a_op.prepare(AFormat::CSR, static_cast<int>(common.threads));
+    const AccuracyScale scale = accuracy_scale(qp);  // setup, as in every solver
+    counters.a_products += scale.a_products;
+    loop.setup_phase("measure_scale");
     if (!loop.end_setup()) {
         result.x = qp.x0;
         result.lambda = Vec::Zero(m);
         return loop.finish(result, SolveStatus::TIME_LIMIT);
     }
 
-    const AccuracyScale scale = accuracy_scale(qp);
-    counters.a_products += scale.a_products;
     const Vec x_unc = apply_a_inverse(qp.b);
     // A non-finite b (or A) leaves nothing to pivot on: the loop's finiteness check ends the solve.
     if (!x_unc.allFinite()) return loop.finish(result, loop.check(counters.iterations, false, false));

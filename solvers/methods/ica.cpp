@@ -185,14 +185,17 @@ SolverResult IcaSolver::solve(const QpView& qp, const SolveContext& context)
         result.info["start_solve_s"] = loop.elapsed_s() - start_begin_s;
         result.info["start_solver"] = "cholmod";
     }
+    loop.setup_phase("blocks_and_start");  // D3^-1, J D3^-1 J' and the start
     AOperator a_op(qp);  // the product with A: 3x3 blocks when A has them, built in the setup
     a_op.prepare(s.common.a_format, static_cast<int>(s.common.threads));
+    loop.setup_phase("a_prepare");
     result.info["a_format"] = to_string(a_op.format());  // the storage the products read
     Vec lambda = Vec::Zero(m);
     if (context.lambda0 && context.lambda0->size() == m) lambda = context.lambda0->cwiseMax(0.0);
-    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT);
-    const AccuracyScale scale = accuracy_scale(qp);
+    const AccuracyScale scale = accuracy_scale(qp);  // setup, as in every solver
     counters.a_products += scale.a_products;
+    loop.setup_phase("measure_scale");
+    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT);
     Vec Ax = a_product(a_op, x);
     ++counters.a_products;
     Vec f = qp.b + qp.J.transpose() * lambda;

@@ -95,11 +95,13 @@ SolverResult PgsSolver::solve(const QpView& qp, const SolveContext& context)
     const Vec S_diag = S.diagonal();
     result.info["y_stored"] = keep_y;
     // CSR: a few products (the stop test's gradients) would not repay a block copy of A.
+    loop.setup_phase("delassus");  // A's factor, S = J A^-1 J'
     AOperator a_op(qp);
     a_op.prepare(AFormat::CSR, static_cast<int>(s.common.threads));
-    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT);
-    const AccuracyScale scale = accuracy_scale(qp);
+    const AccuracyScale scale = accuracy_scale(qp);  // setup, as in every solver
     counters.a_products += scale.a_products;
+    loop.setup_phase("measure_scale");
+    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT);
 
     Vec lambda = Vec::Zero(m);
     if (context.lambda0 && context.lambda0->size() == m) lambda = context.lambda0->cwiseMax(0.0);

@@ -8,6 +8,9 @@
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <algorithm>
+#include <string>
+#include <vector>
 
 namespace {
 
@@ -104,6 +107,28 @@ TEST_P(AllSolvers, ConvergedStatusIsConfirmedByTheAccuracyMeasure)
         const double rel = cb::accuracy(qp.view(), r.x, r.lambda).max();
         EXPECT_LE(rel, tol * (1 + 1e-6)) << GetParam() << " claims convergence at tol " << tol;
     }
+}
+
+// A solver's setup in the record (info.setup_phases_s): the parts sum to time.setup_s, and the
+// accuracy measure's scale is one of them for the solvers that form it (all of the project's own
+// iterative solvers; a later solver is checked whenever it reports the field).
+TEST_P(AllSolvers, SetupPhasesSumToTheSetupAndNameTheMeasureScale)
+{
+    const Qp qp = cb::testing_qps::two_row_decoupled_qp();
+    const SolverResult r = cb::builtin_registry().create(GetParam(), {{"tol", 1e-8}})->solve(qp.view(), {});
+    const std::vector<std::string> split = {"mprgp", "mprgp-coupled", "cg", "ica", "pgs", "active-set"};
+    const bool must = std::find(split.begin(), split.end(), GetParam()) != split.end();
+    if (!r.info.is_object() || !r.info.contains("setup_phases_s")) {
+        EXPECT_FALSE(must) << GetParam() << " reports no setup phases";
+        return;
+    }
+    double sum = 0.0;
+    for (const auto& [key, value] : r.info["setup_phases_s"].items()) {
+        EXPECT_GE(value.get<double>(), 0.0) << key;
+        sum += value.get<double>();
+    }
+    EXPECT_NEAR(sum, r.setup_s, 1e-9);
+    if (must) EXPECT_TRUE(r.info["setup_phases_s"].contains("measure_scale")) << r.info["setup_phases_s"].dump();
 }
 
 TEST_P(AllSolvers, UnknownSettingIsAnInputError)
