@@ -161,6 +161,16 @@ class ReportsStaleFigures(unittest.TestCase):
                                          f"`contactbench solve f.qpsnap`.{tail}\n")
         self.commit("doc")
 
+    def change_solver(self, path="solvers/mprgp/mprgp.cpp", text="int iterations = 317;\n", message="solver"):
+        write(self.root, path, text)
+        self.commit(message)
+
+    def stale(self, line, path="solvers/mprgp/mprgp.cpp"):
+        """The check's message for docs/work.md's block at `line`, measured at self.measured."""
+        return (f"docs/work.md:{line}: figures measured at {self.measured} with `contactbench solve f.qpsnap` "
+                f"predate changes to {path}: re-measure, or say why they still stand (\"Still stands: <commit> ...\") "
+                "or that they were not re-measured (\"Not re-measured: ...\")")
+
     def test_fresh_figures_pass(self):
         self.doc()
         self.assertEqual(stale_figures_problems(self.root), [])
@@ -173,12 +183,8 @@ class ReportsStaleFigures(unittest.TestCase):
 
     def test_a_planted_solver_change_makes_them_stale(self):
         self.doc()
-        write(self.root, "solvers/mprgp/mprgp.cpp", "int iterations = 317;\n")
-        self.commit("solver")
-        self.assertEqual(stale_figures_problems(self.root), [
-            f"docs/work.md:3: figures measured at {self.measured} with `contactbench solve f.qpsnap` predate "
-            "changes to solvers/mprgp/mprgp.cpp: re-measure, or say why they still stand (\"Still stands: <commit> ...\") or that "
-            "they were not re-measured (\"Not re-measured: ...\")"])
+        self.change_solver()
+        self.assertEqual(stale_figures_problems(self.root), [self.stale(3)])
 
     def test_a_measured_line_wrapped_over_lines_is_read_whole(self):
         # "Measured at <commit>" at the end of one line and "with `command`" on the next: the block
@@ -187,19 +193,14 @@ class ReportsStaleFigures(unittest.TestCase):
                                          "with `contactbench solve\nf.qpsnap` (covers\nsolvers/).\n")
         self.commit("doc")
         self.assertEqual(stale_figures_problems(self.root), [])
-        write(self.root, "solvers/mprgp/mprgp.cpp", "int iterations = 317;\n")
-        self.commit("solver")
-        self.assertEqual(stale_figures_problems(self.root), [
-            f"docs/work.md:4: figures measured at {self.measured} with `contactbench solve f.qpsnap` predate "
-            "changes to solvers/mprgp/mprgp.cpp: re-measure, or say why they still stand (\"Still stands: <commit> ...\") or that "
-            "they were not re-measured (\"Not re-measured: ...\")"])
+        self.change_solver()
+        self.assertEqual(stale_figures_problems(self.root), [self.stale(4)])
 
     def test_a_measured_line_in_mid_sentence_is_read_too(self):
         write(self.root, "docs/work.md", f"# Work\n\nThe share, measured at {self.measured} with `make share`, "
                                          "was 0.16.\n")
         self.commit("doc")
-        write(self.root, "solvers/mprgp/mprgp.cpp", "int iterations = 317;\n")
-        self.commit("solver")
+        self.change_solver()
         self.assertEqual(len(stale_figures_problems(self.root)), 1)
 
     def test_a_pure_move_leaves_them_fresh_and_a_later_change_does_not(self):
@@ -209,8 +210,7 @@ class ReportsStaleFigures(unittest.TestCase):
         write(self.root, "plots/fig.py", "# solvers/engine/mprgp.cpp\n")
         self.commit("Pure move: solvers/mprgp/ into solvers/engine/")
         self.assertEqual(stale_figures_problems(self.root), [])
-        write(self.root, "solvers/engine/mprgp.cpp", "int iterations = 317;\n")
-        self.commit("solver")
+        self.change_solver("solvers/engine/mprgp.cpp")
         self.assertEqual(len(stale_figures_problems(self.root)), 1)
         self.assertIn("predate changes to solvers/engine/mprgp.cpp:", stale_figures_problems(self.root)[0])
 
@@ -238,8 +238,7 @@ class ReportsStaleFigures(unittest.TestCase):
 
     def test_saying_they_were_not_re_measured_keeps_them_visible(self):
         self.doc("\nNot re-measured: the solver changed after it; `make ladder` gives today's figures.")
-        write(self.root, "solvers/mprgp/mprgp.cpp", "int iterations = 317;\n")
-        self.commit("solver")
+        self.change_solver()
         self.assertEqual(stale_figures_problems(self.root), [])
 
     def test_covers_narrows_what_they_describe(self):

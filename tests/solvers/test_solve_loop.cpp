@@ -277,8 +277,8 @@ TEST(SolveLoop, SetupPhasesPartTheSetupTime)
     EXPECT_GE(p["second"].get<double>(), 2e-3);
     EXPECT_GE(p["other"].get<double>(), 1e-3);
     EXPECT_NEAR(p["first"].get<double>() + p["second"].get<double>() + p["other"].get<double>(), out.setup_s, 1e-12);
-    EXPECT_DOUBLE_EQ(loop.setup_phase_s("first"), p["first"].get<double>());
-    EXPECT_EQ(loop.setup_phase_s("after"), 0.0);
+    EXPECT_NEAR(loop.setup_phase_s("first"), p["first"].get<double>(), 1e-12);  // the accessor sums the same parts
+    EXPECT_LT(loop.setup_phase_s("after"), 1e-12);  // a mark after the setup records nothing
 
     SolveLoop unmarked("t", f.view(), limits(10, 0.0), context);
     ASSERT_TRUE(unmarked.end_setup());
