@@ -104,12 +104,14 @@ SolverResult solve_frictional_snapshot(const std::string& name, const QpView& qp
     } catch (const InputError& e) {
         return loop.finish(result, SolveStatus::INVALID_INPUT, e.what());
     }
+    loop.setup_phase("local_problem");
+    const AccuracyScale scale = accuracy_scale(qp);  // in the setup, as in every solver
+    counters.a_products += scale.a_products;
+    loop.setup_phase("measure_scale");
     if (!loop.end_setup()) {
         add_work_counters(counters, method.counters());
         return loop.finish(result, SolveStatus::TIME_LIMIT);
     }
-    const AccuracyScale scale = accuracy_scale(qp);
-    counters.a_products += scale.a_products;
 
     Vec x = qp.x0, lambda = Vec::Zero(m), lambda_t = Vec::Zero(own_frame ? 2 * m : 0);
     double native = std::numeric_limits<double>::infinity(), e = native;

@@ -138,9 +138,13 @@ SolverResult MprgpStaggeredSolver::solve(const QpView& qp, const SolveContext& c
         return loop.finish(result, SolveStatus::INVALID_INPUT, std::string(STAGGERED_NAME) + ": " + error);
     const SpMat W_tt = tangential.matrix().sparseView();
     const Vec q_t0 = tangential.q();
+    // ||q|| of the local problem (FCLIB's denominator): q = (J A^-1 b - c, q_T0).
+    const Vec q_n0 = qp.J * tangential.unconstrained() - qp.c;
+    const double norm_q = std::sqrt(q_n0.squaredNorm() + q_t0.squaredNorm());
     // D^-1 of W_TT; a zero tangent row (diagonal 0) never moves its disc's centre: 1 is harmless.
     Vec dinv(2 * m);
     for (Eigen::Index j = 0; j < 2 * m; ++j) dinv[j] = W_tt.coeff(j, j) > 0.0 ? 1.0 / W_tt.coeff(j, j) : 1.0;
+    loop.setup_phase("tangential_dual");
     AOperator w_op(W_tt);
     w_op.prepare(AFormat::CSR);
     Vec eigenvector;
@@ -148,12 +152,11 @@ SolverResult MprgpStaggeredSolver::solve(const QpView& qp, const SolveContext& c
     const double alpha_bar = power.estimate > 0.0 ? 2.0 / (1.01 * power.estimate) : 1.0;
     const double w_product_flops = dense_matvec_flops(double(2 * m), double(2 * m));
     counters.work_flops += double(power.products) * w_product_flops;
-    // ||q|| of the local problem (FCLIB's denominator): q = (J A^-1 b - c, q_T0).
-    const Vec q_n0 = qp.J * tangential.unconstrained() - qp.c;
-    const double norm_q = std::sqrt(q_n0.squaredNorm() + q_t0.squaredNorm());
-    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT);
-    const AccuracyScale scale = accuracy_scale(qp);
+    loop.setup_phase("power");
+    const AccuracyScale scale = accuracy_scale(qp);  // in the setup, as in every solver
     counters.a_products += scale.a_products;
+    loop.setup_phase("measure_scale");
+    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT);
     // The normal QPs are measured in the snapshot's scale (their b differs, so l is fixed here).
     const FixedLength length{scale.length, "given"};
     const bool native = s.common.stops_on_native();

@@ -130,11 +130,14 @@ SolverResult NsgsFrictionSolver::solve(const QpView& qp, const SolveContext& con
         return loop.finish(result, SolveStatus::INVALID_INPUT, e.what());
     }
     result.info["y_stored"] = keep_y;
+    loop.setup_phase("local_problem");
     AOperator a_op(qp);
     a_op.prepare(AFormat::CSR, static_cast<int>(s.common.threads));
-    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT);
-    const AccuracyScale scale = accuracy_scale(qp);
+    loop.setup_phase("a_prepare");
+    const AccuracyScale scale = accuracy_scale(qp);  // in the setup, as in every solver
     counters.a_products += scale.a_products;
+    loop.setup_phase("measure_scale");
+    if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT);
 
     Vec r = Vec::Zero(k3);
     if (context.lambda0 && context.lambda0->size() == m)

@@ -51,11 +51,14 @@ SolverResult TemplateSolver::solve(const QpView& qp, const SolveContext& context
         norm_inf = std::max(norm_inf, row);
     }
     const double step = norm_inf > 0 ? m_settings.step_scale / norm_inf : 1.0;
+    loop.setup_phase("bounds_and_step");  // each part of the setup by name in info.setup_phases_s
     AOperator a_op(qp);  // the product with A: 3x3 blocks when A has them, built in the setup
     a_op.prepare(common.a_format, static_cast<int>(common.threads));
     result.info["a_format"] = to_string(a_op.format());  // the storage the products read
-    const AccuracyScale scale = accuracy_scale(qp);
+    loop.setup_phase("a_prepare");
+    const AccuracyScale scale = accuracy_scale(qp);  // in the setup, as in every solver
     counters.a_products += scale.a_products;
+    loop.setup_phase("measure_scale");
     // time_limit_s counts setup: a limit reached here ends the solve before any iteration.
     if (!loop.end_setup()) return loop.finish(result, SolveStatus::TIME_LIMIT);
 

@@ -112,6 +112,29 @@ TEST_P(FrictionRegistry, ConvergesOnTheFrictionalErrorAndAgreesWithNsgsFriction)
     }
 }
 
+// The measure's scale is formed in the setup of every frictional solver that forms a local problem,
+// as in the frictionless ones (a solve-time comparison would charge it to these alone otherwise), and
+// the setup's parts sum to setup_s. On the frictional particles, where mprgp-staggered runs its own
+// path (without friction it hands the QP to mprgp-coupled).
+TEST(FrictionSetupPhases, TheMeasureScaleIsPartOfTheSetup)
+{
+    const Qp qp = particles_on_a_plane(12);
+    ASSERT_TRUE(qp.frictional());
+    std::vector<std::string> names = {"nsgs-friction", "mprgp-staggered", "mprgp-tresca-fp", "mprgp+ica-friction"};
+    for (const char* peer : {"siconos-fc3d-nsgs", "siconos-fc3d-nsn"})
+        if (builtin_registry().contains(peer)) names.emplace_back(peer);
+    for (const std::string& name : names) {
+        const SolverResult r = builtin_registry().create(name, {{"tol", 1e-6}})->solve(qp.view(), {});
+        ASSERT_TRUE(r.info.contains("setup_phases_s")) << name << " reports no setup phases";
+        const nlohmann::json& phases = r.info["setup_phases_s"];
+        ASSERT_TRUE(phases.contains("measure_scale")) << name << ": " << phases.dump();
+        double sum = 0.0;
+        for (const auto& [key, value] : phases.items()) sum += value.get<double>();
+        EXPECT_NEAR(sum, r.setup_s, 1e-9) << name;
+        EXPECT_GT(r.solve_s, 0.0) << name;
+    }
+}
+
 TEST_P(FrictionRegistry, RunsAtMuZeroWithAndWithoutFrictionFields)
 {
     const std::string name = GetParam();
