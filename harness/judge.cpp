@@ -130,7 +130,7 @@ Judgement judge_point(const Qp& qp, const SolutionPoint& point, const JudgeOptio
             if (solved == "unconstrained") {
                 const SpMat no_rows(0, qp.n());
                 const Vec no_c(0);
-                const QpView relaxed{qp.A, qp.b, no_rows, no_c, qp.x0, &qp.length};
+                const QpView relaxed{qp.A, qp.b, no_rows, no_c, qp.x0, &qp.length, nullptr, qp.a_symmetric};
                 out.accuracy_solved = accuracy_from_gradient(relaxed, accuracy_scale(relaxed), x, g, Vec(0));
                 out.have_solved = true;
             } else if (solved == "decoupled") {
@@ -164,7 +164,7 @@ Judgement judge_point(const Qp& qp, const SolutionPoint& point, const JudgeOptio
                 Vec lambda_kept(static_cast<Eigen::Index>(report.kept_rows.size()));
                 for (size_t k = 0; k < report.kept_rows.size(); ++k)
                     lambda_kept[static_cast<Eigen::Index>(k)] = out.lambda[report.kept_rows[k]];
-                const QpView reduced_view{qp.A, qp.b, J_kept, c_kept, qp.x0, &qp.length, nullptr};
+                const QpView reduced_view{qp.A, qp.b, J_kept, c_kept, qp.x0, &qp.length, nullptr, qp.a_symmetric};
                 Vec used;
                 bool fitted = false;
                 out.accuracy_solved = measure_point(reduced_view, accuracy_scale(reduced_view), x, g, &lambda_kept,

@@ -202,11 +202,12 @@ void measure_outcome(RunOutcome& out, RunFacts& facts, const CommonSettings& com
     } else if (facts.ignores_constraints) {
         const SpMat no_rows(0, original.n());
         const Vec no_c(0);
-        const QpView relaxed{original.A, original.b, no_rows, no_c, original.x0, &original.length};
+        const QpView relaxed{original.A,  original.b,       no_rows, no_c,
+                             original.x0, &original.length, nullptr, original.a_symmetric};
         out.accuracy_solved = accuracy_from_gradient(relaxed, accuracy_scale_with_rows(scale, relaxed), x, g, Vec(0));
     } else {
         // The decoupled rows, or the rows without their friction: the view with no friction fields.
-        const QpView solved{view.A, view.b, view.J, view.c, view.x0, view.length, nullptr};
+        const QpView solved{view.A, view.b, view.J, view.c, view.x0, view.length, nullptr, view.a_symmetric};
         Vec lambda_solved;
         bool fitted_solved = result.lambda_fitted;
         // The same A, b and x0 as the problem's own scale: only the rows' parts are formed again.

@@ -95,7 +95,8 @@ SolverResult solve_frictional_snapshot(const std::string& name, const QpView& qp
 
     Friction synthesized;
     if (!own_frame) synthesized = frictionless_frame(qp);
-    const QpView framed{qp.A, qp.b, qp.J, qp.c, qp.x0, qp.length, own_frame ? qp.friction : &synthesized};
+    const QpView framed{qp.A,          qp.b, qp.J, qp.c, qp.x0, qp.length, own_frame ? qp.friction : &synthesized,
+                        qp.a_symmetric};
     result.info["frame"] =
         own_frame ? "the snapshot's (mu, T)" : "no friction fields: mu = 0 with synthesized tangent rows (no lambda_t)";
     SnapshotFrictionMethod method;

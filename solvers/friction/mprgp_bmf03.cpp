@@ -121,7 +121,7 @@ SolverResult MprgpBmf03Solver::solve(const QpView& qp, const SolveContext& conte
     }
 
     // Stage 1: the frictionless QP, exactly (friction fields hidden from mprgp-coupled).
-    const QpView frictionless{qp.A, qp.b, qp.J, qp.c, qp.x0, qp.length, nullptr};
+    const QpView frictionless{qp.A, qp.b, qp.J, qp.c, qp.x0, qp.length, nullptr, qp.a_symmetric};
     SolverResult result = mprgp_coupled_solve(frictionless, MprgpCoupledSettings::from_json(common.to_json()), context);
     rename_message(result);
     result.info["frictionless_stage"] = {

@@ -223,7 +223,7 @@ SolverResult MprgpStaggeredSolver::solve(const QpView& qp, const SolveContext& c
         const double inner_tol = std::max(s.inner_fraction * s.common.tol, s.inner_relative * e) * tighten;
         // (a) the normal QP with lambda_T fixed: b + T'lambda_T, warm-started at x.
         b_normal = qp.b + f.T.transpose() * lambda_t;
-        const QpView normal_qp{qp.A, b_normal, qp.J, qp.c, x, &length, nullptr};
+        const QpView normal_qp{qp.A, b_normal, qp.J, qp.c, x, &length, nullptr, qp.a_symmetric};
         MprgpCoupledSettings normal;
         normal.common = s.common;
         normal.common.stop = StopRule::ACCURACY;

@@ -193,14 +193,31 @@ namespace {
 
 /// The connected components of A's node graph (node = DOF / per_node; stored zeros do not join),
 /// numbered by their smallest node (DisjointSets' labels depend on the partition alone). A node's
-/// rows mostly name the same neighbours: `joined` keeps each pair to one join.
-std::vector<int> node_bodies(const SpMat& A, int per_node, int nodes, int& bodies)
+/// rows mostly name the same neighbours: `joined` keeps each pair to one join. When A equals A' to
+/// the bit, an entry right of a row's node meets every edge once (its mirror is the entry left of the
+/// other node's rows, nonzero exactly when it is): the scan starts at the first column past the node,
+/// found by a binary search (compressed rows' columns increase), and reads about half of A.
+std::vector<int> node_bodies(const SpMat& A, int per_node, int nodes, bool a_symmetric, int& bodies)
 {
     DisjointSets sets(nodes);
     std::vector<int> joined(static_cast<size_t>(nodes), -1);
+    const bool upper_only = a_symmetric && A.isCompressed();
+    const int* outer = A.outerIndexPtr();
+    const int* inner = A.innerIndexPtr();
+    const double* val = A.valuePtr();
     for (Eigen::Index r = 0; r < A.outerSize(); ++r) {
         const int node = static_cast<int>(per_node == 3 ? r / 3 : r);  // no division by a variable
         joined[static_cast<size_t>(node)] = node;
+        if (upper_only) {
+            const int* end = inner + outer[r + 1];
+            for (const int* k = std::lower_bound(inner + outer[r], end, per_node * (node + 1)); k != end; ++k) {
+                const int other = per_node == 3 ? *k / 3 : *k;
+                if (val[k - inner] == 0.0 || joined[static_cast<size_t>(other)] == node) continue;
+                sets.join(node, other);
+                joined[static_cast<size_t>(other)] = node;
+            }
+            continue;
+        }
         for (SpMat::InnerIterator it(A, r); it; ++it) {
             const int other = static_cast<int>(per_node == 3 ? it.col() / 3 : it.col());
             if (it.value() == 0.0 || joined[static_cast<size_t>(other)] == node)
@@ -228,7 +245,7 @@ BodyMotion::BodyMotion(const QpView& qp, double length)
     Bodies& B = *own;
 
     int bodies = 0;
-    B.body = node_bodies(A, m_per_node, nodes, bodies);
+    B.body = node_bodies(A, m_per_node, nodes, qp.a_symmetric, bodies);
     auto body_of = [&](Eigen::Index p) { return static_cast<size_t>(B.body[static_cast<size_t>(p / m_per_node)]); };
 
     if (m_spatial) {

@@ -117,7 +117,8 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
     // cg solves the unconstrained relaxation: its stop test measures that QP (J without rows). The
     // scale is setup, as in the other solvers (it was formed after end_setup(), on the solve's clock).
     const Vec no_c(0);
-    const AccuracyScale scale = accuracy_scale(QpView{qp.A, qp.b, no_rows, no_c, qp.x0, qp.length});
+    const AccuracyScale scale =
+        accuracy_scale(QpView{qp.A, qp.b, no_rows, no_c, qp.x0, qp.length, nullptr, qp.a_symmetric});
     counters.a_products += scale.a_products;
     loop.setup_phase("measure_scale");
     // The search direction: M^-1 r, made A-conjugate to V when deflating (deflated PCG).
