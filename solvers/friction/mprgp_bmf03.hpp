@@ -36,7 +36,7 @@ struct MprgpBmf03Settings {
 
 class MprgpBmf03Solver final : public Solver {
 public:
-    explicit MprgpBmf03Solver(MprgpBmf03Settings settings) : m_settings(std::move(settings)) {}
+    explicit MprgpBmf03Solver(const MprgpBmf03Settings& settings) : m_settings(settings) {}
     std::string name() const override { return "mprgp+bmf03"; }
     nlohmann::json settings() const override { return m_settings.to_json(); }
     bool handles_friction() const override { return true; }

@@ -130,8 +130,8 @@ SolverResult MprgpStaggeredSolver::solve(const QpView& qp, const SolveContext& c
     if (!loop.inputs_finite() || !f.mu.allFinite()) return loop.finish(result, loop.check(0, false, false));
 
     // --- setup: W_TT and q_T0 = T A^-1 b - cT by one CHOLMOD factor of A, alpha_bar, D^-1 ---
-    const Vec cT = f.cT.size() == 2 * m ? f.cT : Vec(Vec::Zero(2 * m));
-    const QpView tangent_rows{qp.A, qp.b, f.T, cT, qp.x0, nullptr, nullptr};
+    const Vec c_tangent = f.cT.size() == 2 * m ? f.cT : Vec(Vec::Zero(2 * m));
+    const QpView tangent_rows{qp.A, qp.b, f.T, c_tangent, qp.x0, nullptr, nullptr};
     DualLcp tangential;
     std::string error;
     if (!tangential.form(tangent_rows, counters, error))
@@ -273,9 +273,9 @@ SolverResult MprgpStaggeredSolver::solve(const QpView& qp, const SolveContext& c
         // (b) the tangential QP with lambda_N fixed: discs of radius mu_i lambda_N,i, warm-started.
         for (Eigen::Index i = 0; i < m; ++i) radius[static_cast<size_t>(i)] = f.mu[i] * std::max(lambda_n[i], 0.0);
         b_normal = qp.b + qp.J.transpose() * lambda_n;
-        const QpView normal_load{qp.A, b_normal, f.T, cT, qp.x0, nullptr, nullptr};
+        const QpView normal_load{qp.A, b_normal, f.T, c_tangent, qp.x0, nullptr, nullptr};
         x_free_n = tangential.primal(normal_load, Vec::Zero(2 * m), counters);  // A^-1 (b + J'lambda_N)
-        b_disc = -(f.T * x_free_n - cT);                                        // -q_T
+        b_disc = -(f.T * x_free_n - c_tangent);                                 // -q_T
         CommonSettings disc_common;
         disc_common.stop = StopRule::NATIVE;
         disc_common.tol = inner_tol * tangential_unit;
