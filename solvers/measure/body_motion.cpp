@@ -208,22 +208,18 @@ std::vector<int> node_bodies(const SpMat& A, int per_node, int nodes, bool a_sym
     for (Eigen::Index r = 0; r < A.outerSize(); ++r) {
         const int node = static_cast<int>(per_node == 3 ? r / 3 : r);  // no division by a variable
         joined[static_cast<size_t>(node)] = node;
-        if (upper_only) {
-            const int* end = inner + outer[r + 1];
-            for (const int* k = std::lower_bound(inner + outer[r], end, per_node * (node + 1)); k != end; ++k) {
-                const int other = per_node == 3 ? *k / 3 : *k;
-                if (val[k - inner] == 0.0 || joined[static_cast<size_t>(other)] == node) continue;
-                sets.join(node, other);
-                joined[static_cast<size_t>(other)] = node;
-            }
-            continue;
-        }
-        for (SpMat::InnerIterator it(A, r); it; ++it) {
-            const int other = static_cast<int>(per_node == 3 ? it.col() / 3 : it.col());
-            if (it.value() == 0.0 || joined[static_cast<size_t>(other)] == node)
-                continue;  // a stored zero couples nothing
+        const auto meet = [&](Eigen::Index col, double value) {
+            const int other = static_cast<int>(per_node == 3 ? col / 3 : col);
+            if (value == 0.0 || joined[static_cast<size_t>(other)] == node) return;  // a stored zero couples nothing
             sets.join(node, other);
             joined[static_cast<size_t>(other)] = node;
+        };
+        if (upper_only) {
+            const int* end = inner + outer[r + 1];
+            for (const int* k = std::lower_bound(inner + outer[r], end, per_node * (node + 1)); k != end; ++k)
+                meet(*k, val[k - inner]);
+        } else {
+            for (SpMat::InnerIterator it(A, r); it; ++it) meet(it.col(), it.value());
         }
     }
     return sets.labels(bodies);

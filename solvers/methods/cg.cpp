@@ -115,7 +115,7 @@ SolverResult CgSolver::solve(const QpView& qp, const SolveContext& context)
         loop.setup_phase("deflation");
     }
     // cg solves the unconstrained relaxation: its stop test measures that QP (J without rows). The
-    // scale is setup, as in the other solvers (it was formed after end_setup(), on the solve's clock).
+    // scale is setup, as in every solver.
     const Vec no_c(0);
     const AccuracyScale scale =
         accuracy_scale(QpView{qp.A, qp.b, no_rows, no_c, qp.x0, qp.length, nullptr, qp.a_symmetric});
